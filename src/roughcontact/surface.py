@@ -1,0 +1,161 @@
+"""Self-affine periodic rough surfaces by FFT filtering of white noise (Hu & Tonder 1992).
+
+Conventions: a square periodic domain of side ``length`` (L) sampled on ``n x n``
+points, spacing ``dx = L / n``. Wavenumbers ``k`` are mode numbers in cycles per L
+(``k = L / lambda``), as in the paper; angular wavenumbers are ``q = 2 pi k / L``.
+Heights are in the same length unit as ``length``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+
+import numpy as np
+
+from .fft import get_fft, rfft_weights, wavenumbers
+
+
+def _check_params(n, k_l, k_s, hurst, rms_slope, rms_height, length):
+    if not isinstance(n, (int, np.integer)) or n < 4:
+        raise ValueError(f"n (grid points per side) must be an integer >= 4, got {n!r}")
+    if not (np.isfinite(k_l) and np.isfinite(k_s)) or not (0 < k_l < k_s):
+        raise ValueError(f"cutoffs must satisfy 0 < k_l < k_s, got k_l={k_l!r}, k_s={k_s!r}")
+    if k_s > n / 2:
+        raise ValueError(f"k_s must be <= n/2 = {n / 2} (Nyquist), got k_s={k_s!r}")
+    if not np.isfinite(hurst) or not (0.0 < hurst < 1.0):
+        raise ValueError(f"hurst (H) must lie in the open interval (0, 1), got {hurst!r}")
+    if (rms_slope is None) == (rms_height is None):
+        raise ValueError("give exactly one of rms_slope or rms_height")
+    target = rms_slope if rms_slope is not None else rms_height
+    name = "rms_slope" if rms_slope is not None else "rms_height"
+    if not np.isfinite(target) or target <= 0:
+        raise ValueError(f"{name} must be a finite number > 0, got {target!r}")
+    if not np.isfinite(length) or length <= 0:
+        raise ValueError(f"length (L) must be a finite number > 0, got {length!r}")
+
+
+def case_seed(seed: int, k_l: float, k_s: float, hurst: float) -> np.random.SeedSequence:
+    """Seed sequence for one case: the user's ``seed`` plus a digest of the cutoffs and H.
+
+    Different cases with the same ``seed`` thus draw independent noise, and the same
+    arguments always give the same noise, on any platform.
+    """
+    if not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed must be an integer >= 0, got {seed!r}")
+    key = f"{float(k_l)!r}|{float(k_s)!r}|{float(hurst)!r}".encode()
+    digest = int.from_bytes(hashlib.sha256(key).digest()[:8], "little")
+    return np.random.SeedSequence(entropy=int(seed), spawn_key=(digest,))
+
+
+def psd_filter(n: int, k_l: float, k_s: float, hurst: float, *, length: float = 1.0,
+               plateau: bool = False) -> np.ndarray:
+    """Amplitude filter sqrt(C(k)) on the rfft2 grid, shape ``(n, n//2+1)``.
+
+    C(k) is proportional to ``|k|^(-2(1+H))`` for ``k_l <= |k| <= k_s`` (k in cycles per
+    L) and zero elsewhere, or constant at C(k_l) for ``0 < |k| < k_l`` when ``plateau``.
+    The mean (k = 0) is always zero. The overall scale is arbitrary: callers normalise.
+    """
+    kx, ky = wavenumbers(n, 1.0)
+    k = np.hypot(kx, ky)
+    with np.errstate(divide="ignore"):
+        amp = np.where(k > 0, k, np.inf) ** (-(1.0 + hurst))
+    band = (k >= k_l) & (k <= k_s)
+    out = np.where(band, amp, 0.0)
+    if plateau:
+        out = np.where((k > 0) & (k < k_l), float(k_l) ** (-(1.0 + hurst)), out)
+    out[0, 0] = 0.0
+    return out
+
+
+def spectral_moments(heights: np.ndarray, length: float = 1.0) -> dict[str, float]:
+    """Spectral statistics of a periodic ``(n, n)`` height field, from its own spectrum.
+
+    Returns a dict (units: length unit ``u`` of ``heights`` and ``length``):
+
+    - ``rms_height``: sqrt(<h^2>) about the mean [u]
+    - ``rms_slope``: sqrt(<|grad h|^2>) with the exact spectral derivative [-]
+    - ``m0``, ``m2``, ``m4``: *profile* moments, averaged over the x and y directions:
+      <h^2> [u^2], <(dh/dx)^2> [-], <(d2h/dx2)^2> [u^-2]
+    - ``alpha``: Nayak's bandwidth m0*m4/m2^2 [-] from the profile moments (areal
+      moments would give 2/3 of this for an isotropic surface)
+    """
+    h = np.asarray(heights, dtype=float)
+    n = h.shape[0]
+    if h.ndim != 2 or h.shape[0] != h.shape[1]:
+        raise ValueError(f"heights must be a square 2-D array, got shape {h.shape}")
+    spec = np.fft.rfft2(h)
+    power = rfft_weights(n) * np.abs(spec) ** 2 / float(n) ** 4
+    power[0, 0] = 0.0
+    kx, ky = wavenumbers(n, length)
+    qx2 = (2 * np.pi * kx) ** 2
+    qy2 = (2 * np.pi * ky) ** 2
+    m0 = float(power.sum())
+    m2 = float(0.5 * ((qx2 + qy2) * power).sum())
+    m4 = float(0.5 * ((qx2**2 + qy2**2) * power).sum())
+    return {
+        "rms_height": float(np.sqrt(m0)),
+        "rms_slope": float(np.sqrt(2.0 * m2)),
+        "m0": m0,
+        "m2": m2,
+        "m4": m4,
+        "alpha": float(m0 * m4 / m2**2) if m2 > 0 else float("nan"),
+    }
+
+
+def finite_difference_rms_slope(heights: np.ndarray, length: float = 1.0) -> float:
+    """rms slope from periodic central differences [-]; biased low against the spectral one."""
+    h = np.asarray(heights, dtype=float)
+    dx = length / h.shape[0]
+    gx = (np.roll(h, -1, 0) - np.roll(h, 1, 0)) / (2 * dx)
+    gy = (np.roll(h, -1, 1) - np.roll(h, 1, 1)) / (2 * dx)
+    return float(np.sqrt(np.mean(gx**2 + gy**2)))
+
+
+def generate_surface(n: int, k_l: float, k_s: float, hurst: float, seed: int, *,
+                     rms_slope: float | None = None, rms_height: float | None = None,
+                     length: float = 1.0, plateau: bool = False,
+                     backend: str | None = None) -> np.ndarray:
+    """Periodic self-affine Gaussian rough surface, shape ``(n, n)``, zero mean.
+
+    Parameters
+    ----------
+    n : int
+        Grid points per side (any integer >= 4; odd sizes allowed).
+    k_l, k_s : float
+        Long- and short-wavelength cutoffs as mode numbers ``L / lambda``, 0 < k_l < k_s <= n/2.
+    hurst : float
+        Hurst exponent H in (0, 1); the PSD decays as ``k^(-2(1+H))``.
+    seed : int
+        Seed of the white noise (>= 0); the case's cutoffs and H are mixed in, so
+        different cases never share noise.
+    rms_slope, rms_height : float
+        Exactly one: the target rms slope sqrt(<|grad h|^2>) [-], computed from the
+        spectrum with exact derivatives, or the rms height [length unit].
+    length : float
+        Side L of the periodic domain [length unit].
+    plateau : bool
+        Keep C constant at C(k_l) below k_l instead of cutting it (off in the paper).
+    backend : {"pyfftw", "numpy"} or None
+        FFT backend; both give the same array to ~1e-12 relative.
+
+    Returns
+    -------
+    numpy.ndarray, float64, shape (n, n)
+        Heights h(x, y) [length unit], axis 0 = x, axis 1 = y, spacing ``length / n``.
+    """
+    _check_params(n, k_l, k_s, hurst, rms_slope, rms_height, length)
+    rng = np.random.default_rng(case_seed(seed, k_l, k_s, hurst))
+    noise = rng.standard_normal((n, n))
+    fft = get_fft((n, n), backend=backend)
+    spec = fft.forward(noise) * psd_filter(n, k_l, k_s, hurst, length=length, plateau=plateau)
+    h = fft.backward(spec).copy()
+    stats = spectral_moments(h, length)
+    current = stats["rms_slope"] if rms_slope is not None else stats["rms_height"]
+    if not current > 0:
+        raise ValueError(
+            f"no spectral power between k_l={k_l} and k_s={k_s} on a {n}x{n} grid; widen the band"
+        )
+    target = rms_slope if rms_slope is not None else rms_height
+    h *= target / current
+    h -= h.mean()
+    return h
