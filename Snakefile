@@ -1,0 +1,31 @@
+# roughcontact: the contact mechanics of representative rough surfaces.
+# Stages: surfaces -> representativity | contact -> aggregate -> fit -> figures.
+# `snakemake -j2` runs the default scene (config/config.yaml: scene), `--config scene=NAME`
+# another; any single output can be asked for by its path.
+from snakemake.utils import min_version
+
+min_version("9.0")
+
+
+report: "workflow/report/workflow.rst"
+
+
+configfile: "config/config.yaml"
+
+
+include: "workflow/rules/common.smk"
+include: "workflow/rules/surfaces.smk"
+include: "workflow/rules/representativity.smk"
+include: "workflow/rules/contact.smk"
+include: "workflow/rules/aggregate.smk"
+include: "workflow/rules/figures.smk"
+
+
+localrules:
+    all,
+
+
+rule all:
+    input:
+        scene_targets(ACTIVE_SCENE),
+    default_target: True

@@ -1,0 +1,204 @@
+"""Scenes: validate the pipeline's config and expand it into cases.
+
+A *scene* is a named block under ``scenes:`` that says what to compute. Validation
+runs in two passes, both before Snakemake plans any job:
+
+1. the JSON schema ``workflow/schemas/config.schema.yaml`` (types, ranges, unknown keys),
+   whose ``default`` values are filled in;
+2. the cross-field rules a schema cannot express (k_l < k_s <= N/2, 0 < H < 1, examples
+   inside the grid, fit window ordered, field steps within the load schedule).
+
+Every error is a :class:`ConfigError` whose message names the scene and the field
+(``scene 'demo', field 'contact.grid.k_s': ...``) and the allowed range.
+"""
+
+from __future__ import annotations
+
+import copy
+import itertools
+from dataclasses import dataclass
+from pathlib import Path
+
+import yaml
+from jsonschema import Draft202012Validator
+
+#: The two studies a scene may declare, and the stage folder of each one's surfaces.
+STUDIES = {"representativity": "surfaces_rep", "contact": "surfaces"}
+
+DEFAULT_SCHEMA = Path(__file__).resolve().parents[2] / "workflow" / "schemas" / "config.schema.yaml"
+
+
+class ConfigError(ValueError):
+    """The config asks for something the pipeline cannot do; the message says what."""
+
+
+@dataclass(frozen=True)
+class Case:
+    """One surface realisation: cutoffs and Hurst exponent as config strings, and a seed."""
+
+    k_l: str
+    k_s: str
+    H: str
+    seed: int
+
+    @property
+    def stem(self) -> str:
+        """File stem ``kl{k_l}_ks{k_s}_H{H}_s{seed}`` built from the config strings."""
+        return f"kl{self.k_l}_ks{self.k_s}_H{self.H}_s{self.seed}"
+
+
+def load_schema(path: str | Path = DEFAULT_SCHEMA) -> dict:
+    """The config JSON schema as a dict."""
+    with open(path) as fh:
+        return yaml.safe_load(fh)
+
+
+def _resolve(schema: dict, root: dict) -> dict:
+    ref = schema.get("$ref")
+    if ref:
+        node = root
+        for part in ref.lstrip("#/").split("/"):
+            node = node[part]
+        merged = {**_resolve(node, root), **{k: v for k, v in schema.items() if k != "$ref"}}
+        return merged
+    return schema
+
+
+def _fill_defaults(instance, schema: dict, root: dict):
+    """Fill ``default`` values of the schema into ``instance`` (dicts only), in place."""
+    schema = _resolve(schema, root)
+    if not isinstance(instance, dict):
+        return
+    props: dict = {}
+    for sub in schema.get("allOf", []):
+        props.update(_resolve(sub, root).get("properties", {}))
+    for name, sub in schema.get("properties", {}).items():
+        if sub is True:
+            continue
+        props[name] = sub
+    for name, sub in props.items():
+        sub = _resolve(sub, root)
+        if name not in instance and "default" in sub:
+            instance[name] = copy.deepcopy(sub["default"])
+        if name in instance:
+            _fill_defaults(instance[name], sub, root)
+    extra = schema.get("additionalProperties")
+    if isinstance(extra, dict):
+        for name, value in instance.items():
+            if name not in props:
+                _fill_defaults(value, extra, root)
+
+
+def _field(path) -> str:
+    return ".".join(str(p) for p in path) or "(top level)"
+
+
+def _schema_message(err) -> str:
+    if err.validator == "additionalProperties" or err.validator == "unevaluatedProperties":
+        allowed = sorted(_resolve(err.schema, {}).get("properties", {}) or [])
+        return f"{err.message}" + (f"; allowed keys: {', '.join(allowed)}" if allowed else "")
+    if err.validator == "oneOf" and "rms_slope" in str(err.schema):
+        return "give exactly one of rms_slope or rms_height"
+    if err.validator == "anyOf" and "representativity" in str(err.schema):
+        return "a scene must declare at least one of 'representativity' or 'contact'"
+    if err.validator == "type" and err.schema.get("type") == "string" and "pattern" in err.schema:
+        return (f"{err.instance!r} must be written as a string (e.g. \"{err.instance}\") so that "
+                "file names carry the config's text, not float formatting")
+    if err.validator == "pattern":
+        return f"{err.instance!r} is not a positive number written as a string (e.g. \"0.8\")"
+    return err.message
+
+
+def _check_study(scene: str, study: str, block: dict) -> None:
+    def fail(field, msg):
+        raise ConfigError(f"scene {scene!r}, field '{study}.{field}': {msg}")
+
+    n = block["surface"]["N"]
+    grid = block["grid"]
+    for key in ("k_l", "k_s", "H"):
+        for text in grid[key]:
+            if float(text) <= 0:
+                fail(f"grid.{key}", f"{text!r} must be > 0")
+    for text in grid["H"]:
+        if not 0.0 < float(text) < 1.0:
+            fail("grid.H", f"{text!r} is outside the allowed range 0 < H < 1")
+    for text in grid["k_s"]:
+        if float(text) > n / 2:
+            fail("grid.k_s", f"{text!r} exceeds N/2 = {n / 2:g} (the Nyquist mode of N = {n})")
+    # Every pair is run, so a pair with k_l >= k_s is an error rather than a silent skip.
+    for kl, ks in itertools.product(grid["k_l"], grid["k_s"]):
+        if float(kl) >= float(ks):
+            fail("grid.k_l", f"k_l={kl} must be < k_s={ks} for every pair of the grid")
+    for i, ex in enumerate(block.get("examples", [])):
+        if ex["k_l"] not in grid["k_l"] or ex["k_s"] not in grid["k_s"]:
+            fail(f"examples[{i}]", f"({ex['k_l']}, {ex['k_s']}) is not in the grid's k_l x k_s")
+        if float(ex["k_l"]) >= float(ex["k_s"]):
+            fail(f"examples[{i}]", f"k_l={ex['k_l']} must be < k_s={ex['k_s']}")
+    if study == "contact":
+        steps = block["load"]["n_steps"]
+        bad = [s for s in block["outputs"]["fields"] if s > steps]
+        if bad:
+            fail("outputs.fields", f"steps {bad} exceed load.n_steps = {steps} (allowed 1..{steps})")
+
+
+def validate_scene(name: str, scene: dict, schema: dict) -> dict:
+    """Validate one scene and return a copy with defaults filled in.
+
+    Raises :class:`ConfigError` naming ``name`` and the offending field.
+    """
+    scene_schema = {**schema["$defs"]["scene"], "$defs": schema["$defs"]}
+    validator = Draft202012Validator(scene_schema)
+    errors = sorted(validator.iter_errors(scene), key=lambda e: (len(e.path), list(e.path)))
+    if errors:
+        err = errors[0]
+        raise ConfigError(f"scene {name!r}, field '{_field(err.path)}': {_schema_message(err)}")
+    out = copy.deepcopy(scene)
+    _fill_defaults(out, scene_schema, scene_schema)
+    for study in STUDIES:
+        if study in out:
+            _check_study(name, study, out[study])
+    lo, hi = out["fit"]["window"]
+    if not lo < hi:
+        raise ConfigError(f"scene {name!r}, field 'fit.window': needs low < high, got [{lo}, {hi}]")
+    return out
+
+
+def validate_config(config: dict, schema: dict | None = None) -> dict:
+    """Validate the whole config (every scene) and return it with defaults filled in.
+
+    ``config['scene']`` must name one of ``config['scenes']``.
+    """
+    schema = schema or load_schema()
+    if not isinstance(config, dict):
+        raise ConfigError("config must be a mapping with keys 'scene' and 'scenes'")
+    top = {k: v for k, v in config.items() if k != "scenes"}
+    unknown = sorted(set(top) - {"scene"})
+    if unknown:
+        raise ConfigError(f"unknown top-level config key(s) {unknown}; allowed: scene, scenes")
+    scenes = config.get("scenes")
+    if not isinstance(scenes, dict) or not scenes:
+        raise ConfigError("config field 'scenes' must be a non-empty mapping of scene blocks")
+    validated = {name: validate_scene(name, block or {}, schema) for name, block in scenes.items()}
+    default = config.get("scene")
+    if default not in validated:
+        raise ConfigError(
+            f"config field 'scene': unknown scene {default!r}; defined scenes: {', '.join(sorted(validated))}"
+        )
+    return {"scene": default, "scenes": validated}
+
+
+def cases(block: dict) -> list[Case]:
+    """All cases of a study block: k_l x k_s x H x seeds (seeds 0..seeds-1)."""
+    grid = block["grid"]
+    return [
+        Case(kl, ks, h, seed)
+        for kl, ks, h in itertools.product(grid["k_l"], grid["k_s"], grid["H"])
+        for seed in range(block["seeds"])
+    ]
+
+
+def load_steps(block: dict) -> list[float]:
+    """Applied mean pressures p0 of a contact block: p_max*E*/n, ..., p_max*E* (n steps)."""
+    n = block["load"]["n_steps"]
+    p_max = block["load"]["p_max"] * block["solver"]["e_star"]
+    return [p_max * (i + 1) / n for i in range(n)]

@@ -1,0 +1,110 @@
+"""Labelled per-case datasets: arrays in, xarray out, no file I/O.
+
+Every per-case dataset carries length-1 dimensions ``k_l, k_s, H, seed`` so that the
+aggregate stage can join the cases with ``xarray.combine_by_coords``. The coordinate
+values are the floats of the config strings (``float("0.36")``, identical on every
+parse); file names use the strings themselves.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from .surface import finite_difference_rms_slope, spectral_moments
+
+CASE_DIMS = ("k_l", "k_s", "H", "seed")
+
+_CASE_COORD_ATTRS = {
+    "k_l": {"units": "1", "long_name": "long-wavelength cutoff L/lambda_l"},
+    "k_s": {"units": "1", "long_name": "short-wavelength cutoff L/lambda_s"},
+    "H": {"units": "1", "long_name": "Hurst roughness exponent"},
+    "seed": {"units": "1", "long_name": "white-noise seed"},
+}
+
+
+def case_coords(k_l: str, k_s: str, hurst: str, seed: int) -> dict:
+    """Length-1 case coordinates with units and long_name, from config strings."""
+    values = {"k_l": float(k_l), "k_s": float(k_s), "H": float(hurst), "seed": int(seed)}
+    return {
+        name: xr.Variable((name,), np.array([value]), attrs=_CASE_COORD_ATTRS[name])
+        for name, value in values.items()
+    }
+
+
+def expand_case(ds: xr.Dataset, k_l: str, k_s: str, hurst: str, seed: int) -> xr.Dataset:
+    """Add the length-1 case dimensions to every data variable of ``ds``."""
+    coords = case_coords(k_l, k_s, hurst, seed)
+    out = ds.expand_dims({name: 1 for name in CASE_DIMS}).assign_coords(coords)
+    for name in out.data_vars:
+        out[name] = out[name].transpose(*CASE_DIMS, *[d for d in out[name].dims if d not in CASE_DIMS])
+        out[name].attrs = ds[name].attrs
+    return out
+
+
+def surface_dataset(heights: np.ndarray, *, k_l: str, k_s: str, hurst: str, seed: int,
+                    length: float, normalisation: dict) -> xr.Dataset:
+    """Dataset of one generated surface.
+
+    ``heights`` is (n, n) [length unit]; ``normalisation`` is ``{"rms_slope": v}`` or
+    ``{"rms_height": v}``, recorded as an attribute. Adds scalar statistics: rms height,
+    spectral and finite-difference rms slope, profile moments and Nayak's alpha.
+    """
+    n = heights.shape[0]
+    stats = spectral_moments(heights, length)
+    x = np.arange(n) * (length / n)
+    ds = xr.Dataset(
+        {
+            "heights": (("x", "y"), heights, {"units": "length unit of L", "long_name": "surface height h(x, y)"}),
+            "rms_height": ((), stats["rms_height"], {"units": "length unit of L", "long_name": "rms height (spectral)"}),
+            "rms_slope": ((), stats["rms_slope"], {"units": "1", "long_name": "rms slope sqrt(<|grad h|^2>) from the spectrum"}),
+            "rms_slope_fd": ((), finite_difference_rms_slope(heights, length),
+                             {"units": "1", "long_name": "rms slope from periodic central differences"}),
+            "m0": ((), stats["m0"], {"units": "length unit^2", "long_name": "profile spectral moment m0"}),
+            "m2": ((), stats["m2"], {"units": "1", "long_name": "profile spectral moment m2"}),
+            "m4": ((), stats["m4"], {"units": "length unit^-2", "long_name": "profile spectral moment m4"}),
+            "alpha": ((), stats["alpha"], {"units": "1", "long_name": "Nayak bandwidth alpha = m0 m4 / m2^2 (profile moments)"}),
+        },
+        coords={
+            "x": ("x", x, {"units": "length unit of L", "long_name": "position along x"}),
+            "y": ("y", x.copy(), {"units": "length unit of L", "long_name": "position along y"}),
+        },
+        attrs={"length": float(length), "n": int(n), "normalisation": str(normalisation)},
+    )
+    return expand_case(ds, k_l, k_s, hurst, seed)
+
+
+def representativity_dataset(epsilon: float, heights: np.ndarray, *, n_bins: int, k_l: str, k_s: str,
+                             hurst: str, seed: int) -> xr.Dataset:
+    """Dataset of one surface's representativity: eps and the heights' mean and std."""
+    ds = xr.Dataset(
+        {
+            "epsilon": ((), float(epsilon), {"units": "length unit^-1/2",
+                                            "long_name": "L2 error between the heights PDF and its Gaussian"}),
+            "mean_height": ((), float(np.mean(heights)), {"units": "length unit of L", "long_name": "mean height"}),
+            "std_height": ((), float(np.std(heights)), {"units": "length unit of L",
+                                                        "long_name": "standard deviation of heights"}),
+        },
+        attrs={"n_bins": int(n_bins)},
+    )
+    return expand_case(ds, k_l, k_s, hurst, seed)
+
+
+def contact_dataset(result: xr.Dataset, *, rms_slope: float, alpha: float, e_star: float,
+                    k_l: str, k_s: str, hurst: str, seed: int) -> xr.Dataset:
+    """Per-case contact dataset: the solver's result over ``step`` plus kappa and surface stats.
+
+    kappa = E* h' / pbar [1] with h' the surface's spectral rms slope, the paper's
+    normalised inverse mean contact pressure (its Fig. 3). The solver's ``wall_time``
+    is dropped: result files must be byte-identical across reruns, so timings go to the
+    job's log and Snakemake benchmark file instead.
+    """
+    ds = result.drop_vars("wall_time", errors="ignore")
+    ds["kappa"] = (e_star * rms_slope / ds["mean_contact_pressure"]).assign_attrs(
+        units="1", long_name="kappa = E* h' / mean contact pressure")
+    ds["rms_slope"] = xr.DataArray(float(rms_slope), attrs={
+        "units": "1", "long_name": "spectral rms slope h' of the surface"})
+    ds["alpha"] = xr.DataArray(float(alpha), attrs={
+        "units": "1", "long_name": "Nayak bandwidth alpha of the surface (profile moments)"})
+    ds.attrs["e_star"] = float(e_star)
+    return expand_case(ds, k_l, k_s, hurst, seed)

@@ -1,0 +1,56 @@
+# Stage 4: one dataset over the grid, then the contact-evolution-law fit.
+
+
+localrules:
+    aggregate_representativity,
+    aggregate_contact,
+    fit_cel,
+
+
+rule aggregate_representativity:
+    input:
+        lambda w: case_files(w.scene, "representativity", "representativity"),
+    output:
+        "results/{scene}/aggregate/representativity.nc",
+    params:
+        scene=lambda w: w.scene,
+        block=lambda w: study_block(w.scene, "representativity"),
+    log:
+        "results/{scene}/logs/aggregate_representativity.log",
+    benchmark:
+        "results/{scene}/benchmarks/aggregate_representativity.tsv"
+    script:
+        "../scripts/aggregate_representativity.py"
+
+
+rule aggregate_contact:
+    input:
+        lambda w: case_files(w.scene, "contact", "contact"),
+    output:
+        "results/{scene}/aggregate/contact.nc",
+    params:
+        scene=lambda w: w.scene,
+        block=lambda w: study_block(w.scene, "contact"),
+    log:
+        "results/{scene}/logs/aggregate_contact.log",
+    benchmark:
+        "results/{scene}/benchmarks/aggregate_contact.tsv"
+    script:
+        "../scripts/aggregate_contact.py"
+
+
+rule fit_cel:
+    input:
+        "results/{scene}/aggregate/contact.nc",
+    output:
+        nc="results/{scene}/fit/cel.nc",
+        csv=report("results/{scene}/fit/cel.csv", caption="../report/fit.rst", category="Fit"),
+    params:
+        scene=lambda w: w.scene,
+        fit=lambda w: SCENES[w.scene]["fit"],
+    log:
+        "results/{scene}/logs/fit_cel.log",
+    benchmark:
+        "results/{scene}/benchmarks/fit_cel.tsv"
+    script:
+        "../scripts/fit_cel.py"

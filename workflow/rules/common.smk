@@ -1,0 +1,101 @@
+# Shared set-up: validate the config (every scene) before any job is planned, expose
+# the scenes, and build the wildcard constraints that make a mistyped target fail.
+import re
+
+from roughcontact.config import ConfigError, STUDIES, cases, load_schema, validate_config, load_steps
+
+try:
+    _VALID = validate_config(config, load_schema(workflow.source_path("../schemas/config.schema.yaml")))
+except ConfigError as _err:
+    raise WorkflowError(f"invalid config: {_err}") from None
+
+SCENES = _VALID["scenes"]
+ACTIVE_SCENE = _VALID["scene"]
+SCHEMA_PATH = "workflow/schemas/config.schema.yaml"
+
+
+def _alternatives(values):
+    return "|".join(re.escape(v) for v in sorted(set(values), key=lambda v: (-len(v), v)))
+
+
+def _all_grid_values(key):
+    return [
+        value
+        for scene in SCENES.values()
+        for study in STUDIES
+        if study in scene
+        for value in scene[study]["grid"][key]
+    ]
+
+
+wildcard_constraints:
+    scene=_alternatives(SCENES),
+    k_l=_alternatives(_all_grid_values("k_l")),
+    k_s=_alternatives(_all_grid_values("k_s")),
+    H=_alternatives(_all_grid_values("H")),
+    seed=r"\d+",
+
+
+CASE = "kl{k_l}_ks{k_s}_H{H}_s{seed}"
+
+
+def study_block(scene, study):
+    """The validated config block of `study` in `scene`, or a clear error."""
+    block = SCENES[scene].get(study)
+    if block is None:
+        raise WorkflowError(f"scene {scene!r} declares no '{study}' block, so it has no {study} outputs")
+    return block
+
+
+def check_case(wildcards, study):
+    """Stop with the allowed values if a requested case is not in the scene's grid."""
+    block = study_block(wildcards.scene, study)
+    grid = block["grid"]
+    for key in ("k_l", "k_s", "H"):
+        if getattr(wildcards, key) not in grid[key]:
+            raise WorkflowError(
+                f"scene {wildcards.scene!r}, {study}: {key}={getattr(wildcards, key)} is not in its grid; "
+                f"allowed: {', '.join(grid[key])}"
+            )
+    if not 0 <= int(wildcards.seed) < block["seeds"]:
+        raise WorkflowError(
+            f"scene {wildcards.scene!r}, {study}: seed={wildcards.seed} outside 0..{block['seeds'] - 1}"
+        )
+    return block
+
+
+def case_files(scene, study, stage):
+    """Paths of `stage` files for every case of `study` in `scene`."""
+    return [f"results/{scene}/{stage}/{c.stem}.nc" for c in cases(study_block(scene, study))]
+
+
+def scene_targets(scene):
+    """Final products of a scene: only what its blocks call for."""
+    s = SCENES[scene]
+    out = []
+    if "representativity" in s:
+        out += [f"results/{scene}/aggregate/representativity.nc"]
+        out += expand("results/{scene}/figures/representativity.{ext}", scene=scene, ext=("png", "pdf"))
+        if s["representativity"]["examples"]:
+            out += expand("results/{scene}/figures/surface_examples.{ext}", scene=scene, ext=("png", "pdf"))
+    if "contact" in s:
+        out += [f"results/{scene}/aggregate/contact.nc", f"results/{scene}/fit/cel.nc", f"results/{scene}/fit/cel.csv"]
+        out += expand(
+            "results/{scene}/figures/{fig}.{ext}", scene=scene, fig=("area_load", "kappa", "dpbar"), ext=("png", "pdf")
+        )
+    return out
+
+
+def surface_mem_mb(n):
+    """Peak memory of one surface job [MB]: interpreter + libraries (~250 MB) + ~10 N^2 doubles."""
+    return int(250 + 10 * 8 * n * n / 2**20)
+
+
+def contact_mem_mb(n):
+    """Peak memory of one contact job [MB]: interpreter + libraries + ~40 N^2 doubles of solver work."""
+    return int(300 + 40 * 8 * n * n / 2**20)
+
+
+def contact_runtime_min(n, n_steps):
+    """Wall-time request of one contact job [min]: 30 steps at N=1024 take well under a minute; x10 margin."""
+    return max(5, int(10 * n_steps / 30 * (n / 1024) ** 2 * 2))
