@@ -58,7 +58,7 @@ def gaussian_l2_error(heights: np.ndarray, n_bins: int = 500) -> float:
     inside = float(np.sum(g2 - 2.0 * pdf * g1 + pdf**2 * width))
     tails = (0.5 * erfc(-z[0]) + 0.5 * erfc(z[-1])) / (2.0 * sigma * np.sqrt(np.pi))
     # Mathematically >= 0; a tiny negative value can only be roundoff.
-    return float(np.sqrt(max(inside + 0.5 * tails, 0.0)))
+    return float(np.sqrt(max(inside + tails, 0.0)))
 
 
 def binning_noise_floor(n_samples: int, n_bins: int, range_in_sigma: float,

@@ -1,0 +1,103 @@
+"""Scene validation: shipped scenes pass; each kind of bad config is named precisely."""
+import copy
+
+import pytest
+
+from roughcontact.config import ConfigError, cases, load_schema, load_steps, validate_config
+
+SCHEMA = load_schema()
+
+
+def test_shipped_config_is_valid(shipped_config):
+    cfg = validate_config(shipped_config, SCHEMA)
+    assert cfg["scene"] == "demo"
+    assert {"demo", "paper", "representative"} <= set(cfg["scenes"])
+
+
+def test_paper_scene_grids_are_the_papers(shipped_config):
+    paper = validate_config(shipped_config, SCHEMA)["scenes"]["paper"]
+    rep, con = paper["representativity"], paper["contact"]
+    assert rep["surface"] == {"N": 1024, "L": 1.0, "rms_height": 0.1, "plateau": False}
+    assert rep["seeds"] == 30 and rep["grid"]["H"] == ["0.8"] and rep["n_bins"] == 500
+    assert rep["grid"]["k_l"] == ["1", "2", "4", "8", "16"]
+    assert rep["grid"]["k_s"] == ["32", "40", "64", "128", "256", "512"]
+    assert con["surface"]["rms_slope"] == 0.1 and con["seeds"] == 12
+    assert con["grid"]["k_l"] == ["1", "2", "8", "16"]
+    assert con["grid"]["k_s"] == ["32", "64", "128", "256", "512"]
+    assert con["grid"]["H"] == ["0.2", "0.36", "0.52", "0.68", "0.84"]
+    assert len(cases(con)) == 4 * 5 * 5 * 12
+    steps = load_steps(con)
+    assert len(steps) == 30 and steps[-1] == pytest.approx(0.005) and steps[0] == pytest.approx(0.005 / 30)
+
+
+def _demo(shipped_config):
+    return copy.deepcopy(shipped_config)
+
+
+def _edit(cfg, path, value):
+    node = cfg["scenes"]["demo"]
+    *head, last = path
+    for key in head:
+        node = node[key]
+    if value is KeyError:
+        del node[last]
+    else:
+        node[last] = value
+    return cfg
+
+
+@pytest.mark.parametrize(
+    "path, value, field, words",
+    [
+        (("contact", "grid", "k_l"), ["32"], "contact.grid.k_l", "must be < k_s"),
+        (("contact", "grid", "k_s"), ["200"], "contact.grid.k_s", "N/2"),
+        (("contact", "grid", "H"), ["1.2"], "contact.grid.H", "0 < H < 1"),
+        (("contact", "grid", "H"), ["0"], "contact.grid.H", "> 0"),
+        (("contact", "seeds"), 0, "contact.seeds", "minimum"),
+        (("contact", "surface", "rms_slope"), -0.1, "contact.surface.rms_slope", "0"),
+        (("contact", "solver", "tol"), 2.0, "contact.solver.tol", "1"),
+        (("contact", "load", "n_steps"), 0, "contact.load.n_steps", "minimum"),
+        (("contact", "bogus"), 1, "contact", "bogus"),
+        (("contact", "effects"), {"magic": {}}, "contact.effects", "magic"),
+        (("contact", "grid", "k_l"), [4], "contact.grid.k_l.0", "string"),
+        (("contact", "outputs"), {"fields": [31]}, "contact.outputs.fields", "1..30"),
+        (("representativity", "examples"), [{"k_l": "2", "k_s": "32"}], "representativity.examples[0]", "not in the grid"),
+        (("fit", "window"), [0.2, 0.1], "fit.window", "low < high"),
+        (("contact", "surface", "rms_height"), 0.1, "contact.surface", "exactly one"),
+    ],
+)
+def test_invalid_field_is_named(shipped_config, path, value, field, words):
+    cfg = _edit(_demo(shipped_config), path, value)
+    with pytest.raises(ConfigError) as info:
+        validate_config(cfg, SCHEMA)
+    msg = str(info.value)
+    assert "scene 'demo'" in msg and field in msg and words in msg, msg
+
+
+def test_unknown_scene_is_named(shipped_config):
+    cfg = _demo(shipped_config)
+    cfg["scene"] = "nope"
+    with pytest.raises(ConfigError, match="unknown scene 'nope'.*defined scenes: demo"):
+        validate_config(cfg, SCHEMA)
+
+
+def test_scene_without_studies(shipped_config):
+    cfg = _demo(shipped_config)
+    cfg["scenes"]["demo"] = {"description": "nothing"}
+    with pytest.raises(ConfigError, match="at least one of 'representativity' or 'contact'"):
+        validate_config(cfg, SCHEMA)
+
+
+def test_unknown_top_level_key(shipped_config):
+    cfg = _demo(shipped_config)
+    cfg["colour"] = "blue"
+    with pytest.raises(ConfigError, match="colour"):
+        validate_config(cfg, SCHEMA)
+
+
+def test_defaults_filled(shipped_config):
+    cfg = _demo(shipped_config)
+    del cfg["scenes"]["demo"]["contact"]["solver"]
+    demo = validate_config(cfg, SCHEMA)["scenes"]["demo"]
+    assert demo["contact"]["solver"] == {"e_star": 1.0, "tol": 1e-8, "max_iter": 10000}
+    assert demo["contact"]["outputs"] == {"fields": []}

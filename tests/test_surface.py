@@ -1,0 +1,116 @@
+"""Surface generation: spectrum shape, normalisation, reproducibility, FFT backends."""
+import numpy as np
+import pytest
+
+from roughcontact import generate_surface
+from roughcontact.fft import wavenumbers
+from roughcontact.surface import finite_difference_rms_slope, spectral_moments
+
+
+def radial_psd(h):
+    """Azimuthally averaged |h(k)|^2 on integer |k| shells (k in cycles per L)."""
+    n = h.shape[0]
+    power = np.abs(np.fft.fft2(h)) ** 2
+    kx = np.fft.fftfreq(n, 1.0 / n)
+    k = np.hypot(kx[:, None], kx[None, :])
+    shell = np.rint(k).astype(int)
+    sums = np.bincount(shell.ravel(), power.ravel())
+    counts = np.bincount(shell.ravel())
+    return np.arange(len(sums)), sums / np.maximum(counts, 1), k, power
+
+
+@pytest.mark.parametrize("hurst", [0.2, 0.5, 0.8])
+def test_psd_slope_between_cutoffs(hurst):
+    # Averaging a few seeds beats down the chi-squared scatter of each shell; +-0.05 on
+    # the exponent is the issue's acceptance band.
+    k_l, k_s, n = 4, 64, 256
+    psd = np.mean([radial_psd(generate_surface(n, k_l, k_s, hurst, s, rms_slope=0.1))[1] for s in range(4)], axis=0)
+    k = np.arange(len(psd))
+    sel = (k >= k_l + 1) & (k <= k_s - 1)
+    slope = np.polyfit(np.log(k[sel]), np.log(psd[sel]), 1)[0]
+    assert slope == pytest.approx(-2 * (1 + hurst), abs=0.05)
+
+
+def test_no_power_outside_band():
+    n, k_l, k_s = 128, 8, 32
+    h = generate_surface(n, k_l, k_s, 0.7, 3, rms_slope=0.1)
+    _, _, k, power = radial_psd(h)
+    outside = (k < k_l) | (k > k_s)
+    assert power[outside].max() < 1e-20 * power.max()
+
+
+def test_plateau_adds_power_below_k_l_only():
+    n, k_l, k_s = 128, 8, 32
+    h = generate_surface(n, k_l, k_s, 0.7, 3, rms_slope=0.1, plateau=True)
+    _, _, k, power = radial_psd(h)
+    assert power[(k > 0) & (k < k_l)].max() > 0
+    assert power[k > k_s].max() < 1e-20 * power.max()
+
+
+@pytest.mark.parametrize("n", [64, 63, 100])
+def test_normalisation_exact(n):
+    h = generate_surface(n, 2, 16, 0.8, 0, rms_slope=0.1)
+    assert spectral_moments(h)["rms_slope"] == pytest.approx(0.1, rel=1e-6)
+    assert abs(h.mean()) < 1e-14
+    h = generate_surface(n, 2, 16, 0.8, 0, rms_height=0.1, length=2.0)
+    assert spectral_moments(h, 2.0)["rms_height"] == pytest.approx(0.1, rel=1e-6)
+    assert np.std(h) == pytest.approx(0.1, rel=1e-6)
+
+
+def test_spectral_slope_matches_exact_derivative_of_a_sinusoid():
+    n, length, amp = 64, 2.0, 0.3
+    x = np.arange(n) * length / n
+    h = amp * np.sin(2 * np.pi * 3 * x / length)[:, None] * np.ones(n)[None, :]
+    exact = amp * 2 * np.pi * 3 / length / np.sqrt(2)
+    assert spectral_moments(h, length)["rms_slope"] == pytest.approx(exact, rel=1e-12)
+    # Central differences underestimate it: the reason the paper uses the spectrum.
+    assert finite_difference_rms_slope(h, length) < exact
+
+
+def test_same_seed_same_array_and_independent_cases():
+    a = generate_surface(64, 2, 16, 0.8, 5, rms_slope=0.1)
+    assert np.array_equal(a, generate_surface(64, 2, 16, 0.8, 5, rms_slope=0.1))
+    others = [
+        generate_surface(64, 2, 16, 0.8, 6, rms_slope=0.1),
+        generate_surface(64, 2, 16, 0.7, 5, rms_slope=0.1),
+        generate_surface(64, 4, 16, 0.8, 5, rms_slope=0.1),
+    ]
+    for b in others:
+        assert abs(np.corrcoef(a.ravel(), b.ravel())[0, 1]) < 0.5
+
+
+def test_backends_agree():
+    pytest.importorskip("pyfftw")
+    a = generate_surface(128, 4, 32, 0.6, 1, rms_slope=0.1, backend="pyfftw")
+    b = generate_surface(128, 4, 32, 0.6, 1, rms_slope=0.1, backend="numpy")
+    assert np.max(np.abs(a - b)) <= 1e-12 * np.max(np.abs(a))
+
+
+def test_wavenumbers_grid():
+    kx, ky = wavenumbers(8)
+    assert kx.shape == (8, 1) and ky.shape == (1, 5)
+    assert kx[:, 0].tolist() == [0, 1, 2, 3, -4, -3, -2, -1]
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(n=64, k_l=16, k_s=16, hurst=0.8, seed=0, rms_slope=0.1), "k_l < k_s"),
+        (dict(n=64, k_l=1, k_s=33, hurst=0.8, seed=0, rms_slope=0.1), "n/2"),
+        (dict(n=64, k_l=1, k_s=16, hurst=1.0, seed=0, rms_slope=0.1), r"\(0, 1\)"),
+        (dict(n=64, k_l=1, k_s=16, hurst=0.5, seed=-1, rms_slope=0.1), "seed"),
+        (dict(n=64, k_l=1, k_s=16, hurst=0.5, seed=0, rms_slope=-0.1), "rms_slope"),
+        (dict(n=64, k_l=1, k_s=16, hurst=0.5, seed=0), "exactly one"),
+        (dict(n=64, k_l=1, k_s=16, hurst=0.5, seed=0, rms_slope=0.1, rms_height=0.1), "exactly one"),
+        (dict(n=64, k_l=1, k_s=16, hurst=float("nan"), seed=0, rms_slope=0.1), "hurst"),
+    ],
+)
+def test_bad_arguments_named(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        generate_surface(**kwargs)
+
+
+def test_empty_band_is_reported():
+    # 0.2 < |k| < 0.9 holds no integer mode: no power to normalise.
+    with pytest.raises(ValueError, match="no spectral power"):
+        generate_surface(16, 0.2, 0.9, 0.5, 0, rms_slope=0.1)

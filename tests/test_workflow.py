@@ -1,0 +1,142 @@
+"""The Snakemake workflow: dry runs of every scene, bad input stops early, a tiny real run."""
+import copy
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from conftest import copy_workflow, run_snakemake
+
+TINY = {
+    "scene": "tiny",
+    "scenes": {
+        "tiny": {
+            "description": "tiny end-to-end run for the tests",
+            "representativity": {
+                "surface": {"N": 32, "rms_height": 0.1},
+                "grid": {"k_l": ["1", "4"], "k_s": ["8"], "H": ["0.8"]},
+                "seeds": 2,
+                "n_bins": 20,
+                "examples": [{"k_l": "1", "k_s": "8"}, {"k_l": "4", "k_s": "8"}],
+            },
+            "contact": {
+                "surface": {"N": 32, "rms_slope": 0.1},
+                "grid": {"k_l": ["2"], "k_s": ["8"], "H": ["0.5", "0.8"]},
+                "seeds": 2,
+                "load": {"p_max": 0.01, "n_steps": 12},
+                "solver": {"tol": 1e-8},
+            },
+            "fit": {"window": [0.01, 0.3], "n_boot": 20},
+        },
+        "reponly": {
+            "representativity": {
+                "surface": {"N": 32, "rms_height": 0.1},
+                "grid": {"k_l": ["1"], "k_s": ["8"], "H": ["0.8"]},
+                "seeds": 2,
+            }
+        },
+    },
+}
+
+
+def _jobs(stdout):
+    """Job counts from the 'Job stats' table of a dry run."""
+    counts, table = {}, False
+    for line in stdout.splitlines():
+        if line.startswith("job "):
+            table = True
+            continue
+        if table:
+            parts = line.split()
+            if len(parts) == 2 and parts[1].isdigit():
+                counts[parts[0]] = int(parts[1])
+            elif parts and parts[0] == "total":
+                break
+    return counts
+
+
+@pytest.mark.parametrize("scene", ["demo", "paper", "representative"])
+def test_dry_run_every_shipped_scene(repo, scene):
+    res = run_snakemake(repo, "-n", "--config", f"scene={scene}", timeout=600)
+    assert res.returncode == 0, res.stderr[-3000:]
+    jobs = _jobs(res.stdout)
+    if scene == "paper":
+        assert jobs["contact"] == 1200 and jobs["representativity"] == 900
+    if scene == "representative":
+        assert jobs["contact"] == 60 and "representativity" not in jobs
+
+
+def test_representativity_only_scene_plans_no_contact(tmp_path):
+    wd = copy_workflow(tmp_path / "wf", {**TINY, "scene": "reponly"})
+    res = run_snakemake(wd, "-n")
+    assert res.returncode == 0, res.stderr[-3000:]
+    jobs = _jobs(res.stdout)
+    assert jobs["representativity"] == 2 and jobs["surface_rep"] == 2
+    assert not {"contact", "surface", "fit_cel", "aggregate_contact"} & set(jobs)
+
+
+@pytest.mark.parametrize(
+    "edit, words",
+    [
+        (lambda c: c["scenes"]["tiny"]["contact"]["grid"].update(k_s=["17"]), "field 'contact.grid.k_s'"),
+        (lambda c: c["scenes"]["tiny"]["contact"].update(seeds=0), "field 'contact.seeds'"),
+        (lambda c: c.update(scene="nosuch"), "unknown scene 'nosuch'"),
+    ],
+)
+def test_invalid_config_stops_before_any_job(tmp_path, edit, words):
+    cfg = copy.deepcopy(TINY)
+    edit(cfg)
+    wd = copy_workflow(tmp_path / "wf", cfg)
+    res = run_snakemake(wd, "-j1")
+    assert res.returncode != 0
+    log = res.stdout + res.stderr
+    assert words in log and "scene '" in log
+    assert not (wd / "results").exists()
+
+
+def test_mistyped_target_fails_at_once(tmp_path):
+    wd = copy_workflow(tmp_path / "wf", TINY)
+    # H=0.7 is in no scene's grid: no rule can make it.
+    res = run_snakemake(wd, "-n", "results/tiny/contact/kl2_ks8_H0.7_s0.nc")
+    assert res.returncode != 0 and "MissingRuleException" in res.stdout + res.stderr
+    # seed 5 matches the pattern but is outside the scene's seeds: named with the range.
+    res = run_snakemake(wd, "-n", "results/tiny/contact/kl2_ks8_H0.5_s5.nc")
+    assert res.returncode != 0 and "seed=5 outside 0..1" in res.stdout + res.stderr
+
+
+def test_tiny_real_run(tmp_path):
+    wd = copy_workflow(tmp_path / "wf", TINY)
+    res = run_snakemake(wd, "-j2")
+    assert res.returncode == 0, res.stderr[-5000:]
+    out = wd / "results" / "tiny"
+    surf = xr.open_dataset(out / "surfaces" / "kl2_ks8_H0.5_s1.nc")
+    assert surf.heights.dims == ("k_l", "k_s", "H", "seed", "x", "y")
+    assert surf.heights.shape == (1, 1, 1, 1, 32, 32)
+    assert float(surf.H[0]) == 0.5 and int(surf.seed[0]) == 1
+    assert float(surf.rms_slope.squeeze()) == pytest.approx(0.1, rel=1e-6)
+    for name in ("roughcontact_version", "scene_parameters", "config_hash"):
+        assert name in surf.attrs
+    for var in list(surf.data_vars) + list(surf.coords):
+        assert {"units", "long_name"} <= set(surf[var].attrs), var
+    rep = xr.open_dataset(out / "aggregate" / "representativity.nc")
+    assert rep.epsilon.sizes == {"k_l": 2, "k_s": 1, "H": 1, "seed": 2}
+    con = xr.open_dataset(out / "aggregate" / "contact.nc")
+    assert con.area_fraction.dims == ("k_l", "k_s", "H", "seed", "step")
+    assert con.area_fraction.shape == (1, 1, 2, 2, 12)
+    assert np.all(np.isfinite(con.area_fraction.values))
+    assert np.all(np.diff(con.area_fraction.values, axis=-1) >= 0)
+    # a scene that asks for no fields writes none
+    case = xr.open_dataset(out / "contact" / "kl2_ks8_H0.5_s0.nc")
+    assert "contact_pressure" not in case and "gap" not in case
+    for fig in ("representativity", "surface_examples", "area_load", "kappa", "dpbar"):
+        for ext in ("png", "pdf"):
+            assert (out / "figures" / f"{fig}.{ext}").stat().st_size > 1000
+    assert "kappa" in (out / "fit" / "cel.csv").read_text()
+    # nothing left to do, and a rerun of one case by its file name works
+    again = run_snakemake(wd, "-n")
+    assert "Nothing to be done" in again.stdout + again.stderr
+    target = "results/tiny/contact/kl2_ks8_H0.8_s1.nc"
+    before = (wd / target).read_bytes()
+    res = run_snakemake(wd, "-j1", "--forcerun", "contact", target)
+    assert res.returncode == 0, res.stderr[-3000:]
+    assert (wd / target).read_bytes() == before, "outputs must be byte-identical across reruns"
