@@ -19,6 +19,8 @@ rule aggregate_representativity:
         "results/{scene}/logs/aggregate_representativity.log",
     benchmark:
         "results/{scene}/benchmarks/aggregate_representativity.tsv"
+    conda:
+        "../../envs/roughcontact.yaml"
     script:
         "../scripts/aggregate_representativity.py"
 
@@ -35,6 +37,8 @@ rule aggregate_contact:
         "results/{scene}/logs/aggregate_contact.log",
     benchmark:
         "results/{scene}/benchmarks/aggregate_contact.tsv"
+    conda:
+        "../../envs/roughcontact.yaml"
     script:
         "../scripts/aggregate_contact.py"
 
@@ -52,5 +56,7 @@ rule fit_cel:
         "results/{scene}/logs/fit_cel.log",
     benchmark:
         "results/{scene}/benchmarks/fit_cel.tsv"
+    conda:
+        "../../envs/roughcontact.yaml"
     script:
         "../scripts/fit_cel.py"

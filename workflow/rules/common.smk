@@ -36,7 +36,6 @@ wildcard_constraints:
     seed=r"\d+",
 
 
-CASE = "kl{k_l}_ks{k_s}_H{H}_s{seed}"
 
 
 def study_block(scene, study):
@@ -99,3 +98,16 @@ def contact_mem_mb(n):
 def contact_runtime_min(n, n_steps):
     """Wall-time request of one contact job [min]: 30 steps at N=1024 take well under a minute; x10 margin."""
     return max(5, int(10 * n_steps / 30 * (n / 1024) ** 2 * 2))
+
+
+def maybe_temp(path, study):
+    """`temp(path)` when the active scene's study sets keep_surfaces: false."""
+    keep = SCENES[ACTIVE_SCENE].get(study, {}).get("keep_surfaces", True)
+    return path if keep else temp(path)
+
+
+def example_surfaces(w):
+    """Surface files drawn in the Fig. 1 b-d panel: seed 0 and the first H of each example."""
+    block = study_block(w.scene, "representativity")
+    h = block["grid"]["H"][0]
+    return [f"results/{w.scene}/surfaces_rep/kl{e['k_l']}_ks{e['k_s']}_H{h}_s0.nc" for e in block["examples"]]

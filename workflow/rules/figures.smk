@@ -9,12 +9,6 @@ localrules:
     fig_dpbar,
 
 
-def _example_surfaces(w):
-    block = study_block(w.scene, "representativity")
-    h = block["grid"]["H"][0]
-    return [f"results/{w.scene}/surfaces_rep/kl{e['k_l']}_ks{e['k_s']}_H{h}_s0.nc" for e in block["examples"]]
-
-
 rule fig_representativity:
     input:
         rep="results/{scene}/aggregate/representativity.nc",
@@ -27,13 +21,15 @@ rule fig_representativity:
         "results/{scene}/logs/fig_representativity.log",
     benchmark:
         "results/{scene}/benchmarks/fig_representativity.tsv"
+    conda:
+        "../../envs/roughcontact.yaml"
     script:
         "../scripts/plot.py"
 
 
 rule fig_surface_examples:
     input:
-        surfaces=_example_surfaces,
+        surfaces=example_surfaces,
     output:
         png=report("results/{scene}/figures/surface_examples.png", caption="../report/surface_examples.rst", category="Representativity"),
         pdf="results/{scene}/figures/surface_examples.pdf",
@@ -43,6 +39,8 @@ rule fig_surface_examples:
         "results/{scene}/logs/fig_surface_examples.log",
     benchmark:
         "results/{scene}/benchmarks/fig_surface_examples.tsv"
+    conda:
+        "../../envs/roughcontact.yaml"
     script:
         "../scripts/plot.py"
 
@@ -60,6 +58,8 @@ rule fig_area_load:
         "results/{scene}/logs/fig_area_load.log",
     benchmark:
         "results/{scene}/benchmarks/fig_area_load.tsv"
+    conda:
+        "../../envs/roughcontact.yaml"
     script:
         "../scripts/plot.py"
 
@@ -77,6 +77,8 @@ rule fig_kappa:
         "results/{scene}/logs/fig_kappa.log",
     benchmark:
         "results/{scene}/benchmarks/fig_kappa.tsv"
+    conda:
+        "../../envs/roughcontact.yaml"
     script:
         "../scripts/plot.py"
 
@@ -94,5 +96,7 @@ rule fig_dpbar:
         "results/{scene}/logs/fig_dpbar.log",
     benchmark:
         "results/{scene}/benchmarks/fig_dpbar.tsv"
+    conda:
+        "../../envs/roughcontact.yaml"
     script:
         "../scripts/plot.py"

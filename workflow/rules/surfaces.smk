@@ -3,49 +3,39 @@
 # surfaces differently (rms height vs rms slope), so they live in separate folders.
 
 
-def _surface_params(study):
-    return dict(
-        scene=lambda w: w.scene,
-        study=study,
-        block=lambda w: check_case(w, study),
-    )
-
-
 rule surface_rep:
     output:
-        (
-            "results/{scene}/surfaces_rep/" + CASE + ".nc"
-            if SCENES[ACTIVE_SCENE].get("representativity", {}).get("keep_surfaces", True)
-            else temp("results/{scene}/surfaces_rep/" + CASE + ".nc")
-        ),
+        maybe_temp("results/{scene}/surfaces_rep/kl{k_l}_ks{k_s}_H{H}_s{seed}.nc", "representativity"),
     params:
-        **_surface_params("representativity"),
+        scene=lambda w: w.scene,
+        block=lambda w: check_case(w, "representativity"),
     log:
-        "results/{scene}/logs/surface_rep/" + CASE + ".log",
+        "results/{scene}/logs/surface_rep/kl{k_l}_ks{k_s}_H{H}_s{seed}.log",
     benchmark:
-        "results/{scene}/benchmarks/surface_rep/" + CASE + ".tsv"
+        "results/{scene}/benchmarks/surface_rep/kl{k_l}_ks{k_s}_H{H}_s{seed}.tsv"
     resources:
         mem_mb=lambda w: surface_mem_mb(SCENES[w.scene]["representativity"]["surface"]["N"]),
         runtime=5,
+    conda:
+        "../../envs/roughcontact.yaml"
     script:
         "../scripts/generate_surface.py"
 
 
 rule surface:
     output:
-        (
-            "results/{scene}/surfaces/" + CASE + ".nc"
-            if SCENES[ACTIVE_SCENE].get("contact", {}).get("keep_surfaces", True)
-            else temp("results/{scene}/surfaces/" + CASE + ".nc")
-        ),
+        maybe_temp("results/{scene}/surfaces/kl{k_l}_ks{k_s}_H{H}_s{seed}.nc", "contact"),
     params:
-        **_surface_params("contact"),
+        scene=lambda w: w.scene,
+        block=lambda w: check_case(w, "contact"),
     log:
-        "results/{scene}/logs/surface/" + CASE + ".log",
+        "results/{scene}/logs/surface/kl{k_l}_ks{k_s}_H{H}_s{seed}.log",
     benchmark:
-        "results/{scene}/benchmarks/surface/" + CASE + ".tsv"
+        "results/{scene}/benchmarks/surface/kl{k_l}_ks{k_s}_H{H}_s{seed}.tsv"
     resources:
         mem_mb=lambda w: surface_mem_mb(SCENES[w.scene]["contact"]["surface"]["N"]),
         runtime=5,
+    conda:
+        "../../envs/roughcontact.yaml"
     script:
         "../scripts/generate_surface.py"
