@@ -83,6 +83,10 @@ def write_dataset(ds: xr.Dataset, path: str | os.PathLike, *, stage: str, scene:
     path.parent.mkdir(parents=True, exist_ok=True)
     out = ds.copy()
     out.attrs = {**ds.attrs, **provenance_attrs(stage, scene, scene_parameters)}
+    # A job killed mid-write leaves its temporary file behind; only this job writes
+    # this target, so its stale temporaries are safe to remove.
+    for stale in path.parent.glob(f".{path.name}.*.tmp"):
+        stale.unlink(missing_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     os.close(fd)
     try:

@@ -9,7 +9,7 @@ def main(log):
     paths = list(snakemake.input)
     datasets = [read_dataset(p, stage="representativity", variables=["epsilon"]) for p in paths]
     expected = [(float(c.k_l), float(c.k_s), float(c.H), c.seed) for c in cases(block)]
-    ds = aggregate.combine_cases(datasets, paths, expected=expected)
+    ds = aggregate.combine_cases(datasets, paths, expected=expected, kind="representativity")
     ds = ds.merge(aggregate.representativity_statistics(ds))
     write_dataset(ds, snakemake.output[0], stage="aggregate", scene=snakemake.params.scene, scene_parameters=block)
     log.info("aggregated %d representativity cases into %s", len(paths), snakemake.output[0])

@@ -11,7 +11,18 @@ def main(log):
         if excluded:
             log.warning("excluding %d case(s) with unconverged steps from the fit", excluded)
         agg = agg.where(agg["n_unconverged"] == 0)
-    result = fit.fit_cel(agg, window=tuple(cfg["window"]), n_boot=cfg["n_boot"], rng_seed=cfg["rng_seed"])
+    # One group that cannot be fitted (too few points in the window, a joint fit that does not
+    # converge on a non-representative case) must not sink the others: it is reported as NaN.
+    result = fit.fit_cel(agg, window=tuple(cfg["window"]), n_boot=cfg["n_boot"], rng_seed=cfg["rng_seed"],
+                         on_insufficient="nan")
+    failed = result["value"].isnull()
+    for idx in zip(*map(lambda a: a.tolist(), failed.values.nonzero())):
+        labels = {dim: result[dim].values[i] for dim, i in zip(failed.dims, idx)}
+        if labels.get("constant") in (None, "kappa"):
+            log.warning("no fit for %s (see the log above for the reason)", labels)
+    for name in result.data_vars:
+        if result[name].dtype.kind == "f":
+            result[name].attrs["allow_nan"] = 1
     write_dataset(result, snakemake.output.nc, stage="fit", scene=snakemake.params.scene, scene_parameters=cfg)
     with open(snakemake.output.csv, "w") as fh:
         fh.write(fit.to_csv_table(result))

@@ -1,0 +1,234 @@
+#!/usr/bin/env bash
+# End-to-end check of the SLURM profile on a real (single-node, localhost-only) SLURM.
+#
+#   sudo tests/cluster/run_slurm_test.sh        # or: make test as root (tests/test_cluster.py)
+#
+# 1. installs what is missing: slurm-wlm + munge (apt-get), snakemake-executor-plugin-slurm (pip);
+# 2. starts a private munged, slurmctld and slurmd from tests/cluster/slurm.conf.in (one node,
+#    `localhost`, all CPUs, RAM from `free -m` minus a margin; no accounting database; free
+#    ports; everything under one temporary directory, nothing under /etc is touched);
+# 3. copies the workflow (Snakefile, workflow/, config/, envs/) into two directories, writes the same
+#    small scene into both (representativity N=32; contact N=32 when roughcontact.solver imports),
+#    runs it locally with -j2 in one and through workflow/profiles/slurm in the other;
+# 4. compares every NetCDF and CSV output: byte-identical is required.
+# The daemons are always stopped on exit. Prints "SKIP: <reason>" and exits 0 when it cannot run
+# here (not root, no apt-get, packages cannot be installed); exits non-zero on a real failure.
+#
+# Environment: PYTHON (default: .venv/bin/python of the repository, else python3),
+# ROUGHCONTACT_SLURM_KEEP=1 keeps the temporary directory, SLURM_UP_TIMEOUT (default 120 s).
+set -uo pipefail
+
+HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+REPO=$(cd "$HERE/../.." && pwd)
+export PATH="$PATH:/usr/sbin:/sbin"
+T0=$(date +%s)
+
+log() { echo "[slurm-test +$(($(date +%s) - T0))s] $*"; }
+skip() { echo "SKIP: $*"; exit 0; }
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+PY=${PYTHON:-}
+if [ -z "$PY" ]; then
+    if [ -x "$REPO/.venv/bin/python" ]; then PY="$REPO/.venv/bin/python"; else PY=$(command -v python3 || true); fi
+fi
+[ -n "$PY" ] && [ -x "$PY" ] || skip "no Python interpreter found (set PYTHON)"
+
+# ---------------------------------------------------------------- can it run here?
+[ "$(id -u)" = 0 ] || skip "not root: installing SLURM and starting its daemons needs root"
+"$PY" -c 'import snakemake, xarray, roughcontact' 2>/dev/null \
+    || skip "$PY cannot import snakemake, xarray and roughcontact (install the package first: make install)"
+
+# A run from inside a SLURM job would otherwise talk to the outer cluster.
+for var in $(env | sed -n 's/^\(SLURM_[A-Za-z0-9_]*\)=.*/\1/p'); do unset "$var"; done
+
+have_slurm() {
+    local b
+    for b in munged mungekey slurmctld slurmd sbatch squeue sinfo scontrol scancel srun; do
+        command -v "$b" >/dev/null 2>&1 || return 1
+    done
+}
+if ! have_slurm; then
+    command -v apt-get >/dev/null 2>&1 || skip "slurm-wlm/munge are not installed and apt-get is unavailable"
+    log "installing slurm-wlm and munge with apt-get"
+    export DEBIAN_FRONTEND=noninteractive
+    if ! apt-get install -y -q slurm-wlm munge >/tmp/roughcontact-apt.log 2>&1; then
+        apt-get update -q >>/tmp/roughcontact-apt.log 2>&1
+        apt-get install -y -q slurm-wlm munge >>/tmp/roughcontact-apt.log 2>&1 \
+            || skip "apt-get install slurm-wlm munge failed (log: /tmp/roughcontact-apt.log): $(tail -n 1 /tmp/roughcontact-apt.log)"
+    fi
+    have_slurm || skip "slurm-wlm/munge installed, but their programs are not on PATH"
+fi
+if ! "$PY" -c 'import snakemake_executor_plugin_slurm' 2>/dev/null; then
+    log "installing snakemake-executor-plugin-slurm with pip"
+    "$PY" -m pip install -q snakemake-executor-plugin-slurm >/tmp/roughcontact-pip.log 2>&1 \
+        || skip "pip install snakemake-executor-plugin-slurm failed (log: /tmp/roughcontact-pip.log)"
+fi
+log "slurm-wlm $(dpkg-query -W -f '${Version}' slurm-wlm 2>/dev/null || sinfo --version), plugin $("$PY" -c \
+    'import importlib.metadata as m; print(m.version("snakemake-executor-plugin-slurm"))'), $("$PY" -m snakemake --version)"
+
+# ---------------------------------------------------------------- private SLURM
+WORK=$(mktemp -d "${TMPDIR:-/tmp}/roughcontact-slurm.XXXXXX") || fail "mktemp failed"
+RUNDIR="$WORK/slurm-daemons"
+mkdir -p "$RUNDIR"/{munge,state,spool,log}
+chmod 700 "$RUNDIR/munge"
+PIDS=()
+
+cleanup() {
+    local rc=$? pid i
+    trap - EXIT INT TERM
+    if [ -n "${SLURM_CONF:-}" ] && [ -f "$SLURM_CONF" ]; then
+        timeout 10 scancel --user=root >/dev/null 2>&1 || true   # only this private cluster's jobs
+    fi
+    for ((i = ${#PIDS[@]} - 1; i >= 0; i--)); do
+        pid=${PIDS[i]}
+        kill "$pid" 2>/dev/null || continue
+        for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.2; done
+        kill -9 "$pid" 2>/dev/null || true
+    done
+    wait 2>/dev/null
+    if [ "$rc" = 0 ] && [ "${ROUGHCONTACT_SLURM_KEEP:-0}" != 1 ]; then
+        rm -rf "$WORK"
+    else
+        echo "[slurm-test] kept $WORK (daemon logs in $RUNDIR/log, run logs in $WORK/*.log)"
+    fi
+    exit "$rc"
+}
+trap cleanup EXIT
+trap 'exit 130' INT TERM
+
+show_logs() {
+    local f
+    for f in "$RUNDIR"/log/*; do
+        [ -s "$f" ] || continue
+        echo "----- $f (last 20 lines)" >&2
+        tail -n 20 "$f" >&2
+    done
+}
+
+read -r CTLD_PORT SLURMD_PORT < <("$PY" - <<'EOF'
+import socket
+socks = [socket.socket() for _ in range(2)]
+for s in socks:
+    s.bind(("127.0.0.1", 0))
+print(*(s.getsockname()[1] for s in socks))
+EOF
+)
+CPUS=$(nproc)
+MEM_TOTAL=$(free -m | awk '/^Mem:/ {print $2}')
+MARGIN=$((MEM_TOTAL / 10 > 512 ? MEM_TOTAL / 10 : 512))
+REAL_MEMORY=$((MEM_TOTAL - MARGIN))
+sed -e "s|@RUNDIR@|$RUNDIR|g" -e "s|@CTLD_PORT@|$CTLD_PORT|g" -e "s|@SLURMD_PORT@|$SLURMD_PORT|g" \
+    -e "s|@CPUS@|$CPUS|g" -e "s|@REAL_MEMORY@|$REAL_MEMORY|g" \
+    "$HERE/slurm.conf.in" >"$RUNDIR/slurm.conf"
+: >"$RUNDIR/plugstack.conf"
+export SLURM_CONF="$RUNDIR/slurm.conf"
+log "slurm.conf: node localhost, CPUs=$CPUS, RealMemory=$REAL_MEMORY MB, ports $CTLD_PORT/$SLURMD_PORT, in $RUNDIR"
+
+SOCK="$RUNDIR/munge/munge.socket.2"
+mungekey --create --keyfile="$RUNDIR/munge/munge.key" >/dev/null 2>&1 \
+    || dd if=/dev/urandom of="$RUNDIR/munge/munge.key" bs=1024 count=1 status=none
+chmod 600 "$RUNDIR/munge/munge.key"
+munged --foreground --force --socket="$SOCK" --key-file="$RUNDIR/munge/munge.key" \
+    --pid-file="$RUNDIR/munge/munged.pid" --seed-file="$RUNDIR/munge/munged.seed" \
+    --log-file="$RUNDIR/log/munged.log" >"$RUNDIR/log/munged.out" 2>&1 &
+PIDS+=($!)
+for _ in $(seq 50); do [ -S "$SOCK" ] && break; sleep 0.2; done
+munge --socket="$SOCK" -n 2>/dev/null | unmunge --socket="$SOCK" >/dev/null 2>&1 \
+    || { show_logs; fail "munged did not come up (socket $SOCK)"; }
+
+slurmctld -D -c -f "$SLURM_CONF" >"$RUNDIR/log/slurmctld.out" 2>&1 &
+PIDS+=($!)
+slurmd -D -N localhost -f "$SLURM_CONF" >"$RUNDIR/log/slurmd.out" 2>&1 &
+PIDS+=($!)
+log "munged, slurmctld, slurmd started (pids ${PIDS[*]})"
+
+# ---------------------------------------------------------------- the scene, twice
+SCENE_YAML="$WORK/config.yaml"
+if "$PY" -c 'import roughcontact.solver' 2>/dev/null; then WITH_CONTACT=1; else WITH_CONTACT=0; fi
+WITH_CONTACT=$WITH_CONTACT "$PY" - "$SCENE_YAML" <<'EOF' || fail "could not write the scene config"
+import os, sys, yaml
+scene = {
+    "description": "tests/cluster: the same small scene run locally and through SLURM",
+    "representativity": {
+        "surface": {"N": 32, "rms_height": 0.1},
+        "grid": {"k_l": ["1", "4"], "k_s": ["8"], "H": ["0.8"]},
+        "seeds": 2,
+        "n_bins": 20,
+        "examples": [{"k_l": "1", "k_s": "8"}, {"k_l": "4", "k_s": "8"}],
+    },
+}
+if os.environ["WITH_CONTACT"] == "1":
+    scene["contact"] = {
+        "surface": {"N": 32, "rms_slope": 0.1},
+        "grid": {"k_l": ["2"], "k_s": ["8"], "H": ["0.5", "0.8"]},
+        "seeds": 2,
+        "load": {"p_max": 0.01, "n_steps": 12},
+        "solver": {"tol": 1e-8},
+    }
+    scene["fit"] = {"window": [0.01, 0.3], "n_boot": 20}
+with open(sys.argv[1], "w") as fh:
+    yaml.safe_dump({"scene": "slurmtest", "scenes": {"slurmtest": scene}}, fh, sort_keys=False)
+EOF
+if [ "$WITH_CONTACT" = 1 ]; then
+    log "scene: representativity N=32 (4 surfaces) + contact N=32 (4 cases)"
+else
+    log "scene: representativity only (roughcontact.solver does not import, contact left out)"
+fi
+for d in local slurm; do
+    mkdir -p "$WORK/$d"
+    cp "$REPO/Snakefile" "$WORK/$d/"
+    cp -r "$REPO/workflow" "$REPO/config" "$WORK/$d/"
+    [ -d "$REPO/envs" ] && cp -r "$REPO/envs" "$WORK/$d/"   # the rules' conda: files (run metadata reads them)
+    rm -rf "$WORK/$d/results" "$WORK/$d/.snakemake"
+    cp "$SCENE_YAML" "$WORK/$d/config/config.yaml"
+done
+
+log "local run: snakemake --workflow-profile workflow/profiles/default -j2"
+t=$(date +%s)
+(cd "$WORK/local" && timeout 300 "$PY" -m snakemake --workflow-profile workflow/profiles/default -j2 --nocolor) \
+    >"$WORK/local.log" 2>&1 || { tail -n 40 "$WORK/local.log" >&2; fail "the local -j2 run failed (log above)"; }
+LOCAL_S=$(($(date +%s) - t))
+log "local run done in ${LOCAL_S}s"
+
+# ---------------------------------------------------------------- wait for the node
+UP_TIMEOUT=${SLURM_UP_TIMEOUT:-120}
+state=""
+while :; do
+    state=$(timeout 10 sinfo -h -n localhost -o %t 2>/dev/null | head -n 1)
+    [ "$state" = idle ] && break
+    for pid in "${PIDS[@]}"; do
+        kill -0 "$pid" 2>/dev/null || { show_logs; fail "a SLURM daemon (pid $pid) exited before the node came up"; }
+    done
+    if [ $(($(date +%s) - T0)) -ge "$UP_TIMEOUT" ]; then
+        show_logs
+        timeout 10 sinfo -R >&2 2>/dev/null || true
+        fail "SLURM node 'localhost' not idle after ${UP_TIMEOUT}s (sinfo state: '${state:-no answer}')"
+    fi
+    sleep 2
+done
+log "SLURM node localhost is idle"
+
+# ---------------------------------------------------------------- through SLURM
+SLURM_ARGS=(--workflow-profile workflow/profiles/slurm
+    --slurm-status-command squeue --slurm-no-account --slurm-init-seconds-before-status-checks 5
+    --slurm-keep-successful-logs --nocolor)
+log "SLURM run: snakemake ${SLURM_ARGS[*]}"
+t=$(date +%s)
+(cd "$WORK/slurm" && timeout 300 "$PY" -m snakemake "${SLURM_ARGS[@]}") >"$WORK/slurm.log" 2>&1
+rc=$?
+SLURM_S=$(($(date +%s) - t))
+if [ "$rc" != 0 ]; then
+    tail -n 60 "$WORK/slurm.log" >&2
+    find "$WORK/slurm/.snakemake/slurm_logs" -name '*.log' -exec tail -n 20 {} + >&2 2>/dev/null
+    show_logs
+    fail "the SLURM run failed with status $rc after ${SLURM_S}s (log above)"
+fi
+N_SUBMITTED=$(grep -c "submitted with SLURM jobid" "$WORK/slurm.log")
+[ "$N_SUBMITTED" -gt 0 ] || { tail -n 40 "$WORK/slurm.log" >&2; fail "the SLURM run submitted no SLURM job"; }
+log "SLURM run done in ${SLURM_S}s: $N_SUBMITTED SLURM job(s) (id, state, elapsed, CPUs, memory, comment):"
+timeout 10 squeue --states=all -h -o '    %i %T %M %C %m %k' 2>/dev/null | head -n 20
+
+# ---------------------------------------------------------------- same results?
+"$PY" "$HERE/compare_results.py" "$WORK/local/results" "$WORK/slurm/results" \
+    || fail "the SLURM run's outputs differ from the local -j2 run's"
+log "PASS: local -j2 ${LOCAL_S}s, SLURM ${SLURM_S}s ($N_SUBMITTED SLURM jobs), outputs byte-identical"

@@ -1,0 +1,158 @@
+"""Figures build from contract-format data and save byte-identically."""
+
+import os
+import subprocess
+import sys
+import textwrap
+
+import matplotlib.colors as mcolors
+import numpy as np
+import pytest
+import xarray as xr
+from matplotlib.figure import Figure
+
+from roughcontact.aggregate import CASE_DIMS, aggregate_contact, combine_cases, representativity_statistics, seed_statistics
+from roughcontact.fit import fit_cel, simulate_cel_cases
+from roughcontact.plots import (
+    DOUBLE_COLUMN_IN,
+    OKABE_ITO,
+    fig_area_load,
+    fig_dpbar,
+    fig_kappa,
+    fig_representativity,
+    fig_surface_examples,
+    save_figure,
+)
+from roughcontact.surface import generate_surface
+
+
+@pytest.fixture(scope="module")
+def contact():
+    dss, names = simulate_cel_cases(k_l=(4.0, 16.0), k_s=(32.0, 128.0), hurst=(0.36, 0.84), seeds=range(3),
+                                    point_noise=1e-4, seed_scatter=0.01, rng_seed=5)
+    agg = aggregate_contact(dss, names)
+    return agg, seed_statistics(agg), fit_cel(agg, n_boot=10)
+
+
+@pytest.fixture(scope="module")
+def rep_stats():
+    dss, names = [], []
+    rng = np.random.default_rng(0)
+    for kl in (1.0, 4.0, 16.0):
+        for ks in (32.0, 64.0, 128.0):
+            for s in range(3):
+                eps = 0.3 / kl * (32 / ks) ** 0.3 * (1 + 0.1 * rng.standard_normal())
+                dss.append(xr.Dataset(
+                    {"epsilon": (CASE_DIMS, np.full((1, 1, 1, 1), eps), {"units": "1/L", "long_name": "L2 error"})},
+                    coords={"k_l": [kl], "k_s": [ks], "H": [0.8], "seed": np.array([s], dtype=np.int64)}))
+                names.append(f"kl{kl:g}_ks{ks:g}_s{s}.nc")
+    return representativity_statistics(combine_cases(dss, names, kind="representativity"))
+
+
+@pytest.fixture(scope="module")
+def examples():
+    return [(generate_surface(64, kl, 32, 0.8, 0, rms_height=0.1), f"$k_l = {kl}$") for kl in (1, 4, 16)]
+
+
+def _builders(contact, rep_stats, examples):
+    agg, stats, fit = contact
+    return {
+        "representativity": lambda: fig_representativity(rep_stats),
+        "surface_examples": lambda: fig_surface_examples(examples),
+        "area_load": lambda: fig_area_load(agg, stats, fit),
+        "kappa": lambda: fig_kappa(agg, stats, fit),
+        "dpbar": lambda: fig_dpbar(agg, stats, fit),
+        "area_load_nofit": lambda: fig_area_load(agg, stats),
+        "kappa_one_panel": lambda: fig_kappa(agg, stats, fit, k_s=[32.0], hurst=[0.84]),
+    }
+
+
+@pytest.mark.parametrize("name", ["representativity", "surface_examples", "area_load", "kappa", "dpbar",
+                                  "area_load_nofit", "kappa_one_panel"])
+def test_figure_builds_and_saves_byte_identically(name, contact, rep_stats, examples, tmp_path):
+    build = _builders(contact, rep_stats, examples)[name]
+    fig = build()
+    assert isinstance(fig, Figure)
+    assert fig.get_size_inches()[0] <= DOUBLE_COLUMN_IN + 0.01
+    first = save_figure(fig, tmp_path / "a" / name)
+    second = save_figure(build(), tmp_path / "b" / f"{name}.pdf")  # a fresh render, suffix form
+    assert [p.suffix for p in first] == [".png", ".pdf"]
+    assert first[0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and first[1].read_bytes()[:5] == b"%PDF-"
+    for a, b in zip(first, second):
+        assert a.read_bytes() == b.read_bytes(), a.name
+    for ax in fig.axes:
+        if ax.get_visible() and ax.has_data() and not ax.get_label() == "<colorbar>":
+            assert ax.get_xlabel(), name
+    assert fig.legends, "legend expected outside the axes"
+
+
+def test_labels_symbols_and_units(contact):
+    agg, stats, fit = contact
+    ax = fig_area_load(agg, stats, fit).axes[0]
+    assert ax.get_xlabel() == r"$p_0/E^*$ [1]" and ax.get_ylabel() == r"$A/A_0$ [1]"
+    ax = fig_kappa(agg, stats, fit).axes[0]
+    assert "kappa" in ax.get_ylabel() and "[1]" in ax.get_ylabel()
+    ax = fig_dpbar(agg, stats, fit).axes[0]
+    assert ax.get_xscale() == "log" and ax.get_yscale() == "log"
+    assert r"\partial\bar p/\partial p_0" in ax.get_ylabel()
+
+
+def test_legend_lies_outside_the_axes(contact):
+    agg, stats, fit = contact
+    fig = fig_kappa(agg, stats, fit)
+    fig.draw_without_rendering()
+    legend = fig.legends[0].get_window_extent()
+    for ax in fig.axes:
+        if ax.get_visible():
+            assert not legend.overlaps(ax.get_window_extent())
+
+
+def test_data_colours_are_okabe_ito(contact):
+    agg, stats, fit = contact
+    fig = fig_area_load(agg, stats, fit)
+    allowed = {mcolors.to_hex(c) for c in OKABE_ITO}
+    for line in fig.axes[0].get_lines():
+        c = mcolors.to_rgb(line.get_color())
+        grey = np.allclose(c, c[0])
+        assert grey or mcolors.to_hex(c) in allowed, c
+
+
+def test_save_is_reproducible_across_processes(tmp_path):
+    script = textwrap.dedent("""
+        import sys
+        from roughcontact.aggregate import aggregate_contact, seed_statistics
+        from roughcontact.fit import fit_cel, simulate_cel_cases
+        from roughcontact.plots import fig_area_load, save_figure
+        dss, names = simulate_cel_cases(hurst=(0.36, 0.84), seeds=range(3), point_noise=1e-4)
+        agg = aggregate_contact(dss, names)
+        save_figure(fig_area_load(agg, seed_statistics(agg), fit_cel(agg, n_boot=10)), sys.argv[1])
+    """)
+    outs = []
+    for salt in ("1", "12345"):
+        env = dict(os.environ, PYTHONHASHSEED=salt)
+        base = tmp_path / salt / "fig"
+        subprocess.run([sys.executable, "-c", script, str(base)], check=True, env=env, timeout=300)
+        outs.append([base.with_suffix(".png").read_bytes(), base.with_suffix(".pdf").read_bytes()])
+    assert outs[0] == outs[1]
+
+
+def test_bad_inputs_are_rejected(contact, rep_stats, examples, tmp_path):
+    agg, stats, fit = contact
+    with pytest.raises(ValueError, match="k_s"):
+        fig_kappa(agg, stats, fit, k_s=[64.0])
+    with pytest.raises(ValueError, match="estimator"):
+        fig_dpbar(agg, stats, fit, estimator="median")
+    with pytest.raises(ValueError, match="e_star"):
+        fig_area_load(agg.drop_attrs(), stats)
+    with pytest.raises(ValueError, match="stats lacks"):
+        fig_dpbar(agg, stats.drop_vars("dpbar_dp0_mean"))
+    two_h = xr.concat([rep_stats, rep_stats.assign_coords(H=[0.5])], dim="H")
+    with pytest.raises(ValueError, match="hurst"):
+        fig_representativity(two_h)
+    fig_representativity(two_h, hurst=0.5)
+    with pytest.raises(ValueError, match="square"):
+        fig_surface_examples([(np.zeros((4, 5)), "x")])
+    with pytest.raises(ValueError, match="1 to 6"):
+        fig_surface_examples([])
+    with pytest.raises(ValueError, match="Figure"):
+        save_figure("not a figure", tmp_path / "x")

@@ -1,0 +1,239 @@
+"""Solver robustness: awkward surfaces and grids, input validation, stalls, warm start.
+
+Every solve either converges or says ``converged=False`` with finite outputs;
+:func:`solver_invariants.check_solution` runs on each of them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from roughcontact.solver import (
+    DEFAULT_MAX_ITER,
+    FRACTION_UNITS,
+    LENGTH_UNITS,
+    PRESSURE_UNITS,
+    STALL_WINDOW,
+    contact_perimeter,
+    solve_contact,
+    solve_step,
+)
+from roughcontact.surface import generate_surface
+from solver_invariants import check_solution
+
+TOL = 1e-10
+
+
+def _loads(p_max, n_steps=5):
+    return np.linspace(p_max / n_steps, p_max, n_steps)
+
+
+def test_first_contact_single_node():
+    # A load so small that the crest node alone carries it: the conjugate
+    # direction on a single free node is null, only the active set can move.
+    n = 64
+    h = generate_surface(n, 8, 32, 0.8, 0, rms_slope=0.1)
+    loads = [1e-12, 1e-10]
+    ds = solve_contact(h, loads, tol=TOL, store_fields=True)
+    check_solution(ds, h, tol=TOL)
+    p = ds["contact_pressure"].values[0]
+    assert np.count_nonzero(p) == 1
+    assert np.unravel_index(np.argmax(p), p.shape) == np.unravel_index(np.argmax(h), h.shape)
+
+
+@pytest.mark.parametrize("hurst", [0.05, 0.95])
+def test_extreme_hurst(hurst):
+    n = 128
+    h = generate_surface(n, 8, 32, hurst, 0, rms_slope=0.1)
+    ds = solve_contact(h, _loads(0.005), tol=TOL, store_fields=True)
+    check_solution(ds, h, tol=TOL)
+
+
+def test_short_cutoff_at_nyquist():
+    n = 128
+    h = generate_surface(n, 8, n // 2, 0.8, 0, rms_slope=0.1)
+    ds = solve_contact(h, _loads(0.005), tol=TOL, store_fields=True)
+    check_solution(ds, h, tol=TOL)
+
+
+def test_flat_surface_uniform_pressure():
+    n = 32
+    h = np.zeros((n, n))
+    ds = solve_contact(h, [0.01, 0.02], tol=TOL, store_fields=True)
+    check_solution(ds, h, tol=TOL)
+    assert np.all(ds["area_fraction"].values == 1.0)
+    np.testing.assert_allclose(ds["contact_pressure"].values[1], 0.02, rtol=1e-14)
+    assert np.all(ds["contact_perimeter"].values == 0.0)
+    np.testing.assert_allclose(ds["mean_gap"].values, 0.0, atol=1e-15)
+
+
+def test_constant_offset_surface_is_flat():
+    # A constant height is a rigid shift: same pressure as the flat case.
+    n = 16
+    ds = solve_contact(np.full((n, n), 3.0), [0.01], tol=TOL, store_fields=True)
+    np.testing.assert_allclose(ds["contact_pressure"].values[0], 0.01, rtol=1e-14)
+
+
+def test_two_dimensional_sinusoid_past_full_contact():
+    # h = D cos(2 pi x/L) cos(2 pi y/L): full contact needs p0 >= the amplitude
+    # of the single-mode pressure, p* = E* q D / 2 with q = 2 pi sqrt(2) / L.
+    n = 64
+    x = np.arange(n) / n
+    delta = 0.01
+    h = delta * np.cos(2 * np.pi * x)[:, None] * np.cos(2 * np.pi * x)[None, :]
+    p_star = np.pi * np.sqrt(2) * delta
+    loads = np.array([0.2, 0.6, 1.0 - 1e-3, 1.3, 2.0]) * p_star
+    ds = solve_contact(h, loads, tol=TOL, store_fields=True)
+    check_solution(ds, h, tol=TOL)
+    assert ds["area_fraction"].values[-1] == 1.0
+    exact = loads[-1] + p_star * h / delta
+    np.testing.assert_allclose(ds["contact_pressure"].values[-1], exact, atol=1e-8 * loads[-1])
+
+
+def test_rms_slope_one():
+    n = 128
+    h = generate_surface(n, 8, 32, 0.8, 0, rms_slope=1.0)
+    ds = solve_contact(h, _loads(0.05), tol=TOL, store_fields=True)
+    check_solution(ds, h, tol=TOL)
+
+
+@pytest.mark.parametrize("n", [63, 96, 100])
+def test_odd_and_non_power_of_two_grids(n):
+    h = generate_surface(n, 4, 16, 0.8, 0, rms_slope=0.1)
+    ds = solve_contact(h, _loads(0.005), tol=TOL, store_fields=True, length=2.5, e_star=3.0)
+    check_solution(ds, h, tol=TOL, length=2.5, e_star=3.0)
+
+
+def test_max_iter_reached_is_reported_not_raised():
+    h = generate_surface(64, 8, 32, 0.8, 0, rms_slope=0.1)
+    ds = solve_contact(h, _loads(0.005, 3), tol=TOL, max_iter=1, store_fields=True)
+    check_solution(ds, h, tol=TOL, require_converged=False, area_slack_nodes=64 * 64)
+    assert not ds["converged"].values.any()
+    assert np.all(ds["iterations"].values == 1)
+
+
+def test_unreachable_tolerance_stalls_cleanly():
+    # 1e-16 is below the round-off floor of the gap (~1e-15 of the rms height):
+    # the solver must give up by itself long before max_iter.
+    h = generate_surface(64, 8, 32, 0.8, 0, rms_slope=0.1)
+    ds = solve_contact(h, [0.002, 0.004], tol=1e-16, store_fields=True)
+    check_solution(ds, h, tol=1e-16, require_converged=False)
+    assert not ds["converged"].values.any()
+    assert np.all(ds["iterations"].values < 3 * STALL_WINDOW) and DEFAULT_MAX_ITER > 3 * STALL_WINDOW
+    assert np.all(ds["residual"].values < 1e-12)  # it got to the floor before stopping
+
+
+def test_tight_tolerance_reachable():
+    h = generate_surface(128, 16, 32, 0.8, 0, rms_slope=0.1)
+    ds = solve_contact(h, _loads(0.005, 3), tol=1e-13, store_fields=True)
+    check_solution(ds, h, tol=1e-13)
+
+
+def test_decreasing_loads_are_accepted():
+    h = generate_surface(64, 8, 32, 0.8, 0, rms_slope=0.1)
+    loads = [0.004, 0.001, 0.003]
+    ds = solve_contact(h, loads, tol=TOL, store_fields=True)
+    check_solution(ds, h, tol=TOL)
+    ref = solve_step(h, 0.001, tol=TOL)
+    assert float(ds["area_fraction"][1]) == ref.area_fraction
+
+
+def test_warm_start_reduces_iterations():
+    h = generate_surface(128, 16, 32, 0.8, 0, rms_slope=0.1)
+    loads = _loads(0.005, 10)
+    warm = solve_contact(h, loads, tol=TOL)
+    cold = [solve_step(h, p0, tol=TOL) for p0 in loads]
+    n_warm = int(warm["iterations"].sum())
+    n_cold = sum(r.iterations for r in cold)
+    print(f"iterations warm {n_warm}, cold {n_cold}, ratio {n_warm / n_cold:.2f}")
+    assert n_warm < n_cold
+    np.testing.assert_array_equal(warm["area_fraction"].values, [r.area_fraction for r in cold])
+
+
+def test_dataset_layout_and_units():
+    n = 32
+    h = generate_surface(n, 2, 8, 0.8, 0, rms_slope=0.1)
+    ds = solve_contact(h, [0.001, 0.002, 0.003], tol=TOL)
+    assert isinstance(ds, xr.Dataset)
+    assert list(ds["step"].values) == [1, 2, 3]
+    assert "contact_pressure" not in ds and "x" not in ds.coords
+    assert ds["pressure"].attrs["units"] == PRESSURE_UNITS
+    assert ds["mean_contact_pressure"].attrs["units"] == PRESSURE_UNITS
+    assert ds["mean_gap"].attrs["units"] == LENGTH_UNITS
+    assert ds["area_fraction"].attrs["units"] == FRACTION_UNITS
+    assert ds["converged"].dtype == bool
+    assert ds.attrs["n"] == n and ds.attrs["fft_backend"] in ("pyfftw", "numpy")
+
+    full = solve_contact(h, [0.001, 0.002, 0.003], tol=TOL, store_fields=True, length=2.0)
+    assert full["contact_pressure"].dims == ("step", "x", "y")
+    np.testing.assert_allclose(full["x"].values, np.arange(n) * 2.0 / n)
+    check_solution(full, h, tol=TOL, length=2.0)
+
+    some = solve_contact(h, [0.001, 0.002, 0.003], tol=TOL, store_fields=[3, 1], length=2.0)
+    assert some["contact_pressure"].dims == ("field_step", "x", "y")
+    assert list(some["field_step"].values) == [1, 3]
+    np.testing.assert_array_equal(some["contact_pressure"].sel(field_step=3).values,
+                                  full["contact_pressure"].sel(step=3).values)
+    check_solution(some, h, tol=TOL, length=2.0)
+
+
+def test_netcdf_roundtrip(tmp_path):
+    h = generate_surface(32, 2, 8, 0.8, 0, rms_slope=0.1)
+    ds = solve_contact(h, [0.001, 0.002], tol=TOL, store_fields=True, hardness=0.05)
+    path = tmp_path / "solve.nc"
+    ds.to_netcdf(path)
+    back = xr.load_dataset(path)
+    xr.testing.assert_identical(back, ds)
+
+
+def test_perimeter_of_a_square_patch():
+    # A k x k patch has 4k pixel edges on its boundary: P = 4 k dx / L^2.
+    n, k, length = 20, 5, 2.0
+    mask = np.zeros((n, n), dtype=bool)
+    mask[3:3 + k, 18:] = True
+    mask[3:3 + k, :k - 2] = True  # wraps across the periodic edge
+    assert contact_perimeter(mask, length) == pytest.approx(4 * k * (length / n) / length**2)
+
+
+# --------------------------------------------------------------------------- validation
+GOOD = np.zeros((8, 8))
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        (dict(heights=np.full((8, 8), np.nan)), "heights must contain only finite"),
+        (dict(heights=np.zeros((8, 7))), "heights must be a 2-D square"),
+        (dict(heights=np.zeros(8)), "heights must be a 2-D square"),
+        (dict(heights=np.zeros((8, 8), complex)), "heights must be real"),
+        (dict(heights=[[1, 2], [3]]), "heights must be a real 2-D square array"),
+        (dict(heights=np.zeros((2, 2))), "at least 4 x 4"),
+        (dict(pressures=[0.01, -0.01]), "pressures must all be finite and > 0"),
+        (dict(pressures=[0.0]), "pressures must all be finite and > 0"),
+        (dict(pressures=[np.inf]), "pressures must all be finite and > 0"),
+        (dict(pressures=[]), "pressures must be a non-empty 1-D"),
+        (dict(pressures=[[0.1]]), "pressures must be a non-empty 1-D"),
+        (dict(pressures="abc"), "pressures must be a 1-D sequence"),
+        (dict(tol=0.0), r"tol must be a number in the open interval \(0, 1\)"),
+        (dict(tol=1.0), r"tol must be a number in the open interval \(0, 1\)"),
+        (dict(tol=np.nan), r"tol must be a number in the open interval \(0, 1\)"),
+        (dict(max_iter=0), "max_iter must be an integer >= 1"),
+        (dict(max_iter=2.5), "max_iter must be an integer >= 1"),
+        (dict(e_star=0.0), "e_star must be a finite real number > 0"),
+        (dict(length=-1.0), "length must be a finite real number > 0"),
+        (dict(hardness=-1.0), "hardness must be a finite real number > 0"),
+        (dict(hardness=0.005), "must be < hardness"),
+        (dict(threads=0), "threads must be an integer >= 1"),
+        (dict(store_fields=[0]), "store_fields must be a bool or an iterable of step numbers in 1..1"),
+        (dict(store_fields="yes"), "store_fields must be a bool"),
+    ],
+)
+def test_input_validation(kwargs, match):
+    args = dict(heights=GOOD, pressures=[0.01])
+    args.update(kwargs)
+    heights = args.pop("heights")
+    pressures = args.pop("pressures")
+    with pytest.raises(ValueError, match=match):
+        solve_contact(heights, pressures, **args)

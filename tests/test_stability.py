@@ -1,0 +1,74 @@
+"""Property-based stability suite over the parameter space a config can express.
+
+Hypothesis draws surfaces (N 16..N_MAX odd and even, 0.01 < H < 0.99, k_l < k_s <= N/2,
+rms slope 1e-3..1), loads from a single contact node to past full contact, and
+tolerances 1e-3..1e-12, and asserts the invariants of tests/solver_invariants.py on every
+solve: p >= 0, mean p = p0, gap >= -tol*s on the contact set, A/A0 non-decreasing and in
+(0, 1], everything finite, and converged or an honest converged=False with its residual.
+
+Profiles: ``ci`` (default, few small examples so CI stays fast) and ``long``
+(``HYPOTHESIS_PROFILE=long pytest tests/test_stability.py``) for a by-hand soak.
+Failing examples hypothesis finds are committed in tests/test_stability_regressions.py.
+"""
+import os
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from roughcontact import generate_surface
+from roughcontact.solver import elastic_kernel, solve_contact
+from roughcontact.surface import spectral_moments
+from solver_invariants import check_solution
+
+settings.register_profile("ci", max_examples=20, deadline=None, derandomize=True,
+                          suppress_health_check=[HealthCheck.too_slow])
+settings.register_profile("long", max_examples=500, deadline=None,
+                          suppress_health_check=[HealthCheck.too_slow])
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+N_MAX = 128 if os.environ.get("HYPOTHESIS_PROFILE", "ci") == "ci" else 512
+
+
+def full_contact_pressure(h: np.ndarray, e_star: float = 1.0, length: float = 1.0) -> float:
+    """Smallest p0 giving full contact: p = p0 + K^-1 (h - mean h) must stay >= 0."""
+    n = h.shape[0]
+    kernel = elastic_kernel(n, e_star, length)
+    with np.errstate(divide="ignore"):
+        inv = np.where(kernel > 0, 1.0 / np.where(kernel > 0, kernel, 1.0), 0.0)
+    extra = np.fft.irfft2(np.fft.rfft2(h) * inv, s=h.shape)
+    return float(max(-extra.min(), 0.0))
+
+
+@st.composite
+def cases(draw):
+    n = draw(st.integers(16, N_MAX))
+    k_s = draw(st.integers(2, n // 2))
+    k_l = draw(st.integers(1, k_s - 1))
+    hurst = draw(st.floats(0.01, 0.99))
+    slope = 10 ** draw(st.floats(-3, 0))
+    seed = draw(st.integers(0, 2**31 - 1))
+    tol = 10 ** draw(st.floats(-12, -3))
+    # loads as fractions of the full-contact pressure, log-uniform from 1e-6 to 2
+    fracs = sorted(10 ** np.array(draw(st.lists(st.floats(-6, np.log10(2.0)), min_size=1, max_size=4))))
+    return n, k_l, k_s, hurst, slope, seed, tol, fracs
+
+
+@given(cases())
+def test_invariants_hold_everywhere(case):
+    n, k_l, k_s, hurst, slope, seed, tol, fracs = case
+    h = generate_surface(n, k_l, k_s, hurst, seed, rms_slope=slope)
+    assert np.all(np.isfinite(h))
+    assert spectral_moments(h)["rms_slope"] == pytest.approx(slope, rel=1e-6)
+    assert abs(h.mean()) <= 1e-12 * np.abs(h).max()
+    p_full = full_contact_pressure(h)
+    pressures = [f * p_full for f in fracs]
+    ds = solve_contact(h, pressures, tol=tol, max_iter=2000, store_fields=True)
+    check_solution(ds, h, tol=tol, require_converged=False)
+    area = ds.area_fraction.values
+    assert np.all((area > 0) & (area <= 1))
+    for i, f in enumerate(fracs):
+        if f >= 1.0 + 1e-6 and bool(ds.converged.values[i]):
+            assert area[i] == 1.0, "past the full-contact pressure every node is in contact"
+    unconverged = ~ds.converged.values
+    assert np.all(np.isfinite(ds.residual.values[unconverged]))
