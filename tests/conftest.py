@@ -30,11 +30,12 @@ def run_snakemake(workdir, *args, timeout=900):
 
 
 def copy_workflow(dest: Path, config: dict | None = None) -> Path:
-    """Copy Snakefile, workflow/ and config/ into ``dest``; optionally replace the config."""
+    """Copy Snakefile, workflow/, config/ and envs/ into ``dest``; optionally replace the config."""
     dest.mkdir(parents=True, exist_ok=True)
     shutil.copy(REPO / "Snakefile", dest / "Snakefile")
     shutil.copytree(REPO / "workflow", dest / "workflow", dirs_exist_ok=True)
     shutil.copytree(REPO / "config", dest / "config", dirs_exist_ok=True)
+    shutil.copytree(REPO / "envs", dest / "envs", dirs_exist_ok=True)
     if config is not None:
         with open(dest / "config" / "config.yaml", "w") as fh:
             yaml.safe_dump(config, fh, sort_keys=False)

@@ -1,0 +1,51 @@
+"""A scene computes what it calls for and nothing else: jobs planned and variables written."""
+import copy
+
+import xarray as xr
+
+from conftest import copy_workflow, run_snakemake
+from test_workflow import TINY, _jobs
+
+CASE = "results/tiny/contact/kl2_ks8_H0.5_s0.nc"
+
+
+def _scene(**contact_extra):
+    cfg = copy.deepcopy(TINY)
+    cfg["scenes"]["tiny"]["contact"].update(contact_extra)
+    return cfg
+
+
+def _variables(tmp_path, name, cfg):
+    wd = copy_workflow(tmp_path / name, cfg)
+    res = run_snakemake(wd, "-j1", CASE)
+    assert res.returncode == 0, res.stdout[-2000:] + res.stderr[-2000:]
+    with xr.open_dataset(wd / CASE) as ds:
+        return set(ds.variables), ds.load()
+
+
+def test_optional_outputs_and_effects_add_exactly_their_variables(tmp_path):
+    base, _ = _variables(tmp_path, "base", _scene())
+    fields, ds_f = _variables(tmp_path, "fields", _scene(outputs={"fields": [3, 12]}))
+    plastic, ds_p = _variables(tmp_path, "plastic", _scene(effects={"plasticity": {"hardness": 0.02}}))
+    assert fields - base == {"contact_pressure", "gap", "field_step", "x", "y"}
+    assert not base - fields
+    assert ds_f["contact_pressure"].shape[-2:] == (32, 32)
+    assert ds_f["field_step"].values.tolist() == [3, 12]
+    assert plastic - base == {"plastic_area_fraction", "plastic_load_fraction"}
+    assert float(ds_p["plastic_area_fraction"].max()) > 0
+
+
+def test_scene_without_contact_block_plans_no_contact_jobs(tmp_path):
+    cfg = copy.deepcopy(TINY)
+    del cfg["scenes"]["tiny"]["contact"]
+    wd = copy_workflow(tmp_path / "rep", cfg)
+    res = run_snakemake(wd, "-n")
+    assert res.returncode == 0, res.stderr[-2000:]
+    jobs = _jobs(res.stdout)
+    assert "representativity" in jobs
+    assert not {"surface", "contact", "aggregate_contact", "fit_cel", "fig_kappa"} & set(jobs)
+    cfg = copy.deepcopy(TINY)
+    del cfg["scenes"]["tiny"]["representativity"]
+    wd = copy_workflow(tmp_path / "con", cfg)
+    jobs = _jobs(run_snakemake(wd, "-n").stdout)
+    assert "contact" in jobs and not {"surface_rep", "representativity", "fig_representativity"} & set(jobs)
