@@ -100,4 +100,4 @@ def test_defaults_filled(shipped_config):
     del cfg["scenes"]["demo"]["contact"]["solver"]
     demo = validate_config(cfg, SCHEMA)["scenes"]["demo"]
     assert demo["contact"]["solver"] == {"e_star": 1.0, "tol": 1e-8, "max_iter": 10000}
-    assert demo["contact"]["outputs"] == {"fields": []}
+    assert demo["contact"]["outputs"] == {"fields": [], "clusters": False}

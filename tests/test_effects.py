@@ -27,6 +27,10 @@ def test_optional_outputs_and_effects_add_exactly_their_variables(tmp_path):
     base, _ = _variables(tmp_path, "base", _scene())
     fields, ds_f = _variables(tmp_path, "fields", _scene(outputs={"fields": [3, 12]}))
     plastic, ds_p = _variables(tmp_path, "plastic", _scene(effects={"plasticity": {"hardness": 0.02}}))
+    clusters, ds_c = _variables(tmp_path, "clusters", _scene(outputs={"clusters": True}))
+    assert clusters - base == {"cluster_count", "cluster_mean_area", "cluster_max_area", "cluster_area_histogram",
+                               "area_bin", "area_bin_low", "area_bin_high"}
+    assert int(ds_c["cluster_count"].min()) >= 1
     assert fields - base == {"contact_pressure", "gap", "field_step", "x", "y"}
     assert not base - fields
     assert ds_f["contact_pressure"].shape[-2:] == (32, 32)

@@ -237,3 +237,14 @@ def test_input_validation(kwargs, match):
     pressures = args.pop("pressures")
     with pytest.raises(ValueError, match=match):
         solve_contact(heights, pressures, **args)
+
+
+@pytest.mark.parametrize("p0", [0.0, -1.0, np.nan, "x"])
+def test_solve_step_validates_p0(p0):
+    with pytest.raises(ValueError, match="p0 must be a finite number > 0"):
+        solve_step(GOOD, p0)
+
+
+def test_solve_step_initial_pressure_shape():
+    with pytest.raises(ValueError, match="initial_pressure must have shape"):
+        solve_step(GOOD, 0.01, initial_pressure=np.ones((4, 4)))

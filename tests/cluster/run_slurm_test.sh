@@ -69,22 +69,26 @@ log "slurm-wlm $(dpkg-query -W -f '${Version}' slurm-wlm 2>/dev/null || sinfo --
 # ---------------------------------------------------------------- private SLURM
 WORK=$(mktemp -d "${TMPDIR:-/tmp}/roughcontact-slurm.XXXXXX") || fail "mktemp failed"
 RUNDIR="$WORK/slurm-daemons"
-mkdir -p "$RUNDIR"/{munge,state,spool,log}
-chmod 700 "$RUNDIR/munge"
+mkdir -p "$RUNDIR"/{munge,state,spool,log,bin}
+chmod 711 "$RUNDIR/munge"   # munged: the socket's directory must be searchable by all
 PIDS=()
+SNAKE_PID=""
+
+stop_pid() {  # TERM, up to 10 s grace, then KILL
+    local pid=$1
+    [ -n "$pid" ] && kill "$pid" 2>/dev/null || return 0
+    for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || return 0; sleep 0.2; done
+    kill -9 "$pid" 2>/dev/null || true
+}
 
 cleanup() {
     local rc=$? pid i
     trap - EXIT INT TERM
+    stop_pid "${SNAKE_PID:-}"
     if [ -n "${SLURM_CONF:-}" ] && [ -f "$SLURM_CONF" ]; then
         timeout 10 scancel --user=root >/dev/null 2>&1 || true   # only this private cluster's jobs
     fi
-    for ((i = ${#PIDS[@]} - 1; i >= 0; i--)); do
-        pid=${PIDS[i]}
-        kill "$pid" 2>/dev/null || continue
-        for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.2; done
-        kill -9 "$pid" 2>/dev/null || true
-    done
+    for ((i = ${#PIDS[@]} - 1; i >= 0; i--)); do stop_pid "${PIDS[i]}"; done
     wait 2>/dev/null
     if [ "$rc" = 0 ] && [ "${ROUGHCONTACT_SLURM_KEEP:-0}" != 1 ]; then
         rm -rf "$WORK"
@@ -122,6 +126,16 @@ sed -e "s|@RUNDIR@|$RUNDIR|g" -e "s|@CTLD_PORT@|$CTLD_PORT|g" -e "s|@SLURMD_PORT
     "$HERE/slurm.conf.in" >"$RUNDIR/slurm.conf"
 : >"$RUNDIR/plugstack.conf"
 export SLURM_CONF="$RUNDIR/slurm.conf"
+# Inside a SLURM job, snakemake-executor-plugin-slurm-jobstep (0.6) starts each rule with `srun`
+# in an environment stripped of SLURM_* variables, SLURM_CONF included; a real cluster's srun
+# finds /etc/slurm/slurm.conf (or its configless server), this private one would find nothing.
+# So an `srun` first on PATH (PATH reaches the job: sbatch --export=ALL) puts SLURM_CONF back.
+cat >"$RUNDIR/bin/srun" <<EOF
+#!/bin/sh
+SLURM_CONF="$SLURM_CONF" exec "$(command -v srun)" "\$@"
+EOF
+chmod 755 "$RUNDIR/bin/srun"
+export PATH="$RUNDIR/bin:$PATH"
 log "slurm.conf: node localhost, CPUs=$CPUS, RealMemory=$REAL_MEMORY MB, ports $CTLD_PORT/$SLURMD_PORT, in $RUNDIR"
 
 SOCK="$RUNDIR/munge/munge.socket.2"
@@ -141,6 +155,39 @@ PIDS+=($!)
 slurmd -D -N localhost -f "$SLURM_CONF" >"$RUNDIR/log/slurmd.out" 2>&1 &
 PIDS+=($!)
 log "munged, slurmctld, slurmd started (pids ${PIDS[*]})"
+
+# run_snakemake DIR LOG LIMIT_S WATCH_SLURM ARGS...: snakemake in DIR, output to LOG, killed after
+# LIMIT_S seconds; with WATCH_SLURM=1 it also fails fast on a job SLURM can never start.
+run_snakemake() {
+    local dir=$1 logf=$2 limit=$3 watch=$4 start bad rc
+    shift 4
+    start=$(date +%s)
+    (cd "$dir" && exec "$PY" -m snakemake "$@") >"$logf" 2>&1 &
+    SNAKE_PID=$!
+    while kill -0 "$SNAKE_PID" 2>/dev/null; do
+        if [ $(($(date +%s) - start)) -ge "$limit" ]; then
+            stop_pid "$SNAKE_PID"
+            echo "snakemake killed after ${limit}s" >>"$logf"
+            break
+        fi
+        if [ "$watch" = 1 ]; then
+            # pending reasons that never clear: the request exceeds the node or partition
+            bad=$(timeout 10 squeue -h -t PD -o '%i %r' 2>/dev/null \
+                | awk '$2 ~ /^(PartitionConfig|PartitionNodeLimit|PartitionTimeLimit|BadConstraints)$/' | head -n 1)
+            if [ -n "$bad" ]; then
+                stop_pid "$SNAKE_PID"
+                echo "SLURM job ${bad% *} can never start (reason ${bad#* }):" >>"$logf"
+                timeout 10 scontrol show job "${bad% *}" >>"$logf" 2>&1
+                break
+            fi
+        fi
+        sleep 2
+    done
+    wait "$SNAKE_PID"
+    rc=$?
+    SNAKE_PID=""
+    return "$rc"
+}
 
 # ---------------------------------------------------------------- the scene, twice
 SCENE_YAML="$WORK/config.yaml"
@@ -185,8 +232,8 @@ done
 
 log "local run: snakemake --workflow-profile workflow/profiles/default -j2"
 t=$(date +%s)
-(cd "$WORK/local" && timeout 300 "$PY" -m snakemake --workflow-profile workflow/profiles/default -j2 --nocolor) \
-    >"$WORK/local.log" 2>&1 || { tail -n 40 "$WORK/local.log" >&2; fail "the local -j2 run failed (log above)"; }
+run_snakemake "$WORK/local" "$WORK/local.log" 240 0 --workflow-profile workflow/profiles/default -j2 --nocolor \
+    || { tail -n 40 "$WORK/local.log" >&2; fail "the local -j2 run failed (log above)"; }
 LOCAL_S=$(($(date +%s) - t))
 log "local run done in ${LOCAL_S}s"
 
@@ -209,12 +256,15 @@ done
 log "SLURM node localhost is idle"
 
 # ---------------------------------------------------------------- through SLURM
-SLURM_ARGS=(--workflow-profile workflow/profiles/slurm
+# --cores: the node has $CPUS CPUs, so a group job may be at most that wide (the profile says 8).
+# squeue for status: there is no accounting database for sacct. --slurm-no-account: there are
+# no accounts (plugin 2.8 still tries to guess one and then submits without, harmlessly).
+SLURM_ARGS=(--workflow-profile workflow/profiles/slurm --cores "$CPUS"
     --slurm-status-command squeue --slurm-no-account --slurm-init-seconds-before-status-checks 5
     --slurm-keep-successful-logs --nocolor)
 log "SLURM run: snakemake ${SLURM_ARGS[*]}"
 t=$(date +%s)
-(cd "$WORK/slurm" && timeout 300 "$PY" -m snakemake "${SLURM_ARGS[@]}") >"$WORK/slurm.log" 2>&1
+run_snakemake "$WORK/slurm" "$WORK/slurm.log" 240 1 "${SLURM_ARGS[@]}"
 rc=$?
 SLURM_S=$(($(date +%s) - t))
 if [ "$rc" != 0 ]; then

@@ -21,6 +21,7 @@ def main(log):
         store_fields=block["outputs"]["fields"] or False,
         threads=snakemake.threads,
         hardness=plastic["hardness"] * solver["e_star"] if plastic else None,
+        clusters=block["outputs"]["clusters"],
     )
     ds = contact_dataset(result, rms_slope=float(surf.rms_slope.squeeze()), alpha=float(surf.alpha.squeeze()),
                          e_star=solver["e_star"], k_l=w.k_l, k_s=w.k_s, hurst=w.H, seed=int(w.seed))
