@@ -109,9 +109,18 @@ class RealFFT2:
 
 
 @functools.lru_cache(maxsize=32)
+def _cached_fft(shape: tuple[int, int], threads: int, backend: str) -> RealFFT2:
+    return RealFFT2(shape, threads=threads, backend=backend)
+
+
 def get_fft(shape: tuple[int, int], threads: int = 1, backend: str | None = None) -> RealFFT2:
-    """Cached :class:`RealFFT2` for ``shape``: plans are made once per shape and reused."""
-    return RealFFT2(tuple(shape), threads=threads, backend=backend or default_backend())
+    """Cached :class:`RealFFT2` for ``shape``: plans are made once per shape and reused.
+
+    The cache key is normalised (shape as ints, threads >= 1, the resolved backend name),
+    so every caller asking for the same transform shares one set of plans and buffers.
+    """
+    key = (tuple(int(s) for s in shape), max(1, int(threads)), backend or default_backend())
+    return _cached_fft(*key)
 
 
 def wavenumbers(n: int, length: float = 1.0) -> tuple[np.ndarray, np.ndarray]:

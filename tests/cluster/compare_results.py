@@ -18,6 +18,24 @@ def _files(root: Path) -> set[Path]:
     return {p.relative_to(root) for pattern in PATTERNS for p in root.rglob(pattern)}
 
 
+def _numeric_diffs(da, db) -> str:
+    """Largest absolute difference of each numeric variable present in both with equal shape."""
+    import numpy as np
+
+    lines = []
+    for name in sorted(set(da.variables) & set(db.variables)):
+        a, b = da[name].values, db[name].values
+        if a.shape != b.shape or not (np.issubdtype(a.dtype, np.number) and np.issubdtype(b.dtype, np.number)):
+            continue
+        diff = np.abs(a.astype(float) - b.astype(float))
+        both_nan = np.isnan(a.astype(float)) & np.isnan(b.astype(float))
+        diff = np.where(both_nan, 0.0, diff)
+        if diff.size and (np.nanmax(diff) > 0 or np.isnan(diff).any()):
+            where = np.unravel_index(int(np.nanargmax(np.nan_to_num(diff, nan=np.inf))), diff.shape)
+            lines.append(f"{name}: max |local - slurm| = {np.nanmax(diff):.3e} at index {tuple(int(i) for i in where)}")
+    return ("\n" + "\n".join(lines)) if lines else ""
+
+
 def _explain(a: Path, b: Path) -> str:
     if a.suffix != ".nc":
         return "contents differ"
@@ -28,7 +46,7 @@ def _explain(a: Path, b: Path) -> str:
             try:
                 xr.testing.assert_identical(da.load(), db.load())
             except AssertionError as err:
-                return str(err)
+                return str(err) + _numeric_diffs(da, db)
         return "bytes differ, but xarray finds the datasets identical (encoding or layout)"
     except Exception as err:  # noqa: BLE001 - report, do not hide the mismatch
         return f"bytes differ; could not open with xarray: {err!r}"

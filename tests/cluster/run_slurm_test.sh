@@ -5,7 +5,7 @@
 #
 # 1. installs what is missing: slurm-wlm + munge (apt-get), snakemake-executor-plugin-slurm (pip);
 # 2. starts a private munged, slurmctld and slurmd from tests/cluster/slurm.conf.in (one node,
-#    `localhost`, all CPUs, RAM from `free -m` minus a margin; no accounting database; free
+#    `localhost`, all CPUs, RAM of /proc/meminfo minus a margin; no accounting database; free
 #    ports; everything under one temporary directory, nothing under /etc is touched);
 # 3. copies the workflow (Snakefile, workflow/, config/, envs/) into two directories, writes the same
 #    small scene into both (representativity N=32; contact N=32 when roughcontact.solver imports),
@@ -15,7 +15,8 @@
 # here (not root, no apt-get, packages cannot be installed); exits non-zero on a real failure.
 #
 # Environment: PYTHON (default: .venv/bin/python of the repository, else python3),
-# ROUGHCONTACT_SLURM_KEEP=1 keeps the temporary directory, SLURM_UP_TIMEOUT (default 120 s).
+# ROUGHCONTACT_SLURM_KEEP=1 keeps the temporary directory, SLURM_UP_TIMEOUT (default 120 s: the
+# wait for the node to turn idle). Each snakemake run is killed after 240 s.
 set -uo pipefail
 
 HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
@@ -31,7 +32,7 @@ PY=${PYTHON:-}
 if [ -z "$PY" ]; then
     if [ -x "$REPO/.venv/bin/python" ]; then PY="$REPO/.venv/bin/python"; else PY=$(command -v python3 || true); fi
 fi
-[ -n "$PY" ] && [ -x "$PY" ] || skip "no Python interpreter found (set PYTHON)"
+if [ -z "$PY" ] || [ ! -x "$PY" ]; then skip "no Python interpreter found (set PYTHON)"; fi
 
 # ---------------------------------------------------------------- can it run here?
 [ "$(id -u)" = 0 ] || skip "not root: installing SLURM and starting its daemons needs root"
@@ -43,7 +44,7 @@ for var in $(env | sed -n 's/^\(SLURM_[A-Za-z0-9_]*\)=.*/\1/p'); do unset "$var"
 
 have_slurm() {
     local b
-    for b in munged mungekey slurmctld slurmd sbatch squeue sinfo scontrol scancel srun; do
+    for b in munged munge unmunge slurmctld slurmd sbatch squeue sinfo scontrol scancel srun; do
         command -v "$b" >/dev/null 2>&1 || return 1
     done
 }
@@ -51,16 +52,17 @@ if ! have_slurm; then
     command -v apt-get >/dev/null 2>&1 || skip "slurm-wlm/munge are not installed and apt-get is unavailable"
     log "installing slurm-wlm and munge with apt-get"
     export DEBIAN_FRONTEND=noninteractive
-    if ! apt-get install -y -q slurm-wlm munge >/tmp/roughcontact-apt.log 2>&1; then
-        apt-get update -q >>/tmp/roughcontact-apt.log 2>&1
-        apt-get install -y -q slurm-wlm munge >>/tmp/roughcontact-apt.log 2>&1 \
+    APT_OPTS=(-q -o Acquire::Retries=1 -o Acquire::http::Timeout=30 -o DPkg::Lock::Timeout=60)
+    if ! apt-get install -y "${APT_OPTS[@]}" slurm-wlm munge >/tmp/roughcontact-apt.log 2>&1; then
+        apt-get update "${APT_OPTS[@]}" >>/tmp/roughcontact-apt.log 2>&1
+        apt-get install -y "${APT_OPTS[@]}" slurm-wlm munge >>/tmp/roughcontact-apt.log 2>&1 \
             || skip "apt-get install slurm-wlm munge failed (log: /tmp/roughcontact-apt.log): $(tail -n 1 /tmp/roughcontact-apt.log)"
     fi
     have_slurm || skip "slurm-wlm/munge installed, but their programs are not on PATH"
 fi
 if ! "$PY" -c 'import snakemake_executor_plugin_slurm' 2>/dev/null; then
     log "installing snakemake-executor-plugin-slurm with pip"
-    "$PY" -m pip install -q snakemake-executor-plugin-slurm >/tmp/roughcontact-pip.log 2>&1 \
+    "$PY" -m pip install -q --retries 1 --timeout 30 snakemake-executor-plugin-slurm >/tmp/roughcontact-pip.log 2>&1 \
         || skip "pip install snakemake-executor-plugin-slurm failed (log: /tmp/roughcontact-pip.log)"
 fi
 log "slurm-wlm $(dpkg-query -W -f '${Version}' slurm-wlm 2>/dev/null || sinfo --version), plugin $("$PY" -c \
@@ -118,7 +120,7 @@ print(*(s.getsockname()[1] for s in socks))
 EOF
 )
 CPUS=$(nproc)
-MEM_TOTAL=$(free -m | awk '/^Mem:/ {print $2}')
+MEM_TOTAL=$(awk '/^MemTotal:/ {print int($2 / 1024)}' /proc/meminfo)   # MB, as `free -m`
 MARGIN=$((MEM_TOTAL / 10 > 512 ? MEM_TOTAL / 10 : 512))
 REAL_MEMORY=$((MEM_TOTAL - MARGIN))
 sed -e "s|@RUNDIR@|$RUNDIR|g" -e "s|@CTLD_PORT@|$CTLD_PORT|g" -e "s|@SLURMD_PORT@|$SLURMD_PORT|g" \
@@ -150,6 +152,7 @@ for _ in $(seq 50); do [ -S "$SOCK" ] && break; sleep 0.2; done
 munge --socket="$SOCK" -n 2>/dev/null | unmunge --socket="$SOCK" >/dev/null 2>&1 \
     || { show_logs; fail "munged did not come up (socket $SOCK)"; }
 
+UP_T0=$(date +%s)
 slurmctld -D -c -f "$SLURM_CONF" >"$RUNDIR/log/slurmctld.out" 2>&1 &
 PIDS+=($!)
 slurmd -D -N localhost -f "$SLURM_CONF" >"$RUNDIR/log/slurmd.out" 2>&1 &
@@ -246,14 +249,14 @@ while :; do
     for pid in "${PIDS[@]}"; do
         kill -0 "$pid" 2>/dev/null || { show_logs; fail "a SLURM daemon (pid $pid) exited before the node came up"; }
     done
-    if [ $(($(date +%s) - T0)) -ge "$UP_TIMEOUT" ]; then
+    if [ $(($(date +%s) - UP_T0)) -ge "$UP_TIMEOUT" ]; then
         show_logs
         timeout 10 sinfo -R >&2 2>/dev/null || true
-        fail "SLURM node 'localhost' not idle after ${UP_TIMEOUT}s (sinfo state: '${state:-no answer}')"
+        fail "SLURM node 'localhost' not idle ${UP_TIMEOUT}s after slurmctld/slurmd started (sinfo state: '${state:-no answer}')"
     fi
     sleep 2
 done
-log "SLURM node localhost is idle"
+log "SLURM node localhost is idle ($(($(date +%s) - UP_T0))s after slurmctld/slurmd started)"
 
 # ---------------------------------------------------------------- through SLURM
 # --cores: the node has $CPUS CPUs, so a group job may be at most that wide (the profile says 8).

@@ -1,0 +1,324 @@
+#!/usr/bin/env python
+"""Benchmark of roughcontact.solver against Tamaas' PolonskyKeerRey on the paper case.
+
+For each grid size N (one fresh subprocess per N, so that peak memory and FFT
+plans of one size do not leak into the next) it:
+
+1. generates the paper surface (k_l = 16, k_s = 32, H = 0.8, rms slope 0.1,
+   seed 0) with :func:`roughcontact.surface.generate_surface`;
+2. times one rfft2 + irfft2 pair with the solver's own pyFFTW plan
+   (:func:`roughcontact.fft.get_fft`) and with ``numpy.fft`` (best of batches,
+   i.e. hot caches: inside the solver the same pair runs between other passes
+   over memory and costs more);
+3. runs :func:`roughcontact.solver.solve_contact` over ``--steps`` loads
+   ``p_max/steps ... p_max`` (wall and CPU time, per-step time and iterations)
+   and records the process' peak RSS (``ru_maxrss``: imports + surface +
+   solve) right after it, before anything else runs; then times the FFT pair
+   (item 2) and repeats the solve under ``tracemalloc`` for the peak of the
+   solver's own numpy allocations;
+4. runs Tamaas' ``PolonskyKeerRey`` (pressure primal, pressure constraint) on
+   the identical array in the same process (``OMP_NUM_THREADS=1``), with the
+   same tolerance, and compares A/A0 step by step.
+
+Prints per-step tables and a summary markdown table; ``--out`` also writes the
+summary (``.csv`` gives CSV, anything else markdown).
+
+Usage::
+
+    python benchmarks/bench_solver.py                 # N = 512 1024
+    python benchmarks/bench_solver.py --n 256 --out benchmarks/out/bench.md
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import csv
+import io
+import json
+import os
+import re
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+import tracemalloc
+
+import numpy as np
+
+
+# --------------------------------------------------------------------------- worker
+def _time_fft_pairs(n: int, repeats: int = 5) -> tuple[float, float]:
+    """Best per-pair seconds of rfft2+irfft2 with the solver's pyFFTW plan and numpy."""
+    from roughcontact.fft import get_fft
+
+    rng = np.random.default_rng(1)
+    a = rng.standard_normal((n, n))
+    fft = get_fft((n, n))
+    batch = max(3, int(2e8 / (n * n * np.log2(n * n))))
+
+    def best(fn):
+        fn()
+        out = []
+        for _ in range(repeats):
+            t = time.perf_counter()
+            for _ in range(batch):
+                fn()
+            out.append((time.perf_counter() - t) / batch)
+        return min(out)
+
+    t_plan = best(lambda: fft.backward(fft.forward(a)))
+    t_numpy = best(lambda: np.fft.irfft2(np.fft.rfft2(a), s=a.shape))
+    return t_plan, t_numpy
+
+
+@contextlib.contextmanager
+def _capture_fds():
+    """Capture C-level stdout/stderr (Tamaas logs from C++) into a string buffer."""
+    buf = io.StringIO()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = os.dup(1), os.dup(2)
+    with tempfile.TemporaryFile(mode="w+") as tmp:
+        os.dup2(tmp.fileno(), 1)
+        os.dup2(tmp.fileno(), 2)
+        try:
+            yield buf
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            os.close(saved[0])
+            os.close(saved[1])
+            tmp.seek(0)
+            buf.write(tmp.read())
+
+
+_ITER_LINE = re.compile(r"^\s*(\d+)\s+[-+0-9.eE]+\s+[-+0-9.eE]+\s*$")
+
+
+def _run_tamaas(h, loads, tol):
+    try:
+        import tamaas as tm
+    except ImportError:
+        return None
+    n = h.shape[0]
+    tm.set_log_level(tm.LogLevel.info)  # the final iteration count is only logged
+    model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [1.0, 1.0], [n, n])
+    model.E = 1.0
+    model.nu = 0.0
+    solver = tm.PolonskyKeerRey(model, h, tol, tm.PolonskyKeerRey.pressure,
+                                tm.PolonskyKeerRey.pressure)
+    area, times, iters = [], [], []
+    w0, c0 = time.perf_counter(), time.process_time()
+    for p0 in loads:
+        t = time.perf_counter()
+        with _capture_fds() as log:
+            solver.solve(float(p0))
+        times.append(time.perf_counter() - t)
+        lines = [m.group(1) for m in map(_ITER_LINE.match, log.getvalue().splitlines()) if m]
+        iters.append(int(lines[-1]) if lines else -1)
+        area.append(np.count_nonzero(np.asarray(model.traction) > 0) / n**2)
+    return {
+        "version": getattr(tm, "__version__", "?"),
+        "wall": time.perf_counter() - w0,
+        "cpu": time.process_time() - c0,
+        "area": area,
+        "step_time": times,
+        "iterations": iters,
+    }
+
+
+def worker(n: int, steps: int, p_max: float, tol: float, tamaas: bool) -> dict:
+    from roughcontact.solver import solve_contact
+    from roughcontact.surface import generate_surface
+
+    rss_start = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    h = generate_surface(n, 16, 32, 0.8, 0, rms_slope=0.1)
+    loads = np.linspace(p_max / steps, p_max, steps)
+    rss_before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+
+    # The FFT plans were made (and cached) by generate_surface: the timed solve
+    # is the solver alone, as in a workflow that generates then solves.
+    w0, c0 = time.perf_counter(), time.process_time()
+    ds = solve_contact(h, loads, tol=tol)
+    wall, cpu = time.perf_counter() - w0, time.process_time() - c0
+    # Peak RSS of "imports + surface + solve", before anything else allocates.
+    rss_after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+
+    t_plan, t_numpy = _time_fft_pairs(n)
+
+    # Second, instrumented solve: numpy allocation peak and the number of
+    # pressure -> displacement products (FFT pairs) per CG iteration.
+    from roughcontact import solver as _solver
+
+    calls = [0]
+    original = _solver._Workspace.apply_k
+
+    def counting(self, field):
+        calls[0] += 1
+        return original(self, field)
+
+    _solver._Workspace.apply_k = counting
+    tracemalloc.start()
+    try:
+        solve_contact(h, loads, tol=tol)
+        traced_peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+        _solver._Workspace.apply_k = original
+
+    iters = ds["iterations"].values
+    res = {
+        "n": n,
+        "steps": steps,
+        "p_max": p_max,
+        "tol": tol,
+        "fft_backend": ds.attrs["fft_backend"],
+        "fft_pair_pyfftw": t_plan,
+        "fft_pair_numpy": t_numpy,
+        "ours": {
+            "wall": wall,
+            "cpu": cpu,
+            "area": ds["area_fraction"].values.tolist(),
+            "step_time": ds["wall_time"].values.tolist(),
+            "iterations": iters.tolist(),
+            "converged": bool(ds["converged"].values.all()),
+            "time_per_iter": float(ds["wall_time"].values.sum() / max(1, iters.sum())),
+            "fft_pairs_per_iter": calls[0] / max(1, int(iters.sum())),
+        },
+        "rss_start_mb": rss_start / 1024,
+        "rss_before_solve_mb": rss_before / 1024,
+        "rss_peak_mb": rss_after / 1024,
+        "tracemalloc_peak_mb": traced_peak / 2**20,
+        "tamaas": _run_tamaas(h, loads, tol) if tamaas else None,
+    }
+    return res
+
+
+# --------------------------------------------------------------------------- driver
+def _per_step_table(r: dict) -> str:
+    ours, tm = r["ours"], r["tamaas"]
+    head = "| step | p0 | A/A0 ours | iters ours | t ours [s] |"
+    sep = "|---:|---:|---:|---:|---:|"
+    if tm:
+        head += " A/A0 Tamaas | iters Tamaas | t Tamaas [s] |"
+        sep += "---:|---:|---:|"
+    rows = [head, sep]
+    loads = np.linspace(r["p_max"] / r["steps"], r["p_max"], r["steps"])
+    for k in range(r["steps"]):
+        row = (f"| {k + 1} | {loads[k]:.3e} | {ours['area'][k]:.6f} | {ours['iterations'][k]} | "
+               f"{ours['step_time'][k]:.4f} |")
+        if tm:
+            row += f" {tm['area'][k]:.6f} | {tm['iterations'][k]} | {tm['step_time'][k]:.4f} |"
+        rows.append(row)
+    return "\n".join(rows)
+
+
+def _summary_rows(results: list[dict]) -> list[dict]:
+    rows = []
+    for r in results:
+        ours, tm = r["ours"], r["tamaas"]
+        row = {
+            "N": r["n"],
+            "steps": r["steps"],
+            "ours wall [s]": f"{ours['wall']:.2f}",
+            "ours CPU [s]": f"{ours['cpu']:.2f}",
+            "ours iters": int(sum(ours["iterations"])),
+            "converged": "yes" if ours["converged"] else "NO",
+            "ms/iter": f"{1e3 * ours['time_per_iter']:.2f}",
+            "FFT pair pyFFTW [ms]": f"{1e3 * r['fft_pair_pyfftw']:.2f}",
+            "FFT pair numpy [ms]": f"{1e3 * r['fft_pair_numpy']:.2f}",
+            "iter/pair pyFFTW": f"{ours['time_per_iter'] / r['fft_pair_pyfftw']:.2f}",
+            "iter/pair numpy": f"{ours['time_per_iter'] / r['fft_pair_numpy']:.2f}",
+            "FFT pairs/iter": f"{ours['fft_pairs_per_iter']:.2f}",
+            "peak RSS [MB]": f"{r['rss_peak_mb']:.0f}",
+            "RSS imports [MB]": f"{r['rss_start_mb']:.0f}",
+            "RSS after surface [MB]": f"{r['rss_before_solve_mb']:.0f}",
+            "tracemalloc peak [MB]": f"{r['tracemalloc_peak_mb']:.0f}",
+        }
+        if tm:
+            a = np.array(ours["area"])
+            b = np.array(tm["area"])
+            row.update({
+                "Tamaas wall [s]": f"{tm['wall']:.2f}",
+                "Tamaas CPU [s]": f"{tm['cpu']:.2f}",
+                "Tamaas iters": int(sum(tm["iterations"])),
+                "speed-up wall": f"{tm['wall'] / ours['wall']:.1f}",
+                "speed-up CPU": f"{tm['cpu'] / ours['cpu']:.1f}",
+                "max rel dA/A0": f"{float(np.max(np.abs(a - b) / b)):.1e}",
+            })
+        else:
+            row.update({"Tamaas wall [s]": "n/a (not installed)"})
+        rows.append(row)
+    return rows
+
+
+def _markdown(rows: list[dict]) -> str:
+    keys = list(dict.fromkeys(k for r in rows for k in r))
+    lines = ["| " + " | ".join(keys) + " |", "|" + "---:|" * len(keys)]
+    for r in rows:
+        lines.append("| " + " | ".join(str(r.get(k, "")) for k in keys) + " |")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--n", type=int, nargs="+", default=[512, 1024], help="grid sizes (default: 512 1024)")
+    ap.add_argument("--steps", type=int, default=30, help="load steps (default 30)")
+    ap.add_argument("--p-max", type=float, default=0.005, help="largest mean pressure / E* (default 0.005)")
+    ap.add_argument("--tol", type=float, default=1e-8,
+                    help="tolerance of both solvers (default 1e-8; both criteria are sum(p g)/(sum(p) h_rms)-type)")
+    ap.add_argument("--no-tamaas", action="store_true", help="run our solver only")
+    ap.add_argument("--out", help="write the summary table here (.csv -> CSV, else markdown)")
+    ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
+    args = ap.parse_args(argv)
+
+    if args.worker:
+        res = worker(args.n[0], args.steps, args.p_max, args.tol, not args.no_tamaas)
+        print("@@RESULT@@" + json.dumps(res))
+        return 0
+
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
+    results = []
+    for n in args.n:
+        cmd = [sys.executable, os.path.abspath(__file__), "--worker", "--n", str(n),
+               "--steps", str(args.steps), "--p-max", str(args.p_max), "--tol", str(args.tol)]
+        if args.no_tamaas:
+            cmd.append("--no-tamaas")
+        print(f"== N = {n}: running in a subprocess ...", flush=True)
+        proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
+        if proc.returncode != 0:
+            sys.stderr.write(proc.stdout + proc.stderr)
+            return proc.returncode
+        line = next(ln for ln in proc.stdout.splitlines() if ln.startswith("@@RESULT@@"))
+        r = json.loads(line[len("@@RESULT@@"):])
+        results.append(r)
+        if r["tamaas"] is None and not args.no_tamaas:
+            print("Tamaas is not importable: our solver only.")
+        print(_per_step_table(r))
+        print()
+
+    rows = _summary_rows(results)
+    table = _markdown(rows)
+    print("== summary (tol = %g, %d steps to p0 = %g E*)" % (args.tol, args.steps, args.p_max))
+    print(table)
+    if args.out:
+        os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
+        with open(args.out, "w", newline="") as f:
+            if args.out.endswith(".csv"):
+                keys = list(dict.fromkeys(k for r in rows for k in r))
+                w = csv.DictWriter(f, fieldnames=keys)
+                w.writeheader()
+                w.writerows(rows)
+            else:
+                f.write(table + "\n")
+        print(f"summary written to {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
