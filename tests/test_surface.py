@@ -114,3 +114,13 @@ def test_empty_band_is_reported():
     # 0.2 < |k| < 0.9 holds no integer mode: no power to normalise.
     with pytest.raises(ValueError, match="no spectral power"):
         generate_surface(16, 0.2, 0.9, 0.5, 0, rms_slope=0.1)
+
+
+def test_same_continuous_surface_at_any_resolution():
+    # The noise is drawn on the smallest grid holding the band, so N=128 and N=2048 sample
+    # one trigonometric polynomial: resolution studies see discretisation error only.
+    coarse = generate_surface(128, 16, 32, 0.8, 0, rms_slope=0.1)
+    for n in (256, 2048):
+        fine = generate_surface(n, 16, 32, 0.8, 0, rms_slope=0.1)
+        step = n // 128
+        assert np.max(np.abs(fine[::step, ::step] - coarse)) <= 1e-12 * np.max(np.abs(coarse))

@@ -111,6 +111,32 @@ def finite_difference_rms_slope(heights: np.ndarray, length: float = 1.0) -> flo
     return float(np.sqrt(np.mean(gx**2 + gy**2)))
 
 
+def base_grid(n: int, k_s: float) -> int:
+    """Side of the grid on which the white noise is drawn: the smallest even M > 2 k_s, or n.
+
+    Every mode of the band (|k| <= k_s) lies strictly inside the M x M spectrum, so the
+    filtered noise is a trigonometric polynomial independent of the output grid: the
+    same seed gives the *same continuous surface* sampled at any n >= M, which makes
+    resolution studies measure discretisation error alone. When n < M (k_s near the
+    Nyquist mode of n) the noise is drawn on the n x n grid itself.
+    """
+    m = 2 * (int(np.floor(k_s)) + 1)
+    return m if m <= n else n
+
+
+def _embed_spectrum(spec_m: np.ndarray, m: int, n: int) -> np.ndarray:
+    """Place an (m, m//2+1) rfft2 spectrum into an (n, n//2+1) one, zero elsewhere (n >= m)."""
+    if m == n:
+        return spec_m
+    out = np.zeros((n, n // 2 + 1), dtype=complex)
+    rows = np.fft.fftfreq(m, 1.0 / m).astype(int)
+    # The mode m/2 (row and column) lies outside the band by construction of m: skip it,
+    # as its Hermitian partner would be ambiguous on the larger grid.
+    keep = np.abs(rows) < m // 2
+    out[np.mod(rows[keep], n), : m // 2] = spec_m[keep, : m // 2]
+    return out
+
+
 def generate_surface(n: int, k_l: float, k_s: float, hurst: float, seed: int, *,
                      rms_slope: float | None = None, rms_height: float | None = None,
                      length: float = 1.0, plateau: bool = False,
@@ -127,7 +153,9 @@ def generate_surface(n: int, k_l: float, k_s: float, hurst: float, seed: int, *,
         Hurst exponent H in (0, 1); the PSD decays as ``k^(-2(1+H))``.
     seed : int
         Seed of the white noise (>= 0); the case's cutoffs and H are mixed in, so
-        different cases never share noise.
+        different cases never share noise. The noise is drawn on the smallest grid that
+        holds the band (:func:`base_grid`), so the same arguments with another ``n``
+        sample the same continuous surface.
     rms_slope, rms_height : float
         Exactly one: the target rms slope sqrt(<|grad h|^2>) [-], computed from the
         spectrum with exact derivatives, or the rms height [length unit].
@@ -145,10 +173,11 @@ def generate_surface(n: int, k_l: float, k_s: float, hurst: float, seed: int, *,
     """
     _check_params(n, k_l, k_s, hurst, rms_slope, rms_height, length)
     rng = np.random.default_rng(case_seed(seed, k_l, k_s, hurst))
-    noise = rng.standard_normal((n, n))
+    m = base_grid(n, k_s)
+    noise = rng.standard_normal((m, m))
+    spec_m = np.fft.rfft2(noise) * psd_filter(m, k_l, k_s, hurst, length=length, plateau=plateau)
     fft = get_fft((n, n), backend=backend)
-    spec = fft.forward(noise) * psd_filter(n, k_l, k_s, hurst, length=length, plateau=plateau)
-    h = fft.backward(spec).copy()
+    h = fft.backward(_embed_spectrum(spec_m, m, n)).copy()
     stats = spectral_moments(h, length)
     current = stats["rms_slope"] if rms_slope is not None else stats["rms_height"]
     if not current > 0:
