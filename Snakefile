@@ -19,6 +19,7 @@ include: "workflow/rules/representativity.smk"
 include: "workflow/rules/contact.smk"
 include: "workflow/rules/aggregate.smk"
 include: "workflow/rules/figures.smk"
+include: "workflow/rules/accuracy.smk"
 
 
 localrules:

@@ -84,7 +84,7 @@ def test_unknown_scene_is_named(shipped_config):
 def test_scene_without_studies(shipped_config):
     cfg = _demo(shipped_config)
     cfg["scenes"]["demo"] = {"description": "nothing"}
-    with pytest.raises(ConfigError, match="at least one of 'representativity' or 'contact'"):
+    with pytest.raises(ConfigError, match="at least one of 'representativity', 'contact' or 'accuracy'"):
         validate_config(cfg, SCHEMA)
 
 

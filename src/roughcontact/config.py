@@ -100,7 +100,7 @@ def _schema_message(err) -> str:
     if err.validator == "oneOf" and "rms_slope" in str(err.schema):
         return "give exactly one of rms_slope or rms_height"
     if err.validator == "anyOf" and "representativity" in str(err.schema):
-        return "a scene must declare at least one of 'representativity' or 'contact'"
+        return "a scene must declare at least one of 'representativity', 'contact' or 'accuracy'"
     if err.validator == "type" and err.schema.get("type") == "string" and "pattern" in err.schema:
         return (f"{err.instance!r} must be written as a string (e.g. \"{err.instance}\") so that "
                 "file names carry the config's text, not float formatting")
@@ -141,6 +141,29 @@ def _check_study(scene: str, study: str, block: dict) -> None:
             fail("outputs.fields", f"steps {bad} exceed load.n_steps = {steps} (allowed 1..{steps})")
 
 
+def _check_accuracy(scene: str, block: dict) -> None:
+    def fail(field, msg):
+        raise ConfigError(f"scene {scene!r}, field 'accuracy.{field}': {msg}")
+
+    k_l, k_s = float(block["k_l"]), float(block["k_s"])
+    if not k_l < k_s:
+        fail("k_l", f"k_l={block['k_l']} must be < k_s={block['k_s']}")
+    for text in block["H"]:
+        if not 0.0 < float(text) < 1.0:
+            fail("H", f"{text!r} is outside the allowed range 0 < H < 1")
+    settings = [("reference", block["reference"]), ("defaults", block["defaults"])]
+    settings += [(f"axes.{axis}", {axis: v}) for axis, vals in block["axes"].items() for v in vals]
+    for where, setting in settings:
+        if "N" in setting and k_s > int(setting["N"]) / 2:
+            fail(where, f"N={setting['N']} is too coarse for k_s={block['k_s']} (needs N >= {2 * k_s:g})")
+        if "tol" in setting and not 0.0 < float(setting["tol"]) < 1.0:
+            fail(where, f"tol={setting['tol']} is outside the allowed range 0 < tol < 1")
+        if "n_steps" in setting and int(setting["n_steps"]) < 1:
+            fail(where, f"n_steps={setting['n_steps']} must be >= 1")
+    if max(int(s) for s in block["seed_axis"]) < 1:
+        fail("seed_axis", "needs at least one entry >= 1")
+
+
 def validate_scene(name: str, scene: dict, schema: dict) -> dict:
     """Validate one scene and return a copy with defaults filled in.
 
@@ -157,6 +180,8 @@ def validate_scene(name: str, scene: dict, schema: dict) -> dict:
     for study in STUDIES:
         if study in out:
             _check_study(name, study, out[study])
+    if "accuracy" in out:
+        _check_accuracy(name, out["accuracy"])
     lo, hi = out["fit"]["window"]
     if not lo < hi:
         raise ConfigError(f"scene {name!r}, field 'fit.window': needs low < high, got [{lo}, {hi}]")

@@ -26,7 +26,7 @@ import xarray as xr
 from . import __version__
 
 #: Stages whose files carry the ``roughcontact_stage`` attribute.
-STAGES = ("surface", "representativity", "contact", "aggregate", "fit")
+STAGES = ("surface", "representativity", "contact", "aggregate", "fit", "accuracy")
 
 
 class InputFileError(ValueError):

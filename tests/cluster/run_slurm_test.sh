@@ -14,9 +14,10 @@
 # The daemons are always stopped on exit. Prints "SKIP: <reason>" and exits 0 when it cannot run
 # here (not root, no apt-get, packages cannot be installed); exits non-zero on a real failure.
 #
-# Environment: PYTHON (default: .venv/bin/python of the repository, else python3),
-# ROUGHCONTACT_SLURM_KEEP=1 keeps the temporary directory, SLURM_UP_TIMEOUT (default 120 s: the
-# wait for the node to turn idle). Each snakemake run is killed after 240 s.
+# Environment: PYTHON (default: .venv/bin/python of the repository, else python3);
+# ROUGHCONTACT_SLURM_KEEP=1 keeps the temporary directory; ROUGHCONTACT_SLURM_UP_TIMEOUT
+# (default 120 s) bounds the wait for the node to turn idle. Each snakemake run is killed
+# after 240 s. (No SLURM_* names: the script unsets those.)
 set -uo pipefail
 
 HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
@@ -241,11 +242,17 @@ LOCAL_S=$(($(date +%s) - t))
 log "local run done in ${LOCAL_S}s"
 
 # ---------------------------------------------------------------- wait for the node
-UP_TIMEOUT=${SLURM_UP_TIMEOUT:-120}
+UP_TIMEOUT=${ROUGHCONTACT_SLURM_UP_TIMEOUT:-120}
 state=""
 while :; do
     state=$(timeout 10 sinfo -h -n localhost -o %t 2>/dev/null | head -n 1)
     [ "$state" = idle ] && break
+    case "$state" in  # states this node cannot leave by itself: its slurm.conf line is wrong
+        inval* | drain* | drng*)
+            show_logs
+            timeout 10 sinfo -R >&2 2>/dev/null || true
+            fail "SLURM node 'localhost' is '$state' (reason above), not idle" ;;
+    esac
     for pid in "${PIDS[@]}"; do
         kill -0 "$pid" 2>/dev/null || { show_logs; fail "a SLURM daemon (pid $pid) exited before the node came up"; }
     done

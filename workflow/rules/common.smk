@@ -2,6 +2,7 @@
 # the scenes, and build the wildcard constraints that make a mistyped target fail.
 import re
 
+from roughcontact.accuracy import variants as accuracy_variants
 from roughcontact.config import ConfigError, STUDIES, cases, load_schema, validate_config, load_steps
 
 try:
@@ -19,13 +20,18 @@ def _alternatives(values):
 
 
 def _all_grid_values(key):
-    return [
+    values = [
         value
         for scene in SCENES.values()
         for study in STUDIES
         if study in scene
         for value in scene[study]["grid"][key]
     ]
+    for scene in SCENES.values():
+        if "accuracy" in scene:
+            acc = scene["accuracy"]
+            values += acc["H"] if key == "H" else [acc[key]]
+    return values
 
 
 wildcard_constraints:
@@ -34,6 +40,7 @@ wildcard_constraints:
     k_s=_alternatives(_all_grid_values("k_s")),
     H=_alternatives(_all_grid_values("H")),
     seed=r"\d+",
+    variant=r"N\d+_tol[0-9.e-]+_steps\d+",
 
 
 
@@ -82,6 +89,9 @@ def scene_targets(scene):
         out += expand(
             "results/{scene}/figures/{fig}.{ext}", scene=scene, fig=("area_load", "kappa", "dpbar"), ext=("png", "pdf")
         )
+    if "accuracy" in s:
+        out += [f"results/{scene}/accuracy/summary.{ext}" for ext in ("nc", "csv", "md")]
+        out += expand("results/{scene}/figures/accuracy.{ext}", scene=scene, ext=("png", "pdf"))
     return out
 
 
@@ -111,3 +121,27 @@ def example_surfaces(w):
     block = study_block(w.scene, "representativity")
     h = block["grid"]["H"][0]
     return [f"results/{w.scene}/surfaces_rep/kl{e['k_l']}_ks{e['k_s']}_H{h}_s0.nc" for e in block["examples"]]
+
+
+def accuracy_setting(w):
+    """The setting (N, tol, n_steps, seeds) named by the `variant` wildcard, or a clear error."""
+    block = study_block(w.scene, "accuracy")
+    for s in accuracy_variants(block):
+        if s["label"] == w.variant:
+            if w.k_l != block["k_l"] or w.k_s != block["k_s"] or w.H not in block["H"] or int(w.seed) >= s["seeds"]:
+                raise WorkflowError(f"scene {w.scene!r}, accuracy: case kl{w.k_l}_ks{w.k_s}_H{w.H}_s{w.seed} "
+                                    f"is not part of setting {w.variant}")
+            return s
+    allowed = ", ".join(s["label"] for s in accuracy_variants(block))
+    raise WorkflowError(f"scene {w.scene!r}, accuracy: unknown setting {w.variant!r}; allowed: {allowed}")
+
+
+def accuracy_files(scene, pattern):
+    """Every case file (or benchmark file) of every setting of the scene's accuracy study."""
+    block = study_block(scene, "accuracy")
+    return [
+        pattern.format(scene=scene, label=s["label"], stem=f"kl{block['k_l']}_ks{block['k_s']}_H{h}_s{seed}")
+        for s in accuracy_variants(block)
+        for h in block["H"]
+        for seed in range(s["seeds"])
+    ]

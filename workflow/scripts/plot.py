@@ -1,5 +1,5 @@
 """Render one of the paper's figures to PNG and PDF (deterministic bytes)."""
-from roughcontact import aggregate, plots
+from roughcontact import plots
 from roughcontact.io import read_dataset, run_logged
 
 
@@ -8,6 +8,8 @@ def main(log):
     if name == "representativity":
         rep = read_dataset(snakemake.input.rep, stage="aggregate", variables=["epsilon"])
         fig = plots.fig_representativity(rep)
+    elif name == "accuracy":
+        fig = plots.fig_accuracy(read_dataset(snakemake.input.summary, stage="accuracy", variables=["err_kappa"]))
     elif name == "surface_examples":
         surfaces = [read_dataset(p, stage="surface", variables=["heights"]) for p in snakemake.input.surfaces]
         fig = plots.fig_surface_examples([

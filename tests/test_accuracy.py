@@ -1,0 +1,84 @@
+"""The accuracy study: settings, metrics, the perimeter correction, and a tiny end-to-end run."""
+import numpy as np
+import pytest
+import xarray as xr
+
+from conftest import copy_workflow, run_snakemake
+from roughcontact import accuracy, generate_surface
+from roughcontact.solver import solve_contact
+
+ACC = {
+    "scene": "acc",
+    "scenes": {
+        "acc": {
+            "accuracy": {
+                "surface": {"L": 1.0, "rms_slope": 0.1},
+                "k_l": "2", "k_s": "8", "H": ["0.5", "0.8"],
+                "p_max": 0.02,
+                "reference": {"N": "64", "tol": "1e-10", "n_steps": "20"},
+                "defaults": {"N": "32", "tol": "1e-8", "n_steps": "20"},
+                "axes": {"N": ["16", "32"], "tol": ["1e-4"], "n_steps": ["10"]},
+                "seeds": 1,
+                "seed_axis": ["1", "3"],
+                "kappa_at": 0.15,
+            }
+        }
+    },
+}
+
+
+def test_variants_one_axis_at_a_time():
+    block = {**ACC["scenes"]["acc"]["accuracy"]}
+    labels = {(v["axis"], v["label"], v["seeds"]) for v in accuracy.variants(block)}
+    assert labels == {
+        ("reference", "N64_tol1e-10_steps20", 1),
+        ("N", "N16_tol1e-10_steps20", 1), ("N", "N32_tol1e-10_steps20", 1),
+        ("tol", "N64_tol1e-4_steps20", 1), ("n_steps", "N64_tol1e-10_steps10", 1),
+        ("defaults", "N32_tol1e-8_steps20", 3),
+    }
+
+
+def test_perimeter_correction_reduces_the_pixel_bias():
+    # The same continuous surface at N = 64, 128, 256 against N = 512: the pixel count
+    # converges from above at first order in dx, and subtracting c P dx removes most of it.
+    p0 = 0.004
+    res = {}
+    for n in (64, 128, 256, 512):
+        h = generate_surface(n, 4, 16, 0.8, 0, rms_slope=0.1)
+        ds = solve_contact(h, [p0], tol=1e-10)
+        res[n] = (float(ds.area_fraction[0]), float(ds.contact_perimeter[0]), 1.0 / n)
+    ref = res[512][0]
+    ref_corr = accuracy.perimeter_corrected_area(*res[512])
+    raw = [abs(res[n][0] - ref) / ref for n in (64, 128, 256)]
+    corr = [abs(accuracy.perimeter_corrected_area(*res[n]) - ref_corr) / ref_corr for n in (64, 128, 256)]
+    assert raw[0] > raw[1] > raw[2]
+    # corrected, even 8 points per shortest wavelength beat the pixel count at 32
+    assert max(corr) < raw[2], (raw, corr)
+    c_fit = accuracy.fit_perimeter_c(*zip(*[res[n] for n in (64, 128, 256)]), ref)
+    assert 0.0 < c_fit < 0.5
+
+
+def test_relative_error_and_cost_table():
+    assert accuracy.relative_error(1.01, 1.0) == pytest.approx(0.01)
+    summary = xr.Dataset({"err_kappa": ("variant", [0.02, 0.005, 0.0005]), "time_per_case": ("variant", [1.0, 3.0, 9.0])},
+                         coords={"variant": ["a", "b", "c"]})
+    table = accuracy.cost_table(summary, "kappa", targets=(1e-2, 1e-3, 1e-4))
+    assert table == {1e-2: ("b", 3.0), 1e-3: ("c", 9.0), 1e-4: None}
+
+
+def test_tiny_accuracy_scene_end_to_end(tmp_path):
+    wd = copy_workflow(tmp_path / "wf", ACC)
+    res = run_snakemake(wd, "-j2")
+    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
+    out = wd / "results" / "acc"
+    s = xr.open_dataset(out / "accuracy" / "summary.nc")
+    assert set(s["axis"].values) == {"reference", "N", "tol", "n_steps", "defaults", "seeds"}
+    ref = s.sel(variant="N64_tol1e-10_steps20")
+    assert float(ref["err_area"]) == 0.0 and float(ref["err_kappa"]) == 0.0
+    # coarser grids are further from the reference
+    e16 = float(s.sel(variant="N16_tol1e-10_steps20")["err_area"])
+    e32 = float(s.sel(variant="N32_tol1e-10_steps20")["err_area"])
+    assert e16 > e32 > 0
+    assert np.all(s["time_per_case"].values > 0)
+    assert (out / "figures" / "accuracy.png").stat().st_size > 1000
+    assert "err kappa" in (out / "accuracy" / "summary.md").read_text()

@@ -1,0 +1,26 @@
+"""Accuracy study: generate one surface at the setting's N and solve it at its tol and steps."""
+from roughcontact.datasets import contact_dataset
+from roughcontact.io import run_logged, write_dataset
+from roughcontact.solver import solve_contact
+from roughcontact.surface import generate_surface, spectral_moments
+
+
+def main(log):
+    w, block, s = snakemake.wildcards, snakemake.params.block, snakemake.params.setting
+    n, n_steps = int(s["N"]), int(s["n_steps"])
+    length = block["surface"]["L"]
+    h = generate_surface(n, float(w.k_l), float(w.k_s), float(w.H), int(w.seed),
+                         rms_slope=block["surface"]["rms_slope"], length=length)
+    stats = spectral_moments(h, length)
+    pressures = [block["p_max"] * (i + 1) / n_steps for i in range(n_steps)]
+    result = solve_contact(h, pressures, length=length, tol=float(s["tol"]), threads=snakemake.threads)
+    ds = contact_dataset(result, rms_slope=stats["rms_slope"], alpha=stats["alpha"], e_star=1.0,
+                         k_l=w.k_l, k_s=w.k_s, hurst=w.H, seed=int(w.seed))
+    ds.attrs.update(setting=s["label"], n=n, length=length)
+    write_dataset(ds, snakemake.output[0], stage="contact", scene=snakemake.params.scene,
+                  scene_parameters={**block, "setting": s})
+    log.info("%s: %d iterations, %.2f s, converged %s", snakemake.output[0], int(result.iterations.sum()),
+             float(result.wall_time.sum()), bool(result.converged.all()))
+
+
+run_logged(snakemake.log[0], main)

@@ -1,0 +1,42 @@
+"""Accuracy study: errors against the reference and the cost of every setting."""
+import csv
+from collections import defaultdict
+from pathlib import Path
+
+from roughcontact import accuracy, aggregate
+from roughcontact.io import read_dataset, run_logged, write_dataset
+
+
+def main(log):
+    block = snakemake.params.block
+    settings = accuracy.variants(block)
+    groups = defaultdict(lambda: ([], [], [], []))
+    for nc, tsv in zip(snakemake.input.cases, snakemake.input.benchmarks):
+        label = Path(nc).parent.name
+        ds = read_dataset(nc, stage="contact", variables=["area_fraction", "contact_perimeter", "pressure", "rms_slope"])
+        with open(tsv) as fh:
+            bench = next(csv.DictReader(fh, delimiter="\t"))
+        g = groups[label]
+        g[0].append(ds)
+        g[1].append(nc)
+        g[2].append(float(bench["s"]))
+        g[3].append(float(bench["max_rss"]) if bench["max_rss"] not in ("", "NA", "-") else float("nan"))
+    results = {}
+    for label, (datasets, names, times, rss) in groups.items():
+        agg = aggregate.add_derived(aggregate.combine_cases(datasets, names))
+        unconverged = int((~agg["converged"].astype(bool)).sum())
+        if unconverged:
+            log.warning("setting %s: %d unconverged load steps", label, unconverged)
+        results[label] = (agg, times, rss)
+    summary = accuracy.summarize(results, settings, length=block["surface"]["L"], kappa_at=block["kappa_at"],
+                                 seed_axis=block["seed_axis"], n_boot=block["n_boot"])
+    write_dataset(summary, snakemake.output.nc, stage="accuracy", scene=snakemake.params.scene, scene_parameters=block)
+    summary.drop_vars([v for v in summary.variables if summary[v].dims != ("variant",)]).to_dataframe().to_csv(
+        snakemake.output.csv)
+    table = accuracy.markdown_table(summary)
+    Path(snakemake.output.md).write_text(table)
+    log.info("accuracy summary:\n%s\nperimeter c fitted: %.4g (default %.4g)", table,
+             summary.attrs["perimeter_c_fit"], summary.attrs["perimeter_c"])
+
+
+run_logged(snakemake.log[0], main)
