@@ -595,6 +595,11 @@ def fig_accuracy(summary: xr.Dataset) -> Figure:
     are not drawn on log axes.
     """
     _require(summary, "summary", ["time_per_case", "err_kappa", "err_area", "axis", "value"])
+    with matplotlib.rc_context(_STYLE):
+        return _draw_accuracy(summary)
+
+
+def _draw_accuracy(summary: xr.Dataset) -> Figure:
     fig = _new_figure(7.0, 3.2)
     axes = fig.subplots(1, 2)
     colours = dict(zip(("N", "tol", "n_steps", "seeds"), OKABE_ITO[1:5]))
@@ -626,7 +631,7 @@ def fig_accuracy(summary: xr.Dataset) -> Figure:
                 ax.plot(summary["time_per_case"].values[d], e, "*", ms=10, color="black", label="defaults")
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel("wall time per surface [s]")
+        ax.set_xlabel("wall time [s] (per surface; seeds: all k seeds)")
         ax.set_ylabel("relative error [1]")
         ax.set_title(title, fontsize=9)
     handles, labels = axes[0].get_legend_handles_labels()
