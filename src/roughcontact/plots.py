@@ -213,6 +213,18 @@ def _selection(stats, k_l, k_s, hurst):
 
 
 # ---------------------------------------------------------------------- figures
+def _family_panels(stats, k_l, k_s, hurst, fit_k_l):
+    """Selection, styles, the k_l of the drawn CEL, and one panel per k_s (Figs. 2-4)."""
+    kl_list, ks_list, h_list = _selection(stats, k_l, k_s, hurst)
+    colour, marker, style = _family_styles(kl_list, h_list)
+    cel_kl = kl_list[-1] if fit_k_l is None else _pick(stats["k_l"].values, fit_k_l, "fit_k_l")[0]
+    nrows, ncols, width, height = _panel_grid(len(ks_list))
+    with matplotlib.rc_context(_STYLE):
+        fig = _new_figure(width, height)
+        axes = fig.subplots(nrows, ncols, squeeze=False)
+    return kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes
+
+
 def fig_representativity(rep_stats: xr.Dataset, *, hurst: float | None = None) -> Figure:
     """Mean Gaussian L2 error of the height PDF versus ``k_s``, one curve per ``k_l``.
 
@@ -379,13 +391,9 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
                               "rms_slope_mean", "n_seeds"))
     e_star = _e_star(agg)
     hp = _mean_slope(stats)
-    kl_list, ks_list, h_list = _selection(stats, k_l, k_s, hurst)
-    colour, marker, style = _family_styles(kl_list, h_list)
-    cel_kl = kl_list[-1] if fit_k_l is None else _pick(stats["k_l"].values, fit_k_l, "fit_k_l")[0]
-    nrows, ncols, width, height = _panel_grid(len(ks_list))
+    kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes = _family_panels(
+        stats, k_l, k_s, hurst, fit_k_l)
     with matplotlib.rc_context(_STYLE):
-        fig = _new_figure(width, height)
-        axes = fig.subplots(nrows, ncols, squeeze=False)
         xmax = ymax = 0.0
         drew_fit = False
         for idx, ks in enumerate(ks_list):
@@ -458,13 +466,9 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
     """
     _require(stats, "stats", ("kappa_mean", "kappa_sem", "area_fraction_mean", "n_seeds"))
     _e_star(agg)
-    kl_list, ks_list, h_list = _selection(stats, k_l, k_s, hurst)
-    colour, marker, style = _family_styles(kl_list, h_list)
-    cel_kl = kl_list[-1] if fit_k_l is None else _pick(stats["k_l"].values, fit_k_l, "fit_k_l")[0]
-    nrows, ncols, width, height = _panel_grid(len(ks_list))
+    kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes = _family_panels(
+        stats, k_l, k_s, hurst, fit_k_l)
     with matplotlib.rc_context(_STYLE):
-        fig = _new_figure(width, height)
-        axes = fig.subplots(nrows, ncols, squeeze=False)
         drew_fit = False
         for idx, ks in enumerate(ks_list):
             ax = axes.flat[idx]
@@ -530,13 +534,9 @@ def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
     """
     _require(stats, "stats", ("dpbar_dp0_mean", "dpbar_dp0_sem", "area_fraction_mean", "n_seeds"))
     _e_star(agg)
-    kl_list, ks_list, h_list = _selection(stats, k_l, k_s, hurst)
-    colour, marker, style = _family_styles(kl_list, h_list)
-    cel_kl = kl_list[-1] if fit_k_l is None else _pick(stats["k_l"].values, fit_k_l, "fit_k_l")[0]
-    nrows, ncols, width, height = _panel_grid(len(ks_list))
+    kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes = _family_panels(
+        stats, k_l, k_s, hurst, fit_k_l)
     with matplotlib.rc_context(_STYLE):
-        fig = _new_figure(width, height)
-        axes = fig.subplots(nrows, ncols, squeeze=False)
         drew_fit = False
         for idx, ks in enumerate(ks_list):
             ax = axes.flat[idx]

@@ -263,7 +263,7 @@ while :; do
     fi
     sleep 2
 done
-log "SLURM node localhost is idle ($(($(date +%s) - UP_T0))s after slurmctld/slurmd started)"
+log "SLURM node localhost is idle (checked from $(($(date +%s) - UP_T0))s after slurmctld/slurmd started)"
 
 # ---------------------------------------------------------------- through SLURM
 # --cores: the node has $CPUS CPUs, so a group job may be at most that wide (the profile says 8).

@@ -100,6 +100,11 @@ def surface_mem_mb(n):
     return int(250 + 10 * 8 * n * n / 2**20)
 
 
+def surface_runtime_min(n):
+    """Wall-time request of a surface or representativity job [min]: ~2 s at N=1024, x100 margin."""
+    return max(5, int(5 * (n / 1024) ** 2))
+
+
 def contact_mem_mb(n):
     """Peak memory of one contact job [MB]: interpreter + libraries + ~40 N^2 doubles of solver work."""
     return int(300 + 40 * 8 * n * n / 2**20)

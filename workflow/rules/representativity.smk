@@ -15,7 +15,7 @@ rule representativity:
         "results/{scene}/benchmarks/representativity/kl{k_l}_ks{k_s}_H{H}_s{seed}.tsv"
     resources:
         mem_mb=lambda w: surface_mem_mb(SCENES[w.scene]["representativity"]["surface"]["N"]),
-        runtime=5,
+        runtime=lambda w: surface_runtime_min(SCENES[w.scene]["representativity"]["surface"]["N"]),
     conda:
         "../../envs/roughcontact.yaml"
     script:
