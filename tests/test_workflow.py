@@ -140,3 +140,18 @@ def test_tiny_real_run(tmp_path):
     res = run_snakemake(wd, "-j1", "--forcerun", "contact", target)
     assert res.returncode == 0, res.stderr[-3000:]
     assert (wd / target).read_bytes() == before, "outputs must be byte-identical across reruns"
+
+
+@pytest.mark.slow
+def test_demo_scene_produces_every_figure_and_the_fit_table(tmp_path, shipped_config):
+    # The shipped default scene, exactly as `make run` runs it (about 1.5 min on 2 cores).
+    wd = copy_workflow(tmp_path / "demo")
+    res = run_snakemake(wd, "-j2")
+    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
+    out = wd / "results" / "demo"
+    for fig in ("representativity", "surface_examples", "area_load", "kappa", "dpbar"):
+        for ext in ("png", "pdf"):
+            assert (out / "figures" / f"{fig}.{ext}").stat().st_size > 1000, fig
+    table = (out / "fit" / "cel.csv").read_text().splitlines()
+    assert table[0].startswith("k_l,k_s,H_group,estimator,constant,value")
+    assert any(",pooled,paper,kappa," in row for row in table)
