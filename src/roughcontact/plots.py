@@ -569,7 +569,9 @@ def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
             # Plain decimals: the data span about one decade, where 4x10^0 reads badly.
             for axis in (ax.xaxis, ax.yaxis):
                 axis.set_major_formatter(FormatStrFormatter("%g"))
-            ax.yaxis.set_minor_formatter(FormatStrFormatter("%g"))
+            # Minor labels help within a decade but collide once the axis spans more.
+            lo, hi = ax.get_ylim()
+            ax.yaxis.set_minor_formatter(FormatStrFormatter("%g") if hi / lo < 12 else NullFormatter())
             ax.set_title(_lambda_label(ks, "s"))
             ax.set_xlabel(r"$A/A_0$ [1]")
             ax.set_ylabel(r"$\partial\bar p/\partial p_0$ [1]")
