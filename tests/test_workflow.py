@@ -155,3 +155,21 @@ def test_demo_scene_produces_every_figure_and_the_fit_table(tmp_path, shipped_co
     table = (out / "fit" / "cel.csv").read_text().splitlines()
     assert table[0].startswith("k_l,k_s,H_group,estimator,constant,value")
     assert any(",pooled,paper,kappa," in row for row in table)
+
+
+def test_unconverged_steps_are_flagged_counted_and_excluded(tmp_path):
+    cfg = copy.deepcopy(TINY)
+    del cfg["scenes"]["tiny"]["representativity"]
+    cfg["scenes"]["tiny"]["contact"]["solver"] = {"tol": 1e-12, "max_iter": 3}
+    wd = copy_workflow(tmp_path / "wf", cfg)
+    res = run_snakemake(wd, "-j2")
+    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
+    out = wd / "results" / "tiny"
+    case = xr.open_dataset(out / "contact" / "kl2_ks8_H0.5_s0.nc")
+    assert not bool(case.converged.all()) and np.all(np.isfinite(case.residual.values))
+    assert "did not converge" in (out / "logs" / "contact" / "kl2_ks8_H0.5_s0.log").read_text()
+    agg = xr.open_dataset(out / "aggregate" / "contact.nc")
+    assert float(agg.n_unconverged.min()) > 0
+    assert "excluding 4 case(s) with unconverged steps" in (out / "logs" / "fit_cel.log").read_text()
+    fitted = xr.open_dataset(out / "fit" / "cel.nc")
+    assert bool(fitted["value"].isnull().all()), "no converged case: nothing may be fitted"
