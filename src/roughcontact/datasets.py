@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from .accuracy import PERIMETER_C, perimeter_corrected_area
 from .surface import finite_difference_rms_slope, spectral_moments
 
 CASE_DIMS = ("k_l", "k_s", "H", "seed")
@@ -100,6 +101,12 @@ def contact_dataset(result: xr.Dataset, *, rms_slope: float, alpha: float, e_sta
     job's log and Snakemake benchmark file instead.
     """
     ds = result.drop_vars("wall_time", errors="ignore")
+    dx = float(result.attrs["length"]) / int(result.attrs["n"])
+    ds["area_fraction_corrected"] = xr.DataArray(
+        perimeter_corrected_area(ds["area_fraction"].values, ds["contact_perimeter"].values, dx),
+        dims=("step",),
+        attrs={"units": "1", "long_name": f"perimeter-corrected contact area fraction A_pix/A0 - c P dx, c = {PERIMETER_C:.4f}"},
+    )
     ds["kappa"] = (e_star * rms_slope / ds["mean_contact_pressure"]).assign_attrs(
         units="1", long_name="kappa = E* h' / mean contact pressure")
     ds["rms_slope"] = xr.DataArray(float(rms_slope), attrs={
