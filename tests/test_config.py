@@ -77,7 +77,7 @@ def test_invalid_field_is_named(shipped_config, path, value, field, words):
 def test_unknown_scene_is_named(shipped_config):
     cfg = _demo(shipped_config)
     cfg["scene"] = "nope"
-    with pytest.raises(ConfigError, match="unknown scene 'nope'.*defined scenes: demo"):
+    with pytest.raises(ConfigError, match="unknown scene 'nope'; defined scenes: .*demo"):
         validate_config(cfg, SCHEMA)
 
 
