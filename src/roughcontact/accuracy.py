@@ -195,7 +195,6 @@ def summarize(results: Mapping[str, tuple[xr.Dataset, Sequence[float], Sequence[
     the all-seeds mean at the defaults). Attr ``perimeter_c_fit``: the c that best
     removes the N dependence of A/A0 at p_max (:func:`fit_perimeter_c`).
     """
-    by_label = {s["label"]: s for s in settings}
     ref = next(s for s in settings if s["axis"] == "reference")
     ref_agg = results[ref["label"]][0]
     rows = []

@@ -22,8 +22,8 @@ from pathlib import Path
 import yaml
 from jsonschema import Draft202012Validator
 
-#: The two studies a scene may declare, and the stage folder of each one's surfaces.
-STUDIES = {"representativity": "surfaces_rep", "contact": "surfaces"}
+#: The studies of a scene that run over a grid of cases (the accuracy study has its own settings).
+STUDIES = ("representativity", "contact")
 
 DEFAULT_SCHEMA = Path(__file__).resolve().parents[2] / "workflow" / "schemas" / "config.schema.yaml"
 

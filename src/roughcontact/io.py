@@ -15,7 +15,9 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import os
+import sys
 import tempfile
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -135,9 +137,6 @@ def run_logged(log_path: str | os.PathLike, main) -> None:
     instead of a traceback from deep inside a library; anything else is logged with its
     traceback and re-raised.
     """
-    import logging
-    import sys
-
     logger = logging.getLogger("roughcontact")
     logger.setLevel(logging.INFO)
     logger.handlers.clear()

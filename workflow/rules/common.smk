@@ -12,7 +12,6 @@ except ConfigError as _err:
 
 SCENES = _VALID["scenes"]
 ACTIVE_SCENE = _VALID["scene"]
-SCHEMA_PATH = "workflow/schemas/config.schema.yaml"
 
 
 def _alternatives(values):

@@ -15,11 +15,10 @@ def main(log):
     # converge on a non-representative case) must not sink the others: it is reported as NaN.
     result = fit.fit_cel(agg, window=tuple(cfg["window"]), n_boot=cfg["n_boot"], rng_seed=cfg["rng_seed"],
                          on_insufficient="nan")
-    failed = result["value"].isnull()
-    for idx in zip(*map(lambda a: a.tolist(), failed.values.nonzero())):
-        labels = {dim: result[dim].values[i] for dim, i in zip(failed.dims, idx)}
-        if labels.get("constant") in (None, "kappa"):
-            log.warning("no fit for %s (see the log above for the reason)", labels)
+    kappa = result["value"].sel(constant="kappa").to_series()
+    for group in kappa[kappa.isna()].index:
+        log.warning("no CEL fit for (k_l, k_s, H, estimator) = %s", group)
+    # NaN is a legitimate value here: it marks a group without a fit.
     for name in result.data_vars:
         if result[name].dtype.kind == "f":
             result[name].attrs["allow_nan"] = 1
