@@ -38,7 +38,7 @@ def _edit(cfg, path, value):
     node = cfg["scenes"]["demo"]
     *head, last = path
     for key in head:
-        node = node[key]
+        node = node.setdefault(key, {})
     if value is KeyError:
         del node[last]
     else:
@@ -97,7 +97,69 @@ def test_unknown_top_level_key(shipped_config):
 
 def test_defaults_filled(shipped_config):
     cfg = _demo(shipped_config)
-    del cfg["scenes"]["demo"]["contact"]["solver"]
+    del cfg["defaults"]["contact"]["solver"]
     demo = validate_config(cfg, SCHEMA)["scenes"]["demo"]
     assert demo["contact"]["solver"] == {"e_star": 1.0, "tol": 1e-8, "max_iter": 10000}
     assert demo["contact"]["outputs"] == {"fields": [], "clusters": False}
+
+
+def test_scene_is_a_delta_over_defaults(shipped_config):
+    scenes = validate_config(shipped_config, SCHEMA)["scenes"]
+    demo, paper = scenes["demo"], scenes["paper"]
+    # what the demo writes replaces, what it omits comes from defaults (mappings merge by key)
+    assert demo["contact"]["surface"] == {"N": 256, "L": 1.0, "rms_slope": 0.1, "plateau": False}
+    assert demo["contact"]["grid"]["k_l"] == ["4", "16"] and demo["contact"]["load"] == paper["contact"]["load"]
+    assert demo["representativity"]["grid"]["H"] == ["0.8"]
+    # a study the scene does not name is not computed, whatever defaults holds
+    assert "accuracy" not in demo and "representativity" not in scenes["representative"]
+    # an empty block declares the study with the defaults alone
+    assert scenes["accuracy"]["accuracy"]["reference"] == {"N": "2048", "tol": "1e-10", "n_steps": "30"}
+
+
+def test_null_removes_a_default(shipped_config):
+    cfg = _demo(shipped_config)
+    cfg["scenes"]["demo"]["contact"]["surface"].update(rms_slope=None, rms_height=0.05)
+    surface = validate_config(cfg, SCHEMA)["scenes"]["demo"]["contact"]["surface"]
+    assert surface["rms_height"] == 0.05 and "rms_slope" not in surface
+
+
+def test_bad_default_is_named_as_such(shipped_config):
+    cfg = _demo(shipped_config)
+    cfg["defaults"]["contact"]["solver"]["tol"] = 5.0
+    with pytest.raises(ConfigError, match=r"scene 'demo', field 'contact.solver.tol' \(value from the 'defaults' "
+                       r"block\)"):
+        validate_config(cfg, SCHEMA)
+    cfg = _demo(shipped_config)
+    cfg["defaults"]["colour"] = {}
+    with pytest.raises(ConfigError, match="config field 'defaults': unknown block 'colour'"):
+        validate_config(cfg, SCHEMA)
+
+
+def test_same_meaning_same_canonical_scene(shipped_config):
+    """Whole floats for integers, ints for floats, key order, explicit defaults: one canonical scene."""
+    plain = validate_config(shipped_config, SCHEMA)["scenes"]["demo"]
+    cfg = _demo(shipped_config)
+    con = cfg["scenes"]["demo"]["contact"]
+    con["surface"] = {"L": 1, "N": 256.0}
+    con["seeds"] = 3.0
+    con["solver"] = {"max_iter": 10000.0, "tol": 1e-8, "e_star": 1}
+    con["load"] = {"n_steps": 30, "p_max": 0.005}
+    other = validate_config(cfg, SCHEMA)["scenes"]["demo"]
+    assert other == plain
+    assert type(other["contact"]["surface"]["N"]) is int and type(other["contact"]["surface"]["L"]) is float
+    assert type(other["contact"]["seeds"]) is int and type(other["contact"]["solver"]["max_iter"]) is int
+
+
+@pytest.mark.parametrize("name", ["../../escape", "a b", "x/y", "", "9lives"])
+def test_unsafe_scene_names_are_refused(shipped_config, name):
+    cfg = _demo(shipped_config)
+    cfg["scenes"][name] = cfg["scenes"]["demo"]
+    with pytest.raises(ConfigError, match="scene name .* is not allowed"):
+        validate_config(cfg, SCHEMA)
+
+
+def test_scene_that_is_not_a_string(shipped_config):
+    cfg = _demo(shipped_config)
+    cfg["scene"] = ["demo"]
+    with pytest.raises(ConfigError, match="config field 'scene': unknown scene"):
+        validate_config(cfg, SCHEMA)

@@ -1,7 +1,12 @@
 """Scenes: validate the pipeline's config and expand it into cases.
 
-A *scene* is a named block under ``scenes:`` that says what to compute. Validation
-runs in two passes, both before Snakemake plans any job:
+A *scene* is a named block under ``scenes:`` that says what to compute. It is a small
+delta over the optional ``defaults:`` block: each study the scene declares
+(``representativity``, ``contact``, ``accuracy``; an empty block or ``null`` declares it
+with the defaults) is the defaults' block of that study deep-merged with the scene's
+(mappings merge key by key, anything else replaces; ``null`` removes a default, e.g.
+``rms_slope: null`` to normalise by ``rms_height`` instead). Validation runs on the merged
+scene, in two passes, both before Snakemake plans any job:
 
 1. the JSON schema ``workflow/schemas/config.schema.yaml`` (types, ranges, unknown keys),
    whose ``default`` values are filled in;
@@ -9,13 +14,19 @@ runs in two passes, both before Snakemake plans any job:
    inside the grid, fit window ordered, field steps within the load schedule).
 
 Every error is a :class:`ConfigError` whose message names the scene and the field
-(``scene 'demo', field 'contact.grid.k_s': ...``) and the allowed range.
+(``scene 'demo', field 'contact.grid.k_s': ...``) and the allowed range, and says when the
+bad value came from ``defaults``.
+
+The validated scene is canonical: schema defaults filled in, numbers typed as the schema
+says (``N: 32.0`` becomes ``32``, ``L: 1`` becomes ``1.0``), so that two configs meaning the
+same thing give the same job parameters (:mod:`roughcontact.params`).
 """
 
 from __future__ import annotations
 
 import copy
 import itertools
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,6 +35,15 @@ from jsonschema import Draft202012Validator
 
 #: The studies of a scene that run over a grid of cases (the accuracy study has its own settings).
 STUDIES = ("representativity", "contact")
+
+#: Every block a scene may declare that computes something.
+SCENE_STUDIES = (*STUDIES, "accuracy")
+
+#: File stem of one case: the config's own strings for k_l, k_s, H and the seed.
+CASE_STEM = "kl{k_l}_ks{k_s}_H{H}_s{seed}"
+
+#: Allowed scene names: they become folder names under results/.
+SCENE_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]*$")
 
 DEFAULT_SCHEMA = Path(__file__).resolve().parents[2] / "workflow" / "schemas" / "config.schema.yaml"
 
@@ -44,7 +64,7 @@ class Case:
     @property
     def stem(self) -> str:
         """File stem ``kl{k_l}_ks{k_s}_H{H}_s{seed}`` built from the config strings."""
-        return f"kl{self.k_l}_ks{self.k_s}_H{self.H}_s{self.seed}"
+        return CASE_STEM.format(k_l=self.k_l, k_s=self.k_s, H=self.H, seed=self.seed)
 
 
 def load_schema(path: str | Path = DEFAULT_SCHEMA) -> dict:
@@ -64,11 +84,29 @@ def _resolve(schema: dict, root: dict) -> dict:
     return schema
 
 
-def _fill_defaults(instance, schema: dict, root: dict):
-    """Fill ``default`` values of the schema into ``instance`` (dicts only), in place."""
+def _coerce_number(value, schema: dict):
+    """``value`` typed as the schema's ``number`` (float) or ``integer`` (int), else as is."""
+    kind = schema.get("type")
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return value
+    if kind == "number":
+        return float(value)
+    if kind == "integer" and float(value).is_integer():
+        return int(value)
+    return value
+
+
+def _complete(instance, schema: dict, root: dict):
+    """Fill the schema's ``default`` values into ``instance`` and type its numbers, in place.
+
+    Returns the (possibly retyped) instance: numbers are retyped, containers changed in place.
+    """
     schema = _resolve(schema, root)
+    if isinstance(instance, list) and isinstance(schema.get("items"), dict):
+        instance[:] = [_complete(item, schema["items"], root) for item in instance]
+        return instance
     if not isinstance(instance, dict):
-        return
+        return _coerce_number(instance, schema)
     props: dict = {}
     for sub in schema.get("allOf", []):
         props.update(_resolve(sub, root).get("properties", {}))
@@ -81,12 +119,56 @@ def _fill_defaults(instance, schema: dict, root: dict):
         if name not in instance and "default" in sub:
             instance[name] = copy.deepcopy(sub["default"])
         if name in instance:
-            _fill_defaults(instance[name], sub, root)
+            instance[name] = _complete(instance[name], sub, root)
     extra = schema.get("additionalProperties")
     if isinstance(extra, dict):
         for name, value in instance.items():
             if name not in props:
-                _fill_defaults(value, extra, root)
+                instance[name] = _complete(value, extra, root)
+    return instance
+
+
+def merge(base, delta):
+    """``delta`` deep-merged over ``base`` (neither changed): mappings merge key by key,
+    any other value replaces, and a ``None`` value removes the key."""
+    if not isinstance(base, dict) or not isinstance(delta, dict):
+        return copy.deepcopy(delta)
+    out = copy.deepcopy(base)
+    for key, value in delta.items():
+        if value is None:
+            out.pop(key, None)
+        else:
+            out[key] = merge(out.get(key), value) if isinstance(value, dict) else copy.deepcopy(value)
+    return out
+
+
+def _has_path(tree, path) -> bool:
+    for part in path:
+        if isinstance(tree, dict) and part in tree:
+            tree = tree[part]
+        elif isinstance(tree, list) and isinstance(part, int) and part < len(tree):
+            tree = tree[part]
+        else:
+            return False
+    return True
+
+
+def merge_scene(defaults: dict, scene: dict) -> dict:
+    """The full scene: each block the scene declares merged over the same block of ``defaults``.
+
+    A study block written as ``null`` or ``{}`` is declared with the defaults alone; a study
+    the scene does not name is not computed, whatever ``defaults`` holds. ``fit`` is always
+    merged (it applies only with ``contact``).
+    """
+    out = {}
+    for key, value in scene.items():
+        if key in (*SCENE_STUDIES, "fit"):
+            out[key] = merge(defaults.get(key) or {}, value or {})
+        else:
+            out[key] = copy.deepcopy(value)
+    if "fit" not in out and "fit" in defaults:
+        out["fit"] = copy.deepcopy(defaults["fit"])
+    return out
 
 
 def _field(path) -> str:
@@ -164,19 +246,23 @@ def _check_accuracy(scene: str, block: dict) -> None:
         fail("seed_axis", "needs at least one entry >= 1")
 
 
-def validate_scene(name: str, scene: dict, schema: dict) -> dict:
-    """Validate one scene and return a copy with defaults filled in.
+def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = None) -> dict:
+    """Validate one (merged) scene and return a canonical copy: defaults filled, numbers typed.
 
-    Raises :class:`ConfigError` naming ``name`` and the offending field.
+    ``delta`` is the scene as written, before :func:`merge_scene`; a bad field that it does
+    not hold came from the ``defaults`` block, and the message says so. Raises
+    :class:`ConfigError` naming ``name`` and the offending field.
     """
     scene_schema = {**schema["$defs"]["scene"], "$defs": schema["$defs"]}
     validator = Draft202012Validator(scene_schema)
     errors = sorted(validator.iter_errors(scene), key=lambda e: (len(e.path), list(e.path)))
     if errors:
         err = errors[0]
-        raise ConfigError(f"scene {name!r}, field '{_field(err.path)}': {_schema_message(err)}")
-    out = copy.deepcopy(scene)
-    _fill_defaults(out, scene_schema, scene_schema)
+        origin = ""
+        if delta is not None and err.path and not _has_path(delta, err.path) and _has_path(scene, err.path):
+            origin = " (value from the 'defaults' block)"
+        raise ConfigError(f"scene {name!r}, field '{_field(err.path)}'{origin}: {_schema_message(err)}")
+    out = _complete(copy.deepcopy(scene), scene_schema, scene_schema)
     for study in STUDIES:
         if study in out:
             _check_study(name, study, out[study])
@@ -191,21 +277,35 @@ def validate_scene(name: str, scene: dict, schema: dict) -> dict:
 def validate_config(config: dict, schema: dict | None = None) -> dict:
     """Validate the whole config (every scene) and return it with defaults filled in.
 
+    Each scene is merged over ``config['defaults']`` first (:func:`merge_scene`);
     ``config['scene']`` must name one of ``config['scenes']``.
     """
     schema = schema or load_schema()
     if not isinstance(config, dict):
         raise ConfigError("config must be a mapping with keys 'scene' and 'scenes'")
-    top = {k: v for k, v in config.items() if k != "scenes"}
-    unknown = sorted(set(top) - {"scene"})
+    unknown = sorted(set(config) - {"scene", "scenes", "defaults"})
     if unknown:
-        raise ConfigError(f"unknown top-level config key(s) {unknown}; allowed: scene, scenes")
+        raise ConfigError(f"unknown top-level config key(s) {unknown}; allowed: defaults, scene, scenes")
     scenes = config.get("scenes")
     if not isinstance(scenes, dict) or not scenes:
         raise ConfigError("config field 'scenes' must be a non-empty mapping of scene blocks")
-    validated = {name: validate_scene(name, block or {}, schema) for name, block in scenes.items()}
+    defaults = config.get("defaults") or {}
+    if not isinstance(defaults, dict):
+        raise ConfigError("config field 'defaults' must be a mapping of study blocks")
+    allowed = (*SCENE_STUDIES, "fit")
+    for key in defaults:
+        if key not in allowed:
+            raise ConfigError(f"config field 'defaults': unknown block {key!r}; allowed: {', '.join(allowed)}")
+    validated = {}
+    for name, block in scenes.items():
+        if not isinstance(name, str) or not SCENE_NAME.match(name):
+            raise ConfigError(f"config field 'scenes': scene name {name!r} is not allowed; names start with "
+                              "a letter and hold only letters, digits, '_' and '-' (they become folder names)")
+        if not isinstance(block or {}, dict):
+            raise ConfigError(f"scene {name!r}: must be a mapping of blocks, got {type(block).__name__}")
+        validated[name] = validate_scene(name, merge_scene(defaults, block or {}), schema, delta=block or {})
     default = config.get("scene")
-    if default not in validated:
+    if not isinstance(default, str) or default not in validated:
         raise ConfigError(
             f"config field 'scene': unknown scene {default!r}; defined scenes: {', '.join(sorted(validated))}"
         )

@@ -3,19 +3,21 @@
 
 rule accuracy_case:
     output:
-        "results/{scene}/accuracy/{variant}/kl{k_l}_ks{k_s}_H{H}_s{seed}.nc",
+        case_path("accuracy/{variant}"),
     params:
-        scene=lambda w: w.scene,
-        block=lambda w: study_block(w.scene, "accuracy"),
-        setting=lambda w: accuracy_setting(w),
+        settings=lambda w: params.accuracy_case(
+            study_block(w.scene, "accuracy"), accuracy_setting(w)
+        ),
     threads: 1
     log:
-        "results/{scene}/logs/accuracy/{variant}/kl{k_l}_ks{k_s}_H{H}_s{seed}.log",
+        case_path("logs/accuracy/{variant}", "log"),
     benchmark:
-        "results/{scene}/benchmarks/accuracy/{variant}/kl{k_l}_ks{k_s}_H{H}_s{seed}.tsv"
+        case_path("benchmarks/accuracy/{variant}", "tsv")
     resources:
         mem_mb=lambda w: contact_mem_mb(int(accuracy_setting(w)["N"])),
-        runtime=lambda w: contact_runtime_min(int(accuracy_setting(w)["N"]), int(accuracy_setting(w)["n_steps"])),
+        runtime=lambda w: contact_runtime_min(
+            int(accuracy_setting(w)["N"]), int(accuracy_setting(w)["n_steps"])
+        ),
     conda:
         "../../envs/roughcontact.yaml"
     script:
@@ -25,14 +27,19 @@ rule accuracy_case:
 rule accuracy_summary:
     input:
         cases=lambda w: accuracy_files(w.scene, "results/{scene}/accuracy/{label}/{stem}.nc"),
-        benchmarks=lambda w: accuracy_files(w.scene, "results/{scene}/benchmarks/accuracy/{label}/{stem}.tsv"),
+        benchmarks=lambda w: accuracy_files(
+            w.scene, "results/{scene}/benchmarks/accuracy/{label}/{stem}.tsv"
+        ),
     output:
         nc="results/{scene}/accuracy/summary.nc",
         csv="results/{scene}/accuracy/summary.csv",
-        md=report("results/{scene}/accuracy/summary.md", caption="../report/accuracy.rst", category="Accuracy"),
+        md=report(
+            "results/{scene}/accuracy/summary.md",
+            caption="../report/accuracy.rst",
+            category="Accuracy",
+        ),
     params:
-        scene=lambda w: w.scene,
-        block=lambda w: study_block(w.scene, "accuracy"),
+        settings=study_params("accuracy", params.accuracy_summary),
     log:
         "results/{scene}/logs/accuracy_summary.log",
     benchmark:
@@ -41,21 +48,3 @@ rule accuracy_summary:
         "../../envs/roughcontact.yaml"
     script:
         "../scripts/accuracy_summary.py"
-
-
-rule fig_accuracy:
-    input:
-        summary="results/{scene}/accuracy/summary.nc",
-    output:
-        png=report("results/{scene}/figures/accuracy.png", caption="../report/accuracy.rst", category="Accuracy"),
-        pdf="results/{scene}/figures/accuracy.pdf",
-    params:
-        figure="accuracy",
-    log:
-        "results/{scene}/logs/fig_accuracy.log",
-    benchmark:
-        "results/{scene}/benchmarks/fig_accuracy.tsv"
-    conda:
-        "../../envs/roughcontact.yaml"
-    script:
-        "../scripts/plot.py"

@@ -1,4 +1,6 @@
 # Stage 4: one dataset over the grid, then the contact-evolution-law fit.
+# The aggregates take every case's settings from the case's own file; their only
+# parameter is the list of cases, each checked against the file that claims it.
 
 
 localrules:
@@ -13,8 +15,7 @@ rule aggregate_representativity:
     output:
         "results/{scene}/aggregate/representativity.nc",
     params:
-        scene=lambda w: w.scene,
-        block=lambda w: study_block(w.scene, "representativity"),
+        cases=case_list("representativity"),
     log:
         "results/{scene}/logs/aggregate_representativity.log",
     benchmark:
@@ -31,8 +32,7 @@ rule aggregate_contact:
     output:
         "results/{scene}/aggregate/contact.nc",
     params:
-        scene=lambda w: w.scene,
-        block=lambda w: study_block(w.scene, "contact"),
+        cases=case_list("contact"),
     log:
         "results/{scene}/logs/aggregate_contact.log",
     benchmark:
@@ -48,10 +48,11 @@ rule fit_cel:
         "results/{scene}/aggregate/contact.nc",
     output:
         nc="results/{scene}/fit/cel.nc",
-        csv=report("results/{scene}/fit/cel.csv", caption="../report/fit.rst", category="Fit"),
+        csv=report(
+            "results/{scene}/fit/cel.csv", caption="../report/fit.rst", category="Fit"
+        ),
     params:
-        scene=lambda w: w.scene,
-        fit=lambda w: SCENES[w.scene]["fit"],
+        fit=lambda w: params.fit(SCENES[w.scene]) if study_block(w.scene, "contact") else None,
     log:
         "results/{scene}/logs/fit_cel.log",
     benchmark:

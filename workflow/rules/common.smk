@@ -1,9 +1,12 @@
 # Shared set-up: validate the config (every scene) before any job is planned, expose
 # the scenes, and build the wildcard constraints that make a mistyped target fail.
 import re
+from pathlib import Path
 
+from roughcontact import params
 from roughcontact.accuracy import variants as accuracy_variants
-from roughcontact.config import ConfigError, STUDIES, cases, load_schema, validate_config, load_steps
+from roughcontact.config import CASE_STEM, STUDIES, ConfigError, cases, load_schema, validate_config
+from roughcontact.figures import FIGURES, scene_figures
 
 try:
     _VALID = validate_config(config, load_schema(workflow.source_path("../schemas/config.schema.yaml")))
@@ -12,6 +15,11 @@ except ConfigError as _err:
 
 SCENES = _VALID["scenes"]
 ACTIVE_SCENE = _VALID["scene"]
+
+
+def case_path(folder, ext="nc"):
+    """Pattern of one case's file: ``results/{scene}/<folder>/kl{k_l}_ks{k_s}_H{H}_s{seed}.<ext>``."""
+    return f"results/{{scene}}/{folder}/{CASE_STEM}.{ext}"
 
 
 def _alternatives(values):
@@ -38,8 +46,9 @@ wildcard_constraints:
     k_l=_alternatives(_all_grid_values("k_l")),
     k_s=_alternatives(_all_grid_values("k_s")),
     H=_alternatives(_all_grid_values("H")),
-    seed=r"\d+",
+    seed=r"0|[1-9]\d*",
     variant=r"N\d+_tol[0-9.e-]+_steps\d+",
+    figure=_alternatives(FIGURES),
 
 
 
@@ -69,9 +78,51 @@ def check_case(wildcards, study):
     return block
 
 
-def case_files(scene, study, stage):
-    """Paths of `stage` files for every case of `study` in `scene`."""
-    return [f"results/{scene}/{stage}/{c.stem}.nc" for c in cases(study_block(scene, study))]
+def case_files(scene, study, folder):
+    """Paths of the ``folder`` files of every case of ``study`` in ``scene``."""
+    return [f"results/{scene}/{folder}/{c.stem}.nc" for c in cases(study_block(scene, study))]
+
+
+def case_params(study, provider):
+    """A params function: ``provider``'s values for the job's study block, once the case is checked."""
+    return lambda w: provider(check_case(w, study))
+
+
+def study_params(study, provider):
+    """A params function: ``provider``'s values for the study block of the job's scene."""
+    return lambda w: provider(study_block(w.scene, study))
+
+
+def case_list(study):
+    """A params function: the cases ``[k_l, k_s, H, seed]`` of the study in the job's scene."""
+    return lambda w: [[c.k_l, c.k_s, c.H, c.seed] for c in cases(study_block(w.scene, study))]
+
+
+def figure_spec(w):
+    """The registered figure named by the wildcards, if the scene asks for it."""
+    spec = FIGURES[w.figure]
+    if w.figure not in scene_figures(SCENES[w.scene]):
+        raise WorkflowError(
+            f"scene {w.scene!r} does not ask for figure {w.figure!r}; "
+            f"its figures: {', '.join(scene_figures(SCENES[w.scene])) or 'none'}"
+        )
+    return spec
+
+
+def figure_inputs(w):
+    """Input files of a figure, by role, under ``results/{scene}/``."""
+    spec = figure_spec(w)
+    paths = spec.inputs(SCENES[w.scene][spec.study])
+    root = f"results/{w.scene}"
+    return {
+        role: [f"{root}/{p}" for p in value] if isinstance(value, list) else f"{root}/{value}"
+        for role, value in paths.items()
+    }
+
+
+def figure_caption(name):
+    """The report caption of a registered figure (its file in workflow/report/)."""
+    return Path(workflow.basedir, "workflow", "report", FIGURES[name].caption).read_text()
 
 
 def scene_targets(scene):
@@ -80,17 +131,11 @@ def scene_targets(scene):
     out = []
     if "representativity" in s:
         out += [f"results/{scene}/aggregate/representativity.nc"]
-        out += expand("results/{scene}/figures/representativity.{ext}", scene=scene, ext=("png", "pdf"))
-        if s["representativity"]["examples"]:
-            out += expand("results/{scene}/figures/surface_examples.{ext}", scene=scene, ext=("png", "pdf"))
     if "contact" in s:
         out += [f"results/{scene}/aggregate/contact.nc", f"results/{scene}/fit/cel.nc", f"results/{scene}/fit/cel.csv"]
-        out += expand(
-            "results/{scene}/figures/{fig}.{ext}", scene=scene, fig=("area_load", "kappa", "dpbar"), ext=("png", "pdf")
-        )
     if "accuracy" in s:
         out += [f"results/{scene}/accuracy/summary.{ext}" for ext in ("nc", "csv", "md")]
-        out += expand("results/{scene}/figures/accuracy.{ext}", scene=scene, ext=("png", "pdf"))
+    out += expand("results/{scene}/figures/{fig}.{ext}", scene=scene, fig=scene_figures(s), ext=("png", "pdf"))
     return out
 
 
@@ -120,21 +165,14 @@ def maybe_temp(path, study):
     return path if keep else temp(path)
 
 
-def example_surfaces(w):
-    """Surface files drawn in the Fig. 1 b-d panel: seed 0 and the first H of each example."""
-    block = study_block(w.scene, "representativity")
-    h = block["grid"]["H"][0]
-    return [f"results/{w.scene}/surfaces_rep/kl{e['k_l']}_ks{e['k_s']}_H{h}_s0.nc" for e in block["examples"]]
-
-
 def accuracy_setting(w):
     """The setting (N, tol, n_steps, seeds) named by the `variant` wildcard, or a clear error."""
     block = study_block(w.scene, "accuracy")
     for s in accuracy_variants(block):
         if s["label"] == w.variant:
             if w.k_l != block["k_l"] or w.k_s != block["k_s"] or w.H not in block["H"] or int(w.seed) >= s["seeds"]:
-                raise WorkflowError(f"scene {w.scene!r}, accuracy: case kl{w.k_l}_ks{w.k_s}_H{w.H}_s{w.seed} "
-                                    f"is not part of setting {w.variant}")
+                stem = CASE_STEM.format(k_l=w.k_l, k_s=w.k_s, H=w.H, seed=w.seed)
+                raise WorkflowError(f"scene {w.scene!r}, accuracy: case {stem} is not part of setting {w.variant}")
             return s
     allowed = ", ".join(s["label"] for s in accuracy_variants(block))
     raise WorkflowError(f"scene {w.scene!r}, accuracy: unknown setting {w.variant!r}; allowed: {allowed}")
@@ -144,7 +182,7 @@ def accuracy_files(scene, pattern):
     """Every case file (or benchmark file) of every setting of the scene's accuracy study."""
     block = study_block(scene, "accuracy")
     return [
-        pattern.format(scene=scene, label=s["label"], stem=f"kl{block['k_l']}_ks{block['k_s']}_H{h}_s{seed}")
+        pattern.format(scene=scene, label=s["label"], stem=CASE_STEM.format(k_l=block["k_l"], k_s=block["k_s"], H=h, seed=seed))
         for s in accuracy_variants(block)
         for h in block["H"]
         for seed in range(s["seeds"])

@@ -1,24 +1,24 @@
 # Stage 3: frictionless normal contact, loaded in steps, one NetCDF per case.
+# params carry exactly the settings a solve depends on (roughcontact.params.contact).
 
 
 rule contact:
     input:
-        "results/{scene}/surfaces/kl{k_l}_ks{k_s}_H{H}_s{seed}.nc",
+        case_path("surfaces"),
     output:
-        "results/{scene}/contact/kl{k_l}_ks{k_s}_H{H}_s{seed}.nc",
+        case_path("contact"),
     params:
-        scene=lambda w: w.scene,
-        block=lambda w: check_case(w, "contact"),
-        pressures=lambda w: load_steps(check_case(w, "contact")),
+        settings=case_params("contact", params.contact),
     threads: 1
     log:
-        "results/{scene}/logs/contact/kl{k_l}_ks{k_s}_H{H}_s{seed}.log",
+        case_path("logs/contact", "log"),
     benchmark:
-        "results/{scene}/benchmarks/contact/kl{k_l}_ks{k_s}_H{H}_s{seed}.tsv"
+        case_path("benchmarks/contact", "tsv")
     resources:
         mem_mb=lambda w: contact_mem_mb(SCENES[w.scene]["contact"]["surface"]["N"]),
         runtime=lambda w: contact_runtime_min(
-            SCENES[w.scene]["contact"]["surface"]["N"], SCENES[w.scene]["contact"]["load"]["n_steps"]
+            SCENES[w.scene]["contact"]["surface"]["N"],
+            SCENES[w.scene]["contact"]["load"]["n_steps"],
         ),
     conda:
         "../../envs/roughcontact.yaml"

@@ -3,16 +3,15 @@
 
 rule representativity:
     input:
-        "results/{scene}/surfaces_rep/kl{k_l}_ks{k_s}_H{H}_s{seed}.nc",
+        case_path("surfaces_rep"),
     output:
-        "results/{scene}/representativity/kl{k_l}_ks{k_s}_H{H}_s{seed}.nc",
+        case_path("representativity"),
     params:
-        scene=lambda w: w.scene,
-        block=lambda w: check_case(w, "representativity"),
+        settings=case_params("representativity", params.representativity),
     log:
-        "results/{scene}/logs/representativity/kl{k_l}_ks{k_s}_H{H}_s{seed}.log",
+        case_path("logs/representativity", "log"),
     benchmark:
-        "results/{scene}/benchmarks/representativity/kl{k_l}_ks{k_s}_H{H}_s{seed}.tsv"
+        case_path("benchmarks/representativity", "tsv")
     resources:
         mem_mb=lambda w: surface_mem_mb(SCENES[w.scene]["representativity"]["surface"]["N"]),
         runtime=lambda w: surface_runtime_min(SCENES[w.scene]["representativity"]["surface"]["N"]),

@@ -1,18 +1,18 @@
 # Stage 1: surfaces by FFT filtering of white noise, one NetCDF per case.
 # Two rules share one script: the representativity and contact studies may normalise
 # surfaces differently (rms height vs rms slope), so they live in separate folders.
+# params carry exactly what a surface depends on (roughcontact.params.surface).
 
 
 rule surface_rep:
     output:
-        maybe_temp("results/{scene}/surfaces_rep/kl{k_l}_ks{k_s}_H{H}_s{seed}.nc", "representativity"),
+        maybe_temp(case_path("surfaces_rep"), "representativity"),
     params:
-        scene=lambda w: w.scene,
-        block=lambda w: check_case(w, "representativity"),
+        surface=case_params("representativity", params.surface),
     log:
-        "results/{scene}/logs/surface_rep/kl{k_l}_ks{k_s}_H{H}_s{seed}.log",
+        case_path("logs/surface_rep", "log"),
     benchmark:
-        "results/{scene}/benchmarks/surface_rep/kl{k_l}_ks{k_s}_H{H}_s{seed}.tsv"
+        case_path("benchmarks/surface_rep", "tsv")
     resources:
         mem_mb=lambda w: surface_mem_mb(SCENES[w.scene]["representativity"]["surface"]["N"]),
         runtime=lambda w: surface_runtime_min(SCENES[w.scene]["representativity"]["surface"]["N"]),
@@ -24,14 +24,13 @@ rule surface_rep:
 
 rule surface:
     output:
-        maybe_temp("results/{scene}/surfaces/kl{k_l}_ks{k_s}_H{H}_s{seed}.nc", "contact"),
+        maybe_temp(case_path("surfaces"), "contact"),
     params:
-        scene=lambda w: w.scene,
-        block=lambda w: check_case(w, "contact"),
+        surface=case_params("contact", params.surface),
     log:
-        "results/{scene}/logs/surface/kl{k_l}_ks{k_s}_H{H}_s{seed}.log",
+        case_path("logs/surface", "log"),
     benchmark:
-        "results/{scene}/benchmarks/surface/kl{k_l}_ks{k_s}_H{H}_s{seed}.tsv"
+        case_path("benchmarks/surface", "tsv")
     resources:
         mem_mb=lambda w: surface_mem_mb(SCENES[w.scene]["contact"]["surface"]["N"]),
         runtime=lambda w: surface_runtime_min(SCENES[w.scene]["contact"]["surface"]["N"]),

@@ -6,7 +6,8 @@ from roughcontact.surface import generate_surface, spectral_moments
 
 
 def main(log):
-    w, block, s = snakemake.wildcards, snakemake.params.block, snakemake.params.setting
+    w, block = snakemake.wildcards, snakemake.params.settings
+    s = block["setting"]
     n, n_steps = int(s["N"]), int(s["n_steps"])
     length = block["surface"]["L"]
     h = generate_surface(n, float(w.k_l), float(w.k_s), float(w.H), int(w.seed),
@@ -16,9 +17,9 @@ def main(log):
     result = solve_contact(h, pressures, length=length, tol=float(s["tol"]), threads=snakemake.threads)
     ds = contact_dataset(result, rms_slope=stats["rms_slope"], alpha=stats["alpha"], e_star=1.0,
                          k_l=w.k_l, k_s=w.k_s, hurst=w.H, seed=int(w.seed))
-    ds.attrs.update(setting=s["label"], n=n, length=length)
-    write_dataset(ds, snakemake.output[0], stage="contact", scene=snakemake.params.scene,
-                  scene_parameters={**block, "setting": s})
+    ds.attrs.update(setting=w.variant, n=n, length=length)
+    write_dataset(ds, snakemake.output[0], stage="contact", scene=snakemake.wildcards.scene,
+                  scene_parameters=block)
     log.info("%s: %d iterations, %.2f s, converged %s", snakemake.output[0], int(result.iterations.sum()),
              float(result.wall_time.sum()), bool(result.converged.all()))
 

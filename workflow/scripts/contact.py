@@ -1,27 +1,29 @@
 """Stage 3: solve the contact of one surface over the scene's load steps."""
 import numpy as np
 
+from roughcontact.config import load_steps
 from roughcontact.datasets import contact_dataset
 from roughcontact.io import read_dataset, run_logged, write_dataset
+from roughcontact.params import recorded
 from roughcontact.solver import solve_contact
 
 
 def main(log):
-    w, block = snakemake.wildcards, snakemake.params.block
+    w, settings = snakemake.wildcards, snakemake.params.settings
     surf = read_dataset(snakemake.input[0], stage="surface", variables=["heights", "rms_slope", "alpha"])
-    solver = block["solver"]
-    plastic = block["effects"].get("plasticity")
+    solver = settings["solver"]
+    plastic = settings["effects"].get("plasticity")
     result = solve_contact(
         surf.heights.values.squeeze(),
-        snakemake.params.pressures,
+        load_steps(settings),
         e_star=solver["e_star"],
         length=float(surf.attrs["length"]),
         tol=solver["tol"],
         max_iter=solver["max_iter"],
-        store_fields=block["outputs"]["fields"] or False,
+        store_fields=settings["outputs"]["fields"] or False,
         threads=snakemake.threads,
         hardness=plastic["hardness"] * solver["e_star"] if plastic else None,
-        clusters=block["outputs"]["clusters"],
+        clusters=settings["outputs"]["clusters"],
     )
     ds = contact_dataset(result, rms_slope=float(surf.rms_slope.squeeze()), alpha=float(surf.alpha.squeeze()),
                          e_star=solver["e_star"], k_l=w.k_l, k_s=w.k_s, hurst=w.H, seed=int(w.seed))
@@ -30,7 +32,8 @@ def main(log):
         log.warning("%d of %d load steps did not converge to tol=%g (max residual %.3g); "
                     "they are flagged in the output's 'converged' variable",
                     unconverged, result.sizes["step"], solver["tol"], float(result.residual.max()))
-    write_dataset(ds, snakemake.output[0], stage="contact", scene=snakemake.params.scene, scene_parameters=block)
+    write_dataset(ds, snakemake.output[0], stage="contact", scene=w.scene,
+                  scene_parameters={**recorded(surf), **settings})
     log.info("contact %s: A/A0 %.4g -> %.4g, %d iterations in %.2f s", snakemake.output[0],
              float(result.area_fraction[0]), float(result.area_fraction[-1]),
              int(result.iterations.sum()), float(np.sum(result.wall_time)))

@@ -5,15 +5,14 @@ from roughcontact.surface import generate_surface
 
 
 def main(log):
-    w, block = snakemake.wildcards, snakemake.params.block
-    surf = block["surface"]
+    w, surf = snakemake.wildcards, snakemake.params.surface
     norm = {k: surf[k] for k in ("rms_slope", "rms_height") if k in surf}
     h = generate_surface(
         surf["N"], float(w.k_l), float(w.k_s), float(w.H), int(w.seed),
         length=surf["L"], plateau=surf["plateau"], **norm,
     )
     ds = surface_dataset(h, k_l=w.k_l, k_s=w.k_s, hurst=w.H, seed=int(w.seed), length=surf["L"], normalisation=norm)
-    write_dataset(ds, snakemake.output[0], stage="surface", scene=snakemake.params.scene, scene_parameters=block)
+    write_dataset(ds, snakemake.output[0], stage="surface", scene=w.scene, scene_parameters={"surface": surf})
     log.info("surface %s: rms slope %.6g, rms height %.6g, alpha %.4g", snakemake.output[0],
              float(ds.rms_slope.squeeze()), float(ds.rms_height.squeeze()), float(ds.alpha.squeeze()))
 

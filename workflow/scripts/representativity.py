@@ -1,17 +1,19 @@
 """Stage 2: L2 distance between a surface's height PDF and its Gaussian."""
 from roughcontact.datasets import representativity_dataset
 from roughcontact.io import read_dataset, run_logged, write_dataset
+from roughcontact.params import recorded
 from roughcontact.representativity import gaussian_l2_error
 
 
 def main(log):
-    w, block = snakemake.wildcards, snakemake.params.block
+    w, settings = snakemake.wildcards, snakemake.params.settings
     surf = read_dataset(snakemake.input[0], stage="surface", variables=["heights"])
     h = surf.heights.values.squeeze()
-    eps = gaussian_l2_error(h, block["n_bins"])
-    ds = representativity_dataset(eps, h, n_bins=block["n_bins"], k_l=w.k_l, k_s=w.k_s, hurst=w.H, seed=int(w.seed))
-    write_dataset(ds, snakemake.output[0], stage="representativity", scene=snakemake.params.scene,
-                  scene_parameters=block)
+    eps = gaussian_l2_error(h, settings["n_bins"])
+    ds = representativity_dataset(eps, h, n_bins=settings["n_bins"], k_l=w.k_l, k_s=w.k_s, hurst=w.H,
+                                  seed=int(w.seed))
+    write_dataset(ds, snakemake.output[0], stage="representativity", scene=w.scene,
+                  scene_parameters={**recorded(surf), **settings})
     log.info("epsilon = %.6g for %s", eps, snakemake.input[0])
 
 

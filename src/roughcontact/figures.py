@@ -1,0 +1,108 @@
+"""The figure registry: every figure the workflow can draw, by name.
+
+One generic Snakemake rule (``workflow/rules/figures.smk``) makes
+``results/{scene}/figures/{figure}.{png,pdf}`` for any name registered here, as
+rna-seq-star-deseq2 makes ``pca.{variable}.svg`` from one rule. A :class:`FigureSpec` says
+which scene block the figure needs, which files it reads, how it is drawn and where its
+report caption lives. A new figure is one entry here and one caption file in
+``workflow/report/``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+from matplotlib.figure import Figure
+
+from . import plots
+from .config import CASE_STEM
+from .io import read_dataset
+
+#: Paths an input role may name: one file or a list of files.
+Paths = str | list[str]
+
+
+@dataclass(frozen=True)
+class FigureSpec:
+    """One figure of the workflow.
+
+    Attributes
+    ----------
+    study : str
+        The scene block the figure needs (``representativity``, ``contact``, ``accuracy``).
+    inputs : callable
+        ``inputs(block) -> {role: path or [paths]}`` from the validated study block, paths
+        relative to ``results/{scene}/``.
+    render : callable
+        ``render({role: path or [paths]}) -> Figure``: reads the files, draws the figure.
+    category : str
+        Section of the Snakemake report.
+    caption : str
+        Caption file (reStructuredText) in ``workflow/report/``.
+    wanted : callable
+        ``wanted(block) -> bool``: whether a scene with this study block asks for the figure.
+    """
+
+    study: str
+    inputs: Callable[[Mapping], dict[str, Paths]]
+    render: Callable[[Mapping[str, Paths]], Figure]
+    category: str
+    caption: str
+    wanted: Callable[[Mapping], bool] = lambda block: True
+
+
+def _contact_inputs(block: Mapping) -> dict[str, Paths]:
+    return {"agg": "aggregate/contact.nc", "fit": "fit/cel.nc"}
+
+
+def _contact_figure(draw: Callable) -> Callable[[Mapping[str, Paths]], Figure]:
+    def render(paths: Mapping[str, Paths]) -> Figure:
+        agg = read_dataset(paths["agg"], stage="aggregate", variables=["area_fraction"])
+        return draw(agg, agg, read_dataset(paths["fit"], stage="fit"))
+
+    return render
+
+
+def _render_representativity(paths: Mapping[str, Paths]) -> Figure:
+    return plots.fig_representativity(read_dataset(paths["rep"], stage="aggregate", variables=["epsilon"]))
+
+
+def _example_inputs(block: Mapping) -> dict[str, Paths]:
+    """Seed 0 and the first H of each example pair (the paper's Fig. 1 b-d)."""
+    h = block["grid"]["H"][0]
+    stems = [CASE_STEM.format(k_l=e["k_l"], k_s=e["k_s"], H=h, seed=0) for e in block["examples"]]
+    return {"surfaces": [f"surfaces_rep/{stem}.nc" for stem in stems]}
+
+
+def _render_surface_examples(paths: Mapping[str, Paths]) -> Figure:
+    surfaces = [read_dataset(p, stage="surface", variables=["heights"]) for p in paths["surfaces"]]
+    return plots.fig_surface_examples([
+        (s.heights.values.squeeze(), f"$k_l$ = {float(s.k_l[0]):g}, $k_s$ = {float(s.k_s[0]):g}")
+        for s in surfaces
+    ])
+
+
+def _render_accuracy(paths: Mapping[str, Paths]) -> Figure:
+    return plots.fig_accuracy(read_dataset(paths["summary"], stage="accuracy", variables=["err_kappa"]))
+
+
+FIGURES: dict[str, FigureSpec] = {
+    "representativity": FigureSpec(
+        "representativity", lambda block: {"rep": "aggregate/representativity.nc"}, _render_representativity,
+        "Representativity", "representativity.rst"),
+    "surface_examples": FigureSpec(
+        "representativity", _example_inputs, _render_surface_examples, "Representativity",
+        "surface_examples.rst", wanted=lambda block: bool(block["examples"])),
+    "area_load": FigureSpec(
+        "contact", _contact_inputs, _contact_figure(plots.fig_area_load), "Contact", "area_load.rst"),
+    "kappa": FigureSpec("contact", _contact_inputs, _contact_figure(plots.fig_kappa), "Contact", "kappa.rst"),
+    "dpbar": FigureSpec("contact", _contact_inputs, _contact_figure(plots.fig_dpbar), "Contact", "dpbar.rst"),
+    "accuracy": FigureSpec(
+        "accuracy", lambda block: {"summary": "accuracy/summary.nc"}, _render_accuracy, "Accuracy", "accuracy.rst"),
+}
+
+
+def scene_figures(scene: Mapping) -> list[str]:
+    """Names of the registered figures a validated scene asks for, in registry order."""
+    return [name for name, spec in FIGURES.items() if spec.study in scene and spec.wanted(scene[spec.study])]

@@ -1,0 +1,77 @@
+"""What each kind of job depends on: the exact, canonical parameters of one job.
+
+Snakemake reruns a job when its ``params`` change, and every output file records the
+parameters that produced it. Both must therefore hold exactly the values the job's output
+depends on — nothing from elsewhere in the scene (adding a seed must not touch existing
+cases; a solver tolerance must not touch surfaces; a description touches nothing) — in one
+canonical form: keys sorted at every level, numbers typed by the schema (done by
+:func:`roughcontact.config.validate_config`). One provider per kind of job, as PyPSA-Eur's
+``config_provider`` hands single keys to rules. Every function takes a *validated* block
+and returns a new plain ``dict`` of JSON types.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+
+
+def canonical(obj):
+    """``obj`` with every mapping's keys sorted (recursively); lists keep their order."""
+    if isinstance(obj, Mapping):
+        return {key: canonical(obj[key]) for key in sorted(obj)}
+    if isinstance(obj, (list, tuple)):
+        return [canonical(item) for item in obj]
+    return obj
+
+
+def _pick(block: Mapping, keys) -> dict:
+    return canonical({key: block[key] for key in keys if key in block})
+
+
+def surface(block: Mapping) -> dict:
+    """A surface job (either study): the surface block (N, L, plateau, normalisation)."""
+    return _pick(block["surface"], ("N", "L", "plateau", "rms_slope", "rms_height"))
+
+
+def representativity(block: Mapping) -> dict:
+    """A representativity job: the histogram bins (its surface is its input file)."""
+    return _pick(block, ("n_bins",))
+
+
+def contact(block: Mapping) -> dict:
+    """A contact job: load schedule, solver settings, optional outputs and effects."""
+    return _pick(block, ("load", "solver", "outputs", "effects"))
+
+
+def fit(scene: Mapping) -> dict:
+    """The CEL fit of a scene: its ``fit`` block."""
+    return canonical(scene["fit"])
+
+
+def accuracy_case(block: Mapping, setting: Mapping) -> dict:
+    """One accuracy case: surface normalisation, final load and the setting's N, tol, steps."""
+    return canonical({
+        "surface": block["surface"],
+        "p_max": block["p_max"],
+        "setting": {key: setting[key] for key in ("N", "tol", "n_steps")},
+    })
+
+
+def accuracy_summary(block: Mapping) -> dict:
+    """The accuracy summary: the whole accuracy block (every setting and the error measures)."""
+    return canonical(block)
+
+
+def recorded(ds) -> dict:
+    """The parameters a file of this package records (its ``scene_parameters`` attribute).
+
+    Raises ``ValueError`` naming the file's source if the attribute is missing or not JSON.
+    """
+    text = ds.attrs.get("scene_parameters")
+    if text is None:
+        raise ValueError(f"{ds.encoding.get('source', 'dataset')}: no 'scene_parameters' attribute")
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{ds.encoding.get('source', 'dataset')}: 'scene_parameters' is not JSON: {exc}") from None
