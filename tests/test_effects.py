@@ -1,5 +1,6 @@
 """A scene computes what it calls for and nothing else: jobs planned and variables written."""
 import copy
+import re
 
 import xarray as xr
 
@@ -47,9 +48,17 @@ def test_scene_without_contact_block_plans_no_contact_jobs(tmp_path):
     assert res.returncode == 0, res.stderr[-2000:]
     jobs = _jobs(res.stdout)
     assert "representativity" in jobs
-    assert not {"surface", "contact", "aggregate_contact", "fit_cel", "fig_kappa"} & set(jobs)
+    assert not {"surface", "contact", "aggregate_contact", "fit_cel"} & set(jobs)
+    assert _figures(res.stdout + res.stderr) == {"representativity", "surface_examples"}
     cfg = copy.deepcopy(TINY)
     del cfg["scenes"]["tiny"]["representativity"]
     wd = copy_workflow(tmp_path / "con", cfg)
-    jobs = _jobs(run_snakemake(wd, "-n").stdout)
-    assert "contact" in jobs and not {"surface_rep", "representativity", "fig_representativity"} & set(jobs)
+    res = run_snakemake(wd, "-n")
+    jobs = _jobs(res.stdout)
+    assert "contact" in jobs and not {"surface_rep", "representativity"} & set(jobs)
+    assert _figures(res.stdout + res.stderr) == {"area_load", "kappa", "dpbar"}
+
+
+def _figures(log):
+    """Names of the figures a dry run plans."""
+    return set(re.findall(r"output: results/tiny/figures/(\w+)\.png", log))

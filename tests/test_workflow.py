@@ -4,6 +4,7 @@ import copy
 import numpy as np
 import pytest
 import xarray as xr
+import yaml
 
 from conftest import copy_workflow, run_snakemake
 
@@ -103,6 +104,26 @@ def test_mistyped_target_fails_at_once(tmp_path):
     # seed 5 matches the pattern but is outside the scene's seeds: named with the range.
     res = run_snakemake(wd, "-n", "results/tiny/contact/kl2_ks8_H0.5_s5.nc")
     assert res.returncode != 0 and "seed=5 outside 0..1" in res.stdout + res.stderr
+    # a seed with a leading zero would be a second file for seed 0: no rule makes it
+    res = run_snakemake(wd, "-n", "results/tiny/contact/kl2_ks8_H0.5_s00.nc")
+    assert res.returncode != 0 and "MissingRuleException" in res.stdout + res.stderr
+    # a figure the scene does not ask for is named, with the scene's figures
+    res = run_snakemake(wd, "-n", "--config", "scene=reponly", "--", "results/reponly/figures/kappa.png")
+    assert res.returncode != 0
+    assert "scene 'reponly' does not ask for figure 'kappa'; its figures: representativity" in res.stdout + res.stderr
+
+
+def test_own_scene_in_its_own_file(tmp_path):
+    """`--configfile my_scene.yaml --config scene=mine`: a user's scene beside the shipped ones."""
+    wd = copy_workflow(tmp_path / "wf")
+    (wd / "my_scene.yaml").write_text(yaml.safe_dump({"scenes": {"mine": {
+        "contact": {"surface": {"N": 64}, "grid": {"k_l": ["2"], "k_s": ["16"], "H": ["0.7"]}, "seeds": 2},
+    }}}))
+    res = run_snakemake(wd, "-n", "--configfile", "my_scene.yaml", "--config", "scene=mine")
+    assert res.returncode == 0, res.stderr[-3000:]
+    jobs = _jobs(res.stdout)
+    assert jobs["contact"] == 2 and jobs["surface"] == 2 and "representativity" not in jobs
+    assert "results/mine/contact/kl2_ks16_H0.7_s1.nc" in res.stdout + res.stderr
 
 
 def test_tiny_real_run(tmp_path):
@@ -138,9 +159,10 @@ def test_tiny_real_run(tmp_path):
     assert "Nothing to be done" in again.stdout + again.stderr
     target = "results/tiny/contact/kl2_ks8_H0.8_s1.nc"
     before = (wd / target).read_bytes()
-    res = run_snakemake(wd, "-j1", "--forcerun", "contact", target)
+    res = run_snakemake(wd, "-j1", "-f", target)
     assert res.returncode == 0, res.stderr[-3000:]
     assert (wd / target).read_bytes() == before, "outputs must be byte-identical across reruns"
+    assert (res.stdout + res.stderr).count("Finished jobid") == 1, "-f FILE reruns that one job only"
 
 
 @pytest.mark.slow
