@@ -163,3 +163,69 @@ def test_scene_that_is_not_a_string(shipped_config):
     cfg["scene"] = ["demo"]
     with pytest.raises(ConfigError, match="config field 'scene': unknown scene"):
         validate_config(cfg, SCHEMA)
+
+
+@pytest.mark.parametrize(
+    "path, value, field, words",
+    [
+        (("contact", "load", "p_max"), float("nan"), "contact.load.p_max", "not a finite number"),
+        (("contact", "surface", "rms_slope"), float("inf"), "contact.surface.rms_slope", "not a finite number"),
+        (("fit", "window"), [0.01, float("nan")], "fit.window.1", "not a finite number"),
+        (("contact", "load", "p_max"), 1e308, "contact.load.p_max", "maximum"),
+        (("contact", "surface", "L"), 1e300, "contact.surface.L", "maximum"),
+        (("contact", "solver", "e_star"), 1e300, "contact.solver.e_star", "maximum"),
+        (("contact", "seeds"), 1, "contact.seeds", "at least 2"),
+        (("contact", "load", "n_steps"), 2, "contact.load.n_steps", "minimum of 3"),
+        (("contact", "effects"), {"plasticity": {"hardness": 0.005}}, "contact.effects.plasticity.hardness",
+         "must exceed load.p_max"),
+        (("representativity", "examples"), [{"k_l": "1", "k_s": "32"}] * 7, "representativity.examples",
+         "too long"),
+        (("fit", "window"), [0.0, 0.1], "fit.window.0", "less than or equal to the minimum of 0"),
+        (("fit", "window"), [0.01, 1.5], "fit.window.1", "maximum"),
+        (("contact", "grid", "k_l"), ["4", "4.0"], "contact.grid.k_l", "'4' and '4.0' are the same number"),
+        (("contact", "grid", "H"), ["0.36", "0.360"], "contact.grid.H", "same number"),
+        (("contact", "grid", "H"), ["0.36\n"], "contact.grid.H.0", "no spaces or line breaks"),
+        (("contact", "grid", "H"), [" 0.36"], "contact.grid.H.0", "no spaces or line breaks"),
+    ],
+)
+def test_hostile_values_are_named_before_planning(shipped_config, path, value, field, words):
+    cfg = _edit(_demo(shipped_config), path, value)
+    with pytest.raises(ConfigError) as info:
+        validate_config(cfg, SCHEMA)
+    msg = str(info.value)
+    assert "scene 'demo'" in msg and f"field '{field}'" in msg and words in msg, msg
+
+
+@pytest.mark.parametrize(
+    "edit, field, words",
+    [
+        (lambda a: a["axes"].update(tol=["1.2.3"]), "accuracy.axes.tol.0", "tolerance written as a string"),
+        (lambda a: a["axes"].update(N=["0"]), "accuracy.axes.N.0", "whole number written as a string"),
+        (lambda a: a["axes"].update(N=["512 "]), "accuracy.axes.N.0", "no spaces"),
+        (lambda a: a.update(seed_axis=["1", "x"]), "accuracy.seed_axis.1", "whole number"),
+        (lambda a: a.update(H=["0.36", "0.360"]), "accuracy.H", "same number"),
+    ],
+)
+def test_malformed_accuracy_settings_are_named(shipped_config, edit, field, words):
+    cfg = copy.deepcopy(shipped_config)
+    edit(cfg["defaults"]["accuracy"])
+    with pytest.raises(ConfigError) as info:
+        validate_config(cfg, SCHEMA)
+    msg = str(info.value)
+    assert "scene 'accuracy'" in msg and f"field '{field}'" in msg and words in msg, msg
+
+
+def test_duplicate_yaml_keys_are_named(tmp_path):
+    from roughcontact.config import check_config_files
+
+    good = tmp_path / "good.yaml"
+    good.write_text("scene: demo\nscenes: {demo: {contact: {seeds: 2}}}\n")
+    check_config_files([good])
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("scene: demo\nscenes:\n  demo:\n    contact: {seeds: 2}\n    contact: {seeds: 3}\n")
+    with pytest.raises(ConfigError, match=r"bad.yaml: key 'contact' appears twice in one mapping \(lines 4 and 5\)"):
+        check_config_files([bad])
+    broken = tmp_path / "broken.yaml"
+    broken.write_text("scenes: [unclosed\n")
+    with pytest.raises(ConfigError, match="broken.yaml: not valid YAML"):
+        check_config_files([broken])

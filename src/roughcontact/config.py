@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import copy
 import itertools
+import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -65,6 +66,30 @@ class Case:
     def stem(self) -> str:
         """File stem ``kl{k_l}_ks{k_s}_H{H}_s{seed}`` built from the config strings."""
         return CASE_STEM.format(k_l=self.k_l, k_s=self.k_s, H=self.H, seed=self.seed)
+
+
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """A YAML loader that refuses a key written twice in one mapping (YAML keeps the last)."""
+
+    def construct_mapping(self, node, deep=False):
+        seen = {}
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            if key in seen:
+                raise ConfigError(f"{self.name}: key {key!r} appears twice in one mapping (lines {seen[key]} and "
+                                  f"{key_node.start_mark.line + 1}); YAML would silently keep the last")
+            seen[key] = key_node.start_mark.line + 1
+        return super().construct_mapping(node, deep)
+
+
+def check_config_files(paths) -> None:
+    """Raise :class:`ConfigError` naming the file if a config file is not YAML or repeats a key."""
+    for path in paths:
+        with open(path) as fh:
+            try:
+                yaml.load(fh, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
+            except yaml.YAMLError as exc:
+                raise ConfigError(f"{path}: not valid YAML: {exc}") from None
 
 
 def load_schema(path: str | Path = DEFAULT_SCHEMA) -> dict:
@@ -187,8 +212,32 @@ def _schema_message(err) -> str:
         return (f"{err.instance!r} must be written as a string (e.g. \"{err.instance}\") so that "
                 "file names carry the config's text, not float formatting")
     if err.validator == "pattern":
-        return f"{err.instance!r} is not a positive number written as a string (e.g. \"0.8\")"
+        what = err.schema.get("description", "a positive number written as a string")
+        return f"{err.instance!r} is not {what} (no spaces or line breaks)"
     return err.message
+
+
+def _non_finite(tree, path=()):
+    """Path and value of the first NaN or infinite number in ``tree``, or None."""
+    if isinstance(tree, float) and not math.isfinite(tree):
+        return path, tree
+    items = tree.items() if isinstance(tree, dict) else enumerate(tree) if isinstance(tree, list) else ()
+    for key, value in items:
+        found = _non_finite(value, (*path, key))
+        if found:
+            return found
+    return None
+
+
+def _duplicates_by_value(texts) -> list[str]:
+    """Strings of ``texts`` that equal an earlier one as numbers ("2" and "2.0")."""
+    seen, dups = {}, []
+    for text in texts:
+        value = float(text)
+        if value in seen:
+            dups.append(f"{seen[value]!r} and {text!r}")
+        seen.setdefault(value, text)
+    return dups
 
 
 def _check_study(scene: str, study: str, block: dict) -> None:
@@ -201,6 +250,9 @@ def _check_study(scene: str, study: str, block: dict) -> None:
         for text in grid[key]:
             if float(text) <= 0:
                 fail(f"grid.{key}", f"{text!r} must be > 0")
+        dups = _duplicates_by_value(grid[key])
+        if dups:
+            fail(f"grid.{key}", f"{dups[0]} are the same number: each case would be computed twice")
     for text in grid["H"]:
         if not 0.0 < float(text) < 1.0:
             fail("grid.H", f"{text!r} is outside the allowed range 0 < H < 1")
@@ -221,6 +273,14 @@ def _check_study(scene: str, study: str, block: dict) -> None:
         bad = [s for s in block["outputs"]["fields"] if s > steps]
         if bad:
             fail("outputs.fields", f"steps {bad} exceed load.n_steps = {steps} (allowed 1..{steps})")
+        if block["seeds"] < 2:
+            fail("seeds", f"{block['seeds']} is too few: the contact study's CEL fit resamples seeds and needs "
+                          "at least 2")
+        plastic = block["effects"].get("plasticity")
+        if plastic and not plastic["hardness"] > block["load"]["p_max"]:
+            fail("effects.plasticity.hardness", f"{plastic['hardness']:g} must exceed load.p_max = "
+                 f"{block['load']['p_max']:g}: a pressure capped at the hardness cannot carry a mean load p0 "
+                 ">= hardness")
 
 
 def _check_accuracy(scene: str, block: dict) -> None:
@@ -233,6 +293,9 @@ def _check_accuracy(scene: str, block: dict) -> None:
     for text in block["H"]:
         if not 0.0 < float(text) < 1.0:
             fail("H", f"{text!r} is outside the allowed range 0 < H < 1")
+    dups = _duplicates_by_value(block["H"])
+    if dups:
+        fail("H", f"{dups[0]} are the same number: each case would be computed twice")
     settings = [("reference", block["reference"]), ("defaults", block["defaults"])]
     settings += [(f"axes.{axis}", {axis: v}) for axis, vals in block["axes"].items() for v in vals]
     for where, setting in settings:
@@ -253,6 +316,9 @@ def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = No
     not hold came from the ``defaults`` block, and the message says so. Raises
     :class:`ConfigError` naming ``name`` and the offending field.
     """
+    bad = _non_finite(scene)
+    if bad:
+        raise ConfigError(f"scene {name!r}, field '{_field(bad[0])}': {bad[1]} is not a finite number")
     scene_schema = {**schema["$defs"]["scene"], "$defs": schema["$defs"]}
     validator = Draft202012Validator(scene_schema)
     errors = sorted(validator.iter_errors(scene), key=lambda e: (len(e.path), list(e.path)))

@@ -5,10 +5,19 @@ from pathlib import Path
 
 from roughcontact import params
 from roughcontact.accuracy import variants as accuracy_variants
-from roughcontact.config import CASE_STEM, STUDIES, ConfigError, cases, load_schema, validate_config
+from roughcontact.config import (
+    CASE_STEM,
+    STUDIES,
+    ConfigError,
+    cases,
+    check_config_files,
+    load_schema,
+    validate_config,
+)
 from roughcontact.figures import FIGURES, scene_figures
 
 try:
+    check_config_files(workflow.configfiles)
     _VALID = validate_config(config, load_schema(workflow.source_path("../schemas/config.schema.yaml")))
 except ConfigError as _err:
     raise WorkflowError(f"invalid config: {_err}") from None
