@@ -231,3 +231,23 @@ def test_kappa_spread_and_csv_table():
 
 def test_kappa_of_paper_is_sqrt_2pi_times_1145():
     assert PAPER_CEL["kappa"][0] / math.sqrt(2 * math.pi) == pytest.approx(1.145)
+
+
+def test_unconverged_seeds_are_excluded_and_the_rest_fitted():
+    """Only some seeds of a group have unconverged steps: they leave, the others are fitted."""
+    from roughcontact.aggregate import add_derived, combine_cases
+    from roughcontact.fit import exclude_unconverged
+
+    dss, names = simulate_cel_cases(seeds=range(4), hurst=(0.5,), point_noise=1e-3, area_max=0.13, rng_seed=0)
+    for ds in dss[:2]:  # seeds 0 and 1: one unconverged step each
+        ds["converged"][..., 5] = False
+    agg = add_derived(combine_cases(dss, names))
+    before = agg.copy(deep=True)
+    kept, excluded = exclude_unconverged(agg)
+    assert [c[-1] for c in excluded] == [0, 1]
+    assert kept["case_present"].sum() == 2 and np.array_equal(kept["pressure"], before["pressure"]), \
+        "only case_present changes: pressures and schedules stay for the kept seeds"
+    result = fit_cel(kept, window=(0.01, 0.11), n_boot=20, on_insufficient="nan")
+    assert int(result["n_seeds"].sel(H_group=POOLED).squeeze()) == 2
+    assert np.isfinite(result["value"].sel(constant="kappa", H_group=POOLED, estimator="paper").squeeze())
+    assert agg["case_present"].all(), "the input is not modified"

@@ -91,11 +91,11 @@ class _Curves:
         self.window = window
         self.ok = valid & (a >= window[0]) & (a <= window[1])
 
-    def take(self, rows: np.ndarray) -> "_Curves":
+    def take(self, rows: np.ndarray) -> _Curves:
         return _Curves(self.a[rows], self.p0[rows], self.hp[rows], self.kappa[rows],
                        self.dpbar[rows], self.valid[rows], self.strata[rows], self.window)
 
-    def stratum_means(self) -> "_Curves":
+    def stratum_means(self) -> _Curves:
         """One row per H stratum: the seed-mean curve (steps valid in every seed)."""
         labels = np.unique(self.strata)
         rows = [np.flatnonzero(self.strata == lab) for lab in labels]
@@ -103,7 +103,7 @@ class _Curves:
 
         def mean(x):
             with np.errstate(invalid="ignore"):
-                return np.array([np.where(v, x[r].mean(axis=0), np.nan) for r, v in zip(rows, valid)])
+                return np.array([np.where(v, x[r].mean(axis=0), np.nan) for r, v in zip(rows, valid, strict=True)])
 
         return _Curves(mean(self.a), mean(self.p0), np.array([self.hp[r].mean() for r in rows]),
                        mean(self.kappa), mean(self.dpbar), valid, labels, self.window)
@@ -136,7 +136,7 @@ def _group_curves(agg: xr.Dataset, k_l: float, k_s: float, hs: Sequence[float],
         empty = np.empty((0, n))
         return _Curves(empty, empty, np.empty(0), empty, empty, np.empty((0, n), bool),
                        np.empty(0, int), window)
-    cols = list(zip(*rows))
+    cols = list(zip(*rows, strict=True))
     return _Curves(np.array(cols[0]), np.array(cols[1]), np.array(cols[2]), np.array(cols[3]),
                    np.array(cols[4]), np.array(cols[5]), np.array(cols[6], dtype=int), window)
 
@@ -269,6 +269,24 @@ def _h_label(h: float) -> str:
 
 
 # --------------------------------------------------------------------------- public
+def exclude_unconverged(agg: xr.Dataset) -> tuple[xr.Dataset, list[tuple[float, float, float, int]]]:
+    """``agg`` with every case that has an unconverged step marked absent, and those cases.
+
+    Only ``case_present`` changes, so the other cases of a group (their pressures, load
+    schedules, seeds) enter the fit untouched. Cases are ``(k_l, k_s, H, seed)``.
+    """
+    if "n_unconverged" not in agg:
+        return agg, []
+    present = agg["case_present"] if "case_present" in agg else xr.ones_like(agg["n_unconverged"], dtype=bool)
+    bad = present & (agg["n_unconverged"] > 0)
+    excluded = [tuple(float(v) if d != "seed" else int(v) for d, v in zip(bad.dims, idx, strict=True))
+                for idx in bad.to_series()[bad.to_series()].index]
+    out = agg.copy()
+    out["case_present"] = (present & ~bad).assign_attrs(present.attrs or {
+        "units": "1", "long_name": "a dataset exists for this case (False: grid hole, not expected)"})
+    return out, excluded
+
+
 def fit_cel(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.11), n_boot: int = 200,
             rng_seed: int = 2012, methods: Sequence[str] = METHODS, min_points: int = 6,
             kappa_extrapolation: str = "cel", paper_average: str = "seeds",
