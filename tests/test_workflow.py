@@ -196,3 +196,24 @@ def test_unconverged_steps_are_flagged_counted_and_excluded(tmp_path):
     assert "excluding 4 case(s) with unconverged steps" in (out / "logs" / "fit_cel.log").read_text()
     fitted = xr.open_dataset(out / "fit" / "cel.nc")
     assert bool(fitted["value"].isnull().all()), "no converged case: nothing may be fitted"
+
+
+def test_a_file_made_for_another_case_or_scene_is_refused(tmp_path):
+    """A surface of N=64 put into an N=32 scene, or seed 1's surface named as seed 0's: named, not used."""
+    big = copy.deepcopy(TINY)
+    big["scenes"]["tiny"]["contact"]["surface"]["N"] = 64
+    src = copy_workflow(tmp_path / "big", big)
+    made = ["results/tiny/surfaces/kl2_ks8_H0.5_s0.nc", "results/tiny/surfaces/kl2_ks8_H0.5_s1.nc"]
+    assert run_snakemake(src, "-j1", *made).returncode == 0
+    wd = copy_workflow(tmp_path / "wf", TINY)
+    (wd / "results/tiny/surfaces").mkdir(parents=True)
+    target = "results/tiny/contact/kl2_ks8_H0.5_s0.nc"
+    (wd / made[0]).write_bytes((src / made[0]).read_bytes())
+    res = run_snakemake(wd, "-j1", target)
+    log = res.stdout + res.stderr
+    assert res.returncode != 0 and f"{made[0]}: was made with surface = " in log and "'N': 64" in log, log[-3000:]
+    assert not (wd / target).exists()
+    (wd / made[0]).write_bytes((src / made[1]).read_bytes())
+    res = run_snakemake(wd, "-j1", target)
+    log = res.stdout + res.stderr
+    assert res.returncode != 0 and "holds seed=[1], but this job is for seed=0" in log, log[-3000:]

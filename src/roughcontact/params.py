@@ -75,3 +75,22 @@ def recorded(ds) -> dict:
         return json.loads(text)
     except json.JSONDecodeError as exc:
         raise ValueError(f"{ds.encoding.get('source', 'dataset')}: 'scene_parameters' is not JSON: {exc}") from None
+
+
+def require_made_for(ds, path, case: Mapping, **expected) -> None:
+    """Raise ``ValueError`` naming ``path`` unless it holds ``case`` made with ``expected``.
+
+    ``case`` maps ``k_l, k_s, H, seed`` to the values the job asks for (config strings or
+    numbers); ``expected`` maps keys of the file's recorded parameters (e.g. ``surface``) to
+    the values the job needs. Guards against a file of another case or scene put in place.
+    """
+    for dim, want in case.items():
+        got = ds[dim].values.ravel() if dim in ds.coords else None
+        if got is None or got.size != 1 or float(got[0]) != float(want):
+            raise ValueError(f"{path}: holds {dim}={None if got is None else got.tolist()}, but this job is "
+                             f"for {dim}={want}; the file was made for another case")
+    rec = recorded(ds)
+    for key, want in expected.items():
+        if canonical(rec.get(key)) != canonical(want):
+            raise ValueError(f"{path}: was made with {key} = {canonical(rec.get(key))}, but this job needs "
+                             f"{key} = {canonical(want)}; remove the file (or rerun with -f) to remake it")

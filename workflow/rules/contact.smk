@@ -9,6 +9,7 @@ rule contact:
         case_path("contact"),
     params:
         settings=case_params("contact", params.contact),
+        surface=case_params("contact", params.surface),
     threads: 1
     log:
         case_path("logs/contact", "log"),

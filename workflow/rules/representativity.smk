@@ -8,6 +8,7 @@ rule representativity:
         case_path("representativity"),
     params:
         settings=case_params("representativity", params.representativity),
+        surface=case_params("representativity", params.surface),
     log:
         case_path("logs/representativity", "log"),
     benchmark:

@@ -4,13 +4,15 @@ import numpy as np
 from roughcontact.config import load_steps
 from roughcontact.datasets import contact_dataset
 from roughcontact.io import read_dataset, run_logged, write_dataset
-from roughcontact.params import recorded
+from roughcontact.params import recorded, require_made_for
 from roughcontact.solver import solve_contact
 
 
 def main(log):
     w, settings = snakemake.wildcards, snakemake.params.settings
     surf = read_dataset(snakemake.input[0], stage="surface", variables=["heights", "rms_slope", "alpha"])
+    require_made_for(surf, snakemake.input[0], {"k_l": w.k_l, "k_s": w.k_s, "H": w.H, "seed": w.seed},
+                     surface=snakemake.params.surface)
     solver = settings["solver"]
     plastic = settings["effects"].get("plasticity")
     result = solve_contact(
