@@ -124,3 +124,41 @@ def test_same_continuous_surface_at_any_resolution():
         fine = generate_surface(n, 16, 32, 0.8, 0, rms_slope=0.1)
         step = n // 128
         assert np.max(np.abs(fine[::step, ::step] - coarse)) <= 1e-12 * np.max(np.abs(coarse))
+
+
+@pytest.mark.parametrize(
+    "kwargs, words",
+    [
+        ({"k_l": "4"}, "k_l must be a finite real number in (0, 32], got '4' of type str"),
+        ({"hurst": "0.8"}, "hurst (H) must be a finite real number in (0, 1)"),
+        ({"hurst": True}, "hurst (H) must be a finite real number"),
+        ({"rms_slope": "0.1"}, "rms_slope must be a finite real number in (0, 1000]"),
+        ({"rms_slope": 1e308}, "rms_slope must be a finite real number in (0, 1000], got 1e+308"),
+        ({"length": "1"}, "length (L) must be a finite real number in [1e-50, 1e+50]"),
+        ({"length": 1e-300}, "length (L) must be a finite real number in [1e-50, 1e+50], got 1e-300"),
+        ({"length": 1e300}, "length (L) must be a finite real number in [1e-50, 1e+50], got 1e+300"),
+        ({"rms_slope": None, "rms_height": 1e308}, "rms_height must be a finite real number in [1e-100, 1e+100]"),
+        ({"n": 64.0}, "n (grid points per side) must be an integer >= 4"),
+        ({"length": 1e-50, "rms_slope": 1e-300}, "outside the representable range"),
+    ],
+)
+def test_library_arguments_are_named_with_their_range(kwargs, words):
+    args = {"n": 64, "k_l": 4, "k_s": 16, "hurst": 0.8, "seed": 0, "rms_slope": 0.1}
+    args.update(kwargs)
+    with pytest.raises(ValueError) as info:
+        generate_surface(args.pop("n"), args.pop("k_l"), args.pop("k_s"), args.pop("hurst"), args.pop("seed"),
+                         **args)
+    assert words in str(info.value), str(info.value)
+
+
+@pytest.mark.parametrize("length", [1e-40, 1e-3, 1.0, 1e3, 1e40])
+def test_extreme_lengths_scale_exactly(length):
+    """The same surface on any cell size: heights scale with L at a fixed rms slope, alpha does not move."""
+    ref = generate_surface(64, 4, 16, 0.8, 0, rms_slope=0.1)
+    h = generate_surface(64, 4, 16, 0.8, 0, rms_slope=0.1, length=length)
+    assert np.allclose(h / length, ref, rtol=1e-12, atol=1e-15 * np.abs(ref).max())
+    stats, ref_stats = spectral_moments(h, length), spectral_moments(ref, 1.0)
+    assert stats["rms_slope"] == pytest.approx(0.1, rel=1e-12)
+    assert stats["alpha"] == pytest.approx(ref_stats["alpha"], rel=1e-12)
+    big = generate_surface(64, 4, 16, 0.8, 0, rms_height=1e90)
+    assert np.all(np.isfinite(big)) and np.sqrt(np.mean(big**2)) == pytest.approx(1e90, rel=1e-12)

@@ -9,29 +9,50 @@ Heights are in the same length unit as ``length``.
 from __future__ import annotations
 
 import hashlib
+import math
 
 import numpy as np
 
 from .fft import get_fft, rfft_weights, wavenumbers
 
 
+#: Allowed ranges of the scale arguments: wide, but far enough from float64's limits that
+#: heights, their squares and the spectral moments m2 ~ h^2/L^2 and m4 ~ h^2/L^4 stay finite.
+LENGTH_RANGE = (1e-50, 1e50)
+RMS_HEIGHT_RANGE = (1e-100, 1e100)
+RMS_SLOPE_RANGE = (0.0, 1e3)
+
+
+def _real(name: str, value, lo: float, hi: float, *, lo_open: bool = False, hi_open: bool = False) -> float:
+    """``value`` as a float if it is a real number in the range, else a ValueError naming ``name``."""
+    left, right = "(" if lo_open else "[", ")" if hi_open else "]"
+    allowed = f"a finite real number in {left}{lo:g}, {hi:g}{right}"
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ValueError(f"{name} must be {allowed}, got {value!r} of type {type(value).__name__}")
+    x = float(value)
+    inside = (lo < x if lo_open else lo <= x) and (x < hi if hi_open else x <= hi)
+    if not math.isfinite(x) or not inside:
+        raise ValueError(f"{name} must be {allowed}, got {value!r}")
+    return x
+
+
 def _check_params(n, k_l, k_s, hurst, rms_slope, rms_height, length):
-    if not isinstance(n, (int, np.integer)) or n < 4:
+    if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < 4:
         raise ValueError(f"n (grid points per side) must be an integer >= 4, got {n!r}")
-    if not (np.isfinite(k_l) and np.isfinite(k_s)) or not (0 < k_l < k_s):
+    k_l = _real("k_l", k_l, 0.0, n / 2, lo_open=True)
+    k_s = _real("k_s", k_s, 0.0, math.inf, lo_open=True, hi_open=True)
+    if not k_l < k_s:
         raise ValueError(f"cutoffs must satisfy 0 < k_l < k_s, got k_l={k_l!r}, k_s={k_s!r}")
     if k_s > n / 2:
         raise ValueError(f"k_s must be <= n/2 = {n / 2} (Nyquist), got k_s={k_s!r}")
-    if not np.isfinite(hurst) or not (0.0 < hurst < 1.0):
-        raise ValueError(f"hurst (H) must lie in the open interval (0, 1), got {hurst!r}")
+    _real("hurst (H)", hurst, 0.0, 1.0, lo_open=True, hi_open=True)
     if (rms_slope is None) == (rms_height is None):
         raise ValueError("give exactly one of rms_slope or rms_height")
-    target = rms_slope if rms_slope is not None else rms_height
-    name = "rms_slope" if rms_slope is not None else "rms_height"
-    if not np.isfinite(target) or target <= 0:
-        raise ValueError(f"{name} must be a finite number > 0, got {target!r}")
-    if not np.isfinite(length) or length <= 0:
-        raise ValueError(f"length (L) must be a finite number > 0, got {length!r}")
+    if rms_slope is not None:
+        _real("rms_slope", rms_slope, *RMS_SLOPE_RANGE, lo_open=True)
+    else:
+        _real("rms_height", rms_height, *RMS_HEIGHT_RANGE)
+    _real("length (L)", length, *LENGTH_RANGE)
 
 
 def case_seed(seed: int, k_l: float, k_s: float, hurst: float) -> np.random.SeedSequence:
@@ -86,7 +107,9 @@ def spectral_moments(heights: np.ndarray, length: float = 1.0) -> dict[str, floa
     spec = np.fft.rfft2(h)
     power = rfft_weights(n) * np.abs(spec) ** 2 / float(n) ** 4
     power[0, 0] = 0.0
-    kx, ky = wavenumbers(n, length)
+    # Moments on the unit cell (q in rad per L), scaled by L afterwards: q^4 of a cell of
+    # side 1e50 would underflow, and alpha is scale-free anyway.
+    kx, ky = wavenumbers(n, 1.0)
     qx2 = (2 * np.pi * kx) ** 2
     qy2 = (2 * np.pi * ky) ** 2
     m0 = float(power.sum())
@@ -94,10 +117,10 @@ def spectral_moments(heights: np.ndarray, length: float = 1.0) -> dict[str, floa
     m4 = float(0.5 * ((qx2**2 + qy2**2) * power).sum())
     return {
         "rms_height": float(np.sqrt(m0)),
-        "rms_slope": float(np.sqrt(2.0 * m2)),
+        "rms_slope": float(np.sqrt(2.0 * m2)) / length,
         "m0": m0,
-        "m2": m2,
-        "m4": m4,
+        "m2": m2 / length**2,
+        "m4": m4 / length**4,
         "alpha": float(m0 * m4 / m2**2) if m2 > 0 else float("nan"),
     }
 
@@ -178,13 +201,20 @@ def generate_surface(n: int, k_l: float, k_s: float, hurst: float, seed: int, *,
     spec_m = np.fft.rfft2(noise) * psd_filter(m, k_l, k_s, hurst, length=length, plateau=plateau)
     fft = get_fft((n, n), backend=backend)
     h = fft.backward(_embed_spectrum(spec_m, m, n)).copy()
-    stats = spectral_moments(h, length)
+    # Normalise on the unit cell (the rms slope there is rms_slope * L), so that no
+    # intermediate carries a power of L.
+    stats = spectral_moments(h, 1.0)
     current = stats["rms_slope"] if rms_slope is not None else stats["rms_height"]
     if not current > 0:
         raise ValueError(
             f"no spectral power between k_l={k_l} and k_s={k_s} on a {n}x{n} grid; widen the band"
         )
-    target = rms_slope if rms_slope is not None else rms_height
-    h *= target / current
     h -= h.mean()
+    h *= (float(rms_slope) * float(length) if rms_slope is not None else float(rms_height)) / current
+    rms = float(np.sqrt(np.mean(h * h))) if np.all(np.isfinite(h)) else math.inf
+    if not RMS_HEIGHT_RANGE[0] <= rms <= RMS_HEIGHT_RANGE[1]:
+        raise ValueError(
+            f"rms_slope={rms_slope!r} on length={length!r} gives an rms height of {rms:.3g}, outside the "
+            f"representable range [{RMS_HEIGHT_RANGE[0]:g}, {RMS_HEIGHT_RANGE[1]:g}]; choose a smaller product"
+        )
     return h
