@@ -8,6 +8,9 @@ import yaml
 from conftest import copy_workflow, run_snakemake
 from test_workflow import TINY
 
+# One real run of the tiny scene, then a dry run per edit: about 2.5 min on 2 cores.
+pytestmark = pytest.mark.slow
+
 SURF = "results/tiny/surfaces/kl2_ks8_H{H}_s{seed}.nc"
 CONTACT = "results/tiny/contact/kl2_ks8_H{H}_s{seed}.nc"
 DOWNSTREAM = {
