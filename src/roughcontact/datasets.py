@@ -57,14 +57,17 @@ def surface_dataset(heights: np.ndarray, *, k_l: str, k_s: str, hurst: str, seed
     ds = xr.Dataset(
         {
             "heights": (("x", "y"), heights, {"units": "length unit of L", "long_name": "surface height h(x, y)"}),
-            "rms_height": ((), stats["rms_height"], {"units": "length unit of L", "long_name": "rms height (spectral)"}),
-            "rms_slope": ((), stats["rms_slope"], {"units": "1", "long_name": "rms slope sqrt(<|grad h|^2>) from the spectrum"}),
+            "rms_height": ((), stats["rms_height"],
+                           {"units": "length unit of L", "long_name": "rms height (spectral)"}),
+            "rms_slope": ((), stats["rms_slope"],
+                          {"units": "1", "long_name": "rms slope sqrt(<|grad h|^2>) from the spectrum"}),
             "rms_slope_fd": ((), finite_difference_rms_slope(heights, length),
                              {"units": "1", "long_name": "rms slope from periodic central differences"}),
             "m0": ((), stats["m0"], {"units": "length unit^2", "long_name": "profile spectral moment m0"}),
             "m2": ((), stats["m2"], {"units": "1", "long_name": "profile spectral moment m2"}),
             "m4": ((), stats["m4"], {"units": "length unit^-2", "long_name": "profile spectral moment m4"}),
-            "alpha": ((), stats["alpha"], {"units": "1", "long_name": "Nayak bandwidth alpha = m0 m4 / m2^2 (profile moments)"}),
+            "alpha": ((), stats["alpha"],
+                      {"units": "1", "long_name": "Nayak bandwidth alpha = m0 m4 / m2^2 (profile moments)"}),
         },
         coords={
             "x": ("x", x, {"units": "length unit of L", "long_name": "position along x"}),
@@ -105,7 +108,8 @@ def contact_dataset(result: xr.Dataset, *, rms_slope: float, alpha: float, e_sta
     ds["area_fraction_corrected"] = xr.DataArray(
         perimeter_corrected_area(ds["area_fraction"].values, ds["contact_perimeter"].values, dx),
         dims=("step",),
-        attrs={"units": "1", "long_name": f"perimeter-corrected contact area fraction A_pix/A0 - c P dx, c = {PERIMETER_C:.4f}"},
+        attrs={"units": "1",
+               "long_name": f"perimeter-corrected contact area fraction A_pix/A0 - c P dx, c = {PERIMETER_C:.4f}"},
     )
     ds["kappa"] = (e_star * rms_slope / ds["mean_contact_pressure"]).assign_attrs(
         units="1", long_name="kappa = E* h' / mean contact pressure")
@@ -115,3 +119,31 @@ def contact_dataset(result: xr.Dataset, *, rms_slope: float, alpha: float, e_sta
         "units": "1", "long_name": "Nayak bandwidth alpha of the surface (profile moments)"})
     ds.attrs["e_star"] = float(e_star)
     return expand_case(ds, k_l, k_s, hurst, seed)
+
+
+def surface_heights(ds: xr.Dataset, source) -> tuple[np.ndarray, float]:
+    """The ``(n, n)`` heights and the cell side ``L`` of a surface dataset, checked.
+
+    ``source`` names the file in messages. Raises ``ValueError`` when the heights are
+    missing, not a square 2-D field of at least 4 x 4 points over ``x, y``, or not all
+    finite, or when the global attribute ``length`` is missing or not a positive number.
+    """
+    if "heights" not in ds:
+        raise ValueError(f"{source}: lacks the variable 'heights'")
+    da = ds["heights"].squeeze([d for d in CASE_DIMS if d in ds["heights"].dims])
+    if da.dims != ("x", "y") or da.shape[0] != da.shape[1] or da.shape[0] < 4:
+        raise ValueError(f"{source}: 'heights' must be a square 2-D field over (x, y) of at least 4 x 4 points, "
+                         f"got dims {da.dims} and shape {da.shape}")
+    heights = np.asarray(da.values, dtype=float)
+    if not np.all(np.isfinite(heights)):
+        raise ValueError(f"{source}: 'heights' holds {int(np.sum(~np.isfinite(heights)))} NaN or infinite "
+                         "value(s); every height must be finite")
+    length = ds.attrs.get("length")
+    try:
+        length = float(length)
+    except (TypeError, ValueError):
+        raise ValueError(f"{source}: the global attribute 'length' (side of the cell) is missing or not a "
+                         f"number: {length!r}") from None
+    if not (np.isfinite(length) and length > 0):
+        raise ValueError(f"{source}: the global attribute 'length' must be a finite number > 0, got {length!r}")
+    return heights, length

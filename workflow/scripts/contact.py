@@ -2,7 +2,7 @@
 import numpy as np
 
 from roughcontact.config import load_steps
-from roughcontact.datasets import contact_dataset
+from roughcontact.datasets import contact_dataset, surface_heights
 from roughcontact.io import read_dataset, run_logged, write_dataset
 from roughcontact.params import recorded, require_made_for
 from roughcontact.solver import solve_contact
@@ -13,13 +13,14 @@ def main(log):
     surf = read_dataset(snakemake.input[0], stage="surface", variables=["heights", "rms_slope", "alpha"])
     require_made_for(surf, snakemake.input[0], {"k_l": w.k_l, "k_s": w.k_s, "H": w.H, "seed": w.seed},
                      surface=snakemake.params.surface)
+    heights, length = surface_heights(surf, snakemake.input[0])
     solver = settings["solver"]
     plastic = settings["effects"].get("plasticity")
     result = solve_contact(
-        surf.heights.values.squeeze(),
+        heights,
         load_steps(settings),
         e_star=solver["e_star"],
-        length=float(surf.attrs["length"]),
+        length=length,
         tol=solver["tol"],
         max_iter=solver["max_iter"],
         store_fields=settings["outputs"]["fields"] or False,

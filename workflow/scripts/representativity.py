@@ -1,5 +1,5 @@
 """Stage 2: L2 distance between a surface's height PDF and its Gaussian."""
-from roughcontact.datasets import representativity_dataset
+from roughcontact.datasets import representativity_dataset, surface_heights
 from roughcontact.io import read_dataset, run_logged, write_dataset
 from roughcontact.params import recorded, require_made_for
 from roughcontact.representativity import gaussian_l2_error
@@ -10,7 +10,7 @@ def main(log):
     surf = read_dataset(snakemake.input[0], stage="surface", variables=["heights"])
     require_made_for(surf, snakemake.input[0], {"k_l": w.k_l, "k_s": w.k_s, "H": w.H, "seed": w.seed},
                      surface=snakemake.params.surface)
-    h = surf.heights.values.squeeze()
+    h, _ = surface_heights(surf, snakemake.input[0])
     eps = gaussian_l2_error(h, settings["n_bins"])
     ds = representativity_dataset(eps, h, n_bins=settings["n_bins"], k_l=w.k_l, k_s=w.k_s, hurst=w.H,
                                   seed=int(w.seed))
