@@ -27,6 +27,6 @@ localrules:
 
 
 rule all:
+    default_target: True
     input:
         scene_targets(ACTIVE_SCENE),
-    default_target: True

@@ -1,5 +1,7 @@
 """Shared fixtures: paths of the repository and a runner for the snakemake CLI."""
+import os
 import shutil
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -22,11 +24,34 @@ def shipped_config():
         return yaml.safe_load(fh)
 
 
-def run_snakemake(workdir, *args, timeout=900):
-    """Run snakemake in ``workdir`` (a copy of the workflow); returns CompletedProcess."""
-    return subprocess.run(
-        [SNAKEMAKE, *args], cwd=workdir, capture_output=True, text=True, timeout=timeout
-    )
+# Caps on wall-clock time only catch a hang: ~20x the slowest normal run (the demo scene,
+# 35 s on 2 quiet cores, 1.5 min on busy ones). ROUGHCONTACT_TEST_TIME_SCALE multiplies every
+# cap given to run_snakemake (e.g. 3 on a heavily shared machine).
+SNAKEMAKE_TIMEOUT_S = 1800
+TIME_SCALE = float(os.environ.get("ROUGHCONTACT_TEST_TIME_SCALE", "1"))
+
+
+def run_snakemake(workdir, *args, timeout=SNAKEMAKE_TIMEOUT_S, env=None):
+    """Run snakemake in ``workdir`` (a copy of the workflow); returns CompletedProcess.
+
+    Past ``timeout`` seconds (times ROUGHCONTACT_TEST_TIME_SCALE) Snakemake and its jobs (its own
+    process group) are killed and the test fails saying so, with the end of their output.
+    """
+    limit = timeout * TIME_SCALE
+    proc = subprocess.Popen([SNAKEMAKE, *args], cwd=workdir, env=env, text=True, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, start_new_session=True)
+    try:
+        stdout, stderr = proc.communicate(timeout=limit)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        stdout, stderr = proc.communicate()
+        pytest.fail(f"snakemake {' '.join(args)} did not finish within {limit:.0f} s (killed); last output:\n"
+                    f"{stdout[-2000:]}\n{stderr[-4000:]}")
+    except BaseException:  # e.g. Ctrl-C: its own session would outlive pytest
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+        raise
+    return subprocess.CompletedProcess(proc.args, proc.returncode, stdout, stderr)
 
 
 def copy_workflow(dest: Path, config: dict | None = None) -> Path:

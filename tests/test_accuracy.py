@@ -54,13 +54,14 @@ def test_perimeter_correction_reduces_the_pixel_bias():
     assert raw[0] > raw[1] > raw[2]
     # corrected, even 8 points per shortest wavelength beat the pixel count at 32
     assert max(corr) < raw[2], (raw, corr)
-    c_fit = accuracy.fit_perimeter_c(*zip(*[res[n] for n in (64, 128, 256)]), ref)
+    c_fit = accuracy.fit_perimeter_c(*zip(*[res[n] for n in (64, 128, 256)], strict=True), ref)
     assert 0.0 < c_fit < 0.5
 
 
 def test_relative_error_and_cost_table():
     assert accuracy.relative_error(1.01, 1.0) == pytest.approx(0.01)
-    summary = xr.Dataset({"err_kappa": ("variant", [0.02, 0.005, 0.0005]), "time_per_case": ("variant", [1.0, 3.0, 9.0])},
+    summary = xr.Dataset({"err_kappa": ("variant", [0.02, 0.005, 0.0005]),
+                          "time_per_case": ("variant", [1.0, 3.0, 9.0])},
                          coords={"variant": ["a", "b", "c"]})
     table = accuracy.cost_table(summary, "kappa", targets=(1e-2, 1e-3, 1e-4))
     assert table == {1e-2: ("b", 3.0), 1e-3: ("c", 9.0), 1e-4: None}

@@ -168,7 +168,7 @@ def test_labels_follow_a_periodic_shift():
     shifted, count_s = label_clusters(np.roll(m, (7, -5), axis=(0, 1)))
     assert count_s == count
     rolled = np.roll(labels, (7, -5), axis=(0, 1))
-    pairs = {(a, b) for a, b in zip(rolled[rolled > 0], shifted[shifted > 0])}
+    pairs = {(a, b) for a, b in zip(rolled[rolled > 0], shifted[shifted > 0], strict=True)}
     assert len(pairs) == count  # a bijection between the two labellings
 
 

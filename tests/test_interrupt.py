@@ -6,7 +6,9 @@ import time
 
 import pytest
 
-from conftest import SNAKEMAKE, copy_workflow, run_snakemake
+from conftest import SNAKEMAKE, TIME_SCALE, copy_workflow, run_snakemake
+
+FIRST_CASE_TIMEOUT_S = 600 * TIME_SCALE  # normally 5-30 s
 
 SCENE = {
     "scene": "kill",
@@ -40,20 +42,33 @@ def test_sigkill_then_rerun_incomplete_matches_uninterrupted(tmp_path):
     assert res.returncode == 0, res.stderr[-3000:]
 
     wd = copy_workflow(tmp_path / "killed", SCENE)
-    proc = subprocess.Popen([SNAKEMAKE, "-j2"], cwd=wd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                            start_new_session=True)
+    log = tmp_path / "killed.log"
+    with open(log, "w") as out:
+        proc = subprocess.Popen([SNAKEMAKE, "-j2"], cwd=wd, stdout=out, stderr=subprocess.STDOUT,
+                                start_new_session=True)
     contact = wd / "results" / "kill" / "contact"
-    deadline = time.time() + 120
-    # Kill once the first contact case is written and others are running.
-    while time.time() < deadline and not (contact.exists() and list(contact.glob("*.nc"))):
+    # Kill once the first contact case is written and others are running. The first one takes a
+    # few seconds (two surfaces, one solve at N=128); the cap only catches a hang.
+    start = time.monotonic()
+    while not (contact.exists() and list(contact.glob("*.nc"))):
+        waited = time.monotonic() - start
+        if proc.poll() is not None or waited > FIRST_CASE_TIMEOUT_S:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+            what = (f"snakemake exited with status {proc.returncode}" if waited <= FIRST_CASE_TIMEOUT_S else
+                    f"no contact file within {FIRST_CASE_TIMEOUT_S} s (killed)")
+            pytest.fail(f"{what} before the first contact case was written; last output:\n"
+                        f"{log.read_text()[-4000:]}")
         time.sleep(0.05)
     os.killpg(proc.pid, signal.SIGKILL)
     proc.wait()
-    done = list(contact.glob("*.nc"))
-    assert 0 < len(done) < 6, "the kill must land mid-way through the contact stage"
+    done = sorted(p.name for p in contact.glob("*.nc"))
+    assert 0 < len(done) < 6, (f"the kill must land mid-way through the contact stage, but {len(done)} of 6 "
+                               f"contact files were there after it ({done}); last output:\n{log.read_text()[-2000:]}")
 
     # A SIGKILLed Snakemake cannot release its lock: --unlock is the documented first step.
-    assert run_snakemake(wd, "--unlock").returncode == 0
+    res = run_snakemake(wd, "--unlock")
+    assert res.returncode == 0, res.stderr[-3000:]
     res = run_snakemake(wd, "-j2", "--rerun-incomplete")
     assert res.returncode == 0, res.stderr[-3000:]
     assert _outputs(wd) == _outputs(ref)

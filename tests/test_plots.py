@@ -11,7 +11,13 @@ import pytest
 import xarray as xr
 from matplotlib.figure import Figure
 
-from roughcontact.aggregate import CASE_DIMS, aggregate_contact, combine_cases, representativity_statistics, seed_statistics
+from roughcontact.aggregate import (
+    CASE_DIMS,
+    aggregate_contact,
+    combine_cases,
+    representativity_statistics,
+    seed_statistics,
+)
 from roughcontact.fit import fit_cel, simulate_cel_cases
 from roughcontact.plots import (
     DOUBLE_COLUMN_IN,
@@ -78,7 +84,7 @@ def test_figure_builds_and_saves_byte_identically(name, contact, rep_stats, exam
     second = save_figure(build(), tmp_path / "b" / f"{name}.pdf")  # a fresh render, suffix form
     assert [p.suffix for p in first] == [".png", ".pdf"]
     assert first[0].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and first[1].read_bytes()[:5] == b"%PDF-"
-    for a, b in zip(first, second):
+    for a, b in zip(first, second, strict=True):
         assert a.read_bytes() == b.read_bytes(), a.name
     for ax in fig.axes:
         if ax.get_visible() and ax.has_data() and not ax.get_label() == "<colorbar>":

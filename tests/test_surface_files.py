@@ -1,7 +1,6 @@
 """A surface file with bad heights or attributes is named, never a raw KeyError or a NaN solve."""
 import numpy as np
 import pytest
-import xarray as xr
 
 from roughcontact.datasets import surface_dataset, surface_heights
 

@@ -11,6 +11,7 @@ try:
 except PackageNotFoundError:  # pragma: no cover - running from a source tree
     __version__ = "0+unknown"
 
+from .solver import solve_contact
 from .surface import generate_surface
 
-__all__ = ["__version__", "generate_surface"]
+__all__ = ["__version__", "generate_surface", "solve_contact"]

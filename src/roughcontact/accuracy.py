@@ -230,17 +230,22 @@ def summarize(results: Mapping[str, tuple[xr.Dataset, Sequence[float], Sequence[
                          err={m: float(relative_error(vals[m], all_vals[m])) for m in METRICS}))
 
     n_axis = [r for r in rows if r["axis"] in ("N", "reference")]
-    c_fit = fit_perimeter_c([r["vals"]["area"] for r in n_axis], [r["vals"]["perimeter"] for r in n_axis],
-                            [length / int(r["N"]) for r in n_axis], ref_vals["area"]) if len(n_axis) > 1 else float("nan")
+    if len(n_axis) > 1:
+        c_fit = fit_perimeter_c([r["vals"]["area"] for r in n_axis], [r["vals"]["perimeter"] for r in n_axis],
+                                [length / int(r["N"]) for r in n_axis], ref_vals["area"])
+    else:
+        c_fit = float("nan")
 
     one = {"units": "1"}
     data = {
         "time_per_case": ("variant", [r["time"] for r in rows],
                           {"units": "s", "long_name": "wall time per case (seeds axis: for all its cases)"}),
-        "max_rss": ("variant", [r["rss"] for r in rows], {"units": "MB", "long_name": "peak resident memory of a job"}),
+        "max_rss": ("variant", [r["rss"] for r in rows],
+                    {"units": "MB", "long_name": "peak resident memory of a job"}),
     }
     for m in METRICS:
-        data[m] = ("variant", [r["vals"][m] for r in rows], {**one, "long_name": f"{m} (mean over cases)", "allow_nan": 1})
+        data[m] = ("variant", [r["vals"][m] for r in rows],
+                   {**one, "long_name": f"{m} (mean over cases)", "allow_nan": 1})
         data[f"err_{m}"] = ("variant", [r["err"][m] for r in rows],
                             {**one, "long_name": f"relative error of {m} against the reference", "allow_nan": 1})
     coords = {

@@ -126,7 +126,7 @@ def combine_cases(datasets: Sequence[xr.Dataset], names: Sequence[str], *,
     seen: dict[tuple, str] = {}
     ref = datasets[0]
     ref_vars = set(ref.data_vars)
-    for ds, name in zip(datasets, names):
+    for ds, name in zip(datasets, names, strict=True):
         key = _case_key(ds, name)
         if key in seen:
             raise ValueError(f"{name}: case {_fmt_case(key)} already given by {seen[key]}")
@@ -172,7 +172,7 @@ def combine_cases(datasets: Sequence[xr.Dataset], names: Sequence[str], *,
         shown = ", ".join(_fmt_case(c) for c in missing_cases[:10])
         more = f" and {len(missing_cases) - 10} more" if len(missing_cases) > 10 else ""
         raise ValueError(f"{len(missing_cases)} expected case(s) have no dataset: {shown}{more}")
-    for key, name in zip(keys, names):
+    for key, name in zip(keys, names, strict=True):
         if key not in expected_set:
             raise ValueError(f"{name}: case {_fmt_case(key)} is not among the expected cases")
 
@@ -215,7 +215,7 @@ def combine_cases(datasets: Sequence[xr.Dataset], names: Sequence[str], *,
             raise ValueError(f"{names[0]}: variable {var!r} has dtype {dtype}, which cannot be "
                              "stacked (numeric or boolean only)")
         arr = np.full(grid_shape + rest_shape, fill, dtype=out_dtype)
-        for ds, name, pos in zip(datasets, names, positions):
+        for ds, name, pos in zip(datasets, names, positions, strict=True):
             v = ds[var]
             extra = [d for d in CASE_DIMS if d not in v.dims]
             if extra:
@@ -240,7 +240,7 @@ def combine_cases(datasets: Sequence[xr.Dataset], names: Sequence[str], *,
 # ------------------------------------------------------------------- derived values
 def _first_bad_case(bad: xr.DataArray) -> str:
     idx = np.argwhere(bad.values)[0]
-    parts = [f"{d}={bad[d].values[i]!r}" for d, i in zip(bad.dims, idx)]
+    parts = [f"{d}={bad[d].values[i]!r}" for d, i in zip(bad.dims, idx, strict=True)]
     return ", ".join(parts)
 
 

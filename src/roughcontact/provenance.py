@@ -77,7 +77,7 @@ def settings_variables(combined: xr.Dataset, cases: Sequence[Mapping], settings:
         numeric = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values)
         data = np.full(shape, np.nan) if numeric else np.full(shape, "", dtype=object)
         da = xr.DataArray(data, dims=dims, coords={d: combined[d] for d in dims})
-        for case, value in zip(cases, values):
+        for case, value in zip(cases, values, strict=True):
             da.loc[{d: case[d] for d in dims}] = float(value) if numeric else json.dumps(value, sort_keys=True)
         da.attrs = {"units": "1", "long_name": f"setting '{key}' of each case (it differs between cases)"}
         if numeric:

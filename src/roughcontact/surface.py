@@ -15,7 +15,6 @@ import numpy as np
 
 from .fft import get_fft, rfft_weights, wavenumbers
 
-
 #: Allowed ranges of the scale arguments: wide, but far enough from float64's limits that
 #: heights, their squares and the spectral moments m2 ~ h^2/L^2 and m4 ~ h^2/L^4 stay finite.
 LENGTH_RANGE = (1e-50, 1e50)

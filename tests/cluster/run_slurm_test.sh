@@ -15,15 +15,21 @@
 # here (not root, no apt-get, packages cannot be installed); exits non-zero on a real failure.
 #
 # Environment: PYTHON (default: .venv/bin/python of the repository, else python3);
-# ROUGHCONTACT_SLURM_KEEP=1 keeps the temporary directory; ROUGHCONTACT_SLURM_UP_TIMEOUT
-# (default 120 s) bounds the wait for the node to turn idle. Each snakemake run is killed
-# after 240 s. (No SLURM_* names: the script unsets those.)
+# ROUGHCONTACT_SLURM_KEEP=1 keeps the temporary directory. Time caps (they only catch a hang,
+# ~15-25x the measured time; the failure message names the cap): ROUGHCONTACT_SLURM_UP_TIMEOUT
+# (default 300 s) for the node to turn idle, ROUGHCONTACT_SLURM_LOCAL_TIMEOUT (default 600 s;
+# measured 24 s) for the local run, ROUGHCONTACT_SLURM_RUN_TIMEOUT (default 1200 s; measured 77 s)
+# for the SLURM run. (No SLURM_* names: the script unsets those.)
 set -uo pipefail
 
 HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 REPO=$(cd "$HERE/../.." && pwd)
 export PATH="$PATH:/usr/sbin:/sbin"
 T0=$(date +%s)
+UP_TIMEOUT=${ROUGHCONTACT_SLURM_UP_TIMEOUT:-300}
+LOCAL_TIMEOUT=${ROUGHCONTACT_SLURM_LOCAL_TIMEOUT:-600}
+RUN_TIMEOUT=${ROUGHCONTACT_SLURM_RUN_TIMEOUT:-1200}
+MUNGE_TIMEOUT=60
 
 log() { echo "[slurm-test +$(($(date +%s) - T0))s] $*"; }
 skip() { echo "SKIP: $*"; exit 0; }
@@ -149,9 +155,10 @@ munged --foreground --force --socket="$SOCK" --key-file="$RUNDIR/munge/munge.key
     --pid-file="$RUNDIR/munge/munged.pid" --seed-file="$RUNDIR/munge/munged.seed" \
     --log-file="$RUNDIR/log/munged.log" >"$RUNDIR/log/munged.out" 2>&1 &
 PIDS+=($!)
-for _ in $(seq 50); do [ -S "$SOCK" ] && break; sleep 0.2; done
+for _ in $(seq $((MUNGE_TIMEOUT * 5))); do [ -S "$SOCK" ] && break; sleep 0.2; done
+[ -S "$SOCK" ] || { show_logs; fail "munged did not create its socket $SOCK within ${MUNGE_TIMEOUT}s"; }
 munge --socket="$SOCK" -n 2>/dev/null | unmunge --socket="$SOCK" >/dev/null 2>&1 \
-    || { show_logs; fail "munged did not come up (socket $SOCK)"; }
+    || { show_logs; fail "munged is up but a munge | unmunge round trip failed (socket $SOCK)"; }
 
 UP_T0=$(date +%s)
 slurmctld -D -c -f "$SLURM_CONF" >"$RUNDIR/log/slurmctld.out" 2>&1 &
@@ -162,16 +169,20 @@ log "munged, slurmctld, slurmd started (pids ${PIDS[*]})"
 
 # run_snakemake DIR LOG LIMIT_S WATCH_SLURM ARGS...: snakemake in DIR, output to LOG, killed after
 # LIMIT_S seconds; with WATCH_SLURM=1 it also fails fast on a job SLURM can never start.
+# STOPPED says why it was stopped ("" if it ended by itself), for the caller's failure message.
+STOPPED=""
 run_snakemake() {
     local dir=$1 logf=$2 limit=$3 watch=$4 start bad rc
     shift 4
+    STOPPED=""
     start=$(date +%s)
     (cd "$dir" && exec "$PY" -m snakemake "$@") >"$logf" 2>&1 &
     SNAKE_PID=$!
     while kill -0 "$SNAKE_PID" 2>/dev/null; do
         if [ $(($(date +%s) - start)) -ge "$limit" ]; then
             stop_pid "$SNAKE_PID"
-            echo "snakemake killed after ${limit}s" >>"$logf"
+            STOPPED="was killed by the time cap: not finished within ${limit}s"
+            echo "snakemake $STOPPED" >>"$logf"
             break
         fi
         if [ "$watch" = 1 ]; then
@@ -180,6 +191,7 @@ run_snakemake() {
                 | awk '$2 ~ /^(PartitionConfig|PartitionNodeLimit|PartitionTimeLimit|BadConstraints)$/' | head -n 1)
             if [ -n "$bad" ]; then
                 stop_pid "$SNAKE_PID"
+                STOPPED="was stopped: SLURM job ${bad% *} can never start (reason ${bad#* })"
                 echo "SLURM job ${bad% *} can never start (reason ${bad#* }):" >>"$logf"
                 timeout 10 scontrol show job "${bad% *}" >>"$logf" 2>&1
                 break
@@ -236,13 +248,14 @@ done
 
 log "local run: snakemake --workflow-profile workflow/profiles/default -j2"
 t=$(date +%s)
-run_snakemake "$WORK/local" "$WORK/local.log" 240 0 --workflow-profile workflow/profiles/default -j2 --nocolor \
-    || { tail -n 40 "$WORK/local.log" >&2; fail "the local -j2 run failed (log above)"; }
+run_snakemake "$WORK/local" "$WORK/local.log" "$LOCAL_TIMEOUT" 0 --workflow-profile workflow/profiles/default \
+    -j2 --nocolor \
+    || { rc=$?; tail -n 40 "$WORK/local.log" >&2
+         fail "the local -j2 run ${STOPPED:-failed} (status $rc; log above)"; }
 LOCAL_S=$(($(date +%s) - t))
 log "local run done in ${LOCAL_S}s"
 
 # ---------------------------------------------------------------- wait for the node
-UP_TIMEOUT=${ROUGHCONTACT_SLURM_UP_TIMEOUT:-120}
 state=""
 while :; do
     state=$(timeout 10 sinfo -h -n localhost -o %t 2>/dev/null | head -n 1)
@@ -274,14 +287,15 @@ SLURM_ARGS=(--workflow-profile workflow/profiles/slurm --cores "$CPUS"
     --slurm-keep-successful-logs --nocolor)
 log "SLURM run: snakemake ${SLURM_ARGS[*]}"
 t=$(date +%s)
-run_snakemake "$WORK/slurm" "$WORK/slurm.log" 240 1 "${SLURM_ARGS[@]}"
+run_snakemake "$WORK/slurm" "$WORK/slurm.log" "$RUN_TIMEOUT" 1 "${SLURM_ARGS[@]}"
 rc=$?
 SLURM_S=$(($(date +%s) - t))
 if [ "$rc" != 0 ]; then
-    tail -n 60 "$WORK/slurm.log" >&2
-    find "$WORK/slurm/.snakemake/slurm_logs" -name '*.log' -exec tail -n 20 {} + >&2 2>/dev/null
     show_logs
-    fail "the SLURM run failed with status $rc after ${SLURM_S}s (log above)"
+    find "$WORK/slurm/.snakemake/slurm_logs" -name '*.log' -exec tail -n 20 {} + >&2 2>/dev/null
+    echo "----- $WORK/slurm.log (last 60 lines)" >&2
+    tail -n 60 "$WORK/slurm.log" >&2
+    fail "the SLURM run ${STOPPED:-failed} (status $rc after ${SLURM_S}s; its log above, daemon logs before it)"
 fi
 N_SUBMITTED=$(grep -c "submitted with SLURM jobid" "$WORK/slurm.log")
 [ "$N_SUBMITTED" -gt 0 ] || { tail -n 40 "$WORK/slurm.log" >&2; fail "the SLURM run submitted no SLURM job"; }

@@ -4,22 +4,18 @@
 rule accuracy_case:
     output:
         case_path("accuracy/{variant}"),
-    params:
-        settings=lambda w: params.accuracy_case(
-            study_block(w.scene, "accuracy"), accuracy_setting(w)
-        ),
-    threads: 1
     log:
         case_path("logs/accuracy/{variant}", "log"),
     benchmark:
         case_path("benchmarks/accuracy/{variant}", "tsv")
-    resources:
-        mem_mb=lambda w: contact_mem_mb(int(accuracy_setting(w)["N"])),
-        runtime=lambda w: contact_runtime_min(
-            int(accuracy_setting(w)["N"]), int(accuracy_setting(w)["n_steps"])
-        ),
     conda:
         "../../envs/roughcontact.yaml"
+    threads: 1
+    resources:
+        mem_mb=lambda w: contact_mem_mb(int(accuracy_setting(w)["N"])),
+        runtime=lambda w: contact_runtime_min(int(accuracy_setting(w)["N"]), int(accuracy_setting(w)["n_steps"])),
+    params:
+        settings=lambda w: params.accuracy_case(study_block(w.scene, "accuracy"), accuracy_setting(w)),
     script:
         "../scripts/accuracy_case.py"
 
@@ -27,9 +23,7 @@ rule accuracy_case:
 rule accuracy_summary:
     input:
         cases=lambda w: accuracy_files(w.scene, "results/{scene}/accuracy/{label}/{stem}.nc"),
-        benchmarks=lambda w: accuracy_files(
-            w.scene, "results/{scene}/benchmarks/accuracy/{label}/{stem}.tsv"
-        ),
+        benchmarks=lambda w: accuracy_files(w.scene, "results/{scene}/benchmarks/accuracy/{label}/{stem}.tsv"),
     output:
         nc="results/{scene}/accuracy/summary.nc",
         csv="results/{scene}/accuracy/summary.csv",
@@ -38,13 +32,13 @@ rule accuracy_summary:
             caption="../report/accuracy.rst",
             category="Accuracy",
         ),
-    params:
-        settings=study_params("accuracy", params.accuracy_summary),
     log:
         "results/{scene}/logs/accuracy_summary.log",
     benchmark:
         "results/{scene}/benchmarks/accuracy_summary.tsv"
     conda:
         "../../envs/roughcontact.yaml"
+    params:
+        settings=study_params("accuracy", params.accuracy_summary),
     script:
         "../scripts/accuracy_summary.py"

@@ -14,14 +14,14 @@ rule aggregate_representativity:
         lambda w: case_files(w.scene, "representativity", "representativity"),
     output:
         "results/{scene}/aggregate/representativity.nc",
-    params:
-        cases=case_list("representativity"),
     log:
         "results/{scene}/logs/aggregate_representativity.log",
     benchmark:
         "results/{scene}/benchmarks/aggregate_representativity.tsv"
     conda:
         "../../envs/roughcontact.yaml"
+    params:
+        cases=case_list("representativity"),
     script:
         "../scripts/aggregate_representativity.py"
 
@@ -31,14 +31,14 @@ rule aggregate_contact:
         lambda w: case_files(w.scene, "contact", "contact"),
     output:
         "results/{scene}/aggregate/contact.nc",
-    params:
-        cases=case_list("contact"),
     log:
         "results/{scene}/logs/aggregate_contact.log",
     benchmark:
         "results/{scene}/benchmarks/aggregate_contact.tsv"
     conda:
         "../../envs/roughcontact.yaml"
+    params:
+        cases=case_list("contact"),
     script:
         "../scripts/aggregate_contact.py"
 
@@ -48,16 +48,14 @@ rule fit_cel:
         "results/{scene}/aggregate/contact.nc",
     output:
         nc="results/{scene}/fit/cel.nc",
-        csv=report(
-            "results/{scene}/fit/cel.csv", caption="../report/fit.rst", category="Fit"
-        ),
-    params:
-        fit=lambda w: params.fit(SCENES[w.scene]) if study_block(w.scene, "contact") else None,
+        csv=report("results/{scene}/fit/cel.csv", caption="../report/fit.rst", category="Fit"),
     log:
         "results/{scene}/logs/fit_cel.log",
     benchmark:
         "results/{scene}/benchmarks/fit_cel.tsv"
     conda:
         "../../envs/roughcontact.yaml"
+    params:
+        fit=lambda w: params.fit(SCENES[w.scene]) if study_block(w.scene, "contact") else None,
     script:
         "../scripts/fit_cel.py"

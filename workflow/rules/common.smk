@@ -37,11 +37,7 @@ def _alternatives(values):
 
 def _all_grid_values(key):
     values = [
-        value
-        for scene in SCENES.values()
-        for study in STUDIES
-        if study in scene
-        for value in scene[study]["grid"][key]
+        value for scene in SCENES.values() for study in STUDIES if study in scene for value in scene[study]["grid"][key]
     ]
     for scene in SCENES.values():
         if "accuracy" in scene:
@@ -58,8 +54,6 @@ wildcard_constraints:
     seed=r"0|[1-9]\d*",
     variant=r"N\d+_tol[0-9.e-]+_steps\d+",
     figure=_alternatives(FIGURES),
-
-
 
 
 def study_block(scene, study):
@@ -191,7 +185,9 @@ def accuracy_files(scene, pattern):
     """Every case file (or benchmark file) of every setting of the scene's accuracy study."""
     block = study_block(scene, "accuracy")
     return [
-        pattern.format(scene=scene, label=s["label"], stem=CASE_STEM.format(k_l=block["k_l"], k_s=block["k_s"], H=h, seed=seed))
+        pattern.format(
+            scene=scene, label=s["label"], stem=CASE_STEM.format(k_l=block["k_l"], k_s=block["k_s"], H=h, seed=seed)
+        )
         for s in accuracy_variants(block)
         for h in block["H"]
         for seed in range(s["seeds"])

@@ -16,14 +16,14 @@ rule figure:
             category=lambda w: FIGURES[w.figure].category,
         ),
         pdf="results/{scene}/figures/{figure}.pdf",
-    params:
-        # Derived from the output, so Snakemake does not rerun a figure for a new caption.
-        caption=lambda w, output: figure_caption(w.figure),
     log:
         "results/{scene}/logs/figure_{figure}.log",
     benchmark:
         "results/{scene}/benchmarks/figure_{figure}.tsv"
     conda:
         "../../envs/roughcontact.yaml"
+    params:
+        # Derived from the output, so Snakemake does not rerun a figure for a new caption.
+        caption=lambda w, output: figure_caption(w.figure),
     script:
         "../scripts/plot.py"

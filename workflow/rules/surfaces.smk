@@ -7,17 +7,17 @@
 rule surface_rep:
     output:
         maybe_temp(case_path("surfaces_rep"), "representativity"),
-    params:
-        surface=case_params("representativity", params.surface),
     log:
         case_path("logs/surface_rep", "log"),
     benchmark:
         case_path("benchmarks/surface_rep", "tsv")
+    conda:
+        "../../envs/roughcontact.yaml"
     resources:
         mem_mb=lambda w: surface_mem_mb(SCENES[w.scene]["representativity"]["surface"]["N"]),
         runtime=lambda w: surface_runtime_min(SCENES[w.scene]["representativity"]["surface"]["N"]),
-    conda:
-        "../../envs/roughcontact.yaml"
+    params:
+        surface=case_params("representativity", params.surface),
     script:
         "../scripts/generate_surface.py"
 
@@ -25,16 +25,16 @@ rule surface_rep:
 rule surface:
     output:
         maybe_temp(case_path("surfaces"), "contact"),
-    params:
-        surface=case_params("contact", params.surface),
     log:
         case_path("logs/surface", "log"),
     benchmark:
         case_path("benchmarks/surface", "tsv")
+    conda:
+        "../../envs/roughcontact.yaml"
     resources:
         mem_mb=lambda w: surface_mem_mb(SCENES[w.scene]["contact"]["surface"]["N"]),
         runtime=lambda w: surface_runtime_min(SCENES[w.scene]["contact"]["surface"]["N"]),
-    conda:
-        "../../envs/roughcontact.yaml"
+    params:
+        surface=case_params("contact", params.surface),
     script:
         "../scripts/generate_surface.py"
