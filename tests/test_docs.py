@@ -1,4 +1,4 @@
-"""Every command and code block of README.md and config/README.md is exercised here.
+"""Every command and code block of README.md, config/README.md and docs/*.md is exercised here.
 
 The markdown is parsed, not copied: fenced ```bash, ```python and ```yaml blocks, and inline
 `code` that starts with `snakemake`, `make`, `pip`, `python` or `. ` (outside fences). Each
@@ -41,7 +41,7 @@ import yaml
 
 from conftest import REPO, copy_workflow, run_snakemake
 
-DOCS = ("README.md", "config/README.md")
+DOCS = ("README.md", "config/README.md", *(f"docs/{name}.md" for name in ("cluster", "representative", "accuracy", "solver")))
 COMMAND_START = re.compile(r"^(snakemake|make|pip|python)(\s|$)|^\.\s")
 SLOW_COMMAND = re.compile(r"scene=paper\b")  # 2100-job DAG: over a minute on a busy machine
 SLURM_PROFILE = REPO / "workflow" / "profiles" / "slurm" / "config.yaml"
