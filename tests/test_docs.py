@@ -41,7 +41,8 @@ import yaml
 
 from conftest import REPO, copy_workflow, run_snakemake
 
-DOCS = ("README.md", "config/README.md", *(f"docs/{name}.md" for name in ("cluster", "representative", "accuracy", "solver")))
+DOCS = ("README.md", "config/README.md",
+        *(f"docs/{name}.md" for name in ("cluster", "representative", "accuracy", "solver")))
 COMMAND_START = re.compile(r"^(snakemake|make|pip|python)(\s|$)|^\.\s")
 SLOW_COMMAND = re.compile(r"scene=paper\b")  # 2100-job DAG: over a minute on a busy machine
 SLURM_PROFILE = REPO / "workflow" / "profiles" / "slurm" / "config.yaml"
