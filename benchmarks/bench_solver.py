@@ -7,15 +7,19 @@ plans of one size do not leak into the next) it:
 1. generates the paper surface (k_l = 16, k_s = 32, H = 0.8, rms slope 0.1,
    seed 0) with :func:`roughcontact.surface.generate_surface`;
 2. times one rfft2 + irfft2 pair with the solver's own pyFFTW plan
-   (:func:`roughcontact.fft.get_fft`) and with ``numpy.fft`` (best of batches,
-   i.e. hot caches: inside the solver the same pair runs between other passes
-   over memory and costs more);
+   (:func:`roughcontact.fft.get_fft`, planned with ``FFTW_ESTIMATE``), with the
+   same pair planned with ``FFTW_MEASURE`` (what earlier versions used; timing-based,
+   so not reproducible bit for bit between processes) and with ``numpy.fft`` (best
+   of batches, i.e. hot caches: inside the solver the same pair runs between other
+   passes over memory and costs more), and the planning time of both plans;
 3. runs :func:`roughcontact.solver.solve_contact` over ``--steps`` loads
    ``p_max/steps ... p_max`` (wall and CPU time, per-step time and iterations)
    and records the process' peak RSS (``ru_maxrss``: imports + surface +
    solve) right after it, before anything else runs; then times the FFT pair
    (item 2) and repeats the solve under ``tracemalloc`` for the peak of the
-   solver's own numpy allocations;
+   solver's own numpy allocations; then (``--plan-repeats``, default 2) solves
+   again with ``FFTW_ESTIMATE`` plans, ``FFTW_MEASURE`` plans and the ``numpy.fft``
+   backend in turn, several times, for the end-to-end cost of the plan choice;
 4. runs Tamaas' ``PolonskyKeerRey`` (pressure primal, pressure constraint) on
    the identical array in the same process (``OMP_NUM_THREADS=1``), with the
    same tolerance, and compares A/A0 step by step.
@@ -49,28 +53,99 @@ import numpy as np
 
 
 # --------------------------------------------------------------------------- worker
-def _time_fft_pairs(n: int, repeats: int = 5) -> tuple[float, float]:
-    """Best per-pair seconds of rfft2+irfft2 with the solver's pyFFTW plan and numpy."""
-    from roughcontact.fft import get_fft
+@contextlib.contextmanager
+def _planner(flags: tuple[str, ...] | None = None, backend: str | None = None):
+    """Make the solver's cached FFTs use FFTW ``flags`` / ``backend`` inside the block."""
+    from roughcontact import fft as _fft
+
+    saved_flags, saved_env = _fft.PLANNER_FLAGS, os.environ.get("ROUGHCONTACT_FFT")
+    _fft._cached_fft.cache_clear()
+    if flags is not None:
+        _fft.PLANNER_FLAGS = flags
+    if backend is not None:
+        os.environ["ROUGHCONTACT_FFT"] = backend
+    try:
+        yield
+    finally:
+        _fft.PLANNER_FLAGS = saved_flags
+        if saved_env is None:
+            os.environ.pop("ROUGHCONTACT_FFT", None)
+        else:
+            os.environ["ROUGHCONTACT_FFT"] = saved_env
+        _fft._cached_fft.cache_clear()
+
+
+def _time_fft_pairs(n: int, repeats: int = 5) -> dict:
+    """Best per-pair seconds of rfft2+irfft2: solver's plan (ESTIMATE), MEASURE, numpy.
+
+    Also the seconds it takes to make the ESTIMATE and the MEASURE plan pair.
+    """
+    from roughcontact.fft import RealFFT2, get_fft
 
     rng = np.random.default_rng(1)
     a = rng.standard_normal((n, n))
-    fft = get_fft((n, n))
+    fft = get_fft((n, n))  # the solver's cached plan, made by generate_surface
+    if fft.backend != "pyfftw":
+        raise RuntimeError(f"pyFFTW is not the default backend here ({fft.backend}): nothing to compare")
+    t = time.perf_counter()
+    RealFFT2((n, n), backend="pyfftw")
+    t_plan_estimate = time.perf_counter() - t
+    with _planner(flags=("FFTW_MEASURE",)):
+        t = time.perf_counter()
+        measured = RealFFT2((n, n), backend="pyfftw")
+        t_plan_measure = time.perf_counter() - t
     batch = max(3, int(2e8 / (n * n * np.log2(n * n))))
-
-    def best(fn):
+    pairs = {
+        "estimate": lambda: fft.backward(fft.forward(a)),
+        "measure": lambda: measured.backward(measured.forward(a)),
+        "numpy": lambda: np.fft.irfft2(np.fft.rfft2(a), s=a.shape),
+    }
+    # Round robin over the candidates, so that a change of machine load hits all alike.
+    times: dict[str, list[float]] = {k: [] for k in pairs}
+    for fn in pairs.values():
         fn()
-        out = []
-        for _ in range(repeats):
+    for _ in range(repeats):
+        for key, fn in pairs.items():
             t = time.perf_counter()
             for _ in range(batch):
                 fn()
-            out.append((time.perf_counter() - t) / batch)
-        return min(out)
+            times[key].append((time.perf_counter() - t) / batch)
+    return {**{k: min(v) for k, v in times.items()},
+            "plan_estimate": t_plan_estimate, "plan_measure": t_plan_measure}
 
-    t_plan = best(lambda: fft.backward(fft.forward(a)))
-    t_numpy = best(lambda: np.fft.irfft2(np.fft.rfft2(a), s=a.shape))
-    return t_plan, t_numpy
+
+#: Plans compared end to end: keyword arguments of ``_planner``.
+PLAN_SOLVES = {
+    "ESTIMATE": {},
+    "MEASURE": {"flags": ("FFTW_MEASURE",)},
+    "numpy": {"backend": "numpy"},
+}
+
+
+def _plan_solves(h, loads, tol, repeats: int) -> dict:
+    """Best wall/CPU seconds of the solve with each plan of ``PLAN_SOLVES``, interleaved.
+
+    Plans are made before the timing (as ``generate_surface`` does for the main solve);
+    the candidates run in turn ``repeats`` times so that load drift hits all alike.
+    """
+    from roughcontact.fft import get_fft
+    from roughcontact.solver import solve_contact
+
+    out = {k: {"wall": [], "cpu": []} for k in PLAN_SOLVES}
+    for _ in range(repeats):
+        for key, planner in PLAN_SOLVES.items():
+            with _planner(**planner):
+                get_fft(h.shape)
+                w0, c0 = time.perf_counter(), time.process_time()
+                ds = solve_contact(h, loads, tol=tol)
+                out[key]["wall"].append(time.perf_counter() - w0)
+                out[key]["cpu"].append(time.process_time() - c0)
+                out[key]["iterations"] = int(ds["iterations"].values.sum())
+                out[key]["backend"] = ds.attrs["fft_backend"]
+    for rec in out.values():
+        rec["wall_all"], rec["cpu_all"] = rec["wall"], rec["cpu"]
+        rec["wall"], rec["cpu"] = min(rec["wall"]), min(rec["cpu"])
+    return out
 
 
 @contextlib.contextmanager
@@ -131,7 +206,8 @@ def _run_tamaas(h, loads, tol):
     }
 
 
-def worker(n: int, steps: int, p_max: float, tol: float, tamaas: bool) -> dict:
+def worker(n: int, steps: int, p_max: float, tol: float, tamaas: bool, plan_repeats: int = 2) -> dict:
+    from roughcontact.fft import PLANNER_FLAGS
     from roughcontact.solver import solve_contact
     from roughcontact.surface import generate_surface
 
@@ -148,7 +224,7 @@ def worker(n: int, steps: int, p_max: float, tol: float, tamaas: bool) -> dict:
     # Peak RSS of "imports + surface + solve", before anything else allocates.
     rss_after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 
-    t_plan, t_numpy = _time_fft_pairs(n)
+    pairs = _time_fft_pairs(n)
 
     # Second, instrumented solve: numpy allocation peak and the number of
     # pressure -> displacement products (FFT pairs) per CG iteration.
@@ -177,8 +253,12 @@ def worker(n: int, steps: int, p_max: float, tol: float, tamaas: bool) -> dict:
         "p_max": p_max,
         "tol": tol,
         "fft_backend": ds.attrs["fft_backend"],
-        "fft_pair_pyfftw": t_plan,
-        "fft_pair_numpy": t_numpy,
+        "fft_planner": list(PLANNER_FLAGS),
+        "fft_pair_estimate": pairs["estimate"],
+        "fft_pair_measure": pairs["measure"],
+        "fft_pair_numpy": pairs["numpy"],
+        "fft_plan_time_estimate": pairs["plan_estimate"],
+        "fft_plan_time_measure": pairs["plan_measure"],
         "ours": {
             "wall": wall,
             "cpu": cpu,
@@ -193,6 +273,7 @@ def worker(n: int, steps: int, p_max: float, tol: float, tamaas: bool) -> dict:
         "rss_before_solve_mb": rss_before / 1024,
         "rss_peak_mb": rss_after / 1024,
         "tracemalloc_peak_mb": traced_peak / 2**20,
+        "plan_solves": _plan_solves(h, loads, tol, plan_repeats) if plan_repeats > 0 else None,
         "tamaas": _run_tamaas(h, loads, tol) if tamaas else None,
     }
     return res
@@ -229,9 +310,13 @@ def _summary_rows(results: list[dict]) -> list[dict]:
             "ours iters": int(sum(ours["iterations"])),
             "converged": "yes" if ours["converged"] else "NO",
             "ms/iter": f"{1e3 * ours['time_per_iter']:.2f}",
-            "FFT pair pyFFTW [ms]": f"{1e3 * r['fft_pair_pyfftw']:.2f}",
+            "FFT pair ESTIMATE [ms]": f"{1e3 * r['fft_pair_estimate']:.2f}",
+            "FFT pair MEASURE [ms]": f"{1e3 * r['fft_pair_measure']:.2f}",
             "FFT pair numpy [ms]": f"{1e3 * r['fft_pair_numpy']:.2f}",
-            "iter/pair pyFFTW": f"{ours['time_per_iter'] / r['fft_pair_pyfftw']:.2f}",
+            "ESTIMATE/MEASURE pair": f"{r['fft_pair_estimate'] / r['fft_pair_measure']:.2f}",
+            "plan ESTIMATE [ms]": f"{1e3 * r['fft_plan_time_estimate']:.1f}",
+            "plan MEASURE [ms]": f"{1e3 * r['fft_plan_time_measure']:.0f}",
+            "iter/pair ESTIMATE": f"{ours['time_per_iter'] / r['fft_pair_estimate']:.2f}",
             "iter/pair numpy": f"{ours['time_per_iter'] / r['fft_pair_numpy']:.2f}",
             "FFT pairs/iter": f"{ours['fft_pairs_per_iter']:.2f}",
             "peak RSS [MB]": f"{r['rss_peak_mb']:.0f}",
@@ -239,6 +324,10 @@ def _summary_rows(results: list[dict]) -> list[dict]:
             "RSS after surface [MB]": f"{r['rss_before_solve_mb']:.0f}",
             "tracemalloc peak [MB]": f"{r['tracemalloc_peak_mb']:.0f}",
         }
+        for label, rec in (r.get("plan_solves") or {}).items():
+            row[f"best wall {label} [s]"] = f"{rec['wall']:.2f}"
+            row[f"best CPU {label} [s]"] = f"{rec['cpu']:.2f}"
+            row[f"iters {label}"] = rec["iterations"]
         if tm:
             a = np.array(ours["area"])
             b = np.array(tm["area"])
@@ -273,12 +362,15 @@ def main(argv=None) -> int:
     ap.add_argument("--tol", type=float, default=1e-8,
                     help="tolerance of both solvers (default 1e-8; both criteria are sum(p g)/(sum(p) h_rms)-type)")
     ap.add_argument("--no-tamaas", action="store_true", help="run our solver only")
+    ap.add_argument("--plan-repeats", type=int, default=2,
+                    help="extra solves with FFTW_ESTIMATE, FFTW_MEASURE and numpy.fft, each this many "
+                         "times, interleaved; the best is reported (default 2; 0 skips them)")
     ap.add_argument("--out", help="write the summary table here (.csv -> CSV, else markdown)")
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
 
     if args.worker:
-        res = worker(args.n[0], args.steps, args.p_max, args.tol, not args.no_tamaas)
+        res = worker(args.n[0], args.steps, args.p_max, args.tol, not args.no_tamaas, args.plan_repeats)
         print("@@RESULT@@" + json.dumps(res))
         return 0
 
@@ -289,6 +381,7 @@ def main(argv=None) -> int:
                "--steps", str(args.steps), "--p-max", str(args.p_max), "--tol", str(args.tol)]
         if args.no_tamaas:
             cmd.append("--no-tamaas")
+        cmd += ["--plan-repeats", str(args.plan_repeats)]
         print(f"== N = {n}: running in a subprocess ...", flush=True)
         proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
         if proc.returncode != 0:
@@ -304,7 +397,7 @@ def main(argv=None) -> int:
 
     rows = _summary_rows(results)
     table = _markdown(rows)
-    print("== summary (tol = %g, %d steps to p0 = %g E*)" % (args.tol, args.steps, args.p_max))
+    print(f"== summary (tol = {args.tol:g}, {args.steps:d} steps to p0 = {args.p_max:g} E*)")
     print(table)
     if args.out:
         os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)

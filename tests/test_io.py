@@ -1,13 +1,33 @@
-"""NetCDF at the edges: labels enforced, atomic and deterministic writes, bad files named."""
+"""NetCDF at the edges: labels enforced, atomic and deterministic writes, bad files named.
+
+Every output (NetCDF, CSV/Markdown, figures) is written atomically with the mode the
+umask gives; interrupted writes leave the previous file (or none) plus a temporary.
+"""
 import os
+import signal
+import stat
+import subprocess
+import sys
+import textwrap
+import threading
 
 import numpy as np
 import pytest
 import xarray as xr
+from matplotlib.figure import Figure
 
 from roughcontact import generate_surface
 from roughcontact.datasets import surface_dataset
-from roughcontact.io import InputFileError, config_hash, read_dataset, write_dataset
+from roughcontact.io import (
+    InputFileError,
+    atomic_output,
+    config_hash,
+    current_umask,
+    read_dataset,
+    write_dataset,
+    write_text_atomic,
+)
+from roughcontact.plots import save_figure
 
 PARAMS = {"surface": {"N": 16}, "seeds": 1}
 
@@ -82,3 +102,205 @@ def test_foreign_and_wrong_stage_files_named(tmp_path):
     with pytest.raises(InputFileError, match="not a readable NetCDF"):
         read_dataset(text, stage="surface")
     assert os.path.exists(p)
+
+
+# ------------------------------------------------------------------ atomic outputs
+TIMEOUT_S = 600  # generous waits for subprocesses: only a hung child reaches them
+
+
+def _figure(slope=1.0):
+    fig = Figure(figsize=(2, 1.5))
+    fig.add_subplot().plot([0, 1, 2], [0, slope, 2 * slope])
+    return fig
+
+
+def _temporaries(folder):
+    return sorted(p.name for p in folder.iterdir() if p.name.endswith(".tmp"))
+
+
+def _mode(path):
+    return stat.S_IMODE(path.stat().st_mode)
+
+
+@pytest.fixture(params=[0o022, 0o077, 0o002], ids=lambda m: f"umask{m:03o}")
+def umask(request):
+    old = os.umask(request.param)
+    try:
+        yield request.param
+    finally:
+        os.umask(old)
+
+
+def test_current_umask_reads_without_changing(umask):
+    assert current_umask() == umask
+    assert current_umask() == umask
+
+
+def test_outputs_get_the_umask_mode(tmp_path, umask):
+    want = 0o666 & ~umask
+    # An earlier version's 0600 file (mkstemp) is replaced by one with the umask's mode.
+    old = tmp_path / "s.nc"
+    old.write_bytes(b"old")
+    old.chmod(0o600)
+    written = {
+        "NetCDF": _write(old),
+        "CSV": write_text_atomic(tmp_path / "fit" / "cel.csv", "a,b\n1,2\n"),
+    }
+    png, pdf = save_figure(_figure(), tmp_path / "fig" / "f")
+    written.update({"PNG": png, "PDF": pdf})
+    with atomic_output(tmp_path / "t.md") as tmp:
+        tmp.write_text("# t\n")
+    written["Markdown"] = tmp_path / "t.md"
+    modes = {kind: oct(_mode(path)) for kind, path in written.items()}
+    assert modes == {kind: oct(want) for kind in written}, f"umask {umask:03o}: modes {modes}, want {oct(want)}"
+    assert not _temporaries(tmp_path) and not any(_temporaries(d) for d in tmp_path.iterdir() if d.is_dir())
+
+
+def test_atomic_output_mode_even_if_writer_recreates_file(tmp_path, umask):
+    target = tmp_path / "x.csv"
+    with atomic_output(target) as tmp:
+        tmp.unlink()
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT, 0o600)  # mkstemp-like writer
+        os.write(fd, b"x\n")
+        os.close(fd)
+    assert _mode(target) == 0o666 & ~umask
+    assert target.read_bytes() == b"x\n"
+
+
+def test_atomic_output_error_keeps_previous_and_cleans_up(tmp_path):
+    target = write_text_atomic(tmp_path / "a" / "x.csv", "old\n")
+    with pytest.raises(RuntimeError, match="writer failed"):
+        with atomic_output(target) as tmp:
+            tmp.write_text("partial")
+            raise RuntimeError("writer failed")
+    assert target.read_text() == "old\n"
+    assert _temporaries(target.parent) == []
+
+
+def test_stale_temporaries_of_the_target_only_are_removed(tmp_path):
+    mine = [tmp_path / ".x.csv.abc123.tmp", tmp_path / ".x.csv.k2j_9zq1.tmp"]
+    others = [tmp_path / ".x.csv.bak.abc123.tmp", tmp_path / ".y.csv.abc123.tmp", tmp_path / "x.csv.tmp"]
+    for p in mine + others:
+        p.write_text("stale")
+    write_text_atomic(tmp_path / "x.csv", "new\n")
+    assert not any(p.exists() for p in mine), "stale temporaries of x.csv were left"
+    assert all(p.exists() for p in others), "temporaries of other targets were removed"
+    assert (tmp_path / "x.csv").read_text() == "new\n"
+
+
+def test_write_dataset_uses_the_helper(tmp_path):
+    # A killed NetCDF write left its temporary: the next write removes it and leaves none.
+    stale = tmp_path / ".s.nc.q1w2e3r4.tmp"
+    stale.write_bytes(b"\x89HDF\r\n")
+    _write(tmp_path / "s.nc")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.nc"]
+
+
+# An interrupted writer: the child prints READY once it is inside the write (the
+# temporary holds part of the bytes) and then sleeps until killed.
+CSV_CHILD = textwrap.dedent(
+    """
+    import sys, time
+    from roughcontact.io import atomic_output
+    with atomic_output(sys.argv[1]) as tmp:
+        with open(tmp, "w") as fh:
+            fh.write("kappa,mu,beta\\n1.1,0.5,")
+            fh.flush()
+            print("READY", flush=True)
+            time.sleep(600)
+    """
+)
+
+FIGURE_CHILD = textwrap.dedent(
+    """
+    import io, sys, time
+    from matplotlib.figure import Figure
+    from roughcontact.plots import save_figure
+
+    target, kill_format = sys.argv[1], sys.argv[2]
+    real_savefig = Figure.savefig
+
+    def slow_savefig(self, fname, **kwargs):
+        if kwargs.get("format") != kill_format:
+            return real_savefig(self, fname, **kwargs)
+        buf = io.BytesIO()
+        real_savefig(self, buf, **kwargs)
+        with open(fname, "wb") as fh:
+            fh.write(buf.getvalue()[:54])  # part of the file, as left by a SIGKILL
+            fh.flush()
+            print("READY", flush=True)
+            time.sleep(600)
+
+    Figure.savefig = slow_savefig
+    fig = Figure(figsize=(2, 1.5))
+    fig.add_subplot().plot([0, 1, 2], [0, 2.0, 4.0])
+    save_figure(fig, target)
+    """
+)
+
+
+def _kill_while_writing(args):
+    """Run a child until it says READY (mid-write), SIGKILL it, return its stderr."""
+    proc = subprocess.Popen([sys.executable, "-c", *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    guard = threading.Timer(TIMEOUT_S, proc.kill)  # a child that never gets READY
+    guard.start()
+    try:
+        line = proc.stdout.readline()
+    finally:
+        guard.cancel()
+    if line.strip() != "READY":
+        proc.kill()
+        _, err = proc.communicate(timeout=TIMEOUT_S)
+        pytest.fail(f"child did not reach the middle of its write (said {line!r}, exit {proc.returncode}):\n{err}")
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.communicate(timeout=TIMEOUT_S)
+    assert proc.returncode == -signal.SIGKILL, f"child ended with {proc.returncode}, not by SIGKILL"
+
+
+@pytest.mark.parametrize("previous", [True, False], ids=["over-previous", "new-file"])
+def test_sigkill_mid_csv_write(tmp_path, previous):
+    target = tmp_path / "fit" / "cel.csv"
+    complete = "kappa,mu,beta\n1.0,0.4,0.9\n"
+    if previous:
+        write_text_atomic(target, complete)
+    _kill_while_writing([CSV_CHILD, str(target)])
+    if previous:
+        assert target.read_text() == complete, "the killed write changed the previous complete file"
+    else:
+        assert not target.exists(), f"the killed write left a target holding {target.read_bytes()!r}"
+    left = _temporaries(target.parent)
+    assert len(left) == 1 and left[0].startswith(".cel.csv."), f"expected one temporary, found {left}"
+    others = sorted(p.name for p in target.parent.iterdir() if p.name not in left)
+    assert others == (["cel.csv"] if previous else []), f"unexpected files {others}"
+    # Recovery: the rerun of the job writes the complete file and removes the stale temporary.
+    write_text_atomic(target, "kappa,mu,beta\n1.1,0.5,0.8\n")
+    assert target.read_text() == "kappa,mu,beta\n1.1,0.5,0.8\n"
+    assert sorted(p.name for p in target.parent.iterdir()) == ["cel.csv"]
+
+
+@pytest.mark.parametrize("kill_format", ["png", "pdf"])
+@pytest.mark.parametrize("previous", [True, False], ids=["over-previous", "new-file"])
+def test_sigkill_mid_figure_write(tmp_path, kill_format, previous):
+    folder = tmp_path / "figures"
+    base = folder / "fig2"
+    if previous:
+        save_figure(_figure(slope=1.0), base)
+        before = {p.name: p.read_bytes() for p in folder.iterdir()}
+    _kill_while_writing([FIGURE_CHILD, str(base), kill_format])
+    left = _temporaries(folder)
+    assert len(left) == 1 and left[0].startswith(f".fig2.{kill_format}."), f"expected one temporary, found {left}"
+    killed = folder / f"fig2.{kill_format}"
+    if previous:
+        assert killed.read_bytes() == before[killed.name], f"the killed write changed the previous {killed.name}"
+    else:
+        assert not killed.exists(), f"the killed write left {killed.name} ({killed.stat().st_size} bytes)"
+    png = folder / "fig2.png"
+    if kill_format == "pdf":  # the PNG was finished before the kill: complete, new
+        assert png.read_bytes().endswith(b"IEND\xaeB`\x82"), "the PNG written before the kill is incomplete"
+    # Recovery: the rerun leaves complete files identical to a clean save, no temporary.
+    recovered = save_figure(_figure(slope=2.0), base)
+    clean = save_figure(_figure(slope=2.0), tmp_path / "clean" / "fig2")
+    for got, want in zip(recovered, clean, strict=True):
+        assert got.read_bytes() == want.read_bytes(), f"recovered {got.name} differs from a clean save"
+    assert sorted(p.name for p in folder.iterdir()) == ["fig2.pdf", "fig2.png"]

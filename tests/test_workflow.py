@@ -167,7 +167,7 @@ def test_tiny_real_run(tmp_path):
 
 @pytest.mark.slow
 def test_demo_scene_produces_every_figure_and_the_fit_table(tmp_path, shipped_config):
-    # The shipped default scene, exactly as `make run` runs it (about 1.5 min on 2 cores).
+    # The shipped default scene, exactly as `make run` runs it, twice (about 1.5 min each on 2 cores).
     wd = copy_workflow(tmp_path / "demo")
     res = run_snakemake(wd, "-j2")
     assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
@@ -178,6 +178,20 @@ def test_demo_scene_produces_every_figure_and_the_fit_table(tmp_path, shipped_co
     table = (out / "fit" / "cel.csv").read_text().splitlines()
     assert table[0].startswith("k_l,k_s,H_group,estimator,constant,value")
     assert any(",pooled,paper,kappa," in row for row in table)
+    # A second run of every job writes the same bytes: NetCDF, CSV and figures.
+    first = _output_bytes(out)
+    assert {p.suffix for p in first} == {".nc", ".csv", ".png", ".pdf"}
+    res = run_snakemake(wd, "-j2", "--forceall")
+    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
+    second = _output_bytes(out)
+    differ = sorted(str(p) for p in first if first[p] != second.get(p))
+    assert not differ and first.keys() == second.keys(), f"rerun changed {len(differ)} file(s): {differ[:10]}"
+
+
+def _output_bytes(root):
+    """Bytes of every result file (NetCDF, CSV, figures) under ``root``, by relative path."""
+    return {p.relative_to(root): p.read_bytes() for p in sorted(root.rglob("*"))
+            if p.is_file() and p.suffix in (".nc", ".csv", ".png", ".pdf")}
 
 
 def test_unconverged_steps_are_flagged_counted_and_excluded(tmp_path):

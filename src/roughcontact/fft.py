@@ -3,6 +3,14 @@
 All transforms use numpy's conventions: the forward transform is unnormalised, the
 backward transform divides by ``n0 * n1``. Arrays are ``float64`` of shape ``(n0, n1)``
 in real space and ``complex128`` of shape ``(n0, n1 // 2 + 1)`` in Fourier space.
+
+Reproducibility: FFTW plans are made with ``FFTW_ESTIMATE`` (:data:`PLANNER_FLAGS`),
+which picks the algorithm from heuristics alone, so the same transform gives the same
+bits in every process on a given machine and build. ``FFTW_MEASURE`` would time candidate
+plans and, on a loaded machine, pick different ones in different processes, whose results
+differ in the last bits. The cost (``benchmarks/README.md``): an ``FFTW_ESTIMATE`` pair
+takes 1.1-1.5x the time of an ``FFTW_MEASURE`` one at N = 512-1024, still less than
+``numpy.fft``, and planning takes milliseconds instead of about a second per shape.
 """
 
 from __future__ import annotations
@@ -22,6 +30,10 @@ except ImportError:  # pragma: no cover
 
 #: Backends a caller may ask for.
 BACKENDS = ("pyfftw", "numpy")
+
+#: FFTW planner flags. ``FFTW_ESTIMATE`` is deterministic (no timing); do not use
+#: ``FFTW_MEASURE``/``FFTW_PATIENT`` here: they make results vary between processes.
+PLANNER_FLAGS = ("FFTW_ESTIMATE",)
 
 
 def default_backend() -> str:
@@ -77,9 +89,12 @@ class RealFFT2:
             self._spec = pyfftw.empty_aligned(self.spectral_shape, dtype="complex128")
             self._spec_in = pyfftw.empty_aligned(self.spectral_shape, dtype="complex128")
             self._real_out = pyfftw.empty_aligned(self.shape, dtype="float64")
-            # FFTW_MEASURE overwrites the buffers while planning, which is fine here:
-            # they are ours and filled on every call.
-            flags = ("FFTW_MEASURE",)
+            # FFTW reuses wisdom from a more rigorous planner: a plan timed with
+            # FFTW_MEASURE earlier in this process (by any pyFFTW user) would replace
+            # the deterministic FFTW_ESTIMATE choice. Forgetting the wisdom first keeps
+            # the plan a function of the shape alone; plans already made stay valid.
+            pyfftw.forget_wisdom()
+            flags = tuple(PLANNER_FLAGS)
             self._fwd = pyfftw.FFTW(
                 self._real, self._spec, axes=(0, 1), direction="FFTW_FORWARD",
                 flags=flags, threads=self.threads,

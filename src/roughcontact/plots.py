@@ -27,6 +27,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import FormatStrFormatter, NullFormatter, ScalarFormatter
 
+from .io import atomic_output
 from .theory import KAPPA_BGT, KAPPA_PERSSON, cel_area, cel_dpbar_dp0, cel_kappa, linear_area, persson_area
 
 #: Okabe & Ito (2008) colour-blind-safe palette, black first (reserved for theory).
@@ -69,6 +70,9 @@ def save_figure(fig: Figure, path: str | os.PathLike) -> list[Path]:
     ``CreationDate``, ``Creator`` and ``Producer`` (dates and versions are the only
     varying bytes; Agg rasterisation and PDF object numbering are deterministic, and
     TrueType embedding (``pdf.fonttype`` 42) subsets fonts deterministically).
+    Each file is written atomically (:func:`roughcontact.io.atomic_output`): an
+    interrupted save leaves the previous complete file or none, never a truncated one,
+    and the files get the mode the umask gives.
 
     Parameters
     ----------
@@ -99,9 +103,11 @@ def save_figure(fig: Figure, path: str | os.PathLike) -> list[Path]:
     ft_log.setLevel(logging.ERROR)
     try:
         with matplotlib.rc_context({"pdf.fonttype": 42, "svg.hashsalt": "roughcontact"}):
-            fig.savefig(png, format="png", dpi=_PNG_DPI, metadata={"Software": None})
-            fig.savefig(pdf, format="pdf",
-                        metadata={"CreationDate": None, "Creator": None, "Producer": None})
+            with atomic_output(png) as tmp:
+                fig.savefig(tmp, format="png", dpi=_PNG_DPI, metadata={"Software": None})
+            with atomic_output(pdf) as tmp:
+                fig.savefig(tmp, format="pdf",
+                            metadata={"CreationDate": None, "Creator": None, "Producer": None})
     finally:
         ft_log.setLevel(level)
     return [png, pdf]
@@ -604,7 +610,7 @@ def fig_accuracy(summary: xr.Dataset) -> Figure:
 def _draw_accuracy(summary: xr.Dataset) -> Figure:
     fig = _new_figure(7.0, 3.2)
     axes = fig.subplots(1, 2)
-    colours = dict(zip(("N", "tol", "n_steps", "seeds"), OKABE_ITO[1:5]))
+    colours = dict(zip(("N", "tol", "n_steps", "seeds"), OKABE_ITO[1:5], strict=True))
     names = {"N": "grid N", "tol": "tolerance", "n_steps": "load steps", "seeds": "seeds"}
     axis_of = summary["axis"].values
     for ax, metric, title in ((axes[0], "kappa", f"$\\kappa$ at $A/A_0$ = {summary.attrs.get('kappa_at', 0.05):g}"),
@@ -623,7 +629,7 @@ def _draw_accuracy(summary: xr.Dataset) -> Figure:
                 ok = np.isfinite(e) & (e > 0)
                 ax.plot(t[order][ok], e[ok], style, marker="o", ms=3, color=colour, label=label)
                 if style == "-":
-                    for ti, ei, v in zip(t[order][ok], e[ok], summary["value"].values[sel][order][ok]):
+                    for ti, ei, v in zip(t[order][ok], e[ok], summary["value"].values[sel][order][ok], strict=True):
                         ax.annotate(str(v), (ti, ei), textcoords="offset points", xytext=(3, 3), fontsize=6,
                                     color=colour)
         d = np.flatnonzero(axis_of == "defaults")
@@ -637,6 +643,6 @@ def _draw_accuracy(summary: xr.Dataset) -> Figure:
         ax.set_ylabel("relative error [1]")
         ax.set_title(title, fontsize=9)
     handles, labels = axes[0].get_legend_handles_labels()
-    uniq = dict(zip(labels, handles))
+    uniq = dict(zip(labels, handles, strict=True))
     fig.legend(uniq.values(), uniq.keys(), loc="outside right center", fontsize=7, frameon=False)
     return fig

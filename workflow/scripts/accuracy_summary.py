@@ -4,16 +4,17 @@ from collections import defaultdict
 from pathlib import Path
 
 from roughcontact import accuracy, aggregate
-from roughcontact.io import read_dataset, run_logged, write_dataset
+from roughcontact.io import atomic_output, read_dataset, run_logged, write_dataset, write_text_atomic
 
 
 def main(log):
-    block = snakemake.params.block
+    block = snakemake.params.settings
     settings = accuracy.variants(block)
     groups = defaultdict(lambda: ([], [], [], []))
-    for nc, tsv in zip(snakemake.input.cases, snakemake.input.benchmarks):
+    for nc, tsv in zip(snakemake.input.cases, snakemake.input.benchmarks, strict=True):
         label = Path(nc).parent.name
-        ds = read_dataset(nc, stage="contact", variables=["area_fraction", "contact_perimeter", "pressure", "rms_slope"])
+        ds = read_dataset(nc, stage="contact",
+                          variables=["area_fraction", "contact_perimeter", "pressure", "rms_slope"])
         with open(tsv) as fh:
             bench = next(csv.DictReader(fh, delimiter="\t"))
         g = groups[label]
@@ -30,11 +31,13 @@ def main(log):
         results[label] = (agg, times, rss)
     summary = accuracy.summarize(results, settings, length=block["surface"]["L"], kappa_at=block["kappa_at"],
                                  seed_axis=block["seed_axis"], n_boot=block["n_boot"])
-    write_dataset(summary, snakemake.output.nc, stage="accuracy", scene=snakemake.params.scene, scene_parameters=block)
-    summary.drop_vars([v for v in summary.variables if summary[v].dims != ("variant",)]).to_dataframe().to_csv(
-        snakemake.output.csv)
+    write_dataset(summary, snakemake.output.nc, stage="accuracy", scene=snakemake.wildcards.scene,
+                  scene_parameters=block)
+    per_variant = summary.drop_vars([v for v in summary.variables if summary[v].dims != ("variant",)])
+    with atomic_output(snakemake.output.csv) as tmp:
+        per_variant.to_dataframe().to_csv(tmp)
     table = accuracy.markdown_table(summary)
-    Path(snakemake.output.md).write_text(table)
+    write_text_atomic(snakemake.output.md, table)
     log.info("accuracy summary:\n%s\nperimeter c fitted: %.4g (default %.4g)", table,
              summary.attrs["perimeter_c_fit"], summary.attrs["perimeter_c"])
 

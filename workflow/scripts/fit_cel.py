@@ -1,16 +1,16 @@
 """Fit the contact evolution law (kappa, mu, beta) with bootstrap uncertainty."""
 from roughcontact import fit
-from roughcontact.io import read_dataset, run_logged, write_dataset
+from roughcontact.io import read_dataset, run_logged, write_dataset, write_text_atomic
 
 
 def main(log):
     cfg = snakemake.params.fit
     agg = read_dataset(snakemake.input[0], stage="aggregate", variables=["area_fraction", "pressure"])
-    if not cfg["include_unconverged"] and "n_unconverged" in agg:
-        excluded = int((agg["n_unconverged"] > 0).sum())
+    if not cfg["include_unconverged"]:
+        agg, excluded = fit.exclude_unconverged(agg)
         if excluded:
-            log.warning("excluding %d case(s) with unconverged steps from the fit", excluded)
-        agg = agg.where(agg["n_unconverged"] == 0)
+            log.warning("excluding %d case(s) with unconverged steps from the fit: (k_l, k_s, H, seed) = %s",
+                        len(excluded), "; ".join(str(c) for c in excluded))
     # One group that cannot be fitted (too few points in the window, a joint fit that does not
     # converge on a non-representative case) must not sink the others: it is reported as NaN.
     result = fit.fit_cel(agg, window=tuple(cfg["window"]), n_boot=cfg["n_boot"], rng_seed=cfg["rng_seed"],
@@ -22,9 +22,8 @@ def main(log):
     for name in result.data_vars:
         if result[name].dtype.kind == "f":
             result[name].attrs["allow_nan"] = 1
-    write_dataset(result, snakemake.output.nc, stage="fit", scene=snakemake.params.scene, scene_parameters=cfg)
-    with open(snakemake.output.csv, "w") as fh:
-        fh.write(fit.to_csv_table(result))
+    write_dataset(result, snakemake.output.nc, stage="fit", scene=snakemake.wildcards.scene, scene_parameters=cfg)
+    write_text_atomic(snakemake.output.csv, fit.to_csv_table(result))
     log.info("CEL fit written to %s", snakemake.output.nc)
 
 

@@ -1,0 +1,119 @@
+"""The same computation gives the same bytes in every process, even on a busy machine.
+
+FFTW plans chosen by timing (``FFTW_MEASURE``) differ between processes that plan while
+the machine is loaded, and different plans round differently in the last bits. The
+package plans with ``FFTW_ESTIMATE`` (heuristics only), so surfaces and contact
+solutions must hash identically across concurrent processes. The concurrency itself,
+plus one CPU burner per core, loads the machine while the workers plan.
+"""
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from collections import Counter
+
+import pytest
+
+pytest.importorskip("pyfftw")
+
+N_WORKERS = 8
+TIMEOUT_S = 600  # generous: only a hung worker should ever reach it
+
+WORKER = textwrap.dedent(
+    """
+    import hashlib, json
+    from roughcontact.solver import solve_contact
+    from roughcontact.surface import generate_surface
+
+    out = {}
+    for n in (128, 256):
+        h = generate_surface(n, 4, 32, 0.5, 1, rms_slope=0.1)
+        out[f"surface N={n} (pyFFTW)"] = hashlib.sha256(h.tobytes()).hexdigest()
+        # Solve on a surface made with numpy.fft so the solve is checked on its own.
+        h = generate_surface(n, 4, 32, 0.5, 1, rms_slope=0.1, backend="numpy")
+        ds = solve_contact(h, [0.001, 0.002, 0.003], store_fields=True)
+        digest = hashlib.sha256()
+        for name in sorted(ds.data_vars):
+            if name != "wall_time":  # the only legitimately varying output
+                digest.update(name.encode())
+                digest.update(ds[name].values.tobytes())
+        out[f"solve N={n} (pyFFTW)"] = digest.hexdigest()
+        out[f"backend N={n}"] = ds.attrs["fft_backend"]
+    print("@@RESULT@@" + json.dumps(out), flush=True)
+    """
+)
+
+BURNER = "import time\nend = time.monotonic() + 600\nwhile time.monotonic() < end:\n    pass\n"
+
+
+def test_fft_results_identical_across_concurrent_processes(tmp_path):
+    env = dict(os.environ, ROUGHCONTACT_FFT="pyfftw", OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
+    script = tmp_path / "worker.py"
+    script.write_text(WORKER)
+    burners = [subprocess.Popen([sys.executable, "-c", BURNER]) for _ in range(os.cpu_count() or 1)]
+    try:
+        workers = [
+            subprocess.Popen([sys.executable, str(script)], env=env, stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)
+            for _ in range(N_WORKERS)
+        ]
+        results = []
+        for i, proc in enumerate(workers):
+            try:
+                stdout, stderr = proc.communicate(timeout=TIMEOUT_S)
+            except subprocess.TimeoutExpired:
+                for p in workers:
+                    p.kill()
+                pytest.fail(f"worker {i} still running after {TIMEOUT_S} s (hung?)")
+            assert proc.returncode == 0, f"worker {i} exited with {proc.returncode}:\n{stderr}"
+            line = [ln for ln in stdout.splitlines() if ln.startswith("@@RESULT@@")]
+            assert line, f"worker {i} printed no result:\n{stdout}\n{stderr}"
+            results.append(json.loads(line[-1][len("@@RESULT@@"):]))
+    finally:
+        for b in burners:
+            b.kill()
+        for b in burners:
+            b.wait()
+    assert all(r[k] == "pyfftw" for r in results for k in r if k.startswith("backend")), results
+    differing = {}
+    for key in results[0]:
+        counts = Counter(r[key] for r in results)
+        if len(counts) > 1:
+            differing[key] = sorted(counts.values(), reverse=True)
+    assert not differing, (
+        f"{N_WORKERS} concurrent processes computed different bytes (group sizes of equal hashes): "
+        f"{differing}; FFT plans are not deterministic (timing-based planning?)"
+    )
+
+
+def test_estimate_plan_ignores_measured_wisdom():
+    """A timed plan made earlier in the process must not replace the ESTIMATE choice.
+
+    FFTW reuses wisdom from a more rigorous planner (MEASURE, PATIENT), so without
+    forgetting it the package's plan would depend on what else ran in the process.
+    Checked in a fresh subprocess: the bytes after a PATIENT plan of the same shape equal
+    the plain ones (without ``pyfftw.forget_wisdom()`` in RealFFT2 they differ).
+    """
+    code = textwrap.dedent(
+        """
+        import hashlib, json, sys
+        import numpy as np, pyfftw
+        from roughcontact.fft import RealFFT2
+        a = np.random.default_rng(0).standard_normal((96, 96))
+        def digest():
+            f = RealFFT2((96, 96), backend="pyfftw")
+            return hashlib.sha256(f.forward(a).tobytes() + f.backward(f.forward(a)).tobytes()).hexdigest()
+        plain = digest()
+        r = pyfftw.empty_aligned((96, 96), dtype="float64")
+        s = pyfftw.empty_aligned((96, 49), dtype="complex128")
+        pyfftw.FFTW(r, s, axes=(0, 1), flags=("FFTW_PATIENT",))
+        print(json.dumps([plain, digest()]))
+        """
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=TIMEOUT_S,
+                          env=dict(os.environ, OMP_NUM_THREADS="1"))
+    assert proc.returncode == 0, proc.stderr
+    plain, after = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert plain == after, "the ESTIMATE plan changed after a PATIENT plan of the same shape (wisdom reused)"
+
