@@ -30,22 +30,10 @@ dryrun: install
 test: install lint
 	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest
 
-# The inner loop (under 3 min on 2 cores): no test marked slow, and none of these (`make test`
-# runs them): real runs of small scenes, the paper scene's 2100-job DAG, many dry runs in one test,
-# machine-loading and long statistical tests - each 15 s to 2 min on 2 cores.
-FAST_DESELECT := \
-	tests/test_workflow.py::test_tiny_real_run \
-	tests/test_workflow.py::test_unconverged_steps_are_flagged_counted_and_excluded \
-	tests/test_workflow.py::test_a_file_made_for_another_case_or_scene_is_refused \
-	tests/test_workflow.py::test_mistyped_target_fails_at_once \
-	'tests/test_workflow.py::test_dry_run_every_shipped_scene[paper]' \
-	tests/test_accuracy.py::test_tiny_accuracy_scene_end_to_end \
-	tests/test_effects.py::test_optional_outputs_and_effects_add_exactly_their_variables \
-	tests/test_determinism.py::test_fft_results_identical_across_concurrent_processes \
-	tests/test_fit.py::test_recovers_known_constants_from_noisy_synthetic_data \
-	tests/test_fit.py::test_bootstrap_error_shrinks_with_more_seeds
+# The inner loop (under 3 min on 2 cores): every test not marked slow. Slow tests (real runs of
+# small scenes, the paper scene's 2100-job DAG, concurrency and bootstrap studies) run in `make test`.
 test-fast: install
-	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest -m "not slow" $(addprefix --deselect ,$(FAST_DESELECT))
+	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest -m "not slow"
 
 # Checks only, never rewrites: ruff over the Python, snakefmt over the rules (settings in
 # pyproject.toml). Both always run; it fails if either finds something.

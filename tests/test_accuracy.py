@@ -67,6 +67,7 @@ def test_relative_error_and_cost_table():
     assert table == {1e-2: ("b", 3.0), 1e-3: ("c", 9.0), 1e-4: None}
 
 
+@pytest.mark.slow
 def test_tiny_accuracy_scene_end_to_end(tmp_path):
     wd = copy_workflow(tmp_path / "wf", ACC)
     res = run_snakemake(wd, "-j2")

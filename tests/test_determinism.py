@@ -47,6 +47,7 @@ WORKER = textwrap.dedent(
 BURNER = "import time\nend = time.monotonic() + 600\nwhile time.monotonic() < end:\n    pass\n"
 
 
+@pytest.mark.slow
 def test_fft_results_identical_across_concurrent_processes(tmp_path):
     env = dict(os.environ, ROUGHCONTACT_FFT="pyfftw", OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
     script = tmp_path / "worker.py"

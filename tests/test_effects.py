@@ -2,6 +2,7 @@
 import copy
 import re
 
+import pytest
 import xarray as xr
 
 from conftest import copy_workflow, run_snakemake
@@ -24,6 +25,7 @@ def _variables(tmp_path, name, cfg):
         return set(ds.variables), ds.load()
 
 
+@pytest.mark.slow
 def test_optional_outputs_and_effects_add_exactly_their_variables(tmp_path):
     base, _ = _variables(tmp_path, "base", _scene())
     fields, ds_f = _variables(tmp_path, "fields", _scene(outputs={"fields": [3, 12]}))

@@ -50,6 +50,7 @@ def test_noiseless_data_are_recovered():
     assert paper[2] == pytest.approx(TRUTH[2], abs=3e-3)
 
 
+@pytest.mark.slow
 def test_recovers_known_constants_from_noisy_synthetic_data():
     # 12 independent data sets, each 12 seeds x 30 load steps with independent 0.1 %
     # multiplicative noise on A/A0. An unbiased estimator with a calibrated error lands
@@ -82,6 +83,7 @@ def test_joint_covariance_matches_the_scatter_of_the_estimates():
     assert np.all((ratio > 0.6) & (ratio < 1.6)), ratio
 
 
+@pytest.mark.slow
 def test_bootstrap_error_shrinks_with_more_seeds():
     # Independent seeds: the error of either estimator scales like 1/sqrt(n_seeds), so
     # 16 seeds should halve the 4-seed error (measured ratios 0.5-0.6).

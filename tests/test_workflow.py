@@ -56,7 +56,7 @@ def _jobs(stdout):
     return counts
 
 
-@pytest.mark.parametrize("scene", ["demo", "paper", "representative"])
+@pytest.mark.parametrize("scene", ["demo", pytest.param("paper", marks=pytest.mark.slow), "representative"])
 def test_dry_run_every_shipped_scene(repo, scene):
     # --forceall: the full job list, whatever a local results/ already holds
     res = run_snakemake(repo, "-n", "--forceall", "--config", f"scene={scene}", timeout=600)
@@ -96,6 +96,7 @@ def test_invalid_config_stops_before_any_job(tmp_path, edit, words):
     assert not (wd / "results").exists()
 
 
+@pytest.mark.slow
 def test_mistyped_target_fails_at_once(tmp_path):
     wd = copy_workflow(tmp_path / "wf", TINY)
     # H=0.7 is in no scene's grid: no rule can make it.
@@ -126,6 +127,7 @@ def test_own_scene_in_its_own_file(tmp_path):
     assert "results/mine/contact/kl2_ks16_H0.7_s1.nc" in res.stdout + res.stderr
 
 
+@pytest.mark.slow
 def test_tiny_real_run(tmp_path):
     wd = copy_workflow(tmp_path / "wf", TINY)
     res = run_snakemake(wd, "-j2")
@@ -194,6 +196,7 @@ def _output_bytes(root):
             if p.is_file() and p.suffix in (".nc", ".csv", ".png", ".pdf")}
 
 
+@pytest.mark.slow
 def test_unconverged_steps_are_flagged_counted_and_excluded(tmp_path):
     cfg = copy.deepcopy(TINY)
     del cfg["scenes"]["tiny"]["representativity"]
@@ -212,6 +215,7 @@ def test_unconverged_steps_are_flagged_counted_and_excluded(tmp_path):
     assert bool(fitted["value"].isnull().all()), "no converged case: nothing may be fitted"
 
 
+@pytest.mark.slow
 def test_a_file_made_for_another_case_or_scene_is_refused(tmp_path):
     """A surface of N=64 put into an N=32 scene, or seed 1's surface named as seed 0's: named, not used."""
     big = copy.deepcopy(TINY)
