@@ -304,3 +304,41 @@ def test_sigkill_mid_figure_write(tmp_path, kill_format, previous):
     for got, want in zip(recovered, clean, strict=True):
         assert got.read_bytes() == want.read_bytes(), f"recovered {got.name} differs from a clean save"
     assert sorted(p.name for p in folder.iterdir()) == ["fig2.pdf", "fig2.png"]
+
+
+def test_full_disk_is_one_line_naming_the_file_and_leaves_nothing(tmp_path, monkeypatch):
+    """ENOSPC half-way through a write: one message naming the target, no partial file, old file kept."""
+    import errno
+    import logging
+
+    from roughcontact.io import OutputFileError, run_logged, write_dataset, write_text_atomic
+
+    target = tmp_path / "out" / "case.nc"
+    write_text_atomic(target, "previous complete content")
+
+    def full_disk(self, tmp, **kwargs):
+        with open(tmp, "wb") as fh:
+            fh.write(b"CDF\x01 half")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", full_disk)
+    ds = xr.Dataset({"a": ("x", [1.0], {"units": "1", "long_name": "a"})},
+                    coords={"x": ("x", [0], {"units": "1", "long_name": "x"})})
+    with pytest.raises(OutputFileError, match=r"case\.nc: could not be written \(\[Errno 28\] No space left"):
+        write_dataset(ds, target, stage="surface", scene="s", scene_parameters={})
+    assert target.read_text() == "previous complete content"
+    assert sorted(p.name for p in target.parent.iterdir()) == ["case.nc"]
+
+    log = tmp_path / "job.log"
+    with pytest.raises(SystemExit) as info:
+        run_logged(log, lambda logger: write_dataset(ds, target, stage="surface", scene="s", scene_parameters={}))
+    assert info.value.code == 1
+    lines = log.read_text().splitlines()
+    assert len(lines) == 1 and "ERROR" in lines[0] and "case.nc: could not be written" in lines[0], lines
+    logging.getLogger("roughcontact").handlers.clear()
+
+
+def test_directory_in_place_of_a_file_is_named(tmp_path):
+    (tmp_path / "case.nc").mkdir()
+    with pytest.raises(InputFileError, match=r"case\.nc: is a directory, not a file"):
+        read_dataset(tmp_path / "case.nc", stage="contact")

@@ -42,6 +42,10 @@ class InputFileError(ValueError):
     """An input NetCDF file is missing, unreadable, foreign or incomplete."""
 
 
+class OutputFileError(OSError):
+    """An output could not be written (full disk, no permission); nothing partial remains."""
+
+
 def canonical_json(obj) -> str:
     """JSON with sorted keys and no whitespace variation: the basis of config hashes."""
     return json.dumps(obj, sort_keys=True, separators=(",", ":"), default=str)
@@ -145,6 +149,11 @@ def atomic_output(path: str | os.PathLike) -> Iterator[Path]:
         # The writer may have recreated the file with another mode (mkstemp-style).
         os.chmod(tmp, 0o666 & ~current_umask())
         os.replace(tmp, path)
+    except (OSError, RuntimeError) as exc:
+        # A full disk, a quota, a read-only folder: netCDF4 reports them as RuntimeError
+        # or OSError without the file's name, so name it here, once.
+        tmp.unlink(missing_ok=True)
+        raise OutputFileError(f"{path}: could not be written ({exc}); nothing was left in its place") from exc
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
@@ -186,6 +195,8 @@ def read_dataset(path: str | os.PathLike, *, stage: str,
     lacking a required variable. The data are loaded into memory and the file closed.
     """
     path = Path(path)
+    if path.is_dir():
+        raise InputFileError(f"{path}: is a directory, not a file")
     if not path.is_file():
         raise InputFileError(f"{path}: file does not exist")
     try:
@@ -210,7 +221,8 @@ def run_logged(log_path: str | os.PathLike, main) -> None:
     """Run ``main(logger)`` for a workflow script, logging to ``log_path``.
 
     Errors the user can act on (:class:`ValueError`, including :class:`InputFileError`
-    and config errors) are logged as one clear line and end the process with status 1
+    and config errors, and :class:`OutputFileError`: a full disk, a missing permission)
+    are logged as one clear line and end the process with status 1
     instead of a traceback from deep inside a library; anything else is logged with its
     traceback and re-raised.
     """
@@ -223,7 +235,7 @@ def run_logged(log_path: str | os.PathLike, main) -> None:
         logger.addHandler(handler)
     try:
         main(logger)
-    except ValueError as exc:
+    except (ValueError, OutputFileError) as exc:
         logger.error("%s", exc)
         sys.exit(1)
     except Exception:
