@@ -20,19 +20,19 @@ Contents
   over the integer modes of an ``n x n`` grid (what :func:`~roughcontact.surface.generate_surface`
   actually draws), and Nayak's bandwidth ``alpha = m0 m4 / m2^2``.
 
-What is deliberately missing: finite-load BGT and Greenwood curves
-------------------------------------------------------------------
-The paper's Fig. 2 shows the BGT (1975) and Greenwood (2006, "simplified elliptic
-model") curves ``A/A0(p0)`` for ``alpha = 2``, taken from Carbone & Bottiglione,
-J. Mech. Phys. Solids 56, 2555 (2008). Both need Nayak's (1971) trivariate probability
-density of summit height and principal curvatures for an isotropic Gaussian surface,
-integrated against the elliptic (BGT) or geometric-mean-radius (Greenwood) Hertz
-solution for each summit. Those equations are not in the reference material available
-to this project (only the 2012 paper itself), and reproducing Nayak's density and the
-Carbone-Bottiglione normalisations from memory risks silent misprints in exactly the
-curves the comparison is about. Only their common small-load limit ``kappa_BGT =
-sqrt(2 pi)`` is provided; the finite-load curves should be added from the primary
-sources, with a test of their ``A/A0 -> 0`` limit against :data:`KAPPA_BGT`.
+Finite-load BGT and Greenwood curves
+------------------------------------
+The paper's Fig. 2 (``fig:5`` in its source) compares with the curves of Bush, Gibson & Thomas (1975,
+exact elliptic Hertz per summit) and of Greenwood (2006, "simplified elliptic model":
+geometric-mean-radius sphere per summit) for ``alpha = 2``, both built on Nayak's (1971)
+summit statistics. They live in :mod:`roughcontact.asperity` and are re-exported here:
+:func:`asperity_model` (``A/A0`` and ``pbar = p0/(E* h')`` at a reduced separation
+``xi_d = d/sqrt(m0)``), :func:`asperity_reduced_area` / :func:`asperity_reduced_pressure`
+(one at given other), :func:`asperity_area` (dimensional, like :func:`persson_area`),
+:func:`asperity_kappa`, the summit statistics :func:`nayak_summit_pdf`,
+:func:`nayak_summit_pdf_xi_t`, :func:`nayak_summit_density` and the elliptic Hertz factors
+:func:`hertz_elliptic_factors`. Their small-load limit is :data:`KAPPA_BGT`, reached only
+slowly (``1 - kappa/sqrt(2 pi) ~ c alpha / xi_d^2``).
 """
 
 from __future__ import annotations
@@ -42,6 +42,20 @@ import math
 import numpy as np
 from scipy.special import erf
 
+from .asperity import (  # noqa: F401  (re-exported: the finite-load asperity theories)
+    ASPERITY_MODELS,
+    NAYAK_ALPHA_MIN,
+    XI_D_RANGE,
+    asperity_area,
+    asperity_kappa,
+    asperity_model,
+    asperity_reduced_area,
+    asperity_reduced_pressure,
+    hertz_elliptic_factors,
+    nayak_summit_density,
+    nayak_summit_pdf,
+    nayak_summit_pdf_xi_t,
+)
 from .fft import rfft_weights, wavenumbers
 
 #: Small-load slope of asperity models (BGT 1975, Greenwood 2006), ``sqrt(2 pi)`` [-].
