@@ -162,3 +162,21 @@ def test_bad_inputs_are_rejected(contact, rep_stats, examples, tmp_path):
         fig_surface_examples([])
     with pytest.raises(ValueError, match="Figure"):
         save_figure("not a figure", tmp_path / "x")
+
+
+def test_finite_load_asperity_curves_are_drawn_and_labelled(contact):
+    """BGT and Greenwood (2006) at the paper's alpha = 2 and at the surfaces' own alpha, named in the legend."""
+    from roughcontact.theory import asperity_kappa
+
+    agg, stats, fit = contact
+    for draw in (fig_area_load, fig_kappa):
+        fig = draw(agg, stats, fit)
+        labels = [t.get_text() for t in fig.legends[0].get_texts()]
+        alpha = float(agg["alpha"].mean())
+        for name in ("BGT", "Greenwood (2006)"):
+            assert f"{name}, $\\alpha = 2$ (paper)" in labels, labels
+            assert f"{name}, $\\alpha = {alpha:.2f}$ (these surfaces)" in labels, labels
+    ax = fig_kappa(agg, stats, fit).axes[0]
+    drawn = [line.get_ydata() for line in ax.get_lines() if len(line.get_ydata()) == 120]
+    a = np.linspace(0, float(stats["area_fraction_mean"].max()), 120)
+    assert any(np.allclose(y, asperity_kappa(a, alpha=2.0, model="bgt")) for y in drawn)

@@ -28,7 +28,18 @@ from matplotlib.lines import Line2D
 from matplotlib.ticker import FormatStrFormatter, NullFormatter, ScalarFormatter
 
 from .io import atomic_output
-from .theory import KAPPA_BGT, KAPPA_PERSSON, cel_area, cel_dpbar_dp0, cel_kappa, linear_area, persson_area
+from .theory import (
+    KAPPA_BGT,
+    KAPPA_PERSSON,
+    NAYAK_ALPHA_MIN,
+    asperity_area,
+    asperity_kappa,
+    cel_area,
+    cel_dpbar_dp0,
+    cel_kappa,
+    linear_area,
+    persson_area,
+)
 
 #: Okabe & Ito (2008) colour-blind-safe palette, black first (reserved for theory).
 OKABE_ITO = ("#000000", "#E69F00", "#56B4E9", "#009E73", "#D55E00", "#0072B2", "#CC79A7", "#F0E442")
@@ -196,6 +207,30 @@ def _e_star(agg: xr.Dataset) -> float:
     if not (np.isfinite(e) and e > 0):
         raise ValueError(f"agg.attrs['e_star'] must be finite and > 0, got {agg.attrs['e_star']!r}")
     return e
+
+
+#: Finite-load asperity models drawn in the area-load and kappa figures: line style per model.
+ASPERITY_STYLES = {"bgt": ("-", "BGT"), "greenwood": ("-.", "Greenwood (2006)")}
+BGT_LIMIT_LABEL = r"BGT small-load limit, $\kappa=\sqrt{2\pi}$"
+#: Nayak's bandwidth of the paper's Fig. 5 comparison (Carbone & Bottiglione 2008).
+PAPER_ALPHA = 2.0
+
+
+def _asperity_alphas(agg: xr.Dataset) -> list[tuple[float, str, str]]:
+    """``(alpha, colour, label)`` of the asperity curves: the paper's alpha = 2 and, when the
+    surfaces carry it and it differs, their own mean Nayak bandwidth (profile moments)."""
+    out = [(PAPER_ALPHA, "0.15", r"$\alpha = 2$ (paper)")]
+    if "alpha" in agg:
+        present = agg["case_present"] if "case_present" in agg else True
+        alpha = float(agg["alpha"].where(present).mean(skipna=True))
+        if np.isfinite(alpha) and alpha >= NAYAK_ALPHA_MIN and abs(alpha - PAPER_ALPHA) > 0.005:
+            out.append((alpha, "0.6", rf"$\alpha = {alpha:.2f}$ (these surfaces)"))
+    return out
+
+
+def _asperity_handles(alphas) -> list[Line2D]:
+    return [Line2D([], [], color=colour, lw=1.1, ls=ls, label=f"{name}, {label}")
+            for alpha, colour, label in alphas for ls, name in ASPERITY_STYLES.values()]
 
 
 def _mean_slope(stats: xr.Dataset) -> float:
@@ -397,6 +432,7 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
                               "rms_slope_mean", "n_seeds"))
     e_star = _e_star(agg)
     hp = _mean_slope(stats)
+    alphas = _asperity_alphas(agg)
     kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes = _family_panels(
         stats, k_l, k_s, hurst, fit_k_l)
     with matplotlib.rc_context(_STYLE):
@@ -432,6 +468,10 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
                     color=OKABE_ITO[0], lw=0.9, ls="--", zorder=3)
             ax.plot(p / e_star, persson_area(p, rms_slope=hp, e_star=e_star),
                     color="0.5", lw=0.9, ls=":", zorder=3)
+            for alpha, shade, _ in alphas:
+                for model, (ls, _name) in ASPERITY_STYLES.items():
+                    ax.plot(p / e_star, asperity_area(p, alpha=alpha, rms_slope=hp, e_star=e_star, model=model),
+                            color=shade, lw=1.1, ls=ls, zorder=3)
             ax.set_xlim(0, xmax)
             ax.set_ylim(0, ymax * 1.05)
             ax.set_xlabel(r"$p_0/E^*$ [1]")
@@ -439,9 +479,11 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
         for ax in list(axes.flat)[len(ks_list):]:
             ax.set_visible(False)
         handles = _family_handles(kl_list, h_list, colour, marker, style)
-        handles += [Line2D([], [], color=OKABE_ITO[0], lw=0.9, label=r"BGT, $\kappa=\sqrt{2\pi}$"),
-                    Line2D([], [], color=OKABE_ITO[0], lw=0.9, ls="--", label=r"Persson, $\kappa=\sqrt{8/\pi}$"),
+        handles += [Line2D([], [], color=OKABE_ITO[0], lw=0.9, label=BGT_LIMIT_LABEL),
+                    Line2D([], [], color=OKABE_ITO[0], lw=0.9, ls="--",
+                           label=r"Persson small-load limit, $\kappa=\sqrt{8/\pi}$"),
                     Line2D([], [], color="0.5", lw=0.9, ls=":", label=r"Persson, erf")]
+        handles += _asperity_handles(alphas)
         if drew_fit:
             handles.append(Line2D([], [], color="0.45", lw=2.2, alpha=0.8,
                                   label=f"CEL fit ({estimator}), " + _lambda_label(cel_kl, "l")))
@@ -472,6 +514,7 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
     """
     _require(stats, "stats", ("kappa_mean", "kappa_sem", "area_fraction_mean", "n_seeds"))
     _e_star(agg)
+    alphas = _asperity_alphas(agg)
     kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes = _family_panels(
         stats, k_l, k_s, hurst, fit_k_l)
     with matplotlib.rc_context(_STYLE):
@@ -500,6 +543,13 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
                 drew_fit = True
             ax.axhline(KAPPA_BGT, color=OKABE_ITO[0], lw=0.9)
             ylo, yhi = min(ylo, KAPPA_BGT), max(yhi, KAPPA_BGT)
+            a = np.linspace(0, amax, 120)
+            for alpha, shade, _ in alphas:
+                for model, (ls, _name) in ASPERITY_STYLES.items():
+                    # Below the small-load limit sqrt(2 pi): they set the lower bound of the axis.
+                    k = asperity_kappa(a, alpha=alpha, model=model)
+                    ax.plot(a, k, color=shade, lw=1.1, ls=ls, zorder=2)
+                    ylo = min(ylo, float(np.min(k)))
             pad = 0.05 * (yhi - ylo)
             if ylo - pad <= KAPPA_PERSSON <= yhi + pad:
                 ax.axhline(KAPPA_PERSSON, color=OKABE_ITO[0], lw=0.9, ls="--")
@@ -511,7 +561,8 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
         for ax in list(axes.flat)[len(ks_list):]:
             ax.set_visible(False)
         handles = _family_handles(kl_list, h_list, colour, marker, style)
-        handles.append(Line2D([], [], color=OKABE_ITO[0], lw=0.9, label=r"BGT, $\kappa=\sqrt{2\pi}$"))
+        handles.append(Line2D([], [], color=OKABE_ITO[0], lw=0.9, label=BGT_LIMIT_LABEL))
+        handles += _asperity_handles(alphas)
         if drew_fit:
             handles.append(Line2D([], [], color="0.45", lw=2.2, alpha=0.8,
                                   label=f"CEL fit ({estimator}), " + _lambda_label(cel_kl, "l")))
