@@ -9,11 +9,15 @@ result must satisfy whatever the surface, so that every test solve exercises it:
   monotonically with load, Barber 2003), checked on the steps sorted by ``p0``;
 - a converged step has ``residual <= tol``;
 - with stored fields: ``p >= 0`` (``<= hardness``), ``mean(p) == p0`` to 1e-10
-  relative, ``gap >= -tol * s`` wherever ``p`` is below the cap, with ``s`` the
-  same gap scale as the solver's criterion (:func:`roughcontact.solver.gap_scale`),
-  ``mean(gap) == mean_gap``, A/A0 equals the fraction of ``p > 0``, and the gap
-  equals ``u - h + d`` recomputed here with ``numpy.fft`` (an independent path
-  from the solver's pyFFTW buffers and incremental updates).
+  relative, ``mean(gap) == mean_gap``, A/A0 equals the fraction of ``p > 0``, and
+  the gap equals ``u - h + d`` recomputed here with ``numpy.fft`` (an independent
+  path from the solver's pyFFTW buffers and incremental updates);
+- on every converged step, the solver's convergence criterion (module docstring of
+  :mod:`roughcontact.solver`) recomputed here from the fields, with ``s`` the same
+  gap scale (:func:`roughcontact.solver.gap_scale`): ``gap >= -tol * s`` wherever
+  ``p`` is below the cap, ``gap <= tol * s`` wherever it is at the cap, the gap has
+  zero mean on the elastic contact set ``F = {0 < p < hardness}`` (the offset
+  convention) and ``sum_F(p |gap|) / (n^2 p0 s) <= tol`` (gap ~ 0 on ``F``).
 """
 
 from __future__ import annotations
@@ -95,6 +99,17 @@ def check_solution(ds, heights, *, tol, e_star=1.0, length=1.0, hardness=None,
         if converged[i]:
             assert g[below_cap].min() >= -tol * s * (1 + 1e-9), (
                 f"step {step}: gap {g[below_cap].min()} below -tol*s = {-tol * s}")
+            at_cap = ~below_cap
+            if at_cap.any():
+                assert g[at_cap].max() <= tol * s * (1 + 1e-9), (
+                    f"step {step}: gap {g[at_cap].max()} at the cap above tol*s = {tol * s}")
+            free = mask & below_cap
+            if free.any():
+                assert abs(g[free].mean()) <= 1e-9 * s + 1e-12 * np.abs(g[free]).max(), (
+                    f"step {step}: gap not zero-mean on the elastic contact set ({g[free].mean():.3e})")
+                e_orth = float(np.sum(p[free] * np.abs(g[free]))) / (pp * n2 * s)
+                assert e_orth <= tol * (1 + 1e-6), (
+                    f"step {step}: complementarity sum_F(p|g|)/(n^2 p0 s) = {e_orth:.3e} > tol = {tol:.1e}")
         if hardness is not None:
             plastic = p >= hardness
             np.testing.assert_allclose(ds["plastic_area_fraction"].values[i], plastic.mean())

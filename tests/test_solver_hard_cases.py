@@ -228,6 +228,22 @@ GOOD = np.zeros((8, 8))
         (dict(threads=0), "threads must be an integer >= 1"),
         (dict(store_fields=[0]), "store_fields must be a bool or an iterable of step numbers in 1..1"),
         (dict(store_fields="yes"), "store_fields must be a bool"),
+        # strings and other wrong types: refused, naming the argument (not converted)
+        (dict(heights="abc"), "heights must be a real numeric array, got the string 'abc'"),
+        (dict(pressures=["0.01"]), "pressures must be a 1-D sequence of finite real numbers > 0"),
+        (dict(pressures=[True]), "pressures must be a 1-D sequence of finite real numbers > 0"),
+        (dict(pressures=[0.01 + 0j]), "pressures must be a 1-D sequence of finite real numbers > 0"),
+        (dict(e_star="1"), "e_star must be a finite real number > 0, got str '1'"),
+        (dict(length="1"), "length must be a finite real number > 0, got str '1'"),
+        (dict(tol="1e-8"), r"tol must be a number in the open interval \(0, 1\), got str '1e-8'"),
+        (dict(hardness="0.1"), "hardness must be a finite real number > 0, got str '0.1'"),
+        (dict(hardness=True), "hardness must be a finite real number > 0, got bool True"),
+        (dict(max_iter="10"), "max_iter must be an integer >= 1"),
+        (dict(clusters="yes"), "clusters must be True or False, got str 'yes'"),
+        (dict(clusters=1), "clusters must be True or False, got int 1"),
+        # a load the cap cannot carry
+        (dict(pressures=[0.001, 0.02], hardness=0.02),
+         r"pressures: every p0 must be in the open interval \(0, hardness\) = \(0, 0.02\)"),
     ],
 )
 def test_input_validation(kwargs, match):
@@ -239,10 +255,86 @@ def test_input_validation(kwargs, match):
         solve_contact(heights, pressures, **args)
 
 
-@pytest.mark.parametrize("p0", [0.0, -1.0, np.nan, "x"])
+@pytest.mark.parametrize("p0", [0.0, -1.0, np.nan, "x", "0.01", True, [0.01]])
 def test_solve_step_validates_p0(p0):
     with pytest.raises(ValueError, match="p0 must be a finite number > 0"):
         solve_step(GOOD, p0)
+
+
+def test_solve_step_refuses_a_load_the_cap_cannot_carry():
+    with pytest.raises(ValueError, match=r"p0: p0 must be in the open interval \(0, hardness\) = \(0, 0.01\)"):
+        solve_step(GOOD, 0.01, hardness=0.01)
+    with pytest.raises(ValueError, match=r"p0: p0 must be in the open interval \(0, hardness\)"):
+        solve_step(ROUGH, 0.02, hardness=0.01)
+
+
+# --------------------------------------------------------------------------- float64 range
+ROUGH = generate_surface(32, 2, 8, 0.8, 0, rms_slope=0.1)  # rms height 4.4e-3
+RANGE_MSG = r"every p0 \* length / \(e_star \* s\) must be in \[1e-100, 1e\+100\] with s = "
+
+
+@pytest.mark.parametrize(
+    ("scale", "kwargs", "match"),
+    [
+        # the rms of h * 1e200 overflowed (A/A0 = 1 "converged" after 0 iterations)
+        (1e200, dict(pressures=[0.001]), "pressures: " + RANGE_MSG + "4.44049e[+]197"),
+        (1e-200, dict(pressures=[0.001]), "pressures: " + RANGE_MSG),
+        # a subnormal load gave a NaN residual
+        (1.0, dict(pressures=[5e-324]), "pressures: " + RANGE_MSG + r".*got p0 = 5e-324"),
+        (1.0, dict(pressures=[1e-3], e_star=1e300), "pressures: " + RANGE_MSG),
+        (1.0, dict(pressures=[1e-3], e_star=1e-300, length=1e300), "pressures: " + RANGE_MSG),
+        (1.0, dict(pressures=[1e305]), r"pressures: every p0 must be <= 1e\+300 / n\*\*2"),
+        (1.0, dict(pressures=[1e-3], hardness=1e200),
+         r"hardness: hardness \* length / \(e_star \* s\) must be in \[1e-100, 1e\+100\]"),
+    ],
+)
+def test_loads_outside_the_float64_range_are_refused(scale, kwargs, match):
+    pressures = kwargs.pop("pressures")
+    with pytest.raises(ValueError, match=match):
+        solve_contact(ROUGH * scale, pressures, **kwargs)
+
+
+def test_solve_step_refuses_a_subnormal_load():
+    with pytest.raises(ValueError, match="p0: p0 " + RANGE_MSG[len("every p0 "):]):
+        solve_step(ROUGH, 5e-324)
+
+
+@pytest.mark.parametrize("factor", [1e-150, 1e150])
+@pytest.mark.parametrize("hardness", [None, 0.02])
+def test_extreme_but_representable_scales_are_exact(factor, hardness):
+    # Inside the range the solution scales exactly: heights and pressures by one
+    # factor (same dimensionless load), or heights by it and E* by its inverse.
+    loads = [0.001, 0.01]
+    ref = solve_contact(ROUGH, loads, tol=TOL, store_fields=True, hardness=hardness)
+    big = solve_contact(ROUGH * factor, [p * factor for p in loads], tol=TOL, store_fields=True,
+                        hardness=None if hardness is None else hardness * factor)
+    check_solution(big, ROUGH * factor, tol=TOL, hardness=None if hardness is None else hardness * factor)
+    np.testing.assert_array_equal(big["area_fraction"].values, ref["area_fraction"].values)
+    np.testing.assert_allclose(big["contact_pressure"].values / factor, ref["contact_pressure"].values,
+                               rtol=0, atol=1e-12)
+    soft = solve_contact(ROUGH * factor, loads, tol=TOL, store_fields=True, e_star=1 / factor,
+                         hardness=hardness)
+    np.testing.assert_array_equal(soft["area_fraction"].values, ref["area_fraction"].values)
+    np.testing.assert_allclose(soft["gap"].values / factor, ref["gap"].values, rtol=0, atol=1e-15)
+
+
+def test_flat_surface_any_load_is_exact():
+    # Flat surfaces have the exact solution p = p0, g = 0 for any representable p0.
+    ds = solve_contact(np.zeros((8, 8)), [5e-324, 1e-3, 1e296], store_fields=True, hardness=1e297)
+    assert ds["converged"].values.all()
+    assert np.all(ds["contact_pressure"].values == np.array([5e-324, 1e-3, 1e296])[:, None, None])
+    assert np.all(ds["gap"].values == 0) and np.all(ds["iterations"].values == 0)
+
+
+def test_displacement_overflow_is_refused():
+    from roughcontact.solver import displacement
+
+    p = np.zeros((8, 8))
+    p[0, 0] = 1e300
+    with pytest.raises(ValueError, match="displacement: u = K p overflows float64"):
+        displacement(p, e_star=1e-300)
+    np.testing.assert_allclose(displacement(p * 1e-300, e_star=1e-300) * 1e-300, displacement(p * 1e-300),
+                               rtol=1e-12)
 
 
 def test_solve_step_initial_pressure_shape():
