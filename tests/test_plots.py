@@ -180,3 +180,28 @@ def test_finite_load_asperity_curves_are_drawn_and_labelled(contact):
     drawn = [line.get_ydata() for line in ax.get_lines() if len(line.get_ydata()) == 120]
     a = np.linspace(0, float(stats["area_fraction_mean"].max()), 120)
     assert any(np.allclose(y, asperity_kappa(a, alpha=2.0, model="bgt")) for y in drawn)
+
+
+def test_kappa_figure_names_paper_and_run_curves(contact):
+    """The paper's own CEL and this run's fit are both drawn and told apart; the window has an entry."""
+    from roughcontact.plots import PAPER_CONSTANTS
+    from roughcontact.theory import cel_kappa
+
+    agg, stats, fit = contact
+    fig = fig_kappa(agg, stats, fit)
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert any(lab.startswith("CEL, paper: ") and "1.145" in lab for lab in labels), labels
+    assert any(lab.startswith("CEL, this run (paper)") for lab in labels), labels
+    assert any(lab.startswith("fit window") for lab in labels) and any("Persson" in lab for lab in labels)
+    ax = fig.axes[0]
+    a = np.linspace(0, float(stats["area_fraction_mean"].sel(k_s=32.0).max()), 200)
+    assert any(len(line.get_ydata()) == 200 and np.allclose(line.get_ydata(), cel_kappa(a, **PAPER_CONSTANTS))
+               for line in ax.get_lines())
+
+
+def test_representativity_units_are_mathtext(rep_stats):
+    """The units the pipeline writes for epsilon ("length unit^-1/2") appear as mathtext, not literally."""
+    rep = rep_stats.copy()
+    rep["epsilon_mean"].attrs["units"] = "length unit^-1/2"
+    label = fig_representativity(rep).axes[0].get_ylabel()
+    assert "^-1/2" not in label and r"$(\mathrm{length\ unit})^{-1/2}$" in label, label

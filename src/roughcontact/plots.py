@@ -25,6 +25,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 from matplotlib.ticker import FormatStrFormatter, NullFormatter, ScalarFormatter
 
 from .io import atomic_output
@@ -150,12 +151,31 @@ def _pick(values: np.ndarray, wanted, name: str) -> list[float]:
     return out
 
 
+def _unit_tex(units: str) -> str:
+    """A CF-style unit string as mathtext: ``"length unit^-1/2"`` -> ``$(\\mathrm{length\\ unit})^{-1/2}$``."""
+    if units in ("", "1"):
+        return "1"
+    base, _, power = units.partition("^")
+    tex = r"\mathrm{" + base.strip().replace(" ", r"\ ") + "}"
+    if " " in base.strip() and power:
+        tex = f"({tex})"
+    return f"${tex}^{{{power}}}$" if power else f"${tex}$"
+
+
 def _fmt(v: float) -> str:
     return f"{float(v):g}"
 
 
 def _lambda_label(k: float, which: str) -> str:
     return rf"$\lambda_{which} = L/{_fmt(k)}$"
+
+
+def _legend_below(fig: Figure, handles: list, title: str) -> None:
+    """A two-column legend under the panels; the figure grows by its height, the panels keep theirs."""
+    rows = int(np.ceil(len(handles) / 2)) + 1
+    width, height = fig.get_size_inches()
+    fig.set_size_inches(max(width, DOUBLE_COLUMN_IN), height + 0.19 * rows + 0.2)
+    fig.legend(handles=handles, loc="outside lower center", ncols=2, title=title)
 
 
 def _panel_grid(n: int) -> tuple[int, int, float, float]:
@@ -211,6 +231,9 @@ def _e_star(agg: xr.Dataset) -> float:
 
 #: Finite-load asperity models drawn in the area-load and kappa figures: line style per model.
 ASPERITY_STYLES = {"bgt": ("-", "BGT"), "greenwood": ("-.", "Greenwood (2006)")}
+#: The paper's contact evolution law (Yastrebov et al. 2012): kappa, mu, beta.
+PAPER_CONSTANTS = {"kappa": 1.145 * KAPPA_BGT, "mu": 0.55, "beta": 0.21}
+PAPER_CEL_LABEL = r"CEL, paper: $\kappa/\sqrt{2\pi}$ = 1.145, $\mu$ = 0.55, $\beta$ = 0.21"
 BGT_LIMIT_LABEL = r"BGT small-load limit, $\kappa=\sqrt{2\pi}$"
 #: Nayak's bandwidth of the paper's Fig. 5 comparison (Carbone & Bottiglione 2008).
 PAPER_ALPHA = 2.0
@@ -319,8 +342,7 @@ def fig_representativity(rep_stats: xr.Dataset, *, hurst: float | None = None) -
         ax.xaxis.set_major_formatter(ScalarFormatter())
         ax.xaxis.set_minor_formatter(NullFormatter())
         ax.set_xlabel(r"short cutoff $k_s = L/\lambda_s$ [1]")
-        unit_txt = "1" if units in ("1", "") else units
-        ax.set_ylabel(rf"mean $L_2$ error $\bar\varepsilon$ [{unit_txt}]")
+        ax.set_ylabel(rf"mean $L_2$ error $\bar\varepsilon$ [{_unit_tex(units)}]")
         ax.set_title(rf"$H = {_fmt(h)}$, error bars: s.e.m. over seeds")
         fig.legend(loc="outside right upper", title=r"$k_l = L/\lambda_l$")
     return fig
@@ -487,8 +509,7 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
         if drew_fit:
             handles.append(Line2D([], [], color="0.45", lw=2.2, alpha=0.8,
                                   label=f"CEL fit ({estimator}), " + _lambda_label(cel_kl, "l")))
-        fig.legend(handles=handles, loc="outside right upper",
-                   title=f"$h' = {hp:.3g}$; bands: $\\pm 1$ s.d.")
+        _legend_below(fig, handles, f"$h' = {hp:.3g}$; bands: $\\pm 1$ s.d.")
     return fig
 
 
@@ -543,6 +564,8 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
                 drew_fit = True
             ax.axhline(KAPPA_BGT, color=OKABE_ITO[0], lw=0.9)
             ylo, yhi = min(ylo, KAPPA_BGT), max(yhi, KAPPA_BGT)
+            a = np.linspace(0, amax, 200)
+            ax.plot(a, cel_kappa(a, **PAPER_CONSTANTS), color=OKABE_ITO[0], lw=1.4, ls=":", zorder=4)
             a = np.linspace(0, amax, 120)
             for alpha, shade, _ in alphas:
                 for model, (ls, _name) in ASPERITY_STYLES.items():
@@ -551,7 +574,8 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
                     ax.plot(a, k, color=shade, lw=1.1, ls=ls, zorder=2)
                     ylo = min(ylo, float(np.min(k)))
             pad = 0.05 * (yhi - ylo)
-            if ylo - pad <= KAPPA_PERSSON <= yhi + pad:
+            persson_shown = ylo - pad <= KAPPA_PERSSON <= yhi + pad
+            if persson_shown:
                 ax.axhline(KAPPA_PERSSON, color=OKABE_ITO[0], lw=0.9, ls="--")
             ax.set_ylim(ylo - pad, yhi + pad)
             ax.set_xlim(0, amax * 1.02)
@@ -562,12 +586,29 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
             ax.set_visible(False)
         handles = _family_handles(kl_list, h_list, colour, marker, style)
         handles.append(Line2D([], [], color=OKABE_ITO[0], lw=0.9, label=BGT_LIMIT_LABEL))
+        handles.append(Line2D([], [], color=OKABE_ITO[0], lw=0.9, ls="--", label=(
+            r"Persson small-load limit, $\kappa=\sqrt{8/\pi}$" if persson_shown
+            else rf"Persson, $\kappa=\sqrt{{8/\pi}}$ = {KAPPA_PERSSON:.2f}: below the axis")))
         handles += _asperity_handles(alphas)
+        handles.append(Line2D([], [], color=OKABE_ITO[0], lw=1.4, ls=":", label=PAPER_CEL_LABEL))
         if drew_fit:
-            handles.append(Line2D([], [], color="0.45", lw=2.2, alpha=0.8,
-                                  label=f"CEL fit ({estimator}), " + _lambda_label(cel_kl, "l")))
-        fig.legend(handles=handles, loc="outside right upper", title="error bars: s.e.m.")
+            handles.append(Line2D([], [], color="0.45", lw=2.2, alpha=0.8, label=_fit_label(
+                "this run", estimator, cel_kl, _fit_constants(fit, cel_kl, ks_list[0], estimator)
+                if len(ks_list) == 1 else None)))
+            handles.append(Patch(facecolor="0.9", edgecolor="none", label=(
+                f"fit window $A/A_0 \\in$ [{float(fit.attrs.get('window_low', np.nan)):g}, "
+                f"{float(fit.attrs.get('window_high', np.nan)):g}]")))
+        _legend_below(fig, handles, "error bars: s.e.m.")
     return fig
+
+
+def _fit_label(who: str, estimator: str, k_l: float, consts) -> str:
+    """Legend text of a fitted CEL curve, with its constants when one curve is drawn."""
+    text = f"CEL, {who} ({estimator}), " + _lambda_label(k_l, "l")
+    if consts is not None:
+        text += rf": $\kappa/\sqrt{{2\pi}}$ = {consts[0] / KAPPA_BGT:.3f}, $\mu$ = {consts[1]:.2f}, " \
+                rf"$\beta$ = {consts[2]:.2f}"
+    return text
 
 
 def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None, *,
