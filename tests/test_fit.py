@@ -253,3 +253,18 @@ def test_unconverged_seeds_are_excluded_and_the_rest_fitted():
     assert int(result["n_seeds"].sel(H_group=POOLED).squeeze()) == 2
     assert np.isfinite(result["value"].sel(constant="kappa", H_group=POOLED, estimator="paper").squeeze())
     assert agg["case_present"].all(), "the input is not modified"
+
+
+def test_unconstrained_constants_are_flagged():
+    """A bootstrap interval wider than the value (kappa = 4.79 in [3.1, 6368]) is flagged, not reported as a number."""
+    from roughcontact.fit import constrained_flags
+
+    flags = constrained_flags([4.79, 2.87, 0.5, np.nan, 1.0], [3.1, 2.80, 0.3, 0.0, np.nan], [6368, 2.95, 0.7, 1, 2])
+    assert flags.tolist() == [0, 1, 1, 0, 0]
+    fitted = fit_cel(_agg(seeds=range(3)), n_boot=20)
+    rows = list(csv.DictReader(io.StringIO(to_csv_table(fitted))))
+    assert {r["constrained"] for r in rows} <= {"yes", "no"}
+    for r in rows:
+        if r["value"] and r["ci_low"] and r["ci_high"]:
+            wide = float(r["ci_high"]) - float(r["ci_low"]) >= abs(float(r["value"]))
+            assert (r["constrained"] == "no") == wide, r

@@ -465,6 +465,9 @@ def fit_cel(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.11), n_bo
                                  "(seeds resampled with replacement; times sqrt(n/(n-1)))"}),
             "ci_low": (dims5, clo, {**one, "long_name": f"lower end of the {pct} bootstrap percentile interval"}),
             "ci_high": (dims5, chi, {**one, "long_name": f"upper end of the {pct} bootstrap percentile interval"}),
+            "constrained": (dims5, constrained_flags(value, clo, chi), {**one, "long_name": "1 if the "
+                            "bootstrap interval is narrower than the value itself, 0 if the data do not "
+                            "constrain the constant (interval wider than the value, or no interval)"}),
             "n_points": (dims5, npts, {**one, "long_name": "in-window points used by the fit (paper route with "
                                                   "paper_average='seeds': seed-mean points, one per H and step)"}),
             "n_seeds": (dims5[:3], nseeds, {**one, "long_name": "number of seeds (surfaces) in the group"}),
@@ -544,11 +547,23 @@ def kappa_spread(fit_ds: xr.Dataset, *, estimator: str = "paper") -> xr.Dataset:
                        "max_abs_relative_deviation": mx})
 
 
+def constrained_flags(value, ci_low, ci_high) -> np.ndarray:
+    """1 where the bootstrap interval ``[ci_low, ci_high]`` is narrower than ``|value|``, else 0 (int8).
+
+    A constant whose 95 % interval is wider than itself (e.g. kappa = 4.79 with the
+    interval [3.1, 6368]) is not determined by the data and must not be reported as a number.
+    """
+    value, lo, hi = (np.asarray(x, dtype=float) for x in (value, ci_low, ci_high))
+    with np.errstate(invalid="ignore"):
+        ok = np.isfinite(value) & np.isfinite(lo) & np.isfinite(hi) & ((hi - lo) < np.abs(value))
+    return ok.astype(np.int8)
+
+
 def to_csv_table(fit_ds: xr.Dataset) -> str:
     """Human-readable CSV of a :func:`fit_cel` result, one row per group/estimator/constant.
 
     Columns: ``k_l, k_s, H_group, estimator, constant, value, stderr, bootstrap_stderr,
-    ci_low, ci_high, n_points, n_seeds, n_boot_ok, paper_value, paper_stderr`` (floats
+    ci_low, ci_high, constrained, n_points, n_seeds, n_boot_ok, paper_value, paper_stderr`` (floats
     with 6 significant digits; empty cell for NaN). Groups without cases are omitted.
     Rows are sorted by k_l, k_s, then the dataset's H_group, estimator, constant order.
 
@@ -562,7 +577,7 @@ def to_csv_table(fit_ds: xr.Dataset) -> str:
     str
         The table, with a header line and a trailing newline.
     """
-    needed = ("value", "stderr", "bootstrap_stderr", "ci_low", "ci_high", "n_points", "n_seeds",
+    needed = ("value", "stderr", "bootstrap_stderr", "ci_low", "ci_high", "constrained", "n_points", "n_seeds",
               "n_boot_ok", "paper_value", "paper_stderr")
     missing = [v for v in needed if v not in fit_ds]
     if missing:
@@ -574,7 +589,7 @@ def to_csv_table(fit_ds: xr.Dataset) -> str:
 
     buf = io.StringIO()
     cols = ["k_l", "k_s", "H_group", "estimator", "constant", "value", "stderr", "bootstrap_stderr",
-            "ci_low", "ci_high", "n_points", "n_seeds", "n_boot_ok", "paper_value", "paper_stderr"]
+            "ci_low", "ci_high", "constrained", "n_points", "n_seeds", "n_boot_ok", "paper_value", "paper_stderr"]
     buf.write(",".join(cols) + "\n")
     for kl in fit_ds["k_l"].values:
         for ks in fit_ds["k_s"].values:
@@ -589,7 +604,8 @@ def to_csv_table(fit_ds: xr.Dataset) -> str:
                         row = [fmt(kl), fmt(ks), str(hg), str(m), str(c)]
                         row += [fmt(fit_ds[v].sel(full)) for v in ("value", "stderr", "bootstrap_stderr",
                                                                  "ci_low", "ci_high")]
-                        row += [str(int(fit_ds["n_points"].sel(full))), str(n_s),
+                        row += ["yes" if int(fit_ds["constrained"].sel(full)) else "no",
+                                str(int(fit_ds["n_points"].sel(full))), str(n_s),
                                 str(int(fit_ds["n_boot_ok"].sel(dict(sel, estimator=m))))]
                         row += [fmt(fit_ds["paper_value"].sel(constant=c)),
                                 fmt(fit_ds["paper_stderr"].sel(constant=c))]

@@ -594,7 +594,7 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
         if drew_fit:
             handles.append(Line2D([], [], color="0.45", lw=2.2, alpha=0.8, label=_fit_label(
                 "this run", estimator, cel_kl, _fit_constants(fit, cel_kl, ks_list[0], estimator)
-                if len(ks_list) == 1 else None)))
+                if len(ks_list) == 1 else None, _fit_constrained(fit, cel_kl, ks_list[0], estimator))))
             handles.append(Patch(facecolor="0.9", edgecolor="none", label=(
                 f"fit window $A/A_0 \\in$ [{float(fit.attrs.get('window_low', np.nan)):g}, "
                 f"{float(fit.attrs.get('window_high', np.nan)):g}]")))
@@ -602,9 +602,20 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
     return fig
 
 
-def _fit_label(who: str, estimator: str, k_l: float, consts) -> str:
-    """Legend text of a fitted CEL curve, with its constants when one curve is drawn."""
+def _fit_constrained(fit: xr.Dataset, k_l: float, k_s: float, estimator: str) -> bool:
+    """Whether every constant of the H-pooled fit is constrained by the data (see fit.constrained_flags)."""
+    if "constrained" not in fit:
+        return True
+    sel = {"k_l": k_l, "k_s": k_s, "H_group": "pooled", "estimator": estimator}
+    return bool(fit["constrained"].sel(sel).all())
+
+
+def _fit_label(who: str, estimator: str, k_l: float, consts, constrained: bool = True) -> str:
+    """Legend text of a fitted CEL curve, with its constants when one curve is drawn and the
+    data constrain them (else "not constrained": an interval wider than the value is no number)."""
     text = f"CEL, {who} ({estimator}), " + _lambda_label(k_l, "l")
+    if not constrained:
+        return text + ": not constrained by the data (bootstrap interval wider than the value)"
     if consts is not None:
         text += rf": $\kappa/\sqrt{{2\pi}}$ = {consts[0] / KAPPA_BGT:.3f}, $\mu$ = {consts[1]:.2f}, " \
                 rf"$\beta$ = {consts[2]:.2f}"

@@ -18,6 +18,10 @@ def main(log):
     kappa = result["value"].sel(constant="kappa").to_series()
     for group in kappa[kappa.isna()].index:
         log.warning("no CEL fit for (k_l, k_s, H, estimator) = %s", group)
+    loose = result["constrained"].where(result["value"].notnull(), 1).to_series()
+    for group in loose[loose == 0].index:
+        log.warning("not constrained by the data (bootstrap interval wider than the value), flagged in cel.csv: "
+                    "(k_l, k_s, H, estimator, constant) = %s", group)
     # NaN is a legitimate value here: it marks a group without a fit.
     for name in result.data_vars:
         if result[name].dtype.kind == "f":
