@@ -205,3 +205,14 @@ def test_representativity_units_are_mathtext(rep_stats):
     rep["epsilon_mean"].attrs["units"] = "length unit^-1/2"
     label = fig_representativity(rep).axes[0].get_ylabel()
     assert "^-1/2" not in label and r"$(\mathrm{length\ unit})^{-1/2}$" in label, label
+
+
+def test_surface_examples_share_one_scale_by_default():
+    rng = np.random.default_rng(1)
+    small, large = 0.01 * rng.standard_normal((16, 16)), rng.standard_normal((16, 16))
+    fig = fig_surface_examples([(small, "a"), (large, "b")])
+    images = [ax.get_images()[0] for ax in fig.axes if ax.get_images()]
+    assert len(images) == 2 and images[0].get_clim() == images[1].get_clim() == (large.min(), large.max())
+    own = fig_surface_examples([(small, "a"), (large, "b")], shared_scale=False)
+    images = [ax.get_images()[0] for ax in own.axes if ax.get_images()]
+    assert images[0].get_clim() == (small.min(), small.max())

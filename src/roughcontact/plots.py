@@ -349,7 +349,7 @@ def fig_representativity(rep_stats: xr.Dataset, *, hurst: float | None = None) -
 
 
 def fig_surface_examples(examples: Sequence[tuple[np.ndarray, str]], *, length: float = 1.0,
-                         bins: int = 60) -> Figure:
+                         bins: int = 60, shared_scale: bool = True) -> Figure:
     """Example surfaces (top) and their height PDFs against a Gaussian (bottom).
 
     The paper's Fig. 1 b-d. Lengths are shown in units of the domain side (``x/L``,
@@ -365,6 +365,9 @@ def fig_surface_examples(examples: Sequence[tuple[np.ndarray, str]], *, length: 
         Side ``L`` of the domain (> 0) [u].
     bins : int
         Histogram bins (>= 5).
+    shared_scale : bool
+        One colour scale and one height axis for all panels (default), so that the panels
+        compare; ``False`` scales each panel to its own surface.
 
     Returns
     -------
@@ -387,6 +390,8 @@ def fig_surface_examples(examples: Sequence[tuple[np.ndarray, str]], *, length: 
             raise ValueError(f"examples[{i}] heights must be a finite square 2-D array, got shape {h.shape}")
         fields.append((h, str(item[1])))
     n = len(fields)
+    lo = min(float(h.min()) for h, _ in fields) / length
+    hi = max(float(h.max()) for h, _ in fields) / length
     width = SINGLE_COLUMN_IN if n == 1 else DOUBLE_COLUMN_IN
     col_w = width / n
     with matplotlib.rc_context(_STYLE):
@@ -394,8 +399,9 @@ def fig_surface_examples(examples: Sequence[tuple[np.ndarray, str]], *, length: 
         axes = fig.subplots(2, n, squeeze=False, gridspec_kw={"height_ratios": [col_w * 0.95, 1.5]})
         for j, (h, label) in enumerate(fields):
             h = h / length
+            vmin, vmax = (lo, hi) if shared_scale else (float(h.min()), float(h.max()))
             ax = axes[0, j]
-            im = ax.imshow(h.T, origin="lower", extent=(0, 1, 0, 1), interpolation="nearest")
+            im = ax.imshow(h.T, origin="lower", extent=(0, 1, 0, 1), interpolation="nearest", vmin=vmin, vmax=vmax)
             ax.set_title(label)
             ax.set_xlabel(r"$x/L$")
             if j == 0:
@@ -404,9 +410,10 @@ def fig_surface_examples(examples: Sequence[tuple[np.ndarray, str]], *, length: 
             cb.ax.set_title(r"$h/L$", fontsize=7)
             mean, std = float(h.mean()), float(h.std())
             axh = axes[1, j]
-            axh.hist(h.ravel(), bins=bins, density=True, color=DATA_COLOURS[1], alpha=0.6,
+            axh.hist(h.ravel(), bins=bins, range=(vmin, vmax), density=True, color=DATA_COLOURS[1], alpha=0.6,
                      label="surface")
-            grid = np.linspace(h.min(), h.max(), 200)
+            axh.set_xlim(vmin, vmax)
+            grid = np.linspace(vmin, vmax, 200)
             if std > 0:
                 axh.plot(grid, np.exp(-0.5 * ((grid - mean) / std) ** 2) / (np.sqrt(2 * np.pi) * std),
                          color=OKABE_ITO[0], label=r"Gaussian $G(h,\bar h,\sigma)$")
