@@ -342,3 +342,18 @@ def test_directory_in_place_of_a_file_is_named(tmp_path):
     (tmp_path / "case.nc").mkdir()
     with pytest.raises(InputFileError, match=r"case\.nc: is a directory, not a file"):
         read_dataset(tmp_path / "case.nc", stage="contact")
+
+
+def test_netcdf_library_failure_is_named_too(tmp_path, monkeypatch):
+    """netCDF4 reports a failed write as RuntimeError ("NetCDF: HDF error"): named like any I/O failure."""
+    from roughcontact.io import OutputFileError, write_dataset
+
+    def hdf_error(self, tmp, **kwargs):
+        raise RuntimeError("NetCDF: HDF error")
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", hdf_error)
+    ds = xr.Dataset({"a": ("x", [1.0], {"units": "1", "long_name": "a"})},
+                    coords={"x": ("x", [0], {"units": "1", "long_name": "x"})})
+    with pytest.raises(OutputFileError, match=r"c\.nc: could not be written \(NetCDF: HDF error\)"):
+        write_dataset(ds, tmp_path / "c.nc", stage="surface", scene="s", scene_parameters={})
+    assert list(tmp_path.iterdir()) == []

@@ -149,9 +149,9 @@ def atomic_output(path: str | os.PathLike) -> Iterator[Path]:
         # The writer may have recreated the file with another mode (mkstemp-style).
         os.chmod(tmp, 0o666 & ~current_umask())
         os.replace(tmp, path)
-    except (OSError, RuntimeError) as exc:
-        # A full disk, a quota, a read-only folder: netCDF4 reports them as RuntimeError
-        # or OSError without the file's name, so name it here, once.
+    except OSError as exc:
+        # A full disk, a quota, a read-only folder: often reported without the file's
+        # name, so name it here, once.
         tmp.unlink(missing_ok=True)
         raise OutputFileError(f"{path}: could not be written ({exc}); nothing was left in its place") from exc
     except BaseException:
@@ -182,7 +182,10 @@ def write_dataset(ds: xr.Dataset, path: str | os.PathLike, *, stage: str, scene:
     out = ds.copy()
     out.attrs = {**ds.attrs, **provenance_attrs(stage, scene, scene_parameters)}
     with atomic_output(path) as tmp:
-        out.to_netcdf(tmp, engine="netcdf4", format="NETCDF4")
+        try:
+            out.to_netcdf(tmp, engine="netcdf4", format="NETCDF4")
+        except RuntimeError as exc:  # netCDF4's report of an I/O failure (e.g. "NetCDF: HDF error")
+            raise OSError(str(exc)) from exc
     return path
 
 
