@@ -22,7 +22,14 @@ plans of one size do not leak into the next) it:
    backend in turn, several times, for the end-to-end cost of the plan choice;
 4. runs Tamaas' ``PolonskyKeerRey`` (pressure primal, pressure constraint) on
    the identical array in the same process (``OMP_NUM_THREADS=1``), with the
-   same tolerance, and compares A/A0 step by step.
+   same tolerance, and compares A/A0 step by step;
+5. (``--methods``) solves with each elastic iteration of
+   :data:`roughcontact.solver.ELASTIC_METHODS` in turn (``"pk"``, the plain
+   Polonsky-Keer CG, is the reference): iterations, FFT pairs in double and in
+   single precision, CPU and wall time, ``--method-repeats`` interleaved rounds
+   (best reported), and the largest A/A0 difference from ``"pk"``. With two or
+   more ``--n`` the summary ends with the fitted iteration-scaling exponent
+   ``a`` of ``iterations ~ N**a`` per method.
 
 Prints per-step tables and a summary markdown table; ``--out`` also writes the
 summary (``.csv`` gives CSV, anything else markdown).
@@ -206,9 +213,64 @@ def _run_tamaas(h, loads, tol):
     }
 
 
-def worker(n: int, steps: int, p_max: float, tol: float, tamaas: bool, plan_repeats: int = 2) -> dict:
+@contextlib.contextmanager
+def _count_pairs():
+    """Count the solver's FFT pairs (double and single precision) inside the block."""
+    from roughcontact import solver as _solver
+
+    counts = {"double": 0, "single": 0}
+    ws = _solver._Workspace
+    names = {"apply_k": "double", "apply_m": "double", "apply_k32": "single", "apply_m32": "single"}
+    saved = {name: getattr(ws, name) for name in names}
+
+    def wrap(name, kind):
+        original = saved[name]
+
+        def counting(self, field):
+            counts[kind] += 1
+            return original(self, field)
+        return counting
+
+    for name, kind in names.items():
+        setattr(ws, name, wrap(name, kind))
+    try:
+        yield counts
+    finally:
+        for name, fn in saved.items():
+            setattr(ws, name, fn)
+
+
+def _method_solves(h, loads, tol, methods, repeats: int) -> dict:
+    """Iterations, FFT pairs and best wall/CPU seconds of each elastic method, interleaved."""
+    from roughcontact import solver as _solver
+
+    saved = _solver.ELASTIC_METHOD
+    out = {m: {"wall": [], "cpu": []} for m in methods}
+    try:
+        for _ in range(max(1, repeats)):
+            for m in methods:
+                _solver.ELASTIC_METHOD = m
+                with _count_pairs() as counts:
+                    w0, c0 = time.perf_counter(), time.process_time()
+                    ds = _solver.solve_contact(h, loads, tol=tol)
+                    cpu, wall = time.process_time() - c0, time.perf_counter() - w0
+                rec = out[m]
+                rec["wall"].append(wall)
+                rec["cpu"].append(cpu)
+                rec["iterations"] = ds["iterations"].values.tolist()
+                rec["pairs_double"], rec["pairs_single"] = counts["double"], counts["single"]
+                rec["converged"] = bool(ds["converged"].values.all())
+                rec["area"] = ds["area_fraction"].values.tolist()
+                rec["max_residual"] = float(ds["residual"].values.max())
+    finally:
+        _solver.ELASTIC_METHOD = saved
+    return out
+
+
+def worker(n: int, steps: int, p_max: float, tol: float, tamaas: bool, plan_repeats: int = 2,
+           methods: tuple[str, ...] = (), method_repeats: int = 2) -> dict:
     from roughcontact.fft import PLANNER_FLAGS
-    from roughcontact.solver import solve_contact
+    from roughcontact.solver import ELASTIC_METHOD, solve_contact
     from roughcontact.surface import generate_surface
 
     rss_start = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
@@ -226,25 +288,16 @@ def worker(n: int, steps: int, p_max: float, tol: float, tamaas: bool, plan_repe
 
     pairs = _time_fft_pairs(n)
 
-    # Second, instrumented solve: numpy allocation peak and the number of
-    # pressure -> displacement products (FFT pairs) per CG iteration.
-    from roughcontact import solver as _solver
-
-    calls = [0]
-    original = _solver._Workspace.apply_k
-
-    def counting(self, field):
-        calls[0] += 1
-        return original(self, field)
-
-    _solver._Workspace.apply_k = counting
+    # Second, instrumented solve: numpy allocation peak and the number of FFT
+    # pairs (operator and preconditioner products, double and single) per iteration.
     tracemalloc.start()
     try:
-        solve_contact(h, loads, tol=tol)
+        with _count_pairs() as counts:
+            solve_contact(h, loads, tol=tol)
         traced_peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
-        _solver._Workspace.apply_k = original
+    calls = [counts["double"] + counts["single"]]
 
     iters = ds["iterations"].values
     res = {
@@ -254,6 +307,7 @@ def worker(n: int, steps: int, p_max: float, tol: float, tamaas: bool, plan_repe
         "tol": tol,
         "fft_backend": ds.attrs["fft_backend"],
         "fft_planner": list(PLANNER_FLAGS),
+        "elastic_method": ELASTIC_METHOD,
         "fft_pair_estimate": pairs["estimate"],
         "fft_pair_measure": pairs["measure"],
         "fft_pair_numpy": pairs["numpy"],
@@ -274,6 +328,7 @@ def worker(n: int, steps: int, p_max: float, tol: float, tamaas: bool, plan_repe
         "rss_peak_mb": rss_after / 1024,
         "tracemalloc_peak_mb": traced_peak / 2**20,
         "plan_solves": _plan_solves(h, loads, tol, plan_repeats) if plan_repeats > 0 else None,
+        "method_solves": _method_solves(h, loads, tol, methods, method_repeats) if methods else None,
         "tamaas": _run_tamaas(h, loads, tol) if tamaas else None,
     }
     return res
@@ -324,6 +379,17 @@ def _summary_rows(results: list[dict]) -> list[dict]:
             "RSS after surface [MB]": f"{r['rss_before_solve_mb']:.0f}",
             "tracemalloc peak [MB]": f"{r['tracemalloc_peak_mb']:.0f}",
         }
+        ms = r.get("method_solves") or {}
+        for label, rec in ms.items():
+            row[f"{label}: iters"] = int(sum(rec["iterations"]))
+            row[f"{label}: FFT pairs f64 + f32"] = f"{rec['pairs_double']} + {rec['pairs_single']}"
+            row[f"{label}: best CPU [s]"] = f"{min(rec['cpu']):.2f}"
+            row[f"{label}: best wall [s]"] = f"{min(rec['wall']):.2f}"
+            row[f"{label}: converged"] = "yes" if rec["converged"] else "NO"
+            if "pk" in ms and label != "pk":
+                a, b = np.array(rec["area"]), np.array(ms["pk"]["area"])
+                row[f"{label}: CPU / pk CPU"] = f"{min(rec['cpu']) / min(ms['pk']['cpu']):.2f}"
+                row[f"{label}: max rel dA/A0 vs pk"] = f"{float(np.max(np.abs(a - b) / b)):.1e}"
         for label, rec in (r.get("plan_solves") or {}).items():
             row[f"best wall {label} [s]"] = f"{rec['wall']:.2f}"
             row[f"best CPU {label} [s]"] = f"{rec['cpu']:.2f}"
@@ -343,6 +409,20 @@ def _summary_rows(results: list[dict]) -> list[dict]:
             row.update({"Tamaas wall [s]": "n/a (not installed)"})
         rows.append(row)
     return rows
+
+
+def _scaling(results: list[dict]) -> str:
+    """Exponent ``a`` of ``iterations ~ N**a`` (least squares in log-log) per method."""
+    if len(results) < 2 or not all(r.get("method_solves") for r in results):
+        return ""
+    ns = np.array([r["n"] for r in results], dtype=float)
+    lines = ["| method | " + " | ".join(f"iters N={int(n)}" for n in ns) + " | exponent a |",
+             "|---|" + "---:|" * (len(ns) + 1)]
+    for m in results[0]["method_solves"]:
+        its = np.array([sum(r["method_solves"][m]["iterations"]) for r in results], dtype=float)
+        a = float(np.polyfit(np.log(ns), np.log(its), 1)[0])
+        lines.append(f"| {m} | " + " | ".join(str(int(i)) for i in its) + f" | {a:.2f} |")
+    return "\n".join(lines)
 
 
 def _markdown(rows: list[dict]) -> str:
@@ -365,12 +445,19 @@ def main(argv=None) -> int:
     ap.add_argument("--plan-repeats", type=int, default=2,
                     help="extra solves with FFTW_ESTIMATE, FFTW_MEASURE and numpy.fft, each this many "
                          "times, interleaved; the best is reported (default 2; 0 skips them)")
+    ap.add_argument("--methods", default="pk,pk-fourier,pk-fourier-f32",
+                    help="comma-separated elastic methods to compare (default: all of "
+                         "roughcontact.solver.ELASTIC_METHODS; '' skips the comparison)")
+    ap.add_argument("--method-repeats", type=int, default=2,
+                    help="interleaved rounds of the method comparison (default 2; best reported)")
     ap.add_argument("--out", help="write the summary table here (.csv -> CSV, else markdown)")
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
 
     if args.worker:
-        res = worker(args.n[0], args.steps, args.p_max, args.tol, not args.no_tamaas, args.plan_repeats)
+        methods = tuple(m for m in args.methods.split(",") if m)
+        res = worker(args.n[0], args.steps, args.p_max, args.tol, not args.no_tamaas, args.plan_repeats,
+                     methods, args.method_repeats)
         print("@@RESULT@@" + json.dumps(res))
         return 0
 
@@ -381,7 +468,8 @@ def main(argv=None) -> int:
                "--steps", str(args.steps), "--p-max", str(args.p_max), "--tol", str(args.tol)]
         if args.no_tamaas:
             cmd.append("--no-tamaas")
-        cmd += ["--plan-repeats", str(args.plan_repeats)]
+        cmd += ["--plan-repeats", str(args.plan_repeats), "--methods", args.methods,
+                "--method-repeats", str(args.method_repeats)]
         print(f"== N = {n}: running in a subprocess ...", flush=True)
         proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
         if proc.returncode != 0:
@@ -399,6 +487,11 @@ def main(argv=None) -> int:
     table = _markdown(rows)
     print(f"== summary (tol = {args.tol:g}, {args.steps:d} steps to p0 = {args.p_max:g} E*)")
     print(table)
+    scaling = _scaling(results)
+    if scaling:
+        print(f"\n== iteration scaling, iterations ~ N**a over N = {', '.join(str(r['n']) for r in results)}")
+        print(scaling)
+        table += "\n\n" + scaling
     if args.out:
         os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
         with open(args.out, "w", newline="") as f:

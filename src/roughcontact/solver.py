@@ -70,6 +70,38 @@ set. Implementation details:
 * each load step starts from the previous step's pressure scaled to the new
   ``p0`` (for the elastic problem ``u`` scales with it, so no FFT is needed).
 
+That is the reference iteration, :data:`ELASTIC_METHOD` ``= "pk"`` (the
+iteration of Tamaas' ``PolonskyKeerRey``, with the same iteration count). The
+default, ``"pk-fourier"``, keeps its projections, active-set rules, stall
+guard and final check, and changes two things (a third is opt-in):
+
+* *Fourier preconditioner*: the search direction is built from
+  ``z = P_F M P_F g`` with ``M = |q| E* / 2`` (the exact inverse of the
+  elastic operator when ``F`` is the whole cell; 0 at ``q = 0``), ``P_F`` the
+  restriction to ``F``, and ``z``'s mean over ``F`` removed; ``t = z + beta t``
+  with ``beta = (g.z) / (g_old.z_old)``. At iterations where nodes join ``F``
+  the gradient is re-centred on the enlarged ``F`` (a shift of ``d``) and the
+  CG restarts from the preconditioned direction. One more FFT pair per
+  iteration; on the paper case the iterations drop 2-3x and grow more slowly
+  with ``n`` (``benchmarks/README.md``);
+* *extrapolated warm start*: from the third step on, the start is the linear
+  extrapolation in ``p0`` of the last two solutions, clipped at 0 and rescaled
+  to the mean (one FFT pair to get ``u``), instead of the scaled last one;
+* *single-precision transforms*, ``"pk-fourier-f32"``, not the default
+  (``float32`` pyFFTW plans, ``FFTW_ESTIMATE`` as the double ones): the
+  products ``K t`` and ``M P_F g`` of the loop are computed in ``float32``
+  while ``p``, the gap, every reduction and the mean removal of the direction
+  stay in ``float64``. The incremental update
+  ``u <- u - tau K t`` then drifts from ``K p`` by ~1e-7 of the steps taken,
+  so ``u = K p`` is recomputed in ``float64`` after every projection, when the
+  residual first falls below 1e-5 and after each further four decades, and
+  before the final check (which always uses a fresh ``float64`` product).
+  Same iterations and answers to the tolerance, tolerances down to 1e-13
+  reachable, deterministic; but float32 rounding is not a smooth function of
+  the input, so problems that differ only by round-off (exact rescalings of
+  heights and ``E*``) end at solutions that differ by O(``tol``) instead of
+  O(1e-16): off by default for that reason (``tests/test_solver_hard_cases.py``).
+
 *With a hardness*: the bound-constrained problem is solved by a monotone
 gradient-projection / conjugate-gradient scheme (Moré & Toraldo 1991, with
 Dostál's proportioning test), every step of which lowers the energy and keeps
@@ -162,7 +194,9 @@ FRACTION_UNITS = "1"
 SOLVER_NAME = "roughcontact.solver.pk_pressure"
 SOLVER_DESCRIPTION = (
     "Pressure-controlled constrained conjugate gradient (Polonsky & Keer 1999) on a "
-    "periodic FFT-BEM elastic half-space, u(q) = 2 p(q) / (E* |q|); with a hardness, "
+    "periodic FFT-BEM elastic half-space, u(q) = 2 p(q) / (E* |q|), Fourier-preconditioned "
+    "(|q| E*/2 on the contact set) with an extrapolated warm start by default (attribute "
+    "elastic_method; 'pk' is the plain iteration); with a hardness, "
     "monotone gradient-projection/CG on {0 <= p <= H, mean p = p0}; converged when "
     "max(sum_F(p|g|)/(sum(p) s), max(0,-min g below cap)/s, max(0,max g at cap)/s) <= tol "
     "with s the rms height, mean(p) = p0 to 1e-10 and 0 <= p (<= H), checked on a freshly "
@@ -183,6 +217,13 @@ LOAD_RANGE = (1e-100, 1e100)
 MEAN_RTOL = 1e-10
 #: Largest float64 with some head room: a single node may carry ``n^2 p0``.
 _FLOAT_CEILING = 1e300
+#: Iterations of the elastic path (module docstring): ``"pk"``, Polonsky & Keer's
+#: CG as in Tamaas' ``PolonskyKeerRey`` (the reference); ``"pk-fourier"``, the same
+#: iteration with the Fourier preconditioner and an extrapolated warm start;
+#: ``"pk-fourier-f32"``, the latter with single-precision transforms in the loop.
+ELASTIC_METHODS = ("pk", "pk-fourier", "pk-fourier-f32")
+#: Elastic iteration used by :func:`solve_contact` and :func:`solve_step`.
+ELASTIC_METHOD = "pk-fourier"
 
 
 @dataclass
@@ -599,6 +640,54 @@ class _Workspace:
         self.Tf = self.T.ravel()
         self.mask = np.zeros((n, n), dtype=bool)
         self.bbuf = np.empty((n, n), dtype=bool)
+        #: elastic iteration, one of :data:`ELASTIC_METHODS`
+        if ELASTIC_METHOD not in ELASTIC_METHODS:
+            raise ValueError(f"ELASTIC_METHOD must be one of {ELASTIC_METHODS}, got {ELASTIC_METHOD!r}")
+        self.method = ELASTIC_METHOD
+        self._minv2 = None  # preconditioner multiplier |q| E*/2, made on first use
+        self.Z = None  # preconditioner input, zero off the free set
+        self.fft32 = None  # single-precision plans (method "pk-fourier-f32")
+
+    def _setup_method(self) -> None:
+        """Preconditioner multiplier, its buffer and, for ``-f32``, the single plans."""
+        if self.method == "pk" or self.Z is not None and (
+                self.method != "pk-fourier-f32" or self.fft32 is not None):
+            return
+        if self.Z is None:
+            kern = self.kern2[..., 0]
+            minv = np.zeros_like(kern)
+            np.divide(1.0, kern, out=minv, where=kern > 0)
+            self._minv2 = np.repeat(minv[..., None], 2, axis=-1)
+            self.Z = np.zeros((self.n, self.n))
+        if self.method == "pk-fourier-f32" and self.fft32 is None:
+            self.fft32 = get_fft((self.n, self.n), threads=self.fft.threads, backend=self.fft.backend,
+                                 dtype=np.float32)
+            self.kern2_32 = self.kern2.astype(np.float32)
+            self.minv2_32 = self._minv2.astype(np.float32)
+
+    def _product(self, field: np.ndarray, mult: np.ndarray, fft) -> np.ndarray:
+        spec = fft.forward(field)
+        if spec.dtype.itemsize != 2 * mult.dtype.itemsize:  # numpy.fft < 2 computes in double
+            spec = spec * mult[..., 0]
+        else:
+            view = spec.view(mult.dtype).reshape(mult.shape)
+            np.multiply(view, mult, out=view)
+        return fft.backward(spec)
+
+    def apply_m(self, field: np.ndarray) -> np.ndarray:
+        """``M field`` with ``M = |q| E* / 2`` (``K``'s inverse off ``q = 0``; 0 at ``q = 0``).
+
+        Returns an FFT buffer that the next transform overwrites.
+        """
+        return self._product(field, self._minv2, self.fft)
+
+    def apply_k32(self, field: np.ndarray) -> np.ndarray:
+        """``K field`` with single-precision transforms (``float32`` buffer)."""
+        return self._product(field, self.kern2_32, self.fft32)
+
+    def apply_m32(self, field: np.ndarray) -> np.ndarray:
+        """``M field`` with single-precision transforms (``float32`` buffer)."""
+        return self._product(field, self.minv2_32, self.fft32)
 
     def apply_k(self, field: np.ndarray) -> np.ndarray:
         """``K field`` in an FFT buffer that the next transform overwrites."""
@@ -719,6 +808,16 @@ def _pk_solve(ws: _Workspace, p0: float, tol: float, max_iter: int, fresh: bool)
     w, wf, Pf, T, Tf, mask, bbuf = ws.w, ws.wf, ws.Pf, ws.T, ws.Tf, ws.mask, ws.bbuf
     maskf = mask.ravel()
 
+    precond = ws.method != "pk"
+    single = ws.method == "pk-fourier-f32"
+    ws._setup_method()
+    if precond:
+        Zf = ws.Z.ravel()
+    apply_m = ws.apply_m32 if single else ws.apply_m
+    apply_k = ws.apply_k32 if single else ws.apply_k
+    # single precision: w drifts from K p - h by ~1e-7 of the steps taken; it is
+    # recomputed in float64 when the residual falls below each of these levels
+    next_sync = 1e-5
     if not fresh:
         ws.refresh()
     idx = _active_set(ws)
@@ -768,6 +867,14 @@ def _pk_solve(ws: _Workspace, p0: float, tol: float, max_iter: int, fresh: bool)
             ws.refresh()
             fresh = True
             continue
+        if single and residual < next_sync and not fresh:
+            # float64 gap below 1e-5 and after every further four decades
+            while next_sync > residual:
+                next_sync *= 1e-4
+            _sync_pressure(ws, idx, p_c, target)
+            ws.refresh()
+            fresh = True
+            continue
         if not math.isfinite(residual) or it >= max_iter:
             break
         if residual < 0.5 * ref:
@@ -792,25 +899,44 @@ def _pk_solve(ws: _Workspace, p0: float, tol: float, max_iter: int, fresh: bool)
             break
 
         # ---- conjugate direction (zero mean on F, so mean(p) is kept) and step
-        G = _dot(g_c, g_c)
-        if delta > 0.0 and g_old > 0.0:
-            t_c *= delta * G / g_old
-            t_c += g_c
-        else:
-            t_c[...] = g_c
+        if precond:
             if joined_after:
-                # Restore zero mean on the nodes already in contact only: each
-                # joining node keeps t = g (< 0), so the step moves it into the
-                # contact set as PK's rule does instead of clipping it at once.
-                # g.t = |g|^2 still holds because g has zero mean on the old
-                # free set.
-                t_c[:joined_after] -= t_c.sum() / joined_after
-            joined_after = 0
+                # gradient on the enlarged set: zero mean on F (shifts d only)
+                g_c -= g_c.sum() / nf
+                joined_after = 0
+            # z = P_F M P_F g, zero mean on F; beta = g.z / g_old.z_old
+            Zf[idx] = g_c
+            _take(apply_m(ws.Z).ravel(), idx, a_c)
+            Zf[idx] = 0.0
+            a_c -= a_c.sum() / nf
+            G = _dot(g_c, a_c)
+            if not (G > 0.0 and math.isfinite(G)):
+                break  # breakdown at round-off level: the final check decides
+            if delta > 0.0 and g_old > 0.0:
+                t_c *= G / g_old
+                t_c += a_c
+            else:
+                t_c[...] = a_c
+        else:
+            G = _dot(g_c, g_c)
+            if delta > 0.0 and g_old > 0.0:
+                t_c *= delta * G / g_old
+                t_c += g_c
+            else:
+                t_c[...] = g_c
+                if joined_after:
+                    # Restore zero mean on the nodes already in contact only: each
+                    # joining node keeps t = g (< 0), so the step moves it into the
+                    # contact set as PK's rule does instead of clipping it at once.
+                    # g.t = |g|^2 still holds because g has zero mean on the old
+                    # free set.
+                    t_c[:joined_after] -= t_c.sum() / joined_after
+                joined_after = 0
         g_old = G
         delta = 1.0
         Tf[idx] = t_c
-        Rf = ws.apply_k(T).ravel()
-        np.take(Rf, idx, out=a_c)
+        Rf = apply_k(T).ravel()
+        _take(Rf, idx, a_c)
         rt = _dot(a_c, t_c)
         tau = _dot(g_c, t_c) / rt if rt > 0.0 else math.nan
         if not (math.isfinite(tau) and tau > 0.0):
@@ -821,7 +947,7 @@ def _pk_solve(ws: _Workspace, p0: float, tol: float, max_iter: int, fresh: bool)
         n_out = np.count_nonzero(a_c <= 0.0)
         if n_out == 0:
             p_c, a_c = a_c, p_c
-            np.multiply(Rf, tau, out=Rf)
+            np.multiply(Rf, Rf.dtype.type(tau), out=Rf)
             wf -= Rf  # u <- u - tau K t: exact, no FFT pair for p
             fresh = False
             continue
@@ -847,6 +973,14 @@ def _pk_solve(ws: _Workspace, p0: float, tol: float, max_iter: int, fresh: bool)
     # An early exit right after nodes joined leaves them flagged with p = 0.
     np.greater(ws.P, 0.0, out=mask)
     return it, converged
+
+
+def _take(src: np.ndarray, idx: np.ndarray, out: np.ndarray) -> None:
+    """``out[:] = src[idx]``, converting a float32 ``src`` to float64."""
+    if src.dtype == out.dtype:
+        np.take(src, idx, out=out)
+    else:
+        out[...] = src[idx]
 
 
 def _sync_pressure(ws, idx, p_c, target):
@@ -1139,6 +1273,8 @@ class _Solver:
         if hardness is not None and not self.units.flat:
             self.cap = self.units.to_internal(hardness)
         self.prev = None  # internal p0 of the last solved step
+        self._older = None  # (p0, pressure) of the step before the last
+        self._last = None  # pressure of the last step
         self._pbuf = np.empty((self.n, self.n))
 
     @property
@@ -1169,6 +1305,20 @@ class _Solver:
             ws.P.fill(p_int)
             return False
         s = p_int / self.prev
+        c = 0.0
+        if cap is None and ws.method != "pk" and self._older is not None and self._older[0] != self.prev:
+            c = (p_int - self.prev) / (self.prev - self._older[0])
+        if 0.0 < c <= 2.0:
+            # Extrapolated warm start, linear in the load through the last two
+            # solutions (loads moving on in the same direction, by at most twice
+            # the last increment); otherwise the scaled last solution below.
+            P_old = self._older[1]
+            ws.P -= P_old
+            ws.P *= c
+            ws.P += self._last
+            np.maximum(ws.P, 0.0, out=ws.P)
+            _enforce_mean(ws.P, target, None)
+            return False
         if cap is None:
             # Warm start: p and u = K p scale together, so w = K p - h follows
             # without a transform.
@@ -1197,6 +1347,9 @@ class _Solver:
         else:
             its, _ = _box_solve(ws, p_int, self.tol, self.max_iter, cap, fresh)
         ok, residual, gbar, w_sum = _final_check(ws, p_int, self.tol, cap)
+        if cap is None and ws.method != "pk":
+            self._older = None if self.prev is None else (self.prev, self._last)
+            self._last = ws.P.copy()
         self.prev = p_int
         p = units.pressure(ws.P, out=self._pbuf)
         n_sat = 0
@@ -1377,6 +1530,7 @@ def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.
 
     ds = _to_dataset(p, cols, iters, conv, fields_p, fields_g, field_steps, store_fields,
                      n, e_star, length, tol, max_iter, hardness, threads, solver.backend)
+    ds.attrs["elastic_method"] = solver.ws.method if solver.ws is not None else ELASTIC_METHOD
     if masks is not None:
         from .clusters import cluster_dataset
 
@@ -1450,6 +1604,8 @@ def _to_dataset(p, cols, iters, conv, fields_p, fields_g, field_steps, store_fie
 
 __all__ = [
     "DEFAULT_MAX_ITER",
+    "ELASTIC_METHOD",
+    "ELASTIC_METHODS",
     "FRACTION_UNITS",
     "INVERSE_LENGTH_UNITS",
     "LENGTH_UNITS",
