@@ -622,7 +622,7 @@ def _fit_label(who: str, estimator: str, k_l: float, consts, constrained: bool =
     data constrain them (else "not constrained": an interval wider than the value is no number)."""
     text = f"CEL, {who} ({estimator}), " + _lambda_label(k_l, "l")
     if not constrained:
-        return text + ": not constrained by the data (bootstrap interval wider than the value)"
+        return text + ": not constrained by the data"
     if consts is not None:
         text += rf": $\kappa/\sqrt{{2\pi}}$ = {consts[0] / KAPPA_BGT:.3f}, $\mu$ = {consts[1]:.2f}, " \
                 rf"$\beta$ = {consts[2]:.2f}"
