@@ -40,6 +40,7 @@ import pytest
 import yaml
 
 from conftest import REPO, copy_workflow, run_snakemake
+from test_workflow import _jobs
 
 DOCS = ("README.md", "config/README.md",
         *(f"docs/{name}.md" for name in ("cluster", "representative", "accuracy", "solver")))
@@ -136,22 +137,6 @@ SCENE_FILES = scene_files(ITEMS)
 
 
 # ------------------------------------------------------------------------------------- helpers
-def _jobs(stdout: str) -> dict[str, int]:
-    """Job counts from the 'Job stats' table of a (dry) run."""
-    counts, table = {}, False
-    for line in stdout.splitlines():
-        if line.startswith("job "):
-            table = True
-            continue
-        if table:
-            parts = line.split()
-            if parts and parts[0] == "total":
-                break
-            if len(parts) == 2 and parts[1].isdigit():
-                counts[parts[0]] = int(parts[1])
-    return counts
-
-
 def _ok(res, what: str):
     assert res.returncode == 0, (f"{what} exited with status {res.returncode}\n--- stdout (end)\n"
                                  f"{res.stdout[-3000:]}\n--- stderr (end)\n{res.stderr[-3000:]}")
