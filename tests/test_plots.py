@@ -216,3 +216,13 @@ def test_surface_examples_share_one_scale_by_default():
     own = fig_surface_examples([(small, "a"), (large, "b")], shared_scale=False)
     images = [ax.get_images()[0] for ax in own.axes if ax.get_images()]
     assert images[0].get_clim() == (small.min(), small.max())
+
+
+def test_contact_figures_state_grid_seeds_and_loads(contact):
+    import json
+
+    agg, stats, fit = contact
+    agg = agg.assign_attrs(scene_parameters=json.dumps({"surface": {"N": 256}}))
+    for draw in (fig_area_load, fig_kappa, fig_dpbar):
+        title = draw(agg, stats, fit)._suptitle.get_text()
+        assert "$N = 256$" in title and "3 seeds" in title and "$p_0/E^*$ = " in title, (draw.__name__, title)

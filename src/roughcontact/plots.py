@@ -15,6 +15,7 @@ slope, ``A/A0`` contact-area fraction, ``pbar`` mean contact pressure,
 
 from __future__ import annotations
 
+import json
 import logging
 import os
 from collections.abc import Sequence
@@ -168,6 +169,27 @@ def _fmt(v: float) -> str:
 
 def _lambda_label(k: float, which: str) -> str:
     return rf"$\lambda_{which} = L/{_fmt(k)}$"
+
+
+def _run_summary(agg: xr.Dataset, stats: xr.Dataset) -> str:
+    """What a contact figure shows, for its title: grid N, seeds per family, load range."""
+    parts = []
+    try:
+        recorded = json.loads(agg.attrs.get("scene_parameters", "{}"))
+    except ValueError:
+        recorded = {}
+    n = recorded.get("surface", {}).get("N") if isinstance(recorded, dict) else None
+    if n is not None:
+        parts.append(f"$N = {int(n)}$")
+    seeds = stats["n_seeds"].values[stats["n_seeds"].values > 0] if "n_seeds" in stats else np.array([])
+    if seeds.size:
+        lo, hi = int(seeds.min()), int(seeds.max())
+        parts.append(f"{lo} seeds" if lo == hi else f"{lo}-{hi} seeds")
+    if "pressure" in agg and "e_star" in agg.attrs:
+        p = agg["pressure"].values / float(agg.attrs["e_star"])
+        if np.isfinite(p).any():
+            parts.append(f"$p_0/E^*$ = {np.nanmin(p):.3g}-{np.nanmax(p):.3g}")
+    return ", ".join(parts)
 
 
 def _legend_below(fig: Figure, handles: list, title: str) -> None:
@@ -516,6 +538,7 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
         if drew_fit:
             handles.append(Line2D([], [], color="0.45", lw=2.2, alpha=0.8,
                                   label=f"CEL fit ({estimator}), " + _lambda_label(cel_kl, "l")))
+        fig.suptitle(_run_summary(agg, stats))
         _legend_below(fig, handles, f"$h' = {hp:.3g}$; bands: $\\pm 1$ s.d.")
     return fig
 
@@ -605,6 +628,7 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
             handles.append(Patch(facecolor="0.9", edgecolor="none", label=(
                 f"fit window $A/A_0 \\in$ [{float(fit.attrs.get('window_low', np.nan)):g}, "
                 f"{float(fit.attrs.get('window_high', np.nan)):g}]")))
+        fig.suptitle(_run_summary(agg, stats))
         _legend_below(fig, handles, "error bars: s.e.m.")
     return fig
 
@@ -699,6 +723,7 @@ def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
         if drew_fit:
             handles.append(Line2D([], [], color="0.45", lw=2.2, alpha=0.8,
                                   label=rf"fit $\beta(A_0/A)^\mu$ ({estimator}), " + _lambda_label(cel_kl, "l")))
+        fig.suptitle(_run_summary(agg, stats))
         fig.legend(handles=handles, loc="outside right upper", title="error bars: s.e.m.")
     return fig
 
