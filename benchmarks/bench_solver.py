@@ -216,10 +216,10 @@ def _run_tamaas(h, loads, tol):
 @contextlib.contextmanager
 def _count_pairs():
     """Count the solver's FFT pairs (double and single precision) inside the block."""
-    from roughcontact import solver as _solver
+    from roughcontact.solver.workspace import Workspace
 
     counts = {"double": 0, "single": 0}
-    ws = _solver._Workspace
+    ws = Workspace
     names = {"apply_k": "double", "apply_m": "double", "apply_k32": "single", "apply_m32": "single"}
     saved = {name: getattr(ws, name) for name in names}
 

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from roughcontact import solver as solver_mod
-from roughcontact.solver import MEAN_RTOL, solve_contact, solve_step
+from roughcontact.solver import MEAN_RTOL, check, contact, projection, solve_contact, solve_step, validation
 from roughcontact.surface import generate_surface
 from solver_invariants import check_solution
 
@@ -155,7 +155,7 @@ def test_a_false_claim_of_convergence_is_caught(monkeypatch, issue_surface):
         ws.refresh()  # the contract: w fresh on exit; P left as the start
         return 0, True
 
-    monkeypatch.setattr(solver_mod, "_box_solve", lazy)
+    monkeypatch.setattr(contact, "box_solve", lazy)
     ds = solve_contact(issue_surface, [0.0003], hardness=0.001, store_fields=True)
     assert not ds["converged"].values.any()
     assert ds["residual"].values[0] > ds.attrs["tol"]
@@ -166,22 +166,23 @@ def test_a_false_elastic_claim_is_caught(monkeypatch, issue_surface):
         ws.refresh()
         return 0, True
 
-    monkeypatch.setattr(solver_mod, "_pk_solve", lazy)
+    monkeypatch.setattr(contact, "pk_solve", lazy)
     ds = solve_contact(issue_surface, [0.0003])
     assert not ds["converged"].values.any()
 
 
 def test_wrong_mean_fails_the_check(issue_surface):
     # A pressure field that is right but for its mean (1e-9 relative) is refused.
-    s = solver_mod._Solver(solver_mod._validate_heights(issue_surface), 1.0, 1.0, 1e-8, 1000, 0.01, 1)
+    s = solver_mod.ContactSolver(validation.validate_heights(issue_surface), 1.0, 1.0, 1e-8, 1000,
+                                 [solver_mod.PlasticityCap(0.01)], 1, solver_mod.ELASTIC_METHOD)
     st, _ = s.solve(0.004)
     assert st.converged
     p_int = s.units.to_internal(0.004)
-    ok = solver_mod._final_check(s.ws, p_int, 1e-8, s.cap)[0]
+    ok = check.final_check(s.ws, p_int, 1e-8, s.cap)[0]
     assert ok
     s.ws.P *= 1 - 1e-9
     s.ws.refresh()
-    ok = solver_mod._final_check(s.ws, p_int, 1e-8, s.cap)[0]
+    ok = check.final_check(s.ws, p_int, 1e-8, s.cap)[0]
     assert not ok
 
 
@@ -193,10 +194,35 @@ def test_projection_onto_capped_simplex(seed):
     y = rng.normal(size=5000) * 10 ** rng.uniform(-3, 3)
     cap = 10 ** rng.uniform(-20, 2)
     total = rng.uniform(0.01, 0.99) * cap * y.size
-    x = solver_mod._project(y, total, cap)
+    x = projection.project(y, total, cap)
     assert x.min() >= 0 and x.max() <= cap
     assert x.sum() == pytest.approx(total, rel=1e-12)
     inside = (x > 0) & (x < cap)
     if inside.sum() > 1 and cap > 1e-10 * np.abs(y).max():
         shift = y[inside] - x[inside]
         assert np.ptp(shift) <= 1e-9 * (np.abs(y).max() + cap)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_projection_keeps_a_feasible_point_exactly(seed):
+    # A point already on {0 <= x <= cap, sum x = total} (up to round-off of the sum)
+    # is its own projection: nodes at the cap stay exactly at it. A shift by the
+    # rounding error of the offset once moved 221 capped nodes an ulp inside the
+    # box, where the bounded iteration then took them for free nodes and stalled.
+    rng = np.random.default_rng(seed)
+    cap = 10 ** rng.uniform(-3, 1)
+    x = np.where(rng.random(256) < 0.8, cap, rng.uniform(0, cap, 256))
+    x[rng.random(256) < 0.1] = 0.0
+    out = projection.project(x.copy(), float(x.sum()), cap)
+    np.testing.assert_array_equal(out[x == cap], cap)
+    np.testing.assert_allclose(out, x, rtol=1e-14, atol=0)
+
+
+def test_repeated_load_on_a_mostly_capped_surface_converges():
+    # The case hypothesis found: the same load twice, 86 % of the nodes capped.
+    h = generate_surface(16, 1, 2, 0.27734375, 29, rms_slope=1.0)
+    hardness = 0.012589254117941675
+    p0 = 0.8659643233600653 * hardness
+    ds = solve_contact(h, [p0, p0], tol=1e-4, max_iter=3000, store_fields=True, hardness=hardness)
+    check_solution(ds, h, tol=1e-4, hardness=hardness)
+    assert ds["iterations"].values[1] == 0

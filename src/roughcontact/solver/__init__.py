@@ -1,0 +1,234 @@
+"""Pressure-controlled FFT-BEM normal contact solver (Polonsky & Keer 1999).
+
+Problem
+-------
+A rigid rough surface with heights ``h(x, y)`` (highest points touch first; the
+same convention as Tamaas, where ``h`` is the combined roughness) is pressed onto
+a periodic elastic half-space of plane-strain modulus ``E*`` over a square cell of
+side ``L`` sampled on ``n x n`` nodes (spacing ``dx = L / n``, node ``i`` at
+``x = i * dx``, axis 0 = x, axis 1 = y). With ``p >= 0`` the nodal contact
+pressure, the surface displacement into the half-space is, in Fourier space,
+
+    u(q) = 2 p(q) / (E* |q|)   for q != 0,      u(q = 0) = 0,
+
+``|q| = 2 pi |k| / L`` in rad per length. Fixing ``u(0) = 0`` makes ``u`` the
+displacement relative to its mean; the rigid-body approach is the Lagrange
+multiplier of the mean-pressure constraint ``mean(p) = p0``. The gap is
+
+    g = u - h + d,     d = rigid-body offset,
+
+so that ``mean(g) = d - mean(h)`` is the mean separation between the rigid
+surface and the deformed half-space (the ``mean_gap`` output). The discrete
+problem: ``p >= 0``, ``g >= 0``, ``p * g = 0``, ``mean(p) = p0``. With a
+``hardness`` ``H`` (perfect plasticity of the interface, as in Tamaas'
+``KatoSaturated``) the pressure is also capped, ``p <= H``, nodes at the cap
+may interpenetrate (``g <= 0`` there) and nodes strictly between the bounds
+have ``g = 0``; a mean ``p0 >= H`` cannot be carried and is refused. Each load
+step is solved for the current load alone (no plastic history carried between
+steps). Both problems are the optimality conditions of the convex quadratic
+program ``min 1/2 p.Kp - h.p`` over ``{0 <= p (<= H), mean(p) = p0}``, ``d``
+being the multiplier of the mean constraint; the solution is unique.
+
+Units
+-----
+Internally the solver works in units where ``E* = L = 1`` and lengths are
+counted in ``c``, the power of two just above the rms height ``s`` of ``h``
+(so the internal heights have rms in [0.5, 1) and are an exact copy of ``h``);
+pressures are counted in ``E* c / L``. Every load then enters through the
+dimensionless ``p0 L / (E* s)``, which must lie in :data:`LOAD_RANGE` (as must
+``hardness L / (E* s)``): outside it float64 cannot represent the contact
+(squares of pressures or gaps overflow or underflow) and the load is refused
+with a ``ValueError`` naming the argument. When ``|mean(h)| > s`` the mean is
+subtracted first (a rigid shift absorbed by ``d``). A perfectly flat surface
+(all heights equal) has the exact solution ``p = p0`` everywhere, ``g = 0``;
+it is returned directly, with ``iterations = 0``. For the default
+``E* = L = 1`` the unit changes are exact (powers of two), so the iterates are
+bit for bit those of the unscaled problem.
+
+Algorithm
+---------
+*Elastic* (no hardness): constrained conjugate gradient on the contact set
+``F = {p > 0}`` with the mean-pressure constraint, projection onto ``p >= 0``
+and Polonsky-Keer's active-set rules: nodes out of contact with a negative gap
+join ``F`` and the CG restarts; a step that would take nodes below 0 is
+projected, the mean restored by rescaling, and the CG continues on the reduced
+set. Implementation details:
+
+* the Fourier kernel and the pyFFTW plans are made once per grid
+  (:func:`roughcontact.fft.get_fft`), all buffers are preallocated and the
+  inner loop calls no BLAS routine (OpenBLAS' thread wake-up interleaved with
+  FFTW costs more than the transform at these sizes);
+* the search direction ``t`` is kept zero-mean on ``F``, so a step
+  ``p <- p - tau t`` keeps ``mean(p)`` and, since ``u`` is linear in ``p``, the
+  displacement is updated as ``u <- u - tau K t`` from the response ``K t`` that
+  the step length needs anyway: such an iteration costs one FFT pair. Joining
+  nodes are folded into the search direction (they start at ``p = 0``), so
+  joins keep this exact update too. Only a projection (nodes leaving the
+  contact set) recomputes ``u = K p`` with a second FFT pair, and so does
+  the confirmation of a small residual before the final check;
+* reductions run on compressed arrays over ``F`` only;
+* each load step starts from the previous step's pressure scaled to the new
+  ``p0`` (for the elastic problem ``u`` scales with it, so no FFT is needed).
+
+That is the reference iteration, :data:`ELASTIC_METHOD` ``= "pk"`` (the
+iteration of Tamaas' ``PolonskyKeerRey``, with the same iteration count).
+``"pk-fourier"`` keeps its projections, active-set rules, stall guard and final
+check, and changes two things; the default, ``"pk-fourier-f32"``, a third:
+
+* *Fourier preconditioner*: the search direction is built from
+  ``z = P_F M P_F g`` with ``M = |q| E* / 2`` (the exact inverse of the
+  elastic operator when ``F`` is the whole cell; 0 at ``q = 0``), ``P_F`` the
+  restriction to ``F``, and ``z``'s mean over ``F`` removed; ``t = z + beta t``
+  with ``beta = (g.z) / (g_old.z_old)``. At iterations where nodes join ``F``
+  the gradient is re-centred on the enlarged ``F`` (a shift of ``d``) and the
+  CG restarts from the preconditioned direction. One more FFT pair per
+  iteration; on the paper case the iterations drop 2-3x and grow more slowly
+  with ``n`` (``benchmarks/README.md``);
+* *extrapolated warm start*: from the third step on, the start is the linear
+  extrapolation in ``p0`` of the last two solutions, clipped at 0 and rescaled
+  to the mean (one FFT pair to get ``u``), instead of the scaled last one;
+* *single-precision transforms* (``float32`` pyFFTW plans, ``FFTW_ESTIMATE``
+  as the double ones): the products ``K t`` and ``M P_F g`` of the loop, and
+  ``u = K p`` after a projection while the residual is above 1e-5, are
+  computed in ``float32`` (inputs divided by the internal rms height before
+  the cast, so that the float32 values do not depend on the problem's units),
+  while ``p``, the gap, every reduction and the mean removal of the direction
+  stay in ``float64``. The gap then drifts from ``K p - h`` by ~1e-7 of the
+  steps taken, so ``u = K p`` is recomputed in ``float64`` when the residual
+  first falls below 1e-5 and after each further four decades, after every
+  later projection, and before the final check (which always uses a fresh
+  ``float64`` product). Same iterations and answers to the tolerance,
+  tolerances down to 1e-13 reachable, deterministic. Float32 rounding of the
+  small late directions is not a smooth function of the input, though: two
+  problems that differ only by round-off (an exact rescaling of heights and
+  ``E*``) end at solutions that differ by what ``tol`` allows instead of by
+  O(1e-16) as with ``"pk-fourier"`` (``tests/test_solver_hard_cases.py``).
+
+*With a hardness*: the bound-constrained problem is solved by a monotone
+gradient-projection / conjugate-gradient scheme (Moré & Toraldo 1991, with
+Dostál's proportioning test), every step of which lowers the energy and keeps
+``0 <= p <= H`` and ``mean(p) = p0``:
+
+* the feasible set's projection is ``P(y) = clip(y - lam, 0, H)`` with the
+  offset ``lam`` found by a 1-D search (Newton steps on the piecewise linear
+  ``sum(clip(y - lam, 0, H))``, safeguarded by bisection): it is the exact
+  projection onto ``{0 <= p <= H, mean(p) = p0}``, so the load carried by the
+  capped nodes never has to be rescaled away (the free set's share
+  ``p0 n^2 - H |capped|`` may be tiny or the capped set too large; the
+  projection releases nodes from the cap as needed);
+* with ``d`` chosen so that ``g`` has zero mean on the free set
+  ``F = {0 < p < H}``, the *free gradient* is ``g`` on ``F`` and the
+  *chopped gradient* the sign violations at the bounds (``g < 0`` at ``p = 0``,
+  ``g > 0`` at ``p = H``); while the chopped part is not larger than the free
+  part (2-norms), a CG step minimises the energy on the current face
+  (direction zero-mean on ``F``); a step that would leave the box is replaced
+  by the projection of the CG trial point onto the face (exact line search on
+  the segment, or the full projected point when it lowers the energy), and the
+  CG restarts;
+* otherwise a gradient-projection step ``P(p - alpha g)`` (Barzilai-Borwein
+  ``alpha``, exact line search on the segment) changes the active sets, many
+  nodes at a time.
+
+With any elastic method but ``"pk"``, the CG steps on the face use the same
+Fourier preconditioner (``z = P_F M P_F g`` on ``F = {0 < p < H}``, capped
+nodes outside it; one more float64 FFT pair per CG step): on the paper case at
+``n = 512`` it takes 2.4x fewer iterations and 0.57x the CPU time when few
+nodes are capped, 1.5x fewer when a quarter are (``tests/test_solver_methods.py``).
+
+In the rigid-plastic limit (``H`` far below ``E* s / L``) this finds the
+bearing-area solution in one or two steps; for a cap that is never reached it
+is a CG on the contact set with gradient-projection steps for the joins, about
+as many iterations as the elastic path (each one dearer: full-grid passes).
+
+Convergence criterion
+---------------------
+Let ``s`` be the gap scale: the rms height of ``h`` about its mean, see
+:func:`gap_scale`; ``d`` is taken so that ``g`` has zero mean on
+``F = {0 < p < H}`` (``H = inf`` without hardness; when ``F`` is empty, the
+offset in the middle of the admissible interval). The solver forms
+
+    e_orth = sum_F(p |g|) / (n^2 p0 * s)      (complementarity, pressure-weighted:
+                                               g ~ 0 on the elastic contact set;
+                                               pointwise |g| <= ~6 tol s measured)
+    e_pen  = max(0, -min g over all nodes below the cap) / s   (gap sign)
+    e_cap  = max(0, max g over nodes at the cap) / s           (hardness only)
+
+and ``residual = max(e_orth, e_pen, e_cap)``. All three terms are ratios of
+gaps to ``s`` and do not depend on ``n``. A step is converged only when a final
+check on ``u = K p`` recomputed by FFT from the returned pressure finds
+
+* every value finite, ``0 <= p`` (``<= H``), ``|mean(p) - p0| <= MEAN_RTOL p0``
+  (:data:`MEAN_RTOL`, 1e-10), and
+* ``residual <= tol`` as defined above, hence ``g >= -tol * s`` wherever
+  ``p < H`` and ``g <= tol * s`` wherever ``p = H``;
+
+a step that fails any of these is ``converged = False``, whatever the iteration
+said, and its ``residual`` is the one of the check. In floating point the gap
+carries a round-off error of order ``1e-16 * max|h - mean(h)| / s`` (about
+``1e-15`` for Gaussian surfaces) plus ``1e-16 * p0 L / (E* s)``, so any
+``tol >= 1e-13`` is reachable at moderate loads; far past full contact
+(``p0 L / (E* s)`` above roughly ``tol * 1e16``) the pressure field itself cannot
+resolve the gap to ``tol`` and the step ends ``converged = False``. Should the
+iteration stall (no halving of the residual within :data:`STALL_WINDOW`
+iterations, or a breakdown of the step length), the step ends with
+``converged = False`` and finite fields instead of running to ``max_iter``.
+
+Parts
+-----
+:mod:`.halfspace` the elastic operator (periodic), :mod:`.workspace` the fields
+of one surface, :mod:`.elastic` and :mod:`.box` the two iterations,
+:mod:`.effects` what acts on them (the plasticity cap), :mod:`.check` the
+final check, :mod:`.results` the assembly of the output, :mod:`.units` and
+:mod:`.validation` the checks of the input, :mod:`.contact` the step loop.
+
+The FFT plans and buffers are shared per grid size within a process, so two
+solves of the same size must not run concurrently in threads of one process
+(separate processes, as under Snakemake, are fine).
+"""
+
+from .check import MEAN_RTOL
+from .contact import DEFAULT_MAX_ITER, ContactSolver, solve_contact, solve_step
+from .effects import PlasticityCap
+from .elastic import STALL_WINDOW
+from .halfspace import PeriodicHalfSpace, displacement, elastic_kernel
+from .results import (
+                      FRACTION_UNITS,
+                      INVERSE_LENGTH_UNITS,
+                      LENGTH_UNITS,
+                      PRESSURE_UNITS,
+                      SOLVER_DESCRIPTION,
+                      SOLVER_NAME,
+                      StepResult,
+                      contact_perimeter,
+)
+from .units import LOAD_RANGE, gap_scale
+from .workspace import ELASTIC_METHODS
+
+#: Elastic iteration used by :func:`solve_contact` and :func:`solve_step`, one of
+#: :data:`ELASTIC_METHODS` (read at each call: set it here to switch).
+ELASTIC_METHOD = "pk-fourier-f32"
+
+__all__ = [
+    "DEFAULT_MAX_ITER",
+    "ELASTIC_METHOD",
+    "ELASTIC_METHODS",
+    "FRACTION_UNITS",
+    "INVERSE_LENGTH_UNITS",
+    "LENGTH_UNITS",
+    "LOAD_RANGE",
+    "MEAN_RTOL",
+    "PRESSURE_UNITS",
+    "SOLVER_DESCRIPTION",
+    "SOLVER_NAME",
+    "STALL_WINDOW",
+    "ContactSolver",
+    "PeriodicHalfSpace",
+    "PlasticityCap",
+    "StepResult",
+    "contact_perimeter",
+    "displacement",
+    "elastic_kernel",
+    "gap_scale",
+    "solve_contact",
+    "solve_step",
+]

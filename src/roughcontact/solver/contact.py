@@ -1,0 +1,360 @@
+"""The contact solver of one surface: units, effects, warm starts and the step loop.
+
+Public entry points :func:`solve_contact` and :func:`solve_step` (re-exported
+by :mod:`roughcontact.solver`, whose docstring states the problem, the units,
+the algorithms and the convergence criterion).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+
+import numpy as np
+import xarray as xr
+
+from .box import box_solve
+from .check import MEAN_RTOL, final_check
+from .effects import PlasticityCap
+from .elastic import pk_solve
+from .halfspace import plans
+from .projection import enforce_mean
+from .results import (
+    PRESSURE_UNITS,
+    SOLVER_DESCRIPTION,
+    SOLVER_NAME,
+    StepRecord,
+    StepResult,
+    contact_perimeter,
+    to_dataset,
+)
+from .units import Units, check_loads
+from .validation import (
+    real_scalar,
+    validate_flag,
+    validate_heights,
+    validate_pressures,
+    validate_solver_args,
+    validate_store,
+)
+from .workspace import Workspace
+
+#: Default iteration cap per load step.
+DEFAULT_MAX_ITER = 10000
+
+
+def _effects(hardness) -> list:
+    return [] if hardness is None else [PlasticityCap(hardness)]
+
+
+class ContactSolver:
+    """Validated problem of one surface: units, effects, workspace and warm starts.
+
+    ``heights`` (n, n) and the scalars are already validated; ``effects`` act on
+    the iteration (:mod:`.effects`); ``method`` is the elastic iteration.
+    """
+
+    def __init__(self, h, e_star, length, tol, max_iter, effects, threads, method):
+        self.n = h.shape[0]
+        self.length = length
+        self.tol, self.max_iter = tol, max_iter
+        self.effects = list(effects)
+        self.units = Units(h, e_star, length)
+        self.threads = threads
+        self.method = method
+        self.ws = None if self.units.flat else Workspace(self.units.heights, length, threads, method)
+        for effect in self.effects:
+            effect.bind(self.units)
+        caps = [e.upper_bound for e in self.effects if e.upper_bound is not None]
+        self.cap = min(caps) if caps else None
+        # the physical cap, for starting pressures given by the caller
+        self.hardness = min((e.hardness for e in self.effects if isinstance(e, PlasticityCap)), default=None)
+        self.prev = None  # internal p0 of the last solved step
+        self._older = None  # (p0, pressure) of the step before the last
+        self._last = None  # pressure of the last step
+        self._pbuf = np.empty((self.n, self.n))
+
+    def check_loads(self, p: np.ndarray, name: str) -> None:
+        """Refuse loads an effect cannot carry or float64 cannot represent."""
+        for effect in self.effects:
+            effect.check_loads(self.units, p, name)
+        check_loads(self.units, p, self.n, name)
+        for effect in self.effects:
+            effect.check_range(self.units)
+
+    @property
+    def backend(self) -> str:
+        return self.ws.backend if self.ws is not None else plans(self.n, self.threads).backend
+
+    def _extrapolation(self, p_int: float) -> float:
+        """Factor ``c`` of the linear extrapolation in the load, 0 when not used."""
+        if self.cap is not None or self.method == "pk" or self._older is None:
+            return 0.0
+        if self._older[0] == self.prev:
+            return 0.0
+        c = (p_int - self.prev) / (self.prev - self._older[0])
+        return c if 0.0 < c <= 2.0 else 0.0
+
+    def start(self, p0: float, initial=None) -> bool:
+        """Put the starting pressure for ``p0`` in the workspace; returns ``fresh``."""
+        ws, cap = self.ws, self.cap
+        p_int = self.units.to_internal(p0)
+        target = p_int * ws.size
+        if initial is not None:
+            np.maximum(initial, 0.0, out=ws.P)
+            if cap is None:
+                top = float(ws.P.max())
+                if top > 0:
+                    ws.P /= top
+            else:
+                np.minimum(ws.P, self.hardness, out=ws.P)
+                ws.P *= cap / self.hardness
+            enforce_mean(ws.P, target, cap)
+            return False
+        if cap is not None and p_int >= cap:
+            # p0 within an ulp of the hardness: every node at the cap
+            ws.P.fill(cap)
+            return False
+        if self.prev is None:
+            ws.P.fill(p_int)
+            return False
+        s = p_int / self.prev
+        c = self._extrapolation(p_int)
+        if c:
+            # Extrapolated warm start, linear in the load through the last two
+            # solutions (loads moving on in the same direction, by at most twice
+            # the last increment); otherwise the scaled last solution below.
+            ws.P -= self._older[1]
+            ws.P *= c
+            ws.P += self._last
+            np.maximum(ws.P, 0.0, out=ws.P)
+            enforce_mean(ws.P, target, None)
+            return False
+        if cap is None:
+            # Warm start: p and u = K p scale together, so w = K p - h follows
+            # without a transform.
+            ws.w *= s
+            ws.w += (s - 1.0) * ws.h
+            ws.P *= s
+            return True
+        ws.P *= s
+        enforce_mean(ws.P, target, cap)
+        return False
+
+    def _flat(self, p0: float, keep_gap: bool):
+        # exact solution: u = K p0 = 0, so g = 0 with d = h
+        n2 = self.n * self.n
+        p = np.full((self.n, self.n), p0)
+        mean_ok = abs(float(p.sum()) - p0 * n2) <= MEAN_RTOL * p0 * n2
+        gap = np.zeros((self.n, self.n)) if keep_gap else None
+        cols = {}
+        for effect in self.effects:
+            cols.update(effect.finish(p, None, p0))
+        return StepRecord(p, p > 0, 1.0, 0.0, 0.0, 0, 0.0, mean_ok, cols), gap
+
+    def _iterate(self, p_int: float, fresh: bool) -> int:
+        if self.cap is None:
+            return pk_solve(self.ws, p_int, self.tol, self.max_iter, fresh)[0]
+        return box_solve(self.ws, p_int, self.tol, self.max_iter, self.cap, fresh)[0]
+
+    def solve(self, p0: float, initial=None, keep_gap: bool = False):
+        """Solve the step for the physical mean pressure ``p0``; returns ``(StepRecord, gap)``."""
+        if self.units.flat:
+            return self._flat(p0, keep_gap)
+        ws, units = self.ws, self.units
+        n2 = self.n * self.n
+        fresh = self.start(p0, initial)
+        p_int = units.to_internal(p0)
+        its = self._iterate(p_int, fresh)
+        ok, residual, gbar, w_sum = final_check(ws, p_int, self.tol, self.cap)
+        if self.cap is None and self.method != "pk":
+            self._older = None if self.prev is None else (self.prev, self._last)
+            self._last = ws.P.copy()
+        self.prev = p_int
+        p = units.pressure(ws.P, out=self._pbuf)
+        cols = {}
+        for effect in self.effects:
+            cols.update(effect.finish(p, ws.P, p0))
+        mask = p > 0
+        area = np.count_nonzero(mask) / n2
+        if area <= 0:
+            raise RuntimeError(f"no contact node at p0={p0!r}: the solver lost the load (bug)")
+        mean_gap = math.ldexp(w_sum / n2 - gbar, units.e_len)
+        gap = units.length_field(ws.w - gbar) if keep_gap else None
+        if not (math.isfinite(mean_gap) and (gap is None or np.all(np.isfinite(gap)))):
+            raise ValueError(
+                f"pressures: the gap at p0={p0!r} overflows float64 in the units of heights; reduce "
+                "p0 * length / e_star or the heights")
+        step = StepRecord(p, mask, area, mean_gap, contact_perimeter(mask, self.length), its,
+                          float(residual), bool(ok), cols)
+        return step, gap
+
+
+def _method() -> str:
+    """The elastic iteration: the switch ``roughcontact.solver.ELASTIC_METHOD`` (set there)."""
+    return sys.modules[__package__].ELASTIC_METHOD
+
+
+def solve_step(heights, p0: float, *, e_star: float = 1.0, length: float = 1.0,
+               tol: float = 1e-8, max_iter: int = DEFAULT_MAX_ITER, threads: int = 1,
+               hardness: float | None = None, initial_pressure=None) -> StepResult:
+    """Solve the contact for one mean pressure.
+
+    Parameters
+    ----------
+    heights : array_like, shape (n, n)
+        Rigid surface heights [length]; the highest points touch first.
+    p0 : float
+        Applied mean pressure [pressure]: ``0 < p0``, ``p0 < hardness`` if a
+        hardness is given, and ``p0 * length / (e_star * s)`` in
+        :data:`LOAD_RANGE` (``s`` the rms height).
+    e_star, length, tol, max_iter, threads, hardness
+        As in :func:`solve_contact`.
+    initial_pressure : array_like, shape (n, n), optional
+        Starting pressure (clipped to ``[0, hardness]`` and brought to mean
+        ``p0``); uniform ``p0`` when omitted.
+
+    Returns
+    -------
+    StepResult
+        Fields are fresh arrays owned by the caller.
+
+    Raises
+    ------
+    ValueError
+        For invalid input, naming the argument and its allowed range.
+    """
+    h = validate_heights(heights)
+    p0_f = real_scalar("p0", p0, "a finite number > 0")
+    if not (math.isfinite(p0_f) and p0_f > 0):
+        raise ValueError(f"p0 must be a finite number > 0, got {p0!r}")
+    e_star, length, tol, max_iter, hardness, threads = validate_solver_args(
+        e_star, length, tol, max_iter, hardness, threads)
+    init = None
+    if initial_pressure is not None:
+        init = validate_heights(initial_pressure, name="initial_pressure")
+        if init.shape != h.shape:
+            raise ValueError(f"initial_pressure must have shape {h.shape}, got {init.shape}")
+    solver = ContactSolver(h, e_star, length, tol, max_iter, _effects(hardness), threads, _method())
+    solver.check_loads(np.array([p0_f]), "p0")
+    t0 = time.perf_counter()
+    st, gap = solver.solve(p0_f, initial=init, keep_gap=True)
+    wall = time.perf_counter() - t0
+    return StepResult(p0_f, st.pressure.copy(), gap, st.area, st.mean_gap, st.perimeter,
+                      st.iterations, st.residual, st.converged, wall,
+                      st.effect_columns.get("plastic_area_fraction"),
+                      st.effect_columns.get("plastic_load_fraction"))
+
+
+def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.0,
+                  tol: float = 1e-8, max_iter: int = DEFAULT_MAX_ITER, store_fields=False,
+                  threads: int = 1, hardness: float | None = None,
+                  clusters: bool = False) -> xr.Dataset:
+    """Solve the normal contact of a rigid rough surface on a periodic half-space.
+
+    Parameters
+    ----------
+    heights : array_like, shape (n, n)
+        Rigid surface heights [length] on the square periodic cell, axis 0 = x,
+        axis 1 = y; the highest points touch first. Any ``n >= 4``, odd or not.
+    pressures : sequence of float, shape (n_steps,)
+        Applied mean pressures ``p0 > 0``, one load step each [pressure, same unit
+        as ``e_star``], each with ``p0 * length / (e_star * s)`` in
+        :data:`LOAD_RANGE` (``s`` the rms height of ``heights``) and, with a
+        hardness, ``p0 < hardness``. Any order is accepted; each step
+        warm-starts from the previous one, which pays off most for increasing
+        loads.
+    e_star : float
+        Plane-strain modulus ``E* = E / (1 - nu**2)`` of the half-space, > 0.
+    length : float
+        Side ``L`` of the periodic cell [length], > 0.
+    tol : float
+        Convergence tolerance in (0, 1) on the scale-free residual of the module
+        docstring.
+    max_iter : int
+        Iteration cap per step, >= 1.
+    store_fields : bool or iterable of int
+        ``True`` stores ``contact_pressure`` and ``gap`` for every step (dims
+        ``step, x, y``); an iterable of 1-based step numbers stores only those
+        (dims ``field_step, x, y``, coordinate ``field_step`` = step numbers).
+    threads : int
+        FFTW threads (default 1).
+    hardness : float, optional
+        Cap on the pressure (perfectly plastic interface) [pressure], > every p0,
+        with ``hardness * length / (e_star * s)`` in :data:`LOAD_RANGE`.
+    clusters : bool
+        Add contact-cluster statistics per step (periodic 4-connected labelling, see
+        :mod:`roughcontact.clusters`): ``cluster_count``, ``cluster_mean_area``,
+        ``cluster_max_area`` and ``cluster_area_histogram``. Off: no labelling work.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimension ``step`` (coordinate 1..n_steps) with ``pressure``,
+        ``area_fraction``, ``mean_contact_pressure``, ``mean_gap``,
+        ``contact_perimeter``, ``iterations``, ``residual``, ``converged``,
+        ``wall_time`` and, with a hardness, ``plastic_area_fraction`` and
+        ``plastic_load_fraction``; fields and ``x``/``y`` coordinates only when
+        stored. Every variable carries ``units`` and ``long_name``.
+        ``converged`` is True only when the final check of the module docstring
+        passed on a freshly recomputed displacement.
+
+    Raises
+    ------
+    ValueError
+        For invalid input, naming the argument and its allowed range.
+    """
+    h = validate_heights(heights)
+    p = validate_pressures(pressures)
+    e_star, length, tol, max_iter, hardness, threads = validate_solver_args(
+        e_star, length, tol, max_iter, hardness, threads)
+    store = validate_store(store_fields, p.size)
+    clusters = validate_flag("clusters", clusters)
+    solver = ContactSolver(h, e_star, length, tol, max_iter, _effects(hardness), threads, _method())
+    solver.check_loads(p, "pressures")
+    cols, iters, conv, fields, masks = _run_steps(solver, p, store, clusters)
+    attrs = {"e_star": e_star, "length": length, "tol": tol, "max_iter": max_iter, "threads": threads,
+             "fft_backend": solver.backend, "n": h.shape[0], "solver": SOLVER_NAME,
+             "solver_description": SOLVER_DESCRIPTION, "pressure_units": PRESSURE_UNITS}
+    ds = to_dataset(p, cols, iters, conv, fields, store_fields, h.shape[0], attrs, solver.effects)
+    ds.attrs["elastic_method"] = solver.method
+    if masks is not None:
+        from ..clusters import cluster_dataset
+
+        stats = cluster_dataset(masks, ds["step"].values, length)
+        ds = ds.merge(stats.drop_vars("step"), combine_attrs="override")
+    return ds
+
+
+def _run_steps(solver: ContactSolver, p: np.ndarray, store: set, clusters: bool):
+    """Solve every load step; per-step columns, iterations, flags, stored fields, masks."""
+    n_steps = p.size
+    names = ["area_fraction", "mean_contact_pressure", "mean_gap", "contact_perimeter", "residual",
+             "wall_time"] + [v for e in solver.effects for v in e.variables()]
+    cols = {k: np.empty(n_steps) for k in names}
+    iters = np.empty(n_steps, dtype=np.int64)
+    conv = np.empty(n_steps, dtype=bool)
+    fields_p, fields_g, field_steps = [], [], []
+    masks = [] if clusters else None
+    for k, p0 in enumerate(p):
+        p0 = float(p0)
+        t0 = time.perf_counter()
+        st, gap = solver.solve(p0, keep_gap=k + 1 in store)
+        cols["wall_time"][k] = time.perf_counter() - t0
+        cols["area_fraction"][k] = st.area
+        cols["mean_contact_pressure"][k] = p0 / st.area
+        cols["mean_gap"][k] = st.mean_gap
+        cols["contact_perimeter"][k] = st.perimeter
+        cols["residual"][k] = st.residual
+        for name, value in st.effect_columns.items():
+            cols[name][k] = value
+        iters[k] = st.iterations
+        conv[k] = st.converged
+        if k + 1 in store:
+            fields_p.append(st.pressure.copy())
+            fields_g.append(gap)
+            field_steps.append(k + 1)
+        if masks is not None:
+            masks.append(st.mask.copy())
+    return cols, iters, conv, (fields_p, fields_g, field_steps), masks

@@ -1,0 +1,174 @@
+"""Assembly of results: per-step records and the labelled ``xarray.Dataset``.
+
+The solver's iterations work in internal units on flat arrays; this module is
+the only place that knows the output's variable names, units and long names.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+
+#: ``units`` attribute of pressures: they carry whatever unit ``e_star`` has.
+PRESSURE_UNITS = "same as e_star"
+#: ``units`` attribute of lengths: the unit of ``heights`` and ``length``.
+LENGTH_UNITS = "same as heights"
+#: ``units`` attribute of lengths per unit area.
+INVERSE_LENGTH_UNITS = "1/(same as heights)"
+#: ``units`` attribute of dimensionless fractions.
+FRACTION_UNITS = "1"
+
+SOLVER_NAME = "roughcontact.solver.pk_pressure"
+SOLVER_DESCRIPTION = (
+    "Pressure-controlled constrained conjugate gradient (Polonsky & Keer 1999) on a "
+    "periodic FFT-BEM elastic half-space, u(q) = 2 p(q) / (E* |q|), Fourier-preconditioned "
+    "(|q| E*/2 on the contact set) with an extrapolated warm start and float32 transforms inside "
+    "the loop by default (attribute elastic_method; 'pk' is the plain iteration); with a hardness, "
+    "monotone gradient-projection/CG on {0 <= p <= H, mean p = p0}; converged when "
+    "max(sum_F(p|g|)/(sum(p) s), max(0,-min g below cap)/s, max(0,max g at cap)/s) <= tol "
+    "with s the rms height, mean(p) = p0 to 1e-10 and 0 <= p (<= H), checked on a freshly "
+    "recomputed displacement"
+)
+
+@dataclass
+class StepResult:
+    """Outcome of one load step of :func:`solve_step`.
+
+    Attributes
+    ----------
+    p0 : float
+        Applied mean pressure [pressure].
+    pressure : numpy.ndarray, shape (n, n)
+        Nodal contact pressure ``0 <= p (<= hardness)`` [pressure].
+    gap : numpy.ndarray, shape (n, n)
+        Gap ``g = u - h + d`` [length]; zero (to ``tol``) on the elastic contact set.
+    area_fraction : float
+        Fraction of nodes with ``p > 0`` [-].
+    mean_gap : float
+        Mean of ``gap`` over the cell [length].
+    contact_perimeter : float
+        Contact-set boundary length per unit nominal area [1/length].
+    iterations : int
+        Iterations (CG or gradient-projection steps).
+    residual : float
+        Residual of the final check (module docstring) [-].
+    converged : bool
+        The final check on a freshly recomputed displacement passed.
+    wall_time : float
+        Wall-clock seconds spent in the step.
+    plastic_area_fraction, plastic_load_fraction : float or None
+        Fraction of nodes at the hardness cap and share of the load they carry;
+        ``None`` when no hardness is given.
+    """
+
+    p0: float
+    pressure: np.ndarray
+    gap: np.ndarray
+    area_fraction: float
+    mean_gap: float
+    contact_perimeter: float
+    iterations: int
+    residual: float
+    converged: bool
+    wall_time: float
+    plastic_area_fraction: float | None = None
+    plastic_load_fraction: float | None = None
+
+
+
+
+@dataclass
+class StepRecord:
+    """Physical outputs of one solved load step (internal to the solver)."""
+
+    pressure: np.ndarray
+    mask: np.ndarray
+    area: float
+    mean_gap: float
+    perimeter: float
+    iterations: int
+    residual: float
+    converged: bool
+    effect_columns: dict
+
+
+def contact_perimeter(mask: np.ndarray, length: float = 1.0) -> float:
+    """Length of the contact-set boundary per unit nominal area [1/length].
+
+    Counts pixel edges between a contact and a non-contact node, with periodic
+    wrap in both directions, times ``dx = L / n``, divided by ``L**2``.
+
+    Parameters
+    ----------
+    mask : numpy.ndarray of bool, shape (n, n)
+        Contact set.
+    length : float
+        Side L of the cell [length].
+    """
+    m = np.asarray(mask, dtype=bool)
+    n = m.shape[0]
+    edges = np.count_nonzero(m != np.roll(m, 1, axis=0)) + np.count_nonzero(m != np.roll(m, 1, axis=1))
+    return float(edges) * (length / n) / length**2
+
+
+
+
+def to_dataset(p, cols, iters, conv, fields, store_fields, n, attrs: dict, effects=()) -> xr.Dataset:
+    """The solver's output dataset (see :func:`roughcontact.solver.solve_contact`).
+
+    ``p`` the loads, shape (n_steps,); ``cols`` per-step float columns by name
+    (including each effect's); ``iters``, ``conv`` per-step iterations and
+    flags; ``fields`` a ``(pressures, gaps, step numbers)`` triple of the
+    stored fields; ``attrs`` the solver's global attributes; ``effects`` add
+    their variables and attributes.
+    """
+    fields_p, fields_g, field_steps = fields
+    length = attrs["length"]
+    steps = np.arange(1, p.size + 1)
+    meta = {
+        "pressure": (p, PRESSURE_UNITS, "applied mean pressure p0 = F / A0"),
+        "area_fraction": (cols["area_fraction"], FRACTION_UNITS,
+                          "real contact area fraction A / A0 (fraction of nodes with p > 0)"),
+        "mean_contact_pressure": (cols["mean_contact_pressure"], PRESSURE_UNITS,
+                                  "mean contact pressure F / A = p0 / (A / A0)"),
+        "mean_gap": (cols["mean_gap"], LENGTH_UNITS,
+                     "mean gap between the rigid surface and the deformed half-space"),
+        "contact_perimeter": (cols["contact_perimeter"], INVERSE_LENGTH_UNITS,
+                              "contact-set boundary length (pixel edges x dx) per unit nominal area"),
+        "iterations": (iters, FRACTION_UNITS, "solver iterations (CG or gradient-projection steps)"),
+        "residual": (cols["residual"], FRACTION_UNITS,
+                     "final scale-free residual max(sum_F(p|g|)/(sum(p) s), max(0,-min g below cap)/s, "
+                     "max(0,max g at cap)/s) on a freshly recomputed displacement"),
+        "converged": (conv, FRACTION_UNITS,
+                      "residual <= tol, mean(p) = p0 to 1e-10 and 0 <= p (<= hardness) on a freshly "
+                      "recomputed displacement"),
+        "wall_time": (cols["wall_time"], "s", "wall-clock time of the load step"),
+    }
+    for effect in effects:
+        for name, (units, long_name) in effect.variables().items():
+            meta[name] = (cols[name], units, long_name)
+    data_vars = {name: xr.Variable(("step",), val, {"units": u, "long_name": ln})
+                 for name, (val, u, ln) in meta.items()}
+    coords = {"step": xr.Variable(("step",), steps, {"units": FRACTION_UNITS,
+                                                      "long_name": "load step number (1-based)"})}
+    if field_steps:
+        dim = "step" if (isinstance(store_fields, (bool, np.bool_)) and store_fields) else "field_step"
+        dims = (dim, "x", "y")
+        xs = np.arange(n) * (length / n)
+        coords["x"] = xr.Variable(("x",), xs, {"units": LENGTH_UNITS, "long_name": "node position along axis 0"})
+        coords["y"] = xr.Variable(("y",), xs.copy(), {"units": LENGTH_UNITS, "long_name": "node position along axis 1"})
+        if dim == "field_step":
+            coords["field_step"] = xr.Variable(("field_step",), np.array(field_steps),
+                                               {"units": FRACTION_UNITS,
+                                                "long_name": "load step number of the stored fields"})
+        data_vars["contact_pressure"] = xr.Variable(
+            dims, np.stack(fields_p), {"units": PRESSURE_UNITS, "long_name": "nodal contact pressure"})
+        data_vars["gap"] = xr.Variable(
+            dims, np.stack(fields_g), {"units": LENGTH_UNITS,
+                                       "long_name": "gap between the rigid surface and the half-space"})
+    attrs = dict(attrs)
+    for effect in effects:
+        attrs.update(effect.attrs())
+    return xr.Dataset(data_vars, coords=coords, attrs=attrs)

@@ -1,0 +1,119 @@
+"""Checks of the solver's arguments: each error names the argument and its allowed range."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+
+import numpy as np
+
+
+def real_scalar(name: str, value, expected: str) -> float:
+    """``float(value)`` for a real number; strings, bools and the like are refused."""
+    if isinstance(value, (str, bytes, bool, np.bool_)) or (
+            isinstance(value, np.ndarray) and (value.ndim != 0 or value.dtype.kind not in "iuf")):
+        raise ValueError(f"{name} must be {expected}, got {type(value).__name__} {value!r}")
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be {expected}, got {type(value).__name__} {value!r}") from None
+
+
+def check_positive(name: str, value) -> float:
+    v = real_scalar(name, value, "a finite real number > 0")
+    if not math.isfinite(v) or v <= 0:
+        raise ValueError(f"{name} must be a finite real number > 0, got {value!r}")
+    return v
+
+
+def validate_heights(heights, name: str = "heights") -> np.ndarray:
+    if isinstance(heights, (str, bytes)):
+        raise ValueError(f"{name} must be a real numeric array, got the string {heights!r}")
+    try:
+        a = np.asarray(heights)
+    except Exception as exc:  # ragged lists and the like
+        raise ValueError(f"{name} must be a real 2-D square array of finite numbers: {exc}") from None
+    if a.dtype == object or a.dtype.kind not in "iuf":
+        if a.dtype.kind == "c":
+            raise ValueError(f"{name} must be real, got complex dtype {a.dtype}")
+        raise ValueError(f"{name} must be a real numeric array, got dtype {a.dtype}")
+    if a.ndim != 2 or a.shape[0] != a.shape[1]:
+        raise ValueError(f"{name} must be a 2-D square array (n, n), got shape {a.shape}")
+    if a.shape[0] < 4:
+        raise ValueError(f"{name} must be at least 4 x 4, got shape {a.shape}")
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} must contain only finite values (found NaN or inf)")
+    return a
+
+
+def validate_pressures(pressures) -> np.ndarray:
+    if isinstance(pressures, (str, bytes)):
+        raise ValueError(
+            f"pressures must be a 1-D sequence of finite numbers > 0, got the string {pressures!r}")
+    try:
+        raw = np.asarray(pressures)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"pressures must be a 1-D sequence of finite numbers > 0, got {pressures!r}"
+        ) from None
+    if raw.dtype == object or raw.dtype.kind not in "iuf":
+        # strings, bools, complex numbers, ragged or mixed sequences
+        raise ValueError(
+            f"pressures must be a 1-D sequence of finite real numbers > 0, got {pressures!r} "
+            f"(dtype {raw.dtype})"
+        )
+    p = raw.astype(np.float64)
+    if p.ndim == 0:
+        raise ValueError(
+            f"pressures must be a non-empty 1-D sequence of mean pressures p0 > 0, got the scalar {pressures!r}"
+        )
+    if p.ndim != 1 or p.size == 0:
+        raise ValueError(
+            f"pressures must be a non-empty 1-D sequence of mean pressures p0 > 0, got shape {p.shape}"
+        )
+    if not np.all(np.isfinite(p)) or np.any(p <= 0):
+        raise ValueError(f"pressures must all be finite and > 0, got {p.tolist()}")
+    return p
+
+
+def validate_threads(threads) -> int:
+    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or threads < 1:
+        raise ValueError(f"threads must be an integer >= 1, got {threads!r}")
+    return int(threads)
+
+
+def validate_solver_args(e_star, length, tol, max_iter, hardness, threads):
+    e_star = check_positive("e_star", e_star)
+    length = check_positive("length", length)
+    tol_f = real_scalar("tol", tol, "a number in the open interval (0, 1)")
+    if not (0.0 < tol_f < 1.0):
+        raise ValueError(f"tol must be a number in the open interval (0, 1), got {tol!r}")
+    if isinstance(max_iter, (bool, np.bool_)) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
+        raise ValueError(f"max_iter must be an integer >= 1, got {max_iter!r}")
+    if hardness is not None:
+        hardness = check_positive("hardness", hardness)
+    return e_star, length, tol_f, int(max_iter), hardness, validate_threads(threads)
+
+
+def validate_store(store_fields, n_steps: int) -> set[int]:
+    if isinstance(store_fields, (bool, np.bool_)):
+        return set(range(1, n_steps + 1)) if store_fields else set()
+    if isinstance(store_fields, Iterable) and not isinstance(store_fields, (str, bytes)):
+        steps = set()
+        for s in store_fields:
+            if isinstance(s, (bool, np.bool_)) or not isinstance(s, (int, np.integer)) or not 1 <= s <= n_steps:
+                raise ValueError(
+                    f"store_fields must be a bool or an iterable of step numbers in 1..{n_steps}, got {s!r}"
+                )
+            steps.add(int(s))
+        return steps
+    raise ValueError(
+        f"store_fields must be a bool or an iterable of step numbers in 1..{n_steps}, got {store_fields!r}"
+    )
+
+
+def validate_flag(name: str, value) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"{name} must be True or False, got {type(value).__name__} {value!r}")
+    return bool(value)
