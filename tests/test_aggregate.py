@@ -11,11 +11,13 @@ from roughcontact.aggregate import (
     combine_cases,
     fd_weights,
     load_derivative,
+    log_window_edges,
     representativity_statistics,
     seed_statistics,
+    windowed_load_slope,
 )
 from roughcontact.fit import simulate_cel_cases
-from roughcontact.theory import cel_dpbar_dp0
+from roughcontact.theory import cel_area, cel_dpbar_dp0, cel_pressure
 
 
 def _cases(**kw):
@@ -245,3 +247,61 @@ def test_representativity_statistics():
         representativity_statistics(ds.drop_vars("epsilon"))
     with pytest.raises(ValueError, match="epsilon"):
         combine_cases([d.drop_vars("epsilon") for d in dss], names, kind="representativity")
+
+
+# ------------------------------------------------------- windowed d pbar / d p0
+def test_log_window_edges_sit_on_a_fixed_grid_and_merge_sparse_windows():
+    a = np.array([0.011, 0.012, 0.02, 0.03, 0.031, 0.05, 0.07, 0.071, 0.09])
+    e = log_window_edges(a, per_decade=6, min_points=1)
+    np.testing.assert_allclose(np.log10(e) * 6, np.round(np.log10(e) * 6), atol=1e-9)  # on 10^(k/6)
+    assert e[0] <= a.min() and e[-1] > a.max()
+    merged = log_window_edges(a, per_decade=6, min_points=2)
+    counts = np.histogram(a, bins=merged)[0]
+    assert counts.min() >= 2 and counts.sum() == a.size
+    assert set(np.round(np.log10(merged) * 6, 9)) <= set(np.round(np.log10(e) * 6, 9))
+    with pytest.raises(ValueError, match="per_decade"):
+        log_window_edges(a, per_decade=0)
+    with pytest.raises(ValueError, match="min_points"):
+        log_window_edges(a[:1], min_points=2)
+
+
+def test_windowed_slope_is_exact_on_linear_and_quadratic_loads():
+    """Linear pbar(p0): exact slope; quadratic on equal load steps: exact pbar' at the window's mean p0."""
+    p0 = 0.005 * np.arange(1, 31) / 30
+    area = 25.0 * p0  # A/A0 from 0.004 to 0.125, only assigns the windows
+    edges = log_window_edges(area, 6)
+    a_w, slope = windowed_load_slope(0.3 + 2.5 * p0, p0, area, edges)
+    assert np.isfinite(slope).sum() >= 5
+    np.testing.assert_allclose(slope[np.isfinite(slope)], 2.5, rtol=1e-10)
+    a_w, slope = windowed_load_slope(0.3 + 2.5 * p0 - 40.0 * p0**2, p0, area, edges)
+    ok = np.isfinite(slope)
+    p_mean = a_w[ok] / 25.0  # area is linear in p0: mean area <-> mean p0
+    np.testing.assert_allclose(slope[ok], 2.5 - 80.0 * p_mean, rtol=1e-10)
+    # Leading axes are independent load curves; a NaN step drops out of its window only.
+    pb = np.stack([0.3 + 2.5 * p0, 0.3 + 1.5 * p0])
+    pb[1, -1] = np.nan
+    _, s2 = windowed_load_slope(pb, p0, np.stack([area, area]), edges)
+    assert s2.shape == (2, edges.size - 1)
+    np.testing.assert_allclose(s2[0][np.isfinite(s2[0])], 2.5, rtol=1e-10)
+    np.testing.assert_allclose(s2[1][np.isfinite(s2[1])], 1.5, rtol=1e-10)
+
+
+def test_windowed_slope_recovers_the_cel_power_law():
+    """On the noiseless CEL, pbar = p0 / (A/A0) has d pbar/d p0 = beta (A0/A)^mu exactly."""
+    cel = {"kappa": 1.145 * np.sqrt(2 * np.pi), "mu": 0.55, "beta": 0.21, "rms_slope": 0.1, "e_star": 1.0}
+    p0 = cel_pressure(0.15, **cel) * np.arange(1, 31) / 30
+    a = cel_area(p0, **cel)
+    a_w, slope = windowed_load_slope(p0 / a, p0, a, log_window_edges(a, 6))
+    ok = np.isfinite(slope)
+    assert ok.sum() >= 5 and a_w[ok].min() < 0.01
+    np.testing.assert_allclose(slope[ok], cel_dpbar_dp0(a_w[ok], mu=0.55, beta=0.21), rtol=0.02)
+
+
+def test_windowed_slope_needs_points_and_increasing_edges():
+    p0 = np.arange(1.0, 6.0)
+    a_w, slope = windowed_load_slope(p0, p0, 0.01 * p0, np.array([0.01, 0.015, 0.1]), min_points=2)
+    assert np.isnan(slope[0]) and np.isnan(a_w[0]) and slope[1] == pytest.approx(1.0)  # 1 step, then 4
+    with pytest.raises(ValueError, match="edges"):
+        windowed_load_slope(p0, p0, p0, np.array([1.0, 0.5]))
+    with pytest.raises(ValueError, match="min_points"):
+        windowed_load_slope(p0, p0, p0, np.array([0.5, 1.0]), min_points=1)

@@ -49,10 +49,13 @@ def rep_stats():
             for s in range(3):
                 eps = 0.3 / kl * (32 / ks) ** 0.3 * (1 + 0.1 * rng.standard_normal())
                 dss.append(xr.Dataset(
-                    {"epsilon": (CASE_DIMS, np.full((1, 1, 1, 1), eps), {"units": "1/L", "long_name": "L2 error"})},
+                    {"epsilon": (CASE_DIMS, np.full((1, 1, 1, 1), eps), {"units": "1/L", "long_name": "L2 error"}),
+                     "std_height": (CASE_DIMS, np.full((1, 1, 1, 1), 0.1), {"units": "L"})},
                     coords={"k_l": [kl], "k_s": [ks], "H": [0.8], "seed": np.array([s], dtype=np.int64)}))
                 names.append(f"kl{kl:g}_ks{ks:g}_s{s}.nc")
-    return representativity_statistics(combine_cases(dss, names, kind="representativity"))
+    # As the workflow's aggregate/representativity.nc: per-case values and their seed statistics.
+    cases = combine_cases(dss, names, kind="representativity")
+    return cases.merge(representativity_statistics(cases))
 
 
 @pytest.fixture(scope="module")
@@ -226,3 +229,152 @@ def test_contact_figures_state_grid_seeds_and_loads(contact):
     for draw in (fig_area_load, fig_kappa, fig_dpbar):
         title = draw(agg, stats, fit)._suptitle.get_text()
         assert "$N = 256$" in title and "3 seeds" in title and "$p_0/E^*$ = " in title, (draw.__name__, title)
+
+
+# ------------------------------------------------------------ issue 12: readability
+def _errorbar_ends(ax):
+    """(y, lower end, upper end) of every errorbar container of ``ax`` with vertical bars."""
+    out = []
+    for cont in ax.containers:
+        line, _caps, (bars, *_) = cont.lines[0], cont.lines[1], cont.lines[2]
+        segs = bars.get_segments()
+        y = np.asarray(line.get_ydata(), dtype=float)
+        if len(segs) == len(y):
+            out.append((y, np.array([s[:, 1].min() for s in segs]), np.array([s[:, 1].max() for s in segs])))
+    return out
+
+
+def test_dpbar_bars_are_symmetric_in_log_space_and_the_axis_stays_near_the_data(contact):
+    """Bars y e^(+-s/y): always above zero and symmetric on the log axis (not y - s clipped near 0)."""
+    agg, stats, fit = contact
+    agg = agg.copy()
+    rng = np.random.default_rng(0)  # noisy loads: s.e.m. comparable to the value in some windows
+    agg["mean_contact_pressure"] = agg["mean_contact_pressure"] * (1 + 0.002 * rng.standard_normal(
+        agg["mean_contact_pressure"].shape))
+    fig = fig_dpbar(agg, stats, fit)
+    ax = fig.axes[0]
+    ends = _errorbar_ends(ax)
+    assert ends, "windowed estimates with error bars expected"
+    for y, lo, hi in ends:
+        assert np.all(lo > 0)
+        np.testing.assert_allclose(np.log(y) - np.log(lo), np.log(hi) - np.log(y), rtol=1e-9, atol=1e-12)
+    y_all = np.concatenate([y for y, _, _ in ends])
+    assert ax.get_ylim()[0] > y_all.min() / 10, ax.get_ylim()
+    assert "log space" in fig.legends[0].get_title().get_text()
+
+
+def test_dpbar_draws_windowed_slopes_over_faint_finite_differences(contact):
+    agg, stats, fit = contact
+    fig = fig_dpbar(agg, stats, fit)
+    ax = fig.axes[0]
+    faint = [ln for ln in ax.get_lines() if ln.get_linestyle() == "None" and (ln.get_alpha() or 1) < 0.5]
+    bold = [c.lines[0] for c in ax.containers]
+    assert faint and bold
+    assert max(ln.get_markersize() for ln in faint) < min(ln.get_markersize() for ln in bold)
+    # The raw points are the stored finite differences; the windowed ones are fewer (one per window).
+    s = stats.sel(k_l=4.0, k_s=32.0, H=0.36)
+    raw = s["dpbar_dp0_mean"].values
+    assert any(ln.get_ydata().size == raw.size and np.allclose(ln.get_ydata(), raw) for ln in faint)
+    assert all(ln.get_ydata().size < raw.size / 2 for ln in bold)
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert any(lab.startswith("least-squares slope") for lab in labels)
+    assert any(lab.startswith("pointwise finite differences (faint)") for lab in labels), labels
+
+
+def test_dpbar_paper_and_fit_lines_are_told_apart(contact):
+    """The paper's power law and the fit differ in colour, dash and width; the legend gives both constants."""
+    from roughcontact.plots import PAPER_CONSTANTS, _fit_constants
+    from roughcontact.theory import cel_dpbar_dp0
+
+    agg, stats, fit = contact
+    fig = fig_dpbar(agg, stats, fit, k_s=[32.0])
+    ax = fig.axes[0]
+    consts = _fit_constants(fit, 16.0, 32.0, "paper")
+    paper = fitted = None
+    for ln in ax.get_lines():
+        x, y = np.asarray(ln.get_xdata()), np.asarray(ln.get_ydata())
+        if x.size != 100:
+            continue
+        if np.allclose(y, cel_dpbar_dp0(x, mu=PAPER_CONSTANTS["mu"], beta=PAPER_CONSTANTS["beta"])):
+            paper = ln
+        elif np.allclose(y, cel_dpbar_dp0(x, mu=consts[1], beta=consts[2])):
+            fitted = ln
+    assert paper is not None and fitted is not None
+
+    def look(ln):
+        return mcolors.to_hex(ln.get_color()), str(ln.get_linestyle()), ln.get_linewidth()
+
+    assert all(a != b for a, b in zip(look(paper), look(fitted), strict=True)), (look(paper), look(fitted))
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert any(lab.startswith("paper:") and "0.21" in lab and "0.55" in lab for lab in labels), labels
+    assert any(f"{consts[2]:.3f}" in lab and f"{consts[1]:.3f}" in lab for lab in labels), labels
+
+
+def test_area_load_persson_lines_differ_and_bands_show(contact):
+    from roughcontact.plots import PERSSON_COLOUR
+    from roughcontact.theory import KAPPA_PERSSON, linear_area, persson_area
+
+    agg, stats, fit = contact
+    fig = fig_area_load(agg, stats, fit)
+    ax = fig.axes[0]
+    hp = float(stats["rms_slope_mean"].mean())
+    lines = {}
+    for ln in ax.get_lines():
+        x, y = np.asarray(ln.get_xdata()), np.asarray(ln.get_ydata())
+        if x.size != 200:
+            continue
+        if np.allclose(y, persson_area(x, rms_slope=hp, e_star=1.0)):
+            lines["erf"] = ln
+        elif np.allclose(y, linear_area(x, kappa=KAPPA_PERSSON, rms_slope=hp, e_star=1.0)):
+            lines["limit"] = ln
+    assert set(lines) == {"erf", "limit"}
+    erf, limit = lines["erf"], lines["limit"]
+    # One colour for Persson; the limit is dashed on top of a wide erf line, so both show where they meet.
+    assert mcolors.to_hex(erf.get_color()) == mcolors.to_hex(limit.get_color()) == PERSSON_COLOUR.lower()
+    assert erf.get_linewidth() >= 2 * limit.get_linewidth() and limit.get_zorder() > erf.get_zorder()
+    assert str(erf.get_linestyle()) != str(limit.get_linestyle())
+    labels = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert sum(lab.startswith("Persson, small-load limit") for lab in labels) == 1
+    assert sum(lab.startswith("Persson, full") and "erf" in lab for lab in labels) == 1
+    bands = [c for c in ax.collections if c.get_paths() and len(c.get_paths()[0].vertices) > 10]
+    assert bands
+    for band in bands:
+        assert band.get_facecolor()[0][3] >= 0.25 and band.get_linewidth()[0] > 0
+    assert any(lab.startswith(r"$\pm 1$ s.d. over seeds") for lab in labels), labels
+
+
+def _map_axes(fig):
+    return [ax for ax in fig.axes if ax.get_label() == "epsilon map"]
+
+
+def test_representativity_map_is_drawn_only_for_a_two_dimensional_grid(rep_stats):
+    """The paper's Fig. 1a: eps as colour over k_l x k_s, when both have >= 2 values with data."""
+    fig = fig_representativity(rep_stats)
+    (ax,) = _map_axes(fig)
+    (mesh,) = [c for c in ax.collections if hasattr(c, "get_array")]
+    free = rep_stats["epsilon_mean"].sel(H=0.8) * np.sqrt(0.1)  # fixture: sigma = 0.1 in every case
+    np.testing.assert_allclose(np.asarray(mesh.get_array()).reshape(3, 3), free.values, rtol=1e-9)
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["32", "64", "128"]
+    assert [t.get_text() for t in ax.get_yticklabels()] == ["1", "4", "16"]
+    assert not _map_axes(fig_representativity(rep_stats.sel(k_s=[32.0])))
+    assert not _map_axes(fig_representativity(rep_stats.sel(k_l=[4.0])))
+
+
+def test_representativity_shows_the_scale_free_epsilon_beside_the_paper_one(rep_stats):
+    import json
+
+    rep = rep_stats.assign_attrs(scene_parameters=json.dumps({"surface": {"N": 256, "rms_height": 0.1}}),
+                                 n_bins=500)
+    fig = fig_representativity(rep)
+    dim_ax, free_ax = fig.axes[0], fig.axes[1]
+    assert "(h-\\bar h)/\\sigma" in free_ax.get_title() and free_ax.get_ylabel().endswith("[1]")
+    assert "^-1/2" not in dim_ax.get_ylabel() and "$" in dim_ax.get_ylabel()
+    for dim_line, free_line in zip(dim_ax.get_lines(), free_ax.get_lines(), strict=True):
+        np.testing.assert_allclose(free_line.get_ydata(), np.asarray(dim_line.get_ydata()) * np.sqrt(0.1))
+    title = fig._suptitle.get_text()
+    for part in ("$N = 256$", "3 seeds", "500 bins", "$H = 0.8$", r"$\sigma$ = 0.1"):
+        assert part in title, title
+    # Without per-case heights' sigma only the paper's eps can be drawn.
+    stats_only = rep.drop_vars(["epsilon", "std_height"])
+    texts = [t for ax in fig_representativity(stats_only).axes for t in (ax.get_ylabel(), ax.get_title())]
+    assert not any(r"\varepsilon_\sigma" in t for t in texts), texts

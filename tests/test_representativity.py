@@ -5,7 +5,13 @@ from scipy import integrate
 from scipy.stats import norm
 
 from roughcontact import generate_surface
-from roughcontact.representativity import binning_noise_floor, gaussian_l2_error
+from roughcontact.representativity import (
+    binning_noise_floor,
+    gaussian_l2_error,
+    scale_free_epsilon,
+    scale_free_l2_error,
+    scale_free_statistics,
+)
 
 
 def test_matches_direct_quadrature():
@@ -53,3 +59,33 @@ def test_bad_input():
         gaussian_l2_error(np.array([1.0, np.nan, 2.0]))
     with pytest.raises(ValueError, match="n_bins"):
         gaussian_l2_error(np.arange(10.0), 1)
+
+
+def test_scale_free_epsilon_is_invariant_and_the_dimensional_one_scales():
+    """eps(c h) = eps(h)/sqrt(c); eps of (h - hbar)/sigma is the same for every c and equals eps sqrt(sigma)."""
+    h = generate_surface(64, 1, 32, 0.8, 3, rms_height=0.1)
+    eps, free = gaussian_l2_error(h), scale_free_l2_error(h)
+    for c in (1e-3, 0.1, 7.0, 1e4):
+        assert gaussian_l2_error(c * h) == pytest.approx(eps / np.sqrt(c), rel=1e-9)
+        assert scale_free_l2_error(c * h + 5.0) == pytest.approx(free, rel=1e-9)
+    assert free == pytest.approx(scale_free_epsilon(eps, h.std()), rel=1e-9)
+    # At the paper's rms height 0.1 the two differ by sqrt(0.1).
+    assert free == pytest.approx(eps * np.sqrt(0.1), rel=1e-9)
+    with pytest.raises(ValueError, match="sigma"):
+        scale_free_epsilon(eps, 0.0)
+    with pytest.raises(ValueError, match="all equal"):
+        scale_free_l2_error(np.ones(10))
+
+
+def test_scale_free_statistics_from_per_case_values():
+    import xarray as xr
+
+    dims = ("k_l", "k_s", "H", "seed")
+    rng = np.random.default_rng(0)
+    eps, sigma = rng.uniform(0.1, 0.5, (2, 1, 1, 3)), rng.uniform(0.05, 0.2, (2, 1, 1, 3))
+    coords = {"k_l": [1.0, 4.0], "k_s": [32.0], "H": [0.8], "seed": np.arange(3)}
+    rep = xr.Dataset({"epsilon": (dims, eps), "std_height": (dims, sigma)}, coords=coords)
+    st = scale_free_statistics(rep)
+    np.testing.assert_allclose(st["epsilon_mean"].values, (eps * np.sqrt(sigma)).mean(axis=-1))
+    assert st["epsilon_mean"].attrs["units"] == "1" and st["n_seeds"].values.min() == 3
+    assert scale_free_statistics(rep.drop_vars("std_height")) is None

@@ -5,7 +5,9 @@ case dimensions ``k_l, k_s, H`` (float64 coordinates) and ``seed`` (int64), each
 length 1; contact datasets add the load-step dimension ``step`` (integer coordinate
 1..n_steps). :func:`combine_cases` stacks them on the Cartesian grid of the case
 coordinates; :func:`add_derived` adds ``kappa``, ``dpbar_dp0`` and ``n_unconverged``;
-:func:`seed_statistics` and :func:`representativity_statistics` reduce over ``seed``.
+:func:`seed_statistics` and :func:`representativity_statistics` reduce over ``seed``;
+:func:`windowed_load_slope` estimates ``d pbar / d p0`` by least squares over windows of
+``log A/A0`` (:func:`log_window_edges`), a smoother alternative to the finite differences.
 
 Every variable these functions create has ``units`` and ``long_name`` attributes.
 Units: ``pressure`` and ``mean_contact_pressure`` share the unit of the global
@@ -361,6 +363,110 @@ def load_derivative(values: np.ndarray, p0: np.ndarray, *, order: int = 2,
             cache[key] = W
         out[i] = cache[key] @ flat_v[i]
     return out.reshape(v.shape)
+
+
+def log_window_edges(area: np.ndarray, per_decade: int = 6, min_points: int = 2) -> np.ndarray:
+    """Edges of windows of equal width ``1/per_decade`` decade in ``A/A0``, each holding steps.
+
+    The edges sit on the fixed grid ``10^(k / per_decade)`` (integer ``k``) and cover the
+    range of ``area``, so curves of different range get the same windows. Where the load
+    steps are sparse in ``log A/A0`` (small loads on an equally spaced load schedule) a
+    window holding fewer than ``min_points`` values of ``area`` is merged with the next
+    one (the last with the previous one): those windows are wider, a whole number of
+    grid windows.
+
+    Parameters
+    ----------
+    area : numpy.ndarray, shape (n,)
+        Reference area fractions ``A/A0`` [1] (e.g. a seed-mean load curve); non-finite
+        and non-positive values are ignored; at least ``min_points`` must remain.
+    per_decade : int
+        Grid windows per decade (>= 1).
+    min_points : int
+        Fewest values of ``area`` a window must hold (>= 1).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_windows + 1,)
+        Increasing edges [1], the first <= ``min(area)``, the last > ``max(area)``.
+    """
+    for name, v in (("per_decade", per_decade), ("min_points", min_points)):
+        if not isinstance(v, (int, np.integer)) or v < 1:
+            raise ValueError(f"{name} must be an integer >= 1, got {v!r}")
+    a = np.asarray(area, dtype=float).ravel()
+    a = np.sort(a[np.isfinite(a) & (a > 0)])
+    if a.size < min_points:
+        raise ValueError(f"area holds {a.size} finite positive value(s); min_points={min_points}")
+    k = np.floor(np.log10(a) * per_decade + 1e-9)
+    grid = 10.0 ** (np.arange(k[0], k[-1] + 2) / per_decade)
+    counts = np.histogram(a, bins=grid)[0]
+    keep, held = [grid[0]], 0
+    for j, c in enumerate(counts):
+        held += c
+        if held >= min_points:
+            keep.append(grid[j + 1])
+            held = 0
+    if held:
+        keep[-1] = grid[-1]
+    return np.asarray(keep)
+
+
+def windowed_load_slope(pbar: np.ndarray, p0: np.ndarray, area: np.ndarray, edges: np.ndarray, *,
+                        min_points: int = 2) -> tuple[np.ndarray, np.ndarray]:
+    """``d pbar / d p0`` as the least-squares slope of ``pbar`` against ``p0`` per window of ``A/A0``.
+
+    The load steps whose area fraction lies in ``[edges[j], edges[j+1])`` form window
+    ``j``; a straight line ``pbar = a + b p0`` is fitted to them and ``b`` is returned with
+    the steps' mean ``A/A0``. The slope is exact for a linear ``pbar(p0)``, and for a
+    quadratic one on equally spaced loads it is exactly ``pbar'`` at the steps' mean
+    ``p0`` (the odd moments of the loads about their mean vanish); in general its error is
+    ``O(d^2 pbar''')`` for a window of half-width ``d`` in ``p0``. With windows of equal
+    width in ``log A/A0`` (:func:`log_window_edges`) the estimate averages over many steps
+    at large ``A/A0``, where finite differences are noisiest on a log axis, and reduces to
+    the secant of two steps where steps are sparse. Non-finite values are left out.
+
+    Parameters
+    ----------
+    pbar : numpy.ndarray, shape (..., n_steps)
+        Mean contact pressure ``F/A`` [pressure unit].
+    p0 : numpy.ndarray, shape (..., n_steps) or (n_steps,)
+        Applied mean pressure ``F/A0`` [same pressure unit].
+    area : numpy.ndarray, shape (..., n_steps)
+        Area fraction ``A/A0`` [1] that assigns the steps to windows.
+    edges : numpy.ndarray, shape (n_windows + 1,)
+        Increasing window edges in ``A/A0`` [1].
+    min_points : int
+        Fewest steps a window needs (>= 2); fewer give NaN.
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray), each shape (..., n_windows)
+        Mean ``A/A0`` of the window's steps [1] and the slope ``d pbar / d p0`` [1].
+    """
+    if not isinstance(min_points, (int, np.integer)) or min_points < 2:
+        raise ValueError(f"min_points must be an integer >= 2, got {min_points!r}")
+    y = np.asarray(pbar, dtype=float)
+    x = np.broadcast_to(np.asarray(p0, dtype=float), y.shape)
+    a = np.broadcast_to(np.asarray(area, dtype=float), y.shape)
+    e = np.asarray(edges, dtype=float)
+    if e.ndim != 1 or e.size < 2 or not np.all(np.diff(e) > 0):
+        raise ValueError("edges must be a 1-D increasing array of at least two values")
+    ok = np.isfinite(x) & np.isfinite(y) & np.isfinite(a)
+    a_mean = np.full(y.shape[:-1] + (e.size - 1,), np.nan)
+    slope = np.full_like(a_mean, np.nan)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for j in range(e.size - 1):
+            m = ok & (a >= e[j]) & (a < e[j + 1])
+            n = m.sum(axis=-1)
+            xm = np.where(m, x, 0.0).sum(axis=-1) / n
+            ym = np.where(m, y, 0.0).sum(axis=-1) / n
+            dx = np.where(m, x - xm[..., None], 0.0)
+            sxx = (dx * dx).sum(axis=-1)
+            b = (dx * np.where(m, y - ym[..., None], 0.0)).sum(axis=-1) / sxx
+            good = (n >= min_points) & (sxx > 0)
+            slope[..., j] = np.where(good, b, np.nan)
+            a_mean[..., j] = np.where(good, np.where(m, a, 0.0).sum(axis=-1) / n, np.nan)
+    return a_mean, slope
 
 
 def add_derived(ds: xr.Dataset, *, kappa_rtol: float = 1e-6, derivative_order: int = 2,

@@ -8,9 +8,9 @@ Conventions: single-column figures are 3.4 in wide, multi-panel ones 7 in; legen
 outside the axes; colours are the Okabe-Ito palette (distinguishable with the common
 colour-vision deficiencies), one colour per Hurst exponent; the long cutoff
 ``lambda_l = L / k_l`` is told apart by marker and line style. Theory curves are black
-or grey. Symbols: ``p0`` applied mean pressure, ``E*`` contact modulus, ``h'`` rms
-slope, ``A/A0`` contact-area fraction, ``pbar`` mean contact pressure,
-``kappa = E* h' / pbar``.
+or grey, except Persson's, in reddish purple (:data:`PERSSON_COLOUR`). Symbols: ``p0``
+applied mean pressure, ``E*`` contact modulus, ``h'`` rms slope, ``A/A0`` contact-area
+fraction, ``pbar`` mean contact pressure, ``kappa = E* h' / pbar``.
 """
 
 from __future__ import annotations
@@ -18,18 +18,22 @@ from __future__ import annotations
 import json
 import logging
 import os
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
 import matplotlib
+import matplotlib.colors as mcolors
 import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
-from matplotlib.ticker import FormatStrFormatter, NullFormatter, ScalarFormatter
+from matplotlib.ticker import FormatStrFormatter, FuncFormatter, NullFormatter
 
+from .aggregate import log_window_edges, windowed_load_slope
 from .io import atomic_output
+from .representativity import scale_free_statistics
 from .theory import (
     KAPPA_BGT,
     KAPPA_PERSSON,
@@ -311,62 +315,169 @@ def _family_panels(stats, k_l, k_s, hurst, fit_k_l):
     return kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes
 
 
+def _rep_hurst(rep: xr.Dataset, hurst: float | None) -> float:
+    hs = [float(h) for h in rep["H"].values]
+    if hurst is None:
+        if len(hs) != 1:
+            raise ValueError(f"rep_stats holds several H {hs}; pass hurst= one of them")
+        return hs[0]
+    return _pick(rep["H"].values, hurst, "hurst")[0]
+
+
+def _rep_summary(rep: xr.Dataset, h: float) -> str:
+    """What a representativity figure shows: grid N, seeds, histogram bins, H, rms height."""
+    try:
+        recorded = json.loads(rep.attrs.get("scene_parameters", "{}"))
+    except ValueError:
+        recorded = {}
+    recorded = recorded if isinstance(recorded, dict) else {}
+    surface = recorded.get("surface", {}) if isinstance(recorded.get("surface"), dict) else {}
+    parts = [f"$N = {int(surface['N'])}$"] if "N" in surface else []
+    seeds = rep["n_seeds"].values[rep["n_seeds"].values > 0]
+    if seeds.size:
+        lo, hi = int(seeds.min()), int(seeds.max())
+        parts.append(f"{lo} seeds" if lo == hi else f"{lo}-{hi} seeds")
+    bins = rep.attrs.get("n_bins", recorded.get("n_bins"))
+    if bins is not None:
+        parts.append(f"{int(bins)} bins")
+    parts.append(f"$H = {_fmt(h)}$")
+    sigma = float(rep["std_height"].mean()) if "std_height" in rep else surface.get("rms_height")
+    if sigma is not None and np.isfinite(sigma):
+        parts.append(rf"rms height $\sigma$ = {float(sigma):.3g}")
+    return ", ".join(parts)
+
+
+def _plain_log_labels(axis) -> None:
+    """Plain decimals on a log axis (0.3, not 3x10^-1): the decades, and 2, 3, 5 times them
+    where the axis spans less than two decades (decided when drawn, from its limits)."""
+    def minor(v, _pos):
+        lo, hi = sorted(axis.get_view_interval())
+        mantissa = v / 10.0 ** np.floor(np.log10(v) + 1e-9)
+        return f"{v:g}" if hi / lo < 100 and any(np.isclose(mantissa, (2, 3, 5))) else ""
+
+    axis.set_major_formatter(FormatStrFormatter("%g"))
+    axis.set_minor_formatter(FuncFormatter(minor))
+
+
+def _rep_curves(ax, sub: xr.Dataset, ylabel: str, title: str) -> None:
+    """Seed-mean eps against k_s, one curve per k_l, s.e.m. bars; log-log with the k_s as ticks."""
+    for i, kl in enumerate(float(k) for k in sub["k_l"].values):
+        row = sub.sel(k_l=kl)
+        ok = ((row["n_seeds"] > 0) & np.isfinite(row["epsilon_mean"])).values
+        if ok.any():
+            ax.errorbar(row["k_s"].values[ok], row["epsilon_mean"].values[ok], yerr=row["epsilon_sem"].values[ok],
+                        color=DATA_COLOURS[i % len(DATA_COLOURS)], marker=_MARKERS[i % len(_MARKERS)],
+                        ls=_LINESTYLES[i % len(_LINESTYLES)], label=f"$k_l = {_fmt(kl)}$")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ks = [float(k) for k in sub["k_s"].values]
+    labelled = ks[:1]
+    for k in ks[1:]:  # a label only 1.4x beyond the last one: 32 and 40 would collide
+        if k / labelled[-1] >= 1.4:
+            labelled.append(k)
+    ax.set_xticks(ks, [_fmt(k) if k in labelled else "" for k in ks])
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    _plain_log_labels(ax.yaxis)
+    ax.set_xlabel(r"short cutoff $k_s = L/\lambda_s$ [1]")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+
+
+def _rep_grid(sub: xr.Dataset) -> tuple[list[float], list[float]]:
+    """The k_l and k_s that have data (some finite seed mean) in ``sub`` (dims k_l, k_s)."""
+    ok = (sub["n_seeds"] > 0) & np.isfinite(sub["epsilon_mean"])
+    kls = [float(k) for k, a in zip(sub["k_l"].values, ok.any("k_s").values, strict=True) if a]
+    kss = [float(k) for k, a in zip(sub["k_s"].values, ok.any("k_l").values, strict=True) if a]
+    return kls, kss
+
+
+def _rep_map(fig: Figure, ax, sub: xr.Dataset, symbol: str, unit: str) -> None:
+    """The paper's Fig. 1a as a map: seed-mean eps as colour over k_l x k_s (categorical axes).
+
+    ``sub``: statistics over ``(k_l, k_s)``; ``symbol``/``unit``: mathtext of the measure.
+    Log colour scale; each cell carries its value; cells without data stay blank.
+    """
+    kls, kss = _rep_grid(sub)
+    z = sub["epsilon_mean"].sel(k_l=kls, k_s=kss).transpose("k_l", "k_s").values
+    z = np.where(np.isfinite(z) & (z > 0), z, np.nan)
+    norm = mcolors.LogNorm(vmin=float(np.nanmin(z)), vmax=float(np.nanmax(z)))
+    mesh = ax.pcolormesh(np.arange(len(kss) + 1) - 0.5, np.arange(len(kls) + 1) - 0.5, np.ma.masked_invalid(z),
+                         norm=norm, cmap="cividis", edgecolors="white", linewidth=0.5)
+    for (i, j), v in np.ndenumerate(z):
+        if np.isfinite(v):
+            dark = norm(v) < 0.55  # cividis is dark at the low end
+            ax.text(j, i, f"{v:.2g}", ha="center", va="center", fontsize=5.5 if len(kss) <= 4 else 4.5,
+                    color="white" if dark else "black")
+    ax.set_xticks(range(len(kss)), [_fmt(k) for k in kss])
+    ax.set_yticks(range(len(kls)), [_fmt(k) for k in kls])
+    ax.set_xlabel(r"short cutoff $k_s$ [1]")
+    ax.set_ylabel(r"long cutoff $k_l$ [1]")
+    ax.set_title(rf"(c) {symbol} over $(k_l, k_s)$")
+    ax.set_label("epsilon map")
+    cb = fig.colorbar(mesh, ax=ax, shrink=0.9, pad=0.02)
+    cb.set_label(f"{symbol} [{unit}]")
+    _plain_log_labels(cb.ax.yaxis)
+
+
+def _rep_panels(rep: xr.Dataset, h: float) -> list[tuple[xr.Dataset, str, str, str]]:
+    """``(statistics at H=h, symbol, unit, title)`` of the paper's eps and, when the per-case
+    data allow it, of the scale-free eps (:func:`roughcontact.representativity.scale_free_statistics`)."""
+    units = _unit_tex(str(rep["epsilon_mean"].attrs.get("units", "1")))
+    panels = [(rep.sel(H=h), r"$\bar\varepsilon$", units, r"(a) heights $h$ (paper's $\varepsilon$)")]
+    free = scale_free_statistics(rep)
+    if free is not None:
+        panels.append((free.sel(H=h), r"$\bar\varepsilon_\sigma$", "1",
+                       r"(b) normalised $(h-\bar h)/\sigma$: scale-free"))
+    first = panels[0][0]
+    if not np.isfinite(first["epsilon_mean"].where(first["n_seeds"] > 0)).any():
+        raise ValueError(f"rep_stats has no finite epsilon_mean at H={h}")
+    return panels
+
+
 def fig_representativity(rep_stats: xr.Dataset, *, hurst: float | None = None) -> Figure:
     """Mean Gaussian L2 error of the height PDF versus ``k_s``, one curve per ``k_l``.
 
-    The paper's Fig. 1a / appendix figure: log-log axes, error bars are the standard
-    error of the seed mean.
+    The paper's Fig. 1a / appendix figure. Panel (a): eps of the heights ``h`` as the
+    paper defines it [height unit^-1/2], which scales as ``sigma^(-1/2)`` with the rms
+    height ``sigma``; panel (b), when ``rep_stats`` holds the per-case ``epsilon`` and
+    ``std_height``: the scale-free eps of ``(h - hbar)/sigma`` [1], ``eps sqrt(sigma)``
+    (:func:`roughcontact.representativity.scale_free_epsilon`). Log-log axes, error bars
+    the standard error of the seed mean. Panel (c), when data exist for at least two
+    ``k_l`` and two ``k_s``: the paper's Fig. 1a as a map, the seed-mean eps (scale-free
+    where available) as colour over ``k_l x k_s``. The title states N, seeds, bins, H
+    and the rms height.
 
     Parameters
     ----------
     rep_stats : xarray.Dataset
         :func:`roughcontact.aggregate.representativity_statistics` output: ``epsilon_mean``,
-        ``epsilon_sem``, ``n_seeds`` over ``(k_l, k_s, H)``.
+        ``epsilon_sem``, ``n_seeds`` over ``(k_l, k_s, H)``, optionally merged with the
+        per-case ``epsilon`` and ``std_height`` over ``(k_l, k_s, H, seed)`` as in the
+        workflow's ``aggregate/representativity.nc``.
     hurst : float, optional
         Which H to show; required when the dataset holds several.
 
     Returns
     -------
     matplotlib.figure.Figure
-        3.4 in wide (plus the legend column).
+        7 in wide with two or three panels (4.4 in with one), legend below.
     """
     _require(rep_stats, "rep_stats", ("epsilon_mean", "epsilon_sem", "n_seeds"))
-    hs = [float(h) for h in rep_stats["H"].values]
-    if hurst is None:
-        if len(hs) != 1:
-            raise ValueError(f"rep_stats holds several H {hs}; pass hurst= one of them")
-        h = hs[0]
-    else:
-        h = _pick(rep_stats["H"].values, hurst, "hurst")[0]
-    sub = rep_stats.sel(H=h)
-    units = str(rep_stats["epsilon_mean"].attrs.get("units", "1"))
+    h = _rep_hurst(rep_stats, hurst)
+    panels = _rep_panels(rep_stats, h)
+    kls, kss = _rep_grid(panels[-1][0])
+    n = len(panels) + (len(kls) >= 2 and len(kss) >= 2)
     with matplotlib.rc_context(_STYLE):
-        fig = _new_figure(SINGLE_COLUMN_IN + 1.0, 2.6)
-        ax = fig.add_subplot()
-        k_ls = [float(k) for k in sub["k_l"].values]
-        drawn = 0
-        for i, kl in enumerate(k_ls):
-            row = sub.sel(k_l=kl)
-            ok = (row["n_seeds"] > 0) & np.isfinite(row["epsilon_mean"])
-            if not bool(ok.any()):
-                continue
-            x = row["k_s"].values[ok.values]
-            ax.errorbar(x, row["epsilon_mean"].values[ok.values], yerr=row["epsilon_sem"].values[ok.values],
-                        color=DATA_COLOURS[i % len(DATA_COLOURS)], marker=_MARKERS[i % len(_MARKERS)],
-                        ls=_LINESTYLES[i % len(_LINESTYLES)], label=f"$k_l = {_fmt(kl)}$")
-            drawn += 1
-        if drawn == 0:
-            raise ValueError(f"rep_stats has no finite epsilon_mean at H={h}")
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ks_vals = sub["k_s"].values
-        ax.set_xticks(ks_vals)
-        ax.xaxis.set_major_formatter(ScalarFormatter())
-        ax.xaxis.set_minor_formatter(NullFormatter())
-        ax.set_xlabel(r"short cutoff $k_s = L/\lambda_s$ [1]")
-        ax.set_ylabel(rf"mean $L_2$ error $\bar\varepsilon$ [{_unit_tex(units)}]")
-        ax.set_title(rf"$H = {_fmt(h)}$, error bars: s.e.m. over seeds")
-        fig.legend(loc="outside right upper", title=r"$k_l = L/\lambda_l$")
+        fig = _new_figure(DOUBLE_COLUMN_IN if n > 1 else SINGLE_COLUMN_IN + 1.0, 2.9)
+        axes = fig.subplots(1, n, squeeze=False, width_ratios=[1.0] * len(panels) + [1.15] * (n - len(panels)))[0]
+        for ax, (sub, symbol, unit, title) in zip(axes, panels, strict=False):
+            _rep_curves(ax, sub, f"mean $L_2$ error {symbol} [{unit}]", title if len(panels) > 1 else "")
+        if n > len(panels):
+            _rep_map(fig, axes[-1], *panels[-1][:3])
+        fig.suptitle(_rep_summary(rep_stats, h) + "; bars: s.e.m. over seeds")
+        handles, labels = axes[0].get_legend_handles_labels()
+        fig.legend(handles, labels, loc="outside lower center", ncols=len(handles),
+                   title=r"long cutoff $k_l = L/\lambda_l$")
     return fig
 
 
@@ -454,11 +565,14 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
     """Contact-area fraction versus ``p0/E*`` (the paper's Fig. 2), one panel per ``k_s``.
 
     Each ``(lambda_l, lambda_s, H)`` family is its seed-mean curve with a +-1 standard
-    deviation band. Black lines: BGT (``kappa = sqrt(2 pi)``) and Persson
-    (``sqrt(8/pi)``) asymptotes ``A/A0 = kappa p0 / (h' E*)``; grey dotted: Persson's
-    full ``erf`` curve; with ``fit``, the H-pooled CEL of ``fit_k_l`` (default: the
-    largest ``k_l`` shown, the most representative surfaces) as a thick grey line.
-    Theory lines use the mean rms slope of the shown cases.
+    deviation band (translucent, edged in the family's colour so that a thin band still
+    shows; the largest s.d. is in the legend). Black solid: the BGT asymptote
+    ``A/A0 = sqrt(2 pi) p0 / (h' E*)``. Persson's two curves share one colour
+    (:data:`PERSSON_COLOUR`): his small-load asymptote (``kappa = sqrt(8/pi)``) thin
+    dashed, on top of his full ``erf`` curve, thick and translucent (the two coincide at
+    small load). With ``fit``, the H-pooled CEL of ``fit_k_l`` (default: the largest
+    ``k_l`` shown, the most representative surfaces) as a thick grey line. Theory lines
+    use the mean rms slope of the shown cases.
 
     Parameters
     ----------
@@ -487,22 +601,17 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
     kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes = _family_panels(
         stats, k_l, k_s, hurst, fit_k_l)
     with matplotlib.rc_context(_STYLE):
-        xmax = ymax = 0.0
-        drew_fit = False
+        extent = np.zeros(3)  # largest p0/E*, A/A0 + s.d., s.d.
         for idx, ks in enumerate(ks_list):
-            ax = axes.flat[idx]
             for kl in kl_list:
                 for h in h_list:
-                    if not _present(stats, kl, ks, h):
-                        continue
-                    s = stats.sel(k_l=kl, k_s=ks, H=h)
-                    x = s["pressure_mean"].values / e_star
-                    y, sd = s["area_fraction_mean"].values, s["area_fraction_std"].values
-                    ax.fill_between(x, y - sd, y + sd, color=colour[h], alpha=0.2, lw=0)
-                    ax.plot(x, y, color=colour[h], marker=marker[kl], ls=style[kl], markevery=3)
-                    xmax = max(xmax, float(np.nanmax(x)))
-                    ymax = max(ymax, float(np.nanmax(y + sd)))
-            ax.set_title(_lambda_label(ks, "s"))
+                    if _present(stats, kl, ks, h):
+                        extent = np.maximum(extent, _area_load_family(
+                            axes.flat[idx], stats.sel(k_l=kl, k_s=ks, H=h), e_star, colour[h], marker[kl],
+                            style[kl]))
+            axes.flat[idx].set_title(_lambda_label(ks, "s"))
+        xmax, ymax, sdmax = (float(v) for v in extent)
+        drew_fit = False
         for idx, ks in enumerate(ks_list):
             # Second pass: theory over the common load range of all panels.
             ax = axes.flat[idx]
@@ -513,34 +622,67 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
                                              rms_slope=hp, e_star=e_star),
                         color="0.45", lw=2.2, alpha=0.8, zorder=1)
                 drew_fit = True
-            ax.plot(p / e_star, linear_area(p, kappa=KAPPA_BGT, rms_slope=hp, e_star=e_star),
-                    color=OKABE_ITO[0], lw=0.9, ls="-", zorder=3)
-            ax.plot(p / e_star, linear_area(p, kappa=KAPPA_PERSSON, rms_slope=hp, e_star=e_star),
-                    color=OKABE_ITO[0], lw=0.9, ls="--", zorder=3)
-            ax.plot(p / e_star, persson_area(p, rms_slope=hp, e_star=e_star),
-                    color="0.5", lw=0.9, ls=":", zorder=3)
-            for alpha, shade, _ in alphas:
-                for model, (ls, _name) in ASPERITY_STYLES.items():
-                    ax.plot(p / e_star, asperity_area(p, alpha=alpha, rms_slope=hp, e_star=e_star, model=model),
-                            color=shade, lw=1.1, ls=ls, zorder=3)
+            _area_load_theory(ax, p, e_star, hp, alphas)
             ax.set_xlim(0, xmax)
             ax.set_ylim(0, ymax * 1.05)
             ax.set_xlabel(r"$p_0/E^*$ [1]")
             ax.set_ylabel(r"$A/A_0$ [1]")
         for ax in list(axes.flat)[len(ks_list):]:
             ax.set_visible(False)
-        handles = _family_handles(kl_list, h_list, colour, marker, style)
-        handles += [Line2D([], [], color=OKABE_ITO[0], lw=0.9, label=BGT_LIMIT_LABEL),
-                    Line2D([], [], color=OKABE_ITO[0], lw=0.9, ls="--",
-                           label=r"Persson small-load limit, $\kappa=\sqrt{8/\pi}$"),
-                    Line2D([], [], color="0.5", lw=0.9, ls=":", label=r"Persson, erf")]
+        handles = _family_handles(kl_list, h_list, colour, marker, style) + _area_load_theory_handles(sdmax)
         handles += _asperity_handles(alphas)
         if drew_fit:
             handles.append(Line2D([], [], color="0.45", lw=2.2, alpha=0.8,
                                   label=f"CEL fit ({estimator}), " + _lambda_label(cel_kl, "l")))
         fig.suptitle(_run_summary(agg, stats))
-        _legend_below(fig, handles, f"$h' = {hp:.3g}$; bands: $\\pm 1$ s.d.")
+        _legend_below(fig, handles, f"$h' = {hp:.3g}$")
     return fig
+
+
+#: The +-1 s.d. bands of the area-load figure: face and edge opacity, edge width [pt].
+_BAND_ALPHA, _BAND_EDGE_ALPHA, _BAND_EDGE_LW = 0.3, 0.8, 0.6
+#: Persson's (2001) two curves: one colour, told apart by style (they coincide at small load).
+PERSSON_COLOUR = OKABE_ITO[6]
+_PERSSON_LIMIT_STYLE = {"color": PERSSON_COLOUR, "lw": 1.0, "ls": (0, (4, 2))}
+_PERSSON_ERF_STYLE = {"color": PERSSON_COLOUR, "lw": 2.6, "ls": "-", "alpha": 0.45}
+
+
+def _area_load_family(ax, s: xr.Dataset, e_star: float, colour, marker, style) -> np.ndarray:
+    """Seed-mean ``A/A0(p0/E*)`` of one family with its ``+-1`` s.d. band (edged, so it shows
+    when thin). Returns ``[max p0/E*, max A/A0 + s.d., max s.d.]`` [1]."""
+    x = s["pressure_mean"].values / e_star
+    y, sd = s["area_fraction_mean"].values, s["area_fraction_std"].values
+    face, edge = mcolors.to_rgba(colour, _BAND_ALPHA), mcolors.to_rgba(colour, _BAND_EDGE_ALPHA)
+    ax.fill_between(x, y - sd, y + sd, facecolor=face, edgecolor=edge, lw=_BAND_EDGE_LW, zorder=2)
+    ax.plot(x, y, color=colour, marker=marker, ls=style, markevery=3, zorder=2.5)
+    return np.array([np.nanmax(x), np.nanmax(y + sd), np.nanmax(sd)])
+
+
+def _area_load_theory(ax, p: np.ndarray, e_star: float, hp: float, alphas) -> None:
+    """BGT and Persson small-load limits, Persson's erf curve and the asperity models at loads ``p``."""
+    x = p / e_star
+    ax.plot(x, linear_area(p, kappa=KAPPA_BGT, rms_slope=hp, e_star=e_star),
+            color=OKABE_ITO[0], lw=0.9, ls="-", zorder=3)
+    ax.plot(x, persson_area(p, rms_slope=hp, e_star=e_star), **_PERSSON_ERF_STYLE, zorder=3)
+    ax.plot(x, linear_area(p, kappa=KAPPA_PERSSON, rms_slope=hp, e_star=e_star), **_PERSSON_LIMIT_STYLE,
+            zorder=4)
+    for alpha, shade, _ in alphas:
+        for model, (ls, _name) in ASPERITY_STYLES.items():
+            ax.plot(x, asperity_area(p, alpha=alpha, rms_slope=hp, e_star=e_star, model=model),
+                    color=shade, lw=1.1, ls=ls, zorder=3)
+
+
+def _area_load_theory_handles(sdmax: float) -> list:
+    """Legend entries of the s.d. band (``sdmax``: its largest half-width [1]) and of the
+    BGT and Persson curves."""
+    grey = np.array([0.5, 0.5, 0.5])
+    return [Patch(facecolor=(*grey, _BAND_ALPHA), edgecolor=(*grey, _BAND_EDGE_ALPHA), lw=_BAND_EDGE_LW,
+                  label=f"$\\pm 1$ s.d. over seeds (largest: {sdmax:.2g})"),
+            Line2D([], [], color=OKABE_ITO[0], lw=0.9, label=BGT_LIMIT_LABEL),
+            Line2D([], [], **_PERSSON_LIMIT_STYLE,
+                   label=r"Persson, small-load limit $A/A_0 = \sqrt{8/\pi}\,p_0/(h'E^*)$"),
+            Line2D([], [], **_PERSSON_ERF_STYLE,
+                   label=r"Persson, full: $A/A_0 = \mathrm{erf}(\sqrt{2}\,p_0/(h'E^*))$")]
 
 
 def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None, *,
@@ -606,7 +748,7 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
             pad = 0.05 * (yhi - ylo)
             persson_shown = ylo - pad <= KAPPA_PERSSON <= yhi + pad
             if persson_shown:
-                ax.axhline(KAPPA_PERSSON, color=OKABE_ITO[0], lw=0.9, ls="--")
+                ax.axhline(KAPPA_PERSSON, **_PERSSON_LIMIT_STYLE)
             ax.set_ylim(ylo - pad, yhi + pad)
             ax.set_xlim(0, amax * 1.02)
             ax.set_title(_lambda_label(ks, "s"))
@@ -616,7 +758,7 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
             ax.set_visible(False)
         handles = _family_handles(kl_list, h_list, colour, marker, style)
         handles.append(Line2D([], [], color=OKABE_ITO[0], lw=0.9, label=BGT_LIMIT_LABEL))
-        handles.append(Line2D([], [], color=OKABE_ITO[0], lw=0.9, ls="--", label=(
+        handles.append(Line2D([], [], **_PERSSON_LIMIT_STYLE, label=(
             r"Persson small-load limit, $\kappa=\sqrt{8/\pi}$" if persson_shown
             else rf"Persson, $\kappa=\sqrt{{8/\pi}}$ = {KAPPA_PERSSON:.2f}: below the axis")))
         handles += _asperity_handles(alphas)
@@ -653,79 +795,170 @@ def _fit_label(who: str, estimator: str, k_l: float, consts, constrained: bool =
     return text
 
 
+#: Windows per decade of ``A/A0`` of the windowed ``d pbar / d p0`` (see aggregate.windowed_load_slope).
+DPBAR_PER_DECADE = 6
+#: Style of the paper's power law and of this run's fit in the d pbar / d p0 figure.
+_PAPER_LAW_STYLE = {"color": OKABE_ITO[0], "lw": 1.0, "ls": (0, (4, 2)), "zorder": 5}
+_FIT_LAW_STYLE = {"color": "0.55", "lw": 2.6, "alpha": 0.6, "ls": "-", "zorder": 1}
+
+
+def _windowed_dpbar(agg: xr.Dataset, kl: float, ks: float, h: float, per_decade: int):
+    """Seed mean and s.e.m. of the windowed ``d pbar / d p0`` of one family.
+
+    Windows: :func:`roughcontact.aggregate.log_window_edges` of the seed-mean load curve;
+    slopes per seed by :func:`roughcontact.aggregate.windowed_load_slope`. Returns
+    ``(a, mean, sem)``, each shape ``(n_windows,)``: mean ``A/A0`` [1], seed-mean slope [1]
+    and its standard error [1] (NaN with fewer than two seeds in a window).
+    """
+    case = agg.sel(k_l=kl, k_s=ks, H=h)
+    dims = ("seed", "step")
+    a = case["area_fraction"].transpose(*dims).values
+    pbar = case["mean_contact_pressure"].transpose(*dims).values
+    p0 = case["pressure"].broadcast_like(case["area_fraction"]).transpose(*dims).values
+    keep = case["case_present"].values if "case_present" in case else np.ones(a.shape[0], bool)
+    a, pbar, p0 = a[keep], pbar[keep], p0[keep]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN steps
+        reference = np.nanmean(a, axis=0)
+    if np.sum(np.isfinite(reference) & (reference > 0)) < 2:
+        return (np.array([]),) * 3
+    edges = log_window_edges(reference, per_decade)
+    a_w, slope = windowed_load_slope(pbar, p0, a, edges)
+    n = np.isfinite(slope).sum(axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN windows
+        mean = np.nanmean(slope, axis=0)
+        sem = np.where(n >= 2, np.nanstd(slope, axis=0, ddof=1) / np.sqrt(n), np.nan)
+        x = np.nanmean(a_w, axis=0)
+    return x, mean, sem
+
+
+def _log_bars(y: np.ndarray, sem: np.ndarray) -> np.ndarray:
+    """``[lower, upper]`` bar lengths of ``+-1`` s.e.m. drawn in log space: ``y e^(+-sem/y)``.
+
+    Symmetric on a log axis and always above zero (the lower end is ``y e^(-sem/y)``,
+    not ``y - sem``); equal to ``+-sem`` to first order in ``sem/y``. Shape ``(2, n)``.
+    """
+    r = np.where(np.isfinite(sem), sem / y, 0.0)
+    return np.vstack([y * (1.0 - np.exp(-r)), y * (np.exp(r) - 1.0)])
+
+
+def _dpbar_family(ax, agg, stats, kl, ks, h, colour, marker, style, per_decade):
+    """Draw one family: faint finite differences, windowed slopes with log-space bars.
+
+    Returns ``(x_raw, y_raw, bar_lo, bar_hi)`` of what was drawn, for the axis limits.
+    """
+    s = stats.sel(k_l=kl, k_s=ks, H=h)
+    xr_, yr_ = s["area_fraction_mean"].values, s["dpbar_dp0_mean"].values
+    raw = np.isfinite(xr_) & np.isfinite(yr_) & (xr_ > 0) & (yr_ > 0)
+    ax.plot(xr_[raw], yr_[raw], ls="none", marker=marker, ms=1.6, color=colour, alpha=0.35, mew=0, zorder=2)
+    x, y, sem = _windowed_dpbar(agg, kl, ks, h, per_decade)
+    ok = np.isfinite(x) & np.isfinite(y) & (x > 0) & (y > 0)
+    bars = _log_bars(y[ok], sem[ok])
+    ax.errorbar(x[ok], y[ok], yerr=bars, color=colour, marker=marker, ls=style, ms=3.5,
+                elinewidth=0.8, capsize=2.0, zorder=3)
+    return xr_[raw], yr_[raw], y[ok] - bars[0], y[ok] + bars[1]
+
+
+def _fit_law_label(consts, ks: float, many: bool, estimator: str, cel_kl: float) -> str:
+    where = _lambda_label(cel_kl, "l") + (", " + _lambda_label(ks, "s") if many else "")
+    return rf"this run (fit: {estimator}), {where}: $\beta$ = {consts[2]:.3f}, $\mu$ = {consts[1]:.3f}"
+
+
 def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None, *,
               k_l: Sequence[float] | None = None, k_s: Sequence[float] | None = None,
               hurst: Sequence[float] | None = None, fit_k_l: float | None = None,
-              estimator: str = "paper") -> Figure:
+              estimator: str = "paper", per_decade: int = DPBAR_PER_DECADE) -> Figure:
     """``d pbar / d p0`` versus ``A/A0`` on log-log axes (the paper's Fig. 4).
 
-    Seed means with standard-error bars (non-positive means are not drawn on the log
-    axis); the paper's power law ``0.21 (A0/A)^0.55`` (grey dotted) and, with ``fit``,
-    the fitted ``beta (A0/A)^mu`` of ``fit_k_l``.
+    Large markers: per seed, the least-squares slope of ``pbar`` against ``p0`` over
+    windows of equal width ``1/per_decade`` decade in ``A/A0`` (merged where the load
+    steps are sparse; :func:`roughcontact.aggregate.windowed_load_slope`), averaged over
+    seeds, with ``+-1`` s.e.m. bars drawn in log space (``y e^(+-sem/y)``, always above
+    zero); non-positive values cannot be drawn on the log axis and are left out. Small
+    faint markers: the seed mean of the pointwise finite differences
+    (``dpbar_dp0_mean``); those outside the axis range are counted in the legend. Lines:
+    the paper's ``0.21 (A0/A)^0.55`` (black dashed) and, with ``fit``, the fitted
+    ``beta (A0/A)^mu`` of ``fit_k_l`` (thick grey), their constants in the legend.
 
     Parameters
     ----------
-    agg, stats, fit, k_l, k_s, hurst, fit_k_l, estimator
+    agg : xarray.Dataset
+        Combined contact dataset with ``pressure``, ``mean_contact_pressure`` and
+        ``area_fraction`` over ``(k_l, k_s, H, seed, step)`` and the attr ``e_star``.
+    stats, fit, k_l, k_s, hurst, fit_k_l, estimator
         As in :func:`fig_area_load`.
+    per_decade : int
+        Windows per decade of ``A/A0`` (>= 1).
 
     Returns
     -------
     matplotlib.figure.Figure
     """
-    _require(stats, "stats", ("dpbar_dp0_mean", "dpbar_dp0_sem", "area_fraction_mean", "n_seeds"))
+    _require(stats, "stats", ("dpbar_dp0_mean", "area_fraction_mean", "n_seeds"))
+    _require(agg, "agg", ("pressure", "mean_contact_pressure", "area_fraction"))
     _e_star(agg)
     kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes = _family_panels(
         stats, k_l, k_s, hurst, fit_k_l)
+    fit_handles, n_off = [], 0
     with matplotlib.rc_context(_STYLE):
-        drew_fit = False
         for idx, ks in enumerate(ks_list):
             ax = axes.flat[idx]
-            amin, amax = np.inf, 0.0
-            for kl in kl_list:
-                for h in h_list:
-                    if not _present(stats, kl, ks, h):
-                        continue
-                    s = stats.sel(k_l=kl, k_s=ks, H=h)
-                    x, y, e = (s[v].values for v in ("area_fraction_mean", "dpbar_dp0_mean", "dpbar_dp0_sem"))
-                    ok = np.isfinite(x) & np.isfinite(y) & (x > 0) & (y > 0)
-                    if not ok.any():
-                        continue
-                    # Clip the lower error bar so it stays on the positive log axis.
-                    lower = np.minimum(e[ok], 0.95 * y[ok])
-                    ax.errorbar(x[ok], y[ok], yerr=[lower, e[ok]], color=colour[h], marker=marker[kl],
-                                ls=style[kl], elinewidth=0.6)
-                    amin, amax = min(amin, float(x[ok].min())), max(amax, float(x[ok].max()))
-            if not np.isfinite(amin):
-                continue
-            a = np.geomspace(amin, amax, 100)
-            ax.plot(a, cel_dpbar_dp0(a, mu=0.55, beta=0.21), color="0.5", lw=0.9, ls=":", zorder=3)
+            drawn = [_dpbar_family(ax, agg, stats, kl, ks, h, colour[h], marker[kl], style[kl], per_decade)
+                     for kl in kl_list for h in h_list if _present(stats, kl, ks, h)]
+            x_raw, y_raw, lo, hi = (np.concatenate(v) for v in zip(*drawn, strict=True))
+            if x_raw.size == 0 or lo.size == 0:
+                continue  # nothing drawable on log axes in this panel
+            a = np.geomspace(float(x_raw.min()), float(x_raw.max()), 100)
+            lines = [cel_dpbar_dp0(a, mu=PAPER_CONSTANTS["mu"], beta=PAPER_CONSTANTS["beta"])]
+            ax.plot(a, lines[0], **_PAPER_LAW_STYLE)
             consts = _fit_constants(fit, cel_kl, ks, estimator)
             if consts is not None:
-                ax.plot(a, cel_dpbar_dp0(a, mu=consts[1], beta=consts[2]), color="0.45", lw=2.2,
-                        alpha=0.8, zorder=1)
-                drew_fit = True
-            ax.set_xscale("log")
-            ax.set_yscale("log")
-            # Plain decimals: the data span about one decade, where 4x10^0 reads badly.
-            for axis in (ax.xaxis, ax.yaxis):
-                axis.set_major_formatter(FormatStrFormatter("%g"))
-            # Minor labels help within a decade but collide once the axis spans more.
-            lo, hi = ax.get_ylim()
-            ax.yaxis.set_minor_formatter(FormatStrFormatter("%g") if hi / lo < 12 else NullFormatter())
-            ax.set_title(_lambda_label(ks, "s"))
-            ax.set_xlabel(r"$A/A_0$ [1]")
-            ax.set_ylabel(r"$\partial\bar p/\partial p_0$ [1]")
+                lines.append(cel_dpbar_dp0(a, mu=consts[1], beta=consts[2]))
+                ax.plot(a, lines[-1], **_FIT_LAW_STYLE)
+                fit_handles.append(Line2D([], [], **{k: v for k, v in _FIT_LAW_STYLE.items() if k != "zorder"},
+                                          label=_fit_law_label(consts, ks, len(ks_list) > 1, estimator, cel_kl)))
+            ylo = min(float(lo.min()), *(float(v.min()) for v in lines)) / 1.3
+            yhi = max(float(hi.max()), *(float(v.max()) for v in lines)) * 1.3
+            n_off += int(np.sum((y_raw < ylo) | (y_raw > yhi)))
+            ax.set_ylim(ylo, yhi)
+            ax.set_xlim(float(x_raw.min()) / 1.15, float(x_raw.max()) * 1.15)
+            _dpbar_axes(ax, ks)
         for ax in list(axes.flat)[len(ks_list):]:
             ax.set_visible(False)
         handles = _family_handles(kl_list, h_list, colour, marker, style)
-        handles.append(Line2D([], [], color="0.5", lw=0.9, ls=":",
-                              label=r"paper: $0.21\,(A_0/A)^{0.55}$"))
-        if drew_fit:
-            handles.append(Line2D([], [], color="0.45", lw=2.2, alpha=0.8,
-                                  label=rf"fit $\beta(A_0/A)^\mu$ ({estimator}), " + _lambda_label(cel_kl, "l")))
+        handles += _dpbar_handles(per_decade, n_off) + fit_handles
         fig.suptitle(_run_summary(agg, stats))
-        fig.legend(handles=handles, loc="outside right upper", title="error bars: s.e.m.")
+        _legend_below(fig, handles, r"bars: $\pm 1$ s.e.m. over seeds, in log space ($y\,e^{\pm s/y}$)")
     return fig
+
+
+def _dpbar_axes(ax, ks: float) -> None:
+    """Log axes with plain decimal labels, title and labels of a d pbar / d p0 panel."""
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    # Plain decimals: the data span about one decade, where 4x10^0 reads badly.
+    for axis in (ax.xaxis, ax.yaxis):
+        axis.set_major_formatter(FormatStrFormatter("%g"))
+    # Minor labels help within a decade but collide once the axis spans more.
+    lo, hi = ax.get_ylim()
+    ax.yaxis.set_minor_formatter(FormatStrFormatter("%g") if hi / lo < 12 else NullFormatter())
+    ax.set_title(_lambda_label(ks, "s"))
+    ax.set_xlabel(r"$A/A_0$ [1]")
+    ax.set_ylabel(r"$\partial\bar p/\partial p_0$ [1]")
+
+
+def _dpbar_handles(per_decade: int, n_off: int) -> list[Line2D]:
+    """Legend entries of the two estimates and of the paper's power law."""
+    off = f"; {n_off} outside the axis" if n_off else ""
+    style = {k: v for k, v in _PAPER_LAW_STYLE.items() if k != "zorder"}
+    return [
+        Line2D([], [], color="0.35", marker="o", ms=3.5, ls="-",
+               label=rf"least-squares slope of $\bar p(p_0)$ in windows of 1/{per_decade} decade of $A/A_0$"),
+        Line2D([], [], color="0.35", marker="o", ms=1.6, alpha=0.35, ls="none",
+               label=f"pointwise finite differences (faint){off}"),
+        Line2D([], [], **style, label=r"paper: $\beta\,(A_0/A)^{\mu}$, $\beta$ = 0.21, $\mu$ = 0.55"),
+    ]
 
 
 def fig_accuracy(summary: xr.Dataset) -> Figure:

@@ -11,12 +11,21 @@ outside. The integral is evaluated exactly for that piecewise-constant P (bin in
 of G and G^2 through erf), including the Gaussian tails outside the histogram's range,
 so the only approximation left is the histogram itself. eps has units of
 1/sqrt(height unit).
+
+eps depends on the height scale: heights ``c h`` give ``eps / sqrt(c)`` (the histogram
+and G are densities in h, and the bins follow [min, max]). The scale-free measure is eps
+of the normalised heights ``z = (h - hbar) / sigma``, dimensionless and the same for
+every rms height: ``eps_z = eps sqrt(sigma)`` exactly (:func:`scale_free_epsilon`), so at
+the paper's rms height 0.1 it is ``sqrt(0.1) = 0.316`` times eps.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import xarray as xr
 from scipy.special import erf, erfc
+
+from .aggregate import representativity_statistics
 
 
 def _gauss_cdf(z: np.ndarray) -> np.ndarray:
@@ -78,3 +87,67 @@ def binning_noise_floor(n_samples: int, n_bins: int, range_in_sigma: float,
     noise = 1.0 / (n_samples * dh)
     shape = dh**2 / (48.0 * np.sqrt(np.pi) * sigma**3)
     return float(np.sqrt(noise + shape))
+
+
+def scale_free_epsilon(epsilon, sigma):
+    """eps of the normalised heights ``(h - hbar) / sigma`` from eps of the heights [1].
+
+    Under ``z = (h - hbar) / sigma`` the equal bins over [min, max] map onto equal bins
+    over the new range, every density gains a factor ``sigma`` and ``dh = sigma dz``, so
+    ``int (G_z - P_z)^2 dz = sigma int (G - P)^2 dh``: ``eps_z = eps sqrt(sigma)``.
+
+    Parameters
+    ----------
+    epsilon : array_like, any shape
+        :func:`gaussian_l2_error` of the heights [height unit^-1/2].
+    sigma : array_like, broadcastable to ``epsilon``
+        Population standard deviation of the same heights (> 0) [height unit].
+
+    Returns
+    -------
+    numpy.ndarray or xarray.DataArray, the broadcast shape
+        Dimensionless eps of the normalised heights [1].
+    """
+    if np.any(np.asarray(sigma) <= 0):
+        raise ValueError("sigma must be > 0")
+    return epsilon * np.sqrt(sigma)
+
+
+def scale_free_l2_error(heights: np.ndarray, n_bins: int = 500) -> float:
+    """eps of the normalised heights ``(h - hbar) / sigma`` [1]: invariant to the height scale.
+
+    Parameters as in :func:`gaussian_l2_error`; equals
+    ``scale_free_epsilon(gaussian_l2_error(h, n_bins), h.std())`` up to roundoff.
+    """
+    h = np.asarray(heights, dtype=float)
+    sigma = float(h.std()) if h.size and np.all(np.isfinite(h)) else 0.0
+    if not sigma > 0:
+        return gaussian_l2_error(h, n_bins)  # raises with the reason
+    return gaussian_l2_error((h - h.mean()) / sigma, n_bins)
+
+
+def scale_free_statistics(rep: xr.Dataset) -> xr.Dataset | None:
+    """Seed statistics of the scale-free eps, or None when ``rep`` lacks the per-case data.
+
+    Parameters
+    ----------
+    rep : xarray.Dataset
+        Aggregated representativity dataset with per-case ``epsilon`` [height unit^-1/2]
+        and ``std_height`` [height unit] over ``(k_l, k_s, H, seed)`` (as the workflow's
+        ``aggregate/representativity.nc`` holds them).
+
+    Returns
+    -------
+    xarray.Dataset or None
+        :func:`roughcontact.aggregate.representativity_statistics` of
+        ``epsilon * sqrt(std_height)``: ``epsilon_mean``, ``epsilon_sem``, ... [1] and
+        ``n_seeds`` over ``(k_l, k_s, H)``.
+    """
+    if not all(v in rep and "seed" in rep[v].dims for v in ("epsilon", "std_height")):
+        return None
+    present = rep["case_present"] if "case_present" in rep else True
+    sigma = rep["std_height"].where(present & (rep["std_height"] > 0))
+    eps = (rep["epsilon"] * np.sqrt(sigma)).assign_attrs(
+        units="1", long_name="L2 error of the normalised heights (h - hbar)/sigma")
+    keep = [v for v in ("case_present",) if v in rep]
+    return representativity_statistics(rep[keep].assign(epsilon=eps), min_seeds=1)
