@@ -230,3 +230,34 @@ def test_duplicate_yaml_keys_are_named(tmp_path):
     broken.write_text("scenes: [unclosed\n")
     with pytest.raises(ConfigError, match="broken.yaml: not valid YAML"):
         check_config_files([broken])
+
+
+def test_geometric_load_schedule(shipped_config):
+    cfg = _edit(_demo(shipped_config), ("contact", "load"), {"p_max": 0.005, "n_steps": 30,
+                                                             "schedule": "geometric"})
+    con = validate_config(cfg, SCHEMA)["scenes"]["demo"]["contact"]
+    steps = load_steps(con)
+    assert len(steps) == 30 and steps[0] == pytest.approx(0.005 / 30) and steps[-1] == 0.005
+    ratios = [b / a for a, b in zip(steps[:-1], steps[1:], strict=True)]
+    assert max(ratios) == pytest.approx(min(ratios), rel=1e-12)  # equal ratios
+    uniform = load_steps(validate_config(shipped_config, SCHEMA)["scenes"]["demo"]["contact"])
+    # more steps at small loads than the uniform schedule: 10 of 30 below p_max/10
+    assert sum(p < 0.0005 for p in steps) > 3 * sum(p < 0.0005 for p in uniform)
+    con["load"]["p_min"] = 1e-4
+    steps = load_steps(con)
+    assert steps[0] == pytest.approx(1e-4) and steps[-1] == 0.005
+
+
+@pytest.mark.parametrize(
+    "load, words",
+    [
+        ({"schedule": "geometric", "p_min": 0.01}, "must be < load.p_max"),
+        ({"p_min": 0.001}, "only used by load.schedule: geometric"),
+        ({"schedule": "log"}, "schedule"),
+    ],
+)
+def test_bad_load_schedule_is_named(shipped_config, load, words):
+    cfg = _edit(_demo(shipped_config), ("contact", "load"), {"p_max": 0.005, "n_steps": 30, **load})
+    with pytest.raises(ConfigError, match="contact.load") as err:
+        validate_config(cfg, SCHEMA)
+    assert words in str(err.value)

@@ -276,6 +276,11 @@ def _check_study(scene: str, study: str, block: dict) -> None:
         if block["seeds"] < 2:
             fail("seeds", f"{block['seeds']} is too few: the contact study's CEL fit resamples seeds and needs "
                           "at least 2")
+        load = block["load"]
+        if "p_min" in load and load["schedule"] != "geometric":
+            fail("load.p_min", f"only used by load.schedule: geometric (here {load['schedule']!r}); remove it")
+        if "p_min" in load and not load["p_min"] < load["p_max"]:
+            fail("load.p_min", f"{load['p_min']:g} must be < load.p_max = {load['p_max']:g}")
         plastic = block["effects"].get("plasticity")
         if plastic and not plastic["hardness"] > block["load"]["p_max"]:
             fail("effects.plasticity.hardness", f"{plastic['hardness']:g} must exceed load.p_max = "
@@ -389,7 +394,20 @@ def cases(block: dict) -> list[Case]:
 
 
 def load_steps(block: dict) -> list[float]:
-    """Applied mean pressures p0 of a contact block: p_max*E*/n, ..., p_max*E* (n steps)."""
-    n = block["load"]["n_steps"]
-    p_max = block["load"]["p_max"] * block["solver"]["e_star"]
-    return [p_max * (i + 1) / n for i in range(n)]
+    """Applied mean pressures p0 of a contact block [pressure, E*'s unit], increasing, n of them.
+
+    ``load.schedule: uniform`` (the paper's): ``p_max E* k / n`` for k = 1..n.
+    ``geometric``: ``p_min E* (p_max / p_min)**((k - 1) / (n - 1))``, equal ratios
+    from ``p_min`` (default ``p_max / n``, the uniform schedule's first step) to
+    ``p_max``; it puts more steps at small A/A0, where the CEL's mu and beta are
+    read off dp_bar/dp0.
+    """
+    load = block["load"]
+    n, e_star = load["n_steps"], block["solver"]["e_star"]
+    p_max = load["p_max"] * e_star
+    if load.get("schedule", "uniform") == "uniform":
+        return [p_max * (i + 1) / n for i in range(n)]
+    p_min = load.get("p_min", load["p_max"] / n) * e_star
+    steps = [p_min * (p_max / p_min) ** (i / (n - 1)) for i in range(n)]
+    steps[-1] = p_max  # exact end point
+    return steps
