@@ -8,7 +8,7 @@ BIN := $(VENV)/bin
 JOBS ?= 2
 SCENE ?=
 
-.PHONY: install run test test-fast lint dryrun report bench clean
+.PHONY: install run test test-fast lint browser dryrun report bench clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -27,8 +27,21 @@ dryrun: install
 	$(BIN)/snakemake -n $(if $(SCENE),--config scene=$(SCENE))
 
 # Lint runs first (seconds) and stops `make test` when it fails.
-test: install lint
+test: install lint browser
 	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest
+
+# tests/test_report.py opens the report in a real browser: Debian's chromium, installed here when
+# missing and possible (root and apt-get). Never fails: without chromium that test skips, saying why.
+browser:
+	@if command -v chromium >/dev/null 2>&1; then \
+		echo "chromium: $$(command -v chromium)"; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+		echo "installing chromium (apt-get) for the report's browser test"; \
+		{ apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium; } >/dev/null 2>&1 \
+			|| echo "could not install chromium: the report's browser test will skip"; \
+	else \
+		echo "no chromium, and installing it needs root and apt-get: the report's browser test will skip"; \
+	fi
 
 # The inner loop (under 3 min on 2 cores): every test not marked slow. Slow tests (real runs of
 # small scenes, the paper scene's 2100-job DAG, concurrency and bootstrap studies) run in `make test`.

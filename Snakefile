@@ -2,12 +2,20 @@
 # Stages: surfaces -> representativity | contact -> aggregate -> fit -> figures.
 # `snakemake -j2` runs the default scene (config/config.yaml: scene), `--config scene=NAME`
 # another; any single output can be asked for by its path.
+from pathlib import Path
+
 from snakemake.utils import min_version
+
+from roughcontact import report as report_module
 
 min_version("9.0")
 
 
 report: "workflow/report/workflow.rst"
+
+
+# Report captions render their maths (:math:, .. math::) as MathML: see roughcontact.report.
+report_module.render_maths_as_mathml(Path(workflow.basedir, "workflow", "report", "docutils.conf"))
 
 
 configfile: "config/config.yaml"
@@ -20,6 +28,7 @@ include: "workflow/rules/contact.smk"
 include: "workflow/rules/aggregate.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/accuracy.smk"
+include: "workflow/rules/report.smk"
 
 
 localrules:

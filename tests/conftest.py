@@ -65,3 +65,16 @@ def copy_workflow(dest: Path, config: dict | None = None) -> Path:
         with open(dest / "config" / "config.yaml", "w") as fh:
             yaml.safe_dump(config, fh, sort_keys=False)
     return dest
+
+
+@pytest.fixture(scope="session")
+def demo_run(tmp_path_factory):
+    """A workflow copy where the shipped default scene (demo) has run, as `make run` runs it.
+
+    Run once per session (about 1.5 min on 2 cores) and shared by the tests that need its results
+    (test_workflow's byte-identical rerun, test_report's browser check of the report).
+    """
+    wd = copy_workflow(tmp_path_factory.mktemp("demo") / "wf")
+    res = run_snakemake(wd, "-j2")
+    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
+    return wd

@@ -63,6 +63,20 @@ def test_params_are_canonical(shipped_config):
           "surface": {"L": 1.0, "rms_slope": 0.1}}
 
 
+def test_report_summary_holds_every_result_setting_but_no_description(shipped_config):
+    demo = _demo(shipped_config)
+    got = params.summary(demo)
+    assert list(got) == ["contact", "fit", "representativity"]
+    assert got["contact"]["seeds"] == 3 and got["fit"] == params.fit(demo)
+    assert "description" not in got and "keep_surfaces" not in got["contact"]
+    for unchanged in (lambda s: s.update(description="another text"),
+                      lambda s: s["contact"].update(keep_surfaces=False)):
+        assert params.summary(_edited(shipped_config, unchanged)) == got
+    assert params.summary(_edited(shipped_config, lambda s: s["contact"].update(seeds=5))) != got
+    # the fit is part of the contact study: a scene without one shows no fit settings
+    assert list(params.summary({k: v for k, v in demo.items() if k != "contact"})) == ["representativity"]
+
+
 def test_recorded_reads_what_was_written():
     ds = xr.Dataset(attrs={"scene_parameters": canonical_json({"b": 1, "a": {"c": 2.0}})})
     assert params.recorded(ds) == {"a": {"c": 2.0}, "b": 1}

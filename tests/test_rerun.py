@@ -19,8 +19,9 @@ DOWNSTREAM = {
     "results/tiny/figures/area_load.png",
     "results/tiny/figures/kappa.png",
     "results/tiny/figures/dpbar.png",
+    "results/tiny/report/summary.rst",
 }
-FIT_ON = {"results/tiny/fit/cel.nc", *(p for p in DOWNSTREAM if "figures" in p)}
+FIT_ON = {"results/tiny/fit/cel.nc", *(p for p in DOWNSTREAM if "figures" in p), "results/tiny/report/summary.rst"}
 ALL_CONTACT = {CONTACT.format(H=h, seed=s) for h in ("0.5", "0.8") for s in (0, 1)}
 
 
@@ -51,6 +52,15 @@ EDITS = [
     ("add a seed", lambda s: s["contact"].update(seeds=3),
      {SURF.format(H=h, seed=2) for h in ("0.5", "0.8")} | {CONTACT.format(H=h, seed=2) for h in ("0.5", "0.8")}
      | DOWNSTREAM),
+    # the representativity study runs one job per grid point with all its seeds
+    ("add a representativity seed", lambda s: s["representativity"].update(seeds=3),
+     {f"results/tiny/representativity/kl{kl}_ks8_H0.8.nc" for kl in ("1", "4")}
+     | {"results/tiny/aggregate/representativity.nc", "results/tiny/figures/representativity.png",
+        "results/tiny/report/summary.rst"}),
+    ("change representativity.n_bins", lambda s: s["representativity"].update(n_bins=30),
+     {f"results/tiny/representativity/kl{kl}_ks8_H0.8.nc" for kl in ("1", "4")}
+     | {"results/tiny/aggregate/representativity.nc", "results/tiny/figures/representativity.png",
+        "results/tiny/report/summary.rst"}),
     ("change solver.tol", lambda s: s["contact"]["solver"].update(tol=1e-9), ALL_CONTACT | DOWNSTREAM),
     ("change fit.window", lambda s: s["fit"].update(window=[0.02, 0.3]), FIT_ON),
     ("change the description", lambda s: s.update(description="another description"), set()),

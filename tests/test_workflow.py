@@ -63,7 +63,8 @@ def test_dry_run_every_shipped_scene(repo, scene):
     assert res.returncode == 0, res.stderr[-3000:]
     jobs = _jobs(res.stdout)
     if scene == "paper":
-        assert jobs["contact"] == 1200 and jobs["representativity"] == 900
+        # 900 representativity surfaces in one job per grid point (5 k_l x 6 k_s), each all 30 seeds
+        assert jobs["contact"] == 1200 and jobs["representativity"] == 30
     if scene == "representative":
         assert jobs["contact"] == 60 and "representativity" not in jobs
 
@@ -73,7 +74,8 @@ def test_representativity_only_scene_plans_no_contact(tmp_path):
     res = run_snakemake(wd, "-n")
     assert res.returncode == 0, res.stderr[-3000:]
     jobs = _jobs(res.stdout)
-    assert jobs["representativity"] == 2 and jobs["surface_rep"] == 2
+    # one job for the grid point's two seeds; a surface file only for the example figure
+    assert jobs["representativity"] == 1
     assert not {"contact", "surface", "fit_cel", "aggregate_contact"} & set(jobs)
 
 
@@ -168,11 +170,10 @@ def test_tiny_real_run(tmp_path):
 
 
 @pytest.mark.slow
-def test_demo_scene_produces_every_figure_and_the_fit_table(tmp_path, shipped_config):
-    # The shipped default scene, exactly as `make run` runs it, twice (about 1.5 min each on 2 cores).
-    wd = copy_workflow(tmp_path / "demo")
-    res = run_snakemake(wd, "-j2")
-    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
+def test_demo_scene_produces_every_figure_and_the_fit_table(demo_run):
+    # The shipped default scene, exactly as `make run` runs it (the demo_run fixture), then every
+    # job again (about 1.5 min each on 2 cores).
+    wd = demo_run
     out = wd / "results" / "demo"
     for fig in ("representativity", "surface_examples", "area_load", "kappa", "dpbar"):
         for ext in ("png", "pdf"):
@@ -180,9 +181,10 @@ def test_demo_scene_produces_every_figure_and_the_fit_table(tmp_path, shipped_co
     table = (out / "fit" / "cel.csv").read_text().splitlines()
     assert table[0].startswith("k_l,k_s,H_group,estimator,constant,value")
     assert any(",pooled,paper,kappa," in row for row in table)
-    # A second run of every job writes the same bytes: NetCDF, CSV and figures.
+    assert "git commit: ``unknown``" in (out / "report" / "summary.rst").read_text()  # not a git checkout
+    # A second run of every job writes the same bytes: NetCDF, CSV, figures and the report summary.
     first = _output_bytes(out)
-    assert {p.suffix for p in first} == {".nc", ".csv", ".png", ".pdf"}
+    assert {p.suffix for p in first} == {".nc", ".csv", ".png", ".pdf", ".rst"}
     res = run_snakemake(wd, "-j2", "--forceall")
     assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
     second = _output_bytes(out)
@@ -191,9 +193,9 @@ def test_demo_scene_produces_every_figure_and_the_fit_table(tmp_path, shipped_co
 
 
 def _output_bytes(root):
-    """Bytes of every result file (NetCDF, CSV, figures) under ``root``, by relative path."""
+    """Bytes of every result file (NetCDF, CSV, figures, report summary) under ``root``, by relative path."""
     return {p.relative_to(root): p.read_bytes() for p in sorted(root.rglob("*"))
-            if p.is_file() and p.suffix in (".nc", ".csv", ".png", ".pdf")}
+            if p.is_file() and p.suffix in (".nc", ".csv", ".png", ".pdf", ".rst")}
 
 
 @pytest.mark.slow

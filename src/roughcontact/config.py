@@ -42,6 +42,8 @@ SCENE_STUDIES = (*STUDIES, "accuracy")
 
 #: File stem of one case: the config's own strings for k_l, k_s, H and the seed.
 CASE_STEM = "kl{k_l}_ks{k_s}_H{H}_s{seed}"
+#: File stem of one grid point (all its seeds in one file): the representativity batches.
+POINT_STEM = "kl{k_l}_ks{k_s}_H{H}"
 
 #: Allowed scene names: they become folder names under results/.
 SCENE_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]*$")
@@ -381,6 +383,12 @@ def validate_config(config: dict, schema: dict | None = None) -> dict:
             f"config field 'scene': unknown scene {default!r}; defined scenes: {', '.join(sorted(validated))}"
         )
     return {"scene": default, "scenes": validated}
+
+
+def grid_points(block: dict) -> list[tuple[str, str, str]]:
+    """The ``(k_l, k_s, H)`` points of a study block's grid (``k_l < k_s`` by validation)."""
+    grid = block["grid"]
+    return list(itertools.product(grid["k_l"], grid["k_s"], grid["H"]))
 
 
 def cases(block: dict) -> list[Case]:

@@ -147,3 +147,34 @@ def surface_heights(ds: xr.Dataset, source) -> tuple[np.ndarray, float]:
     if not (np.isfinite(length) and length > 0):
         raise ValueError(f"{source}: the global attribute 'length' must be a finite number > 0, got {length!r}")
     return heights, length
+
+
+def representativity_batch(surface: dict, *, k_l: str, k_s: str, hurst: str, seeds: int,
+                           n_bins: int) -> xr.Dataset:
+    """eps of seeds ``0 .. seeds-1`` of one ``(k_l, k_s, H)``, each surface made in memory.
+
+    One job of the representativity study: at N = 1024 a surface and its eps take
+    ~0.3 s, less than a job's start-up, so the seeds of a grid point run together.
+    ``surface`` is the study's surface block (``N``, ``L``, ``plateau`` and
+    ``rms_height`` or ``rms_slope``). Returns the per-seed datasets of
+    :func:`representativity_dataset` concatenated along ``seed`` (dims
+    ``k_l, k_s, H`` of length 1 and ``seed`` of length ``seeds``); one seed is
+    ``ds.sel(seed=[s])``.
+    """
+    from .representativity import gaussian_l2_error
+    from .surface import generate_surface
+
+    norm = {k: surface[k] for k in ("rms_slope", "rms_height") if k in surface}
+    parts = []
+    for seed in range(seeds):
+        h = generate_surface(surface["N"], float(k_l), float(k_s), float(hurst), seed,
+                             length=surface["L"], plateau=surface["plateau"], **norm)
+        eps = gaussian_l2_error(h, n_bins)
+        parts.append(representativity_dataset(eps, h, n_bins=n_bins, k_l=k_l, k_s=k_s, hurst=hurst,
+                                              seed=seed))
+    return xr.concat(parts, dim="seed", combine_attrs="override")
+
+
+def split_seeds(ds: xr.Dataset) -> list[xr.Dataset]:
+    """The per-seed datasets of a batch (each with a length-1 ``seed`` dimension)."""
+    return [ds.isel(seed=[i]) for i in range(ds.sizes["seed"])]

@@ -35,8 +35,8 @@ def surface(block: Mapping) -> dict:
 
 
 def representativity(block: Mapping) -> dict:
-    """A representativity job: the histogram bins (its surface is its input file)."""
-    return _pick(block, ("n_bins",))
+    """A representativity job (one grid point, all its seeds): bins, seeds and the surface block."""
+    return canonical({**_pick(block, ("n_bins", "seeds")), "surface": surface(block)})
 
 
 def contact(block: Mapping) -> dict:
@@ -61,6 +61,20 @@ def accuracy_case(block: Mapping, setting: Mapping) -> dict:
 def accuracy_summary(block: Mapping) -> dict:
     """The accuracy summary: the whole accuracy block (every setting and the error measures)."""
     return canonical(block)
+
+
+def summary(scene: Mapping) -> dict:
+    """The report's summary of a scene: its study blocks and, with a contact study, its fit.
+
+    Not its description (free text), nor ``keep_surfaces`` (whether surface files are kept,
+    which changes no result).
+    """
+    blocks = {key: scene[key] for key in ("representativity", "contact", "accuracy") if key in scene}
+    if "contact" in scene:
+        blocks["fit"] = scene["fit"]
+    return canonical({
+        key: {k: v for k, v in block.items() if k != "keep_surfaces"} for key, block in blocks.items()
+    })
 
 
 def recorded(ds) -> dict:

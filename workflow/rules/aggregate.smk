@@ -11,7 +11,7 @@ localrules:
 
 rule aggregate_representativity:
     input:
-        lambda w: case_files(w.scene, "representativity", "representativity"),
+        lambda w: point_files(w.scene, "representativity", "representativity"),
     output:
         "results/{scene}/aggregate/representativity.nc",
     log:

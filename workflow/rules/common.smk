@@ -7,10 +7,12 @@ from roughcontact import params
 from roughcontact.accuracy import variants as accuracy_variants
 from roughcontact.config import (
     CASE_STEM,
+    POINT_STEM,
     STUDIES,
     ConfigError,
     cases,
     check_config_files,
+    grid_points,
     load_schema,
     validate_config,
 )
@@ -29,6 +31,11 @@ ACTIVE_SCENE = _VALID["scene"]
 def case_path(folder, ext="nc"):
     """Pattern of one case's file: ``results/{scene}/<folder>/kl{k_l}_ks{k_s}_H{H}_s{seed}.<ext>``."""
     return f"results/{{scene}}/{folder}/{CASE_STEM}.{ext}"
+
+
+def point_path(folder, ext="nc"):
+    """Pattern of one grid point's file (all seeds): ``results/{scene}/<folder>/kl{k_l}_ks{k_s}_H{H}.<ext>``."""
+    return f"results/{{scene}}/{folder}/{POINT_STEM}.{ext}"
 
 
 def _alternatives(values):
@@ -79,6 +86,31 @@ def check_case(wildcards, study):
             f"scene {wildcards.scene!r}, {study}: seed={wildcards.seed} outside 0..{block['seeds'] - 1}"
         )
     return block
+
+
+def check_point(wildcards, study):
+    """Stop with the allowed values if a requested grid point is not in the scene's grid."""
+    block = study_block(wildcards.scene, study)
+    for key in ("k_l", "k_s", "H"):
+        if getattr(wildcards, key) not in block["grid"][key]:
+            raise WorkflowError(
+                f"scene {wildcards.scene!r}, {study}: {key}={getattr(wildcards, key)} is not in its grid; "
+                f"allowed: {', '.join(block['grid'][key])}"
+            )
+    return block
+
+
+def point_params(study, provider):
+    """A params function: ``provider``'s values for the job's study block, once the point is checked."""
+    return lambda w: provider(check_point(w, study))
+
+
+def point_files(scene, study, folder):
+    """Paths of the ``folder`` files of every grid point of ``study`` in ``scene``."""
+    return [
+        f"results/{scene}/{folder}/{POINT_STEM.format(k_l=kl, k_s=ks, H=h)}.nc"
+        for kl, ks, h in grid_points(study_block(scene, study))
+    ]
 
 
 def case_files(scene, study, folder):
@@ -139,6 +171,7 @@ def scene_targets(scene):
     if "accuracy" in s:
         out += [f"results/{scene}/accuracy/summary.{ext}" for ext in ("nc", "csv", "md")]
     out += expand("results/{scene}/figures/{fig}.{ext}", scene=scene, fig=scene_figures(s), ext=("png", "pdf"))
+    out += [f"results/{scene}/report/summary.rst"]
     return out
 
 
@@ -150,6 +183,12 @@ def surface_mem_mb(n):
 def surface_runtime_min(n):
     """Wall-time request of a surface or representativity job [min]: ~2 s at N=1024, x100 margin."""
     return max(5, int(5 * (n / 1024) ** 2))
+
+
+def batch_runtime_min(block):
+    """Wall-time request of a representativity job [min]: ~0.3 s a seed at N=1024, x30 margin."""
+    n, seeds = block["surface"]["N"], block["seeds"]
+    return max(5, int(0.15 * seeds * (n / 1024) ** 2))
 
 
 def contact_mem_mb(n):

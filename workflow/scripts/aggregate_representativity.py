@@ -1,11 +1,16 @@
-"""Aggregate: join every representativity case of a scene, with mean and error over seeds."""
+"""Aggregate: join every representativity grid point of a scene, with mean and error over seeds."""
 from roughcontact import aggregate, provenance
+from roughcontact.datasets import split_seeds
 from roughcontact.io import read_dataset, run_logged, write_dataset
 
 
 def main(log):
-    paths = list(snakemake.input)
-    datasets = [read_dataset(p, stage="representativity", variables=["epsilon"]) for p in paths]
+    datasets, paths = [], []
+    for path in snakemake.input:
+        batch = read_dataset(path, stage="representativity", variables=["epsilon"])
+        for one in split_seeds(batch):
+            datasets.append(one)
+            paths.append(f"{path} (seed {int(one.seed.values[0])})")
     expected = [(float(kl), float(ks), float(h), int(s)) for kl, ks, h, s in snakemake.params.cases]
     ds = aggregate.combine_cases(datasets, paths, expected=expected, kind="representativity")
     ds = ds.merge(aggregate.representativity_statistics(ds))
@@ -16,7 +21,8 @@ def main(log):
         ds.attrs["varying_parameters"] = ", ".join(varying)
     write_dataset(ds, snakemake.output[0], stage="aggregate", scene=snakemake.wildcards.scene,
                   scene_parameters=common)
-    log.info("aggregated %d representativity cases into %s", len(paths), snakemake.output[0])
+    log.info("aggregated %d representativity cases from %d files into %s", len(datasets),
+             len(snakemake.input), snakemake.output[0])
 
 
 run_logged(snakemake.log[0], main)

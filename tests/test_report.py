@@ -1,0 +1,336 @@
+"""The Snakemake report: its landing page (roughcontact.report) and captions, and the demo's report in a browser."""
+import os
+import re
+import shutil
+import subprocess
+from html.parser import HTMLParser
+from pathlib import Path
+
+import jinja2
+import numpy as np
+import pytest
+import xarray as xr
+from docutils.core import publish_parts
+
+from conftest import REPO, run_snakemake
+from roughcontact import __version__, fit, report
+from roughcontact.figures import FIGURES
+
+REPORT_DIR = REPO / "workflow" / "report"
+DOCUTILS_CONF = REPORT_DIR / "docutils.conf"
+GIT = shutil.which("git")
+CHROMIUM = shutil.which("chromium")
+
+
+@pytest.fixture
+def mathml(monkeypatch):
+    """docutils configured as the Snakefile configures it for the report (undone afterwards)."""
+    monkeypatch.delenv("DOCUTILSCONFIG", raising=False)
+    report.render_maths_as_mathml(DOCUTILS_CONF)
+    assert os.environ["DOCUTILSCONFIG"].endswith(os.pathsep + str(DOCUTILS_CONF))
+
+
+def _html(rst: str) -> str:
+    """``rst`` rendered as Snakemake renders captions; fails on any docutils message."""
+    html = publish_parts(rst, writer="html", settings_overrides={"report_level": 1, "halt_level": 2})["body"]
+    assert "system-message" not in html, html
+    return html
+
+
+# --------------------------------------------------------------------------------- git commit
+def _git(cwd, *args):
+    subprocess.run([GIT, "-c", "user.name=t", "-c", "user.email=t@example.org", *args], cwd=cwd, check=True,
+                   capture_output=True)
+
+
+@pytest.mark.skipif(GIT is None, reason="git is not installed")
+def test_git_commit_names_the_checkout_and_its_uncommitted_changes(tmp_path):
+    assert report.git_commit(tmp_path) == "unknown"  # not a git checkout
+    _git(tmp_path, "init", "-q")
+    assert report.git_commit(tmp_path) == "unknown"  # no commit yet
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "code.py").write_text("x = 1\n")
+    _git(tmp_path, "add", ".")
+    _git(tmp_path, "commit", "-q", "-m", "first")
+    head = subprocess.run([GIT, "rev-parse", "HEAD"], cwd=tmp_path, capture_output=True, text=True).stdout.strip()
+    assert len(head) == 40
+    assert report.git_commit(tmp_path / "sub") == head  # any folder of the work tree
+    (tmp_path / "untracked.txt").write_text("results, a user's scene file\n")
+    assert report.git_commit(tmp_path) == head  # untracked files are not changes to the code
+    (tmp_path / "sub" / "code.py").write_text("x = 2\n")
+    assert report.git_commit(tmp_path) == f"{head} (uncommitted changes)"
+
+
+def test_git_commit_is_unknown_without_git(tmp_path, monkeypatch):
+    monkeypatch.setenv("PATH", str(tmp_path))  # no git on it
+    assert report.git_commit(REPO) == "unknown"
+
+
+# --------------------------------------------------------------------------------- maths
+def test_docutils_config_adds_ours_last_and_keeps_the_users():
+    ours = "/w/workflow/report/docutils.conf"
+    standard = os.pathsep.join(report.DOCUTILS_STANDARD_CONFIGS)
+    assert report.docutils_config_path(ours, {}) == standard + os.pathsep + ours
+    assert report.docutils_config_path(ours, {"DOCUTILSCONFIG": "/mine.conf"}) == "/mine.conf" + os.pathsep + ours
+    # a second parse of the Snakefile (e.g. in a cluster job) does not add it twice
+    again = report.docutils_config_path(ours, {"DOCUTILSCONFIG": standard + os.pathsep + ours})
+    assert again == standard + os.pathsep + ours
+
+
+def test_maths_renders_as_mathml_with_the_shipped_docutils_config(mathml):
+    html = _html(r"The law :math:`\kappa = \sqrt{2\pi}`." + "\n\n" + r".. math:: \frac{A}{A_0} = \beta^{\mu}" + "\n")
+    assert html.count("<math") == 2 and "<msqrt>" in html and "<mfrac>" in html
+    assert 'display="block"' in html
+
+
+def test_without_it_docutils_maths_needs_a_stylesheet_the_report_lacks(monkeypatch, tmp_path):
+    monkeypatch.setenv("DOCUTILSCONFIG", str(tmp_path / "none.conf"))
+    html = _html(r":math:`\frac{a}{b}`")
+    assert "<math" not in html and 'class="fraction"' in html  # laid out only by docutils' math.css
+
+
+@pytest.mark.parametrize("caption", sorted(p.name for p in REPORT_DIR.glob("*.rst")))
+def test_every_caption_renders_cleanly(caption, mathml):
+    """Captions without Jinja render without docutils messages; their maths becomes MathML."""
+    text = (REPORT_DIR / caption).read_text()
+    if "{{" in text or "{%" in text:
+        pytest.skip("a Jinja template: rendered by the report (test_landing_page_template_renders, browser test)")
+    html = _html(text)
+    assert html.count("<math") == text.count(":math:") + text.count(".. math::")
+
+
+# --------------------------------------------------------------------------------- tables
+PARAMETERS = {"contact": {"grid": {"H": ["0.36", "0.84"], "k_l": ["4"]}, "outputs": {"fields": []},
+                          "effects": {}, "seeds": 3, "solver": {"tol": 1e-8}},
+              "fit": {"window": [0.01, 0.11], "include_unconverged": False}}
+
+
+def test_parameters_table_lists_every_dotted_key_sorted(mathml):
+    rst = report.parameters_table(PARAMETERS)
+    html = _html(rst)
+    keys = ["contact.effects", "contact.grid.H", "contact.grid.k_l", "contact.outputs.fields", "contact.seeds",
+            "contact.solver.tol", "fit.include_unconverged", "fit.window"]
+    assert [line.split("``")[1] for line in rst.splitlines() if line.startswith("   * - ``")] == keys
+    for shown in ("0.36, 0.84", "1e-08", "[0.01, 0.11]", "false", "(empty)", "{}"):
+        assert shown in html, shown
+    with pytest.raises(ValueError, match="no parameters"):
+        report.parameters_table({})
+    odd = _html(report.parameters_table({"x": "a`b\\c *d*_ "}))  # not a literal: escaped text, shown as written
+    assert "<td>a`b\\c *d*_</td>" in odd.replace("\n", "")
+
+
+def _fit_result(n_seeds=3, ci=True):
+    """A small dataset shaped like roughcontact.fit.fit_cel's result, for fit.to_csv_table."""
+    coords = {"k_l": [4.0, 16.0], "k_s": [32.0], "H_group": ["0.36", "pooled"], "estimator": ["paper", "joint"],
+              "constant": list(fit.CONSTANTS)}
+    dims = tuple(coords)
+    shape = tuple(len(v) for v in coords.values())
+    value = np.arange(np.prod(shape), dtype=float).reshape(shape) / 10 + 1
+    value[1, 0, 0, 1, 2] = np.nan  # a group/estimator/constant without a fit
+    constrained = np.ones(shape, dtype=int)
+    constrained[0, 0, 1, 0, 1] = 0
+    lo, hi = (value - 0.5, value + 0.5) if ci else (np.full(shape, np.nan),) * 2
+    return xr.Dataset(
+        {"value": (dims, value), "stderr": (dims, value / 100), "bootstrap_stderr": (dims, value / 10),
+         "ci_low": (dims, lo), "ci_high": (dims, hi), "constrained": (dims, constrained),
+         "n_points": (dims, np.full(shape, 25)), "n_seeds": (dims[:3], np.full(shape[:3], n_seeds)),
+         "n_boot_ok": (dims[:4], np.full(shape[:4], 200)),
+         "paper_value": (("constant",), [2.87009, 0.55, 0.21]), "paper_stderr": (("constant",), [0.005, 0.02, 0.005])},
+        coords=coords)
+
+
+def test_fit_table_shows_every_value_of_cel_csv_with_its_interval(mathml):
+    csv_text = fit.to_csv_table(_fit_result())
+    rows = report.read_fit_csv(csv_text)
+    html = _html(report.fit_table(csv_text))
+    assert html.count("<table") == 1
+    # one table row per group and estimator, a header row and the published values
+    assert html.count("<tr") == 1 + len(rows) // 3 + 1
+    for row in rows:
+        if row["value"]:
+            assert f"{row['value']} [{row['ci_low']}, {row['ci_high']}]" in html, row
+    assert "—" in html  # the constant without a fit
+    assert html.count(" *</td>") == 1 and "not constrained by the data" in html
+    assert "2.87009 ± 0.005" in html and "0.55 ± 0.02" in html and "published" in html
+    assert html.count("<math") == 6  # k_l, k_s, H, kappa, mu, beta in the header
+
+
+def test_fit_table_without_bootstrap_shows_the_values_alone(mathml):
+    csv_text = fit.to_csv_table(_fit_result(ci=False))
+    html = _html(report.fit_table(csv_text))
+    assert "[" not in html.split("</thead>")[1].split("published")[0]
+    assert "1.1<" in html or "1.1\n" in html
+
+
+def test_fit_table_refuses_what_is_not_a_cel_table():
+    with pytest.raises(ValueError, match="no rows"):
+        report.fit_table("k_l,k_s\n")
+    with pytest.raises(ValueError, match="lacks the column"):
+        report.fit_table("k_l,k_s\n4,32\n")
+    good = fit.to_csv_table(_fit_result())
+    with pytest.raises(ValueError, match="unknown constant 'gamma'"):
+        report.fit_table(good.replace(",kappa,", ",gamma,"))
+
+
+def test_summary_has_the_code_the_parameters_and_the_fit(mathml):
+    csv_text = fit.to_csv_table(_fit_result())
+    rst = report.summary_rst("demo", PARAMETERS, version="1.2.3", commit="abc (uncommitted changes)",
+                             fit_csv=csv_text)
+    assert rst == report.summary_rst("demo", PARAMETERS, version="1.2.3", commit="abc (uncommitted changes)",
+                                     fit_csv=csv_text), "deterministic"
+    html = _html(rst)
+    for text in ("1.2.3", "abc (uncommitted changes)", "Parameters of scene demo", "contact.solver.tol",
+                 "Contact evolution law fit", "published"):
+        assert text in html, text
+    without_fit = _html(report.summary_rst("rep", PARAMETERS, version="1.2.3", commit="unknown"))
+    assert "Contact evolution law" not in without_fit and "unknown" in without_fit
+    with pytest.raises(ValueError, match="version and the commit"):
+        report.summary_rst("demo", PARAMETERS, version="1.2.3", commit="")
+
+
+# --------------------------------------------------------------------------------- landing page
+class _Category:
+    def __init__(self, name):
+        self.name, self.is_other = name or "Other", name is None
+
+    def __lt__(self, other):
+        return self.name < other.name
+
+
+class _Result:
+    def __init__(self, path, caption):
+        self.path, self.target, self.caption = Path(path), Path(path).name, caption
+
+
+def _landing_page(config, results):
+    """workflow.rst rendered as Snakemake 9 renders the global description (jinja2 then docutils)."""
+    categories = {}
+    for category, res in results:
+        categories.setdefault(_Category(category), {}).setdefault(_Category(None), []).append(res)
+    files = [res for _, res in results]
+    links = "\n\n" + "\n".join(f".. _{res.target}: javascript:app.showResultInfo('{res.path}')" for res in files)
+    env = jinja2.Environment(trim_blocks=True, lstrip_blocks=True)
+    text = env.from_string((REPORT_DIR / "workflow.rst").read_text() + links).render(
+        snakemake=type("Snakemake", (), {"config": config}), categories=categories, files=files)
+    html = publish_parts(text, writer="html")["html_body"]  # warnings and errors shown, as in Snakemake
+    assert "system-message" not in html, html
+    return html
+
+
+def test_landing_page_template_renders(tmp_path, monkeypatch, mathml):
+    monkeypatch.chdir(tmp_path)  # Snakemake renders the report from the working directory
+    summary = Path("results/demo/report/summary.rst")
+    summary.parent.mkdir(parents=True)
+    summary.write_text(report.summary_rst("demo", PARAMETERS, version="9.9", commit="unknown",
+                                          fit_csv=fit.to_csv_table(_fit_result())))
+    config = {"scene": "demo", "scenes": {"demo": {"description": "A *star*, k_l and `ticks` stay text."}}}
+    figure = _Result("results/demo/figures/kappa.png", "<p>The kappa caption <math><mi>κ</mi></math>.</p>")
+    html = _landing_page(config, [("Summary", _Result(summary, "<p>summary</p>")), ("Contact", figure)])
+    assert "A *star*, k_l and `ticks` stay text." in html
+    assert "Parameters of scene demo" in html and "9.9" in html and "published" in html
+    assert "kappa.png" in html and "The kappa caption <math>" in html and "(Contact)" in html
+    assert html.count("<math") >= 3  # the law, the figure's caption, the fit's header
+    assert "safe center" in html  # the page keeps its top when taller than the window
+    summary.unlink()
+    html = _landing_page({"scene": "demo", "scenes": {"demo": {}}}, [("Contact", figure)])
+    assert "No summary of this scene yet" in html
+
+
+# --------------------------------------------------------------------------------- in a browser
+class _Visible(HTMLParser):
+    """Text and element counts of a DOM, without scripts and styles."""
+
+    def __init__(self):
+        super().__init__()
+        self.skip, self.parts, self.tags = 0, [], {}
+
+    def handle_starttag(self, tag, attrs):
+        if tag in ("script", "style"):
+            self.skip += 1
+        elif not self.skip:
+            self.tags[tag] = self.tags.get(tag, 0) + 1
+
+    def handle_endtag(self, tag):
+        if tag in ("script", "style"):
+            self.skip -= 1
+
+    def handle_data(self, data):
+        if not self.skip:
+            self.parts.append(data)
+
+    @property
+    def text(self):
+        return " ".join(" ".join(self.parts).split())
+
+
+def _plain_phrase(rst: str, n: int = 3) -> str:
+    """The first ``n`` consecutive words of ``rst`` without markup: text a reader sees as written."""
+    words = rst.split()
+    for i in range(len(words) - n + 1):
+        if all(re.fullmatch(r"[A-Za-z][A-Za-z'-]*", w) for w in words[i:i + n]):
+            return " ".join(words[i:i + n])
+    raise AssertionError(f"no plain phrase of {n} words in {rst!r}")
+
+
+# Records where the landing page's first heading ("Code") lies once the app has rendered.
+MEASURE = """<script>
+window.addEventListener("load", () => setTimeout(() => {
+  const h = [...document.querySelectorAll("#app h1, #app h2, #app h3")].find(e => e.textContent.trim() === "Code");
+  document.body.setAttribute("data-code-top", h ? String(h.getBoundingClientRect().top) : "missing");
+}, 2000));
+</script>
+"""
+
+
+def _browser_dom(html_file: Path, profile: Path, height: int) -> str:
+    """The DOM of ``html_file`` after headless chromium has run its scripts."""
+    cmd = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+           "--disable-background-networking", "--disable-component-update", "--disable-sync",
+           f"--user-data-dir={profile}", f"--window-size=1280,{height}", "--virtual-time-budget=15000",
+           "--dump-dom", html_file.as_uri()]
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0 and "</html>" in res.stdout, res.stderr[-3000:]
+    return res.stdout
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (make test installs it as root with apt-get)")
+def test_demo_report_in_a_browser(demo_run, tmp_path, shipped_config):
+    """`snakemake --report` of the demo scene, opened by a real browser: what the landing page shows."""
+    res = run_snakemake(demo_run, "--report", str(tmp_path / "report.html"), timeout=600)
+    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
+    page = tmp_path / "measured.html"
+    head, tail = (tmp_path / "report.html").read_text().rsplit("</body>", 1)  # scripts hold "</body>" too
+    page.write_text(head + MEASURE + "</body>" + tail)
+    height = 900
+    dom = _browser_dom(page, tmp_path / "profile", height)
+    visible = _Visible()
+    visible.feed(dom)
+    text = visible.text
+    assert "Parameters of scene demo" in text, "the app did not render the landing page"
+    # the code, the scene and its parameters
+    assert f"roughcontact version: {__version__}" in text and "git commit: unknown" in text  # not a git checkout
+    assert "for scene demo" in text and _plain_phrase(shipped_config["scenes"]["demo"]["description"]) in text
+    demo = shipped_config["scenes"]["demo"]["contact"]
+    for key, value in (("contact.surface.N", demo["surface"]["N"]), ("contact.grid.H", ", ".join(demo["grid"]["H"]))):
+        assert f"{key} {value}" in text, key
+    # the CEL fit table: every fitted value of cel.csv with its bootstrap interval
+    rows = report.read_fit_csv((demo_run / "results" / "demo" / "fit" / "cel.csv").read_text())
+    assert rows
+    for row in rows:
+        if row["value"] and row["ci_low"]:
+            assert f"{row['value']} [{row['ci_low']}, {row['ci_high']}]" in text, row
+    assert visible.tags.get("table", 0) >= 2  # the parameters and the fit
+    # every figure, by name, with its caption
+    figures = sorted(p.stem for p in (demo_run / "results" / "demo" / "figures").glob("*.png"))
+    assert len(figures) >= 5
+    for name in figures:
+        assert f"{name}.png" in text, name
+        phrase = _plain_phrase((REPORT_DIR / FIGURES[name].caption).read_text())
+        assert phrase in text, (name, phrase)
+    assert "cel.csv (Fit)" in text
+    # maths rendered as MathML, no docutils error, and the top of the page in the window
+    assert visible.tags.get("math", 0) >= 10 and visible.tags.get("mfrac", 0) >= 1
+    assert "System Message" not in text and "Docutils System Messages" not in text
+    top = dom.split('data-code-top="')[1].split('"')[0]
+    assert top != "missing" and 0 <= float(top) < height, f"the landing page's 'Code' heading is at {top} px"

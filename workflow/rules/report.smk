@@ -1,0 +1,29 @@
+# The report's landing page: a reStructuredText fragment (scene parameters, version, git commit,
+# CEL fit table) that workflow/report/workflow.rst includes. Rendered by roughcontact.report.
+# Its params are the scene's study blocks without the description (roughcontact.params.summary),
+# so a description edit plans nothing; the commit is read when the job runs.
+
+
+localrules:
+    report_summary,
+
+
+rule report_summary:
+    input:
+        fit=lambda w: [f"results/{w.scene}/fit/cel.csv"] if "contact" in SCENES[w.scene] else [],
+    output:
+        report(
+            "results/{scene}/report/summary.rst",
+            caption="../report/summary.rst",
+            category="Summary",
+        ),
+    log:
+        "results/{scene}/logs/report_summary.log",
+    benchmark:
+        "results/{scene}/benchmarks/report_summary.tsv"
+    conda:
+        "../../envs/roughcontact.yaml"
+    params:
+        parameters=lambda w: params.summary(SCENES[w.scene]),
+    script:
+        "../scripts/report_summary.py"
