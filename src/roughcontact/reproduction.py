@@ -1,0 +1,269 @@
+"""The paper's claims measured on a run: numbers, verdicts and figures for docs/reproduction/.
+
+Pure functions over the aggregates (:func:`claims`), and the two commands of the
+reproduction (``python -m roughcontact.reproduction``):
+
+* ``publish RESULTS OUT``: copy a run's aggregates and fit (``results/{scene}/aggregate/*.nc``,
+  ``fit/cel.{nc,csv}``; not the per-case files) into ``OUT/data``, then ``regenerate``;
+* ``regenerate OUT``: from ``OUT/data`` alone, in seconds and without a solve, redraw the
+  figures into ``OUT/figures`` (the example surfaces are regenerated from their seeds)
+  and write the claim table ``OUT/claims.md``.
+
+Every verdict states the test it applies, so a reader can disagree with a threshold
+without recomputing anything.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from . import plots
+from .figures import FIGURES
+from .io import read_dataset, write_text_atomic
+
+#: The constants the paper states for lambda_l = L/16, lambda_s = L/32 (its Figs. 3-4).
+PAPER_KAPPA = 1.145 * np.sqrt(2 * np.pi)
+#: Area fraction at which kappa is compared across cases (inside the paper's fit window).
+KAPPA_AREA = 0.05
+#: Files of a published reproduction, relative to its data folder.
+DATA_FILES = ("representativity.nc", "contact.nc", "cel.nc", "cel.csv")
+
+
+def kappa_at(con: xr.Dataset, area: float = KAPPA_AREA) -> xr.DataArray:
+    """kappa of every case at ``A/A0 = area``, log-linear in A between load steps.
+
+    ``con`` is a contact aggregate (``kappa`` and ``area_fraction`` over
+    ``k_l, k_s, H, seed, step``); cases that never reach ``area`` give NaN.
+    Returns dims ``(k_l, k_s, H, seed)`` [1].
+    """
+    def interp(a, k):
+        ok = np.isfinite(a) & np.isfinite(k) & (a > 0)
+        if ok.sum() < 2 or not a[ok].min() <= area <= a[ok].max():
+            return np.nan
+        order = np.argsort(a[ok])
+        return float(np.interp(np.log(area), np.log(a[ok][order]), k[ok][order]))
+
+    return xr.apply_ufunc(interp, con["area_fraction"], con["kappa"], input_core_dims=[["step"], ["step"]],
+                          vectorize=True)
+
+
+def _row(claim: str, paper: str, ours: str, verdict: str, test: str) -> dict:
+    return {"claim": claim, "paper": paper, "ours": ours, "verdict": verdict, "test": test}
+
+
+def _eps_by_kl(rep: xr.Dataset) -> xr.DataArray:
+    """Scale-free eps (eps sqrt(sigma)), mean over seeds, per (k_l, k_s)."""
+    eps = rep["epsilon"] * np.sqrt(rep["std_height"]) if "std_height" in rep else rep["epsilon"]
+    return eps.where(rep["case_present"]).mean("seed").mean("H")
+
+
+def representativity_claims(rep: xr.Dataset) -> list[dict]:
+    """The threshold k_l >~ 8-16 and the weak dependence on k_s (the paper's Fig. 1a)."""
+    eps = _eps_by_kl(rep)
+    by_kl = eps.mean("k_s")
+    kls = [float(k) for k in by_kl.k_l.values]
+    vals = [float(v) for v in by_kl.values]
+    # the threshold: from which k_l on eps has fallen to within 1.5x of its value at the largest k_l
+    floor = vals[-1]
+    thr = next(k for k, v in zip(kls, vals, strict=True) if v <= 1.5 * floor)
+    falls = all(b <= a * 1.05 for a, b in zip(vals, vals[1:], strict=False))
+    rows = [_row(
+        "representativity grows with k_l up to k_l ≈ 8–16", "k_l ≈ 8–16",
+        "eps_σ: " + ", ".join(f"{v:.3g} (k_l={k:g})" for k, v in zip(kls, vals, strict=True))
+        + f"; within 1.5× of k_l={kls[-1]:g} from k_l={thr:g}",
+        "reproduced" if falls and 4 <= thr <= 16 else "partly" if falls else "not",
+        "mean over k_s and seeds of the scale-free eps falls with k_l; threshold = first k_l within 1.5× "
+        "of the largest k_l's value")]
+    spread_ks = (eps.max("k_s") - eps.min("k_s")) / eps.mean("k_s")
+    spread_kl = (by_kl.max() - by_kl.min()) / by_kl.mean()
+    rows.append(_row(
+        "k_s has a weaker effect than k_l (for k_s ≫ k_l)", "weak",
+        f"relative spread over k_s at fixed k_l: {float(spread_ks.median()):.2f} (median over k_l); "
+        f"over k_l: {float(spread_kl):.2f}",
+        "reproduced" if float(spread_ks.median()) < 0.5 * float(spread_kl) else "not",
+        "(max − min)/mean of eps_σ over k_s, median over k_l, below half the same spread over k_l"))
+    return rows
+
+
+def _sel(da: xr.DataArray, **coords) -> xr.DataArray:
+    return da.sel({k: float(v) for k, v in coords.items()})
+
+
+def kappa_claims(con: xr.Dataset) -> list[dict]:
+    """H-independence, scatter, kappa against lambda_l and the asymptotes (the paper's Fig. 3)."""
+    kap = kappa_at(con)
+    mean, std = kap.mean("seed"), kap.std("seed", ddof=1)
+    kl_max, kl_min, ks_min = float(kap.k_l.max()), float(kap.k_l.min()), float(kap.k_s.min())
+    h_spread = (mean.max("H") - mean.min("H")) / mean.mean("H")
+    rep_spread, nonrep_spread = float(_sel(h_spread, k_l=kl_max, k_s=ks_min)), float(_sel(h_spread, k_l=kl_min,
+                                                                                             k_s=ks_min))
+    rows = [_row(
+        "κ(A/A0) independent of H for representative smooth surfaces, H-dependent otherwise",
+        "independent at λ_l = L/16, λ_s = L/32; higher H, smaller κ at λ_l = L",
+        f"spread of κ(A/A0={KAPPA_AREA}) over H: {100 * rep_spread:.1f} % at (k_l, k_s) = ({kl_max:g}, "
+        f"{ks_min:g}), {100 * nonrep_spread:.1f} % at ({kl_min:g}, {ks_min:g})",
+        "reproduced" if rep_spread < 0.5 * nonrep_spread else "partly" if rep_spread < nonrep_spread else "not",
+        "(max − min)/mean over H of the seed-mean κ at A/A0 = 0.05; reproduced when the representative "
+        "spread is below half the non-representative one")]
+    rel = (std / mean).mean(["k_s"])
+    by_kl = rel.mean("H")
+    by_h = rel.mean("k_l")
+    kl_falls = float(by_kl.isel(k_l=-1)) < float(by_kl.isel(k_l=0))
+    h_rises = float(by_h.isel(H=-1)) > float(by_h.isel(H=0))
+    rows.append(_row(
+        "seed scatter falls with k_l and rises with H", "falls with k_l, rises with H",
+        "s.d./mean of κ(0.05) over seeds: " + ", ".join(f"{100 * float(v):.1f} % (k_l={float(k):g})"
+                                                         for k, v in zip(by_kl.k_l.values, by_kl.values,
+                                                                         strict=True))
+        + "; " + ", ".join(f"{100 * float(v):.1f} % (H={float(h):g})"
+                           for h, v in zip(by_h.H.values, by_h.values, strict=True)),
+        "reproduced" if kl_falls and h_rises else "partly" if kl_falls or h_rises else "not",
+        "coefficient of variation over seeds, averaged over the other parameters; compares the ends"))
+    kl_mean = mean.mean(["k_s", "H"])
+    rises = bool(np.all(np.diff(kl_mean.values) > 0))
+    rows.append(_row(
+        "κ rises as λ_l falls (k_l rises)", "rises",
+        "κ(0.05): " + ", ".join(f"{float(v):.3f} (k_l={float(k):g})" for k, v in zip(kl_mean.k_l.values,
+                                                                                       kl_mean.values, strict=True)),
+        "reproduced" if rises else "not", "seed-, H- and k_s-mean κ at A/A0 = 0.05 increasing in k_l"))
+    bgt = np.sqrt(2 * np.pi)
+    frac_above = float((mean > bgt).mean())
+    rows.append(_row(
+        "κ is not confined between the Persson (√(8/π) ≈ 1.60) and BGT (√(2π) ≈ 2.51) asymptotes",
+        "not confined", f"κ(0.05) from {float(mean.min()):.3f} to {float(mean.max()):.3f}; "
+        f"{100 * frac_above:.0f} % of the (k_l, k_s, H) points above √(2π)",
+        "reproduced" if frac_above > 0 else "not", "some seed-mean κ at A/A0 = 0.05 above √(2π)"))
+    return rows
+
+
+def cel_claims(fit: xr.Dataset, con: xr.Dataset) -> list[dict]:
+    """kappa, mu and beta at (16, 32), pooled over H; A/A0 at the final load."""
+    paper = {"kappa": (PAPER_KAPPA, 0.002 * np.sqrt(2 * np.pi)), "mu": (0.55, 0.02), "beta": (0.21, 0.005)}
+    kl, ks = float(fit.k_l.max()), float(fit.k_s.min())
+    point = fit.sel(k_l=kl, k_s=ks, H_group="pooled", estimator="paper")
+    rows = []
+    for name, (pv, pe) in paper.items():
+        v = float(point["value"].sel(constant=name))
+        lo, hi = float(point["ci_low"].sel(constant=name)), float(point["ci_high"].sel(constant=name))
+        constrained = bool(point["constrained"].sel(constant=name))
+        inside = lo <= pv <= hi
+        scale = "·√(2π)" if name == "kappa" else ""
+        f = 1 / np.sqrt(2 * np.pi) if name == "kappa" else 1.0
+        rows.append(_row(
+            f"{name} = paper value (λ_l = L/{kl:g}, λ_s = L/{ks:g}, pooled H)",
+            f"({pv * f:.3f} ± {pe * f:.3f}){scale}" if scale else f"{pv:.3f} ± {pe:.3f}",
+            f"{v * f:.3f}{scale}, 95 % bootstrap interval [{lo * f:.3f}, {hi * f:.3f}]"
+            + ("" if constrained else " (not constrained by the data)"),
+            "reproduced" if inside and constrained else "partly" if abs(v - pv) < 0.1 * abs(pv) else "not",
+            "paper's value inside our 95 % bootstrap interval over seeds (the paper's fit: κ from κ(A), then "
+            "μ, β from ∂p̄/∂p0, window A/A0 ∈ [0.01, 0.11])"))
+    final = con["area_fraction"].isel(step=-1).where(con["case_present"])
+    rows.append(_row(
+        "A/A0 ≈ 10 % at the final load", "≈ 10 %",
+        f"{100 * float(final.mean()):.1f} % (range {100 * float(final.min()):.1f}–{100 * float(final.max()):.1f} %)"
+        f" at p0/E* = {float(con['pressure'].isel(step=-1).max()) / float(con.attrs.get('e_star', 1.0)):.4g}",
+        "reproduced" if 0.07 <= float(final.mean()) <= 0.14 else "not",
+        "mean over cases within 7–14 %"))
+    return rows
+
+
+def claims(rep: xr.Dataset, con: xr.Dataset, fit: xr.Dataset) -> list[dict]:
+    """Every claim row: ``claim, paper, ours, verdict, test``."""
+    return representativity_claims(rep) + kappa_claims(con) + cel_claims(fit, con)
+
+
+def markdown_table(rows: list[dict]) -> str:
+    """The claim rows as a Markdown table."""
+    out = ["| claim | paper | ours | verdict | test |", "|---|---|---|---|---|"]
+    out += [f"| {r['claim']} | {r['paper']} | {r['ours']} | **{r['verdict']}** | {r['test']} |" for r in rows]
+    return "\n".join(out) + "\n"
+
+
+def _scene_tree(data: Path, tmp: Path) -> Path:
+    """The published files laid out as ``results/{scene}/`` for the figure registry."""
+    (tmp / "aggregate").mkdir(parents=True)
+    (tmp / "fit").mkdir()
+    shutil.copy(data / "representativity.nc", tmp / "aggregate" / "representativity.nc")
+    shutil.copy(data / "contact.nc", tmp / "aggregate" / "contact.nc")
+    shutil.copy(data / "cel.nc", tmp / "fit" / "cel.nc")
+    return tmp
+
+
+def _example_surfaces(rep: xr.Dataset, tmp: Path) -> list[str]:
+    """The paper's Fig. 1 b-d surfaces (k_l = 1, 4, 16 at k_s = 40, seed 0), regenerated."""
+    import json
+
+    from .datasets import surface_dataset
+    from .io import write_dataset
+    from .surface import generate_surface
+
+    surf = json.loads(rep.attrs["scene_parameters"])["surface"]
+    norm = {k: surf[k] for k in ("rms_slope", "rms_height") if k in surf}
+    paths = []
+    for kl in ("1", "4", "16"):
+        h = generate_surface(surf["N"], float(kl), 40.0, 0.8, 0, length=surf["L"], plateau=surf["plateau"], **norm)
+        ds = surface_dataset(h, k_l=kl, k_s="40", hurst="0.8", seed=0, length=surf["L"], normalisation=norm)
+        path = tmp / f"surface_{kl}.nc"
+        write_dataset(ds, path, stage="surface", scene="reproduction", scene_parameters={"surface": surf})
+        paths.append(str(path))
+    return paths
+
+
+def regenerate(out: Path) -> None:
+    """Figures and claim table of ``out`` from ``out/data`` (no solve)."""
+    data = out / "data"
+    figs = out / "figures"
+    figs.mkdir(parents=True, exist_ok=True)
+    rep = read_dataset(data / "representativity.nc", stage="aggregate", variables=["epsilon"])
+    con = read_dataset(data / "contact.nc", stage="aggregate", variables=["area_fraction", "kappa"])
+    fit = read_dataset(data / "cel.nc", stage="fit")
+    with tempfile.TemporaryDirectory() as td:
+        root = _scene_tree(data, Path(td))
+        for name in ("representativity", "area_load", "kappa", "dpbar"):
+            spec = FIGURES[name]
+            paths = {role: str(root / p) for role, p in spec.inputs({}).items()} if name != "representativity" \
+                else {"rep": str(root / "aggregate" / "representativity.nc")}
+            plots.save_figure(spec.render(paths), figs / f"{name}.png")
+        surfaces = _example_surfaces(rep, Path(td))
+        plots.save_figure(FIGURES["surface_examples"].render({"surfaces": surfaces}), figs / "surface_examples.png")
+    write_text_atomic(out / "claims.md", markdown_table(claims(rep, con, fit)))
+
+
+def publish(results: Path, out: Path) -> None:
+    """Copy a run's aggregates and fit into ``out/data``, then :func:`regenerate`."""
+    data = out / "data"
+    data.mkdir(parents=True, exist_ok=True)
+    sources = {"representativity.nc": results / "aggregate" / "representativity.nc",
+               "contact.nc": results / "aggregate" / "contact.nc",
+               "cel.nc": results / "fit" / "cel.nc", "cel.csv": results / "fit" / "cel.csv"}
+    for name, src in sources.items():
+        if not src.is_file():
+            raise FileNotFoundError(f"publish: {src} is missing; run the scene first "
+                                    "(snakemake -j2 --config scene=reproduction)")
+        shutil.copy(src, data / name)
+    regenerate(out)
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(prog="python -m roughcontact.reproduction", description=__doc__.split("\n")[0])
+    sub = ap.add_subparsers(dest="command", required=True)
+    p = sub.add_parser("publish", help="copy a run's aggregates into OUT/data, then regenerate")
+    p.add_argument("results", type=Path, help="results/{scene} of a finished run")
+    p.add_argument("out", type=Path, help="publication folder, e.g. docs/reproduction")
+    r = sub.add_parser("regenerate", help="figures and claim table from OUT/data (seconds, no solve)")
+    r.add_argument("out", type=Path, help="publication folder, e.g. docs/reproduction")
+    args = ap.parse_args(argv)
+    if args.command == "publish":
+        publish(args.results, args.out)
+    else:
+        regenerate(args.out)
+
+
+if __name__ == "__main__":
+    main()
