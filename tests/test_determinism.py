@@ -13,6 +13,7 @@ import sys
 import textwrap
 from collections import Counter
 
+import numpy as np
 import pytest
 
 pytest.importorskip("pyfftw")
@@ -88,7 +89,8 @@ def test_fft_results_identical_across_concurrent_processes(tmp_path):
     )
 
 
-def test_estimate_plan_ignores_measured_wisdom():
+@pytest.mark.parametrize("n", [96, 128])  # 128 has a shipped plan, 96 not
+def test_estimate_plan_ignores_measured_wisdom(n):
     """A timed plan made earlier in the process must not replace the ESTIMATE choice.
 
     FFTW reuses wisdom from a more rigorous planner (MEASURE, PATIENT), so without
@@ -101,20 +103,52 @@ def test_estimate_plan_ignores_measured_wisdom():
         import hashlib, json, sys
         import numpy as np, pyfftw
         from roughcontact.fft import RealFFT2
-        a = np.random.default_rng(0).standard_normal((96, 96))
+        n = int(sys.argv[1])
+        a = np.random.default_rng(0).standard_normal((n, n))
         def digest():
-            f = RealFFT2((96, 96), backend="pyfftw")
+            f = RealFFT2((n, n), backend="pyfftw")
             return hashlib.sha256(f.forward(a).tobytes() + f.backward(f.forward(a)).tobytes()).hexdigest()
         plain = digest()
-        r = pyfftw.empty_aligned((96, 96), dtype="float64")
-        s = pyfftw.empty_aligned((96, 49), dtype="complex128")
+        r = pyfftw.empty_aligned((n, n), dtype="float64")
+        s = pyfftw.empty_aligned((n, n // 2 + 1), dtype="complex128")
         pyfftw.FFTW(r, s, axes=(0, 1), flags=("FFTW_PATIENT",))
         print(json.dumps([plain, digest()]))
         """
     )
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=TIMEOUT_S,
-                          env=dict(os.environ, OMP_NUM_THREADS="1"))
+    proc = subprocess.run([sys.executable, "-c", code, str(n)], capture_output=True, text=True,
+                          timeout=TIMEOUT_S, env=dict(os.environ, OMP_NUM_THREADS="1"))
     assert proc.returncode == 0, proc.stderr
     plain, after = json.loads(proc.stdout.strip().splitlines()[-1])
     assert plain == after, "the ESTIMATE plan changed after a PATIENT plan of the same shape (wisdom reused)"
 
+
+
+def test_shipped_plans_are_loaded_before_planning():
+    # The measured plans shipped with the package are in FFTW's store when a pair is planned.
+    pyfftw = pytest.importorskip("pyfftw")
+    from roughcontact.fft import RealFFT2, shipped_wisdom
+
+    shipped = shipped_wisdom()
+    assert shipped is not None, "src/roughcontact/fftw_wisdom.json is missing"
+    RealFFT2((1024, 1024), backend="pyfftw", dtype=np.float32)
+    store = pyfftw.export_wisdom()
+    for mine, theirs in zip(shipped[:2], store[:2], strict=True):
+        entries = [line.strip() for line in mine.decode().splitlines()[1:-1]]
+        assert entries and all(e in theirs.decode() for e in entries)
+
+
+def test_write_wisdom_round_trip(tmp_path, monkeypatch):
+    pytest.importorskip("pyfftw")
+    from roughcontact import fft
+
+    path = fft.write_wisdom(tmp_path / "w.json", sizes=(8, 16))
+    monkeypatch.setattr(fft, "WISDOM_FILE", path)
+    fft.shipped_wisdom.cache_clear()
+    try:
+        double, single, _ = fft.shipped_wisdom()
+        assert double.startswith(b"(fftw-") and single.startswith(b"(fftw-")
+        data = json.loads(path.read_text())
+        assert data["sizes"] == [8, 16] and data["flags"] == ["FFTW_MEASURE"]
+    finally:
+        monkeypatch.undo()
+        fft.shipped_wisdom.cache_clear()

@@ -7,18 +7,26 @@ in real space and ``complex128`` of shape ``(n0, n1 // 2 + 1)`` in Fourier space
 half the time of a double pair; the solver uses them for its inner products only).
 
 Reproducibility: FFTW plans are made with ``FFTW_ESTIMATE`` (:data:`PLANNER_FLAGS`),
-which picks the algorithm from heuristics alone, so the same transform gives the same
-bits in every process on a given machine and build. ``FFTW_MEASURE`` would time candidate
-plans and, on a loaded machine, pick different ones in different processes, whose results
-differ in the last bits. The cost (``benchmarks/README.md``): an ``FFTW_ESTIMATE`` pair
-takes 1.1-1.5x the time of an ``FFTW_MEASURE`` one at N = 512-1024, still less than
-``numpy.fft``, and planning takes milliseconds instead of about a second per shape.
+which never times anything, so the same transform gives the same bits in every process
+on a given machine and build. ``FFTW_MEASURE`` would time candidate plans and, on a
+loaded machine, pick different ones in different processes, whose results differ in the
+last bits. ESTIMATE's heuristics are slow for some shapes, though (a float32 pair at
+N = 1024 took 1.8x the measured plan's time), so the package ships *wisdom*: plans
+measured once with ``FFTW_MEASURE`` for square grids of 32 to 2048 points per side, both
+precisions, one thread (:data:`WISDOM_FILE`, made by :func:`write_wisdom`). Every pair
+is planned after forgetting all other wisdom and importing the shipped one, and FFTW
+uses wisdom of a more patient planner for an ``FFTW_ESTIMATE`` request: the plan is then
+a function of the shipped file alone, whatever the machine's load. Where the shipped
+plans cannot be used (another FFTW version, a CPU without the SIMD they name), FFTW
+falls back to its ``FFTW_ESTIMATE`` heuristics, again the same in every process.
 """
 
 from __future__ import annotations
 
 import functools
+import json
 import os
+from pathlib import Path
 
 import numpy as np
 
@@ -36,6 +44,60 @@ BACKENDS = ("pyfftw", "numpy")
 #: FFTW planner flags. ``FFTW_ESTIMATE`` is deterministic (no timing); do not use
 #: ``FFTW_MEASURE``/``FFTW_PATIENT`` here: they make results vary between processes.
 PLANNER_FLAGS = ("FFTW_ESTIMATE",)
+
+
+#: Plans measured once and shipped with the package (module docstring).
+WISDOM_FILE = Path(__file__).with_name("fftw_wisdom.json")
+#: Square grid sizes whose plans :func:`write_wisdom` measures.
+WISDOM_SIZES = (32, 64, 128, 256, 512, 1024, 2048)
+
+
+@functools.lru_cache(maxsize=1)
+def shipped_wisdom() -> tuple[bytes, bytes, bytes] | None:
+    """The shipped FFTW wisdom (double, single, long double), or None without the file."""
+    try:
+        data = json.loads(WISDOM_FILE.read_text())
+    except FileNotFoundError:
+        return None
+    return tuple(data[k].encode("ascii") for k in ("double", "single", "long_double"))
+
+
+def _use_shipped_wisdom() -> None:
+    """Forget every plan made so far and import the shipped ones (module docstring)."""
+    # FFTW reuses wisdom from a more patient planner: a plan timed with FFTW_MEASURE
+    # earlier in this process (by any pyFFTW user) would replace the deterministic
+    # choice. Forgetting it first keeps the plan a function of the shape and the
+    # shipped file alone; plans already made stay valid.
+    pyfftw.forget_wisdom()
+    wisdom = shipped_wisdom()
+    if wisdom is not None:
+        pyfftw.import_wisdom(wisdom)
+
+
+def write_wisdom(path: str | os.PathLike = WISDOM_FILE, sizes=WISDOM_SIZES, flags=("FFTW_MEASURE",)) -> Path:
+    """Measure single-threaded plans for ``n x n`` pairs of both precisions; write them to ``path``.
+
+    Run once per FFTW build (``python -c "from roughcontact.fft import write_wisdom;
+    write_wisdom()"``), on a machine of the kind the pipeline runs on; the file's
+    plans are then used by every process (module docstring). Takes about a minute.
+    """
+    from .io import write_text_atomic
+
+    pyfftw.forget_wisdom()
+    for n in sizes:
+        for real, cplx in ((np.float64, np.complex128), (np.float32, np.complex64)):
+            # the same arrays (shapes, alignment, out of place) as RealFFT2 plans
+            a, a_out = (pyfftw.empty_aligned((n, n), dtype=real) for _ in range(2))
+            b, b_in = (pyfftw.empty_aligned((n, n // 2 + 1), dtype=cplx) for _ in range(2))
+            pyfftw.FFTW(a, b, axes=(0, 1), direction="FFTW_FORWARD", flags=flags, threads=1)
+            pyfftw.FFTW(b_in, a_out, axes=(0, 1), direction="FFTW_BACKWARD", flags=flags, threads=1)
+    double, single, long_double = (w.decode("ascii") for w in pyfftw.export_wisdom())
+    text = json.dumps({"sizes": list(sizes), "flags": list(flags), "fftw": pyfftw.__version__,
+                       "double": double, "single": single, "long_double": long_double}, indent=1)
+    out = Path(path)
+    write_text_atomic(out, text + "\n")
+    shipped_wisdom.cache_clear()
+    return out
 
 
 def default_backend() -> str:
@@ -98,11 +160,7 @@ class RealFFT2:
             self._spec = pyfftw.empty_aligned(self.spectral_shape, dtype=cdtype)
             self._spec_in = pyfftw.empty_aligned(self.spectral_shape, dtype=cdtype)
             self._real_out = pyfftw.empty_aligned(self.shape, dtype=self.dtype)
-            # FFTW reuses wisdom from a more rigorous planner: a plan timed with
-            # FFTW_MEASURE earlier in this process (by any pyFFTW user) would replace
-            # the deterministic FFTW_ESTIMATE choice. Forgetting the wisdom first keeps
-            # the plan a function of the shape alone; plans already made stay valid.
-            pyfftw.forget_wisdom()
+            _use_shipped_wisdom()
             flags = tuple(PLANNER_FLAGS)
             self._fwd = pyfftw.FFTW(
                 self._real, self._spec, axes=(0, 1), direction="FFTW_FORWARD",
