@@ -95,8 +95,20 @@ def _sel(da: xr.DataArray, **coords) -> xr.DataArray:
     return da.sel({k: float(v) for k, v in coords.items()})
 
 
+def _pending(claim: str, paper: str, needs: str) -> dict:
+    return _row(claim, paper, f"not yet run: needs {needs}", "pending", "—")
+
+
 def kappa_claims(con: xr.Dataset) -> list[dict]:
     """H-independence, scatter, kappa against lambda_l and the asymptotes (the paper's Fig. 3)."""
+    if con.sizes["k_l"] < 2 or con.sizes["H"] < 2:
+        needs = "at least two k_l and two H in the contact aggregate"
+        return [
+            _pending("κ(A/A0) independent of H for representative smooth surfaces, H-dependent otherwise",
+                     "independent at λ_l = L/16, λ_s = L/32; higher H, smaller κ at λ_l = L", needs),
+            _pending("seed scatter falls with k_l and rises with H", "falls with k_l, rises with H", needs),
+            _pending("κ rises as λ_l falls (k_l rises)", "rises", needs),
+        ] + _asymptote_claim(kappa_at(con).mean("seed"))
     kap = kappa_at(con)
     mean, std = kap.mean("seed"), kap.std("seed", ddof=1)
     kl_max, kl_min, ks_min = float(kap.k_l.max()), float(kap.k_l.min()), float(kap.k_s.min())
@@ -132,14 +144,17 @@ def kappa_claims(con: xr.Dataset) -> list[dict]:
         "κ(0.05): " + ", ".join(f"{float(v):.3f} (k_l={float(k):g})" for k, v in zip(kl_mean.k_l.values,
                                                                                        kl_mean.values, strict=True)),
         "reproduced" if rises else "not", "seed-, H- and k_s-mean κ at A/A0 = 0.05 increasing in k_l"))
+    return rows + _asymptote_claim(mean)
+
+
+def _asymptote_claim(mean: xr.DataArray) -> list[dict]:
     bgt = np.sqrt(2 * np.pi)
     frac_above = float((mean > bgt).mean())
-    rows.append(_row(
+    return [_row(
         "κ is not confined between the Persson (√(8/π) ≈ 1.60) and BGT (√(2π) ≈ 2.51) asymptotes",
         "not confined", f"κ(0.05) from {float(mean.min()):.3f} to {float(mean.max()):.3f}; "
         f"{100 * frac_above:.0f} % of the (k_l, k_s, H) points above √(2π)",
-        "reproduced" if frac_above > 0 else "not", "some seed-mean κ at A/A0 = 0.05 above √(2π)"))
-    return rows
+        "reproduced" if frac_above > 0 else "not", "some seed-mean κ at A/A0 = 0.05 above √(2π)")]
 
 
 def cel_claims(fit: xr.Dataset, con: xr.Dataset) -> list[dict]:
@@ -235,13 +250,18 @@ def regenerate(out: Path) -> None:
     write_text_atomic(out / "claims.md", markdown_table(claims(rep, con, fit)))
 
 
-def publish(results: Path, out: Path) -> None:
-    """Copy a run's aggregates and fit into ``out/data``, then :func:`regenerate`."""
+def publish(results: Path, out: Path, contact_results: Path | None = None) -> None:
+    """Copy a run's aggregates and fit into ``out/data``, then :func:`regenerate`.
+
+    ``contact_results`` takes the contact aggregate and fit from another run (e.g. the
+    ``representative`` scene while the ``reproduction`` scene's contact part is running).
+    """
     data = out / "data"
     data.mkdir(parents=True, exist_ok=True)
+    con = contact_results or results
     sources = {"representativity.nc": results / "aggregate" / "representativity.nc",
-               "contact.nc": results / "aggregate" / "contact.nc",
-               "cel.nc": results / "fit" / "cel.nc", "cel.csv": results / "fit" / "cel.csv"}
+               "contact.nc": con / "aggregate" / "contact.nc",
+               "cel.nc": con / "fit" / "cel.nc", "cel.csv": con / "fit" / "cel.csv"}
     for name, src in sources.items():
         if not src.is_file():
             raise FileNotFoundError(f"publish: {src} is missing; run the scene first "
@@ -256,11 +276,13 @@ def main(argv=None) -> None:
     p = sub.add_parser("publish", help="copy a run's aggregates into OUT/data, then regenerate")
     p.add_argument("results", type=Path, help="results/{scene} of a finished run")
     p.add_argument("out", type=Path, help="publication folder, e.g. docs/reproduction")
+    p.add_argument("--contact-from", type=Path, default=None,
+                   help="results/{scene} to take the contact aggregate and fit from instead")
     r = sub.add_parser("regenerate", help="figures and claim table from OUT/data (seconds, no solve)")
     r.add_argument("out", type=Path, help="publication folder, e.g. docs/reproduction")
     args = ap.parse_args(argv)
     if args.command == "publish":
-        publish(args.results, args.out)
+        publish(args.results, args.out, args.contact_from)
     else:
         regenerate(args.out)
 
