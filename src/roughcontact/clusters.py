@@ -8,6 +8,8 @@ what "connected" means here, and both are deliberate:
   a spot that leaves the cell through one edge and re-enters through the
   opposite one is a single spot. Labelling the raw array would split it in two
   (or four, at a corner) and bias the statistics towards many small spots.
+  For a free patch (the solver's ``boundary="free"``), ``periodic=False``
+  labels the open square instead.
 * **4-connectivity** (edge neighbours only). Two contact nodes that touch only
   at a corner share no pixel edge, so no contact area joins them: on a pixel
   grid they are two spots whose contact zones are separated by gap along both
@@ -119,7 +121,7 @@ def default_area_bins(n_total_pixels: int, n_bins: int = DEFAULT_N_BINS) -> np.n
 
 
 # --------------------------------------------------------------------------- labelling
-def label_clusters(mask: np.ndarray) -> tuple[np.ndarray, int]:
+def label_clusters(mask: np.ndarray, periodic: bool = True) -> tuple[np.ndarray, int]:
     """Label the contact clusters of a periodic cell (4-connectivity).
 
     ``scipy.ndimage.label`` labels the open square; labels facing each other
@@ -133,6 +135,8 @@ def label_clusters(mask: np.ndarray) -> tuple[np.ndarray, int]:
     mask : numpy.ndarray of bool, shape (n, n)
         Contact set (``True`` where the node is in contact), axis 0 = x,
         axis 1 = y, on a periodic square cell; any ``n >= 1``, odd or even.
+    periodic : bool
+        ``False``: a free patch, no merge across its edges.
 
     Returns
     -------
@@ -160,6 +164,8 @@ def label_clusters(mask: np.ndarray) -> tuple[np.ndarray, int]:
     a = np.concatenate([raw[0, :], raw[:, 0]])
     b = np.concatenate([raw[-1, :], raw[:, -1]])
     both = (a > 0) & (b > 0)
+    if not periodic:
+        both[:] = False
     a, b = a[both], b[both]
     # Vertex 0 (background) stays isolated; the graph is tiny (<= 2n edges) but
     # csgraph keeps the merge O(n_raw) without a Python loop over all labels.
@@ -234,7 +240,7 @@ def cluster_area_histogram(areas_in_pixels, n_total_pixels: int, bins=None) -> n
     return counts.astype(np.int64)
 
 
-def cluster_statistics(mask: np.ndarray, length: float = 1.0) -> dict:
+def cluster_statistics(mask: np.ndarray, length: float = 1.0, periodic: bool = True) -> dict:
     """Count and areas of the contact clusters of one periodic contact mask.
 
     Parameters
@@ -244,6 +250,8 @@ def cluster_statistics(mask: np.ndarray, length: float = 1.0) -> dict:
     length : float
         Side ``L`` of the periodic cell [length], > 0; only enters
         ``areas_physical``.
+    periodic : bool
+        As for :func:`label_clusters`.
 
     Returns
     -------
@@ -269,7 +277,7 @@ def cluster_statistics(mask: np.ndarray, length: float = 1.0) -> dict:
         For a bad mask (see :func:`label_clusters`) or a non-positive length.
     """
     length = _check_length(length)
-    labels, count = label_clusters(mask)
+    labels, count = label_clusters(mask, periodic)
     n_total = labels.size
     # bincount over labels gives every cluster's node count in one pass.
     px = np.bincount(labels.ravel(), minlength=count + 1)[1:].astype(np.int64)
@@ -301,7 +309,8 @@ def _to_mask(field, index: int) -> np.ndarray:
     return arr > 0
 
 
-def cluster_dataset(masks_or_pressures: Iterable, steps, length: float, bins=None) -> xr.Dataset:
+def cluster_dataset(masks_or_pressures: Iterable, steps, length: float, bins=None,
+                    periodic: bool = True) -> xr.Dataset:
     """Per-step cluster statistics as an xarray.Dataset.
 
     Parameters
@@ -319,6 +328,8 @@ def cluster_dataset(masks_or_pressures: Iterable, steps, length: float, bins=Non
     bins : array_like of float, shape (n_bins + 1,), optional
         Histogram bin edges in units of A0 (see :func:`cluster_area_histogram`);
         default ``default_area_bins(n**2)``.
+    periodic : bool
+        As for :func:`label_clusters` (``False`` for a free patch).
 
     Returns
     -------
@@ -361,13 +372,14 @@ def cluster_dataset(masks_or_pressures: Iterable, steps, length: float, bins=Non
     max_area = np.zeros(len(masks))
     hist = np.zeros((len(masks), edges.size - 1), dtype=np.int64)
     for k, m in enumerate(masks):
-        st = cluster_statistics(m, length)
+        st = cluster_statistics(m, length, periodic)
         count[k] = st["count"]
         mean_area[k] = st["mean_area"]
         max_area[k] = st["max_area"]
         hist[k] = cluster_area_histogram(st["areas_pixels"], n_total, edges)
 
     u = DIMENSIONLESS_UNITS
+    boundary = "periodic" if periodic else "free"
     coords = {
         "step": xr.Variable(("step",), steps, {"units": u, "long_name": "load step number"}),
         "area_bin": xr.Variable(("area_bin",), np.sqrt(edges[:-1] * edges[1:]), {
@@ -380,7 +392,7 @@ def cluster_dataset(masks_or_pressures: Iterable, steps, length: float, bins=Non
     }
     data_vars = {
         "cluster_count": xr.Variable(("step",), count, {
-            "units": u, "long_name": "number of contact clusters (periodic, 4-connected)"}),
+            "units": u, "long_name": f"number of contact clusters ({boundary}, 4-connected)"}),
         "cluster_mean_area": xr.Variable(("step",), mean_area, {
             "units": u, "long_name": "mean contact cluster area / A0 (0 without contact)"}),
         "cluster_max_area": xr.Variable(("step",), max_area, {
@@ -389,7 +401,7 @@ def cluster_dataset(masks_or_pressures: Iterable, steps, length: float, bins=Non
             "units": u, "long_name": "number of contact clusters per area bin"}),
     }
     attrs = {"length": length, "n": int(masks[0].shape[0]), "cluster_connectivity": 4,
-             "cluster_boundary": "periodic"}
+             "cluster_boundary": boundary}
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 
 

@@ -29,19 +29,43 @@ steps). Both problems are the optimality conditions of the convex quadratic
 program ``min 1/2 p.Kp - h.p`` over ``{0 <= p (<= H), mean(p) = p0}``, ``d``
 being the multiplier of the mean constraint; the solution is unique.
 
+That is ``boundary="periodic"``, the default. A measured patch is not periodic,
+and the periodic half-space glues its edges together; with ``boundary="free"``
+the ``n x n`` cell is an isolated patch on an infinite elastic half-space loaded
+there alone (no periodic images, nothing outside the patch touches). Each
+node's pressure acts uniformly on its pixel of side ``dx``, and
+
+    u(x_i) = sum_j G(x_i - x_j) p_j,   G = Love's displacement under unit
+                                       pressure on one square pixel, ~ dx^2 / (pi E* r) far away,
+
+computed by zero-padding ``p`` to ``2n x 2n`` and one FFT pair there
+(Hockney's method, :class:`FreeHalfSpace`; an iteration costs 3-5x a periodic
+one). ``u`` is then the true displacement,
+not zero mean, ``-d`` the true approach of the rigid surface and
+``mean(g) = mean(u) + d - mean(h)``; the iterations use ``u`` only through the
+gap ``g`` (with ``d`` the free offset), so they, the final check and every
+output are otherwise the same. The contact perimeter and cluster labelling do
+not wrap around.
+
 Units
 -----
 Internally the solver works in units where ``E* = L = 1`` and lengths are
 counted in ``c``, the power of two just above the rms height ``s`` of ``h``
 (so the internal heights have rms in [0.5, 1) and are an exact copy of ``h``);
-pressures are counted in ``E* c / L``. Every load then enters through the
+pressures are counted in ``E* c / L``. Both operators are ``L / E*`` times
+their form for ``E* = L = 1`` (Love's influence scales with ``dx = L / n``), so
+the internal operator is the one for ``E* = L = 1``. Every load then enters through the
 dimensionless ``p0 L / (E* s)``, which must lie in :data:`LOAD_RANGE` (as must
 ``hardness L / (E* s)``): outside it float64 cannot represent the contact
 (squares of pressures or gaps overflow or underflow) and the load is refused
 with a ``ValueError`` naming the argument. When ``|mean(h)| > s`` the mean is
 subtracted first (a rigid shift absorbed by ``d``). A perfectly flat surface
 (all heights equal) has the exact solution ``p = p0`` everywhere, ``g = 0``;
-it is returned directly, with ``iterations = 0``. For the default
+it is returned directly, with ``iterations = 0``. On the free half-space a
+flat surface is instead the rigid square flat punch (its pressure peaks at the
+edges): solved once at unit load, with gap scale ``s = p0 L / E*``
+(:func:`gap_scale`), and scaled to every load (``iterations = 0`` after the
+first step); a hardness is refused there. For the default
 ``E* = L = 1`` the unit changes are exact (powers of two), so the iterates are
 bit for bit those of the unscaled problem.
 
@@ -77,7 +101,9 @@ check, and changes two things; the default, ``"pk-fourier-f32"``, a third:
 
 * *Fourier preconditioner*: the search direction is built from
   ``z = P_F M P_F g`` with ``M = |q| E* / 2`` (the exact inverse of the
-  elastic operator when ``F`` is the whole cell; 0 at ``q = 0``), ``P_F`` the
+  periodic operator when ``F`` is the whole cell; 0 at ``q = 0``; for
+  ``boundary="free"`` the same periodic ``M`` on the ``n x n`` grid, an
+  approximate inverse that still cuts the iterations 1.6-2.5x), ``P_F`` the
   restriction to ``F``, and ``z``'s mean over ``F`` removed; ``t = z + beta t``
   with ``beta = (g.z) / (g_old.z_old)``. At iterations where nodes join ``F``
   the gradient is re-centred on the enlarged ``F`` (a shift of ``d``) and the
@@ -175,7 +201,7 @@ iterations, or a breakdown of the step length), the step ends with
 
 Parts
 -----
-:mod:`.halfspace` the elastic operator (periodic), :mod:`.workspace` the fields
+:mod:`.halfspace` the elastic operators (periodic, free), :mod:`.workspace` the fields
 of one surface, :mod:`.elastic` and :mod:`.box` the two iterations,
 :mod:`.effects` what acts on them (the plasticity cap), :mod:`.check` the
 final check, :mod:`.results` the assembly of the output, :mod:`.units` and
@@ -190,7 +216,7 @@ from .check import MEAN_RTOL
 from .contact import DEFAULT_MAX_ITER, ContactSolver, solve_contact, solve_step
 from .effects import PlasticityCap
 from .elastic import STALL_WINDOW
-from .halfspace import PeriodicHalfSpace, displacement, elastic_kernel
+from .halfspace import FreeHalfSpace, PeriodicHalfSpace, displacement, elastic_kernel, free_influence
 from .results import (
                       FRACTION_UNITS,
                       INVERSE_LENGTH_UNITS,
@@ -202,6 +228,7 @@ from .results import (
                       contact_perimeter,
 )
 from .units import LOAD_RANGE, gap_scale
+from .validation import BOUNDARIES
 from .workspace import ELASTIC_METHODS
 
 #: Elastic iteration used by :func:`solve_contact` and :func:`solve_step`, one of
@@ -209,6 +236,7 @@ from .workspace import ELASTIC_METHODS
 ELASTIC_METHOD = "pk-fourier-f32"
 
 __all__ = [
+    "BOUNDARIES",
     "DEFAULT_MAX_ITER",
     "ELASTIC_METHOD",
     "ELASTIC_METHODS",
@@ -222,12 +250,14 @@ __all__ = [
     "SOLVER_NAME",
     "STALL_WINDOW",
     "ContactSolver",
+    "FreeHalfSpace",
     "PeriodicHalfSpace",
     "PlasticityCap",
     "StepResult",
     "contact_perimeter",
     "displacement",
     "elastic_kernel",
+    "free_influence",
     "gap_scale",
     "solve_contact",
     "solve_step",

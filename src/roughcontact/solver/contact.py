@@ -23,15 +23,17 @@ from .projection import enforce_mean
 from .results import (
     PRESSURE_UNITS,
     SOLVER_DESCRIPTION,
+    SOLVER_DESCRIPTION_FREE,
     SOLVER_NAME,
     StepRecord,
     StepResult,
     contact_perimeter,
     to_dataset,
 )
-from .units import Units, check_loads
+from .units import Units, check_loads, frexp_ratio
 from .validation import (
     real_scalar,
+    validate_boundary,
     validate_flag,
     validate_heights,
     validate_pressures,
@@ -52,10 +54,11 @@ class ContactSolver:
     """Validated problem of one surface: units, effects, workspace and warm starts.
 
     ``heights`` (n, n) and the scalars are already validated; ``effects`` act on
-    the iteration (:mod:`.effects`); ``method`` is the elastic iteration.
+    the iteration (:mod:`.effects`); ``method`` is the elastic iteration;
+    ``boundary`` the half-space, one of :data:`~.validation.BOUNDARIES`.
     """
 
-    def __init__(self, h, e_star, length, tol, max_iter, effects, threads, method):
+    def __init__(self, h, e_star, length, tol, max_iter, effects, threads, method, boundary="periodic"):
         self.n = h.shape[0]
         self.length = length
         self.tol, self.max_iter = tol, max_iter
@@ -63,7 +66,16 @@ class ContactSolver:
         self.units = Units(h, e_star, length)
         self.threads = threads
         self.method = method
-        self.ws = None if self.units.flat else Workspace(self.units.heights, length, threads, method)
+        self.boundary = boundary
+        self.periodic = boundary == "periodic"
+        if self.units.flat and not self.periodic and self.effects:
+            raise ValueError(
+                "hardness: a perfectly flat surface (all heights equal) on the free half-space is a rigid "
+                "flat punch, whose edge pressures would reach any hardness; boundary='free' with a "
+                "hardness is not supported for a flat surface (give hardness=None or a rough surface)")
+        self._punch = None  # flat surface on the free half-space: solution at unit load
+        self.ws = None if self.units.flat else Workspace(self.units.heights, length, threads, method,
+                                                         boundary)
         for effect in self.effects:
             effect.bind(self.units)
         caps = [e.upper_bound for e in self.effects if e.upper_bound is not None]
@@ -153,6 +165,45 @@ class ContactSolver:
             cols.update(effect.finish(p, None, p0))
         return StepRecord(p, p > 0, 1.0, 0.0, 0.0, 0, 0.0, mean_ok, cols), gap
 
+    def _flat_punch(self, p0: float, keep_gap: bool):
+        """A flat surface on the free half-space: the rigid square flat punch.
+
+        ``u = K p`` is no longer uniform under a uniform pressure, so the
+        problem is solved, once, at unit load in units ``E* = L = 1`` with the
+        gap scale ``p0 L / E*`` (:func:`gap_scale` of a flat surface) as unit;
+        without a cap it is linear in ``p0``, so every step is that solution
+        scaled (``iterations`` counts the solve at the first step, 0 after).
+        """
+        n = self.n
+        n2 = n * n
+        its = 0
+        if self._punch is None:
+            ws = Workspace(np.zeros((n, n)), self.length, self.threads, self.method, self.boundary,
+                           scale=1.0)
+            ws.P.fill(1.0)
+            its = pk_solve(ws, 1.0, self.tol, self.max_iter, False)[0]
+            ok, residual, gbar, w_sum = final_check(ws, 1.0, self.tol, None)
+            self._punch = (ws.P.copy(), ws.w - gbar, w_sum / n2 - gbar, float(residual), bool(ok))
+        x, g1, mg1, residual, ok = self._punch
+        p = x * p0
+        mean_ok = ok and abs(float(p.sum()) - p0 * n2) <= MEAN_RTOL * p0 * n2
+        fm, fe = frexp_ratio((p0, self.length), (self.units.e_star,))  # the gap scale p0 L / E*
+        try:
+            mean_gap = math.ldexp(mg1 * fm, fe)
+        except OverflowError:
+            mean_gap = math.inf
+        with np.errstate(over="ignore", under="ignore"):
+            gap = np.ldexp(g1 * fm, fe) if keep_gap else None
+        if not (math.isfinite(mean_gap) and (gap is None or np.all(np.isfinite(gap)))):
+            raise ValueError(
+                f"pressures: the gap at p0={p0!r} overflows float64 in the units of heights; reduce "
+                "p0 * length / e_star")
+        mask = p > 0
+        area = np.count_nonzero(mask) / n2
+        step = StepRecord(p, mask, area, mean_gap, contact_perimeter(mask, self.length, periodic=False), its,
+                          residual, mean_ok, {})
+        return step, gap
+
     def _iterate(self, p_int: float, fresh: bool) -> int:
         if self.cap is None:
             return pk_solve(self.ws, p_int, self.tol, self.max_iter, fresh)[0]
@@ -161,7 +212,7 @@ class ContactSolver:
     def solve(self, p0: float, initial=None, keep_gap: bool = False):
         """Solve the step for the physical mean pressure ``p0``; returns ``(StepRecord, gap)``."""
         if self.units.flat:
-            return self._flat(p0, keep_gap)
+            return self._flat(p0, keep_gap) if self.periodic else self._flat_punch(p0, keep_gap)
         ws, units = self.ws, self.units
         n2 = self.n * self.n
         fresh = self.start(p0, initial)
@@ -186,7 +237,7 @@ class ContactSolver:
             raise ValueError(
                 f"pressures: the gap at p0={p0!r} overflows float64 in the units of heights; reduce "
                 "p0 * length / e_star or the heights")
-        step = StepRecord(p, mask, area, mean_gap, contact_perimeter(mask, self.length), its,
+        step = StepRecord(p, mask, area, mean_gap, contact_perimeter(mask, self.length, self.periodic), its,
                           float(residual), bool(ok), cols)
         return step, gap
 
@@ -198,7 +249,8 @@ def _method() -> str:
 
 def solve_step(heights, p0: float, *, e_star: float = 1.0, length: float = 1.0,
                tol: float = 1e-8, max_iter: int = DEFAULT_MAX_ITER, threads: int = 1,
-               hardness: float | None = None, initial_pressure=None) -> StepResult:
+               hardness: float | None = None, initial_pressure=None,
+               boundary: str = "periodic") -> StepResult:
     """Solve the contact for one mean pressure.
 
     Parameters
@@ -209,7 +261,7 @@ def solve_step(heights, p0: float, *, e_star: float = 1.0, length: float = 1.0,
         Applied mean pressure [pressure]: ``0 < p0``, ``p0 < hardness`` if a
         hardness is given, and ``p0 * length / (e_star * s)`` in
         :data:`LOAD_RANGE` (``s`` the rms height).
-    e_star, length, tol, max_iter, threads, hardness
+    e_star, length, tol, max_iter, threads, hardness, boundary
         As in :func:`solve_contact`.
     initial_pressure : array_like, shape (n, n), optional
         Starting pressure (clipped to ``[0, hardness]`` and brought to mean
@@ -231,12 +283,13 @@ def solve_step(heights, p0: float, *, e_star: float = 1.0, length: float = 1.0,
         raise ValueError(f"p0 must be a finite number > 0, got {p0!r}")
     e_star, length, tol, max_iter, hardness, threads = validate_solver_args(
         e_star, length, tol, max_iter, hardness, threads)
+    boundary = validate_boundary(boundary)
     init = None
     if initial_pressure is not None:
         init = validate_heights(initial_pressure, name="initial_pressure")
         if init.shape != h.shape:
             raise ValueError(f"initial_pressure must have shape {h.shape}, got {init.shape}")
-    solver = ContactSolver(h, e_star, length, tol, max_iter, _effects(hardness), threads, _method())
+    solver = ContactSolver(h, e_star, length, tol, max_iter, _effects(hardness), threads, _method(), boundary)
     solver.check_loads(np.array([p0_f]), "p0")
     t0 = time.perf_counter()
     st, gap = solver.solve(p0_f, initial=init, keep_gap=True)
@@ -250,14 +303,15 @@ def solve_step(heights, p0: float, *, e_star: float = 1.0, length: float = 1.0,
 def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.0,
                   tol: float = 1e-8, max_iter: int = DEFAULT_MAX_ITER, store_fields=False,
                   threads: int = 1, hardness: float | None = None,
-                  clusters: bool = False) -> xr.Dataset:
-    """Solve the normal contact of a rigid rough surface on a periodic half-space.
+                  clusters: bool = False, boundary: str = "periodic") -> xr.Dataset:
+    """Solve the normal contact of a rigid rough surface on an elastic half-space.
 
     Parameters
     ----------
     heights : array_like, shape (n, n)
-        Rigid surface heights [length] on the square periodic cell, axis 0 = x,
-        axis 1 = y; the highest points touch first. Any ``n >= 4``, odd or not.
+        Rigid surface heights [length] on the square cell (periodic, or the
+        whole patch for ``boundary="free"``), axis 0 = x, axis 1 = y; the
+        highest points touch first. Any ``n >= 4``, odd or not.
     pressures : sequence of float, shape (n_steps,)
         Applied mean pressures ``p0 > 0``, one load step each [pressure, same unit
         as ``e_star``], each with ``p0 * length / (e_star * s)`` in
@@ -268,7 +322,7 @@ def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.
     e_star : float
         Plane-strain modulus ``E* = E / (1 - nu**2)`` of the half-space, > 0.
     length : float
-        Side ``L`` of the periodic cell [length], > 0.
+        Side ``L`` of the cell [length], > 0.
     tol : float
         Convergence tolerance in (0, 1) on the scale-free residual of the module
         docstring.
@@ -284,9 +338,19 @@ def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.
         Cap on the pressure (perfectly plastic interface) [pressure], > every p0,
         with ``hardness * length / (e_star * s)`` in :data:`LOAD_RANGE`.
     clusters : bool
-        Add contact-cluster statistics per step (periodic 4-connected labelling, see
-        :mod:`roughcontact.clusters`): ``cluster_count``, ``cluster_mean_area``,
-        ``cluster_max_area`` and ``cluster_area_histogram``. Off: no labelling work.
+        Add contact-cluster statistics per step (4-connected labelling, periodic
+        unless ``boundary="free"``, see :mod:`roughcontact.clusters`):
+        ``cluster_count``, ``cluster_mean_area``, ``cluster_max_area`` and
+        ``cluster_area_histogram``. Off: no labelling work.
+    boundary : {"periodic", "free"}
+        The elastic half-space. ``"periodic"`` (default): the cell is one
+        period of an infinite periodic surface, ``u(q) = 2 p(q) / (E* |q|)``.
+        ``"free"``: the cell is an isolated patch (a measured, non-periodic
+        surface) on an infinite half-space loaded only there; nothing wraps
+        around, ``u`` is the true (not zero-mean) displacement and ``d`` the true
+        rigid-body approach; each product costs a ``2n x 2n`` FFT pair
+        (:class:`~.halfspace.FreeHalfSpace`). A flat surface is then the rigid
+        square flat punch (no hardness allowed).
 
     Returns
     -------
@@ -296,7 +360,8 @@ def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.
         ``contact_perimeter``, ``iterations``, ``residual``, ``converged``,
         ``wall_time`` and, with a hardness, ``plastic_area_fraction`` and
         ``plastic_load_fraction``; fields and ``x``/``y`` coordinates only when
-        stored. Every variable carries ``units`` and ``long_name``.
+        stored. Every variable carries ``units`` and ``long_name``; the
+        attribute ``boundary`` records the half-space.
         ``converged`` is True only when the final check of the module docstring
         passed on a freshly recomputed displacement.
 
@@ -311,18 +376,21 @@ def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.
         e_star, length, tol, max_iter, hardness, threads)
     store = validate_store(store_fields, p.size)
     clusters = validate_flag("clusters", clusters)
-    solver = ContactSolver(h, e_star, length, tol, max_iter, _effects(hardness), threads, _method())
+    boundary = validate_boundary(boundary)
+    solver = ContactSolver(h, e_star, length, tol, max_iter, _effects(hardness), threads, _method(), boundary)
     solver.check_loads(p, "pressures")
     cols, iters, conv, fields, masks = _run_steps(solver, p, store, clusters)
     attrs = {"e_star": e_star, "length": length, "tol": tol, "max_iter": max_iter, "threads": threads,
              "fft_backend": solver.backend, "n": h.shape[0], "solver": SOLVER_NAME,
-             "solver_description": SOLVER_DESCRIPTION, "pressure_units": PRESSURE_UNITS}
+             "solver_description": SOLVER_DESCRIPTION if solver.periodic else SOLVER_DESCRIPTION_FREE,
+             "pressure_units": PRESSURE_UNITS}
     ds = to_dataset(p, cols, iters, conv, fields, store_fields, h.shape[0], attrs, solver.effects)
     ds.attrs["elastic_method"] = solver.method
+    ds.attrs["boundary"] = boundary
     if masks is not None:
         from ..clusters import cluster_dataset
 
-        stats = cluster_dataset(masks, ds["step"].values, length)
+        stats = cluster_dataset(masks, ds["step"].values, length, periodic=solver.periodic)
         ds = ds.merge(stats.drop_vars("step"), combine_attrs="override")
     return ds
 

@@ -31,6 +31,12 @@ SOLVER_DESCRIPTION = (
     "with s the rms height, mean(p) = p0 to 1e-10 and 0 <= p (<= H), checked on a freshly "
     "recomputed displacement"
 )
+#: ``solver_description`` attribute for ``boundary="free"``.
+SOLVER_DESCRIPTION_FREE = SOLVER_DESCRIPTION.replace(
+    "periodic FFT-BEM elastic half-space, u(q) = 2 p(q) / (E* |q|)",
+    "free-boundary FFT-BEM elastic half-space (pressure zero-padded to 2n x 2n and convolved with Love's "
+    "influence function of a uniformly loaded square pixel, Hockney's method; no periodic images)",
+).replace("(|q| E*/2 on the contact set)", "(periodic |q| E*/2 on the contact set, an approximate inverse)")
 
 @dataclass
 class StepResult:
@@ -94,11 +100,14 @@ class StepRecord:
     effect_columns: dict
 
 
-def contact_perimeter(mask: np.ndarray, length: float = 1.0) -> float:
+def contact_perimeter(mask: np.ndarray, length: float = 1.0, periodic: bool = True) -> float:
     """Length of the contact-set boundary per unit nominal area [1/length].
 
-    Counts pixel edges between a contact and a non-contact node, with periodic
-    wrap in both directions, times ``dx = L / n``, divided by ``L**2``.
+    Counts pixel edges between a contact and a non-contact node, times
+    ``dx = L / n``, divided by ``L**2``: with periodic wrap in both directions
+    (``periodic=True``, the periodic cell), or without it (``periodic=False``,
+    a free patch), where nothing touches outside the patch, so that the outer
+    edge of a contact node on the patch's border counts too.
 
     Parameters
     ----------
@@ -106,10 +115,17 @@ def contact_perimeter(mask: np.ndarray, length: float = 1.0) -> float:
         Contact set.
     length : float
         Side L of the cell [length].
+    periodic : bool
+        Whether the cell wraps around (the solver's ``boundary="periodic"``).
     """
     m = np.asarray(mask, dtype=bool)
     n = m.shape[0]
-    edges = np.count_nonzero(m != np.roll(m, 1, axis=0)) + np.count_nonzero(m != np.roll(m, 1, axis=1))
+    if periodic:
+        edges = np.count_nonzero(m != np.roll(m, 1, axis=0)) + np.count_nonzero(m != np.roll(m, 1, axis=1))
+    else:
+        padded = np.pad(m, 1)  # no contact outside the patch
+        edges = (np.count_nonzero(padded[1:, :] != padded[:-1, :])
+                 + np.count_nonzero(padded[:, 1:] != padded[:, :-1]))
     return float(edges) * (length / n) / length**2
 
 

@@ -7,6 +7,11 @@ from collections.abc import Iterable
 
 import numpy as np
 
+#: Boundary conditions of the elastic half-space, the ``boundary`` argument of the
+#: solver: ``"periodic"`` (the default; the cell is one period of an infinite surface)
+#: or ``"free"`` (the patch is all there is; no periodic images).
+BOUNDARIES = ("periodic", "free")
+
 
 def real_scalar(name: str, value, expected: str) -> float:
     """``float(value)`` for a real number; strings, bools and the like are refused."""
@@ -117,3 +122,10 @@ def validate_flag(name: str, value) -> bool:
     if not isinstance(value, (bool, np.bool_)):
         raise ValueError(f"{name} must be True or False, got {type(value).__name__} {value!r}")
     return bool(value)
+
+
+def validate_boundary(boundary) -> str:
+    if not isinstance(boundary, str) or boundary not in BOUNDARIES:
+        allowed = ", ".join(repr(b) for b in BOUNDARIES)
+        raise ValueError(f"boundary must be one of {allowed}, got {type(boundary).__name__} {boundary!r}")
+    return str(boundary)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .halfspace import PeriodicHalfSpace
+from .halfspace import half_space
 from .units import rms_about_mean
 
 #: Iterations of the elastic path (package docstring): ``"pk"``, Polonsky & Keer's
@@ -29,12 +29,16 @@ class Workspace:
 
     ``P`` the pressure, ``w = K P - h`` the gap without the rigid-body offset,
     ``T`` the search direction (zero off the free set), ``mask`` the contact
-    set; ``op`` the elastic operator and ``method`` the elastic iteration, one
-    of :data:`ELASTIC_METHODS`. The ``apply_*`` methods are the operator's
-    products (one FFT pair each; the benchmark counts them here).
+    set; ``op`` the elastic operator (:func:`~.halfspace.half_space` for
+    ``boundary``) and ``method`` the elastic iteration, one of
+    :data:`ELASTIC_METHODS`. The ``apply_*`` methods are the operator's
+    products (one FFT pair each; the benchmark counts them here). ``scale``
+    replaces the rms height of ``heights`` as the gap scale (a flat punch,
+    whose heights have none).
     """
 
-    def __init__(self, heights: np.ndarray, length: float, threads: int, method: str):
+    def __init__(self, heights: np.ndarray, length: float, threads: int, method: str,
+                 boundary: str = "periodic", scale: float | None = None):
         if method not in ELASTIC_METHODS:
             raise ValueError(f"ELASTIC_METHOD must be one of {ELASTIC_METHODS}, got {method!r}")
         n = heights.shape[0]
@@ -42,10 +46,11 @@ class Workspace:
         self.size = n * n
         self.length = length
         self.method = method
-        self.op = PeriodicHalfSpace(n, threads)
+        self.boundary = boundary
+        self.op = half_space(boundary, n, threads)
         self.h = heights
         self.hf = heights.ravel()
-        self.h_rms = rms_about_mean(heights)[1]
+        self.h_rms = rms_about_mean(heights)[1] if scale is None else scale
         self.w = np.empty((n, n))
         self.wf = self.w.ravel()
         self.P = np.zeros((n, n))
@@ -77,7 +82,7 @@ class Workspace:
         return self.op.apply(field)
 
     def apply_m(self, field: np.ndarray) -> np.ndarray:
-        """``M field`` with ``M = |q| E* / 2`` (``K``'s inverse off ``q = 0``)."""
+        """``M field`` with ``M = |q| E* / 2`` (``K``'s inverse off ``q = 0`` when periodic)."""
         return self.op.apply_inverse(field)
 
     def apply_k32(self, field: np.ndarray) -> np.ndarray:
