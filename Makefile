@@ -8,17 +8,26 @@ BIN := $(VENV)/bin
 JOBS ?= 2
 SCENE ?=
 
-.PHONY: install run test test-fast lint browser dryrun report bench clean
+.PHONY: install install-test run test test-fast lint browser dryrun report bench clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 
+# `make run` installs what running needs; the test extras (Tamaas, ContactMechanics, hypothesis,
+# linters: several hundred MB) come only with `make test`. constraints.txt pins the versions the
+# test suite last passed with: `pip install -c constraints.txt -e '.[test]'` for that environment.
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e .
+	touch $@
+
+$(VENV)/.installed-test: pyproject.toml $(VENV)/.installed
 	$(BIN)/python -m pip install --quiet -e '.[test]'
 	touch $@
 
 install: $(VENV)/.installed
+
+install-test: $(VENV)/.installed-test
 
 run: install
 	$(BIN)/snakemake --workflow-profile workflow/profiles/default -j$(JOBS) $(if $(SCENE),--config scene=$(SCENE))
@@ -27,7 +36,7 @@ dryrun: install
 	$(BIN)/snakemake -n $(if $(SCENE),--config scene=$(SCENE))
 
 # Lint runs first (seconds) and stops `make test` when it fails.
-test: install lint browser
+test: install-test lint browser
 	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest
 
 # tests/test_report.py opens the report in a real browser: Debian's chromium, installed here when
@@ -45,14 +54,14 @@ browser:
 
 # The inner loop (under 3 min on 2 cores): every test not marked slow. Slow tests (real runs of
 # small scenes, the paper scene's 2100-job DAG, concurrency and bootstrap studies) run in `make test`.
-test-fast: install
+test-fast: install-test
 	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest -m "not slow"
 
 # Checks only, never rewrites: ruff over the Python, snakefmt over the rules (settings in
 # pyproject.toml). Both always run; it fails if either finds something.
 RUFF_PATHS := src tests benchmarks workflow/scripts
 SNAKEFMT_PATHS := Snakefile workflow/rules
-lint: install
+lint: install-test
 	@status=0; \
 	echo "$(BIN)/ruff check $(RUFF_PATHS)"; \
 	$(BIN)/ruff check $(RUFF_PATHS) || status=1; \
@@ -63,7 +72,7 @@ lint: install
 report: install
 	$(BIN)/snakemake --report report.html $(if $(SCENE),--config scene=$(SCENE))
 
-bench: install
+bench: install-test
 	$(BIN)/python benchmarks/bench_solver.py
 
 clean:

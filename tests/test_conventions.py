@@ -21,3 +21,32 @@ def test_citation_file_cites_the_software_and_the_paper():
     paper = cff["references"][0]
     assert paper["doi"] == "10.1103/PhysRevE.86.035601" and paper["year"] == 2012
     assert [a["family-names"] for a in paper["authors"]] == ["Yastrebov", "Anciaux", "Molinari"]
+
+
+def _make_n(target):
+    import subprocess
+
+    res = subprocess.run(["make", "-n", "-B", target], cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert res.returncode == 0, res.stderr
+    return res.stdout
+
+
+def test_make_run_installs_no_test_extras_and_make_test_does():
+    run = _make_n("run")
+    assert "pip install --quiet -e ." in run and "[test]" not in run
+    assert "-e '.[test]'" in _make_n("test")
+
+
+def test_constraints_pin_every_dependency_the_tests_need():
+    import re
+
+    pins = {}
+    for line in (ROOT / "constraints.txt").read_text().splitlines():
+        if line and not line.startswith("#"):
+            name, version = line.split("==")
+            pins[re.sub(r"[-_.]+", "-", name).lower()] = version
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    wanted = project["dependencies"] + project["optional-dependencies"]["test"]
+    for req in wanted:
+        name = re.sub(r"[-_.]+", "-", re.split(r"[<>=\[ ]", req)[0]).lower()
+        assert name in pins, f"{name} is not pinned in constraints.txt"
