@@ -123,3 +123,14 @@ def test_capped_solves_use_the_preconditioner_too(surface, method, hardness, max
     n_ref, n_new = int(ref["iterations"].sum()), int(new["iterations"].sum())
     print(f"hardness {hardness}: pk {n_ref}, pk-fourier-f32 {n_new} iterations")
     assert n_new < max_ratio * n_ref
+
+
+def test_progress_reports_every_step_as_it_goes(surface):
+    seen = []
+    ds = solve_contact(surface, _loads(steps=4), progress=lambda *args: seen.append(args))
+    assert [s[0] for s in seen] == [1, 2, 3, 4]
+    np.testing.assert_array_equal([s[2] for s in seen], ds["area_fraction"].values)
+    np.testing.assert_array_equal([s[3] for s in seen], ds["iterations"].values)
+    assert all(s[4] for s in seen) and all(s[5] > 0 for s in seen)
+    with pytest.raises(ValueError, match="progress must be a callable"):
+        solve_contact(surface, [0.001], progress="yes")

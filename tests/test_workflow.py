@@ -237,3 +237,11 @@ def test_a_file_made_for_another_case_or_scene_is_refused(tmp_path):
     res = run_snakemake(wd, "-j1", target)
     log = res.stdout + res.stderr
     assert res.returncode != 0 and "holds seed=[1], but this job is for seed=0" in log, log[-3000:]
+
+
+@pytest.mark.slow
+def test_contact_jobs_log_one_line_per_load_step(demo_run):
+    # a long N = 1024 job is not silent: each load step is logged as it finishes
+    log = next((demo_run / "results" / "demo" / "logs" / "contact").glob("*.log")).read_text()
+    lines = [line for line in log.splitlines() if " step " in line and "/30: p0 = " in line]
+    assert len(lines) == 30 and "step 30/30" in lines[-1] and "iterations" in lines[0]

@@ -16,9 +16,16 @@ def main(log):
     heights, length = surface_heights(surf, snakemake.input[0])
     solver = settings["solver"]
     plastic = settings["effects"].get("plasticity")
+    loads = load_steps(settings)
+
+    def progress(step, p0, area, iterations, converged, seconds):
+        # one line per load step as it goes (the log handler flushes every record)
+        log.info("step %d/%d: p0 = %.6g, A/A0 = %.6g, %d iterations, %.2f s%s", step, len(loads), p0, area,
+                 iterations, seconds, "" if converged else ", NOT converged")
+
     result = solve_contact(
         heights,
-        load_steps(settings),
+        loads,
         e_star=solver["e_star"],
         length=length,
         tol=solver["tol"],
@@ -27,6 +34,7 @@ def main(log):
         threads=snakemake.threads,
         hardness=plastic["hardness"] * solver["e_star"] if plastic else None,
         clusters=settings["outputs"]["clusters"],
+        progress=progress,
     )
     ds = contact_dataset(result, rms_slope=float(surf.rms_slope.squeeze()), alpha=float(surf.alpha.squeeze()),
                          e_star=solver["e_star"], k_l=w.k_l, k_s=w.k_s, hurst=w.H, seed=int(w.seed))

@@ -303,7 +303,7 @@ def solve_step(heights, p0: float, *, e_star: float = 1.0, length: float = 1.0,
 def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.0,
                   tol: float = 1e-8, max_iter: int = DEFAULT_MAX_ITER, store_fields=False,
                   threads: int = 1, hardness: float | None = None,
-                  clusters: bool = False, boundary: str = "periodic") -> xr.Dataset:
+                  clusters: bool = False, boundary: str = "periodic", progress=None) -> xr.Dataset:
     """Solve the normal contact of a rigid rough surface on an elastic half-space.
 
     Parameters
@@ -351,6 +351,10 @@ def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.
         rigid-body approach; each product costs a ``2n x 2n`` FFT pair
         (:class:`~.halfspace.FreeHalfSpace`). A flat surface is then the rigid
         square flat punch (no hardness allowed).
+    progress : callable, optional
+        Called after each load step as ``progress(step, p0, area_fraction,
+        iterations, converged, seconds)`` (``step`` 1-based, ``seconds`` the
+        step's wall time), e.g. to log a long solve as it goes.
 
     Returns
     -------
@@ -377,9 +381,11 @@ def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.
     store = validate_store(store_fields, p.size)
     clusters = validate_flag("clusters", clusters)
     boundary = validate_boundary(boundary)
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be a callable or None, got {type(progress).__name__} {progress!r}")
     solver = ContactSolver(h, e_star, length, tol, max_iter, _effects(hardness), threads, _method(), boundary)
     solver.check_loads(p, "pressures")
-    cols, iters, conv, fields, masks = _run_steps(solver, p, store, clusters)
+    cols, iters, conv, fields, masks = _run_steps(solver, p, store, clusters, progress)
     attrs = {"e_star": e_star, "length": length, "tol": tol, "max_iter": max_iter, "threads": threads,
              "fft_backend": solver.backend, "n": h.shape[0], "solver": SOLVER_NAME,
              "solver_description": SOLVER_DESCRIPTION if solver.periodic else SOLVER_DESCRIPTION_FREE,
@@ -395,7 +401,7 @@ def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.
     return ds
 
 
-def _run_steps(solver: ContactSolver, p: np.ndarray, store: set, clusters: bool):
+def _run_steps(solver: ContactSolver, p: np.ndarray, store: set, clusters: bool, progress=None):
     """Solve every load step; per-step columns, iterations, flags, stored fields, masks."""
     n_steps = p.size
     names = ["area_fraction", "mean_contact_pressure", "mean_gap", "contact_perimeter", "residual",
@@ -425,4 +431,6 @@ def _run_steps(solver: ContactSolver, p: np.ndarray, store: set, clusters: bool)
             field_steps.append(k + 1)
         if masks is not None:
             masks.append(st.mask.copy())
+        if progress is not None:
+            progress(k + 1, p0, st.area, st.iterations, st.converged, cols["wall_time"][k])
     return cols, iters, conv, (fields_p, fields_g, field_steps), masks
