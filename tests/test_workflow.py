@@ -67,6 +67,11 @@ def test_dry_run_every_shipped_scene(repo, scene):
         assert jobs["contact"] == 1200 and jobs["representativity"] == 30
     if scene == "representative":
         assert jobs["contact"] == 60 and "representativity" not in jobs
+    # the dry run says what the scene computes before anything runs
+    solves = {"demo": "12 contact cases x 30 load steps = 360 solves at N=256",
+              "paper": "1200 contact cases x 30 load steps = 36000 solves at N=1024",
+              "representative": "60 contact cases x 30 load steps = 1800 solves at N=1024"}[scene]
+    assert f"roughcontact: scene '{scene}' plans" in res.stderr + res.stdout and solves in res.stderr + res.stdout
 
 
 def test_representativity_only_scene_plans_no_contact(tmp_path):

@@ -419,3 +419,21 @@ def load_steps(block: dict) -> list[float]:
     steps = [p_min * (p_max / p_min) ** (i / (n - 1)) for i in range(n)]
     steps[-1] = p_max  # exact end point
     return steps
+
+
+def plan_summary(scene_name: str, scene: dict) -> str:
+    """One line saying how much a validated scene computes (shown by ``snakemake -n``)."""
+    parts = []
+    if "representativity" in scene:
+        rep = scene["representativity"]
+        points = len(grid_points(rep))
+        parts.append(f"{points * rep['seeds']} representativity surfaces at N={rep['surface']['N']} "
+                     f"in {points} jobs")
+    if "contact" in scene:
+        con = scene["contact"]
+        n_cases, n_steps = len(cases(con)), con["load"]["n_steps"]
+        parts.append(f"{n_cases} contact cases x {n_steps} load steps = {n_cases * n_steps} solves at "
+                     f"N={con['surface']['N']}")
+    if "accuracy" in scene:
+        parts.append("the accuracy study")
+    return f"roughcontact: scene {scene_name!r} plans " + ("; ".join(parts) or "nothing") + "."

@@ -14,6 +14,7 @@ from roughcontact.config import (
     check_config_files,
     grid_points,
     load_schema,
+    plan_summary,
     validate_config,
 )
 from roughcontact.figures import FIGURES, scene_figures
@@ -26,6 +27,8 @@ except ConfigError as _err:
 
 SCENES = _VALID["scenes"]
 ACTIVE_SCENE = _VALID["scene"]
+# What the active scene computes, before any job runs (a large scene's cost at a glance).
+logger.info(plan_summary(ACTIVE_SCENE, SCENES[ACTIVE_SCENE]))
 
 
 def case_path(folder, ext="nc"):
