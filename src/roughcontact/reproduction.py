@@ -108,7 +108,7 @@ def kappa_claims(con: xr.Dataset) -> list[dict]:
                      "independent at λ_l = L/16, λ_s = L/32; higher H, smaller κ at λ_l = L", needs),
             _pending("seed scatter falls with k_l and rises with H", "falls with k_l, rises with H", needs),
             _pending("κ rises as λ_l falls (k_l rises)", "rises", needs),
-        ] + _asymptote_claim(kappa_at(con).mean("seed"))
+        ] + _asymptote_claim(con)
     kap = kappa_at(con)
     mean, std = kap.mean("seed"), kap.std("seed", ddof=1)
     kl_max, kl_min, ks_min = float(kap.k_l.max()), float(kap.k_l.min()), float(kap.k_s.min())
@@ -144,17 +144,22 @@ def kappa_claims(con: xr.Dataset) -> list[dict]:
         "κ(0.05): " + ", ".join(f"{float(v):.3f} (k_l={float(k):g})" for k, v in zip(kl_mean.k_l.values,
                                                                                        kl_mean.values, strict=True)),
         "reproduced" if rises else "not", "seed-, H- and k_s-mean κ at A/A0 = 0.05 increasing in k_l"))
-    return rows + _asymptote_claim(mean)
+    return rows + _asymptote_claim(con)
 
 
-def _asymptote_claim(mean: xr.DataArray) -> list[dict]:
+def _asymptote_claim(con: xr.Dataset) -> list[dict]:
+    """kappa above sqrt(2 pi) anywhere in the fit window, for some (k_l, k_s, H)."""
     bgt = np.sqrt(2 * np.pi)
-    frac_above = float((mean > bgt).mean())
+    areas = (0.01, 0.02, 0.05, 0.1)
+    peak = xr.concat([kappa_at(con, a).mean("seed") for a in areas], dim="area").max("area")
+    low = xr.concat([kappa_at(con, a).mean("seed") for a in areas], dim="area").min("area")
+    frac_above = float((peak > bgt).mean())
     return [_row(
         "κ is not confined between the Persson (√(8/π) ≈ 1.60) and BGT (√(2π) ≈ 2.51) asymptotes",
-        "not confined", f"κ(0.05) from {float(mean.min()):.3f} to {float(mean.max()):.3f}; "
-        f"{100 * frac_above:.0f} % of the (k_l, k_s, H) points above √(2π)",
-        "reproduced" if frac_above > 0 else "not", "some seed-mean κ at A/A0 = 0.05 above √(2π)")]
+        "not confined", f"seed-mean κ from {float(low.min()):.3f} to {float(peak.max()):.3f} over A/A0 = "
+        f"0.01–0.1; above √(2π) somewhere in that range for {100 * frac_above:.0f} % of the (k_l, k_s, H) points",
+        "reproduced" if frac_above > 0 else "not",
+        "seed-mean κ at A/A0 = 0.01, 0.02, 0.05, 0.1 above √(2π) for some (k_l, k_s, H)")]
 
 
 def cel_claims(fit: xr.Dataset, con: xr.Dataset) -> list[dict]:
