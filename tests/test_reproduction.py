@@ -69,3 +69,10 @@ def test_published_claims_and_figures_follow_from_the_published_data(tmp_path):
     assert (out / "claims.md").read_text() == (PUBLISHED / "claims.md").read_text()
     for png in (PUBLISHED / "figures").glob("*.png"):
         assert (out / "figures" / png.name).read_bytes() == png.read_bytes(), png.name
+
+
+@pytest.mark.skipif(not (PUBLISHED / "claims.md").is_file(), reason="no published reproduction in docs/reproduction")
+def test_the_readme_shows_the_generated_claim_table():
+    readme = (PUBLISHED / "README.md").read_text()
+    for row in (PUBLISHED / "claims.md").read_text().splitlines():
+        assert row in readme, f"docs/reproduction/README.md lacks the generated row {row[:60]!r}"
