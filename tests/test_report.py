@@ -188,6 +188,13 @@ def test_summary_has_the_code_the_parameters_and_the_fit(mathml):
         report.summary_rst("demo", PARAMETERS, version="1.2.3", commit="")
 
 
+def test_summary_of_a_fit_with_no_row_says_so(mathml):
+    # every case excluded (unconverged steps): cel.csv holds its header only; the report still builds
+    header = fit.to_csv_table(_fit_result()).splitlines()[0] + "\n"
+    html = _html(report.summary_rst("tiny", PARAMETERS, version="1.2.3", commit="unknown", fit_csv=header))
+    assert "Contact evolution law fit" in html and "No constant was fitted" in html
+
+
 # --------------------------------------------------------------------------------- landing page
 class _Category:
     def __init__(self, name):

@@ -212,7 +212,12 @@ def summary_rst(scene: str, parameters: Mapping, *, version: str, commit: str,
         "description and ``keep_surfaces`` aside: they change no result).\n",
         parameters_table(parameters),
     ]
-    if fit_csv is not None:
+    if fit_csv is not None and not list(csv.DictReader(io.StringIO(fit_csv))):
+        # a fit with no row: every case was excluded (e.g. unconverged steps) or none fitted
+        parts += [_heading("Contact evolution law fit"),
+                  "No constant was fitted: the fit table ``fit/cel.csv`` has no row (every case excluded, "
+                  "e.g. for unconverged load steps, or no fit converged; the fit's log says which).\n"]
+    elif fit_csv is not None:
         parts += [
             _heading("Contact evolution law fit"),
             r"Fit of :math:`A/A_0 = \left(\beta + [\kappa p_0/(h' E^*)]^{\mu-1}\right)^{1/(\mu-1)}` over the "
