@@ -215,7 +215,6 @@ solves of the same size must not run concurrently in threads of one process
 from .check import MEAN_RTOL
 from .contact import DEFAULT_MAX_ITER, ContactSolver, solve_contact, solve_step
 from .effects import PlasticityCap
-from .elastic import STALL_WINDOW
 from .halfspace import FreeHalfSpace, PeriodicHalfSpace, displacement, elastic_kernel, free_influence
 from .results import (
                       FRACTION_UNITS,
@@ -229,7 +228,7 @@ from .results import (
 )
 from .units import LOAD_RANGE, gap_scale
 from .validation import BOUNDARIES
-from .workspace import ELASTIC_METHODS
+from .workspace import ELASTIC_METHODS, STALL_WINDOW
 
 #: Elastic iteration used by :func:`solve_contact` and :func:`solve_step`, one of
 #: :data:`ELASTIC_METHODS` (read at each call: set it here to switch).

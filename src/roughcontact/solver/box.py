@@ -10,9 +10,8 @@ import math
 
 import numpy as np
 
-from .elastic import STALL_WINDOW
 from .projection import project
-from .workspace import Workspace, dot
+from .workspace import StallGuard, Workspace, dot
 
 
 def offset_no_free(w, zero, capd) -> float:
@@ -87,7 +86,7 @@ def box_solve(ws: Workspace, p0: float, tol: float, max_iter: int, cap: float, f
     restart = True
     alpha = 0.0  # gradient-projection step length; 0 = not known yet
     it = 0
-    ref, it_ref = math.inf, 0
+    guard = StallGuard(max_iter)
     converged = False
     residual = math.inf
 
@@ -121,11 +120,7 @@ def box_solve(ws: Workspace, p0: float, tol: float, max_iter: int, cap: float, f
             ws.refresh()
             fresh = True
             continue
-        if not math.isfinite(residual) or it >= max_iter:
-            break
-        if residual < 0.5 * ref:
-            ref, it_ref = residual, it
-        elif it - it_ref >= STALL_WINDOW:
+        if guard.stop(residual, it):
             break
         it += 1
 

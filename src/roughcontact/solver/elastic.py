@@ -12,12 +12,7 @@ import math
 import numpy as np
 
 from .projection import enforce_mean
-from .workspace import Workspace, dot
-
-#: A step that does not halve its best residual within this many iterations is
-#: declared stalled (round-off floor or breakdown); when it progresses, the CG
-#: halves the residual every ~5-20 iterations on the paper case (n <= 1024).
-STALL_WINDOW = 300
+from .workspace import StallGuard, Workspace, dot
 
 
 def pk_solve(ws: Workspace, p0: float, tol: float, max_iter: int, fresh: bool):
@@ -55,7 +50,7 @@ def pk_solve(ws: Workspace, p0: float, tol: float, max_iter: int, fresh: bool):
     delta = 0.0
     g_old = 1.0
     it = 0
-    ref, it_ref = math.inf, 0
+    guard = StallGuard(max_iter)
     converged = False
     gbar = 0.0
     residual = math.inf
@@ -101,11 +96,7 @@ def pk_solve(ws: Workspace, p0: float, tol: float, max_iter: int, fresh: bool):
             ws.refresh()
             fresh = True
             continue
-        if not math.isfinite(residual) or it >= max_iter:
-            break
-        if residual < 0.5 * ref:
-            ref, it_ref = residual, it
-        elif it - it_ref >= STALL_WINDOW:
+        if guard.stop(residual, it):
             break
         it += 1
 

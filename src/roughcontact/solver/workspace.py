@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .halfspace import half_space
@@ -12,6 +14,29 @@ from .units import rms_about_mean
 #: iteration with the Fourier preconditioner and an extrapolated warm start;
 #: ``"pk-fourier-f32"``, the latter with single-precision transforms in the loop.
 ELASTIC_METHODS = ("pk", "pk-fourier", "pk-fourier-f32")
+
+
+#: A step that does not halve its best residual within this many iterations is
+#: declared stalled (round-off floor or breakdown); when it progresses, the CG
+#: halves the residual every ~5-20 iterations on the paper case (n <= 1024).
+STALL_WINDOW = 300
+
+
+class StallGuard:
+    """The stop rule both iterations share: a non-finite residual, ``max_iter``, or a stall."""
+
+    def __init__(self, max_iter: int):
+        self.max_iter = max_iter
+        self.best, self.at = math.inf, 0
+
+    def stop(self, residual: float, it: int) -> bool:
+        """Whether iteration ``it`` with this ``residual`` ends the step (unconverged)."""
+        if not math.isfinite(residual) or it >= self.max_iter:
+            return True
+        if residual < 0.5 * self.best:
+            self.best, self.at = residual, it
+            return False
+        return it - self.at >= STALL_WINDOW
 
 
 def dot(a: np.ndarray, b: np.ndarray) -> float:
