@@ -17,7 +17,7 @@ def test_shipped_config_is_valid(shipped_config):
 def test_paper_scene_grids_are_the_papers(shipped_config):
     paper = validate_config(shipped_config, SCHEMA)["scenes"]["paper"]
     rep, con = paper["representativity"], paper["contact"]
-    assert rep["surface"] == {"N": 1024, "L": 1.0, "rms_height": 0.1, "plateau": False}
+    assert rep["surface"] == {"N": 1024, "L": 1.0, "rms_height": 0.1, "plateau": False, "unit": "1"}
     assert rep["seeds"] == 30 and rep["grid"]["H"] == ["0.8"] and rep["n_bins"] == 500
     assert rep["grid"]["k_l"] == ["1", "2", "4", "8", "16"]
     assert rep["grid"]["k_s"] == ["32", "40", "64", "128", "256", "512"]
@@ -100,7 +100,8 @@ def test_defaults_filled(shipped_config):
     cfg = _demo(shipped_config)
     del cfg["defaults"]["contact"]["solver"]
     demo = validate_config(cfg, SCHEMA)["scenes"]["demo"]
-    assert demo["contact"]["solver"] == {"e_star": 1.0, "tol": 1e-8, "max_iter": 10000}
+    assert demo["contact"]["solver"] == {"e_star": 1.0, "tol": 1e-8, "max_iter": 10000, "pressure_unit": "1",
+                                         "boundary": "periodic"}
     assert demo["contact"]["outputs"] == {"fields": [], "clusters": False}
 
 
@@ -108,7 +109,7 @@ def test_scene_is_a_delta_over_defaults(shipped_config):
     scenes = validate_config(shipped_config, SCHEMA)["scenes"]
     demo, paper = scenes["demo"], scenes["paper"]
     # what the demo writes replaces, what it omits comes from defaults (mappings merge by key)
-    assert demo["contact"]["surface"] == {"N": 256, "L": 1.0, "rms_slope": 0.1, "plateau": False}
+    assert demo["contact"]["surface"] == {"N": 256, "L": 1.0, "rms_slope": 0.1, "plateau": False, "unit": "1"}
     assert demo["contact"]["grid"]["k_l"] == ["4", "16"] and demo["contact"]["load"] == paper["contact"]["load"]
     assert demo["representativity"]["grid"]["H"] == ["0.8"]
     # a study the scene does not name is not computed, whatever defaults holds

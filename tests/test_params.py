@@ -55,7 +55,7 @@ def test_params_are_canonical(shipped_config):
     got = params.contact(demo["contact"])
     assert list(got) == sorted(got) and list(got["solver"]) == sorted(got["solver"])
     assert repr(got) == repr(params.contact(copy.deepcopy(demo["contact"])))
-    assert params.surface(demo["contact"]) == {"L": 1.0, "N": 256, "plateau": False, "rms_slope": 0.1}
+    assert params.surface(demo["contact"]) == {"L": 1.0, "N": 256, "plateau": False, "rms_slope": 0.1, "unit": "1"}
     assert params.accuracy_case(
         {"surface": {"rms_slope": 0.1, "L": 1.0}, "p_max": 0.005},
         {"label": "x", "axis": "N", "seeds": 3, "N": "256", "tol": "1e-8", "n_steps": "30"},

@@ -34,6 +34,8 @@ from pathlib import Path
 import yaml
 from jsonschema import Draft202012Validator
 
+from .measured import MeasuredConfigError, check_measured_scene, topography_names
+
 #: The studies of a scene that run over a grid of cases (the accuracy study has its own settings).
 STUDIES = ("representativity", "contact")
 
@@ -242,7 +244,8 @@ def _duplicates_by_value(texts) -> list[str]:
     return dups
 
 
-def _check_study(scene: str, study: str, block: dict) -> None:
+def _check_grid(scene: str, study: str, block: dict) -> None:
+    """Cross-field rules of a generated study's grid (k_l < k_s <= N/2, 0 < H < 1, examples, seeds)."""
     def fail(field, msg):
         raise ConfigError(f"scene {scene!r}, field '{study}.{field}': {msg}")
 
@@ -270,24 +273,30 @@ def _check_study(scene: str, study: str, block: dict) -> None:
             fail(f"examples[{i}]", f"({ex['k_l']}, {ex['k_s']}) is not in the grid's k_l x k_s")
         if float(ex["k_l"]) >= float(ex["k_s"]):
             fail(f"examples[{i}]", f"k_l={ex['k_l']} must be < k_s={ex['k_s']}")
-    if study == "contact":
-        steps = block["load"]["n_steps"]
-        bad = [s for s in block["outputs"]["fields"] if s > steps]
-        if bad:
-            fail("outputs.fields", f"steps {bad} exceed load.n_steps = {steps} (allowed 1..{steps})")
-        if block["seeds"] < 2:
-            fail("seeds", f"{block['seeds']} is too few: the contact study's CEL fit resamples seeds and needs "
-                          "at least 2")
-        load = block["load"]
-        if "p_min" in load and load["schedule"] != "geometric":
-            fail("load.p_min", f"only used by load.schedule: geometric (here {load['schedule']!r}); remove it")
-        if "p_min" in load and not load["p_min"] < load["p_max"]:
-            fail("load.p_min", f"{load['p_min']:g} must be < load.p_max = {load['p_max']:g}")
-        plastic = block["effects"].get("plasticity")
-        if plastic and not plastic["hardness"] > block["load"]["p_max"]:
-            fail("effects.plasticity.hardness", f"{plastic['hardness']:g} must exceed load.p_max = "
-                 f"{block['load']['p_max']:g}: a pressure capped at the hardness cannot carry a mean load p0 "
-                 ">= hardness")
+    if study == "contact" and block["seeds"] < 2:
+        fail("seeds", f"{block['seeds']} is too few: the contact study's CEL fit resamples seeds and needs "
+                      "at least 2")
+
+
+def _check_contact(scene: str, block: dict) -> None:
+    """Cross-field rules of a contact block: output steps, load schedule, effects."""
+    def fail(field, msg):
+        raise ConfigError(f"scene {scene!r}, field 'contact.{field}': {msg}")
+
+    steps = block["load"]["n_steps"]
+    bad = [s for s in block["outputs"]["fields"] if s > steps]
+    if bad:
+        fail("outputs.fields", f"steps {bad} exceed load.n_steps = {steps} (allowed 1..{steps})")
+    load = block["load"]
+    if "p_min" in load and load["schedule"] != "geometric":
+        fail("load.p_min", f"only used by load.schedule: geometric (here {load['schedule']!r}); remove it")
+    if "p_min" in load and not load["p_min"] < load["p_max"]:
+        fail("load.p_min", f"{load['p_min']:g} must be < load.p_max = {load['p_max']:g}")
+    plastic = block["effects"].get("plasticity")
+    if plastic and not plastic["hardness"] > block["load"]["p_max"]:
+        fail("effects.plasticity.hardness", f"{plastic['hardness']:g} must exceed load.p_max = "
+             f"{block['load']['p_max']:g}: a pressure capped at the hardness cannot carry a mean load p0 "
+             ">= hardness")
 
 
 def _check_accuracy(scene: str, block: dict) -> None:
@@ -316,16 +325,20 @@ def _check_accuracy(scene: str, block: dict) -> None:
         fail("seed_axis", "needs at least one entry >= 1")
 
 
-def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = None) -> dict:
+def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = None, *, active: bool = True) -> dict:
     """Validate one (merged) scene and return a canonical copy: defaults filled, numbers typed.
 
     ``delta`` is the scene as written, before :func:`merge_scene`; a bad field that it does
-    not hold came from the ``defaults`` block, and the message says so. Raises
+    not hold came from the ``defaults`` block, and the message says so. ``active``: whether this
+    is the scene that runs (only its topography files must exist now). Raises
     :class:`ConfigError` naming ``name`` and the offending field.
     """
     bad = _non_finite(scene)
     if bad:
         raise ConfigError(f"scene {name!r}, field '{_field(bad[0])}': {bad[1]} is not a finite number")
+    if "topography" in scene and "accuracy" in scene:
+        raise ConfigError(f"scene {name!r}, field 'accuracy': the accuracy study runs on generated surfaces only; "
+                          "remove it from a scene with a topography block")
     scene_schema = {**schema["$defs"]["scene"], "$defs": schema["$defs"]}
     validator = Draft202012Validator(scene_schema)
     errors = sorted(validator.iter_errors(scene), key=lambda e: (len(e.path), list(e.path)))
@@ -336,9 +349,19 @@ def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = No
             origin = " (value from the 'defaults' block)"
         raise ConfigError(f"scene {name!r}, field '{_field(err.path)}'{origin}: {_schema_message(err)}")
     out = _complete(copy.deepcopy(scene), scene_schema, scene_schema)
-    for study in STUDIES:
-        if study in out:
-            _check_study(name, study, out[study])
+    if "topography" in out:
+        try:
+            out = check_measured_scene(name, out, delta, check_files=active)
+        except MeasuredConfigError as err:
+            raise ConfigError(str(err)) from None
+    else:
+        for study in STUDIES:
+            if study in out:
+                _check_grid(name, study, out[study])
+        if "contact" in out:
+            out["contact"]["solver"].setdefault("boundary", "periodic")
+    if "contact" in out:
+        _check_contact(name, out["contact"])
     if "accuracy" in out:
         _check_accuracy(name, out["accuracy"])
     lo, hi = out["fit"]["window"]
@@ -376,7 +399,8 @@ def validate_config(config: dict, schema: dict | None = None) -> dict:
                               "a letter and hold only letters, digits, '_' and '-' (they become folder names)")
         if not isinstance(block or {}, dict):
             raise ConfigError(f"scene {name!r}: must be a mapping of blocks, got {type(block).__name__}")
-        validated[name] = validate_scene(name, merge_scene(defaults, block or {}), schema, delta=block or {})
+        validated[name] = validate_scene(name, merge_scene(defaults, block or {}), schema, delta=block or {},
+                                         active=name == config.get("scene"))
     default = config.get("scene")
     if not isinstance(default, str) or default not in validated:
         raise ConfigError(
@@ -424,6 +448,14 @@ def load_steps(block: dict) -> list[float]:
 def plan_summary(scene_name: str, scene: dict) -> str:
     """One line saying how much a validated scene computes (shown by ``snakemake -n``)."""
     parts = []
+    if "topography" in scene:
+        n_files = len(topography_names(scene))
+        for study in ("representativity", "contact"):
+            if study in scene:
+                steps = scene[study]["load"]["n_steps"] if study == "contact" else 0
+                parts.append(f"{study} of {n_files} topography file(s)" +
+                             (f" x {steps} load steps = {n_files * steps} solves" if steps else ""))
+        return f"roughcontact: scene {scene_name!r} plans " + "; ".join(parts) + "."
     if "representativity" in scene:
         rep = scene["representativity"]
         points = len(grid_points(rep))

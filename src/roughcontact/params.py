@@ -31,12 +31,18 @@ def _pick(block: Mapping, keys) -> dict:
 
 def surface(block: Mapping) -> dict:
     """A surface job (either study): the surface block (N, L, plateau, normalisation)."""
-    return _pick(block["surface"], ("N", "L", "plateau", "rms_slope", "rms_height"))
+    return _pick(block["surface"], ("N", "L", "plateau", "rms_slope", "rms_height", "unit"))
 
 
 def representativity(block: Mapping) -> dict:
-    """A representativity job (one grid point, all its seeds): bins, seeds and the surface block."""
-    return canonical({**_pick(block, ("n_bins", "seeds")), "surface": surface(block)})
+    """A representativity job: bins, and for generated surfaces the seeds and the surface block.
+
+    A measured scene's block has neither (its surface is the file the job reads).
+    """
+    out = _pick(block, ("n_bins", "seeds"))
+    if "surface" in block:
+        out["surface"] = surface(block)
+    return canonical(out)
 
 
 def contact(block: Mapping) -> dict:
@@ -91,16 +97,32 @@ def recorded(ds) -> dict:
         raise ValueError(f"{ds.encoding.get('source', 'dataset')}: 'scene_parameters' is not JSON: {exc}") from None
 
 
+def _same_label(got, want) -> bool:
+    """Whether a case coordinate's value is the one asked for: numbers by value, names as text."""
+    if isinstance(got, (str, bytes)) or isinstance(want, str) and not _is_number(want):
+        return str(got) == str(want)
+    return float(got) == float(want)
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def require_made_for(ds, path, case: Mapping, **expected) -> None:
     """Raise ``ValueError`` naming ``path`` unless it holds ``case`` made with ``expected``.
 
     ``case`` maps ``k_l, k_s, H, seed`` to the values the job asks for (config strings or
-    numbers); ``expected`` maps keys of the file's recorded parameters (e.g. ``surface``) to
+    numbers), or ``topography`` to a measured case's name; ``expected`` maps keys of the
+    file's recorded parameters (e.g. ``surface``) to
     the values the job needs. Guards against a file of another case or scene put in place.
     """
     for dim, want in case.items():
         got = ds[dim].values.ravel() if dim in ds.coords else None
-        if got is None or got.size != 1 or float(got[0]) != float(want):
+        if got is None or got.size != 1 or not _same_label(got[0], want):
             raise ValueError(f"{path}: holds {dim}={None if got is None else got.tolist()}, but this job is "
                              f"for {dim}={want}; the file was made for another case")
     rec = recorded(ds)

@@ -133,6 +133,33 @@ def finite_difference_rms_slope(heights: np.ndarray, length: float = 1.0) -> flo
     return float(np.sqrt(np.mean(gx**2 + gy**2)))
 
 
+def nonperiodic_moments(heights: np.ndarray, length: float = 1.0) -> dict[str, float]:
+    """Statistics of a measured ``(n, n)`` patch (not periodic), from finite differences.
+
+    A measured patch's spectrum would count the jump between opposite edges as roughness,
+    so its moments come from differences taken inside the patch only: forward first and
+    second differences along x and along y, averaged over both directions. Same keys and
+    units as :func:`spectral_moments` (``rms_slope`` = sqrt(<|grad h|^2>) = sqrt(2 m2));
+    differences are biased low against the spectral derivative at the pixel scale, as
+    :func:`finite_difference_rms_slope` is.
+    """
+    h = np.asarray(heights, dtype=float)
+    if h.ndim != 2 or h.shape[0] != h.shape[1] or h.shape[0] < 3:
+        raise ValueError(f"heights must be a square 2-D array of at least 3 x 3, got shape {h.shape}")
+    dx = length / h.shape[0]
+    m0 = float(np.mean((h - h.mean()) ** 2))
+    m2 = 0.5 * float(np.mean(np.diff(h, axis=0) ** 2) + np.mean(np.diff(h, axis=1) ** 2)) / dx**2
+    m4 = 0.5 * float(np.mean(np.diff(h, 2, axis=0) ** 2) + np.mean(np.diff(h, 2, axis=1) ** 2)) / dx**4
+    return {
+        "rms_height": float(np.sqrt(m0)),
+        "rms_slope": float(np.sqrt(2.0 * m2)),
+        "m0": m0,
+        "m2": m2,
+        "m4": m4,
+        "alpha": float(m0 * m4 / m2**2) if m2 > 0 else float("nan"),
+    }
+
+
 def base_grid(n: int, k_s: float) -> int:
     """Side of the grid on which the white noise is drawn: the smallest even M > 2 k_s, or n.
 

@@ -1,0 +1,323 @@
+"""Measured topography files, read with SurfaceTopography into the contact solver's square height array.
+
+Every file format is read by SurfaceTopography (``open_topography`` picks the reader from the
+file's contents); this module only checks that the data suits the solver (one 2-D uniform map
+with square pixels), converts it to the study's length unit and prepares it:
+
+1. **read** the channel, in the file's own unit and size where it carries them (the scene's
+   ``file_unit`` / ``physical_size`` are only used where it does not), then convert heights and
+   sizes to ``unit`` with SurfaceTopography's ``to_unit``;
+2. **detrend** on the full measured area, with the trend fitted to the measured (defined) points
+   only. Detrending before filling keeps imputed values out of the fit, and places the filled
+   points on the trend surface: filling a tilted scan with its global mean first would put
+   spurious pits and peaks in the holes, which would then bias the fitted plane and become
+   contact spots. Fitting before cropping uses every measured point for the instrument's tilt or
+   form (a property of the whole scan), rather than re-levelling the cropped patch by itself;
+3. **fill** the undefined (not measured) points of the detrended heights ("mean" or "harmonic");
+4. **crop** to the centred largest square when the map is not square and cropping is allowed.
+
+Every failure raises :class:`TopographyError`, whose message starts with the file path, says
+what is wrong and what is allowed, and names the config field (``topography.<key>``) to change.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+from SurfaceTopography import Topography
+from SurfaceTopography.Exceptions import CannotDetectFileFormat, CorruptFile
+from SurfaceTopography.IO import open_topography, readers
+from SurfaceTopography.Support.UnitConversion import get_unit_conversion_factor, mangle_length_unit_ascii
+
+#: The study's allowed length units (CF/UDUNITS spellings: micrometres are "um", not "µm").
+LENGTH_UNITS = ("m", "mm", "um", "nm")
+#: What to do with points the instrument did not measure (config ``topography.undefined``).
+UNDEFINED_MODES = ("reject", "mean", "harmonic")
+#: SurfaceTopography detrend modes offered (config ``topography.detrend``); "none" keeps the heights.
+DETREND_MODES = ("none", "center", "height", "curvature")
+#: What to do with a map that is not square (config ``topography.non_square``).
+NON_SQUARE_MODES = ("reject", "crop")
+#: Largest relative difference |dx/dy - 1| of the pixel sizes still taken as square.
+PIXEL_RTOL = 1e-6
+
+
+class TopographyError(ValueError):
+    """A topography file that cannot be used; the message names the file and what is allowed."""
+
+
+@dataclass(frozen=True)
+class MeasuredSurface:
+    """A measured surface on the contact solver's square grid.
+
+    Attributes
+    ----------
+    heights : np.ndarray
+        Heights, float64, shape (n, n), C-contiguous, finite everywhere, in ``unit``; axis 0 is
+        the file's x axis, axis 1 its y axis.
+    length : float
+        Side L of the square patch, in ``unit`` (the pixel size is ``length / n``).
+    unit : str
+        The study's length unit, one of :data:`LENGTH_UNITS`.
+    info : dict
+        JSON-serialisable provenance (file, sha256, reader, channel, units, sizes, steps applied).
+    """
+
+    heights: np.ndarray
+    length: float
+    unit: str
+    info: dict
+
+
+def read_topography(path, *, unit: str, file_unit: str | None = None,
+                    physical_size: tuple[float, float] | None = None, undefined: str = "reject",
+                    detrend: str = "none", non_square: str = "reject", channel: int = 0) -> MeasuredSurface:
+    """Read a measured topography file into a square height array in the study's unit.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Topography file in any format SurfaceTopography reads (detected from its contents).
+    unit : str
+        The study's length unit (one of :data:`LENGTH_UNITS`); heights and length are converted to it.
+    file_unit : str, optional
+        Length unit of the heights and sizes of a file that carries none (one of :data:`LENGTH_UNITS`).
+        Ignored (and recorded so in ``info["ignored"]``) when the file has a unit.
+    physical_size : (float, float), optional
+        Size (Lx, Ly) of the measured area along the array's axes 0 and 1, in the file's unit, for a
+        file that carries none. Ignored (and recorded so) when the file has a size.
+    undefined : str
+        Undefined (not measured) points: "reject", "mean" (the mean of the defined detrended
+        heights) or "harmonic" (SurfaceTopography's harmonic interpolation).
+    detrend : str
+        "none", "center" (mean), "height" (best plane) or "curvature" (best quadric), fitted to the
+        defined points of the full measured area, before filling and cropping.
+    non_square : str
+        "reject" a map with nx != ny, or "crop" it to the centred n x n block, n = min(nx, ny).
+    channel : int
+        Index of the data channel in a multi-channel file (0: the first).
+
+    Returns
+    -------
+    MeasuredSurface
+        Heights of shape (n, n) and side length in ``unit``, and provenance ``info``.
+
+    Raises
+    ------
+    TopographyError
+        On bad arguments and on any file that is missing, unreadable or unsuitable.
+    """
+    name = os.fspath(path)
+    physical_size = _check_arguments(name, unit, file_unit, physical_size, undefined, detrend, non_square, channel)
+    info = {"file": name, "sha256": _sha256(name)}
+    topo = _load(name, info, unit=unit, file_unit=file_unit, physical_size=physical_size, channel=channel)
+    pixel = _check_grid(name, topo, non_square)
+    heights = _detrend_and_fill(name, topo, info, undefined=undefined, detrend=detrend)
+    heights, info["crop"] = _crop(heights)
+    return MeasuredSurface(heights=heights, length=heights.shape[0] * pixel, unit=unit, info=info)
+
+
+def _check_arguments(name, unit, file_unit, physical_size, undefined, detrend, non_square, channel):
+    """Validate the reader settings; returns ``physical_size`` as a (Lx, Ly) float tuple or None."""
+    choices = {"unit": (unit, LENGTH_UNITS), "undefined": (undefined, UNDEFINED_MODES),
+               "detrend": (detrend, DETREND_MODES), "non_square": (non_square, NON_SQUARE_MODES)}
+    if file_unit is not None:
+        choices["file_unit"] = (file_unit, LENGTH_UNITS)
+    for key, (value, allowed) in choices.items():
+        if value not in allowed:
+            raise TopographyError(f"{name}: topography.{key} {value!r} is not allowed; use one of {', '.join(allowed)}")
+    if isinstance(channel, bool) or not isinstance(channel, int | np.integer) or channel < 0:
+        raise TopographyError(f"{name}: topography.channel {channel!r} is not allowed; use an integer >= 0")
+    if physical_size is None:
+        return None
+    try:
+        size = tuple(float(s) for s in physical_size)
+    except (TypeError, ValueError):
+        size = ()
+    if len(size) != 2 or not all(np.isfinite(s) and s > 0 for s in size):
+        raise TopographyError(f"{name}: topography.physical_size {physical_size!r} is not allowed; "
+                              "use two finite numbers > 0, (Lx, Ly) in the file's unit")
+    return size
+
+
+def _sha256(name: str) -> str:
+    """Hex SHA-256 of the file's bytes; a missing or unreadable file is a TopographyError."""
+    if not os.path.isfile(name):
+        raise TopographyError(f"{name}: the topography file does not exist (or is not a regular file)")
+    try:
+        with open(name, "rb") as fh:
+            return hashlib.file_digest(fh, "sha256").hexdigest()
+    except OSError as err:
+        raise TopographyError(f"{name}: the topography file cannot be read ({err})") from err
+
+
+def _load(name, info, *, unit, file_unit, physical_size, channel) -> Topography:
+    """Read one channel with SurfaceTopography; returns a plain Topography in ``unit``.
+
+    Undefined points (masked by the reader, or non-finite) are masked in the result. ``info`` gets
+    the reader's provenance. The reader is closed before returning.
+    """
+    with warnings.catch_warnings():
+        # SurfaceTopography's NetCDF reader closes scipy's memory-mapped file while its variables
+        # still exist, which only warns; the heights have been copied by then.
+        warnings.filterwarnings("ignore", message="Cannot close a netcdf_file", category=RuntimeWarning)
+        reader = _open(name)
+        try:
+            chan = _channel(name, reader, channel)
+            kwargs = _metadata(name, chan, info, file_unit=file_unit, physical_size=physical_size)
+            raw = chan.topography(**kwargs)
+            if raw.dim != 2 or not raw.is_uniform:
+                raise TopographyError(f"{name}: channel {chan.name!r} is not a 2-D uniform map")
+            scaled = _to_unit(name, raw, unit)
+            heights = scaled.heights()
+            # A copy, as the reader may hand out views of a file it is about to close.
+            data = np.array(np.ma.getdata(heights), dtype=np.float64, order="C")
+        except TopographyError:
+            raise
+        except Exception as err:  # readers of ~40 formats raise anything from deep inside
+            raise TopographyError(f"{name}: SurfaceTopography's {type(reader).__name__} could not read channel "
+                                  f"{channel} ({type(err).__name__}: {err})") from err
+        finally:
+            _close(reader)
+    mask = np.ma.getmaskarray(heights) | ~np.isfinite(data)
+    info.update(reader=type(reader).__name__, format=reader.format(), channel=chan.name,
+                file_unit=mangle_length_unit_ascii(raw.unit), original_shape=[int(n) for n in data.shape],
+                original_physical_size=[float(s) for s in scaled.physical_sizes], periodic=bool(raw.is_periodic))
+    return Topography(np.ma.masked_array(data, mask=mask) if mask.any() else data, scaled.physical_sizes,
+                      periodic=bool(raw.is_periodic), unit=unit)
+
+
+def _open(name: str):
+    """SurfaceTopography's reader for the file, its format detected from the contents."""
+    try:
+        return open_topography(name)
+    except CannotDetectFileFormat as err:
+        # Its message lists every reader's complaint; the chained exception keeps them.
+        formats = ", ".join(sorted(r.format() for r in readers))
+        raise TopographyError(f"{name}: not a topography file SurfaceTopography can read (unknown or unsupported "
+                              f"format, or a damaged file); formats read: {formats}") from err
+    except CorruptFile as err:
+        raise TopographyError(f"{name}: the file is damaged ({err})") from err
+    except Exception as err:
+        raise TopographyError(f"{name}: SurfaceTopography cannot open the file ({type(err).__name__}: {err})") from err
+
+
+def _close(reader) -> None:
+    """Close SurfaceTopography's reader and the file it holds."""
+    reader.close()
+    # NPYReader.close() (SurfaceTopography 1.27.1) leaves its NuMPI file open, which warns when collected.
+    mpi_file = getattr(reader, "mpi_file", None)
+    if mpi_file is not None:
+        mpi_file.close()
+
+
+def _channel(name, reader, index):
+    """The ``index``-th data channel; it must hold 2-D uniform heights."""
+    channels = reader.channels
+    names = ", ".join(f"{i}: {c.name!r}" for i, c in enumerate(channels))
+    if index >= len(channels):
+        raise TopographyError(f"{name}: topography.channel {index} is out of range; the file's channels are {names}")
+    chan = channels[index]
+    if not chan.is_height_channel:
+        raise TopographyError(f"{name}: channel {index} ({chan.name!r}) holds {chan.data_kind.value} data in "
+                              f"{chan.data_unit!r}, not heights; the file's channels are {names}")
+    if chan.dim == 1 or chan.is_uniform is False:
+        kind = "a line scan (1-D)" if chan.dim == 1 else "non-uniformly sampled"
+        raise TopographyError(f"{name}: channel {index} ({chan.name!r}) is {kind}; only 2-D maps on a uniform grid "
+                              "can be used")
+    return chan
+
+
+def _metadata(name, chan, info, *, file_unit, physical_size) -> dict:
+    """Keyword arguments for ``chan.topography``: the scene's unit and size where the file has none.
+
+    SurfaceTopography refuses to override metadata the file carries (MetadataAlreadyFixedByFile), and
+    the file's own values are the measurement's, so they win; a scene value they replace is recorded
+    in ``info["ignored"]``.
+    """
+    kwargs, ignored = {}, []
+    if chan.unit is None:
+        if file_unit is None:
+            raise TopographyError(f"{name}: the file carries no length unit; give topography.file_unit "
+                                  f"(one of {', '.join(LENGTH_UNITS)}), the unit of its heights and sizes")
+        kwargs["unit"] = file_unit
+    elif file_unit is not None:
+        ignored.append("file_unit")
+    if chan.physical_sizes is None:
+        if physical_size is None:
+            raise TopographyError(f"{name}: the file has no physical size; give topography.physical_size "
+                                  "[Lx, Ly], the size of the measured area in the file's unit")
+        kwargs["physical_sizes"] = physical_size
+    elif physical_size is not None:
+        ignored.append("physical_size")
+    info.update(unit_from="scene" if "unit" in kwargs else "file", ignored=ignored,
+                physical_size_from="scene" if "physical_sizes" in kwargs else "file")
+    return kwargs
+
+
+def _to_unit(name, topo, unit):
+    """``topo`` converted to the study's ``unit`` by SurfaceTopography (heights and sizes)."""
+    try:
+        get_unit_conversion_factor(topo.unit, unit)
+    except ValueError as err:
+        raise TopographyError(f"{name}: the file's unit {topo.unit!r} cannot be converted to {unit!r} ({err})") from err
+    return topo.to_unit(unit)
+
+
+def _check_grid(name, topo, non_square) -> float:
+    """Check the sizes, square pixels and (unless cropping) a square map; returns the pixel size in ``unit``."""
+    (nx, ny), (lx, ly) = topo.nb_grid_pts, topo.physical_sizes
+    if not all(np.isfinite(s) and s > 0 for s in (lx, ly)):
+        raise TopographyError(f"{name}: the physical size ({lx}, {ly}) {topo.unit} is not positive and finite")
+    dx, dy = lx / nx, ly / ny
+    if not abs(dx / dy - 1) <= PIXEL_RTOL:
+        raise TopographyError(f"{name}: the pixels are not square: dx = {dx:.9g} {topo.unit} along axis 0 and "
+                              f"dy = {dy:.9g} {topo.unit} along axis 1; the contact solver needs "
+                              f"|dx/dy - 1| <= {PIXEL_RTOL:g}")
+    if nx != ny and non_square == "reject":
+        raise TopographyError(f"{name}: the map is {nx} x {ny} points, not square; the contact solver needs a "
+                              f"square one: set topography.non_square: crop to use the centred "
+                              f"{min(nx, ny)} x {min(nx, ny)} block")
+    return dx
+
+
+def _detrend_and_fill(name, topo, info, *, undefined, detrend) -> np.ndarray:
+    """Detrend (fit on the defined points), then fill the undefined points; returns finite heights (nx, ny)."""
+    n_undefined = int(np.ma.getmaskarray(topo.heights()).sum())
+    info.update(n_undefined=n_undefined, undefined=undefined, detrend=detrend)
+    size = topo.heights().size
+    if n_undefined and undefined == "reject":
+        raise TopographyError(f"{name}: {n_undefined} of {size} points ({n_undefined / size:.3%}) are undefined "
+                              "(not measured); set topography.undefined to mean or harmonic to fill them")
+    if n_undefined == size:
+        raise TopographyError(f"{name}: all {size} points are undefined (not measured)")
+    try:
+        if detrend != "none":
+            topo = topo.detrend(detrend_mode=detrend)
+        if n_undefined and undefined == "mean":
+            topo = topo.fill_undefined_data(fill_value=float(topo.mean()))
+        elif n_undefined:
+            topo = topo.interpolate_undefined_data(method="harmonic")
+        # The harmonic filter returns a masked array with nothing masked; anything still masked is NaN here.
+        heights = np.ma.filled(topo.heights(), np.nan).astype(np.float64, order="C")
+    except Exception as err:
+        raise TopographyError(f"{name}: detrend {detrend!r} / filling {undefined!r} failed "
+                              f"({type(err).__name__}: {err})") from err
+    n_bad = int(np.count_nonzero(~np.isfinite(heights)))
+    if n_bad:
+        raise TopographyError(f"{name}: {n_bad} heights are not finite after detrend {detrend!r} and filling "
+                              f"{undefined!r}; the contact solver needs finite heights everywhere")
+    return heights
+
+
+def _crop(heights: np.ndarray) -> tuple[np.ndarray, list[int] | None]:
+    """The centred largest square block of ``heights`` (nx, ny) and its [i0, j0, n], or None if already square."""
+    nx, ny = heights.shape
+    if nx == ny:
+        return heights, None
+    n = min(nx, ny)
+    i0, j0 = (nx - n) // 2, (ny - n) // 2
+    return np.ascontiguousarray(heights[i0:i0 + n, j0:j0 + n]), [i0, j0, n]

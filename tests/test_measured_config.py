@@ -1,0 +1,92 @@
+"""Scenes of measured surfaces: the topography block is checked before any job is planned."""
+import copy
+
+import pytest
+
+from roughcontact.config import ConfigError, plan_summary, validate_config
+from roughcontact.measured import reader_settings, topography_names
+
+
+def _config(tmp_path, topography=None, **scene_blocks):
+    for name in ("a.x3p", "b.nc"):
+        (tmp_path / name).write_bytes(b"placeholder")  # existence is what validation checks
+    topo = topography or {"files": {"a": str(tmp_path / "a.x3p"), "b": {"path": str(tmp_path / "b.nc"),
+                                                                       "file_unit": "nm",
+                                                                       "physical_size": [1.0, 2.0]}},
+                          "unit": "um"}
+    scene = {"topography": topo, **(scene_blocks or {"contact": {}})}
+    return {
+        "scene": "m",
+        "defaults": {"contact": {"surface": {"N": 64, "rms_slope": 0.1},
+                                 "grid": {"k_l": ["2"], "k_s": ["8"], "H": ["0.5"]}, "seeds": 2}},
+        "scenes": {"m": scene, "gen": {"contact": {}}},
+    }
+
+
+def test_measured_scene_is_expanded_and_generator_keys_dropped(tmp_path):
+    scene = validate_config(_config(tmp_path))["scenes"]["m"]
+    assert topography_names(scene) == ["a", "b"]
+    assert not {"surface", "grid", "seeds"} & set(scene["contact"])
+    assert scene["contact"]["solver"]["boundary"] == "free"
+    assert scene["topography"]["undefined"] == "reject" and scene["topography"]["non_square"] == "reject"
+    # a file's own unit and size override the scene's; each job's params hold only its file's settings
+    got = reader_settings(scene, "b")
+    assert got["file_unit"] == "nm" and got["physical_size"] == [1.0, 2.0] and got["path"].endswith("b.nc")
+    assert "file_unit" not in reader_settings(scene, "a")
+    assert "2 topography file(s) x 30 load steps = 60 solves" in plan_summary("m", scene)
+
+
+def test_generated_scenes_default_to_the_periodic_half_space(tmp_path):
+    scene = validate_config(_config(tmp_path))["scenes"]["gen"]
+    assert scene["contact"]["solver"]["boundary"] == "periodic"
+
+
+def test_boundary_can_be_chosen(tmp_path):
+    cfg = _config(tmp_path, contact={"solver": {"boundary": "periodic"}})
+    assert validate_config(cfg)["scenes"]["m"]["contact"]["solver"]["boundary"] == "periodic"
+    cfg["scenes"]["gen"] = {"contact": {"solver": {"boundary": "sideways"}}}
+    with pytest.raises(ConfigError, match=r"scene 'gen', field 'contact.solver.boundary'.*periodic.*free"):
+        validate_config(cfg)
+
+
+def test_glob_names_cases_by_file_stem(tmp_path):
+    cfg = _config(tmp_path, topography={"glob": str(tmp_path / "*.*"), "unit": "nm"})
+    scene = validate_config(cfg)["scenes"]["m"]
+    assert topography_names(scene) == ["a", "b"] and "glob" not in scene["topography"]
+
+
+@pytest.mark.parametrize("edit, words", [
+    (lambda c, t: c["scenes"]["m"]["topography"]["files"].update(c=str(t / "missing.x3p")),
+     r"scene 'm', field 'topography.files.c': file '.*missing.x3p' does not exist"),
+    (lambda c, t: c["scenes"]["m"].update(topography={"glob": str(t / "*.sur"), "unit": "um"}),
+     r"field 'topography.glob': '.*\*.sur' matches no file"),
+    (lambda c, t: c["scenes"]["m"]["topography"]["files"].update({"kl2_ks8_H0.5_s0": str(t / "a.x3p")}),
+     r"looks like a generated case"),
+    (lambda c, t: c["scenes"]["m"]["topography"]["files"].update({"bad name": str(t / "a.x3p")}),
+     r"field 'topography.files'"),
+    (lambda c, t: c["scenes"]["m"]["topography"].update(unit="1"),
+     r"field 'topography.unit'.*'m', 'mm', 'um', 'nm'"),
+    (lambda c, t: c["scenes"]["m"]["topography"].update(undefined="zero"),
+     r"field 'topography.undefined'.*reject.*mean.*harmonic"),
+    (lambda c, t: c["scenes"]["m"]["topography"].update(physical_size=[1.0, -2.0]),
+     r"field 'topography.physical_size.1'"),
+    (lambda c, t: c["scenes"]["m"]["contact"].update(grid={"k_l": ["1"], "k_s": ["8"], "H": ["0.5"]}),
+     r"field 'contact.grid': not used with a topography block"),
+    (lambda c, t: c["scenes"]["m"].update(accuracy={}),
+     r"field 'accuracy': the accuracy study runs on generated surfaces only"),
+])
+def test_bad_topography_blocks_name_the_field(tmp_path, edit, words):
+    cfg = _config(tmp_path)
+    edit(cfg, tmp_path)
+    with pytest.raises(ConfigError, match=words):
+        validate_config(cfg)
+
+
+def test_only_the_running_scene_needs_its_files(tmp_path):
+    cfg = _config(tmp_path)
+    cfg["scenes"]["m"]["topography"]["files"]["gone"] = str(tmp_path / "gone.x3p")
+    with pytest.raises(ConfigError, match="gone.x3p' does not exist"):
+        validate_config(cfg)
+    other = copy.deepcopy(cfg)
+    other["scene"] = "gen"
+    assert "gone" in validate_config(other)["scenes"]["m"]["topography"]["files"]
