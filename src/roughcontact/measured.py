@@ -91,8 +91,9 @@ def check_measured_scene(name: str, scene: dict, delta: Mapping | None = None, *
     """A validated scene with a ``topography`` block, expanded: files resolved, generator keys dropped.
 
     ``delta`` is the scene as written; a generator key it sets itself is an error (it would be
-    ignored). ``check_files``: whether the files must exist (see :func:`topography_files`). The contact solver's ``boundary`` defaults to ``free``: a measured patch is not
-    periodic, and the periodic half-space would glue its opposite edges together.
+    ignored). ``check_files``: whether the files must exist (see :func:`topography_files`).
+    The contact solver's ``boundary`` defaults to ``free``: a measured patch is not periodic,
+    and the periodic half-space would glue its opposite edges together.
     """
     out = copy.deepcopy(scene)
     delta = delta or {}
