@@ -203,9 +203,12 @@ def test_kappa_figure_names_paper_and_run_curves(contact):
 
 
 def test_representativity_units_are_mathtext(rep_stats):
-    """The units the pipeline writes for epsilon ("length unit^-1/2") appear as mathtext, not literally."""
+    """The units the pipeline writes for epsilon ("um^(-1/2)", cf_unit) appear as mathtext, not literally."""
     rep = rep_stats.copy()
-    rep["epsilon_mean"].attrs["units"] = "length unit^-1/2"
+    rep["epsilon_mean"].attrs["units"] = "um^(-1/2)"
+    label = fig_representativity(rep).axes[0].get_ylabel()
+    assert "^(" not in label and r"$\mathrm{\mu m}^{-1/2}$" in label, label
+    rep["epsilon_mean"].attrs["units"] = "length unit^-1/2"  # files of older versions
     label = fig_representativity(rep).axes[0].get_ylabel()
     assert "^-1/2" not in label and r"$(\mathrm{length\ unit})^{-1/2}$" in label, label
 

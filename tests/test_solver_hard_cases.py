@@ -14,8 +14,6 @@ from roughcontact import solver as solver_mod
 from roughcontact.solver import (
     DEFAULT_MAX_ITER,
     FRACTION_UNITS,
-    LENGTH_UNITS,
-    PRESSURE_UNITS,
     STALL_WINDOW,
     contact_perimeter,
     solve_contact,
@@ -160,10 +158,15 @@ def test_dataset_layout_and_units():
     assert isinstance(ds, xr.Dataset)
     assert list(ds["step"].values) == [1, 2, 3]
     assert "contact_pressure" not in ds and "x" not in ds.coords
-    assert ds["pressure"].attrs["units"] == PRESSURE_UNITS
-    assert ds["mean_contact_pressure"].attrs["units"] == PRESSURE_UNITS
-    assert ds["mean_gap"].attrs["units"] == LENGTH_UNITS
-    assert ds["area_fraction"].attrs["units"] == FRACTION_UNITS
+    assert ds["pressure"].attrs["units"] == ds["mean_contact_pressure"].attrs["units"] == "1"  # nondimensional
+    assert ds["mean_gap"].attrs["units"] == ds["contact_perimeter"].attrs["units"] == "1"
+    assert ds["area_fraction"].attrs["units"] == FRACTION_UNITS == "1"
+    assert ds.attrs["pressure_units"] == ds.attrs["length_units"] == "1"
+    um = solve_contact(h, [0.001, 0.002, 0.003], tol=TOL, length_unit="um", pressure_unit="MPa")
+    assert um["pressure"].attrs["units"] == um["mean_contact_pressure"].attrs["units"] == "MPa"
+    assert um["mean_gap"].attrs["units"] == "um" and um["contact_perimeter"].attrs["units"] == "um^-1"
+    assert um["area_fraction"].attrs["units"] == "1"
+    np.testing.assert_array_equal(um["area_fraction"].values, ds["area_fraction"].values)  # labels only
     assert ds["converged"].dtype == bool
     assert ds.attrs["n"] == n and ds.attrs["fft_backend"] in ("pyfftw", "numpy")
 

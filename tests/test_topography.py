@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -224,3 +225,18 @@ def test_bad_arguments_are_named(tmp_path, kwargs, words):
         read_topography(fn, **{"unit": "um", **kwargs})
     assert str(err.value).startswith(f"{fn}: ") and words in str(err.value), str(err.value)
     assert isinstance(err.value, ValueError) and LENGTH_UNITS == ("m", "mm", "um", "nm")
+
+
+def test_shipped_example_files_hold_what_the_examples_module_writes(tmp_path):
+    """data/measured/ (the `measured` scene's inputs) equals a fresh `python -m roughcontact.examples`."""
+    from roughcontact.examples import write_examples
+
+    repo = Path(__file__).resolve().parents[1] / "data" / "measured"
+    fresh = write_examples(tmp_path)
+    settings = {"ground-a": {}, "ground-b": {"undefined": "harmonic"},
+                "ground-c": {"file_unit": "nm", "physical_size": (100000.0, 125000.0), "non_square": "crop"}}
+    for name, path in fresh.items():
+        a = read_topography(repo / path.name, unit="um", **settings[name])
+        b = read_topography(path, unit="um", **settings[name])
+        np.testing.assert_array_equal(a.heights, b.heights)
+        assert a.length == b.length and a.info["n_undefined"] == b.info["n_undefined"]

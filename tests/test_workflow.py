@@ -250,3 +250,31 @@ def test_contact_jobs_log_one_line_per_load_step(demo_run):
     log = next((demo_run / "results" / "demo" / "logs" / "contact").glob("*.log")).read_text()
     lines = [line for line in log.splitlines() if " step " in line and "/30: p0 = " in line]
     assert len(lines) == 30 and "step 30/30" in lines[-1] and "iterations" in lines[0]
+
+
+def test_measured_scene_runs_end_to_end(tmp_path):
+    """The shipped `measured` scene: three files in three formats through every stage (~30 s)."""
+    from roughcontact.io import read_dataset
+    from test_units import assert_all_units_parse
+
+    wd = copy_workflow(tmp_path / "wf")
+    res = run_snakemake(wd, "-j2", "--config", "scene=measured")
+    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
+    root = wd / "results" / "measured"
+    agg = read_dataset(root / "aggregate" / "contact.nc", stage="aggregate")
+    assert list(agg["topography"].values) == ["ground-a", "ground-b", "ground-c"]
+    assert agg.attrs["boundary"] == "free" and agg["pressure"].attrs["units"] == "MPa"
+    assert bool(agg["converged"].all()) and np.all(np.isfinite(agg["kappa"].values))
+    # ground-c (160 x 128 text, no unit or size) was cropped to 128 x 128 in um; ground-b's holes filled
+    c = read_dataset(root / "surfaces" / "ground-c.nc", stage="surface")
+    assert c.sizes["x"] == c.sizes["y"] == 128 and c["heights"].attrs["units"] == "um"
+    assert '"n_undefined": 42' in read_dataset(root / "surfaces" / "ground-b.nc", stage="surface").attrs["source"]
+    rep = read_dataset(root / "aggregate" / "representativity.nc", stage="aggregate")
+    assert rep["epsilon"].attrs["units"] == "um^(-1/2)" and rep.sizes["topography"] == 3
+    for path in sorted(root.rglob("*.nc")):  # every variable of every file: CF/pint-parseable units
+        assert_all_units_parse(xr.open_dataset(path))
+    assert "pooled (3 topographies)" in (root / "fit" / "cel.csv").read_text()
+    for name in ("topographies", "measured_area_load", "measured_kappa"):
+        assert (root / "figures" / f"{name}.png").stat().st_size > 10_000
+    again = run_snakemake(wd, "-n", "--config", "scene=measured")
+    assert "Nothing to be done" in again.stdout + again.stderr

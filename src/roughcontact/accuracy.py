@@ -33,9 +33,15 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import xarray as xr
 
+from .quantities import cf_unit
+
 #: Default coefficient of the perimeter correction, (pi - 1 + ln 2) / 24 (Yastrebov et
 #: al. 2017 as we read it); :func:`fit_perimeter_c` measures the best value for a study.
 PERIMETER_C = (math.pi - 1.0 + math.log(2.0)) / 24.0
+
+#: ``units`` of memory in MiB (Snakemake's ``max_rss``): UDUNITS has no binary prefixes,
+#: "2^20 byte" parses with it (``cf_units``) and with ``pint.UnitRegistry().parse_expression``.
+MIB_UNITS = "2^20 byte"
 
 METRICS = ("area", "area_corrected", "kappa", "kappa_corrected", "cel_kappa", "cel_mu", "cel_beta")
 AXES = ("N", "tol", "n_steps", "seeds")
@@ -176,21 +182,25 @@ def _metric_means(agg: xr.Dataset, *, kappa_at: float, dx: float, n_boot: int, c
 
 def summarize(results: Mapping[str, tuple[xr.Dataset, Sequence[float], Sequence[float]]],
               settings: Sequence[Mapping], *, length: float, kappa_at: float = 0.05,
-              seed_axis: Sequence[str] = (), n_boot: int = 10, c: float = PERIMETER_C) -> xr.Dataset:
+              seed_axis: Sequence[str] = (), n_boot: int = 10, c: float = PERIMETER_C,
+              length_unit: str = "1") -> xr.Dataset:
     """Errors and costs of every setting of an accuracy study.
 
     Parameters
     ----------
-    results : mapping label -> (combined contact dataset, wall seconds per case, peak RSS [MB] per case)
+    results : mapping label -> (combined contact dataset, wall seconds per case, peak RSS [MiB] per case)
     settings : the output of :func:`variants`
     length : domain side L (grid spacing L/N)
     seed_axis : numbers of seeds (strings) compared at the "defaults" setting
+    length_unit : unit of ``length`` (:data:`roughcontact.quantities.LENGTH_UNITS`, default
+        ``"1"``), recorded as the attribute ``length_units``; the metrics are dimensionless
 
     Returns
     -------
     xarray.Dataset over dim ``variant`` (one row per N/tol/n_steps setting, plus one per
     entry of ``seed_axis``) with coords ``axis``, ``value``, ``N``, ``tol``, ``n_steps``,
-    ``n_seeds`` and variables ``time_per_case`` [s], ``max_rss`` [MB], the metric values
+    ``n_seeds`` and variables ``time_per_case`` [s], ``max_rss`` [MiB, units ``"2^20 byte"``,
+    Snakemake's ``max_rss``], the metric values
     and ``err_<metric>`` (relative error against the reference; for the seeds axis against
     the all-seeds mean at the defaults). Attr ``perimeter_c_fit``: the c that best
     removes the N dependence of A/A0 at p_max (:func:`fit_perimeter_c`).
@@ -241,7 +251,7 @@ def summarize(results: Mapping[str, tuple[xr.Dataset, Sequence[float], Sequence[
         "time_per_case": ("variant", [r["time"] for r in rows],
                           {"units": "s", "long_name": "wall time per case (seeds axis: for all its cases)"}),
         "max_rss": ("variant", [r["rss"] for r in rows],
-                    {"units": "MB", "long_name": "peak resident memory of a job"}),
+                    {"units": MIB_UNITS, "long_name": "peak resident memory of a job (Snakemake's max_rss, MiB)"}),
     }
     for m in METRICS:
         data[m] = ("variant", [r["vals"][m] for r in rows],
@@ -259,7 +269,8 @@ def summarize(results: Mapping[str, tuple[xr.Dataset, Sequence[float], Sequence[
     }
     return xr.Dataset(data, coords=coords, attrs={
         "reference": ref["label"], "defaults": d["label"], "kappa_at": float(kappa_at),
-        "perimeter_c": float(c), "perimeter_c_fit": c_fit, "length": float(length)})
+        "perimeter_c": float(c), "perimeter_c_fit": c_fit, "length": float(length),
+        "length_units": cf_unit(length_unit, length_power=1)})
 
 
 def markdown_table(summary: xr.Dataset) -> str:

@@ -10,9 +10,12 @@ coordinates; :func:`add_derived` adds ``kappa``, ``dpbar_dp0`` and ``n_unconverg
 ``log A/A0`` (:func:`log_window_edges`), a smoother alternative to the finite differences.
 
 Every variable these functions create has ``units`` and ``long_name`` attributes.
-Units: ``pressure`` and ``mean_contact_pressure`` share the unit of the global
-attribute ``e_star``; area fractions, slopes, ``kappa`` and ``dpbar_dp0`` are
-dimensionless ("1").
+Units propagate from the inputs, which must agree on them: :func:`combine_cases`
+refuses a variable whose ``units`` differ between files; ``pressure`` and
+``mean_contact_pressure`` share the unit of the global attribute ``e_star`` (its
+``pressure_units`` where recorded, e.g. ``"MPa"``), so that ``kappa = E* h' / pbar``
+and ``dpbar_dp0`` are dimensionless ("1"), as are area fractions and slopes; the
+seed statistics ``<var>_mean/_std/_sem`` keep the ``units`` of ``<var>``.
 """
 
 from __future__ import annotations
@@ -25,6 +28,8 @@ import xarray as xr
 
 #: The four case dimensions, in the order of every combined array.
 CASE_DIMS = ("k_l", "k_s", "H", "seed")
+#: The case dimension of measured surfaces (roughcontact.datasets.TOPOGRAPHY_DIM).
+TOPOGRAPHY_DIM = "topography"
 #: Variables a per-case contact dataset must hold.
 CONTACT_REQUIRED = ("pressure", "area_fraction", "mean_contact_pressure", "converged", "rms_slope")
 #: Variables a per-case representativity dataset must hold.
@@ -71,6 +76,48 @@ def _attrs_equal(a, b) -> bool:
         return a == b
 
 
+def _check_like_first(ds: xr.Dataset, name: str, ref: xr.Dataset, ref_name: str, kind: str,
+                      case_dims: Sequence[str]) -> None:
+    """Raise ``ValueError`` naming ``name`` unless ``ds`` can be stacked with the first case ``ref``.
+
+    Same variables (the kind's required ones among them) with the same units, the same non-case
+    dimensions and coordinates (exact join), and for contact data the same ``e_star``.
+    """
+    ref_vars = set(ref.data_vars)
+    missing = [v for v in _KINDS[kind] if v not in ds.data_vars]
+    if missing:
+        raise ValueError(f"{name}: missing required variable(s) {missing} for kind={kind!r}")
+    if set(ds.data_vars) != ref_vars:
+        only_ref = sorted(ref_vars - set(ds.data_vars))
+        only_here = sorted(set(ds.data_vars) - ref_vars)
+        raise ValueError(f"{name}: variables differ from {ref_name}: missing {only_ref}, extra {only_here}")
+    for var in sorted(ref_vars):
+        got, want = ds[var].attrs.get("units"), ref[var].attrs.get("units")
+        if got != want:
+            raise ValueError(f"{name}: variable {var!r} has units {got!r}, but {ref_name} has "
+                             f"{want!r} (cases of one study share its length and pressure units)")
+    if kind == "contact" and "step" not in ds.dims:
+        raise ValueError(f"{name}: contact datasets need a 'step' dimension")
+    for dim in ds.dims:
+        if dim in case_dims:
+            continue
+        if dim not in ref.dims or ds.sizes[dim] != ref.sizes[dim]:
+            raise ValueError(f"{name}: dimension {dim!r} has size {ds.sizes.get(dim)}, "
+                             f"but {ref_name} has {ref.sizes.get(dim)}")
+        if (dim in ds.coords) != (dim in ref.coords) or (
+                dim in ds.coords and not np.array_equal(ds[dim].values, ref[dim].values)):
+            got = ds[dim].values if dim in ds.coords else None
+            want = ref[dim].values if dim in ref.coords else None
+            raise ValueError(f"{name}: {dim!r} coordinate {got!r} differs from {ref_name}'s "
+                             f"{want!r} (exact join required)")
+    if kind == "contact":
+        if "e_star" not in ds.attrs:
+            raise ValueError(f"{name}: global attribute 'e_star' is missing")
+        if float(ds.attrs["e_star"]) != float(ref.attrs["e_star"]):
+            raise ValueError(f"{name}: e_star={ds.attrs['e_star']!r} differs from "
+                             f"{ref_name}'s e_star={ref.attrs['e_star']!r}")
+
+
 def combine_cases(datasets: Sequence[xr.Dataset], names: Sequence[str], *,
                   expected: Iterable[tuple] | None = None, kind: str = "contact") -> xr.Dataset:
     """Stack per-case datasets on the grid of their case coordinates, strictly.
@@ -110,8 +157,9 @@ def combine_cases(datasets: Sequence[xr.Dataset], names: Sequence[str], *,
     ValueError
         Naming the file: a required variable is missing, a variable present in other
         files is missing, the step coordinate (or any other non-case coordinate) differs,
-        ``e_star`` differs, a case appears twice or is not expected. Naming the case: an
-        expected case has no dataset. Never fills a missing expected case with NaN.
+        a variable's ``units`` differ, ``e_star`` differs, a case appears twice or is not
+        expected. Naming the case: an expected case has no dataset. Never fills a missing
+        expected case with NaN.
     """
     if kind not in _KINDS:
         raise ValueError(f"kind must be one of {sorted(_KINDS)}, got {kind!r}")
@@ -122,7 +170,6 @@ def combine_cases(datasets: Sequence[xr.Dataset], names: Sequence[str], *,
                          f"and {len(names)}")
     if not datasets:
         raise ValueError("datasets is empty: nothing to combine")
-    required = _KINDS[kind]
 
     keys: list[tuple] = []
     seen: dict[tuple, str] = {}
@@ -134,34 +181,7 @@ def combine_cases(datasets: Sequence[xr.Dataset], names: Sequence[str], *,
             raise ValueError(f"{name}: case {_fmt_case(key)} already given by {seen[key]}")
         seen[key] = name
         keys.append(key)
-        missing = [v for v in required if v not in ds.data_vars]
-        if missing:
-            raise ValueError(f"{name}: missing required variable(s) {missing} for kind={kind!r}")
-        if set(ds.data_vars) != ref_vars:
-            only_ref = sorted(ref_vars - set(ds.data_vars))
-            only_here = sorted(set(ds.data_vars) - ref_vars)
-            raise ValueError(f"{name}: variables differ from {names[0]}: missing {only_ref}, "
-                             f"extra {only_here}")
-        if kind == "contact" and "step" not in ds.dims:
-            raise ValueError(f"{name}: contact datasets need a 'step' dimension")
-        for dim in ds.dims:
-            if dim in CASE_DIMS:
-                continue
-            if dim not in ref.dims or ds.sizes[dim] != ref.sizes[dim]:
-                raise ValueError(f"{name}: dimension {dim!r} has size {ds.sizes.get(dim)}, "
-                                 f"but {names[0]} has {ref.sizes.get(dim)}")
-            if (dim in ds.coords) != (dim in ref.coords) or (
-                    dim in ds.coords and not np.array_equal(ds[dim].values, ref[dim].values)):
-                got = ds[dim].values if dim in ds.coords else None
-                want = ref[dim].values if dim in ref.coords else None
-                raise ValueError(f"{name}: {dim!r} coordinate {got!r} differs from {names[0]}'s "
-                                 f"{want!r} (exact join required)")
-        if kind == "contact":
-            if "e_star" not in ds.attrs:
-                raise ValueError(f"{name}: global attribute 'e_star' is missing")
-            if float(ds.attrs["e_star"]) != float(ref.attrs["e_star"]):
-                raise ValueError(f"{name}: e_star={ds.attrs['e_star']!r} differs from "
-                                 f"{names[0]}'s e_star={ref.attrs['e_star']!r}")
+        _check_like_first(ds, name, ref, names[0], kind, CASE_DIMS)
 
     present = set(keys)
     if expected is None:
@@ -237,6 +257,43 @@ def combine_cases(datasets: Sequence[xr.Dataset], names: Sequence[str], *,
             attrs[key_a] = val
     attrs["n_cases"] = len(datasets)
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+
+
+def combine_topographies(datasets: Sequence[xr.Dataset], names: Sequence[str], *, expected: Sequence[str],
+                         kind: str = "contact") -> xr.Dataset:
+    """Stack per-case datasets of measured surfaces along ``topography``, strictly.
+
+    Like :func:`combine_cases` for cases named by their topography file: each dataset has a
+    length-1 dimension ``topography``; the result holds exactly the ``expected`` names, in that
+    order, with every input variable and its attrs, and the global attrs all inputs share plus
+    ``n_cases``. Raises ``ValueError`` naming the file for a duplicate or unexpected name, a
+    missing or extra variable, different units, steps or ``e_star``, and naming the case for
+    an expected name without a dataset.
+    """
+    if kind not in _KINDS:
+        raise ValueError(f"kind must be one of {sorted(_KINDS)}, got {kind!r}")
+    datasets, names, expected = list(datasets), [str(n) for n in names], [str(e) for e in expected]
+    if not datasets or len(datasets) != len(names):
+        raise ValueError(f"need one name per dataset and at least one, got {len(datasets)} and {len(names)}")
+    by_case: dict[str, tuple[xr.Dataset, str]] = {}
+    for ds, name in zip(datasets, names, strict=True):
+        if TOPOGRAPHY_DIM not in ds.coords or ds.sizes.get(TOPOGRAPHY_DIM) != 1:
+            raise ValueError(f"{name}: needs a length-1 dimension coordinate {TOPOGRAPHY_DIM!r} (one measured case)")
+        case = str(ds[TOPOGRAPHY_DIM].values[0])
+        if case in by_case:
+            raise ValueError(f"{name}: topography {case!r} already given by {by_case[case][1]}")
+        if case not in expected:
+            raise ValueError(f"{name}: topography {case!r} is not among the expected {expected}")
+        _check_like_first(ds, name, datasets[0], names[0], kind, (TOPOGRAPHY_DIM,))
+        by_case[case] = (ds, name)
+    missing = [e for e in expected if e not in by_case]
+    if missing:
+        raise ValueError(f"{len(missing)} expected topography case(s) have no dataset: {', '.join(missing)}")
+    ordered = [by_case[e][0] for e in expected]
+    out = xr.concat(ordered, dim=TOPOGRAPHY_DIM, data_vars="minimal", coords="minimal", compat="equals",
+                    combine_attrs="drop_conflicts")
+    out.attrs["n_cases"] = len(ordered)
+    return out
 
 
 # ------------------------------------------------------------------- derived values
@@ -511,6 +568,7 @@ def add_derived(ds: xr.Dataset, *, kappa_rtol: float = 1e-6, derivative_order: i
     e_star = float(ds.attrs["e_star"])
     if not (np.isfinite(e_star) and e_star > 0):
         raise ValueError(f"e_star must be a finite number > 0, got {ds.attrs['e_star']!r}")
+    _check_pressure_units(ds)
     out = ds.copy()
     present = ds["case_present"] if "case_present" in ds else xr.ones_like(ds["rms_slope"], dtype=bool)
 
@@ -553,9 +611,22 @@ def add_derived(ds: xr.Dataset, *, kappa_rtol: float = 1e-6, derivative_order: i
         "stencil": f"order-{derivative_order} Fornberg differences in {derivative_variable}"})
 
     n_unc = (~converged).sum("step").where(present).astype(np.float64)
-    out["n_unconverged"] = n_unc.transpose(*CASE_DIMS)
+    out["n_unconverged"] = n_unc.transpose(*[d for d in (*CASE_DIMS, TOPOGRAPHY_DIM) if d in n_unc.dims])
     out["n_unconverged"].attrs = {"units": "1", "long_name": "number of unconverged load steps (NaN: no such case)"}
     return out
+
+
+def _check_pressure_units(ds: xr.Dataset) -> None:
+    """``pressure``, ``mean_contact_pressure`` and ``e_star`` share one unit (kappa, dpbar_dp0 [1]).
+
+    Only the units that are recorded are compared (a variable without ``units`` passes).
+    """
+    units = {v: ds[v].attrs["units"] for v in ("pressure", "mean_contact_pressure") if "units" in ds[v].attrs}
+    if "pressure_units" in ds.attrs:
+        units["e_star (attribute pressure_units)"] = ds.attrs["pressure_units"]
+    if len(set(units.values())) > 1:
+        raise ValueError(f"pressures must share one unit for kappa = E* h' / pbar and d pbar / d p0 to be "
+                         f"dimensionless, got units {units}")
 
 
 def aggregate_contact(datasets: Sequence[xr.Dataset], names: Sequence[str], *,
@@ -615,8 +686,8 @@ def seed_statistics(ds: xr.Dataset, *, variables: Sequence[str] = SEED_STAT_VARI
     -------
     xarray.Dataset
         Dims ``(k_l, k_s, H[, step])``: ``<var>_mean``, ``<var>_std``, ``<var>_sem`` for each
-        variable, ``pressure_mean`` [unit of e_star], ``rms_slope_mean`` [1] and
-        ``n_seeds(k_l, k_s, H)``; attrs of ``ds`` kept.
+        variable with the ``units`` of the variable, ``pressure_mean`` [unit of e_star],
+        ``rms_slope_mean`` [1] and ``n_seeds(k_l, k_s, H)``; attrs of ``ds`` kept.
     """
     if "dpbar_dp0" not in ds or "kappa" not in ds:
         ds = add_derived(ds)

@@ -33,6 +33,8 @@ from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from .quantities import cf_unit
+
 #: ``units`` attribute of dimensionless quantities (fractions of A0, counts).
 DIMENSIONLESS_UNITS = "1"
 
@@ -310,7 +312,7 @@ def _to_mask(field, index: int) -> np.ndarray:
 
 
 def cluster_dataset(masks_or_pressures: Iterable, steps, length: float, bins=None,
-                    periodic: bool = True) -> xr.Dataset:
+                    periodic: bool = True, *, length_unit: str = "1") -> xr.Dataset:
     """Per-step cluster statistics as an xarray.Dataset.
 
     Parameters
@@ -330,6 +332,10 @@ def cluster_dataset(masks_or_pressures: Iterable, steps, length: float, bins=Non
         default ``default_area_bins(n**2)``.
     periodic : bool
         As for :func:`label_clusters` (``False`` for a free patch).
+    length_unit : str
+        Unit of ``length``, one of :data:`roughcontact.quantities.LENGTH_UNITS`
+        (default ``"1"``: nondimensional), recorded as the global attribute
+        ``length_units``; every variable is dimensionless whatever it is.
 
     Returns
     -------
@@ -354,6 +360,7 @@ def cluster_dataset(masks_or_pressures: Iterable, steps, length: float, bins=Non
         match the number of fields, no field at all, or bad ``length``/``bins``.
     """
     length = _check_length(length)
+    length_units = cf_unit(length_unit, length_power=1)
     masks = [_to_mask(f, i) for i, f in enumerate(masks_or_pressures)]
     if not masks:
         raise ValueError("masks_or_pressures is empty: need at least one (n, n) field")
@@ -400,7 +407,8 @@ def cluster_dataset(masks_or_pressures: Iterable, steps, length: float, bins=Non
         "cluster_area_histogram": xr.Variable(("step", "area_bin"), hist, {
             "units": u, "long_name": "number of contact clusters per area bin"}),
     }
-    attrs = {"length": length, "n": int(masks[0].shape[0]), "cluster_connectivity": 4,
+    attrs = {"length": length, "length_units": length_units, "n": int(masks[0].shape[0]),
+             "cluster_connectivity": 4,
              "cluster_boundary": boundary}
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 

@@ -3,18 +3,25 @@
 Every per-case dataset carries length-1 dimensions ``k_l, k_s, H, seed`` so that the
 aggregate stage can join the cases with ``xarray.combine_by_coords``. The coordinate
 values are the floats of the config strings (``float("0.36")``, identical on every
-parse); file names use the strings themselves.
+parse); file names use the strings themselves. A measured surface's case is its name
+instead: one length-1 dimension ``topography`` with a string coordinate.
 """
 
 from __future__ import annotations
+
+import json
+from fractions import Fraction
 
 import numpy as np
 import xarray as xr
 
 from .accuracy import PERIMETER_C, perimeter_corrected_area
-from .surface import finite_difference_rms_slope, spectral_moments
+from .quantities import cf_unit
+from .surface import finite_difference_rms_slope, nonperiodic_moments, spectral_moments
 
 CASE_DIMS = ("k_l", "k_s", "H", "seed")
+#: The case dimension of measured surfaces (one name per topography file).
+TOPOGRAPHY_DIM = "topography"
 
 _CASE_COORD_ATTRS = {
     "k_l": {"units": "1", "long_name": "long-wavelength cutoff L/lambda_l"},
@@ -33,75 +40,105 @@ def case_coords(k_l: str, k_s: str, hurst: str, seed: int) -> dict:
     }
 
 
-def expand_case(ds: xr.Dataset, k_l: str, k_s: str, hurst: str, seed: int) -> xr.Dataset:
-    """Add the length-1 case dimensions to every data variable of ``ds``."""
-    coords = case_coords(k_l, k_s, hurst, seed)
-    out = ds.expand_dims({name: 1 for name in CASE_DIMS}).assign_coords(coords)
+def expand_case(ds: xr.Dataset, k_l: str | None = None, k_s: str | None = None, hurst: str | None = None,
+                seed: int | None = None, *, topography: str | None = None) -> xr.Dataset:
+    """Add the length-1 case dimensions to every data variable of ``ds``.
+
+    A generated case's ``k_l, k_s, H, seed``, or a measured one's ``topography`` name.
+    """
+    if topography is not None:
+        dims = (TOPOGRAPHY_DIM,)
+        coords = {TOPOGRAPHY_DIM: xr.Variable(dims, np.array([str(topography)], dtype=object),
+                                              {"units": "1", "long_name": "name of the measured topography"})}
+    else:
+        dims, coords = CASE_DIMS, case_coords(k_l, k_s, hurst, seed)
+    out = ds.expand_dims({name: 1 for name in dims}).assign_coords(coords)
     for name in out.data_vars:
-        out[name] = out[name].transpose(*CASE_DIMS, *[d for d in out[name].dims if d not in CASE_DIMS])
+        out[name] = out[name].transpose(*dims, *[d for d in out[name].dims if d not in dims])
         out[name].attrs = ds[name].attrs
     return out
 
 
 def surface_dataset(heights: np.ndarray, *, k_l: str, k_s: str, hurst: str, seed: int,
-                    length: float, normalisation: dict) -> xr.Dataset:
+                    length: float, normalisation: dict, length_unit: str = "1") -> xr.Dataset:
     """Dataset of one generated surface.
 
-    ``heights`` is (n, n) [length unit]; ``normalisation`` is ``{"rms_slope": v}`` or
-    ``{"rms_height": v}``, recorded as an attribute. Adds scalar statistics: rms height,
-    spectral and finite-difference rms slope, profile moments and Nayak's alpha.
+    ``heights`` is (n, n) [``length_unit``, the unit of ``length`` too, one of
+    :data:`roughcontact.quantities.LENGTH_UNITS`; ``"1"``: nondimensional]; ``normalisation``
+    is ``{"rms_slope": v}`` or ``{"rms_height": v}``, recorded as an attribute. Adds scalar
+    statistics: rms height, spectral and finite-difference rms slope, profile moments
+    (``m0`` [length^2], ``m2`` [1], ``m4`` [length^-2]) and Nayak's alpha. The global
+    attribute ``length_units`` is the unit of the attribute ``length``.
     """
     n = heights.shape[0]
     stats = spectral_moments(heights, length)
     x = np.arange(n) * (length / n)
+    u_len = cf_unit(length_unit, length_power=1)
     ds = xr.Dataset(
         {
-            "heights": (("x", "y"), heights, {"units": "length unit of L", "long_name": "surface height h(x, y)"}),
+            "heights": (("x", "y"), heights, {"units": u_len, "long_name": "surface height h(x, y)"}),
             "rms_height": ((), stats["rms_height"],
-                           {"units": "length unit of L", "long_name": "rms height (spectral)"}),
+                           {"units": u_len, "long_name": "rms height (spectral)"}),
             "rms_slope": ((), stats["rms_slope"],
                           {"units": "1", "long_name": "rms slope sqrt(<|grad h|^2>) from the spectrum"}),
             "rms_slope_fd": ((), finite_difference_rms_slope(heights, length),
                              {"units": "1", "long_name": "rms slope from periodic central differences"}),
-            "m0": ((), stats["m0"], {"units": "length unit^2", "long_name": "profile spectral moment m0"}),
+            "m0": ((), stats["m0"], {"units": cf_unit(length_unit, length_power=2),
+                                     "long_name": "profile spectral moment m0"}),
             "m2": ((), stats["m2"], {"units": "1", "long_name": "profile spectral moment m2"}),
-            "m4": ((), stats["m4"], {"units": "length unit^-2", "long_name": "profile spectral moment m4"}),
+            "m4": ((), stats["m4"], {"units": cf_unit(length_unit, length_power=-2),
+                                     "long_name": "profile spectral moment m4"}),
             "alpha": ((), stats["alpha"],
                       {"units": "1", "long_name": "Nayak bandwidth alpha = m0 m4 / m2^2 (profile moments)"}),
         },
         coords={
-            "x": ("x", x, {"units": "length unit of L", "long_name": "position along x"}),
-            "y": ("y", x.copy(), {"units": "length unit of L", "long_name": "position along y"}),
+            "x": ("x", x, {"units": u_len, "long_name": "position along x"}),
+            "y": ("y", x.copy(), {"units": u_len, "long_name": "position along y"}),
         },
-        attrs={"length": float(length), "n": int(n), "normalisation": str(normalisation)},
+        attrs={"length": float(length), "length_units": u_len, "n": int(n),
+               "normalisation": str(normalisation)},
     )
     return expand_case(ds, k_l, k_s, hurst, seed)
 
 
-def representativity_dataset(epsilon: float, heights: np.ndarray, *, n_bins: int, k_l: str, k_s: str,
-                             hurst: str, seed: int) -> xr.Dataset:
-    """Dataset of one surface's representativity: eps and the heights' mean and std."""
+def representativity_dataset(epsilon: float, heights: np.ndarray, *, n_bins: int, k_l: str | None = None,
+                             k_s: str | None = None, hurst: str | None = None, seed: int | None = None,
+                             topography: str | None = None, length_unit: str = "1") -> xr.Dataset:
+    """Dataset of one surface's representativity: eps and the heights' mean and std.
+
+    The case is a generated one's ``k_l, k_s, hurst, seed`` or a measured one's ``topography``.
+
+    ``length_unit`` is the unit of the heights (:data:`roughcontact.quantities.LENGTH_UNITS`);
+    eps has that unit to the power -1/2 (``"um^(-1/2)"``, which pint parses and UDUNITS
+    cannot, see :mod:`roughcontact.quantities`; ``"1"`` when nondimensional).
+    """
+    u_len = cf_unit(length_unit, length_power=1)
     ds = xr.Dataset(
         {
-            "epsilon": ((), float(epsilon), {"units": "length unit^-1/2",
+            "epsilon": ((), float(epsilon), {"units": cf_unit(length_unit, length_power=Fraction(-1, 2)),
                                             "long_name": "L2 error between the heights PDF and its Gaussian"}),
-            "mean_height": ((), float(np.mean(heights)), {"units": "length unit of L", "long_name": "mean height"}),
-            "std_height": ((), float(np.std(heights)), {"units": "length unit of L",
+            "mean_height": ((), float(np.mean(heights)), {"units": u_len, "long_name": "mean height"}),
+            "std_height": ((), float(np.std(heights)), {"units": u_len,
                                                         "long_name": "standard deviation of heights"}),
         },
         attrs={"n_bins": int(n_bins)},
     )
-    return expand_case(ds, k_l, k_s, hurst, seed)
+    return expand_case(ds, k_l, k_s, hurst, seed, topography=topography)
 
 
 def contact_dataset(result: xr.Dataset, *, rms_slope: float, alpha: float, e_star: float,
-                    k_l: str, k_s: str, hurst: str, seed: int) -> xr.Dataset:
+                    k_l: str | None = None, k_s: str | None = None, hurst: str | None = None,
+                    seed: int | None = None, topography: str | None = None) -> xr.Dataset:
     """Per-case contact dataset: the solver's result over ``step`` plus kappa and surface stats.
 
-    kappa = E* h' / pbar [1] with h' the surface's spectral rms slope, the paper's
+    The case is a generated one's ``k_l, k_s, hurst, seed`` or a measured one's ``topography``.
+    kappa = E* h' / pbar [1] with h' the surface's rms slope (spectral for a generated
+    surface, finite differences inside the patch for a measured one), the paper's
     normalised inverse mean contact pressure (its Fig. 3). The solver's ``wall_time``
     is dropped: result files must be byte-identical across reruns, so timings go to the
-    job's log and Snakemake benchmark file instead.
+    job's log and Snakemake benchmark file instead. Units: those of ``result`` (the
+    ``length_unit``/``pressure_unit`` given to :func:`roughcontact.solver.solve_contact`;
+    ``e_star`` in its ``pressure_units``); what this adds is dimensionless.
     """
     ds = result.drop_vars("wall_time", errors="ignore")
     dx = float(result.attrs["length"]) / int(result.attrs["n"])
@@ -114,11 +151,48 @@ def contact_dataset(result: xr.Dataset, *, rms_slope: float, alpha: float, e_sta
     ds["kappa"] = (e_star * rms_slope / ds["mean_contact_pressure"]).assign_attrs(
         units="1", long_name="kappa = E* h' / mean contact pressure")
     ds["rms_slope"] = xr.DataArray(float(rms_slope), attrs={
-        "units": "1", "long_name": "spectral rms slope h' of the surface"})
+        "units": "1", "long_name": "rms slope h' of the surface (its surface file's rms_slope)"})
     ds["alpha"] = xr.DataArray(float(alpha), attrs={
         "units": "1", "long_name": "Nayak bandwidth alpha of the surface (profile moments)"})
     ds.attrs["e_star"] = float(e_star)
-    return expand_case(ds, k_l, k_s, hurst, seed)
+    return expand_case(ds, k_l, k_s, hurst, seed, topography=topography)
+
+
+def measured_surface_dataset(measured, *, name: str) -> xr.Dataset:
+    """Dataset of one measured surface (a :class:`roughcontact.topography.MeasuredSurface`).
+
+    ``heights`` (n, n) and ``x``, ``y`` in the study's length unit ``measured.unit``; the
+    statistics come from differences inside the patch (:func:`roughcontact.surface.nonperiodic_moments`:
+    a measured patch is not periodic, and its spectrum would count the jump between opposite
+    edges as roughness). Global attributes: ``length`` (side L), ``length_units``, ``n``,
+    ``unit`` and ``source`` (the reader's provenance as JSON: file, sha256, reader, units and
+    sizes before conversion, undefined points, detrending, cropping).
+    """
+    h, length, unit = measured.heights, float(measured.length), measured.unit
+    n = h.shape[0]
+    stats = nonperiodic_moments(h, length)
+    u_len = cf_unit(unit, length_power=1)
+    x = np.arange(n) * (length / n)
+    ds = xr.Dataset(
+        {
+            "heights": (("x", "y"), h, {"units": u_len, "long_name": "surface height h(x, y)"}),
+            "rms_height": ((), stats["rms_height"], {"units": u_len, "long_name": "rms height about the mean"}),
+            "rms_slope": ((), stats["rms_slope"], {"units": "1", "long_name": (
+                "rms slope sqrt(<|grad h|^2>) from forward differences inside the patch")}),
+            "m0": ((), stats["m0"], {"units": cf_unit(unit, length_power=2), "long_name": "profile moment m0"}),
+            "m2": ((), stats["m2"], {"units": "1", "long_name": "profile moment m2 = <(dh/dx)^2>, differences"}),
+            "m4": ((), stats["m4"], {"units": cf_unit(unit, length_power=-2),
+                                     "long_name": "profile moment m4 = <(d2h/dx2)^2>, differences"}),
+            "alpha": ((), stats["alpha"], {"units": "1", "long_name": "Nayak bandwidth alpha = m0 m4 / m2^2"}),
+        },
+        coords={
+            "x": ("x", x, {"units": u_len, "long_name": "position along x"}),
+            "y": ("y", x.copy(), {"units": u_len, "long_name": "position along y"}),
+        },
+        attrs={"length": length, "length_units": u_len, "n": int(n), "unit": unit,
+               "source": json.dumps(measured.info, sort_keys=True)},
+    )
+    return expand_case(ds, topography=name)
 
 
 def surface_heights(ds: xr.Dataset, source) -> tuple[np.ndarray, float]:
@@ -130,7 +204,7 @@ def surface_heights(ds: xr.Dataset, source) -> tuple[np.ndarray, float]:
     """
     if "heights" not in ds:
         raise ValueError(f"{source}: lacks the variable 'heights'")
-    da = ds["heights"].squeeze([d for d in CASE_DIMS if d in ds["heights"].dims])
+    da = ds["heights"].squeeze([d for d in (*CASE_DIMS, TOPOGRAPHY_DIM) if d in ds["heights"].dims])
     if da.dims != ("x", "y") or da.shape[0] != da.shape[1] or da.shape[0] < 4:
         raise ValueError(f"{source}: 'heights' must be a square 2-D field over (x, y) of at least 4 x 4 points, "
                          f"got dims {da.dims} and shape {da.shape}")
@@ -150,28 +224,30 @@ def surface_heights(ds: xr.Dataset, source) -> tuple[np.ndarray, float]:
 
 
 def representativity_batch(surface: dict, *, k_l: str, k_s: str, hurst: str, seeds: int,
-                           n_bins: int) -> xr.Dataset:
+                           n_bins: int, length_unit: str | None = None) -> xr.Dataset:
     """eps of seeds ``0 .. seeds-1`` of one ``(k_l, k_s, H)``, each surface made in memory.
 
     One job of the representativity study: at N = 1024 a surface and its eps take
     ~0.3 s, less than a job's start-up, so the seeds of a grid point run together.
     ``surface`` is the study's surface block (``N``, ``L``, ``plateau`` and
-    ``rms_height`` or ``rms_slope``). Returns the per-seed datasets of
-    :func:`representativity_dataset` concatenated along ``seed`` (dims
-    ``k_l, k_s, H`` of length 1 and ``seed`` of length ``seeds``); one seed is
+    ``rms_height`` or ``rms_slope``, optionally ``unit``). ``length_unit`` is the unit of
+    the heights; ``None`` (default): ``surface["unit"]``, ``"1"`` without one. Returns the
+    per-seed datasets of :func:`representativity_dataset` concatenated along ``seed``
+    (dims ``k_l, k_s, H`` of length 1 and ``seed`` of length ``seeds``); one seed is
     ``ds.sel(seed=[s])``.
     """
     from .representativity import gaussian_l2_error
     from .surface import generate_surface
 
     norm = {k: surface[k] for k in ("rms_slope", "rms_height") if k in surface}
+    unit = surface.get("unit", "1") if length_unit is None else length_unit
     parts = []
     for seed in range(seeds):
         h = generate_surface(surface["N"], float(k_l), float(k_s), float(hurst), seed,
                              length=surface["L"], plateau=surface["plateau"], **norm)
         eps = gaussian_l2_error(h, n_bins)
         parts.append(representativity_dataset(eps, h, n_bins=n_bins, k_l=k_l, k_s=k_s, hurst=hurst,
-                                              seed=seed))
+                                              seed=seed, length_unit=unit))
     return xr.concat(parts, dim="seed", combine_attrs="override")
 
 

@@ -47,6 +47,11 @@ of their curves (constants scattered by 1-3 % per seed), the H-pooled joint fit 
 pulled by the mixture (``kappa, mu, beta`` off by about 1.4, 1.7, 5 % at 3 %
 scatter) while the paper route stays within 0.4 %; prefer ``"paper"`` as the primary
 estimate and read ``"joint"`` as a cross-check.
+
+Measured scenes (aggregate dims ``(topography, step)``, one case per topography file) are fitted
+by :func:`fit_topographies`: all topographies pooled as one surface type, the topographies in
+the place of the seeds (topography-mean curve for the paper route, bootstrap over whole
+topographies). It runs the same per-group machinery as :func:`fit_cel` (``_fit_group``).
 """
 
 from __future__ import annotations
@@ -268,13 +273,190 @@ def _h_label(h: float) -> str:
     return f"{float(h):g}"
 
 
+def _check_settings(window, n_boot, rng_seed, methods, min_points, kappa_extrapolation, confidence,
+                    paper_average, on_insufficient) -> tuple[tuple[float, float], tuple[str, ...]]:
+    """The validated window ``(low, high)`` and methods; ValueError naming the first bad setting."""
+    lo, hi = _check_window(window)
+    if not isinstance(n_boot, (int, np.integer)) or n_boot < 10:
+        raise ValueError(f"n_boot must be an integer >= 10, got {n_boot!r}")
+    if not isinstance(rng_seed, (int, np.integer)) or rng_seed < 0:
+        raise ValueError(f"rng_seed must be an integer >= 0, got {rng_seed!r}")
+    methods = tuple(methods)
+    if not methods or any(m not in METHODS for m in methods) or len(set(methods)) != len(methods):
+        raise ValueError(f"methods must be distinct names from {METHODS}, got {methods!r}")
+    if not isinstance(min_points, (int, np.integer)) or min_points < 3:
+        raise ValueError(f"min_points must be an integer >= 3, got {min_points!r}")
+    if kappa_extrapolation not in _KAPPA_EXTRAPOLATIONS:
+        raise ValueError(f"kappa_extrapolation must be one of {_KAPPA_EXTRAPOLATIONS}, got "
+                         f"{kappa_extrapolation!r}")
+    if not (0.0 < float(confidence) < 1.0):
+        raise ValueError(f"confidence must lie in (0, 1), got {confidence!r}")
+    if paper_average not in ("seeds", "none"):
+        raise ValueError(f"paper_average must be 'seeds' or 'none', got {paper_average!r}")
+    if on_insufficient not in ("raise", "nan"):
+        raise ValueError(f"on_insufficient must be 'raise' or 'nan', got {on_insufficient!r}")
+    return (lo, hi), methods
+
+
+def _check_schedules(curves: _Curves, who: Sequence[str]) -> None:
+    """ValueError unless the rows of each stratum share one load schedule (the seed mean needs it).
+
+    ``who[label]`` names the rows of stratum ``label`` in the message.
+    """
+    for lab in np.unique(curves.strata):
+        sched = curves.p0[curves.strata == lab]
+        if not np.allclose(sched, sched[0], rtol=1e-12, atol=0.0, equal_nan=True):
+            raise ValueError(f"{who[lab]} have different load schedules, so their curves cannot be averaged "
+                             "step by step; pass paper_average='none'")
+
+
+class _GroupFit:
+    """One group's results: arrays over ``(estimator, constant)``, ``n_boot_ok`` over ``estimator``."""
+
+    def __init__(self, n_methods: int):
+        shape = (n_methods, len(CONSTANTS))
+        self.value, self.stderr, self.bstd, self.clo, self.chi = (np.full(shape, np.nan) for _ in range(5))
+        self.npts = np.zeros(shape, dtype=np.int64)
+        self.nboot_ok = np.zeros(n_methods, dtype=np.int64)
+
+
+def _fit_group(curves: _Curves, *, methods: Sequence[str], e_star: float, min_points: int,
+               kappa_extrapolation: str, paper_average: str, n_boot: int, confidence: float,
+               rng: np.random.Generator, on_insufficient: str, caller: str, where: str, window) -> _GroupFit:
+    """Every estimator on one group's curves, then the bootstrap over its rows (seeds, topographies).
+
+    The machinery shared by :func:`fit_cel` (one call per group) and :func:`fit_topographies`
+    (one call for all topographies). ``rng`` draws the resamples; ``caller``, ``where`` and
+    ``window`` (as the user passed it) name the group in errors.
+    """
+    out = _GroupFit(len(methods))
+    q = 100.0 * (1.0 - float(confidence)) / 2.0
+
+    def run(method, c, guess):
+        if method == "paper":
+            return _fit_paper(c, min_points, kappa_extrapolation, paper_average == "seeds")
+        return _fit_joint(c, e_star, min_points, guess)
+
+    full = {}
+    for m, method in enumerate(methods):
+        guess = np.array([PAPER_CEL[c][0] for c in CONSTANTS])
+        if method == "joint" and "paper" in full:
+            # The paper route is a good, cheap starting point when it is sane.
+            pv = full["paper"][0]
+            if np.all(np.isfinite(pv)) and 0 < pv[1] < 1 and pv[0] > 0 and pv[2] > 0:
+                guess = pv
+        try:
+            full[method] = run(method, curves, guess)
+        except FitError as err:
+            if on_insufficient == "raise":
+                raise ValueError(
+                    f"{caller} ({method}) at {where} with window={window!r}: {err}; "
+                    "widen `window`, add load steps, or pass on_insufficient='nan'"
+                ) from None
+            continue
+        out.value[m], out.stderr[m], out.npts[m] = full[method]
+
+    # A stratum with one seed has no seed-to-seed information: the bootstrap
+    # would report zero scatter, so it is skipped (NaN, n_boot_ok = 0).
+    n_min = min(np.bincount(curves.strata)[np.unique(curves.strata)]) if curves.n_seeds else 0
+    if n_min < 2:
+        return out
+    # The bootstrap variance of a mean over n clusters is (n-1)/n times the
+    # unbiased one; rescaling by n/(n-1) matters with the paper's 12 seeds.
+    inflate = math.sqrt(n_min / (n_min - 1.0))
+    boot = {method: np.full((n_boot, 3), np.nan) for method in full}
+    for b in range(n_boot):
+        sample = curves.take(_resample(curves, rng))
+        for method in full:
+            try:
+                boot[method][b] = run(method, sample, full[method][0])[0]
+            except (FitError, np.linalg.LinAlgError):
+                pass  # counted through n_boot_ok
+    for m, method in enumerate(methods):
+        if method not in boot:
+            continue
+        draws = boot[method][np.all(np.isfinite(boot[method]), axis=1)]
+        out.nboot_ok[m] = draws.shape[0]
+        if draws.shape[0] >= 2:
+            out.bstd[m] = inflate * draws.std(axis=0, ddof=1)
+            out.clo[m] = np.percentile(draws, q, axis=0)
+            out.chi[m] = np.percentile(draws, 100.0 - q, axis=0)
+    return out
+
+
+def _estimate_vars(dims: tuple[str, ...], value, stderr, bstd, clo, chi, npts, *, confidence: float,
+                   resampled: str, points: str) -> dict:
+    """The per-constant variables of a fit result, over ``dims`` (ending in estimator, constant).
+
+    ``resampled`` names what the bootstrap draws (seeds, topographies); ``points`` says what
+    the paper route's points are.
+    """
+    one = {"units": "1"}
+    pct = f"{100 * float(confidence):g}%"
+    return {
+        "value": (dims, value, {**one, "long_name": "fitted CEL constant"}),
+        "stderr": (dims, stderr, {**one, "long_name": "standard error from the fit itself "
+                                  "(OLS / Jacobian covariance; ignores correlation along a load curve)"}),
+        "bootstrap_stderr": (dims, bstd, {**one, "long_name": "bootstrap standard error "
+                             f"({resampled} resampled with replacement; times sqrt(n/(n-1)))"}),
+        "ci_low": (dims, clo, {**one, "long_name": f"lower end of the {pct} bootstrap percentile interval"}),
+        "ci_high": (dims, chi, {**one, "long_name": f"upper end of the {pct} bootstrap percentile interval"}),
+        "constrained": (dims, constrained_flags(value, clo, chi), {**one, "long_name": "1 if the "
+                        "bootstrap interval is narrower than the value itself, 0 if the data do not "
+                        "constrain the constant (interval wider than the value, or no interval)"}),
+        "n_points": (dims, npts, {**one, "long_name": f"in-window points used by the fit ({points})"}),
+    }
+
+
+def _paper_vars() -> dict:
+    one = {"units": "1"}
+    return {
+        "paper_value": (("constant",), np.array([PAPER_CEL[c][0] for c in CONSTANTS]),
+                        {**one, "long_name": "Yastrebov et al. (2012) value, k_l=16, k_s=32"}),
+        "paper_stderr": (("constant",), np.array([PAPER_CEL[c][1] for c in CONSTANTS]),
+                         {**one, "long_name": "Yastrebov et al. (2012) stated uncertainty"}),
+    }
+
+
+def _estimator_coords(methods: Sequence[str]) -> dict:
+    return {
+        "estimator": ("estimator", np.array(methods, dtype=object),
+                      {"units": "1", "long_name": "estimator: 'paper' (log-log d pbar/d p0 + kappa extrapolation) "
+                                                  "or 'joint' (nonlinear least squares on A/A0(p0))"}),
+        "constant": ("constant", np.array(CONSTANTS, dtype=object), {"units": "1", "long_name": "CEL constant"}),
+    }
+
+
+def _settings_attrs(lo, hi, n_boot, rng_seed, confidence, min_points, kappa_extrapolation, paper_average,
+                    e_star) -> dict:
+    return {
+        "window_low": lo, "window_high": hi, "n_boot": int(n_boot), "rng_seed": int(rng_seed),
+        "confidence": float(confidence), "min_points": int(min_points),
+        "kappa_extrapolation": kappa_extrapolation, "paper_average": paper_average,
+        "e_star": e_star,
+        "description": "Contact evolution law A/A0 = (beta + [kappa p0/(h' E*)]^(mu-1))^(1/(mu-1))",
+    }
+
+
 # --------------------------------------------------------------------------- public
-def exclude_unconverged(agg: xr.Dataset) -> tuple[xr.Dataset, list[tuple[float, float, float, int]]]:
+#: Dimension of a measured scene's cases (one per topography file, named by a string).
+TOPOGRAPHY_DIM = "topography"
+
+
+def _is_topography_layout(agg: xr.Dataset) -> bool:
+    return TOPOGRAPHY_DIM in agg.dims
+
+
+def exclude_unconverged(agg: xr.Dataset) -> tuple[xr.Dataset, list[tuple[float, float, float, int]] | list[str]]:
     """``agg`` with every case that has an unconverged step marked absent, and those cases.
 
     Only ``case_present`` changes, so the other cases of a group (their pressures, load
-    schedules, seeds) enter the fit untouched. Cases are ``(k_l, k_s, H, seed)``.
+    schedules, seeds) enter the fit untouched. Cases are ``(k_l, k_s, H, seed)`` for a
+    generated scene; for a measured one (dims ``(topography, step)``) they are the
+    topographies' names, and ``n_unconverged`` is counted from ``converged`` if absent.
     """
+    if _is_topography_layout(agg):
+        return _exclude_unconverged_topographies(agg)
     if "n_unconverged" not in agg:
         return agg, []
     present = agg["case_present"] if "case_present" in agg else xr.ones_like(agg["n_unconverged"], dtype=bool)
@@ -284,6 +466,22 @@ def exclude_unconverged(agg: xr.Dataset) -> tuple[xr.Dataset, list[tuple[float, 
     out = agg.copy()
     out["case_present"] = (present & ~bad).assign_attrs(present.attrs or {
         "units": "1", "long_name": "a dataset exists for this case (False: grid hole, not expected)"})
+    return out, excluded
+
+
+def _exclude_unconverged_topographies(agg: xr.Dataset) -> tuple[xr.Dataset, list[str]]:
+    if "n_unconverged" in agg:
+        n_unc = agg["n_unconverged"]
+    elif "converged" in agg:
+        n_unc = (~agg["converged"].astype(bool)).sum("step")
+    else:
+        return agg, []
+    present = agg["case_present"].astype(bool) if "case_present" in agg else xr.ones_like(n_unc, dtype=bool)
+    bad = present & (n_unc > 0)
+    excluded = [str(name) for name in agg[TOPOGRAPHY_DIM].values[bad.transpose(TOPOGRAPHY_DIM).values]]
+    out = agg.copy()
+    out["case_present"] = (present & ~bad).assign_attrs(dict(present.attrs) or {
+        "units": "1", "long_name": "the topography enters the fit (False: excluded, e.g. for unconverged steps)"})
     return out, excluded
 
 
@@ -340,25 +538,8 @@ def fit_cel(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.11), n_bo
         group's cases), ``paper_value(constant)``, ``paper_stderr(constant)``. Groups
         without any case are NaN with ``n_seeds = 0``. Attrs record the settings.
     """
-    lo, hi = _check_window(window)
-    if not isinstance(n_boot, (int, np.integer)) or n_boot < 10:
-        raise ValueError(f"n_boot must be an integer >= 10, got {n_boot!r}")
-    if not isinstance(rng_seed, (int, np.integer)) or rng_seed < 0:
-        raise ValueError(f"rng_seed must be an integer >= 0, got {rng_seed!r}")
-    methods = tuple(methods)
-    if not methods or any(m not in METHODS for m in methods) or len(set(methods)) != len(methods):
-        raise ValueError(f"methods must be distinct names from {METHODS}, got {methods!r}")
-    if not isinstance(min_points, (int, np.integer)) or min_points < 3:
-        raise ValueError(f"min_points must be an integer >= 3, got {min_points!r}")
-    if kappa_extrapolation not in _KAPPA_EXTRAPOLATIONS:
-        raise ValueError(f"kappa_extrapolation must be one of {_KAPPA_EXTRAPOLATIONS}, got "
-                         f"{kappa_extrapolation!r}")
-    if not (0.0 < float(confidence) < 1.0):
-        raise ValueError(f"confidence must lie in (0, 1), got {confidence!r}")
-    if paper_average not in ("seeds", "none"):
-        raise ValueError(f"paper_average must be 'seeds' or 'none', got {paper_average!r}")
-    if on_insufficient not in ("raise", "nan"):
-        raise ValueError(f"on_insufficient must be 'raise' or 'nan', got {on_insufficient!r}")
+    (lo, hi), methods = _check_settings(window, n_boot, rng_seed, methods, min_points, kappa_extrapolation,
+                                        confidence, paper_average, on_insufficient)
     for dim in CASE_DIMS + ("step",):
         if dim not in agg.dims:
             raise ValueError(f"agg lacks dimension {dim!r}; pass the output of combine_cases")
@@ -375,12 +556,6 @@ def fit_cel(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.11), n_bo
     nboot_ok = np.zeros(shape5[:4], dtype=np.int64)
     alpha = np.full(shape5[:3], np.nan)
     alpha_surf = np.full(shape5[:3], np.nan)
-    q = 100.0 * (1.0 - float(confidence)) / 2.0
-
-    def run(method, curves, guess):
-        if method == "paper":
-            return _fit_paper(curves, min_points, kappa_extrapolation, paper_average == "seeds")
-        return _fit_joint(curves, e_star, min_points, guess)
 
     for i, kl in enumerate(kls):
         for j, ks in enumerate(kss):
@@ -391,14 +566,8 @@ def fit_cel(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.11), n_bo
                 if curves.n_seeds == 0:
                     continue
                 if paper_average == "seeds" and "paper" in methods:
-                    for lab in np.unique(curves.strata):
-                        sched = curves.p0[curves.strata == lab]
-                        if not np.allclose(sched, sched[0], rtol=1e-12, atol=0.0, equal_nan=True):
-                            h_bad = _h_label(group_hs[lab])
-                            raise ValueError(
-                                f"fit_cel: seeds at k_l={kl:g}, k_s={ks:g}, H={h_bad} have different "
-                                "load schedules, so their curves cannot be averaged step by step; "
-                                "pass paper_average='none'")
+                    _check_schedules(curves, [f"fit_cel: seeds at k_l={kl:g}, k_s={ks:g}, H={_h_label(h)}"
+                                              for h in group_hs])
                 if label != POOLED and kl < ks:
                     alpha[i, j, g] = power_law_alpha(kl, ks, hs[g])
                 if "alpha" in agg:
@@ -406,70 +575,21 @@ def fit_cel(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.11), n_bo
                     if "case_present" in agg:
                         sub = sub.where(agg["case_present"].sel(k_l=kl, k_s=ks, H=group_hs))
                     alpha_surf[i, j, g] = float(sub.mean(skipna=True))
-                where = f"k_l={kl:g}, k_s={ks:g}, H={label}"
-                full = {}
-                for m, method in enumerate(methods):
-                    guess = np.array([PAPER_CEL[c][0] for c in CONSTANTS])
-                    if method == "joint" and "paper" in full:
-                        # The paper route is a good, cheap starting point when it is sane.
-                        pv = full["paper"][0]
-                        if np.all(np.isfinite(pv)) and 0 < pv[1] < 1 and pv[0] > 0 and pv[2] > 0:
-                            guess = pv
-                    try:
-                        full[method] = run(method, curves, guess)
-                    except FitError as err:
-                        if on_insufficient == "raise":
-                            raise ValueError(
-                                f"fit_cel ({method}) at {where} with window={window!r}: {err}; "
-                                "widen `window`, add load steps, or pass on_insufficient='nan'"
-                            ) from None
-                        continue
-                    value[i, j, g, m], stderr[i, j, g, m], npts[i, j, g, m] = full[method]
-
-                # A stratum with one seed has no seed-to-seed information: the bootstrap
-                # would report zero scatter, so it is skipped (NaN, n_boot_ok = 0).
-                n_min = min(np.bincount(curves.strata)[np.unique(curves.strata)]) if curves.n_seeds else 0
-                if n_min < 2:
-                    continue
-                # The bootstrap variance of a mean over n clusters is (n-1)/n times the
-                # unbiased one; rescaling by n/(n-1) matters with the paper's 12 seeds.
-                inflate = math.sqrt(n_min / (n_min - 1.0))
-                rng = _group_rng(rng_seed, kl, ks, label)
-                boot = {method: np.full((n_boot, 3), np.nan) for method in full}
-                for b in range(n_boot):
-                    sample = curves.take(_resample(curves, rng))
-                    for method in full:
-                        try:
-                            boot[method][b] = run(method, sample, full[method][0])[0]
-                        except (FitError, np.linalg.LinAlgError):
-                            pass  # counted through n_boot_ok
-                for m, method in enumerate(methods):
-                    if method not in boot:
-                        continue
-                    draws = boot[method][np.all(np.isfinite(boot[method]), axis=1)]
-                    nboot_ok[i, j, g, m] = draws.shape[0]
-                    if draws.shape[0] >= 2:
-                        bstd[i, j, g, m] = inflate * draws.std(axis=0, ddof=1)
-                        clo[i, j, g, m] = np.percentile(draws, q, axis=0)
-                        chi[i, j, g, m] = np.percentile(draws, 100.0 - q, axis=0)
+                res = _fit_group(curves, methods=methods, e_star=e_star, min_points=min_points,
+                                 kappa_extrapolation=kappa_extrapolation, paper_average=paper_average,
+                                 n_boot=n_boot, confidence=confidence, rng=_group_rng(rng_seed, kl, ks, label),
+                                 on_insufficient=on_insufficient, caller="fit_cel",
+                                 where=f"k_l={kl:g}, k_s={ks:g}, H={label}", window=window)
+                value[i, j, g], stderr[i, j, g], npts[i, j, g] = res.value, res.stderr, res.npts
+                bstd[i, j, g], clo[i, j, g], chi[i, j, g] = res.bstd, res.clo, res.chi
+                nboot_ok[i, j, g] = res.nboot_ok
 
     dims5 = ("k_l", "k_s", "H_group", "estimator", "constant")
     one = {"units": "1"}
-    pct = f"{100 * float(confidence):g}%"
     ds = xr.Dataset(
         {
-            "value": (dims5, value, {**one, "long_name": "fitted CEL constant"}),
-            "stderr": (dims5, stderr, {**one, "long_name": "standard error from the fit itself "
-                                       "(OLS / Jacobian covariance; ignores correlation along a load curve)"}),
-            "bootstrap_stderr": (dims5, bstd, {**one, "long_name": "bootstrap standard error "
-                                 "(seeds resampled with replacement; times sqrt(n/(n-1)))"}),
-            "ci_low": (dims5, clo, {**one, "long_name": f"lower end of the {pct} bootstrap percentile interval"}),
-            "ci_high": (dims5, chi, {**one, "long_name": f"upper end of the {pct} bootstrap percentile interval"}),
-            "constrained": (dims5, constrained_flags(value, clo, chi), {**one, "long_name": "1 if the "
-                            "bootstrap interval is narrower than the value itself, 0 if the data do not "
-                            "constrain the constant (interval wider than the value, or no interval)"}),
-            "n_points": (dims5, npts, {**one, "long_name": "in-window points used by the fit (paper route with "
-                                                  "paper_average='seeds': seed-mean points, one per H and step)"}),
+            **_estimate_vars(dims5, value, stderr, bstd, clo, chi, npts, confidence=confidence, resampled="seeds",
+                             points="paper route with paper_average='seeds': seed-mean points, one per H and step"),
             "n_seeds": (dims5[:3], nseeds, {**one, "long_name": "number of seeds (surfaces) in the group"}),
             "n_boot_ok": (dims5[:4], nboot_ok, {**one, "long_name": "bootstrap resamples that fitted"}),
             "alpha_power_law": (dims5[:3], alpha, {**one, "long_name": "Nayak alpha of the ideal "
@@ -477,10 +597,7 @@ def fit_cel(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.11), n_bo
                                 "for k_l = 1, see theory.discrete_power_law_moments)"}),
             "alpha_surfaces": (dims5[:3], alpha_surf, {**one, "long_name": "mean Nayak alpha of the "
                                "group's generated surfaces (agg variable alpha; NaN if absent)"}),
-            "paper_value": (("constant",), np.array([PAPER_CEL[c][0] for c in CONSTANTS]),
-                            {**one, "long_name": "Yastrebov et al. (2012) value, k_l=16, k_s=32"}),
-            "paper_stderr": (("constant",), np.array([PAPER_CEL[c][1] for c in CONSTANTS]),
-                             {**one, "long_name": "Yastrebov et al. (2012) stated uncertainty"}),
+            **_paper_vars(),
         },
         coords={
             "k_l": ("k_l", kls.astype(np.float64), dict(agg["k_l"].attrs)),
@@ -489,20 +606,142 @@ def fit_cel(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.11), n_bo
                         {"units": "1", "long_name": "Hurst exponent of the group, or 'pooled' over all H"}),
             "H_value": ("H_group", np.append(hs.astype(np.float64), np.nan),
                         {"units": "1", "long_name": "Hurst exponent (NaN: pooled)"}),
-            "estimator": ("estimator", np.array(methods, dtype=object),
-                       {"units": "1", "long_name": "estimator: 'paper' (log-log d pbar/d p0 + kappa extrapolation) "
-                                     "or 'joint' (nonlinear least squares on A/A0(p0))"}),
-            "constant": ("constant", np.array(CONSTANTS, dtype=object), {"units": "1", "long_name": "CEL constant"}),
+            **_estimator_coords(methods),
         },
-        attrs={
-            "window_low": lo, "window_high": hi, "n_boot": int(n_boot), "rng_seed": int(rng_seed),
-            "confidence": float(confidence), "min_points": int(min_points),
-            "kappa_extrapolation": kappa_extrapolation, "paper_average": paper_average,
-            "e_star": e_star,
-            "description": "Contact evolution law A/A0 = (beta + [kappa p0/(h' E*)]^(mu-1))^(1/(mu-1))",
-        },
+        attrs=_settings_attrs(lo, hi, n_boot, rng_seed, confidence, min_points, kappa_extrapolation,
+                              paper_average, e_star),
     )
     return ds
+
+
+def _derive_topographies(agg: xr.Dataset) -> xr.Dataset:
+    """``agg`` (dims ``topography, step``) with ``kappa`` and ``dpbar_dp0`` derived as for generated cases.
+
+    :func:`roughcontact.aggregate.add_derived` works on the generated layout, so the
+    topographies are mapped onto it (as seeds of one placeholder ``(k_l, k_s, H)``) and back.
+    """
+    case = agg.rename({TOPOGRAPHY_DIM: "seed"}).expand_dims({d: [0.0] for d in CASE_DIMS[:3]})
+    derived = add_derived(case).isel({d: 0 for d in CASE_DIMS[:3]}, drop=True).rename({"seed": TOPOGRAPHY_DIM})
+    out = agg.copy()
+    for name in ("kappa", "dpbar_dp0", "n_unconverged"):
+        dims = [d for d in (TOPOGRAPHY_DIM, "step") if d in derived[name].dims]
+        out[name] = derived[name].transpose(*dims)
+    return out
+
+
+def _topography_curves(agg: xr.Dataset, window: tuple[float, float]) -> tuple[_Curves, list[str]]:
+    """The load curves of the present topographies (one row each, one stratum) and their names."""
+    names = [str(t) for t in agg[TOPOGRAPHY_DIM].values]
+    dims = (TOPOGRAPHY_DIM, "step")
+    present = (agg["case_present"].transpose(TOPOGRAPHY_DIM).values.astype(bool) if "case_present" in agg
+               else np.ones(len(names), bool))
+
+    def steps(name, dtype=float):
+        return agg[name].broadcast_like(agg["area_fraction"]).transpose(*dims).values.astype(dtype)[present]
+
+    a = steps("area_fraction")
+    valid = steps("converged", bool) & np.isfinite(a)
+    hp = agg["rms_slope"].transpose(TOPOGRAPHY_DIM).values.astype(float)[present]
+    curves = _Curves(a, steps("pressure"), hp, steps("kappa"), steps("dpbar_dp0"), valid,
+                     np.zeros(a.shape[0], dtype=int), window)
+    return curves, [n for n, p in zip(names, present, strict=True) if p]
+
+
+def fit_topographies(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.11), n_boot: int = 200,
+                     rng_seed: int = 2012, methods: Sequence[str] = METHODS, min_points: int = 6,
+                     kappa_extrapolation: str = "cel", paper_average: str = "seeds",
+                     confidence: float = 0.95, on_insufficient: str = "nan") -> xr.Dataset:
+    """Fit the CEL constants to all topographies of a measured scene, pooled as one surface type.
+
+    The topographies play the part of :func:`fit_cel`'s seeds in a single group: the same
+    estimators, and a bootstrap that resamples whole topographies (one stratum). With a
+    single topography there is no surface-to-surface scatter to resample: the bootstrap
+    columns are NaN and ``n_boot_ok`` is 0. Topographies with ``case_present == False``
+    (e.g. set by :func:`exclude_unconverged`) are left out.
+
+    Parameters
+    ----------
+    agg : xarray.Dataset
+        Contact aggregate of a measured scene, dims ``(topography, step)`` (string
+        coordinate ``topography``): ``area_fraction`` [1], ``pressure`` (``p0``, per step
+        or per topography and step) [unit of ``e_star``], ``mean_contact_pressure``,
+        ``converged``, ``rms_slope(topography)`` [1], optionally ``alpha(topography)`` [1]
+        and ``case_present(topography)``; global attr ``e_star``. ``kappa`` and
+        ``dpbar_dp0`` are derived if absent.
+    window, n_boot, rng_seed, methods, min_points, kappa_extrapolation, confidence
+        As in :func:`fit_cel`. The bootstrap stream is keyed by ``rng_seed`` alone.
+    paper_average : {"seeds", "none"}
+        ``"seeds"``: the paper route fits the topography-mean curve (needs one load
+        schedule for all topographies); ``"none"``: every (topography, step) point.
+    on_insufficient : {"nan", "raise"}
+        Too few in-window points: NaN values (default; a measured surface may simply not
+        reach the window) or a ValueError naming the window.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dims ``estimator``, ``constant`` and ``topography``. Variables, all with units "1":
+        ``value``, ``stderr``, ``bootstrap_stderr``, ``ci_low``, ``ci_high``, ``constrained``,
+        ``n_points(estimator, constant)``, ``n_boot_ok(estimator)``, ``n_topographies`` (scalar,
+        topographies fitted), ``in_fit(topography)`` (1 if it entered the fit),
+        ``alpha_surfaces`` (scalar, mean Nayak alpha of the fitted topographies, NaN if
+        ``agg`` has no ``alpha``), ``paper_value(constant)``, ``paper_stderr(constant)``.
+        Attrs record the settings, as :func:`fit_cel`'s, and ``layout = "topographies"``.
+    """
+    (lo, hi), methods = _check_settings(window, n_boot, rng_seed, methods, min_points, kappa_extrapolation,
+                                        confidence, paper_average, on_insufficient)
+    if not _is_topography_layout(agg) or "step" not in agg.dims:
+        raise ValueError(f"agg must have dims (topography, step), got {tuple(agg.dims)}; "
+                         "generated scenes are fitted by fit_cel")
+    clash = [d for d in CASE_DIMS if d in agg.dims]
+    if clash:
+        raise ValueError(f"agg mixes topographies with generated-case dims {clash}; not supported")
+    missing = [v for v in ("area_fraction", "pressure", "converged", "rms_slope") if v not in agg]
+    if missing:
+        raise ValueError(f"agg lacks variable(s) {missing}")
+    if "e_star" not in agg.attrs:
+        raise ValueError("agg lacks the global attribute 'e_star' (contact modulus)")
+    if "dpbar_dp0" not in agg or "kappa" not in agg:
+        agg = _derive_topographies(agg)
+    e_star = float(agg.attrs["e_star"])
+    curves, fitted = _topography_curves(agg, (lo, hi))
+    if paper_average == "seeds" and "paper" in methods and curves.n_seeds:
+        _check_schedules(curves, ["fit_topographies: the topographies"])
+    res = _GroupFit(len(methods))
+    if curves.n_seeds:
+        res = _fit_group(curves, methods=methods, e_star=e_star, min_points=min_points,
+                         kappa_extrapolation=kappa_extrapolation, paper_average=paper_average, n_boot=n_boot,
+                         confidence=confidence, rng=_group_rng(rng_seed, 0.0, 0.0, "topographies"),
+                         on_insufficient=on_insufficient, caller="fit_topographies",
+                         where=f"{curves.n_seeds} topographies pooled", window=window)
+    alpha_surf = np.nan
+    if "alpha" in agg and fitted:
+        alpha_surf = float(agg["alpha"].sel({TOPOGRAPHY_DIM: fitted}).mean(skipna=True))
+    names = agg[TOPOGRAPHY_DIM].values
+    in_fit = np.isin(np.array([str(t) for t in names]), fitted).astype(np.int8)
+    dims = ("estimator", "constant")
+    one = {"units": "1"}
+    return xr.Dataset(
+        {
+            **_estimate_vars(dims, res.value, res.stderr, res.bstd, res.clo, res.chi, res.npts,
+                             confidence=confidence, resampled="topographies",
+                             points="paper route with paper_average='seeds': topography-mean points, one per step"),
+            "n_topographies": ((), np.int64(curves.n_seeds), {**one, "long_name": "number of topographies fitted"}),
+            "n_boot_ok": (dims[:1], res.nboot_ok, {**one, "long_name": "bootstrap resamples that fitted"}),
+            "in_fit": ((TOPOGRAPHY_DIM,), in_fit, {**one, "long_name": "1 if the topography entered the fit, "
+                                                   "0 if excluded (e.g. unconverged steps)"}),
+            "alpha_surfaces": ((), alpha_surf, {**one, "long_name": "mean Nayak alpha of the fitted "
+                                                "topographies (agg variable alpha; NaN if absent)"}),
+            **_paper_vars(),
+        },
+        coords={
+            TOPOGRAPHY_DIM: (TOPOGRAPHY_DIM, np.array([str(t) for t in names], dtype=object),
+                             {"units": "1", "long_name": "name of the measured topography"}),
+            **_estimator_coords(methods),
+        },
+        attrs={**_settings_attrs(lo, hi, n_boot, rng_seed, confidence, min_points, kappa_extrapolation,
+                                 paper_average, e_star), "layout": "topographies"},
+    )
 
 
 def kappa_spread(fit_ds: xr.Dataset, *, estimator: str = "paper") -> xr.Dataset:
@@ -559,33 +798,43 @@ def constrained_flags(value, ci_low, ci_high) -> np.ndarray:
     return ok.astype(np.int8)
 
 
-def to_csv_table(fit_ds: xr.Dataset) -> str:
-    """Human-readable CSV of a :func:`fit_cel` result, one row per group/estimator/constant.
+def _csv_float(x) -> str:
+    x = float(x)
+    return "" if not np.isfinite(x) else f"{x:.6g}"
 
-    Columns: ``k_l, k_s, H_group, estimator, constant, value, stderr, bootstrap_stderr,
-    ci_low, ci_high, constrained, n_points, n_seeds, n_boot_ok, paper_value, paper_stderr`` (floats
-    with 6 significant digits; empty cell for NaN). Groups without cases are omitted.
-    Rows are sorted by k_l, k_s, then the dataset's H_group, estimator, constant order.
+
+def to_csv_table(fit_ds: xr.Dataset) -> str:
+    """Human-readable CSV of a :func:`fit_cel` or :func:`fit_topographies` result.
+
+    One row per group/estimator/constant (floats with 6 significant digits; empty cell for
+    NaN). For :func:`fit_cel`, columns ``k_l, k_s, H_group, estimator, constant, value,
+    stderr, bootstrap_stderr, ci_low, ci_high, constrained, n_points, n_seeds, n_boot_ok,
+    paper_value, paper_stderr``; groups without cases are omitted; rows are sorted by k_l,
+    k_s, then the dataset's H_group, estimator, constant order. For
+    :func:`fit_topographies` (a dataset with ``n_topographies``), columns ``group, estimator,
+    constant, value, stderr, bootstrap_stderr, ci_low, ci_high, constrained, n_points,
+    n_topographies, n_boot_ok, paper_value, paper_stderr`` with ``group`` =
+    ``"pooled (N topographies)"``; no row if no topography was fitted.
 
     Parameters
     ----------
     fit_ds : xarray.Dataset
-        Output of :func:`fit_cel`.
+        Output of :func:`fit_cel` or :func:`fit_topographies`.
 
     Returns
     -------
     str
         The table, with a header line and a trailing newline.
     """
-    needed = ("value", "stderr", "bootstrap_stderr", "ci_low", "ci_high", "constrained", "n_points", "n_seeds",
-              "n_boot_ok", "paper_value", "paper_stderr")
+    measured = "n_topographies" in fit_ds
+    needed = ("value", "stderr", "bootstrap_stderr", "ci_low", "ci_high", "constrained", "n_points",
+              "n_topographies" if measured else "n_seeds", "n_boot_ok", "paper_value", "paper_stderr")
     missing = [v for v in needed if v not in fit_ds]
     if missing:
-        raise ValueError(f"fit_ds lacks {missing}; pass the output of fit_cel")
-
-    def fmt(x) -> str:
-        x = float(x)
-        return "" if not np.isfinite(x) else f"{x:.6g}"
+        raise ValueError(f"fit_ds lacks {missing}; pass the output of fit_cel or fit_topographies")
+    if measured:
+        return _csv_table_topographies(fit_ds)
+    fmt = _csv_float
 
     buf = io.StringIO()
     cols = ["k_l", "k_s", "H_group", "estimator", "constant", "value", "stderr", "bootstrap_stderr",
@@ -610,6 +859,33 @@ def to_csv_table(fit_ds: xr.Dataset) -> str:
                         row += [fmt(fit_ds["paper_value"].sel(constant=c)),
                                 fmt(fit_ds["paper_stderr"].sel(constant=c))]
                         buf.write(",".join(row) + "\n")
+    return buf.getvalue()
+
+
+#: Columns of the CSV table of a :func:`fit_topographies` result.
+TOPOGRAPHY_CSV_COLUMNS = ("group", "estimator", "constant", "value", "stderr", "bootstrap_stderr", "ci_low",
+                          "ci_high", "constrained", "n_points", "n_topographies", "n_boot_ok", "paper_value",
+                          "paper_stderr")
+
+
+def _csv_table_topographies(fit_ds: xr.Dataset) -> str:
+    buf = io.StringIO()
+    buf.write(",".join(TOPOGRAPHY_CSV_COLUMNS) + "\n")
+    n_t = int(fit_ds["n_topographies"])
+    if n_t == 0:
+        return buf.getvalue()
+    # A label without commas keeps every cell unquoted, like fit_cel's table.
+    group = f"pooled ({n_t} topograph{'y' if n_t == 1 else 'ies'})"
+    for m in fit_ds["estimator"].values:
+        for c in fit_ds["constant"].values:
+            full = dict(estimator=m, constant=c)
+            row = [group, str(m), str(c)]
+            row += [_csv_float(fit_ds[v].sel(full)) for v in ("value", "stderr", "bootstrap_stderr", "ci_low",
+                                                              "ci_high")]
+            row += ["yes" if int(fit_ds["constrained"].sel(full)) else "no", str(int(fit_ds["n_points"].sel(full))),
+                    str(n_t), str(int(fit_ds["n_boot_ok"].sel(estimator=m)))]
+            row += [_csv_float(fit_ds[v].sel(constant=c)) for v in ("paper_value", "paper_stderr")]
+            buf.write(",".join(row) + "\n")
     return buf.getvalue()
 
 

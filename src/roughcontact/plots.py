@@ -18,6 +18,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import re
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
@@ -33,6 +34,7 @@ from matplotlib.ticker import FormatStrFormatter, FuncFormatter, NullFormatter
 
 from .aggregate import log_window_edges, windowed_load_slope
 from .io import atomic_output
+from .quantities import LENGTH_UNITS, PRESSURE_UNITS
 from .representativity import scale_free_statistics
 from .theory import (
     KAPPA_BGT,
@@ -156,10 +158,31 @@ def _pick(values: np.ndarray, wanted, name: str) -> list[float]:
     return out
 
 
+#: One factor of a unit string of :func:`roughcontact.quantities.cf_unit`: ``um``, ``um^-2``,
+#: ``um^(-1/2)`` (also ``um**-2`` and ``um^-0.5``).
+_UNIT_FACTOR = re.compile(r"^([A-Za-z]+)(?:(?:\^|\*\*)\(?([-+]?\d+(?:/\d+|\.\d+)?)\)?)?$")
+_UNIT_SYMBOLS = frozenset(LENGTH_UNITS + PRESSURE_UNITS + ("s",)) - {"1"}
+
+
 def _unit_tex(units: str) -> str:
-    """A CF-style unit string as mathtext: ``"length unit^-1/2"`` -> ``$(\\mathrm{length\\ unit})^{-1/2}$``."""
+    """A unit string as mathtext, upright, factors separated by a thin space.
+
+    The strings of :func:`roughcontact.quantities.cf_unit`: ``"um^(-1/2)"`` ->
+    ``$\\mathrm{\\mu m}^{-1/2}$``, ``"MPa um^-1"`` -> ``$\\mathrm{MPa}\\,\\mathrm{\\mu m}^{-1}$``,
+    ``"1"`` -> ``"1"``. Other strings (files of older versions) as one upright word with
+    its power: ``"length unit^-1/2"`` -> ``$(\\mathrm{length\\ unit})^{-1/2}$``.
+    """
+    units = units.strip()
     if units in ("", "1"):
         return "1"
+    factors = [_UNIT_FACTOR.match(f) for f in units.split()]
+    if all(m is not None and m.group(1) in _UNIT_SYMBOLS for m in factors):
+        parts = []
+        for m in factors:
+            base, power = m.groups()
+            tex = r"\mathrm{" + (r"\mu m" if base == "um" else base) + "}"
+            parts.append(f"{tex}^{{{power}}}" if power else tex)
+        return "$" + r"\,".join(parts) + "$"
     base, _, power = units.partition("^")
     tex = r"\mathrm{" + base.strip().replace(" ", r"\ ") + "}"
     if " " in base.strip() and power:
@@ -685,6 +708,31 @@ def _area_load_theory_handles(sdmax: float) -> list:
                    label=r"Persson, full: $A/A_0 = \mathrm{erf}(\sqrt{2}\,p_0/(h'E^*))$")]
 
 
+def _kappa_theory(ax, amax: float, alphas, ylo: float, yhi: float) -> list:
+    """BGT and Persson limits, the paper's CEL and the asperity models on ``[0, amax]``; sets the y
+    limits from ``[ylo, yhi]`` (data) and the asperity curves; returns the legend entries."""
+    ax.axhline(KAPPA_BGT, color=OKABE_ITO[0], lw=0.9)
+    a = np.linspace(0, amax, 200)
+    ax.plot(a, cel_kappa(a, **PAPER_CONSTANTS), color=OKABE_ITO[0], lw=1.4, ls=":", zorder=4)
+    a = np.linspace(0, amax, 120)
+    for alpha, shade, _ in alphas:
+        for model, (ls, _name) in ASPERITY_STYLES.items():
+            k = asperity_kappa(a, alpha=alpha, model=model)
+            ax.plot(a, k, color=shade, lw=1.1, ls=ls, zorder=2)
+            ylo = min(ylo, float(np.min(k)))
+    pad = 0.05 * (yhi - ylo)
+    shown = ylo - pad <= KAPPA_PERSSON <= yhi + pad
+    if shown:
+        ax.axhline(KAPPA_PERSSON, **_PERSSON_LIMIT_STYLE)
+    ax.set_ylim(ylo - pad, yhi + pad)
+    return [Line2D([], [], color=OKABE_ITO[0], lw=0.9, label=BGT_LIMIT_LABEL),
+            Line2D([], [], **_PERSSON_LIMIT_STYLE, label=(
+                r"Persson small-load limit, $\kappa=\sqrt{8/\pi}$" if shown
+                else rf"Persson, $\kappa=\sqrt{{8/\pi}}$ = {KAPPA_PERSSON:.2f}: below the axis")),
+            *_asperity_handles(alphas),
+            Line2D([], [], color=OKABE_ITO[0], lw=1.4, ls=":", label=PAPER_CEL_LABEL)]
+
+
 def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None, *,
               k_l: Sequence[float] | None = None, k_s: Sequence[float] | None = None,
               hurst: Sequence[float] | None = None, fit_k_l: float | None = None,
@@ -734,35 +782,14 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
                            color="0.9", zorder=0, lw=0)
                 ylo, yhi = min(ylo, consts[0]), max(yhi, consts[0])
                 drew_fit = True
-            ax.axhline(KAPPA_BGT, color=OKABE_ITO[0], lw=0.9)
-            ylo, yhi = min(ylo, KAPPA_BGT), max(yhi, KAPPA_BGT)
-            a = np.linspace(0, amax, 200)
-            ax.plot(a, cel_kappa(a, **PAPER_CONSTANTS), color=OKABE_ITO[0], lw=1.4, ls=":", zorder=4)
-            a = np.linspace(0, amax, 120)
-            for alpha, shade, _ in alphas:
-                for model, (ls, _name) in ASPERITY_STYLES.items():
-                    # Below the small-load limit sqrt(2 pi): they set the lower bound of the axis.
-                    k = asperity_kappa(a, alpha=alpha, model=model)
-                    ax.plot(a, k, color=shade, lw=1.1, ls=ls, zorder=2)
-                    ylo = min(ylo, float(np.min(k)))
-            pad = 0.05 * (yhi - ylo)
-            persson_shown = ylo - pad <= KAPPA_PERSSON <= yhi + pad
-            if persson_shown:
-                ax.axhline(KAPPA_PERSSON, **_PERSSON_LIMIT_STYLE)
-            ax.set_ylim(ylo - pad, yhi + pad)
+            theory = _kappa_theory(ax, amax, alphas, min(ylo, KAPPA_BGT), max(yhi, KAPPA_BGT))
             ax.set_xlim(0, amax * 1.02)
             ax.set_title(_lambda_label(ks, "s"))
             ax.set_xlabel(r"$A/A_0$ [1]")
             ax.set_ylabel(r"$\kappa = E^* h'/\bar p$ [1]")
         for ax in list(axes.flat)[len(ks_list):]:
             ax.set_visible(False)
-        handles = _family_handles(kl_list, h_list, colour, marker, style)
-        handles.append(Line2D([], [], color=OKABE_ITO[0], lw=0.9, label=BGT_LIMIT_LABEL))
-        handles.append(Line2D([], [], **_PERSSON_LIMIT_STYLE, label=(
-            r"Persson small-load limit, $\kappa=\sqrt{8/\pi}$" if persson_shown
-            else rf"Persson, $\kappa=\sqrt{{8/\pi}}$ = {KAPPA_PERSSON:.2f}: below the axis")))
-        handles += _asperity_handles(alphas)
-        handles.append(Line2D([], [], color=OKABE_ITO[0], lw=1.4, ls=":", label=PAPER_CEL_LABEL))
+        handles = _family_handles(kl_list, h_list, colour, marker, style) + theory
         if drew_fit:
             handles.append(Line2D([], [], color="0.45", lw=2.2, alpha=0.8, label=_fit_label(
                 "this run", estimator, cel_kl, _fit_constants(fit, cel_kl, ks_list[0], estimator)

@@ -60,15 +60,21 @@ def _equal(a, b) -> bool:
     return json.dumps(a, sort_keys=True) == json.dumps(b, sort_keys=True)
 
 
+def case_dims(ds: xr.Dataset) -> tuple[str, ...]:
+    """The case dimensions of a combined dataset: ``topography`` (measured) or ``k_l, k_s, H, seed``."""
+    return ("topography",) if "topography" in ds.dims else ("k_l", "k_s", "H", "seed")
+
+
 def settings_variables(combined: xr.Dataset, cases: Sequence[Mapping], settings: Sequence[Mapping],
                        varying: Sequence[str]) -> dict[str, xr.DataArray]:
     """One variable over the case dims of ``combined`` per varying setting.
 
-    ``cases[i]`` gives the case coordinates (``k_l, k_s, H, seed``) of ``settings[i]``.
+    ``cases[i]`` gives the case coordinates (``k_l, k_s, H, seed``, or a measured case's
+    ``topography``) of ``settings[i]``.
     Numbers become float64 (NaN where no case was solved), anything else its JSON text
     (empty where no case was solved). Names are ``setting_<key with '.' as '_'>``.
     """
-    dims = ("k_l", "k_s", "H", "seed")
+    dims = case_dims(combined)
     shape = tuple(combined.sizes[d] for d in dims)
     flats = [flatten(s) for s in settings]
     out = {}
@@ -93,6 +99,6 @@ def attach_settings(combined: xr.Dataset, datasets: Sequence[xr.Dataset]) -> tup
     parameters (:func:`roughcontact.params.recorded`) are its settings.
     """
     settings = [recorded(ds) for ds in datasets]
-    cases = [{d: ds[d].values[0] for d in ("k_l", "k_s", "H", "seed")} for ds in datasets]
+    cases = [{d: ds[d].values[0] for d in case_dims(combined)} for ds in datasets]
     common, varying = split_settings(settings)
     return combined.assign(settings_variables(combined, cases, settings, varying)), common, varying

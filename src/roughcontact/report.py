@@ -118,13 +118,29 @@ def parameters_table(parameters: Mapping) -> str:
     return _list_table(["parameter", "value"], [[f"``{key}``", _literal(flat[key])] for key in sorted(flat)])
 
 
+#: Columns :func:`read_fit_csv` needs in the table of a generated scene (fit.fit_cel) and of a
+#: measured one (fit.fit_topographies, told apart by its ``group`` column).
+FIT_COLUMNS = ("k_l", "k_s", "H_group", "estimator", "constant", "value", "ci_low", "ci_high", "constrained",
+               "n_seeds", "paper_value", "paper_stderr")
+MEASURED_FIT_COLUMNS = ("group", "estimator", "constant", "value", "ci_low", "ci_high", "constrained",
+                        "n_topographies", "paper_value", "paper_stderr")
+
+
+def is_measured_fit(rows: Sequence[Mapping[str, str]]) -> bool:
+    """Whether rows of a cel.csv come from a measured scene's fit (all topographies pooled)."""
+    return bool(rows) and "group" in rows[0]
+
+
 def read_fit_csv(text: str) -> list[dict[str, str]]:
-    """Rows of a cel.csv (:func:`roughcontact.fit.to_csv_table`) as dictionaries of strings."""
+    """Rows of a cel.csv (:func:`roughcontact.fit.to_csv_table`) as dictionaries of strings.
+
+    Either layout: a generated scene's (``k_l, k_s, H_group, ...``) or a measured scene's
+    (``group, ...``, one pooled group of topographies).
+    """
     rows = list(csv.DictReader(io.StringIO(text)))
-    needed = {"k_l", "k_s", "H_group", "estimator", "constant", "value", "ci_low", "ci_high", "constrained",
-              "n_seeds", "paper_value", "paper_stderr"}
     if not rows:
         raise ValueError("the fit table has no rows")
+    needed = set(MEASURED_FIT_COLUMNS if is_measured_fit(rows) else FIT_COLUMNS)
     missing = needed - set(rows[0])
     if missing:
         raise ValueError(f"the fit table lacks the column(s) {', '.join(sorted(missing))}")
@@ -139,26 +155,30 @@ def _estimate(value: str, low: str, high: str) -> str:
 
 
 def fit_table(csv_text: str) -> str:
-    """The CEL fit table as RST: one row per (k_l, k_s, H group, estimator), a column per constant.
+    """The CEL fit table as RST: one row per group and estimator, a column per constant.
 
-    Each cell is the value and its 95 % bootstrap interval ``value [ci_low, ci_high]``, exactly as
-    cel.csv writes them, marked ``*`` where the data do not constrain the constant (the interval
-    is wider than the value); a last row, ``published``, gives the paper's values ``value ± standard error``.
-    Rows keep cel.csv's order.
+    Groups are ``(k_l, k_s, H group)`` for a generated scene and the pooled topographies for a
+    measured one. Each cell is the value and its 95 % bootstrap interval ``value [ci_low,
+    ci_high]``, exactly as cel.csv writes them, marked ``*`` where the data do not constrain the
+    constant (the interval is wider than the value); in a measured table a value without an
+    interval (a single topography: no bootstrap) is marked ``†`` instead. A last row,
+    ``published``, gives the paper's values ``value ± standard error``. Rows keep cel.csv's order.
     """
     rows = read_fit_csv(csv_text)
-    groups: dict[tuple[str, str, str, str], dict[str, dict[str, str]]] = {}
+    measured = is_measured_fit(rows)
+    keys, count = (("group", "estimator"), "n_topographies") if measured else \
+        (("k_l", "k_s", "H_group", "estimator"), "n_seeds")
+    groups: dict[tuple[str, ...], dict[str, dict[str, str]]] = {}
     paper: dict[str, dict[str, str]] = {}
     for row in rows:
         if row["constant"] not in CONSTANTS:
             raise ValueError(f"unknown constant {row['constant']!r} in the fit table; expected {', '.join(CONSTANTS)}")
-        key = (row["k_l"], row["k_s"], row["H_group"], row["estimator"])
-        groups.setdefault(key, {})[row["constant"]] = row
+        groups.setdefault(tuple(row[k] for k in keys), {})[row["constant"]] = row
         paper.setdefault(row["constant"], row)
-    any_loose = False
+    marks = set()
     body = []
-    for (k_l, k_s, h_group, estimator), by_constant in groups.items():
-        cells = [k_l, k_s, h_group, estimator]
+    for key, by_constant in groups.items():
+        cells = list(key)
         for constant in CONSTANTS:
             row = by_constant.get(constant)
             if row is None:
@@ -166,20 +186,24 @@ def fit_table(csv_text: str) -> str:
                 continue
             cell = _estimate(row["value"], row["ci_low"], row["ci_high"])
             if row["value"] and row["constrained"] == "no":
-                cell += r" \*"
-                any_loose = True
+                mark = "†" if measured and not (row["ci_low"] and row["ci_high"]) else r"\*"
+                cell += " " + mark
+                marks.add(mark)
             cells.append(cell)
-        cells.append(next(iter(by_constant.values()))["n_seeds"])
+        cells.append(next(iter(by_constant.values()))[count])
         body.append(cells)
     paper_cells = []
     for c in CONSTANTS:
         value, stderr = (paper[c]["paper_value"], paper[c]["paper_stderr"]) if c in paper else ("", "")
         paper_cells.append("—" if not value else f"{value} ± {stderr}" if stderr else value)
-    body.append(["", "", "", "published", *paper_cells, ""])
-    header = [":math:`k_l`", ":math:`k_s`", ":math:`H`", "estimator", *CONSTANTS.values(), "seeds"]
+    body.append([""] * (len(keys) - 1) + ["published", *paper_cells, ""])
+    header = ["surfaces", "estimator"] if measured else [":math:`k_l`", ":math:`k_s`", ":math:`H`", "estimator"]
+    header += [*CONSTANTS.values(), "topographies" if measured else "seeds"]
     text = _list_table(header, body)
-    if any_loose:
+    if r"\*" in marks:
         text += "\n\\* not constrained by the data: the bootstrap interval is wider than the value.\n"
+    if "†" in marks:
+        text += "\n† no bootstrap interval: a single topography says nothing about the scatter between surfaces.\n"
     return text
 
 
@@ -217,6 +241,16 @@ def summary_rst(scene: str, parameters: Mapping, *, version: str, commit: str,
         parts += [_heading("Contact evolution law fit"),
                   "No constant was fitted: the fit table ``fit/cel.csv`` has no row (every case excluded, "
                   "e.g. for unconverged load steps, or no fit converged; the fit's log says which).\n"]
+    elif fit_csv is not None and is_measured_fit(list(csv.DictReader(io.StringIO(fit_csv)))):
+        parts += [
+            _heading("Contact evolution law fit"),
+            r"Fit of :math:`A/A_0 = \left(\beta + [\kappa p_0/(h' E^*)]^{\mu-1}\right)^{1/(\mu-1)}` over the "
+            "scene's window of :math:`A/A_0`, all measured topographies pooled as one surface type, by the paper's "
+            "route and by a joint least-squares fit: each constant's value and, in brackets, its 95 % bootstrap "
+            "interval (resampling whole topographies; none for a single topography). The estimators' own "
+            "standard errors, which understate the scatter between surfaces, are in ``cel.csv``.\n",
+            fit_table(fit_csv),
+        ]
     elif fit_csv is not None:
         parts += [
             _heading("Contact evolution law fit"),

@@ -10,7 +10,9 @@ P is piecewise constant on ``n_bins`` equal bins spanning [min h, max h] and zer
 outside. The integral is evaluated exactly for that piecewise-constant P (bin integrals
 of G and G^2 through erf), including the Gaussian tails outside the histogram's range,
 so the only approximation left is the histogram itself. eps has units of
-1/sqrt(height unit).
+1/sqrt(height unit): the ``units`` attribute ``cf_unit(length_unit, length_power=-1/2)``
+(:mod:`roughcontact.quantities`), e.g. ``"um^(-1/2)"``, which pint parses and UDUNITS
+cannot express, or ``"1"`` for nondimensional heights.
 
 eps depends on the height scale: heights ``c h`` give ``eps / sqrt(c)`` (the histogram
 and G are densities in h, and the bins follow [min, max]). The scale-free measure is eps

@@ -18,6 +18,7 @@ from roughcontact.config import (
     validate_config,
 )
 from roughcontact.figures import FIGURES, scene_figures
+from roughcontact.measured import is_measured, reader_settings, topography_names
 
 try:
     check_config_files(workflow.configfiles)
@@ -45,9 +46,23 @@ def _alternatives(values):
     return "|".join(re.escape(v) for v in sorted(set(values), key=lambda v: (-len(v), v)))
 
 
+def topography_path(folder, ext="nc"):
+    """Pattern of one measured case's file: ``results/{scene}/<folder>/{topography}.<ext>``."""
+    return f"results/{{scene}}/{folder}/{{topography}}.{ext}"
+
+
+def _alternatives_or_none(values):
+    """A wildcard constraint matching exactly ``values`` (nothing at all when there are none)."""
+    return _alternatives(values) if values else "(?!)"
+
+
 def _all_grid_values(key):
     values = [
-        value for scene in SCENES.values() for study in STUDIES if study in scene for value in scene[study]["grid"][key]
+        value
+        for scene in SCENES.values()
+        for study in STUDIES
+        if study in scene and "grid" in scene[study]
+        for value in scene[study]["grid"][key]
     ]
     for scene in SCENES.values():
         if "accuracy" in scene:
@@ -64,6 +79,7 @@ wildcard_constraints:
     seed=r"0|[1-9]\d*",
     variant=r"N\d+_tol[0-9.e-]+_steps\d+",
     figure=_alternatives(FIGURES),
+    topography=_alternatives_or_none([n for s in SCENES.values() if is_measured(s) for n in topography_names(s)]),
 
 
 def study_block(scene, study):
@@ -109,7 +125,9 @@ def point_params(study, provider):
 
 
 def point_files(scene, study, folder):
-    """Paths of the ``folder`` files of every grid point of ``study`` in ``scene``."""
+    """Paths of the ``folder`` files of every grid point of ``study`` in ``scene`` (measured: every file)."""
+    if is_measured(SCENES[scene]):
+        return case_files(scene, study, folder)
     return [
         f"results/{scene}/{folder}/{POINT_STEM.format(k_l=kl, k_s=ks, H=h)}.nc"
         for kl, ks, h in grid_points(study_block(scene, study))
@@ -117,8 +135,11 @@ def point_files(scene, study, folder):
 
 
 def case_files(scene, study, folder):
-    """Paths of the ``folder`` files of every case of ``study`` in ``scene``."""
-    return [f"results/{scene}/{folder}/{c.stem}.nc" for c in cases(study_block(scene, study))]
+    """Paths of the ``folder`` files of every case of ``study`` in ``scene`` (generated or measured)."""
+    block = study_block(scene, study)
+    if is_measured(SCENES[scene]):
+        return [f"results/{scene}/{folder}/{name}.nc" for name in topography_names(SCENES[scene])]
+    return [f"results/{scene}/{folder}/{c.stem}.nc" for c in cases(block)]
 
 
 def case_params(study, provider):
@@ -132,8 +153,42 @@ def study_params(study, provider):
 
 
 def case_list(study):
-    """A params function: the cases ``[k_l, k_s, H, seed]`` of the study in the job's scene."""
-    return lambda w: [[c.k_l, c.k_s, c.H, c.seed] for c in cases(study_block(w.scene, study))]
+    """A params function: the scene's cases of ``study``: ``[k_l, k_s, H, seed]`` each, or topography names."""
+
+    def cases_of(w):
+        block = study_block(w.scene, study)
+        if is_measured(SCENES[w.scene]):
+            return topography_names(SCENES[w.scene])
+        return [[c.k_l, c.k_s, c.H, c.seed] for c in cases(block)]
+
+    return cases_of
+
+
+def check_topography(w, study=None):
+    """The measured scene of the job, once its ``topography`` wildcard is checked (and its study exists)."""
+    scene = SCENES[w.scene]
+    if not is_measured(scene):
+        raise WorkflowError(f"scene {w.scene!r} has no topography block, so it has no measured case {w.topography!r}")
+    if w.topography not in scene["topography"]["files"]:
+        raise WorkflowError(
+            f"scene {w.scene!r}: {w.topography!r} is not one of its topography files; "
+            f"allowed: {', '.join(topography_names(scene))}"
+        )
+    if study is not None:
+        study_block(w.scene, study)
+    return scene
+
+
+def topography_file(w):
+    """The measured file a topography job reads (its input, so a changed file is read again)."""
+    return check_topography(w)["topography"]["files"][w.topography]["path"]
+
+
+def topography_params(study=None, provider=None):
+    """A params function: the reader settings of the job's file, or ``provider`` of its study block."""
+    if provider is None:
+        return lambda w: reader_settings(check_topography(w), w.topography)
+    return lambda w: provider(check_topography(w, study)[study])
 
 
 def figure_spec(w):
@@ -150,7 +205,7 @@ def figure_spec(w):
 def figure_inputs(w):
     """Input files of a figure, by role, under ``results/{scene}/``."""
     spec = figure_spec(w)
-    paths = spec.inputs(SCENES[w.scene][spec.study])
+    paths = spec.input_paths(SCENES[w.scene])
     root = f"results/{w.scene}"
     return {
         role: [f"{root}/{p}" for p in value] if isinstance(value, list) else f"{root}/{value}"
@@ -202,6 +257,16 @@ def contact_mem_mb(n):
 def contact_runtime_min(n, n_steps):
     """Wall-time request of one contact job [min]: 30 steps at N=1024 take well under a minute; x10 margin."""
     return max(5, int(10 * n_steps / 30 * (n / 1024) ** 2 * 2))
+
+
+def measured_mem_mb(w):
+    """Peak memory of a job on one measured file [MB]: interpreter + ~160 doubles per stored value.
+
+    The grid size is only known once the file is read; a file stores at least 2 bytes a point,
+    and the free-boundary solver works on the 2n x 2n padded grid (4x the periodic ~40 doubles).
+    """
+    points = Path(topography_file(w)).stat().st_size / 2
+    return int(300 + 160 * 8 * points / 2**20)
 
 
 def maybe_temp(path, study):

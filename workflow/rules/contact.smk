@@ -25,3 +25,26 @@ rule contact:
         surface=case_params("contact", params.surface),
     script:
         "../scripts/contact.py"
+
+
+# Measured surfaces: the same load steps on one topography file (free boundary by default).
+rule contact_topography:
+    input:
+        topography_path("surfaces"),
+    output:
+        topography_path("contact"),
+    log:
+        topography_path("logs/contact", "log"),
+    benchmark:
+        topography_path("benchmarks/contact", "tsv")
+    conda:
+        "../../envs/roughcontact.yaml"
+    threads: 1
+    resources:
+        mem_mb=measured_mem_mb,
+        runtime=60,
+    params:
+        settings=topography_params("contact", params.contact),
+        surface=topography_params(),
+    script:
+        "../scripts/contact.py"

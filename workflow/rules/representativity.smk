@@ -20,3 +20,25 @@ rule representativity:
         settings=point_params("representativity", params.representativity),
     script:
         "../scripts/representativity.py"
+
+
+# Measured surfaces: eps of one topography file's heights.
+rule representativity_topography:
+    input:
+        topography_path("surfaces"),
+    output:
+        topography_path("representativity"),
+    log:
+        topography_path("logs/representativity", "log"),
+    benchmark:
+        topography_path("benchmarks/representativity", "tsv")
+    conda:
+        "../../envs/roughcontact.yaml"
+    resources:
+        mem_mb=measured_mem_mb,
+        runtime=10,
+    params:
+        settings=topography_params("representativity", params.representativity),
+        surface=topography_params(),
+    script:
+        "../scripts/representativity_topography.py"

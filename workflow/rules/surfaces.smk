@@ -38,3 +38,26 @@ rule surface:
         surface=case_params("contact", params.surface),
     script:
         "../scripts/generate_surface.py"
+
+
+# Measured surfaces: one topography file read by SurfaceTopography (roughcontact.topography),
+# converted to the scene's length unit, with its statistics. The file is the job's input, so an
+# edited file is read again; params carry the reader settings of that file only.
+rule topography:
+    input:
+        topography_file,
+    output:
+        topography_path("surfaces"),
+    log:
+        topography_path("logs/surface", "log"),
+    benchmark:
+        topography_path("benchmarks/surface", "tsv")
+    conda:
+        "../../envs/roughcontact.yaml"
+    resources:
+        mem_mb=measured_mem_mb,
+        runtime=10,
+    params:
+        settings=topography_params(),
+    script:
+        "../scripts/read_topography.py"

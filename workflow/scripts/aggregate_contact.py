@@ -8,10 +8,13 @@ REQUIRED = ["pressure", "area_fraction", "mean_contact_pressure", "kappa", "conv
 def main(log):
     paths = list(snakemake.input)
     datasets = [read_dataset(p, stage="contact", variables=REQUIRED) for p in paths]
-    expected = [(float(kl), float(ks), float(h), int(s)) for kl, ks, h, s in snakemake.params.cases]
-    ds = aggregate.combine_cases(datasets, paths, expected=expected)
-    ds = aggregate.add_derived(ds)
-    ds = ds.merge(aggregate.seed_statistics(ds))
+    cases = snakemake.params.cases
+    if cases and isinstance(cases[0], str):  # measured surfaces: cases are named by their files
+        ds = aggregate.add_derived(aggregate.combine_topographies(datasets, paths, expected=cases))
+    else:
+        expected = [(float(kl), float(ks), float(h), int(s)) for kl, ks, h, s in cases]
+        ds = aggregate.add_derived(aggregate.combine_cases(datasets, paths, expected=expected))
+        ds = ds.merge(aggregate.seed_statistics(ds))
     ds, common, varying = provenance.attach_settings(ds, datasets)
     if varying:
         log.warning("cases were solved with different settings: %s; each case's value is in the "

@@ -5,15 +5,21 @@ from roughcontact.io import read_dataset, run_logged, write_dataset
 
 
 def main(log):
-    datasets, paths = [], []
-    for path in snakemake.input:
-        batch = read_dataset(path, stage="representativity", variables=["epsilon"])
-        for one in split_seeds(batch):
-            datasets.append(one)
-            paths.append(f"{path} (seed {int(one.seed.values[0])})")
-    expected = [(float(kl), float(ks), float(h), int(s)) for kl, ks, h, s in snakemake.params.cases]
-    ds = aggregate.combine_cases(datasets, paths, expected=expected, kind="representativity")
-    ds = ds.merge(aggregate.representativity_statistics(ds))
+    cases = snakemake.params.cases
+    if cases and isinstance(cases[0], str):  # measured surfaces: one file per topography
+        paths = list(snakemake.input)
+        datasets = [read_dataset(p, stage="representativity", variables=["epsilon"]) for p in paths]
+        ds = aggregate.combine_topographies(datasets, paths, expected=cases, kind="representativity")
+    else:
+        datasets, paths = [], []
+        for path in snakemake.input:
+            batch = read_dataset(path, stage="representativity", variables=["epsilon"])
+            for one in split_seeds(batch):
+                datasets.append(one)
+                paths.append(f"{path} (seed {int(one.seed.values[0])})")
+        expected = [(float(kl), float(ks), float(h), int(s)) for kl, ks, h, s in cases]
+        ds = aggregate.combine_cases(datasets, paths, expected=expected, kind="representativity")
+        ds = ds.merge(aggregate.representativity_statistics(ds))
     ds, common, varying = provenance.attach_settings(ds, datasets)
     if varying:
         log.warning("cases were computed with different settings: %s; each case's value is in the "

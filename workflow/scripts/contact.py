@@ -1,4 +1,4 @@
-"""Stage 3: solve the contact of one surface over the scene's load steps."""
+"""Stage 3: solve the contact of one surface (generated or measured) over the scene's load steps."""
 import numpy as np
 
 from roughcontact.config import load_steps
@@ -8,11 +8,25 @@ from roughcontact.params import recorded, require_made_for
 from roughcontact.solver import solve_contact
 
 
+def case_of(w) -> dict:
+    """The job's case: a measured file's name, or a generated case's (k_l, k_s, H, seed)."""
+    if "topography" in w.keys():
+        return {"topography": w.topography}
+    return {"k_l": w.k_l, "k_s": w.k_s, "H": w.H, "seed": w.seed}
+
+
+def labels_of(case: dict) -> dict:
+    """The case as roughcontact.datasets' keyword arguments."""
+    return {"hurst" if key == "H" else key: value for key, value in case.items()}
+
+
 def main(log):
     w, settings = snakemake.wildcards, snakemake.params.settings
+    case = case_of(w)
     surf = read_dataset(snakemake.input[0], stage="surface", variables=["heights", "rms_slope", "alpha"])
-    require_made_for(surf, snakemake.input[0], {"k_l": w.k_l, "k_s": w.k_s, "H": w.H, "seed": w.seed},
-                     surface=snakemake.params.surface)
+    # a generated surface records its generator block, a measured one its reader settings
+    source = "topography" if "topography" in case else "surface"
+    require_made_for(surf, snakemake.input[0], case, **{source: snakemake.params.surface})
     heights, length = surface_heights(surf, snakemake.input[0])
     solver = settings["solver"]
     plastic = settings["effects"].get("plasticity")
@@ -34,10 +48,14 @@ def main(log):
         threads=snakemake.threads,
         hardness=plastic["hardness"] * solver["e_star"] if plastic else None,
         clusters=settings["outputs"]["clusters"],
+        boundary=solver["boundary"],
         progress=progress,
+        # both a generator block and a reader's settings name the study's length unit
+        length_unit=snakemake.params.surface["unit"],
+        pressure_unit=solver["pressure_unit"],
     )
     ds = contact_dataset(result, rms_slope=float(surf.rms_slope.squeeze()), alpha=float(surf.alpha.squeeze()),
-                         e_star=solver["e_star"], k_l=w.k_l, k_s=w.k_s, hurst=w.H, seed=int(w.seed))
+                         e_star=solver["e_star"], **labels_of(case))
     unconverged = int((~result.converged.values).sum())
     if unconverged:
         log.warning("%d of %d load steps did not converge to tol=%g (max residual %.3g); "

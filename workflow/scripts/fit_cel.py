@@ -1,4 +1,9 @@
-"""Fit the contact evolution law (kappa, mu, beta) with bootstrap uncertainty."""
+"""Fit the contact evolution law (kappa, mu, beta) with bootstrap uncertainty.
+
+A generated scene's aggregate (dims k_l, k_s, H, seed, step) is fitted per (k_l, k_s, H) and pooled
+over H by fit.fit_cel; a measured scene's (dims topography, step) by fit.fit_topographies, all its
+topographies pooled as one surface type.
+"""
 from roughcontact import fit
 from roughcontact.io import read_dataset, run_logged, write_dataset, write_text_atomic
 
@@ -6,22 +11,22 @@ from roughcontact.io import read_dataset, run_logged, write_dataset, write_text_
 def main(log):
     cfg = snakemake.params.fit
     agg = read_dataset(snakemake.input[0], stage="aggregate", variables=["area_fraction", "pressure"])
+    measured = fit.TOPOGRAPHY_DIM in agg.dims
+    cases = "topographies" if measured else "(k_l, k_s, H, seed)"
     if not cfg["include_unconverged"]:
         agg, excluded = fit.exclude_unconverged(agg)
         if excluded:
-            log.warning("excluding %d case(s) with unconverged steps from the fit: (k_l, k_s, H, seed) = %s",
-                        len(excluded), "; ".join(str(c) for c in excluded))
+            log.warning("excluding %d case(s) with unconverged steps from the fit: %s = %s",
+                        len(excluded), cases, "; ".join(str(c) for c in excluded))
     # One group that cannot be fitted (too few points in the window, a joint fit that does not
     # converge on a non-representative case) must not sink the others: it is reported as NaN.
-    result = fit.fit_cel(agg, window=tuple(cfg["window"]), n_boot=cfg["n_boot"], rng_seed=cfg["rng_seed"],
-                         on_insufficient="nan")
-    kappa = result["value"].sel(constant="kappa").to_series()
-    for group in kappa[kappa.isna()].index:
-        log.warning("no CEL fit for (k_l, k_s, H, estimator) = %s", group)
-    loose = result["constrained"].where(result["value"].notnull(), 1).to_series()
-    for group in loose[loose == 0].index:
-        log.warning("not constrained by the data (bootstrap interval wider than the value), flagged in cel.csv: "
-                    "(k_l, k_s, H, estimator, constant) = %s", group)
+    fitter = fit.fit_topographies if measured else fit.fit_cel
+    result = fitter(agg, window=tuple(cfg["window"]), n_boot=cfg["n_boot"], rng_seed=cfg["rng_seed"],
+                    on_insufficient="nan")
+    if measured:
+        _log_topographies(log, result)
+    else:
+        _log_groups(log, result)
     # NaN is a legitimate value here: it marks a group without a fit.
     for name in result.data_vars:
         if result[name].dtype.kind == "f":
@@ -29,6 +34,35 @@ def main(log):
     write_dataset(result, snakemake.output.nc, stage="fit", scene=snakemake.wildcards.scene, scene_parameters=cfg)
     write_text_atomic(snakemake.output.csv, fit.to_csv_table(result))
     log.info("CEL fit written to %s", snakemake.output.nc)
+
+
+def _log_groups(log, result):
+    kappa = result["value"].sel(constant="kappa").to_series()
+    for group in kappa[kappa.isna()].index:
+        log.warning("no CEL fit for (k_l, k_s, H, estimator) = %s", group)
+    loose = result["constrained"].where(result["value"].notnull(), 1).to_series()
+    for group in loose[loose == 0].index:
+        log.warning("not constrained by the data (bootstrap interval wider than the value), flagged in cel.csv: "
+                    "(k_l, k_s, H, estimator, constant) = %s", group)
+
+
+def _log_topographies(log, result):
+    n = int(result["n_topographies"])
+    names = [str(t) for t, used in zip(result[fit.TOPOGRAPHY_DIM].values, result["in_fit"].values, strict=True) if used]
+    log.info("topographies pooled in the fit (%d): %s", n, ", ".join(names) or "none")
+    if n == 1:
+        log.warning("a single topography: no bootstrap interval (one surface says nothing about the scatter "
+                    "between surfaces); cel.csv flags its constants as not constrained")
+    for estimator in result["estimator"].values:
+        value = result["value"].sel(estimator=estimator)
+        if value.isnull().any():
+            log.warning("no CEL fit (%s) of the %d topographies pooled", estimator, n)
+        elif n > 1:
+            loose = [str(c) for c in result["constant"].values
+                     if not int(result["constrained"].sel(estimator=estimator, constant=c))]
+            if loose:
+                log.warning("not constrained by the data (bootstrap interval wider than the value), flagged in "
+                            "cel.csv: estimator %s, constant(s) %s", estimator, ", ".join(loose))
 
 
 run_logged(snakemake.log[0], main)

@@ -11,7 +11,8 @@ def main(log):
         surf["N"], float(w.k_l), float(w.k_s), float(w.H), int(w.seed),
         length=surf["L"], plateau=surf["plateau"], **norm,
     )
-    ds = surface_dataset(h, k_l=w.k_l, k_s=w.k_s, hurst=w.H, seed=int(w.seed), length=surf["L"], normalisation=norm)
+    ds = surface_dataset(h, k_l=w.k_l, k_s=w.k_s, hurst=w.H, seed=int(w.seed), length=surf["L"], normalisation=norm,
+                         length_unit=surf["unit"])
     write_dataset(ds, snakemake.output[0], stage="surface", scene=w.scene, scene_parameters={"surface": surf})
     log.info("surface %s: rms slope %.6g, rms height %.6g, alpha %.4g", snakemake.output[0],
              float(ds.rms_slope.squeeze()), float(ds.rms_height.squeeze()), float(ds.alpha.squeeze()))

@@ -218,9 +218,6 @@ from .effects import PlasticityCap
 from .halfspace import FreeHalfSpace, PeriodicHalfSpace, displacement, elastic_kernel, free_influence
 from .results import (
                       FRACTION_UNITS,
-                      INVERSE_LENGTH_UNITS,
-                      LENGTH_UNITS,
-                      PRESSURE_UNITS,
                       SOLVER_DESCRIPTION,
                       SOLVER_NAME,
                       StepResult,
@@ -240,11 +237,8 @@ __all__ = [
     "ELASTIC_METHOD",
     "ELASTIC_METHODS",
     "FRACTION_UNITS",
-    "INVERSE_LENGTH_UNITS",
-    "LENGTH_UNITS",
     "LOAD_RANGE",
     "MEAN_RTOL",
-    "PRESSURE_UNITS",
     "SOLVER_DESCRIPTION",
     "SOLVER_NAME",
     "STALL_WINDOW",

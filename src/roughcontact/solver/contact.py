@@ -14,6 +14,7 @@ import time
 import numpy as np
 import xarray as xr
 
+from ..quantities import cf_unit
 from .box import box_solve
 from .check import MEAN_RTOL, final_check
 from .effects import PlasticityCap
@@ -21,7 +22,6 @@ from .elastic import pk_solve
 from .halfspace import plans
 from .projection import enforce_mean
 from .results import (
-    PRESSURE_UNITS,
     SOLVER_DESCRIPTION,
     SOLVER_DESCRIPTION_FREE,
     SOLVER_NAME,
@@ -303,7 +303,8 @@ def solve_step(heights, p0: float, *, e_star: float = 1.0, length: float = 1.0,
 def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.0,
                   tol: float = 1e-8, max_iter: int = DEFAULT_MAX_ITER, store_fields=False,
                   threads: int = 1, hardness: float | None = None,
-                  clusters: bool = False, boundary: str = "periodic", progress=None) -> xr.Dataset:
+                  clusters: bool = False, boundary: str = "periodic", progress=None,
+                  length_unit: str = "1", pressure_unit: str = "1") -> xr.Dataset:
     """Solve the normal contact of a rigid rough surface on an elastic half-space.
 
     Parameters
@@ -355,6 +356,15 @@ def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.
         Called after each load step as ``progress(step, p0, area_fraction,
         iterations, converged, seconds)`` (``step`` 1-based, ``seconds`` the
         step's wall time), e.g. to log a long solve as it goes.
+    length_unit : str
+        Unit of ``heights`` and ``length``, one of
+        :data:`roughcontact.quantities.LENGTH_UNITS` (default ``"1"``: nondimensional);
+        only labels the output (the ``units`` of ``mean_gap``, ``gap``, ``x``, ``y``
+        and, as its inverse, ``contact_perimeter``), the numbers do not depend on it.
+    pressure_unit : str
+        Unit of ``e_star``, ``pressures`` and ``hardness``, one of
+        :data:`roughcontact.quantities.PRESSURE_UNITS` (default ``"1"``); labels
+        ``pressure``, ``mean_contact_pressure`` and ``contact_pressure``.
 
     Returns
     -------
@@ -364,8 +374,11 @@ def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.
         ``contact_perimeter``, ``iterations``, ``residual``, ``converged``,
         ``wall_time`` and, with a hardness, ``plastic_area_fraction`` and
         ``plastic_load_fraction``; fields and ``x``/``y`` coordinates only when
-        stored. Every variable carries ``units`` and ``long_name``; the
-        attribute ``boundary`` records the half-space.
+        stored. Every variable carries ``units`` and ``long_name`` (CF strings from
+        :func:`roughcontact.quantities.cf_unit`); the global attributes
+        ``length_units`` and ``pressure_units`` are the units of the attributes
+        ``length`` and ``e_star`` (and ``hardness``); ``boundary`` records the
+        half-space.
         ``converged`` is True only when the final check of the module docstring
         passed on a freshly recomputed displacement.
 
@@ -381,6 +394,7 @@ def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.
     store = validate_store(store_fields, p.size)
     clusters = validate_flag("clusters", clusters)
     boundary = validate_boundary(boundary)
+    cf_unit(length_unit, pressure_unit)  # ValueError for a unit outside the declared sets
     if progress is not None and not callable(progress):
         raise ValueError(f"progress must be a callable or None, got {type(progress).__name__} {progress!r}")
     solver = ContactSolver(h, e_star, length, tol, max_iter, _effects(hardness), threads, _method(), boundary)
@@ -388,15 +402,16 @@ def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.
     cols, iters, conv, fields, masks = _run_steps(solver, p, store, clusters, progress)
     attrs = {"e_star": e_star, "length": length, "tol": tol, "max_iter": max_iter, "threads": threads,
              "fft_backend": solver.backend, "n": h.shape[0], "solver": SOLVER_NAME,
-             "solver_description": SOLVER_DESCRIPTION if solver.periodic else SOLVER_DESCRIPTION_FREE,
-             "pressure_units": PRESSURE_UNITS}
-    ds = to_dataset(p, cols, iters, conv, fields, store_fields, h.shape[0], attrs, solver.effects)
+             "solver_description": SOLVER_DESCRIPTION if solver.periodic else SOLVER_DESCRIPTION_FREE}
+    ds = to_dataset(p, cols, iters, conv, fields, store_fields, h.shape[0], attrs, solver.effects,
+                    length_unit=length_unit, pressure_unit=pressure_unit)
     ds.attrs["elastic_method"] = solver.method
     ds.attrs["boundary"] = boundary
     if masks is not None:
         from ..clusters import cluster_dataset
 
-        stats = cluster_dataset(masks, ds["step"].values, length, periodic=solver.periodic)
+        stats = cluster_dataset(masks, ds["step"].values, length, periodic=solver.periodic,
+                                length_unit=length_unit)
         ds = ds.merge(stats.drop_vars("step"), combine_attrs="override")
     return ds
 

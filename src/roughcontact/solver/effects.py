@@ -11,8 +11,10 @@ pressure) and what each step reports. The solver asks its effects for
   capped nodes and whose gradient-projection steps release them;
 * ``finish(p, p_int)``: its per-step columns from the physical pressure ``p``
   (which it may correct in place, e.g. exactly to the cap);
-* ``variables()`` and ``attrs()``: the output variables (name -> (units,
-  long name)) and global attributes it adds.
+* ``variables(length_unit="1", pressure_unit="1")`` and ``attrs()``: the output
+  variables (name -> (units, long name), units composed from the caller's length and
+  pressure units with :func:`roughcontact.quantities.cf_unit`) and the global
+  attributes it adds (a pressure there is in the dataset's ``pressure_units``).
 
 Adhesion, for example, would be a second effect of this kind.
 """
@@ -69,7 +71,8 @@ class PlasticityCap:
         return {"plastic_area_fraction": n_sat / n2,
                 "plastic_load_fraction": self.hardness * n_sat / (p0 * n2)}
 
-    def variables(self) -> dict:
+    def variables(self, length_unit: str = "1", pressure_unit: str = "1") -> dict:
+        # both fractions are dimensionless whatever the units
         return {"plastic_area_fraction": (FRACTION_UNITS, "fraction of nodes at the hardness cap"),
                 "plastic_load_fraction": (FRACTION_UNITS,
                                           "share of the load carried by nodes at the hardness cap")}

@@ -2,6 +2,9 @@
 
 The solver's iterations work in internal units on flat arrays; this module is
 the only place that knows the output's variable names, units and long names.
+Units are per call: pressures carry the caller's ``pressure_unit`` (that of
+``e_star``), lengths its ``length_unit`` (that of ``heights`` and ``length``), as CF
+strings from :func:`roughcontact.quantities.cf_unit` (``"1"``: nondimensional).
 """
 
 from __future__ import annotations
@@ -11,13 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-#: ``units`` attribute of pressures: they carry whatever unit ``e_star`` has.
-PRESSURE_UNITS = "same as e_star"
-#: ``units`` attribute of lengths: the unit of ``heights`` and ``length``.
-LENGTH_UNITS = "same as heights"
-#: ``units`` attribute of lengths per unit area.
-INVERSE_LENGTH_UNITS = "1/(same as heights)"
-#: ``units`` attribute of dimensionless fractions.
+from ..quantities import cf_unit
+
+#: ``units`` attribute of dimensionless fractions, counts and flags.
 FRACTION_UNITS = "1"
 
 SOLVER_NAME = "roughcontact.solver.pk_pressure"
@@ -131,27 +130,34 @@ def contact_perimeter(mask: np.ndarray, length: float = 1.0, periodic: bool = Tr
 
 
 
-def to_dataset(p, cols, iters, conv, fields, store_fields, n, attrs: dict, effects=()) -> xr.Dataset:
+def to_dataset(p, cols, iters, conv, fields, store_fields, n, attrs: dict, effects=(), *,
+               length_unit: str = "1", pressure_unit: str = "1") -> xr.Dataset:
     """The solver's output dataset (see :func:`roughcontact.solver.solve_contact`).
 
     ``p`` the loads, shape (n_steps,); ``cols`` per-step float columns by name
     (including each effect's); ``iters``, ``conv`` per-step iterations and
     flags; ``fields`` a ``(pressures, gaps, step numbers)`` triple of the
     stored fields; ``attrs`` the solver's global attributes; ``effects`` add
-    their variables and attributes.
+    their variables and attributes. ``length_unit`` and ``pressure_unit`` (one of
+    :data:`roughcontact.quantities.LENGTH_UNITS` / ``PRESSURE_UNITS``) give the
+    ``units`` of lengths, pressures and ``contact_perimeter`` [length^-1], and the
+    global attributes ``length_units`` and ``pressure_units``.
     """
     fields_p, fields_g, field_steps = fields
     length = attrs["length"]
     steps = np.arange(1, p.size + 1)
+    pressure_units = cf_unit(pressure=pressure_unit, pressure_power=1)
+    length_units = cf_unit(length_unit, length_power=1)
+    inverse_length_units = cf_unit(length_unit, length_power=-1)
     meta = {
-        "pressure": (p, PRESSURE_UNITS, "applied mean pressure p0 = F / A0"),
+        "pressure": (p, pressure_units, "applied mean pressure p0 = F / A0"),
         "area_fraction": (cols["area_fraction"], FRACTION_UNITS,
                           "real contact area fraction A / A0 (fraction of nodes with p > 0)"),
-        "mean_contact_pressure": (cols["mean_contact_pressure"], PRESSURE_UNITS,
+        "mean_contact_pressure": (cols["mean_contact_pressure"], pressure_units,
                                   "mean contact pressure F / A = p0 / (A / A0)"),
-        "mean_gap": (cols["mean_gap"], LENGTH_UNITS,
+        "mean_gap": (cols["mean_gap"], length_units,
                      "mean gap between the rigid surface and the deformed half-space"),
-        "contact_perimeter": (cols["contact_perimeter"], INVERSE_LENGTH_UNITS,
+        "contact_perimeter": (cols["contact_perimeter"], inverse_length_units,
                               "contact-set boundary length (pixel edges x dx) per unit nominal area"),
         "iterations": (iters, FRACTION_UNITS, "solver iterations (CG or gradient-projection steps)"),
         "residual": (cols["residual"], FRACTION_UNITS,
@@ -163,7 +169,8 @@ def to_dataset(p, cols, iters, conv, fields, store_fields, n, attrs: dict, effec
         "wall_time": (cols["wall_time"], "s", "wall-clock time of the load step"),
     }
     for effect in effects:
-        for name, (units, long_name) in effect.variables().items():
+        for name, (units, long_name) in effect.variables(length_unit=length_unit,
+                                                         pressure_unit=pressure_unit).items():
             meta[name] = (cols[name], units, long_name)
     data_vars = {name: xr.Variable(("step",), val, {"units": u, "long_name": ln})
                  for name, (val, u, ln) in meta.items()}
@@ -173,18 +180,18 @@ def to_dataset(p, cols, iters, conv, fields, store_fields, n, attrs: dict, effec
         dim = "step" if (isinstance(store_fields, (bool, np.bool_)) and store_fields) else "field_step"
         dims = (dim, "x", "y")
         xs = np.arange(n) * (length / n)
-        coords["x"] = xr.Variable(("x",), xs, {"units": LENGTH_UNITS, "long_name": "node position along axis 0"})
-        coords["y"] = xr.Variable(("y",), xs.copy(), {"units": LENGTH_UNITS, "long_name": "node position along axis 1"})
+        coords["x"] = xr.Variable(("x",), xs, {"units": length_units, "long_name": "node position along axis 0"})
+        coords["y"] = xr.Variable(("y",), xs.copy(), {"units": length_units, "long_name": "node position along axis 1"})
         if dim == "field_step":
             coords["field_step"] = xr.Variable(("field_step",), np.array(field_steps),
                                                {"units": FRACTION_UNITS,
                                                 "long_name": "load step number of the stored fields"})
         data_vars["contact_pressure"] = xr.Variable(
-            dims, np.stack(fields_p), {"units": PRESSURE_UNITS, "long_name": "nodal contact pressure"})
+            dims, np.stack(fields_p), {"units": pressure_units, "long_name": "nodal contact pressure"})
         data_vars["gap"] = xr.Variable(
-            dims, np.stack(fields_g), {"units": LENGTH_UNITS,
+            dims, np.stack(fields_g), {"units": length_units,
                                        "long_name": "gap between the rigid surface and the half-space"})
-    attrs = dict(attrs)
+    attrs = {**attrs, "length_units": length_units, "pressure_units": pressure_units}
     for effect in effects:
         attrs.update(effect.attrs())
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)

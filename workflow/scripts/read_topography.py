@@ -1,0 +1,23 @@
+"""Stage 1 (measured): read one topography file and write it as a surface with its statistics."""
+import json
+
+from roughcontact.datasets import measured_surface_dataset
+from roughcontact.io import run_logged, write_dataset
+from roughcontact.topography import read_topography
+
+
+def main(log):
+    w, s = snakemake.wildcards, snakemake.params.settings
+    measured = read_topography(
+        s["path"], unit=s["unit"], file_unit=s.get("file_unit"), physical_size=s.get("physical_size"),
+        undefined=s["undefined"], detrend=s["detrend"], non_square=s["non_square"], channel=s["channel"],
+    )
+    ds = measured_surface_dataset(measured, name=w.topography)
+    write_dataset(ds, snakemake.output[0], stage="surface", scene=w.scene, scene_parameters={"topography": s})
+    log.info("topography %s from %s: %s", w.topography, s["path"], json.dumps(measured.info, sort_keys=True))
+    log.info("surface %s: %d x %d points, L = %g %s, rms height %.6g %s, rms slope %.6g, alpha %.4g",
+             snakemake.output[0], ds.sizes["x"], ds.sizes["y"], measured.length, measured.unit,
+             float(ds.rms_height.squeeze()), measured.unit, float(ds.rms_slope.squeeze()), float(ds.alpha.squeeze()))
+
+
+run_logged(snakemake.log[0], main)
