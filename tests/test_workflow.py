@@ -252,6 +252,7 @@ def test_contact_jobs_log_one_line_per_load_step(demo_run):
     assert len(lines) == 30 and "step 30/30" in lines[-1] and "iterations" in lines[0]
 
 
+@pytest.mark.slow  # ~30 s: make test (CI) runs it, make test-fast does not
 def test_measured_scene_runs_end_to_end(tmp_path):
     """The shipped `measured` scene: three files in three formats through every stage (~30 s)."""
     from roughcontact.io import read_dataset
