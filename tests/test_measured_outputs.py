@@ -168,7 +168,7 @@ def _surface(name: str, seed: int) -> xr.Dataset:
                 "y": ("y", x.copy(), {"units": "um", "long_name": "position along y"}),
                 "topography": ("topography", np.array(one["topography"], dtype=object),
                                {"units": "1", "long_name": "name of the measured topography"})},
-        attrs={"length": length, "n": 64, "source_file": f"data/{name}.x3p", "unit": "um"})
+        attrs={"length": length, "n": 64, "source_file": f"data/{name}.x3p", "length_units": "um"})
 
 
 def _scene(names, contact=True) -> dict:
@@ -259,7 +259,7 @@ def test_a_measured_scene_gets_exactly_the_measured_figures():
 def test_surface_files_round_trip(scene_dir):
     root, _ = scene_dir
     ds = read_dataset(root / "surfaces" / "ground-b.nc", stage="surface", variables=["heights", "alpha"])
-    assert ds.attrs["unit"] == "um" and str(ds["topography"].values[0]) == "ground-b"
+    assert ds.attrs["length_units"] == "um" and str(ds["topography"].values[0]) == "ground-b"
 
 
 # ------------------------------------------------------------------------------------- report

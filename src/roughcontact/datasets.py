@@ -164,8 +164,8 @@ def measured_surface_dataset(measured, *, name: str) -> xr.Dataset:
     ``heights`` (n, n) and ``x``, ``y`` in the study's length unit ``measured.unit``; the
     statistics come from differences inside the patch (:func:`roughcontact.surface.nonperiodic_moments`:
     a measured patch is not periodic, and its spectrum would count the jump between opposite
-    edges as roughness). Global attributes: ``length`` (side L), ``length_units``, ``n``,
-    ``unit`` and ``source`` (the reader's provenance as JSON: file, sha256, reader, units and
+    edges as roughness). Global attributes: ``length`` (side L), ``length_units``, ``n`` and
+    ``source`` (the reader's provenance as JSON: file, sha256, reader, units and
     sizes before conversion, undefined points, detrending, cropping).
     """
     h, length, unit = measured.heights, float(measured.length), measured.unit
@@ -189,7 +189,7 @@ def measured_surface_dataset(measured, *, name: str) -> xr.Dataset:
             "x": ("x", x, {"units": u_len, "long_name": "position along x"}),
             "y": ("y", x.copy(), {"units": u_len, "long_name": "position along y"}),
         },
-        attrs={"length": length, "length_units": u_len, "n": int(n), "unit": unit,
+        attrs={"length": length, "length_units": u_len, "n": int(n),
                "source": json.dumps(measured.info, sort_keys=True)},
     )
     return expand_case(ds, topography=name)

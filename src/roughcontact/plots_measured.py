@@ -155,7 +155,7 @@ def fig_topographies(surfaces: Sequence[xr.Dataset]) -> Figure:
         One per topography (``results/{scene}/surfaces/{name}.nc``): ``heights(x, y)``, square
         ``(n, n)`` [unit]; ``rms_height``, ``rms_slope`` [1] and ``alpha`` [1] (Nayak
         bandwidth), each scalar or along a length-1 ``topography`` dim whose label is the
-        name; global attrs ``length`` (side ``L``) [unit], ``n`` and ``unit``.
+        name; global attrs ``length`` (side ``L``) [unit], ``n`` and ``length_units``.
 
     Returns
     -------
@@ -179,7 +179,7 @@ def fig_topographies(surfaces: Sequence[xr.Dataset]) -> Figure:
             h = np.asarray(ds["heights"].transpose(..., "x", "y").values, dtype=float).squeeze()
             if h.ndim != 2 or h.shape[0] != h.shape[1]:
                 raise ValueError(f"heights must be a square 2-D map, got shape {h.shape}")
-            length, unit = float(ds.attrs.get("length", h.shape[0])), str(ds.attrs.get("unit", "1"))
+            length, unit = float(ds.attrs.get("length", h.shape[0])), str(ds.attrs.get("length_units", "1"))
             utex = plots._unit_tex(unit)
             name = str(ds[_DIM].values.ravel()[0]) if _DIM in ds.coords else str(ds.attrs.get("source_file", ""))
             im = ax.imshow(_block_mean(h, MAP_PIXELS).T, origin="lower", extent=(0, length, 0, length),

@@ -13,7 +13,7 @@ def main(log):
     heights, _ = surface_heights(surf, path)
     eps = gaussian_l2_error(heights, settings["n_bins"])
     ds = representativity_dataset(eps, heights, n_bins=settings["n_bins"], topography=w.topography,
-                                  length_unit=surf.attrs["unit"])
+                                  length_unit=surf.attrs["length_units"])
     write_dataset(ds, snakemake.output[0], stage="representativity", scene=w.scene,
                   scene_parameters={**settings, "topography": snakemake.params.surface})
     log.info("eps of %s: %.6g -> %s", w.topography, eps, snakemake.output[0])
