@@ -90,3 +90,14 @@ def test_only_the_running_scene_needs_its_files(tmp_path):
     other = copy.deepcopy(cfg)
     other["scene"] = "gen"
     assert "gone" in validate_config(other)["scenes"]["m"]["topography"]["files"]
+
+
+@pytest.mark.parametrize("block, key, words", [
+    ("surface", "unit", r"field 'contact.surface.unit': 'inch' is not one of \['1', 'm', 'mm', 'um', 'nm'\]"),
+    ("solver", "pressure_unit", r"field 'contact.solver.pressure_unit': 'inch' is not one of \['1', 'Pa'"),
+])
+def test_unknown_units_name_the_field_and_the_allowed_units(tmp_path, block, key, words):
+    cfg = _config(tmp_path)
+    cfg["scenes"]["gen"] = {"contact": {block: {key: "inch"}}}
+    with pytest.raises(ConfigError, match=words):
+        validate_config(cfg)
