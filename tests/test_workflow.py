@@ -252,9 +252,9 @@ def test_contact_jobs_log_one_line_per_load_step(demo_run):
     assert len(lines) == 30 and "step 30/30" in lines[-1] and "iterations" in lines[0]
 
 
-@pytest.mark.slow  # ~30 s: make test (CI) runs it, make test-fast does not
+@pytest.mark.slow  # ~1 min: make test (CI) runs it, make test-fast does not
 def test_measured_scene_runs_end_to_end(tmp_path):
-    """The shipped `measured` scene: three files in three formats through every stage (~30 s)."""
+    """The shipped `measured` scene: three files in three formats through every stage, twice (~1 min)."""
     from roughcontact.io import read_dataset
     from test_units import assert_all_units_parse
 
@@ -279,3 +279,9 @@ def test_measured_scene_runs_end_to_end(tmp_path):
         assert (root / "figures" / f"{name}.png").stat().st_size > 10_000
     again = run_snakemake(wd, "-n", "--config", "scene=measured")
     assert "Nothing to be done" in again.stdout + again.stderr
+    # every output, remade from scratch, has the same bytes
+    outputs = sorted(p for p in root.rglob("*") if p.suffix in (".nc", ".csv", ".png", ".pdf", ".rst"))
+    before = {p: p.read_bytes() for p in outputs}
+    res = run_snakemake(wd, "-j2", "--forceall", "--config", "scene=measured")
+    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
+    assert [p for p in outputs if p.read_bytes() != before[p]] == []
