@@ -28,7 +28,7 @@ import xarray as xr
 
 #: The four case dimensions, in the order of every combined array.
 CASE_DIMS = ("k_l", "k_s", "H", "seed")
-#: The case dimension of measured surfaces (roughcontact.datasets.TOPOGRAPHY_DIM).
+#: The case dimension of measured surfaces: one name per topography file.
 TOPOGRAPHY_DIM = "topography"
 #: Variables a per-case contact dataset must hold.
 CONTACT_REQUIRED = ("pressure", "area_fraction", "mean_contact_pressure", "converged", "rms_slope")

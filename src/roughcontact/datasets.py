@@ -16,12 +16,9 @@ import numpy as np
 import xarray as xr
 
 from .accuracy import PERIMETER_C, perimeter_corrected_area
+from .aggregate import CASE_DIMS, TOPOGRAPHY_DIM
 from .quantities import cf_unit
 from .surface import finite_difference_rms_slope, nonperiodic_moments, spectral_moments
-
-CASE_DIMS = ("k_l", "k_s", "H", "seed")
-#: The case dimension of measured surfaces (one name per topography file).
-TOPOGRAPHY_DIM = "topography"
 
 _CASE_COORD_ATTRS = {
     "k_l": {"units": "1", "long_name": "long-wavelength cutoff L/lambda_l"},

@@ -23,6 +23,7 @@ from matplotlib.figure import Figure
 from . import plots, plots_measured
 from .config import CASE_STEM
 from .io import read_dataset
+from .measured import is_measured, topography_names
 
 #: Paths an input role may name: one file or a list of files.
 Paths = str | list[str]
@@ -69,7 +70,7 @@ class FigureSpec:
 
     def asked_by(self, scene: Mapping) -> bool:
         """Whether the validated ``scene`` asks for this figure."""
-        if self.measured != ("topography" in scene):
+        if self.measured != is_measured(scene):
             return False
         if self.measured:
             return bool(self.wanted(scene))
@@ -114,7 +115,7 @@ def _render_accuracy(paths: Mapping[str, Paths]) -> Figure:
 # ------------------------------------------------------------------ measured scenes
 def _surface_files(scene: Mapping) -> list[str]:
     """``surfaces/{name}.nc`` of every topography of a measured scene, by name."""
-    return [f"surfaces/{name}.nc" for name in sorted(scene["topography"]["files"])]
+    return [f"surfaces/{name}.nc" for name in sorted(topography_names(scene))]
 
 
 def _measured_contact_inputs(scene: Mapping) -> dict[str, Paths]:

@@ -65,7 +65,7 @@ import numpy as np
 import xarray as xr
 from scipy.optimize import least_squares
 
-from .aggregate import CASE_DIMS, add_derived
+from .aggregate import CASE_DIMS, TOPOGRAPHY_DIM, add_derived
 from .theory import KAPPA_BGT, cel_area, cel_pressure, power_law_alpha
 
 #: The constants of the CEL, in the order of the ``constant`` coordinate.
@@ -439,10 +439,6 @@ def _settings_attrs(lo, hi, n_boot, rng_seed, confidence, min_points, kappa_extr
 
 
 # --------------------------------------------------------------------------- public
-#: Dimension of a measured scene's cases (one per topography file, named by a string).
-TOPOGRAPHY_DIM = "topography"
-
-
 def _is_topography_layout(agg: xr.Dataset) -> bool:
     return TOPOGRAPHY_DIM in agg.dims
 

@@ -26,6 +26,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from . import plots
+from .aggregate import TOPOGRAPHY_DIM as _DIM
 from .plots import _MARKERS, _STYLE, DATA_COLOURS
 from .theory import KAPPA_BGT, cel_area, cel_area_limit, cel_kappa
 
@@ -34,7 +35,6 @@ from .theory import KAPPA_BGT, cel_area, cel_area_limit, cel_kappa
 MAP_PIXELS = 512
 #: Style of the fitted CEL (as in :mod:`roughcontact.plots`: thick translucent grey).
 _FIT_STYLE = {"color": "0.45", "lw": 2.2, "alpha": 0.8}
-_DIM = "topography"
 
 
 # ----------------------------------------------------------------------- helpers

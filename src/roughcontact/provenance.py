@@ -15,6 +15,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import xarray as xr
 
+from .aggregate import CASE_DIMS, TOPOGRAPHY_DIM
 from .params import recorded
 
 #: Prefix of the per-case variables that hold a varying setting.
@@ -62,7 +63,7 @@ def _equal(a, b) -> bool:
 
 def case_dims(ds: xr.Dataset) -> tuple[str, ...]:
     """The case dimensions of a combined dataset: ``topography`` (measured) or ``k_l, k_s, H, seed``."""
-    return ("topography",) if "topography" in ds.dims else ("k_l", "k_s", "H", "seed")
+    return (TOPOGRAPHY_DIM,) if TOPOGRAPHY_DIM in ds.dims else CASE_DIMS
 
 
 def settings_variables(combined: xr.Dataset, cases: Sequence[Mapping], settings: Sequence[Mapping],
