@@ -62,6 +62,9 @@ def test_glob_names_cases_by_file_stem(tmp_path):
      r"field 'topography.glob': '.*\*.sur' matches no file"),
     (lambda c, t: c["scenes"]["m"]["topography"]["files"].update({"kl2_ks8_H0.5_s0": str(t / "a.x3p")}),
      r"looks like a generated case"),
+    # a representativity batch's file stem
+    (lambda c, t: c["scenes"]["m"]["topography"]["files"].update({"kl2_H0.5": str(t / "a.x3p")}),
+     r"looks like a generated case"),
     (lambda c, t: c["scenes"]["m"]["topography"]["files"].update({"bad name": str(t / "a.x3p")}),
      r"field 'topography.files'"),
     (lambda c, t: c["scenes"]["m"]["topography"].update(unit="1"),

@@ -89,3 +89,24 @@ def test_scale_free_statistics_from_per_case_values():
     np.testing.assert_allclose(st["epsilon_mean"].values, (eps * np.sqrt(sigma)).mean(axis=-1))
     assert st["epsilon_mean"].attrs["units"] == "1" and st["n_seeds"].values.min() == 3
     assert scale_free_statistics(rep.drop_vars("std_height")) is None
+
+
+def test_a_batch_holds_every_k_s_and_seed_each_as_computed_alone():
+    """One representativity job's file: each (k_s, seed) equals that surface's eps computed on its own."""
+    from roughcontact import aggregate
+    from roughcontact.datasets import representativity_batch, split_cases
+
+    surface = {"N": 32, "L": 1.0, "plateau": False, "rms_height": 0.1}
+    batch = representativity_batch(surface, k_l="2", k_s=["8", "12"], hurst="0.8", seeds=3, n_bins=20)
+    assert dict(batch.sizes) == {"k_l": 1, "k_s": 2, "H": 1, "seed": 3}
+    for ks in ("8", "12"):
+        for seed in range(3):
+            h = generate_surface(32, 2.0, float(ks), 0.8, seed, rms_height=0.1)
+            assert batch.epsilon.sel(k_s=float(ks), seed=seed).item() == gaussian_l2_error(h, 20)
+    parts = split_cases(batch)
+    assert [(p.k_s.item(), p.seed.item()) for p in parts] == [(8.0, 0), (8.0, 1), (8.0, 2),
+                                                              (12.0, 0), (12.0, 1), (12.0, 2)]
+    expected = [(2.0, ks, 0.8, s) for ks in (8.0, 12.0) for s in range(3)]
+    combined = aggregate.combine_cases(parts, [f"case {i}" for i in range(6)], expected=expected,
+                                       kind="representativity")
+    assert combined.epsilon.equals(batch.epsilon)

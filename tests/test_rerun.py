@@ -52,13 +52,18 @@ EDITS = [
     ("add a seed", lambda s: s["contact"].update(seeds=3),
      {SURF.format(H=h, seed=2) for h in ("0.5", "0.8")} | {CONTACT.format(H=h, seed=2) for h in ("0.5", "0.8")}
      | DOWNSTREAM),
-    # the representativity study runs one job per grid point with all its seeds
+    # the representativity study runs one job per (k_l, H) with all its k_s and seeds
     ("add a representativity seed", lambda s: s["representativity"].update(seeds=3),
-     {f"results/tiny/representativity/kl{kl}_ks8_H0.8.nc" for kl in ("1", "4")}
+     {f"results/tiny/representativity/kl{kl}_H0.8.nc" for kl in ("1", "4")}
+     | {"results/tiny/aggregate/representativity.nc", "results/tiny/figures/representativity.png",
+        "results/tiny/report/summary.rst"}),
+    # a new k_s joins every batch's file, so each batch reruns (the part takes ~1 min at N = 1024)
+    ("add a representativity k_s", lambda s: s["representativity"]["grid"].update(k_s=["8", "12"]),
+     {f"results/tiny/representativity/kl{kl}_H0.8.nc" for kl in ("1", "4")}
      | {"results/tiny/aggregate/representativity.nc", "results/tiny/figures/representativity.png",
         "results/tiny/report/summary.rst"}),
     ("change representativity.n_bins", lambda s: s["representativity"].update(n_bins=30),
-     {f"results/tiny/representativity/kl{kl}_ks8_H0.8.nc" for kl in ("1", "4")}
+     {f"results/tiny/representativity/kl{kl}_H0.8.nc" for kl in ("1", "4")}
      | {"results/tiny/aggregate/representativity.nc", "results/tiny/figures/representativity.png",
         "results/tiny/report/summary.rst"}),
     ("change solver.tol", lambda s: s["contact"]["solver"].update(tol=1e-9), ALL_CONTACT | DOWNSTREAM),

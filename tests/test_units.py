@@ -18,7 +18,7 @@ from roughcontact.datasets import (
     contact_dataset,
     representativity_batch,
     representativity_dataset,
-    split_seeds,
+    split_cases,
     surface_dataset,
 )
 from roughcontact.fit import fit_cel
@@ -147,9 +147,10 @@ def written(request):
     names = ["s0.nc", "s1.nc"]
     agg = aggregate.aggregate_contact(contacts, names)
     out["aggregate_contact"] = agg.merge(aggregate.seed_statistics(agg))
-    batch = representativity_batch({**SURFACE, "unit": lu}, seeds=2, n_bins=20, **kw)
+    batch = representativity_batch({**SURFACE, "unit": lu}, seeds=2, n_bins=20, k_l=kw["k_l"], k_s=[kw["k_s"]],
+                                   hurst=kw["hurst"])
     out["representativity_batch"] = batch
-    rep_agg = aggregate.combine_cases(split_seeds(batch), names, kind="representativity")
+    rep_agg = aggregate.combine_cases(split_cases(batch), names, kind="representativity")
     out["aggregate_representativity"] = rep_agg.merge(aggregate.representativity_statistics(rep_agg))
     out["scale_free"] = scale_free_statistics(rep_agg)
     out["fit"] = fit_cel(agg, n_boot=10, on_insufficient="nan", window=(0.01, 0.2), min_points=3)

@@ -63,8 +63,8 @@ def test_dry_run_every_shipped_scene(repo, scene):
     assert res.returncode == 0, res.stderr[-3000:]
     jobs = _jobs(res.stdout)
     if scene == "paper":
-        # 900 representativity surfaces in one job per grid point (5 k_l x 6 k_s), each all 30 seeds
-        assert jobs["contact"] == 1200 and jobs["representativity"] == 30
+        # 900 representativity surfaces in one job per k_l (H = 0.8 only), each all 6 k_s x 30 seeds
+        assert jobs["contact"] == 1200 and jobs["representativity"] == 5
     if scene == "representative":
         assert jobs["contact"] == 60 and "representativity" not in jobs
     # the dry run says what the scene computes before anything runs

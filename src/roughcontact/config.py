@@ -44,8 +44,8 @@ SCENE_STUDIES = (*STUDIES, "accuracy")
 
 #: File stem of one case: the config's own strings for k_l, k_s, H and the seed.
 CASE_STEM = "kl{k_l}_ks{k_s}_H{H}_s{seed}"
-#: File stem of one grid point (all its seeds in one file): the representativity batches.
-POINT_STEM = "kl{k_l}_ks{k_s}_H{H}"
+#: File stem of one representativity batch: every k_s and seed of one (k_l, H) in one file.
+BATCH_STEM = "kl{k_l}_H{H}"
 
 #: Allowed scene names: they become folder names under results/.
 SCENE_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]*$")
@@ -409,10 +409,10 @@ def validate_config(config: dict, schema: dict | None = None) -> dict:
     return {"scene": default, "scenes": validated}
 
 
-def grid_points(block: dict) -> list[tuple[str, str, str]]:
-    """The ``(k_l, k_s, H)`` points of a study block's grid (``k_l < k_s`` by validation)."""
+def batches(block: dict) -> list[tuple[str, str]]:
+    """The ``(k_l, H)`` batches of a study block's grid: one representativity job each."""
     grid = block["grid"]
-    return list(itertools.product(grid["k_l"], grid["k_s"], grid["H"]))
+    return list(itertools.product(grid["k_l"], grid["H"]))
 
 
 def cases(block: dict) -> list[Case]:
@@ -458,9 +458,9 @@ def plan_summary(scene_name: str, scene: dict) -> str:
         return f"roughcontact: scene {scene_name!r} plans " + "; ".join(parts) + "."
     if "representativity" in scene:
         rep = scene["representativity"]
-        points = len(grid_points(rep))
-        parts.append(f"{points * rep['seeds']} representativity surfaces at N={rep['surface']['N']} "
-                     f"in {points} jobs")
+        n_surfaces = len(cases(rep))
+        parts.append(f"{n_surfaces} representativity surfaces at N={rep['surface']['N']} "
+                     f"in {len(batches(rep))} jobs")
     if "contact" in scene:
         con = scene["contact"]
         n_cases, n_steps = len(cases(con)), con["load"]["n_steps"]

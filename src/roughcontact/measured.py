@@ -25,8 +25,8 @@ from pathlib import Path
 
 #: Allowed case names (they become file names under results/{scene}/).
 NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
-#: Names that a generated case's or grid point's file stem could take (``kl16_ks32_H0.8_s0``).
-_GENERATED_STEM = re.compile(r"^kl[^_]*_ks[^_]*_H[^_]*(_s\d+)?$")
+#: Names that a generated case's or batch's file stem could take (``kl16_ks32_H0.8_s0``, ``kl16_H0.8``).
+_GENERATED_STEM = re.compile(r"^kl[^_]*(_ks[^_]*)?_H[^_]*(_s\d+)?$")
 #: Keys of a study block that only the generator uses.
 GENERATOR_KEYS = ("surface", "grid", "seeds", "examples")
 #: Per-file reader settings a ``files`` entry may override.

@@ -35,13 +35,17 @@ def surface(block: Mapping) -> dict:
 
 
 def representativity(block: Mapping) -> dict:
-    """A representativity job: bins, and for generated surfaces the seeds and the surface block.
+    """A representativity job: bins, and for generated surfaces the seeds, the k_s list and the surface block.
 
-    A measured scene's block has neither (its surface is the file the job reads).
+    A generated job computes one ``(k_l, H)`` batch over every k_s of the grid (its file
+    holds them all, so adding a k_s reruns the batches). A measured scene's block has
+    none of these (its surface is the file the job reads).
     """
     out = _pick(block, ("n_bins", "seeds"))
     if "surface" in block:
         out["surface"] = surface(block)
+    if "grid" in block:
+        out["k_s"] = list(block["grid"]["k_s"])
     return canonical(out)
 
 

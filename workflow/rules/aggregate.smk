@@ -11,7 +11,7 @@ localrules:
 
 rule aggregate_representativity:
     input:
-        lambda w: point_files(w.scene, "representativity", "representativity"),
+        lambda w: batch_files(w.scene, "representativity", "representativity"),
     output:
         "results/{scene}/aggregate/representativity.nc",
     log:

@@ -7,12 +7,12 @@ from roughcontact import params
 from roughcontact.accuracy import variants as accuracy_variants
 from roughcontact.config import (
     CASE_STEM,
-    POINT_STEM,
+    BATCH_STEM,
     STUDIES,
     ConfigError,
     cases,
     check_config_files,
-    grid_points,
+    batches,
     load_schema,
     plan_summary,
     validate_config,
@@ -37,9 +37,9 @@ def case_path(folder, ext="nc"):
     return f"results/{{scene}}/{folder}/{CASE_STEM}.{ext}"
 
 
-def point_path(folder, ext="nc"):
-    """Pattern of one grid point's file (all seeds): ``results/{scene}/<folder>/kl{k_l}_ks{k_s}_H{H}.<ext>``."""
-    return f"results/{{scene}}/{folder}/{POINT_STEM}.{ext}"
+def batch_path(folder, ext="nc"):
+    """Pattern of one batch's file (every k_s and seed of a k_l, H): ``results/{scene}/<folder>/kl{k_l}_H{H}.<ext>``."""
+    return f"results/{{scene}}/{folder}/{BATCH_STEM}.{ext}"
 
 
 def _alternatives(values):
@@ -107,10 +107,10 @@ def check_case(wildcards, study):
     return block
 
 
-def check_point(wildcards, study):
-    """Stop with the allowed values if a requested grid point is not in the scene's grid."""
+def check_batch(wildcards, study):
+    """Stop with the allowed values if a requested batch's k_l or H is not in the scene's grid."""
     block = study_block(wildcards.scene, study)
-    for key in ("k_l", "k_s", "H"):
+    for key in ("k_l", "H"):
         if getattr(wildcards, key) not in block["grid"][key]:
             raise WorkflowError(
                 f"scene {wildcards.scene!r}, {study}: {key}={getattr(wildcards, key)} is not in its grid; "
@@ -119,18 +119,18 @@ def check_point(wildcards, study):
     return block
 
 
-def point_params(study, provider):
-    """A params function: ``provider``'s values for the job's study block, once the point is checked."""
-    return lambda w: provider(check_point(w, study))
+def batch_params(study, provider):
+    """A params function: ``provider``'s values for the job's study block, once the batch is checked."""
+    return lambda w: provider(check_batch(w, study))
 
 
-def point_files(scene, study, folder):
-    """Paths of the ``folder`` files of every grid point of ``study`` in ``scene`` (measured: every file)."""
+def batch_files(scene, study, folder):
+    """Paths of the ``folder`` files of every batch of ``study`` in ``scene`` (measured: every file)."""
     if is_measured(SCENES[scene]):
         return case_files(scene, study, folder)
     return [
-        f"results/{scene}/{folder}/{POINT_STEM.format(k_l=kl, k_s=ks, H=h)}.nc"
-        for kl, ks, h in grid_points(study_block(scene, study))
+        f"results/{scene}/{folder}/{BATCH_STEM.format(k_l=kl, H=h)}.nc"
+        for kl, h in batches(study_block(scene, study))
     ]
 
 
@@ -244,9 +244,9 @@ def surface_runtime_min(n):
 
 
 def batch_runtime_min(block):
-    """Wall-time request of a representativity job [min]: ~0.3 s a seed at N=1024, x30 margin."""
-    n, seeds = block["surface"]["N"], block["seeds"]
-    return max(5, int(0.15 * seeds * (n / 1024) ** 2))
+    """Wall-time request of a representativity job [min]: ~0.15 s a surface at N=1024, x20 margin."""
+    n, surfaces = block["surface"]["N"], block["seeds"] * len(block["grid"]["k_s"])
+    return max(5, int(0.05 * surfaces * (n / 1024) ** 2))
 
 
 def contact_mem_mb(n):

@@ -1,6 +1,6 @@
-"""Aggregate: join every representativity grid point of a scene, with mean and error over seeds."""
+"""Aggregate: join every representativity case of a scene, with mean and error over seeds."""
 from roughcontact import aggregate, provenance
-from roughcontact.datasets import split_seeds
+from roughcontact.datasets import split_cases
 from roughcontact.io import read_dataset, run_logged, write_dataset
 
 
@@ -14,9 +14,9 @@ def main(log):
         datasets, paths = [], []
         for path in snakemake.input:
             batch = read_dataset(path, stage="representativity", variables=["epsilon"])
-            for one in split_seeds(batch):
+            for one in split_cases(batch):
                 datasets.append(one)
-                paths.append(f"{path} (seed {int(one.seed.values[0])})")
+                paths.append(f"{path} (k_s {one.k_s.values[0]:g}, seed {int(one.seed.values[0])})")
         expected = [(float(kl), float(ks), float(h), int(s)) for kl, ks, h, s in cases]
         ds = aggregate.combine_cases(datasets, paths, expected=expected, kind="representativity")
         ds = ds.merge(aggregate.representativity_statistics(ds))
