@@ -6,13 +6,13 @@ from pathlib import Path
 from roughcontact import params
 from roughcontact.accuracy import variants as accuracy_variants
 from roughcontact.config import (
-    CASE_STEM,
     BATCH_STEM,
+    CASE_STEM,
     STUDIES,
     ConfigError,
+    batches,
     cases,
     check_config_files,
-    batches,
     load_schema,
     plan_summary,
     validate_config,
@@ -129,8 +129,7 @@ def batch_files(scene, study, folder):
     if is_measured(SCENES[scene]):
         return case_files(scene, study, folder)
     return [
-        f"results/{scene}/{folder}/{BATCH_STEM.format(k_l=kl, H=h)}.nc"
-        for kl, h in batches(study_block(scene, study))
+        f"results/{scene}/{folder}/{BATCH_STEM.format(k_l=kl, H=h)}.nc" for kl, h in batches(study_block(scene, study))
     ]
 
 
