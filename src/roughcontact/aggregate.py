@@ -118,6 +118,120 @@ def _check_like_first(ds: xr.Dataset, name: str, ref: xr.Dataset, ref_name: str,
                              f"{ref_name}'s e_star={ref.attrs['e_star']!r}")
 
 
+def _case_keys(datasets: Sequence[xr.Dataset], names: Sequence[str], kind: str) -> list[tuple]:
+    """The ``(k_l, k_s, H, seed)`` key of each dataset, in input order, after checking each one.
+
+    Raises ``ValueError`` naming the file for a case given twice or a dataset that cannot be
+    stacked with the first one (:func:`_check_like_first`); files are checked in input order,
+    so the first bad file is the one named.
+    """
+    keys: list[tuple] = []
+    seen: dict[tuple, str] = {}
+    ref = datasets[0]
+    for ds, name in zip(datasets, names, strict=True):
+        key = _case_key(ds, name)
+        if key in seen:
+            raise ValueError(f"{name}: case {_fmt_case(key)} already given by {seen[key]}")
+        seen[key] = name
+        keys.append(key)
+        _check_like_first(ds, name, ref, names[0], kind, CASE_DIMS)
+    return keys
+
+
+def _expected_cases(keys: Sequence[tuple], names: Sequence[str],
+                    expected: Iterable[tuple] | None) -> set[tuple[float, float, float, int]]:
+    """The expected case keys, checked against the given ones (``keys``, one per file in ``names``).
+
+    Default: every point of the Cartesian product of the keys' coordinates with ``k_l < k_s``.
+    Raises ``ValueError`` naming the cases for expected cases without a dataset (first, so that
+    a missing file is reported as such), then naming the file for a case that is not expected.
+    """
+    present = set(keys)
+    if expected is None:
+        axes = [sorted({k[i] for k in keys}) for i in range(4)]
+        expected_set = {c for c in itertools.product(*axes) if c[0] < c[1]}
+    else:
+        expected_set = _normalise_expected(expected)
+    missing_cases = sorted(expected_set - present)
+    if missing_cases:
+        shown = ", ".join(_fmt_case(c) for c in missing_cases[:10])
+        more = f" and {len(missing_cases) - 10} more" if len(missing_cases) > 10 else ""
+        raise ValueError(f"{len(missing_cases)} expected case(s) have no dataset: {shown}{more}")
+    for key, name in zip(keys, names, strict=True):
+        if key not in expected_set:
+            raise ValueError(f"{name}: case {_fmt_case(key)} is not among the expected cases")
+    return expected_set
+
+
+def _grid_coords(axes: Sequence[Sequence], ref: xr.Dataset) -> dict[str, xr.Variable]:
+    """Coordinates of the combined grid: the four case axes (with ``ref``'s attrs), then ``ref``'s others.
+
+    ``axes`` holds the sorted values of ``k_l, k_s, H`` (float64) and ``seed`` (int64). Of
+    ``ref``'s other coordinates, those along no case dimension (e.g. ``step``) are kept as they are.
+    """
+    coords: dict[str, xr.Variable | np.ndarray] = {
+        "k_l": np.asarray(axes[0], dtype=np.float64),
+        "k_s": np.asarray(axes[1], dtype=np.float64),
+        "H": np.asarray(axes[2], dtype=np.float64),
+        "seed": np.asarray(axes[3], dtype=np.int64),
+    }
+    for dim in CASE_DIMS:
+        coords[dim] = xr.Variable(dim, coords[dim], attrs=dict(ref[dim].attrs))
+    for name_c, coord in ref.coords.items():
+        if name_c not in CASE_DIMS and not (set(coord.dims) & set(CASE_DIMS)):
+            coords[name_c] = coord.variable
+    return coords
+
+
+def _stack_variable(var: str, datasets: Sequence[xr.Dataset], names: Sequence[str],
+                    positions: Sequence[tuple[int, int, int, int]], grid_shape: tuple[int, ...],
+                    has_holes: bool) -> xr.Variable:
+    """Variable ``var`` of every dataset placed at its case's grid position, dims ``CASE_DIMS + rest``.
+
+    ``positions[i]`` is the grid index of ``datasets[i]`` on a grid of ``grid_shape`` (the
+    four case axes); ``rest`` are the variable's non-case dims in the first dataset's order.
+    Holes are NaN (float), ``False`` (bool); an integer variable becomes float64 only if
+    ``has_holes``, so that a complete grid keeps its integers. Attrs are the first dataset's.
+    """
+    ref = datasets[0]
+    template = ref[var]
+    rest = tuple(d for d in template.dims if d not in CASE_DIMS)
+    order = CASE_DIMS + rest
+    rest_shape = tuple(ref.sizes[d] for d in rest)
+    dtype = template.dtype
+    if np.issubdtype(dtype, np.bool_):
+        fill, out_dtype = False, np.bool_
+    elif np.issubdtype(dtype, np.integer):
+        fill, out_dtype = (np.nan, np.float64) if has_holes else (0, dtype)
+    elif np.issubdtype(dtype, np.floating) or np.issubdtype(dtype, np.complexfloating):
+        fill, out_dtype = np.nan, dtype
+    else:
+        raise ValueError(f"{names[0]}: variable {var!r} has dtype {dtype}, which cannot be "
+                         "stacked (numeric or boolean only)")
+    arr = np.full(grid_shape + rest_shape, fill, dtype=out_dtype)
+    for ds, name, pos in zip(datasets, names, positions, strict=True):
+        v = ds[var]
+        # A variable need not span every case dim (constant along the others): add them, length 1.
+        extra = [d for d in CASE_DIMS if d not in v.dims]
+        if extra:
+            v = v.expand_dims({d: ds[d].values for d in extra})
+        if set(v.dims) != set(order):
+            raise ValueError(f"{name}: variable {var!r} has dims {v.dims}, but {names[0]} has "
+                             f"{template.dims}")
+        arr[pos] = v.transpose(*order).values[0, 0, 0, 0]
+    return xr.Variable(order, arr, attrs=dict(template.attrs))
+
+
+def _shared_attrs(datasets: Sequence[xr.Dataset]) -> dict:
+    """The first dataset's global attrs that every dataset has with an equal value, in its order."""
+    ref = datasets[0]
+    attrs = {}
+    for key_a, val in ref.attrs.items():
+        if all(key_a in ds.attrs and _attrs_equal(ds.attrs[key_a], val) for ds in datasets):
+            attrs[key_a] = val
+    return attrs
+
+
 def combine_cases(datasets: Sequence[xr.Dataset], names: Sequence[str], *,
                   expected: Iterable[tuple] | None = None, kind: str = "contact") -> xr.Dataset:
     """Stack per-case datasets on the grid of their case coordinates, strictly.
@@ -171,33 +285,11 @@ def combine_cases(datasets: Sequence[xr.Dataset], names: Sequence[str], *,
     if not datasets:
         raise ValueError("datasets is empty: nothing to combine")
 
-    keys: list[tuple] = []
-    seen: dict[tuple, str] = {}
-    ref = datasets[0]
-    ref_vars = set(ref.data_vars)
-    for ds, name in zip(datasets, names, strict=True):
-        key = _case_key(ds, name)
-        if key in seen:
-            raise ValueError(f"{name}: case {_fmt_case(key)} already given by {seen[key]}")
-        seen[key] = name
-        keys.append(key)
-        _check_like_first(ds, name, ref, names[0], kind, CASE_DIMS)
-
+    keys = _case_keys(datasets, names, kind)
     present = set(keys)
-    if expected is None:
-        axes = [sorted({k[i] for k in keys}) for i in range(4)]
-        expected_set = {c for c in itertools.product(*axes) if c[0] < c[1]}
-    else:
-        expected_set = _normalise_expected(expected)
-    missing_cases = sorted(expected_set - present)
-    if missing_cases:
-        shown = ", ".join(_fmt_case(c) for c in missing_cases[:10])
-        more = f" and {len(missing_cases) - 10} more" if len(missing_cases) > 10 else ""
-        raise ValueError(f"{len(missing_cases)} expected case(s) have no dataset: {shown}{more}")
-    for key, name in zip(keys, names, strict=True):
-        if key not in expected_set:
-            raise ValueError(f"{name}: case {_fmt_case(key)} is not among the expected cases")
+    expected_set = _expected_cases(keys, names, expected)
 
+    # The grid spans the expected cases too, so that a hole stays visible as one.
     axes = [sorted({k[i] for k in present | expected_set}) for i in range(4)]
     index = [{v: j for j, v in enumerate(ax)} for ax in axes]
     grid_shape = tuple(len(ax) for ax in axes)
@@ -208,53 +300,14 @@ def combine_cases(datasets: Sequence[xr.Dataset], names: Sequence[str], *,
     for pos in positions:
         present_mask[pos] = True
 
-    coords: dict[str, xr.Variable | np.ndarray] = {
-        "k_l": np.asarray(axes[0], dtype=np.float64),
-        "k_s": np.asarray(axes[1], dtype=np.float64),
-        "H": np.asarray(axes[2], dtype=np.float64),
-        "seed": np.asarray(axes[3], dtype=np.int64),
-    }
-    for dim in CASE_DIMS:
-        coords[dim] = xr.Variable(dim, coords[dim], attrs=dict(ref[dim].attrs))
-    for name_c, coord in ref.coords.items():
-        if name_c not in CASE_DIMS and not (set(coord.dims) & set(CASE_DIMS)):
-            coords[name_c] = coord.variable
-
-    data_vars = {}
-    for var in sorted(ref_vars):
-        template = ref[var]
-        rest = tuple(d for d in template.dims if d not in CASE_DIMS)
-        order = CASE_DIMS + rest
-        rest_shape = tuple(ref.sizes[d] for d in rest)
-        dtype = template.dtype
-        if np.issubdtype(dtype, np.bool_):
-            fill, out_dtype = False, np.bool_
-        elif np.issubdtype(dtype, np.integer):
-            fill, out_dtype = (np.nan, np.float64) if has_holes else (0, dtype)
-        elif np.issubdtype(dtype, np.floating) or np.issubdtype(dtype, np.complexfloating):
-            fill, out_dtype = np.nan, dtype
-        else:
-            raise ValueError(f"{names[0]}: variable {var!r} has dtype {dtype}, which cannot be "
-                             "stacked (numeric or boolean only)")
-        arr = np.full(grid_shape + rest_shape, fill, dtype=out_dtype)
-        for ds, name, pos in zip(datasets, names, positions, strict=True):
-            v = ds[var]
-            extra = [d for d in CASE_DIMS if d not in v.dims]
-            if extra:
-                v = v.expand_dims({d: ds[d].values for d in extra})
-            if set(v.dims) != set(order):
-                raise ValueError(f"{name}: variable {var!r} has dims {v.dims}, but {names[0]} has "
-                                 f"{template.dims}")
-            arr[pos] = v.transpose(*order).values[0, 0, 0, 0]
-        data_vars[var] = xr.Variable(order, arr, attrs=dict(template.attrs))
-
+    ref = datasets[0]
+    coords = _grid_coords(axes, ref)
+    data_vars = {var: _stack_variable(var, datasets, names, positions, grid_shape, has_holes)
+                 for var in sorted(set(ref.data_vars))}
     data_vars["case_present"] = xr.Variable(CASE_DIMS, present_mask, attrs={
         "units": "1", "long_name": "a dataset exists for this case (False: grid hole, not expected)"})
 
-    attrs = {}
-    for key_a, val in ref.attrs.items():
-        if all(key_a in ds.attrs and _attrs_equal(ds.attrs[key_a], val) for ds in datasets):
-            attrs[key_a] = val
+    attrs = _shared_attrs(datasets)
     attrs["n_cases"] = len(datasets)
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 
@@ -558,6 +611,25 @@ def add_derived(ds: xr.Dataset, *, kappa_rtol: float = 1e-6, derivative_order: i
         A copy of ``ds`` with the three variables added (``kappa`` replaced by the
         recomputed values).
     """
+    e_star = _check_derived_inputs(ds, kappa_rtol)
+    out = ds.copy()
+    present = ds["case_present"] if "case_present" in ds else xr.ones_like(ds["rms_slope"], dtype=bool)
+    converged = ds["converged"].astype(bool)
+
+    out["kappa"] = _checked_kappa(ds, e_star, converged, present, kappa_rtol)
+    out["kappa"].attrs = {"units": "1", "long_name": "kappa = E* h' / pbar (normalised inverse mean contact pressure)"}
+    out["dpbar_dp0"] = _dpbar_dp0(ds, present, derivative_order, derivative_variable)
+    out["n_unconverged"] = _n_unconverged(converged, present)
+    out["n_unconverged"].attrs = {"units": "1", "long_name": "number of unconverged load steps (NaN: no such case)"}
+    return out
+
+
+def _check_derived_inputs(ds: xr.Dataset, kappa_rtol: float) -> float:
+    """The contact modulus ``e_star`` [pressure unit] of ``ds``, after checking :func:`add_derived`'s inputs.
+
+    ``ValueError`` for a bad ``kappa_rtol``, a missing required variable or ``e_star``, an
+    ``e_star`` that is not finite and positive, or pressures in different units.
+    """
     if not (np.isfinite(kappa_rtol) and kappa_rtol > 0):
         raise ValueError(f"kappa_rtol must be a finite number > 0, got {kappa_rtol!r}")
     missing = [v for v in CONTACT_REQUIRED if v not in ds.data_vars]
@@ -569,13 +641,21 @@ def add_derived(ds: xr.Dataset, *, kappa_rtol: float = 1e-6, derivative_order: i
     if not (np.isfinite(e_star) and e_star > 0):
         raise ValueError(f"e_star must be a finite number > 0, got {ds.attrs['e_star']!r}")
     _check_pressure_units(ds)
-    out = ds.copy()
-    present = ds["case_present"] if "case_present" in ds else xr.ones_like(ds["rms_slope"], dtype=bool)
+    return e_star
 
+
+def _checked_kappa(ds: xr.Dataset, e_star: float, converged: xr.DataArray, present: xr.DataArray,
+                   kappa_rtol: float) -> xr.DataArray:
+    """``kappa = E* h' / pbar`` [1] over the dims of ``mean_contact_pressure``, NaN where ``pbar <= 0``.
+
+    Checked first: ``pbar == p0 / (A/A0)`` to ``kappa_rtol`` at the converged steps of present
+    cases with ``A/A0 > 0``, then a stored ``kappa`` against the recomputed one wherever both
+    are finite; ``ValueError`` naming the first offending case and step otherwise.
+    ``converged`` and ``present`` are boolean masks broadcastable to ``pbar``.
+    """
     pbar = ds["mean_contact_pressure"]
     a = ds["area_fraction"]
     p0 = ds["pressure"]
-    converged = ds["converged"].astype(bool)
     with np.errstate(divide="ignore", invalid="ignore"):
         kappa = e_star * ds["rms_slope"] / pbar
         pbar_check = p0 / a
@@ -591,9 +671,17 @@ def add_derived(ds: xr.Dataset, *, kappa_rtol: float = 1e-6, derivative_order: i
         if bool(bad.any()):
             raise ValueError("stored kappa differs from e_star * rms_slope / mean_contact_pressure "
                              f"beyond rtol={kappa_rtol} at {_first_bad_case(bad)}")
-    out["kappa"] = kappa.transpose(*pbar.dims)
-    out["kappa"].attrs = {"units": "1", "long_name": "kappa = E* h' / pbar (normalised inverse mean contact pressure)"}
+    return kappa.transpose(*pbar.dims)
 
+
+def _dpbar_dp0(ds: xr.Dataset, present: xr.DataArray, order: int, variable: str) -> xr.Variable:
+    """``d pbar / d p0`` [1] by :func:`load_derivative`, dims of ``mean_contact_pressure`` (``step`` last).
+
+    ``ValueError`` if ``step`` is not the last dimension, or (prefixed "pressure / derivative
+    settings") if :func:`load_derivative` rejects the load schedule or the settings.
+    """
+    pbar = ds["mean_contact_pressure"]
+    p0 = ds["pressure"]
     dims = pbar.dims
     if dims[-1] != "step":
         raise ValueError(f"mean_contact_pressure must have 'step' as last dimension, got {dims}")
@@ -601,19 +689,19 @@ def add_derived(ds: xr.Dataset, *, kappa_rtol: float = 1e-6, derivative_order: i
     p0_arr = np.where(present.broadcast_like(pbar).transpose(*dims).values,
                       p0.broadcast_like(pbar).transpose(*dims).values, np.nan)
     try:
-        deriv = load_derivative(pbar.values, p0_arr, order=derivative_order,
-                                variable=derivative_variable)
+        deriv = load_derivative(pbar.values, p0_arr, order=order, variable=variable)
     except ValueError as err:
         raise ValueError(f"pressure / derivative settings: {err}") from None
-    out["dpbar_dp0"] = xr.Variable(dims, deriv, attrs={
+    return xr.Variable(dims, deriv, attrs={
         "units": "1",
         "long_name": "d pbar / d p0 (finite differences along the load steps)",
-        "stencil": f"order-{derivative_order} Fornberg differences in {derivative_variable}"})
+        "stencil": f"order-{order} Fornberg differences in {variable}"})
 
+
+def _n_unconverged(converged: xr.DataArray, present: xr.DataArray) -> xr.DataArray:
+    """Unconverged steps per case (float64; NaN where ``present`` is False), case dims in canonical order."""
     n_unc = (~converged).sum("step").where(present).astype(np.float64)
-    out["n_unconverged"] = n_unc.transpose(*[d for d in (*CASE_DIMS, TOPOGRAPHY_DIM) if d in n_unc.dims])
-    out["n_unconverged"].attrs = {"units": "1", "long_name": "number of unconverged load steps (NaN: no such case)"}
-    return out
+    return n_unc.transpose(*[d for d in (*CASE_DIMS, TOPOGRAPHY_DIM) if d in n_unc.dims])
 
 
 def _check_pressure_units(ds: xr.Dataset) -> None:

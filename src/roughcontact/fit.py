@@ -545,53 +545,93 @@ def fit_cel(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.11), n_bo
 
     kls, kss, hs = (agg[d].values for d in ("k_l", "k_s", "H"))
     labels = [_h_label(h) for h in hs] + [POOLED]
-    shape5 = (len(kls), len(kss), len(labels), len(methods), len(CONSTANTS))
-    value, stderr, bstd, clo, chi = (np.full(shape5, np.nan) for _ in range(5))
-    npts = np.zeros(shape5, dtype=np.int64)
-    nseeds = np.zeros(shape5[:3], dtype=np.int64)
-    nboot_ok = np.zeros(shape5[:4], dtype=np.int64)
-    alpha = np.full(shape5[:3], np.nan)
-    alpha_surf = np.full(shape5[:3], np.nan)
-
+    grid = _CelGrid((len(kls), len(kss), len(labels), len(methods), len(CONSTANTS)))
+    fit_kw = dict(methods=methods, e_star=e_star, min_points=min_points, kappa_extrapolation=kappa_extrapolation,
+                  paper_average=paper_average, n_boot=n_boot, confidence=confidence,
+                  on_insufficient=on_insufficient, window=window)
     for i, kl in enumerate(kls):
         for j, ks in enumerate(kss):
             for g, label in enumerate(labels):
                 group_hs = list(hs) if label == POOLED else [hs[g]]
-                curves = _group_curves(agg, kl, ks, group_hs, (lo, hi))
-                nseeds[i, j, g] = curves.n_seeds
-                if curves.n_seeds == 0:
-                    continue
-                if paper_average == "seeds" and "paper" in methods:
-                    _check_schedules(curves, [f"fit_cel: seeds at k_l={kl:g}, k_s={ks:g}, H={_h_label(h)}"
-                                              for h in group_hs])
-                if label != POOLED and kl < ks:
-                    alpha[i, j, g] = power_law_alpha(kl, ks, hs[g])
-                if "alpha" in agg:
-                    sub = agg["alpha"].sel(k_l=kl, k_s=ks, H=group_hs)
-                    if "case_present" in agg:
-                        sub = sub.where(agg["case_present"].sel(k_l=kl, k_s=ks, H=group_hs))
-                    alpha_surf[i, j, g] = float(sub.mean(skipna=True))
-                res = _fit_group(curves, methods=methods, e_star=e_star, min_points=min_points,
-                                 kappa_extrapolation=kappa_extrapolation, paper_average=paper_average,
-                                 n_boot=n_boot, confidence=confidence, rng=_group_rng(rng_seed, kl, ks, label),
-                                 on_insufficient=on_insufficient, caller="fit_cel",
-                                 where=f"k_l={kl:g}, k_s={ks:g}, H={label}", window=window)
-                value[i, j, g], stderr[i, j, g], npts[i, j, g] = res.value, res.stderr, res.npts
-                bstd[i, j, g], clo[i, j, g], chi[i, j, g] = res.bstd, res.clo, res.chi
-                nboot_ok[i, j, g] = res.nboot_ok
+                _fit_cel_group(agg, grid, (i, j, g), kl, ks, group_hs, label, (lo, hi), rng_seed, fit_kw)
+    return _cel_dataset(agg, grid, labels, methods, confidence,
+                        _settings_attrs(lo, hi, n_boot, rng_seed, confidence, min_points, kappa_extrapolation,
+                                        paper_average, e_star))
 
+
+class _CelGrid:
+    """:func:`fit_cel`'s result arrays, filled group by group.
+
+    ``value, stderr, bstd, clo, chi`` (float, NaN: not fitted) and ``npts`` (int) have the
+    shape ``(k_l, k_s, H_group, estimator, constant)``; ``nboot_ok`` the first four of those
+    dims; ``nseeds`` (int), ``alpha`` and ``alpha_surf`` (float, NaN: none) the first three.
+    """
+
+    def __init__(self, shape5: tuple[int, int, int, int, int]):
+        self.value, self.stderr, self.bstd, self.clo, self.chi = (np.full(shape5, np.nan) for _ in range(5))
+        self.npts = np.zeros(shape5, dtype=np.int64)
+        self.nseeds = np.zeros(shape5[:3], dtype=np.int64)
+        self.nboot_ok = np.zeros(shape5[:4], dtype=np.int64)
+        self.alpha = np.full(shape5[:3], np.nan)
+        self.alpha_surf = np.full(shape5[:3], np.nan)
+
+    def store(self, idx: tuple[int, int, int], res: _GroupFit) -> None:
+        """Copy one group's fit into position ``idx = (i_k_l, i_k_s, i_H_group)``."""
+        self.value[idx], self.stderr[idx], self.npts[idx] = res.value, res.stderr, res.npts
+        self.bstd[idx], self.clo[idx], self.chi[idx] = res.bstd, res.clo, res.chi
+        self.nboot_ok[idx] = res.nboot_ok
+
+
+def _fit_cel_group(agg: xr.Dataset, grid: _CelGrid, idx: tuple[int, int, int], kl: float, ks: float,
+                   group_hs: list[float], label: str, bounds: tuple[float, float], rng_seed: int,
+                   fit_kw: dict) -> None:
+    """Fit the group ``(kl, ks, group_hs)`` (H label ``label``) of ``agg`` into ``grid[idx]``.
+
+    ``bounds`` is the checked window ``(low, high)`` of ``A/A0``; ``fit_kw`` holds
+    :func:`_fit_group`'s settings (with the window as the user passed it, for messages). A group without cases only gets
+    ``n_seeds = 0``.
+    """
+    curves = _group_curves(agg, kl, ks, group_hs, bounds)
+    grid.nseeds[idx] = curves.n_seeds
+    if curves.n_seeds == 0:
+        return
+    if fit_kw["paper_average"] == "seeds" and "paper" in fit_kw["methods"]:
+        _check_schedules(curves, [f"fit_cel: seeds at k_l={kl:g}, k_s={ks:g}, H={_h_label(h)}"
+                                  for h in group_hs])
+    if label != POOLED and kl < ks:
+        grid.alpha[idx] = power_law_alpha(kl, ks, group_hs[0])
+    if "alpha" in agg:
+        grid.alpha_surf[idx] = _mean_alpha_surfaces(agg, kl, ks, group_hs)
+    res = _fit_group(curves, rng=_group_rng(rng_seed, kl, ks, label), caller="fit_cel",
+                     where=f"k_l={kl:g}, k_s={ks:g}, H={label}", **fit_kw)
+    grid.store(idx, res)
+
+
+def _mean_alpha_surfaces(agg: xr.Dataset, kl: float, ks: float, group_hs: list[float]) -> float:
+    """Mean of ``agg.alpha`` [1] over the present cases of the group ``(kl, ks, group_hs)``."""
+    sub = agg["alpha"].sel(k_l=kl, k_s=ks, H=group_hs)
+    if "case_present" in agg:
+        sub = sub.where(agg["case_present"].sel(k_l=kl, k_s=ks, H=group_hs))
+    return float(sub.mean(skipna=True))
+
+
+def _cel_dataset(agg: xr.Dataset, grid: _CelGrid, labels: list[str], methods: Sequence[str],
+                 confidence: float, attrs: dict) -> xr.Dataset:
+    """:func:`fit_cel`'s result dataset from the filled ``grid``; ``agg`` gives the k_l, k_s, H coordinates."""
+    kls, kss, hs = (agg[d].values for d in ("k_l", "k_s", "H"))
     dims5 = ("k_l", "k_s", "H_group", "estimator", "constant")
     one = {"units": "1"}
-    ds = xr.Dataset(
+    return xr.Dataset(
         {
-            **_estimate_vars(dims5, value, stderr, bstd, clo, chi, npts, confidence=confidence, resampled="seeds",
+            **_estimate_vars(dims5, grid.value, grid.stderr, grid.bstd, grid.clo, grid.chi, grid.npts,
+                             confidence=confidence, resampled="seeds",
                              points="paper route with paper_average='seeds': seed-mean points, one per H and step"),
-            "n_seeds": (dims5[:3], nseeds, {**one, "long_name": "number of seeds (surfaces) in the group"}),
-            "n_boot_ok": (dims5[:4], nboot_ok, {**one, "long_name": "bootstrap resamples that fitted"}),
-            "alpha_power_law": (dims5[:3], alpha, {**one, "long_name": "Nayak alpha of the ideal "
+            "n_seeds": (dims5[:3], grid.nseeds, {**one, "long_name": "number of seeds (surfaces) in the group"}),
+            "n_boot_ok": (dims5[:4], grid.nboot_ok, {**one, "long_name": "bootstrap resamples that fitted"}),
+            "alpha_power_law": (dims5[:3], grid.alpha, {**one, "long_name": "Nayak alpha of the ideal "
                                 "continuous power-law spectrum (NaN for pooled groups; 20-60 % low "
                                 "for k_l = 1, see theory.discrete_power_law_moments)"}),
-            "alpha_surfaces": (dims5[:3], alpha_surf, {**one, "long_name": "mean Nayak alpha of the "
+            "alpha_surfaces": (dims5[:3], grid.alpha_surf, {**one, "long_name": "mean Nayak alpha of the "
                                "group's generated surfaces (agg variable alpha; NaN if absent)"}),
             **_paper_vars(),
         },
@@ -604,10 +644,8 @@ def fit_cel(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.11), n_bo
                         {"units": "1", "long_name": "Hurst exponent (NaN: pooled)"}),
             **_estimator_coords(methods),
         },
-        attrs=_settings_attrs(lo, hi, n_boot, rng_seed, confidence, min_points, kappa_extrapolation,
-                              paper_average, e_star),
+        attrs=attrs,
     )
-    return ds
 
 
 def _derive_topographies(agg: xr.Dataset) -> xr.Dataset:
@@ -686,17 +724,7 @@ def fit_topographies(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.
     """
     (lo, hi), methods = _check_settings(window, n_boot, rng_seed, methods, min_points, kappa_extrapolation,
                                         confidence, paper_average, on_insufficient)
-    if not _is_topography_layout(agg) or "step" not in agg.dims:
-        raise ValueError(f"agg must have dims (topography, step), got {tuple(agg.dims)}; "
-                         "generated scenes are fitted by fit_cel")
-    clash = [d for d in CASE_DIMS if d in agg.dims]
-    if clash:
-        raise ValueError(f"agg mixes topographies with generated-case dims {clash}; not supported")
-    missing = [v for v in ("area_fraction", "pressure", "converged", "rms_slope") if v not in agg]
-    if missing:
-        raise ValueError(f"agg lacks variable(s) {missing}")
-    if "e_star" not in agg.attrs:
-        raise ValueError("agg lacks the global attribute 'e_star' (contact modulus)")
+    _check_topography_aggregate(agg)
     if "dpbar_dp0" not in agg or "kappa" not in agg:
         agg = _derive_topographies(agg)
     e_star = float(agg.attrs["e_star"])
@@ -710,6 +738,36 @@ def fit_topographies(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.
                          confidence=confidence, rng=_group_rng(rng_seed, 0.0, 0.0, "topographies"),
                          on_insufficient=on_insufficient, caller="fit_topographies",
                          where=f"{curves.n_seeds} topographies pooled", window=window)
+    attrs = {**_settings_attrs(lo, hi, n_boot, rng_seed, confidence, min_points, kappa_extrapolation,
+                               paper_average, e_star), "layout": "topographies"}
+    return _topography_dataset(agg, res, curves.n_seeds, fitted, methods, confidence, attrs)
+
+
+def _check_topography_aggregate(agg: xr.Dataset) -> None:
+    """ValueError unless ``agg`` is a measured scene's contact aggregate that :func:`fit_topographies` can fit.
+
+    It needs dims ``(topography, step)`` and no generated-case dim, the variables
+    ``area_fraction, pressure, converged, rms_slope`` and the global attribute ``e_star``.
+    """
+    if not _is_topography_layout(agg) or "step" not in agg.dims:
+        raise ValueError(f"agg must have dims (topography, step), got {tuple(agg.dims)}; "
+                         "generated scenes are fitted by fit_cel")
+    clash = [d for d in CASE_DIMS if d in agg.dims]
+    if clash:
+        raise ValueError(f"agg mixes topographies with generated-case dims {clash}; not supported")
+    missing = [v for v in ("area_fraction", "pressure", "converged", "rms_slope") if v not in agg]
+    if missing:
+        raise ValueError(f"agg lacks variable(s) {missing}")
+    if "e_star" not in agg.attrs:
+        raise ValueError("agg lacks the global attribute 'e_star' (contact modulus)")
+
+
+def _topography_dataset(agg: xr.Dataset, res: _GroupFit, n_fitted: int, fitted: list[str],
+                        methods: Sequence[str], confidence: float, attrs: dict) -> xr.Dataset:
+    """:func:`fit_topographies`' result dataset from the pooled fit ``res`` of the ``n_fitted`` topographies ``fitted``.
+
+    ``agg`` gives the topography names (all of them, fitted or not) and ``alpha``.
+    """
     alpha_surf = np.nan
     if "alpha" in agg and fitted:
         alpha_surf = float(agg["alpha"].sel({TOPOGRAPHY_DIM: fitted}).mean(skipna=True))
@@ -722,7 +780,7 @@ def fit_topographies(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.
             **_estimate_vars(dims, res.value, res.stderr, res.bstd, res.clo, res.chi, res.npts,
                              confidence=confidence, resampled="topographies",
                              points="paper route with paper_average='seeds': topography-mean points, one per step"),
-            "n_topographies": ((), np.int64(curves.n_seeds), {**one, "long_name": "number of topographies fitted"}),
+            "n_topographies": ((), np.int64(n_fitted), {**one, "long_name": "number of topographies fitted"}),
             "n_boot_ok": (dims[:1], res.nboot_ok, {**one, "long_name": "bootstrap resamples that fitted"}),
             "in_fit": ((TOPOGRAPHY_DIM,), in_fit, {**one, "long_name": "1 if the topography entered the fit, "
                                                    "0 if excluded (e.g. unconverged steps)"}),
@@ -735,8 +793,7 @@ def fit_topographies(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.
                              {"units": "1", "long_name": "name of the measured topography"}),
             **_estimator_coords(methods),
         },
-        attrs={**_settings_attrs(lo, hi, n_boot, rng_seed, confidence, min_points, kappa_extrapolation,
-                                 paper_average, e_star), "layout": "topographies"},
+        attrs=attrs,
     )
 
 
