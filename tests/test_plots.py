@@ -168,17 +168,21 @@ def test_bad_inputs_are_rejected(contact, rep_stats, examples, tmp_path):
 
 
 def test_finite_load_asperity_curves_are_drawn_and_labelled(contact):
-    """BGT and Greenwood (2006) at the paper's alpha = 2 and at the surfaces' own alpha, named in the legend."""
+    """BGT and Greenwood (2006) at the paper's alpha = 2 and, for one bandwidth, at the surfaces' own alpha."""
     from roughcontact.theory import asperity_kappa
 
     agg, stats, fit = contact
+    one = {"k_l": [16.0], "k_s": [32.0]}  # one family: its surfaces share one alpha
     for draw in (fig_area_load, fig_kappa):
-        fig = draw(agg, stats, fit)
+        fig = draw(agg.sel(one), stats.sel(one), fit.sel(one))
         labels = [t.get_text() for t in fig.legends[0].get_texts()]
-        alpha = float(agg["alpha"].mean())
+        alpha = float(agg["alpha"].sel(one).mean())
         for name in ("BGT", "Greenwood (2006)"):
             assert f"{name}, $\\alpha = 2$ (paper)" in labels, labels
             assert f"{name}, $\\alpha = {alpha:.2f}$ (these surfaces)" in labels, labels
+        # k_l = 4, 16 and k_s = 32, 128 together: no single "these surfaces" curve describes them all
+        labels = [t.get_text() for t in draw(agg, stats, fit).legends[0].get_texts()]
+        assert not any("these surfaces" in lab for lab in labels), labels
     ax = fig_kappa(agg, stats, fit).axes[0]
     drawn = [line.get_ydata() for line in ax.get_lines() if len(line.get_ydata()) == 120]
     a = np.linspace(0, float(stats["area_fraction_mean"].max()), 120)

@@ -288,14 +288,28 @@ BGT_LIMIT_LABEL = r"BGT small-load limit, $\kappa=\sqrt{2\pi}$"
 PAPER_ALPHA = 2.0
 
 
+#: Largest relative spread of the cases' Nayak alpha for which one "these surfaces" curve is drawn.
+ALPHA_SPREAD_MAX = 0.1
+
+
 def _asperity_alphas(agg: xr.Dataset) -> list[tuple[float, str, str]]:
     """``(alpha, colour, label)`` of the asperity curves: the paper's alpha = 2 and, when the
-    surfaces carry it and it differs, their own mean Nayak bandwidth (profile moments)."""
+    surfaces carry it, it differs and the cases share it (relative spread of the means per
+    (k_l, k_s) family at most :data:`ALPHA_SPREAD_MAX`), their own mean Nayak bandwidth
+    (profile moments).
+
+    Families of different bandwidth (k_s / k_l from 2 to 128 gives alpha from ~1.5 to ~30)
+    have no common alpha: their mean would be a curve that describes none of them.
+    """
     out = [(PAPER_ALPHA, "0.15", r"$\alpha = 2$ (paper)")]
     if "alpha" in agg:
         present = agg["case_present"] if "case_present" in agg else True
-        alpha = float(agg["alpha"].where(present).mean(skipna=True))
-        if np.isfinite(alpha) and alpha >= NAYAK_ALPHA_MIN and abs(alpha - PAPER_ALPHA) > 0.005:
+        alphas = agg["alpha"].where(present)
+        family = alphas.mean([d for d in alphas.dims if d not in ("k_l", "k_s")], skipna=True)
+        alpha = float(alphas.mean(skipna=True))
+        spread = (float(family.max(skipna=True)) - float(family.min(skipna=True))) / alpha if family.size else 0.0
+        if (np.isfinite(alpha) and alpha >= NAYAK_ALPHA_MIN and abs(alpha - PAPER_ALPHA) > 0.005
+                and spread <= ALPHA_SPREAD_MAX):
             out.append((alpha, "0.6", rf"$\alpha = {alpha:.2f}$ (these surfaces)"))
     return out
 
@@ -791,9 +805,11 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
             ax.set_visible(False)
         handles = _family_handles(kl_list, h_list, colour, marker, style) + theory
         if drew_fit:
+            loose = [ks for ks in ks_list if not _fit_constrained(fit, cel_kl, ks, estimator)]
             handles.append(Line2D([], [], color="0.45", lw=2.2, alpha=0.8, label=_fit_label(
                 "this run", estimator, cel_kl, _fit_constants(fit, cel_kl, ks_list[0], estimator)
-                if len(ks_list) == 1 else None, _fit_constrained(fit, cel_kl, ks_list[0], estimator))))
+                if len(ks_list) == 1 else None, not loose,
+                where=", ".join(_lambda_label(ks, "s") for ks in loose) if len(ks_list) > 1 else "")))
             handles.append(Patch(facecolor="0.9", edgecolor="none", label=(
                 f"fit window $A/A_0 \\in$ [{float(fit.attrs.get('window_low', np.nan)):g}, "
                 f"{float(fit.attrs.get('window_high', np.nan)):g}]")))
@@ -810,12 +826,13 @@ def _fit_constrained(fit: xr.Dataset, k_l: float, k_s: float, estimator: str) ->
     return bool(fit["constrained"].sel(sel).all())
 
 
-def _fit_label(who: str, estimator: str, k_l: float, consts, constrained: bool = True) -> str:
+def _fit_label(who: str, estimator: str, k_l: float, consts, constrained: bool = True, where: str = "") -> str:
     """Legend text of a fitted CEL curve, with its constants when one curve is drawn and the
-    data constrain them (else "not constrained": an interval wider than the value is no number)."""
+    data constrain them (else "not constrained": an interval wider than the value is no number;
+    ``where`` names the panels where they are not, when there are several)."""
     text = f"CEL, {who} ({estimator}), " + _lambda_label(k_l, "l")
     if not constrained:
-        return text + ": not constrained by the data"
+        return text + ": not constrained by the data" + (f" at {where}" if where else "")
     if consts is not None:
         text += rf": $\kappa/\sqrt{{2\pi}}$ = {consts[0] / KAPPA_BGT:.3f}, $\mu$ = {consts[1]:.2f}, " \
                 rf"$\beta$ = {consts[2]:.2f}"
@@ -945,8 +962,13 @@ def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
                 ax.plot(a, lines[-1], **_FIT_LAW_STYLE)
                 fit_handles.append(Line2D([], [], **{k: v for k, v in _FIT_LAW_STYLE.items() if k != "zorder"},
                                           label=_fit_law_label(consts, ks, len(ks_list) > 1, estimator, cel_kl)))
-            ylo = min(float(lo.min()), *(float(v.min()) for v in lines)) / 1.3
-            yhi = max(float(hi.max()), *(float(v.max()) for v in lines)) * 1.3
+            # the range follows the window means and the laws; a bar longer than a factor 3 runs
+            # off the axis rather than squeezing every other point into a sliver of it
+            means = np.sqrt(lo * hi)  # bars are y e^(-s/y) .. y e^(s/y) around the mean y
+            ylo = max(float(lo.min()), float(means.min()) / 3, min(float(v.min()) for v in lines) / 3)
+            ylo = min(ylo, *(float(v.min()) for v in lines)) / 1.3
+            yhi = min(float(hi.max()), float(means.max()) * 3)
+            yhi = max(yhi, *(float(v.max()) for v in lines)) * 1.3
             n_off += int(np.sum((y_raw < ylo) | (y_raw > yhi)))
             ax.set_ylim(ylo, yhi)
             ax.set_xlim(float(x_raw.min()) / 1.15, float(x_raw.max()) * 1.15)
