@@ -234,8 +234,8 @@ CEL_TEST = ("the paper's value (or range) overlaps our 95 % bootstrap interval o
 def cel_claims(fit: xr.Dataset, con: xr.Dataset) -> list[dict]:
     """kappa, mu and beta at (16, 32) one row each, the CEL at (16, 128) in one row; A/A0 at the final load."""
     rows = []
+    point = _cel_point(fit, 16.0, 32.0)
     for name, (plo, phi) in PAPER_CEL[(16.0, 32.0)].items():
-        point = _cel_point(fit, 16.0, 32.0)
         claim = f"{name} = paper value (λ_l = L/16, λ_s = L/32, pooled H)"
         if point is None:
             rows.append(_pending(claim, _paper_text(name, plo, phi), "the fit at k_l = 16, k_s = 32"))
