@@ -39,8 +39,6 @@ PAPER_CEL = {
                    "mu": (0.53, 0.57), "beta": (0.205, 0.215)},
     (16.0, 128.0): {"kappa": (PAPER_KAPPA, PAPER_KAPPA), "mu": (0.56, 0.56), "beta": (1.120, 1.172)},
 }
-#: Nayak's bandwidth of the BGT and Greenwood curves the paper's Fig. 5 draws (Carbone & Bottiglione 2008).
-PAPER_ALPHA = 2.0
 #: Areas at which kappa's decrease with A/A0 is tested (the paper's window, up to ~10 %).
 KAPPA_AREAS = (0.01, 0.02, 0.05, 0.1)
 #: Area fraction at which kappa is compared across cases (inside the paper's fit window).
@@ -191,12 +189,16 @@ def _h_direction_row(mean: xr.DataArray, kl_rep: float, ks_rep: float) -> dict:
         "smallest")
 
 
+def _kappa_by_area(con: xr.Dataset) -> xr.DataArray:
+    """Seed-mean kappa at each of :data:`KAPPA_AREAS`: dims ``(area, k_l, k_s, H)`` [1]."""
+    return xr.concat([kappa_at(con, a).mean("seed") for a in KAPPA_AREAS], dim="area")
+
+
 def _asymptote_claim(con: xr.Dataset) -> list[dict]:
     """kappa above sqrt(2 pi) anywhere in the fit window, for some (k_l, k_s, H)."""
     bgt = np.sqrt(2 * np.pi)
-    areas = (0.01, 0.02, 0.05, 0.1)
-    peak = xr.concat([kappa_at(con, a).mean("seed") for a in areas], dim="area").max("area")
-    low = xr.concat([kappa_at(con, a).mean("seed") for a in areas], dim="area").min("area")
+    by_area = _kappa_by_area(con)
+    peak, low = by_area.max("area"), by_area.min("area")
     frac_above = float((peak > bgt).mean())
     return [_row(
         "κ is not confined between the Persson (√(8/π) ≈ 1.60) and BGT (√(2π) ≈ 2.51) asymptotes",
@@ -286,7 +288,8 @@ def figure5_claims(con: xr.Dataset) -> list[dict]:
 
 
 def _kappa_decreasing_row(con: xr.Dataset) -> dict:
-    means = np.stack([kappa_at(con, a).mean("seed").values.ravel() for a in KAPPA_AREAS])
+    by_area = _kappa_by_area(con)
+    means = by_area.values.reshape(by_area.sizes["area"], -1)
     ok = np.all(np.isfinite(means), axis=0)
     falls = np.all(np.diff(means[:, ok], axis=0) < 0, axis=0)
     frac = float(falls.mean()) if falls.size else np.nan
@@ -322,7 +325,7 @@ def _asperity_row(con: xr.Dataset) -> dict:
     hp, e_star = float(sub["rms_slope"].where(sub["case_present"]).mean()), float(con.attrs.get("e_star", 1.0))
     inside = {}
     for model in ("bgt", "greenwood"):
-        theory = xr.apply_ufunc(lambda p, m=model: asperity_area(p, alpha=PAPER_ALPHA, rms_slope=hp,
+        theory = xr.apply_ufunc(lambda p, m=model: asperity_area(p, alpha=plots.PAPER_ALPHA, rms_slope=hp,
                                                                  e_star=e_star, model=m), p0)
         within = (abs(theory - mean) <= 1.96 * sd).where(np.isfinite(mean) & np.isfinite(sd))
         inside[model] = float(within.mean())
