@@ -965,7 +965,7 @@ def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
             # the range follows the window means and the laws; a bar longer than a factor 3 runs
             # off the axis rather than squeezing every other point into a sliver of it
             means = np.sqrt(lo * hi)  # bars are y e^(-s/y) .. y e^(s/y) around the mean y
-            ylo = max(float(lo.min()), float(means.min()) / 3, min(float(v.min()) for v in lines) / 3)
+            ylo = max(float(lo.min()), float(means.min()) / 3)
             ylo = min(ylo, *(float(v.min()) for v in lines)) / 1.3
             yhi = min(float(hi.max()), float(means.max()) * 3)
             yhi = max(yhi, *(float(v.max()) for v in lines)) * 1.3
