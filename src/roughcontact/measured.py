@@ -48,7 +48,8 @@ def _check_name(scene: str, field: str, name: str) -> None:
         _fail(scene, field, f"name {name!r} is not allowed: names start with a letter or digit and hold only "
                             "letters, digits, '.', '_' and '-' (they become file names)")
     if _GENERATED_STEM.match(name):
-        _fail(scene, field, f"name {name!r} looks like a generated case (kl.._ks.._H..); choose another name")
+        _fail(scene, field, f"name {name!r} looks like a generated case's or batch's file "
+                            "(kl.._ks.._H.._s.., kl.._H..); choose another name")
 
 
 def _from_glob(scene: str, pattern: str, check: bool) -> dict[str, dict]:
