@@ -123,18 +123,46 @@ def test_estimate_plan_ignores_measured_wisdom(n):
 
 
 
-def test_shipped_plans_are_loaded_before_planning():
+def test_shipped_plans_are_loaded_before_planning(monkeypatch):
     # The measured plans shipped with the package are in FFTW's store when a pair is planned.
     pyfftw = pytest.importorskip("pyfftw")
-    from roughcontact.fft import RealFFT2, shipped_wisdom
+    from roughcontact import fft
 
-    shipped = shipped_wisdom()
+    shipped = fft.shipped_wisdom()
     assert shipped is not None, "src/roughcontact/fftw_wisdom.json is missing"
-    RealFFT2((1024, 1024), backend="pyfftw", dtype=np.float32)
-    store = pyfftw.export_wisdom()
-    for mine, theirs in zip(shipped[:2], store[:2], strict=True):
-        entries = [line.strip() for line in mine.decode().splitlines()[1:-1]]
-        assert entries and all(e in theirs.decode() for e in entries)
+    stores = []
+    real_fftw = pyfftw.FFTW
+
+    def spy(*args, **kwargs):
+        stores.append(pyfftw.export_wisdom())
+        return real_fftw(*args, **kwargs)
+
+    monkeypatch.setattr(fft.pyfftw, "FFTW", spy)
+    fft.RealFFT2((1024, 1024), backend="pyfftw", dtype=np.float32)
+    assert len(stores) == 2  # forward and backward
+    for store in stores:
+        for mine, theirs in zip(shipped[:2], store[:2], strict=True):
+            entries = [line.strip() for line in mine.decode().splitlines()[1:-1]]
+            assert entries and all(e in theirs.decode() for e in entries)
+
+
+def test_planning_keeps_the_callers_wisdom():
+    """Another pyFFTW user's wisdom survives this package's planning, entry for entry."""
+    pyfftw = pytest.importorskip("pyfftw")
+    from roughcontact.fft import RealFFT2
+
+    pyfftw.forget_wisdom()
+    r = pyfftw.empty_aligned((24, 24), dtype="float64")
+    s = pyfftw.empty_aligned((24, 13), dtype="complex128")
+    pyfftw.FFTW(r, s, axes=(0, 1), flags=("FFTW_MEASURE",))  # the caller's measured plan
+    theirs = pyfftw.export_wisdom()
+    assert len(theirs[0].decode().splitlines()) > 2, "the caller's plan left no wisdom to keep"
+    RealFFT2((64, 64), backend="pyfftw")
+
+    def entries(store):  # FFTW's export order is its hash table's, not the plans'
+        return [sorted(w.decode().splitlines()) for w in store]
+
+    assert entries(pyfftw.export_wisdom()) == entries(theirs)
 
 
 def test_write_wisdom_round_trip(tmp_path, monkeypatch):

@@ -14,15 +14,16 @@ last bits. ESTIMATE's heuristics are slow for some shapes, though (a float32 pai
 N = 1024 took 1.8x the measured plan's time), so the package ships *wisdom*: plans
 measured once with ``FFTW_MEASURE`` for square grids of 32 to 2048 points per side, both
 precisions, one thread (:data:`WISDOM_FILE`, made by :func:`write_wisdom`). Every pair
-is planned after forgetting all other wisdom and importing the shipped one, and FFTW
-uses wisdom of a more patient planner for an ``FFTW_ESTIMATE`` request: the plan is then
-a function of the shipped file alone, whatever the machine's load. Where the shipped
+is planned with the shipped wisdom alone (any other wisdom in the process is set aside
+and restored afterwards), and FFTW uses wisdom of a more patient planner for an
+``FFTW_ESTIMATE`` request: the plan is then a function of the shipped file alone, whatever the machine's load. Where the shipped
 plans cannot be used (another FFTW version, a CPU without the SIMD they name), FFTW
 falls back to its ``FFTW_ESTIMATE`` heuristics, again the same in every process.
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import os
@@ -62,16 +63,26 @@ def shipped_wisdom() -> tuple[bytes, bytes, bytes] | None:
     return tuple(data[k].encode("ascii") for k in ("double", "single", "long_double"))
 
 
-def _use_shipped_wisdom() -> None:
-    """Forget every plan made so far and import the shipped ones (module docstring)."""
-    # FFTW reuses wisdom from a more patient planner: a plan timed with FFTW_MEASURE
-    # earlier in this process (by any pyFFTW user) would replace the deterministic
-    # choice. Forgetting it first keeps the plan a function of the shape and the
-    # shipped file alone; plans already made stay valid.
+@contextlib.contextmanager
+def _shipped_wisdom_only():
+    """Plan inside this block with the shipped wisdom alone (module docstring).
+
+    FFTW reuses wisdom from a more patient planner: a plan timed with FFTW_MEASURE
+    earlier in this process (by any pyFFTW user) would replace the deterministic
+    choice, so the store is emptied and given the shipped plans for the block. The
+    caller's wisdom is put back afterwards: this package must not erase the plans
+    another pyFFTW user in the same process has measured or imported.
+    """
+    saved = pyfftw.export_wisdom()
     pyfftw.forget_wisdom()
     wisdom = shipped_wisdom()
     if wisdom is not None:
         pyfftw.import_wisdom(wisdom)
+    try:
+        yield
+    finally:
+        pyfftw.forget_wisdom()
+        pyfftw.import_wisdom(saved)
 
 
 def write_wisdom(path: str | os.PathLike = WISDOM_FILE, sizes=WISDOM_SIZES, flags=("FFTW_MEASURE",)) -> Path:
@@ -160,16 +171,16 @@ class RealFFT2:
             self._spec = pyfftw.empty_aligned(self.spectral_shape, dtype=cdtype)
             self._spec_in = pyfftw.empty_aligned(self.spectral_shape, dtype=cdtype)
             self._real_out = pyfftw.empty_aligned(self.shape, dtype=self.dtype)
-            _use_shipped_wisdom()
             flags = tuple(PLANNER_FLAGS)
-            self._fwd = pyfftw.FFTW(
-                self._real, self._spec, axes=(0, 1), direction="FFTW_FORWARD",
-                flags=flags, threads=self.threads,
-            )
-            self._bwd = pyfftw.FFTW(
-                self._spec_in, self._real_out, axes=(0, 1), direction="FFTW_BACKWARD",
-                flags=flags, threads=self.threads,
-            )
+            with _shipped_wisdom_only():
+                self._fwd = pyfftw.FFTW(
+                    self._real, self._spec, axes=(0, 1), direction="FFTW_FORWARD",
+                    flags=flags, threads=self.threads,
+                )
+                self._bwd = pyfftw.FFTW(
+                    self._spec_in, self._real_out, axes=(0, 1), direction="FFTW_BACKWARD",
+                    flags=flags, threads=self.threads,
+                )
 
     def forward(self, a: np.ndarray) -> np.ndarray:
         """rfft2 of real ``a`` (n0, n1) -> complex (n0, n1//2+1), unnormalised."""
