@@ -16,9 +16,10 @@ measured once with ``FFTW_MEASURE`` for square grids of 32 to 2048 points per si
 precisions, one thread (:data:`WISDOM_FILE`, made by :func:`write_wisdom`). Every pair
 is planned with the shipped wisdom alone (any other wisdom in the process is set aside
 and restored afterwards), and FFTW uses wisdom of a more patient planner for an
-``FFTW_ESTIMATE`` request: the plan is then a function of the shipped file alone, whatever the machine's load. Where the shipped
-plans cannot be used (another FFTW version, a CPU without the SIMD they name), FFTW
-falls back to its ``FFTW_ESTIMATE`` heuristics, again the same in every process.
+``FFTW_ESTIMATE`` request: the plan is then a function of the shipped file alone,
+whatever the machine's load. Where the shipped plans cannot be used (another FFTW
+version, a CPU without the SIMD they name), FFTW falls back to its ``FFTW_ESTIMATE``
+heuristics, again the same in every process.
 """
 
 from __future__ import annotations

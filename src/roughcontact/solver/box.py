@@ -56,146 +56,206 @@ def box_solve(ws: Workspace, p0: float, tol: float, max_iter: int, cap: float, f
     only in projection steps; a CG step inside the face touches the full grid
     only for the transform, the update of ``w`` and two sign tests.
     """
-    n2 = ws.size
-    target = p0 * n2
-    scale = ws.scale(p0)
-    inv_norm = 1.0 / (target * scale)
-    P, w = ws.Pf, ws.wf
-    shape = ws.P.shape
-    if not fresh:
-        ws.refresh()
-    fresh = True
-    zero_m = np.empty(n2, dtype=bool)
-    cap_m = np.empty(n2, dtype=bool)
-    b1 = np.empty(n2, dtype=bool)
-    t = np.zeros(n2)  # CG direction, zero off the free set
-    precond = ws.method != "pk"
-    if precond:
-        ws.setup_method()
-    kt = np.empty(n2)
+    return BoxIteration(ws, p0, tol, max_iter, cap, fresh).run()
 
-    def active_sets():
-        np.less_equal(P, 0.0, out=zero_m)
-        np.greater_equal(P, cap, out=cap_m)
-        np.logical_or(zero_m, cap_m, out=b1)
-        np.logical_not(b1, out=b1)
-        return np.flatnonzero(b1)
 
-    idx = active_sets()
-    g_old = 0.0
-    restart = True
-    alpha = 0.0  # gradient-projection step length; 0 = not known yet
-    it = 0
-    guard = StallGuard(max_iter)
-    converged = False
-    residual = math.inf
+class BoxIteration:
+    """Gradient projection / CG with proportioning for one capped load step.
 
-    while True:
+    Flat views ``P`` and ``w`` of ``ws``'s pressure and gap (shape ``(n*n,)``);
+    boolean masks ``zero_m`` (``p = 0``) and ``cap_m`` (``p = H``) and the free
+    set ``idx`` (flat indices, ``0 < p < H``); ``t`` the CG direction, zero off
+    ``idx``. Each :meth:`_measure` leaves the zero-mean gap ``g_f`` on the free
+    set and the violations ``g_z`` (at ``p = 0``, indices ``vz``) and ``g_c``
+    (at ``p = H``, indices ``vc``) for the move that follows.
+    """
+
+    def __init__(self, ws: Workspace, p0: float, tol: float, max_iter: int, cap: float, fresh: bool):
+        n2 = ws.size
+        self.ws, self.tol, self.cap = ws, tol, cap
+        self.target = p0 * n2
+        self.scale = ws.scale(p0)
+        self.inv_norm = 1.0 / (self.target * self.scale)
+        self.P, self.w = ws.Pf, ws.wf
+        self.shape = ws.P.shape
+        if not fresh:
+            ws.refresh()
+        self.fresh = True
+        self.zero_m = np.empty(n2, dtype=bool)
+        self.cap_m = np.empty(n2, dtype=bool)
+        self.b1 = np.empty(n2, dtype=bool)
+        self.t = np.zeros(n2)  # CG direction, zero off the free set
+        self.precond = ws.method != "pk"
+        if self.precond:
+            ws.setup_method()
+        self.kt = np.empty(n2)
+        self.idx = self._active_sets()
+        self.g_old = 0.0
+        self.restart = True
+        self.alpha = 0.0  # gradient-projection step length; 0 = not known yet
+        self.it = 0
+        self.guard = StallGuard(max_iter)
+        self.converged = False
+
+    def _active_sets(self) -> np.ndarray:
+        """Masks of ``p = 0`` and ``p = H``; flat indices of the free set."""
+        np.less_equal(self.P, 0.0, out=self.zero_m)
+        np.greater_equal(self.P, self.cap, out=self.cap_m)
+        np.logical_or(self.zero_m, self.cap_m, out=self.b1)
+        np.logical_not(self.b1, out=self.b1)
+        return np.flatnonzero(self.b1)
+
+    def run(self) -> tuple[int, bool]:
+        """Iterate to convergence or a stop; ``(iterations, converged)``."""
+        while True:
+            residual = self._measure()
+            if residual <= self.tol:
+                if self.fresh:
+                    self.converged = True
+                    break
+                self.ws.refresh()
+                self.fresh = True
+                continue
+            if self.guard.stop(residual, self.it):
+                break
+            self.it += 1
+            # proportioning: sign violations at the bounds vs gradient on the face
+            chopped = dot(self.g_z, self.g_z) + dot(self.g_c, self.g_c)
+            self.G = dot(self.g_f, self.g_f)
+            if self.idx.size == 0 or chopped > self.G:
+                moved = self._projection_step()
+            else:
+                moved = self._cg_step()
+            if not moved:
+                break  # no descent left at this precision: the final check decides
+        if not self.fresh:
+            self.ws.refresh()
+        np.greater(self.ws.P, 0.0, out=self.ws.mask)
+        return self.it, self.converged
+
+    def _measure(self) -> float:
+        """Gap on the free set (zero mean there), violations at the bounds, residual."""
+        w, b1, idx = self.w, self.b1, self.idx
         nf = idx.size
-        p_f = P[idx]
-        g_f = w[idx]
+        self.p_f = self.P[idx]
+        g_f = self.g_f = w[idx]
         if nf:
             gbar = float(g_f.sum()) / nf
             g_f -= gbar
         else:
-            gbar = offset_no_free(w, zero_m, cap_m)
+            gbar = offset_no_free(w, self.zero_m, self.cap_m)
+        self.gbar = gbar
         # sign violations: g < 0 at p = 0, g > 0 at p = H
         np.less(w, gbar, out=b1)
-        b1 &= zero_m
-        vz = np.flatnonzero(b1)
-        g_z = w[vz] - gbar
+        b1 &= self.zero_m
+        self.vz = np.flatnonzero(b1)
+        self.g_z = w[self.vz] - gbar
         np.greater(w, gbar, out=b1)
-        b1 &= cap_m
-        vc = np.flatnonzero(b1)
-        g_c = w[vc] - gbar
-        pen = max(0.0, -float(g_z.min()) if vz.size else 0.0, -float(g_f.min()) if nf else 0.0)
-        e_cap = float(g_c.max()) if vc.size else 0.0
-        orth = dot(p_f, np.abs(g_f)) * inv_norm if nf else 0.0
-        residual = max(orth, pen / scale, e_cap / scale)
+        b1 &= self.cap_m
+        self.vc = np.flatnonzero(b1)
+        self.g_c = w[self.vc] - gbar
+        pen = max(0.0, -float(self.g_z.min()) if self.vz.size else 0.0, -float(g_f.min()) if nf else 0.0)
+        e_cap = float(self.g_c.max()) if self.vc.size else 0.0
+        orth = dot(self.p_f, np.abs(g_f)) * self.inv_norm if nf else 0.0
+        return max(orth, pen / self.scale, e_cap / self.scale)
 
-        if residual <= tol:
-            if fresh:
-                converged = True
-                break
-            ws.refresh()
-            fresh = True
-            continue
-        if guard.stop(residual, it):
-            break
-        it += 1
+    def _projection_step(self) -> bool:
+        """Gradient projection ``P(p - alpha g)`` with an exact line search on the segment.
 
-        # ---- proportioning: sign violations at the bounds vs gradient on the face
-        chopped = dot(g_z, g_z) + dot(g_c, g_c)
-        G = dot(g_f, g_f)
-        if nf == 0 or chopped > G:
-            # ---- gradient projection: P(p - alpha g), exact line search on the segment
-            g = w - gbar
-            if not alpha > 0.0:
-                r = np.zeros(n2)  # projected gradient: free part and violations
-                r[idx] = g_f
-                r[vz] = g_z
-                r[vc] = g_c
-                act = np.concatenate([idx, vz, vc])
-                r[act] -= r[act].mean()
-                kr = ws.apply_k(r.reshape(shape)).ravel()
-                rkr = dot(r, kr)
-                alpha = dot(r, r) / rkr if rkr > 0.0 else 1.0
-            step = project(P - alpha * g, target, cap)
-            step -= P
-            ks = ws.apply_k(step.reshape(shape)).ravel()
-            sks, gs = dot(step, ks), dot(g, step)
-            if not (sks > 0.0 and gs < 0.0 and math.isfinite(sks)):
-                break  # no descent left at this precision: report as not converged
-            theta = min(1.0, -gs / sks)
-            alpha = dot(step, step) / sks  # Barzilai-Borwein, for the next projection
-            if theta < 1.0:
-                step *= theta
-                ks *= theta
-            P += step
-            np.clip(P, 0.0, cap, out=P)
-            w += ks
-            idx = active_sets()
-            restart = True
-            fresh = False
-            continue
+        False when the segment is no descent direction (round-off level).
+        """
+        ws, P, cap = self.ws, self.P, self.cap
+        g = self.w - self.gbar
+        if not self.alpha > 0.0:
+            self.alpha = self._first_alpha()
+        step = project(P - self.alpha * g, self.target, cap)
+        step -= P
+        ks = ws.apply_k(step.reshape(self.shape)).ravel()
+        sks, gs = dot(step, ks), dot(g, step)
+        if not (sks > 0.0 and gs < 0.0 and math.isfinite(sks)):
+            return False
+        theta = min(1.0, -gs / sks)
+        self.alpha = dot(step, step) / sks  # Barzilai-Borwein, for the next projection
+        if theta < 1.0:
+            step *= theta
+            ks *= theta
+        P += step
+        np.clip(P, 0.0, cap, out=P)
+        self.w += ks
+        self._sets_changed()
+        return True
 
-        # ---- conjugate gradient on the face {0 < p < H}, direction zero-mean there;
-        # with a preconditioner, z = P_F M P_F g (mean over F removed) as in pk_solve
-        z_f, Gz = (_precondition(ws, idx, g_f) if precond else (g_f, G))
+    def _first_alpha(self) -> float:
+        """Cauchy step length ``r.r / r.Kr`` of the projected gradient ``r`` (one FFT pair)."""
+        r = np.zeros(self.ws.size)  # projected gradient: free part and violations
+        r[self.idx] = self.g_f
+        r[self.vz] = self.g_z
+        r[self.vc] = self.g_c
+        act = np.concatenate([self.idx, self.vz, self.vc])
+        r[act] -= r[act].mean()
+        kr = self.ws.apply_k(r.reshape(self.shape)).ravel()
+        rkr = dot(r, kr)
+        return dot(r, r) / rkr if rkr > 0.0 else 1.0
+
+    def _sets_changed(self) -> None:
+        """After a move that may change the bounds: new sets, CG restart, ``w`` updated."""
+        self.idx = self._active_sets()
+        self.restart = True
+        self.fresh = False
+
+    def _cg_step(self) -> bool:
+        """Conjugate gradient on the face ``{0 < p < H}``, direction zero-mean there.
+
+        With a preconditioner, ``z = P_F M P_F g`` (mean over ``F`` removed) as in
+        :class:`~.elastic.PKIteration`. False at a breakdown or a null direction.
+        """
+        idx, t, g_f, p_f = self.idx, self.t, self.g_f, self.p_f
+        z_f, Gz = (_precondition(self.ws, idx, g_f) if self.precond else (g_f, self.G))
         if not (Gz > 0.0 and math.isfinite(Gz)):
-            break  # breakdown at round-off level: the final check decides
-        if restart or g_old <= 0.0:
+            return False
+        if self.restart or self.g_old <= 0.0:
             t.fill(0.0)
             t_f = z_f
         else:
             t_f = t[idx]
-            t_f *= Gz / g_old
+            t_f *= Gz / self.g_old
             t_f += z_f
         t[idx] = t_f
-        g_old = Gz
-        restart = False
-        np.copyto(kt, ws.apply_k(t.reshape(shape)).ravel())
-        tkt, rt = dot(t_f, kt[idx]), dot(g_f, t_f)
+        self.g_old = Gz
+        self.restart = False
+        np.copyto(self.kt, self.ws.apply_k(t.reshape(self.shape)).ravel())
+        tkt, rt = dot(t_f, self.kt[idx]), dot(g_f, t_f)
         if not (tkt > 0.0 and rt > 0.0 and math.isfinite(tkt)):
-            break  # null direction: report as not converged
+            return False
         tau = rt / tkt
-        if not precond:
-            alpha = tau  # a step length along -g: a fair guess for the next projection
+        if not self.precond:
+            self.alpha = tau  # a step length along -g: a fair guess for the next projection
         y_f = p_f - tau * t_f
-        if y_f.min() > 0.0 and y_f.max() < cap:
-            P[idx] = y_f
-            kt *= tau
-            w -= kt
-            fresh = False
-            continue
-        # the CG step leaves the box: project the trial point onto the face
-        # {0 <= p_F <= H, sum p_F fixed} and search on the segment to it
+        if y_f.min() > 0.0 and y_f.max() < self.cap:
+            self.P[idx] = y_f
+            self.kt *= tau
+            self.w -= self.kt
+            self.fresh = False
+            return True
+        if not self._leave_box(y_f, t_f):
+            return False
+        self._sets_changed()
+        return True
+
+    def _leave_box(self, y_f: np.ndarray, t_f: np.ndarray) -> bool:
+        """The CG trial ``y_f`` left the box: move to the face's projection of it.
+
+        The trial is projected onto ``{0 <= p_F <= H, sum p_F fixed}`` with a line
+        search on the segment; when that is no descent, the CG step is truncated at
+        the first bound met along ``-t``. False when no bound lies ahead (round-off).
+        """
+        idx, p_f, cap, P = self.idx, self.p_f, self.cap, self.P
         x_f = project(y_f, float(p_f.sum()), cap)
         s_f = x_f - p_f
-        step = np.zeros(n2)
+        step = np.zeros(self.ws.size)
         step[idx] = s_f
-        ks = ws.apply_k(step.reshape(shape)).ravel()
-        sks, gs = dot(s_f, ks[idx]), dot(g_f, s_f)
+        ks = self.ws.apply_k(step.reshape(self.shape)).ravel()
+        sks, gs = dot(s_f, ks[idx]), dot(self.g_f, s_f)
         if sks > 0.0 and gs < 0.0:
             theta = 1.0 if gs + 0.5 * sks < 0.0 else -gs / sks  # the projected point if it lowers the energy
             if theta >= 1.0:
@@ -203,27 +263,18 @@ def box_solve(ws: Workspace, p0: float, tol: float, max_iter: int, cap: float, f
             else:
                 P[idx] = np.clip(p_f + theta * s_f, 0.0, cap)
                 ks *= theta
-            w += ks
-        else:
-            # truncated CG step: up to the first bound met along -t
-            with np.errstate(divide="ignore", invalid="ignore"):
-                lim = np.where(t_f > 0.0, p_f / t_f, np.where(t_f < 0.0, (p_f - cap) / t_f, np.inf))
-            j = int(np.argmin(lim))
-            tmax = float(lim[j])
-            if not (math.isfinite(tmax) and tmax >= 0.0):
-                break  # no bound ahead although the trial left the box: round-off, give up
-            new = np.clip(p_f - tmax * t_f, 0.0, cap)
-            new[j] = 0.0 if t_f[j] > 0.0 else cap
-            P[idx] = new
-            kt *= tmax
-            w -= kt
-        idx = active_sets()
-        restart = True
-        fresh = False
-
-    if not fresh:
-        ws.refresh()
-    np.greater(ws.P, 0.0, out=ws.mask)
-    return it, converged
-
-
+            self.w += ks
+            return True
+        # truncated CG step: up to the first bound met along -t
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lim = np.where(t_f > 0.0, p_f / t_f, np.where(t_f < 0.0, (p_f - cap) / t_f, np.inf))
+        j = int(np.argmin(lim))
+        tmax = float(lim[j])
+        if not (math.isfinite(tmax) and tmax >= 0.0):
+            return False  # no bound ahead although the trial left the box: round-off
+        new = np.clip(p_f - tmax * t_f, 0.0, cap)
+        new[j] = 0.0 if t_f[j] > 0.0 else cap
+        P[idx] = new
+        self.kt *= tmax
+        self.w -= self.kt
+        return True
