@@ -206,38 +206,13 @@ def summarize(results: Mapping[str, tuple[xr.Dataset, Sequence[float], Sequence[
     removes the N dependence of A/A0 at p_max (:func:`fit_perimeter_c`).
     """
     ref = next(s for s in settings if s["axis"] == "reference")
-    ref_agg = results[ref["label"]][0]
-    rows = []
-
-    def paired(agg, like):
-        return agg.sel(H=like["H"], seed=like["seed"])
-
-    for s in settings:
-        agg, times, rss = results[s["label"]]
-        dx = length / int(s["N"])
-        try:
-            vals = _metric_means(paired(agg, ref_agg), kappa_at=kappa_at, dx=dx, n_boot=n_boot, c=c)
-        except ValueError as exc:
-            raise ValueError(f"setting {s['label']}: {exc}; lower p_max/n_steps or change kappa_at") from None
-        rows.append(dict(label=s["label"], axis=s["axis"], value=s["value"], N=s["N"], tol=s["tol"],
-                         n_steps=s["n_steps"], n_seeds=int(ref_agg.sizes["seed"]),
-                         time=float(np.mean(times)), rss=float(np.max(rss)), vals=vals))
+    d = next(s for s in settings if s["axis"] == "defaults")
+    metric_kw = dict(kappa_at=kappa_at, n_boot=n_boot, c=c)
+    rows = _setting_rows(results, settings, results[ref["label"]][0], length, metric_kw)
     ref_vals = next(r["vals"] for r in rows if r["axis"] == "reference")
     for r in rows:
         r["err"] = {k: float(relative_error(r["vals"][k], ref_vals[k])) for k in METRICS}
-
-    d = next(s for s in settings if s["axis"] == "defaults")
-    agg_d, times_d, rss_d = results[d["label"]]
-    dx_d = length / int(d["N"])
-    all_vals = _metric_means(agg_d, kappa_at=kappa_at, dx=dx_d, n_boot=n_boot, c=c)
-    for k_text in seed_axis:
-        k = int(k_text)
-        sub = agg_d.isel(seed=slice(0, k))
-        vals = _metric_means(sub, kappa_at=kappa_at, dx=dx_d, n_boot=n_boot, c=c)
-        rows.append(dict(label=f"{d['label']}_seeds{k_text}", axis="seeds", value=k_text, N=d["N"], tol=d["tol"],
-                         n_steps=d["n_steps"], n_seeds=k,
-                         time=float(np.mean(times_d)) * k * agg_d.sizes["H"], rss=float(np.max(rss_d)), vals=vals,
-                         err={m: float(relative_error(vals[m], all_vals[m])) for m in METRICS}))
+    rows += _seed_rows(results[d["label"]], d, seed_axis, length, metric_kw)
 
     n_axis = [r for r in rows if r["axis"] in ("N", "reference")]
     if len(n_axis) > 1:
@@ -245,7 +220,46 @@ def summarize(results: Mapping[str, tuple[xr.Dataset, Sequence[float], Sequence[
                                 [length / int(r["N"]) for r in n_axis], ref_vals["area"])
     else:
         c_fit = float("nan")
+    return _summary_dataset(rows, attrs={
+        "reference": ref["label"], "defaults": d["label"], "kappa_at": float(kappa_at),
+        "perimeter_c": float(c), "perimeter_c_fit": c_fit, "length": float(length),
+        "length_units": cf_unit(length_unit, length_power=1)})
 
+
+def _setting_rows(results, settings, ref_agg: xr.Dataset, length: float, metric_kw: dict) -> list[dict]:
+    """One row per setting: its metrics on the reference's (H, seed) cases, time and memory."""
+    rows = []
+    for s in settings:
+        agg, times, rss = results[s["label"]]
+        dx = length / int(s["N"])
+        try:
+            vals = _metric_means(agg.sel(H=ref_agg["H"], seed=ref_agg["seed"]), dx=dx, **metric_kw)
+        except ValueError as exc:
+            raise ValueError(f"setting {s['label']}: {exc}; lower p_max/n_steps or change kappa_at") from None
+        rows.append(dict(label=s["label"], axis=s["axis"], value=s["value"], N=s["N"], tol=s["tol"],
+                         n_steps=s["n_steps"], n_seeds=int(ref_agg.sizes["seed"]),
+                         time=float(np.mean(times)), rss=float(np.max(rss)), vals=vals))
+    return rows
+
+
+def _seed_rows(result, d: Mapping, seed_axis: Sequence[str], length: float, metric_kw: dict) -> list[dict]:
+    """One row per entry of ``seed_axis``: the first k seeds at the defaults against all of them."""
+    agg_d, times_d, rss_d = result
+    dx_d = length / int(d["N"])
+    all_vals = _metric_means(agg_d, dx=dx_d, **metric_kw)
+    rows = []
+    for k_text in seed_axis:
+        k = int(k_text)
+        vals = _metric_means(agg_d.isel(seed=slice(0, k)), dx=dx_d, **metric_kw)
+        rows.append(dict(label=f"{d['label']}_seeds{k_text}", axis="seeds", value=k_text, N=d["N"], tol=d["tol"],
+                         n_steps=d["n_steps"], n_seeds=k,
+                         time=float(np.mean(times_d)) * k * agg_d.sizes["H"], rss=float(np.max(rss_d)), vals=vals,
+                         err={m: float(relative_error(vals[m], all_vals[m])) for m in METRICS}))
+    return rows
+
+
+def _summary_dataset(rows: list[dict], attrs: dict) -> xr.Dataset:
+    """The rows as a Dataset over ``variant`` (:func:`summarize`'s Returns)."""
     one = {"units": "1"}
     data = {
         "time_per_case": ("variant", [r["time"] for r in rows],
@@ -267,10 +281,7 @@ def summarize(results: Mapping[str, tuple[xr.Dataset, Sequence[float], Sequence[
         "n_steps": ("variant", [int(r["n_steps"]) for r in rows], {**one, "long_name": "load steps"}),
         "n_seeds": ("variant", [r["n_seeds"] for r in rows], {**one, "long_name": "seeds per H"}),
     }
-    return xr.Dataset(data, coords=coords, attrs={
-        "reference": ref["label"], "defaults": d["label"], "kappa_at": float(kappa_at),
-        "perimeter_c": float(c), "perimeter_c_fit": c_fit, "length": float(length),
-        "length_units": cf_unit(length_unit, length_power=1)})
+    return xr.Dataset(data, coords=coords, attrs=attrs)
 
 
 def markdown_table(summary: xr.Dataset) -> str:

@@ -361,6 +361,19 @@ def cluster_dataset(masks_or_pressures: Iterable, steps, length: float, bins=Non
     """
     length = _check_length(length)
     length_units = cf_unit(length_unit, length_power=1)
+    masks, steps = _fields_and_steps(masks_or_pressures, steps)
+    n_total = masks[0].size
+    edges = default_area_bins(n_total) if bins is None else _check_edges(bins)
+    boundary = "periodic" if periodic else "free"
+    attrs = {"length": length, "length_units": length_units, "n": int(masks[0].shape[0]),
+             "cluster_connectivity": 4,
+             "cluster_boundary": boundary}
+    return xr.Dataset(_cluster_variables(masks, length, periodic, edges),
+                      coords=_cluster_coords(steps, edges), attrs=attrs)
+
+
+def _fields_and_steps(masks_or_pressures: Iterable, steps) -> tuple[list[np.ndarray], np.ndarray]:
+    """Contact masks (one per field, one shared shape) and the matching 1-D ``steps``."""
     masks = [_to_mask(f, i) for i, f in enumerate(masks_or_pressures)]
     if not masks:
         raise ValueError("masks_or_pressures is empty: need at least one (n, n) field")
@@ -371,9 +384,13 @@ def cluster_dataset(masks_or_pressures: Iterable, steps, length: float, bins=Non
     if steps.ndim != 1 or steps.size != len(masks):
         raise ValueError(
             f"steps must be 1-D with one entry per field ({len(masks)}), got shape {steps.shape}")
-    n_total = masks[0].size
-    edges = default_area_bins(n_total) if bins is None else _check_edges(bins)
+    return masks, steps
 
+
+def _cluster_variables(masks: list[np.ndarray], length: float, periodic: bool,
+                       edges: np.ndarray) -> dict[str, xr.Variable]:
+    """Count, mean and largest area, and area histogram of each mask's clusters."""
+    n_total = masks[0].size
     count = np.zeros(len(masks), dtype=np.int64)
     mean_area = np.zeros(len(masks))
     max_area = np.zeros(len(masks))
@@ -384,20 +401,9 @@ def cluster_dataset(masks_or_pressures: Iterable, steps, length: float, bins=Non
         mean_area[k] = st["mean_area"]
         max_area[k] = st["max_area"]
         hist[k] = cluster_area_histogram(st["areas_pixels"], n_total, edges)
-
     u = DIMENSIONLESS_UNITS
     boundary = "periodic" if periodic else "free"
-    coords = {
-        "step": xr.Variable(("step",), steps, {"units": u, "long_name": "load step number"}),
-        "area_bin": xr.Variable(("area_bin",), np.sqrt(edges[:-1] * edges[1:]), {
-            "units": u, "long_name": "cluster area bin centre (geometric mean of edges) / A0"}),
-        "area_bin_low": xr.Variable(("area_bin",), edges[:-1].copy(), {
-            "units": u, "long_name": "cluster area bin lower edge / A0 (inclusive)"}),
-        "area_bin_high": xr.Variable(("area_bin",), edges[1:].copy(), {
-            "units": u,
-            "long_name": "cluster area bin upper edge / A0 (exclusive, inclusive for the last bin)"}),
-    }
-    data_vars = {
+    return {
         "cluster_count": xr.Variable(("step",), count, {
             "units": u, "long_name": f"number of contact clusters ({boundary}, 4-connected)"}),
         "cluster_mean_area": xr.Variable(("step",), mean_area, {
@@ -407,11 +413,21 @@ def cluster_dataset(masks_or_pressures: Iterable, steps, length: float, bins=Non
         "cluster_area_histogram": xr.Variable(("step", "area_bin"), hist, {
             "units": u, "long_name": "number of contact clusters per area bin"}),
     }
-    attrs = {"length": length, "length_units": length_units, "n": int(masks[0].shape[0]),
-             "cluster_connectivity": 4,
-             "cluster_boundary": boundary}
-    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 
+
+def _cluster_coords(steps: np.ndarray, edges: np.ndarray) -> dict[str, xr.Variable]:
+    """``step`` and the area bins (geometric centre and edges, units of A0)."""
+    u = DIMENSIONLESS_UNITS
+    return {
+        "step": xr.Variable(("step",), steps, {"units": u, "long_name": "load step number"}),
+        "area_bin": xr.Variable(("area_bin",), np.sqrt(edges[:-1] * edges[1:]), {
+            "units": u, "long_name": "cluster area bin centre (geometric mean of edges) / A0"}),
+        "area_bin_low": xr.Variable(("area_bin",), edges[:-1].copy(), {
+            "units": u, "long_name": "cluster area bin lower edge / A0 (inclusive)"}),
+        "area_bin_high": xr.Variable(("area_bin",), edges[1:].copy(), {
+            "units": u,
+            "long_name": "cluster area bin upper edge / A0 (exclusive, inclusive for the last bin)"}),
+    }
 
 __all__ = [
     "DEFAULT_N_BINS",
