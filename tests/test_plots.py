@@ -385,3 +385,14 @@ def test_representativity_shows_the_scale_free_epsilon_beside_the_paper_one(rep_
     stats_only = rep.drop_vars(["epsilon", "std_height"])
     texts = [t for ax in fig_representativity(stats_only).axes for t in (ax.get_ylabel(), ax.get_title())]
     assert not any(r"\varepsilon_\sigma" in t for t in texts), texts
+
+
+def test_the_longest_wavelength_reads_l_as_the_paper_writes_it():
+    # k_l = 1 is lambda_l = L (the paper's notation), not "L/1"; other k read L/k
+    dss, names = simulate_cel_cases(k_l=(1.0, 16.0), k_s=(32.0,), hurst=(0.84,), seeds=range(2),
+                                    point_noise=1e-4, seed_scatter=0.01, rng_seed=5)
+    agg = aggregate_contact(dss, names)
+    fig = fig_kappa(agg, seed_statistics(agg))
+    labels = [t.get_text() for leg in fig.legends for t in leg.get_texts()]
+    assert r"$\lambda_l = L$" in labels and r"$\lambda_l = L/16$" in labels
+    assert not any("L/1$" in text for text in labels)

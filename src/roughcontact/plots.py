@@ -195,7 +195,8 @@ def _fmt(v: float) -> str:
 
 
 def _lambda_label(k: float, which: str) -> str:
-    return rf"$\lambda_{which} = L/{_fmt(k)}$"
+    """``lambda = L/k`` as the paper writes it: ``L`` itself for ``k = 1``."""
+    return rf"$\lambda_{which} = L$" if float(k) == 1.0 else rf"$\lambda_{which} = L/{_fmt(k)}$"
 
 
 def _run_summary(agg: xr.Dataset, stats: xr.Dataset) -> str:
