@@ -286,6 +286,15 @@ def snakemake_report(cmd, ctx):
     assert (wd / out).stat().st_size > 10_000, f"`{cmd}` wrote a near-empty {out}"
 
 
+def python_runcost(cmd, ctx):
+    """``python -m roughcontact.runcost results/<scene>`` on a finished small scene: a row per rule."""
+    wd = ctx.finished()
+    res = subprocess.run([sys.executable, *shlex.split(cmd)[1:]], cwd=wd, capture_output=True, text=True,
+                         timeout=120)
+    _ok(res, f"`{cmd}` on a finished scene")
+    assert re.search(r"^\| contact \| 3 \| ", res.stdout, re.M), f"`{cmd}`: no row for the 3 contact jobs:\n{res.stdout}"
+
+
 def make_target(cmd, ctx):
     args = shlex.split(cmd)[1:]
     res = subprocess.run(["make", "-n", *args], cwd=REPO, capture_output=True, text=True, timeout=120)
@@ -392,6 +401,7 @@ COMMANDS = [
     (r"^snakemake\b.*\s--workflow-profile\s", snakemake_profile, "dry run with the profile"),
     (r"^snakemake(\s|$)", snakemake_dry_run, "dry run in a workflow copy"),
     (r"^make\s+[\w-]+$", make_target, "make -n TARGET"),
+    (r"^python -m roughcontact\.runcost\s", python_runcost, "a row per rule on a finished scene"),
     (r"^pip install -e ", pip_extra, "the extra exists"),
     (r"^\.\s+\S+/bin/activate$", activate_venv, "the Makefile makes that venv"),
 ]
@@ -403,7 +413,7 @@ BLOCKS = [
     ("yaml", _shipped_scene_excerpt, yaml_shipped_excerpt, "equals the scene in config/config.yaml"),
     ("yaml", lambda t: _yaml_header(t)[0] is None, yaml_other, "parses"),
 ]
-SLOW_HANDLERS = {snakemake_report, snakemake_force_one}  # a real run of a small scene first
+SLOW_HANDLERS = {snakemake_report, snakemake_force_one, python_runcost}  # a real run of a small scene first
 SLOW_HANDLERS |= {python_block}  # the README's snippet: a 512^2 solve, ~13 s of CPU (make test-fast < 3 min)
 
 

@@ -1,0 +1,130 @@
+"""What a run cost, from the benchmark files Snakemake wrote for its jobs.
+
+Every rule of the workflow has a ``benchmark:`` directive, so each finished job leaves a
+one-row TSV under ``results/{scene}/benchmarks/`` (``{rule}.tsv`` for a rule with one job,
+``{rule}/{case}.tsv`` for one per case) with its wall time ``s``, CPU time ``cpu_time``
+[s], peak resident memory ``max_rss`` [MiB] and ``mean_load`` [% of one core]. This
+module sums them per rule, so a study's cost is measured rather than estimated::
+
+    python -m roughcontact.runcost results/paper            # markdown table on stdout
+
+Only finished jobs have a file: on an interrupted run the table is the cost so far. A rerun
+job overwrites its file; files of jobs a later run no longer plans (an older grid or rule
+layout) stay and are counted, so measure a run in a fresh ``results/{scene}``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import statistics
+from dataclasses import dataclass
+from pathlib import Path
+
+#: Columns of Snakemake's benchmark TSV this module reads.
+COLUMNS = ("s", "cpu_time", "max_rss", "mean_load")
+
+
+@dataclass(frozen=True)
+class RuleCost:
+    """The summed cost of one rule's finished jobs (times in s, memory in MiB)."""
+
+    rule: str
+    jobs: int
+    cpu_total: float
+    cpu_mean: float
+    cpu_median: float
+    cpu_max: float
+    wall_mean: float
+    wall_total: float
+    max_rss: float
+
+
+def read_benchmark(path: str | Path) -> dict[str, float]:
+    """The first row of one Snakemake benchmark file, the :data:`COLUMNS` as floats.
+
+    Raises ValueError naming the file when it is empty, lacks a column or holds a value
+    that is not a finite number (Snakemake writes ``NA`` when it could not measure).
+    """
+    path = Path(path)
+    with path.open(newline="") as handle:
+        rows = list(csv.DictReader(handle, delimiter="\t"))
+    if not rows:
+        raise ValueError(f"{path}: empty benchmark file (no row under the header)")
+    row = {}
+    for col in COLUMNS:
+        if col not in rows[0]:
+            raise ValueError(f"{path}: no column {col!r}; a Snakemake benchmark file has {', '.join(COLUMNS)}")
+        try:
+            row[col] = float(rows[0][col])
+        except (TypeError, ValueError):
+            raise ValueError(f"{path}: {col} = {rows[0][col]!r} is not a number") from None
+        if not math.isfinite(row[col]):
+            raise ValueError(f"{path}: {col} = {rows[0][col]!r} is not a finite number")
+    return row
+
+
+def rule_files(benchmarks: str | Path) -> dict[str, list[Path]]:
+    """Benchmark files by rule: ``{rule}.tsv`` and ``{rule}/**/*.tsv`` under ``benchmarks``."""
+    root = Path(benchmarks)
+    if not root.is_dir():
+        raise ValueError(f"{root}: no such directory (a run's benchmarks are in results/<scene>/benchmarks)")
+    out: dict[str, list[Path]] = {}
+    for path in sorted(root.rglob("*.tsv")):
+        rel = path.relative_to(root)
+        rule = rel.stem if len(rel.parts) == 1 else rel.parts[0]
+        out.setdefault(rule, []).append(path)
+    return out
+
+
+def summarize(rows_by_rule: dict[str, list[dict[str, float]]]) -> list[RuleCost]:
+    """One :class:`RuleCost` per rule with at least one job, rules sorted by name."""
+    out = []
+    for rule in sorted(rows_by_rule):
+        rows = rows_by_rule[rule]
+        if not rows:
+            continue
+        cpu = [r["cpu_time"] for r in rows]
+        wall = [r["s"] for r in rows]
+        out.append(RuleCost(rule, len(rows), sum(cpu), statistics.fmean(cpu), statistics.median(cpu), max(cpu),
+                            statistics.fmean(wall), sum(wall), max(r["max_rss"] for r in rows)))
+    return out
+
+
+def run_cost(results: str | Path) -> list[RuleCost]:
+    """The cost per rule of the run whose outputs are in ``results`` (``results/{scene}``)."""
+    files = rule_files(Path(results) / "benchmarks")
+    return summarize({rule: [read_benchmark(p) for p in paths] for rule, paths in files.items()})
+
+
+def markdown(costs: list[RuleCost]) -> str:
+    """The costs as a markdown table, with a total row (CPU in hours there)."""
+    lines = ["| rule | jobs | CPU total [h] | CPU per job, mean / median / max [s] | wall per job, mean [s] "
+             "| peak RSS [MiB] |",
+             "|---|---:|---:|---:|---:|---:|"]
+    for c in costs:
+        lines.append(f"| {c.rule} | {c.jobs} | {c.cpu_total / 3600:.2f} | {c.cpu_mean:.1f} / {c.cpu_median:.1f} / "
+                     f"{c.cpu_max:.1f} | {c.wall_mean:.1f} | {c.max_rss:.0f} |")
+    if costs:
+        jobs = sum(c.jobs for c in costs)
+        cpu = sum(c.cpu_total for c in costs)
+        lines.append(f"| all | {jobs} | {cpu / 3600:.2f} | | | {max(c.max_rss for c in costs):.0f} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(prog="python -m roughcontact.runcost", description=__doc__.split("\n")[0])
+    ap.add_argument("results", help="a run's output folder, results/<scene>")
+    args = ap.parse_args(argv)
+    try:
+        costs = run_cost(args.results)
+    except ValueError as exc:
+        ap.exit(2, f"error: {exc}\n")
+    if not costs:
+        ap.exit(1, f"error: no benchmark files under {Path(args.results) / 'benchmarks'}: no job has finished\n")
+    print(markdown(costs), end="")
+
+
+if __name__ == "__main__":
+    main()

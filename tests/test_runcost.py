@@ -1,0 +1,67 @@
+"""roughcontact.runcost: a run's cost summed from Snakemake's benchmark files."""
+
+import pytest
+
+from roughcontact import runcost
+
+HEADER = "s\th:m:s\tmax_rss\tmax_vms\tmax_uss\tmax_pss\tio_in\tio_out\tmean_load\tcpu_time\n"
+
+
+def _bench(path, wall, cpu, rss, load=50.0):
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(HEADER + f"{wall}\t0:00:01\t{rss}\t1\t1\t1\t0\t0\t{load}\t{cpu}\n")
+
+
+@pytest.fixture
+def run(tmp_path):
+    b = tmp_path / "results" / "s" / "benchmarks"
+    _bench(b / "contact" / "kl16_ks32_H0.8_s0.tsv", 70.0, 40.0, 290.0)
+    _bench(b / "contact" / "kl16_ks32_H0.8_s1.tsv", 50.0, 30.0, 300.0)
+    _bench(b / "contact" / "kl1_ks32_H0.8_s0.tsv", 60.0, 110.0, 280.0)
+    _bench(b / "fit_cel.tsv", 90.0, 74.0, 155.0)
+    _bench(b / "accuracy" / "N512" / "kl16_ks32_H0.8_s0.tsv", 5.0, 4.0, 100.0)
+    return tmp_path / "results" / "s"
+
+
+def test_costs_are_summed_per_rule(run):
+    costs = {c.rule: c for c in runcost.run_cost(run)}
+    assert sorted(costs) == ["accuracy", "contact", "fit_cel"]
+    c = costs["contact"]
+    assert (c.jobs, c.cpu_total, c.cpu_max, c.max_rss) == (3, 180.0, 110.0, 300.0)
+    assert c.cpu_mean == pytest.approx(60.0) and c.cpu_median == 40.0 and c.wall_mean == pytest.approx(60.0)
+    assert costs["accuracy"].jobs == 1  # nested folders count for the rule that holds them
+
+
+def test_markdown_has_a_row_per_rule_and_a_total(run, capsys):
+    runcost.main([str(run)])
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].startswith("| rule | jobs | CPU total [h]")
+    assert out[3] == "| contact | 3 | 0.05 | 60.0 / 40.0 / 110.0 | 60.0 | 300 |"
+    assert out[-1] == "| all | 5 | 0.07 | | | 300 |"
+
+
+@pytest.mark.parametrize("body, message", [
+    ("", "empty benchmark file"),
+    ("s\tcpu_time\tmax_rss\n1\t2\t3\n", "no column 'mean_load'"),
+    (HEADER + "1\t0:00:01\tNA\t1\t1\t1\t0\t0\t50\t2\n", "max_rss = 'NA' is not a number"),
+    (HEADER + "1\t0:00:01\tnan\t1\t1\t1\t0\t0\t50\t2\n", "max_rss = 'nan' is not a finite number"),
+])
+def test_a_bad_benchmark_file_is_named(tmp_path, body, message):
+    path = tmp_path / "benchmarks" / "contact" / "x.tsv"
+    path.parent.mkdir(parents=True)
+    path.write_text(body)
+    with pytest.raises(ValueError, match=message) as err:
+        runcost.run_cost(tmp_path)
+    assert str(path) in str(err.value)
+
+
+def test_a_run_without_benchmarks_says_so(tmp_path, capsys):
+    with pytest.raises(SystemExit) as stop:
+        runcost.main([str(tmp_path)])
+    assert stop.value.code == 2
+    assert "no such directory" in capsys.readouterr().err
+    (tmp_path / "benchmarks").mkdir()
+    with pytest.raises(SystemExit) as stop:
+        runcost.main([str(tmp_path)])
+    assert stop.value.code == 1
+    assert "no job has finished" in capsys.readouterr().err
