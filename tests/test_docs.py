@@ -292,7 +292,8 @@ def python_runcost(cmd, ctx):
     res = subprocess.run([sys.executable, *shlex.split(cmd)[1:]], cwd=wd, capture_output=True, text=True,
                          timeout=120)
     _ok(res, f"`{cmd}` on a finished scene")
-    assert re.search(r"^\| contact \| 3 \| ", res.stdout, re.M), f"`{cmd}`: no row for the 3 contact jobs:\n{res.stdout}"
+    assert re.search(r"^\| contact \| 3 \| ", res.stdout, re.M), (
+        f"`{cmd}`: no row for the 3 contact jobs:\n{res.stdout}")
 
 
 def make_target(cmd, ctx):
