@@ -121,11 +121,11 @@ class BoxIteration:
             self.it += 1
             # proportioning: sign violations at the bounds vs gradient on the face
             chopped = dot(self.g_z, self.g_z) + dot(self.g_c, self.g_c)
-            self.G = dot(self.g_f, self.g_f)
-            if self.idx.size == 0 or chopped > self.G:
+            G = dot(self.g_f, self.g_f)
+            if self.idx.size == 0 or chopped > G:
                 moved = self._projection_step()
             else:
-                moved = self._cg_step()
+                moved = self._cg_step(G)
             if not moved:
                 break  # no descent left at this precision: the final check decides
         if not self.fresh:
@@ -203,14 +203,14 @@ class BoxIteration:
         self.restart = True
         self.fresh = False
 
-    def _cg_step(self) -> bool:
+    def _cg_step(self, G: float) -> bool:
         """Conjugate gradient on the face ``{0 < p < H}``, direction zero-mean there.
 
-        With a preconditioner, ``z = P_F M P_F g`` (mean over ``F`` removed) as in
+        ``G = g_f.g_f``. With a preconditioner, ``z = P_F M P_F g`` (mean over ``F`` removed) as in
         :class:`~.elastic.PKIteration`. False at a breakdown or a null direction.
         """
         idx, t, g_f, p_f = self.idx, self.t, self.g_f, self.p_f
-        z_f, Gz = (_precondition(self.ws, idx, g_f) if self.precond else (g_f, self.G))
+        z_f, Gz = (_precondition(self.ws, idx, g_f) if self.precond else (g_f, G))
         if not (Gz > 0.0 and math.isfinite(Gz)):
             return False
         if self.restart or self.g_old <= 0.0:
