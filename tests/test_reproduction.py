@@ -78,6 +78,22 @@ def test_asperity_row_inside_and_outside_the_seed_scatter():
     assert reproduction._asperity_row(con)["verdict"] == "pending"
 
 
+def test_asperity_row_skips_a_family_without_cases():
+    # a grid hole (k_s = 64, no case present) has no loads: it drops out, nothing raises
+    from roughcontact.asperity import asperity_area
+
+    def bgt(p):
+        return asperity_area(p, alpha=2.0, rms_slope=0.1, e_star=1.0, model="bgt")
+
+    full = _lambda_l_equal_l(bgt, 0.1)
+    hole = full.assign_coords(k_s=[64.0])
+    for name in ("area_fraction", "pressure", "kappa", "rms_slope"):
+        hole[name] = hole[name] * np.nan
+    hole["case_present"] = ~hole["case_present"]
+    both = xr.concat([full, hole], dim="k_s")
+    assert reproduction._asperity_row(both) == reproduction._asperity_row(full)
+
+
 def _fit(k_s, values, ci):
     consts = ["kappa", "mu", "beta"]
     shape = (1, 1, 1, 1, 3)
