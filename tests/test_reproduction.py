@@ -45,6 +45,80 @@ def test_h_direction_row_over_non_representative_families():
     assert reproduction._h_direction_row(mean, 16.0, 32.0)["verdict"] == "partly"
 
 
+def _grid(kappa, seeds=3):
+    """A full contact grid k_l {1, 16} x k_s {32} x H {0.2, 0.8}: kappa(k_l, H, seed), constant in A/A0."""
+    kl, ks, hs, steps = [1.0, 16.0], [32.0], [0.2, 0.8], 10
+    shape = (len(kl), len(ks), len(hs), seeds, steps)
+    area = np.broadcast_to(np.geomspace(0.01, 0.12, steps), shape).copy()
+    k = np.array([[[[kappa(a, h, s)] * steps for s in range(seeds)] for h in hs] for a in kl])[:, None]
+    dims = ("k_l", "k_s", "H", "seed", "step")
+    con = xr.Dataset({"area_fraction": (dims, area), "kappa": (dims, k)},
+                     coords={"k_l": kl, "k_s": ks, "H": hs, "seed": np.arange(seeds), "step": np.arange(1, steps + 1)})
+    return _with_presence(con)
+
+
+def _drop_cases(con, **where):
+    """``con`` with the cases at ``where`` (coordinate values) missing, as a partial run leaves them."""
+    out = con.copy(deep=True)
+    out["case_present"].loc[where] = False
+    for name in ("kappa", "area_fraction"):
+        out[name] = out[name].where(out["case_present"])
+    return out
+
+
+def _rows(con):
+    return {r["claim"]: r for r in reproduction.kappa_claims(con)}
+
+
+def test_kappa_claims_on_a_grid_hole_compare_only_complete_cells():
+    # kappa falls with H at k_l = 1 (2.4 -> 2.0) and rises at k_l = 16 (2.3 -> 2.4): on the full grid
+    # kappa rises with k_l (2.2 -> 2.35)
+    def kappa(kl, h, seed):
+        slope = 0.1 if kl == 16 else -0.4
+        return (2.3 if kl == 16 else 2.4) + (h - 0.2) / 0.6 * slope + 0.01 * seed
+
+    full = _grid(kappa)
+    assert _rows(full)["κ rises as λ_l falls (k_l rises)"]["verdict"] == "reproduced"
+    # (k_l, H) = (1, 0.8) not run: the k_l comparison uses H = 0.2 alone, exactly as a grid without H = 0.8
+    hole = _rows(_drop_cases(full, k_l=1.0, H=0.8))
+    sub = _rows(full.sel(H=[0.2]).pipe(lambda c: xr.concat([c, c.assign_coords(H=[0.8])], "H")))
+    row = hole["κ rises as λ_l falls (k_l rises)"]
+    assert row == sub["κ rises as λ_l falls (k_l rises)"] and row["verdict"] == "not"
+    # the H spread at k_l = 1 needs every H there: pending, naming the family
+    h_row = hole["κ(A/A0) independent of H for representative smooth surfaces, H-dependent otherwise"]
+    assert h_row["verdict"] == "pending" and "(1, 32)" in h_row["ours"]
+
+
+def test_a_cell_missing_one_seed_is_left_out():
+    # seed 2 alone at (16, 0.8) is far off: with it missing the cell drops out instead of averaging two seeds
+    def kappa(kl, h, seed):
+        return 2.0 + 0.1 * kl / 16 + (1.0 if (kl, h, seed) == (16, 0.8, 2) else 0.0)
+
+    con = _drop_cases(_grid(kappa), k_l=16.0, H=0.8, seed=2)
+    mean, _ = reproduction._seed_stats(reproduction.kappa_at(con), con)
+    assert np.isnan(float(mean.sel(k_l=16.0, H=0.8, k_s=32.0)))
+    assert np.isfinite(mean.sel(H=0.2)).all()
+    # the asymptote row counts its fraction over the cells present, not over the grid
+    row = reproduction._asymptote_claim(con)[0]
+    assert "for 0 % of" in row["ours"]
+
+
+def test_the_claim_table_says_when_the_grid_is_incomplete():
+    con = _grid(lambda kl, h, seed: 2.5 + 0.01 * seed)
+    con["pressure"] = con["area_fraction"] * 0.04
+    con["rms_slope"] = xr.full_like(con["kappa"].isel(step=0), 0.1)
+    fit = _fit(32.0, [reproduction.PAPER_KAPPA, 0.55, 0.21], 0.01)
+    rep = xr.Dataset({"epsilon": (("k_l", "k_s", "H", "seed"), np.ones((2, 1, 1, 2)))},
+                     coords={"k_l": [1.0, 16.0], "k_s": [32.0], "H": [0.8], "seed": [0, 1]})
+    rep["case_present"] = rep["epsilon"] > 0
+    complete = reproduction.claims(rep, con, fit)
+    assert not any("incomplete grid" in r["ours"] for r in complete)
+    partial = reproduction.claims(rep, _drop_cases(con, k_l=1.0, H=0.2, seed=0), fit)
+    noted = [r for r in partial if "incomplete grid: 11 of 12 cases" in r["ours"]]
+    assert noted and all(r["verdict"] != "pending" for r in noted)
+    assert not any("incomplete" in r["ours"] for r in partial[:2])  # representativity rows: another aggregate
+
+
 def _lambda_l_equal_l(area_of_p0, scatter):
     """Contact cases at k_l = 1, H = 0.68, 12 seeds: A/A0 = area_of_p0(p0) x (1 + scatter x seed offset)."""
     from roughcontact.asperity import asperity_area  # noqa: F401  (the model the row compares with)
