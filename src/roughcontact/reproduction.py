@@ -161,10 +161,12 @@ def kappa_claims(con: xr.Dataset) -> list[dict]:
         return [_pending(*KAPPA_CLAIMS["H"], needs), _pending(H_DIRECTION_CLAIM, "smaller", needs),
                 _pending(*KAPPA_CLAIMS["scatter"], needs), _pending(*KAPPA_CLAIMS["k_l"], needs)
                 ] + _asymptote_claim(con)
-    mean, std = _seed_stats(kappa_at(con), con)
+    kap = kappa_at(con)
+    mean, std = _seed_stats(kap, con)
+    sem = std / np.sqrt(kap.notnull().sum("seed"))
     kl_max, ks_min = float(mean.k_l.max()), float(mean.k_s.min())
     return [_h_spread_row(mean), _h_direction_row(_complete_along(mean, "H"), kl_max, ks_min),
-            _scatter_row(std / mean), _kl_row(mean)] + _asymptote_claim(con)
+            _scatter_row(std / mean), _kl_row(mean, sem)] + _asymptote_claim(con)
 
 
 def _h_spread_row(mean: xr.DataArray) -> dict:
@@ -206,17 +208,32 @@ def _scatter_row(cv: xr.DataArray) -> dict:
         "coefficient of variation over seeds, averaged over the other parameters; compares the ends")
 
 
-def _kl_row(mean: xr.DataArray) -> dict:
-    """The seed-, H- and k_s-mean kappa(0.05) against k_l."""
-    kl_mean = _complete_along(mean, "k_l").mean(["k_s", "H"])
+def _kl_row(mean: xr.DataArray, sem: xr.DataArray) -> dict:
+    """The seed-, H- and k_s-mean kappa(0.05) against k_l, with its standard error.
+
+    ``mean`` and ``sem`` (standard error of each cell's seed mean) have dims
+    ``(k_l, k_s, H)``. Cells are independent surfaces, so the error of an average over
+    ``m`` cells is sqrt(sum sem^2) / m. A fall between neighbouring k_l inside two standard
+    errors is a plateau within the seed scatter, not a contradiction.
+    """
+    full = _complete_along(mean, "k_l")
+    kl_mean = full.mean(["k_s", "H"])
     if kl_mean.isnull().any():
         return _pending(*KAPPA_CLAIMS["k_l"], "a (k_s, H) cell run for every k_l with every seed")
-    rises = bool(np.all(np.diff(kl_mean.values) > 0))
+    cells = full.notnull().sum(["k_s", "H"])
+    kl_sem = np.sqrt((sem**2).where(full.notnull()).sum(["k_s", "H"])) / cells
+    k, e = kl_mean.values, kl_sem.values
+    steps, step_err = np.diff(k), np.hypot(e[1:], e[:-1])
+    rises = bool(np.all(steps > 0))
+    plateau = bool(k[-1] - k[0] > 2 * np.hypot(e[-1], e[0]) and np.all(steps > -2 * step_err))
     return _row(
         *KAPPA_CLAIMS["k_l"],
-        "κ(0.05): " + ", ".join(f"{float(v):.3f} (k_l={float(k):g})" for k, v in zip(kl_mean.k_l.values,
-                                                                                       kl_mean.values, strict=True)),
-        "reproduced" if rises else "not", "seed-, H- and k_s-mean κ at A/A0 = 0.05 increasing in k_l")
+        "κ(0.05): " + ", ".join(f"{float(v):.3f} ± {float(d):.3f} (k_l={float(kl):g})"
+                                for kl, v, d in zip(kl_mean.k_l.values, k, e, strict=True)),
+        "reproduced" if rises else "partly" if plateau else "not",
+        "seed-, H- and k_s-mean κ at A/A0 = 0.05 (± its standard error over seeds) increasing in k_l; partly "
+        "when it rises from the smallest to the largest k_l by more than two standard errors and falls "
+        "between neighbours by less than two (a plateau inside the seed scatter)")
 
 
 H_DIRECTION_CLAIM = ("higher H gives smaller κ for non-representative (λ_l > L/16) or rough (λ_s < 32 Δx) "
@@ -237,7 +254,8 @@ def _h_direction_row(mean: xr.DataArray, kl_rep: float, ks_rep: float) -> dict:
             monotone.append(bool(np.all(np.diff(k) < 0)))
             names.append(f"({kl:g}, {ks:g}): {k[0]:.3f} → {k[-1]:.3f}")
     if not ends:
-        return _pending(H_DIRECTION_CLAIM, "smaller", "a (k_l, k_s) family besides the representative one")
+        return _pending(H_DIRECTION_CLAIM, "smaller", "a (k_l, k_s) family besides the representative one, run for every H with "
+                        "every seed")
     frac = float(np.mean(ends))
     return _row(
         H_DIRECTION_CLAIM, "smaller",
