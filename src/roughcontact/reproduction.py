@@ -254,8 +254,8 @@ def _h_direction_row(mean: xr.DataArray, kl_rep: float, ks_rep: float) -> dict:
             monotone.append(bool(np.all(np.diff(k) < 0)))
             names.append(f"({kl:g}, {ks:g}): {k[0]:.3f} → {k[-1]:.3f}")
     if not ends:
-        return _pending(H_DIRECTION_CLAIM, "smaller", "a (k_l, k_s) family besides the representative one, run for every H with "
-                        "every seed")
+        return _pending(H_DIRECTION_CLAIM, "smaller",
+                        "a (k_l, k_s) family besides the representative one, run for every H with every seed")
     frac = float(np.mean(ends))
     return _row(
         H_DIRECTION_CLAIM, "smaller",
