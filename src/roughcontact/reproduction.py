@@ -419,7 +419,11 @@ def _asperity_row(con: xr.Dataset) -> dict:
 
 
 def claims(rep: xr.Dataset, con: xr.Dataset, fit: xr.Dataset) -> list[dict]:
-    """Every claim row: ``claim, paper, ours, verdict, test``."""
+    """Every claim row: ``claim, paper, ours, verdict, test``.
+
+    On a partly run contact grid every contact row that is not pending says so in ``ours``
+    (how many cases it had); rows whose comparison lacks the cells it needs are pending.
+    """
     contact = kappa_claims(con) + figure5_claims(con) + cel_claims(fit, con)
     note = _coverage_note(con)
     for row in contact:
