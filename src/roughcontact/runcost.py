@@ -37,7 +37,6 @@ class RuleCost:
     cpu_median: float
     cpu_max: float
     wall_mean: float
-    wall_total: float
     max_rss: float
 
 
@@ -88,7 +87,7 @@ def summarize(rows_by_rule: dict[str, list[dict[str, float]]]) -> list[RuleCost]
         cpu = [r["cpu_time"] for r in rows]
         wall = [r["s"] for r in rows]
         out.append(RuleCost(rule, len(rows), sum(cpu), statistics.fmean(cpu), statistics.median(cpu), max(cpu),
-                            statistics.fmean(wall), sum(wall), max(r["max_rss"] for r in rows)))
+                            statistics.fmean(wall), max(r["max_rss"] for r in rows)))
     return out
 
 
