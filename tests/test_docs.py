@@ -296,6 +296,34 @@ def python_runcost(cmd, ctx):
         f"`{cmd}`: no row for the 3 contact jobs:\n{res.stdout}")
 
 
+def python_adopt(cmd, ctx):
+    """``python -m roughcontact.adopt results/<a> --scene <b>`` between two small runs of the shipped scenes.
+
+    Two of b's planned cases exist in a (as its contact rule writes them, no solve), one of them
+    also in b: the command adopts the other.
+    """
+    from test_adopt import _case_file
+
+    from roughcontact import adopt
+    from roughcontact.config import validate_config
+
+    args = shlex.split(cmd)[3:]
+    source, target = Path(args[0]), args[args.index("--scene") + 1]
+    wd = ctx._factory.mktemp("docs-adopt")
+    (wd / "config").mkdir()
+    shutil.copy(REPO / "config" / "config.yaml", wd / "config" / "config.yaml")
+    scene = validate_config({**ctx.shipped, "scene": target})["scenes"][target]
+    parameters = adopt.expected_parameters(scene)
+    for i, (name, case) in enumerate(sorted(adopt.planned_files(scene).items())[:2]):
+        _case_file(wd / source / "contact" / name, case, scene=source.name, parameters=parameters)
+        if i == 0:
+            _case_file(wd / "results" / target / "contact" / name, case, scene=target, parameters=parameters)
+    res = subprocess.run([sys.executable, *shlex.split(cmd)[1:]], cwd=wd, capture_output=True, text=True,
+                         timeout=120)
+    _ok(res, f"`{cmd}` between two small runs")
+    assert "adopted 1 case(s)" in res.stdout, f"`{cmd}`: {res.stdout}"
+
+
 def make_target(cmd, ctx):
     args = shlex.split(cmd)[1:]
     res = subprocess.run(["make", "-n", *args], cwd=REPO, capture_output=True, text=True, timeout=120)
@@ -403,6 +431,7 @@ COMMANDS = [
     (r"^snakemake(\s|$)", snakemake_dry_run, "dry run in a workflow copy"),
     (r"^make\s+[\w-]+$", make_target, "make -n TARGET"),
     (r"^python -m roughcontact\.runcost\s", python_runcost, "a row per rule on a finished scene"),
+    (r"^python -m roughcontact\.adopt\s", python_adopt, "adopts a case between two small runs"),
     (r"^pip install -e ", pip_extra, "the extra exists"),
     (r"^\.\s+\S+/bin/activate$", activate_venv, "the Makefile makes that venv"),
 ]
