@@ -65,3 +65,27 @@ def test_a_run_without_benchmarks_says_so(tmp_path, capsys):
         runcost.main([str(tmp_path)])
     assert stop.value.code == 1
     assert "no job has finished" in capsys.readouterr().err
+
+
+def test_adopted_cases_count_with_their_cost_in_the_source_run(run, capsys):
+    # two cases adopted from run "src" (one path absolute, one relative to the working directory)
+    src = run.parents[1] / "results" / "src"
+    _bench(src / "benchmarks" / "contact" / "kl2_ks32_H0.8_s0.tsv", 80.0, 45.0, 310.0)
+    _bench(src / "benchmarks" / "contact" / "kl2_ks32_H0.8_s1.tsv", 80.0, 35.0, 290.0)
+    _bench(src / "benchmarks" / "surface" / "kl2_ks32_H0.8_s1.tsv", 2.0, 1.5, 180.0)  # s0's surface: no file
+    (run / "adopted.tsv").write_text(
+        "case_file\tsource_file\tsource_sha256\tsha256\n"
+        f"kl2_ks32_H0.8_s0.nc\t{src / 'contact' / 'kl2_ks32_H0.8_s0.nc'}\ta\tb\n"
+        "kl2_ks32_H0.8_s1.nc\tresults/src/contact/kl2_ks32_H0.8_s1.nc\ta\tb\n")
+    costs = {c.rule: c for c in runcost.run_cost(run)}
+    assert costs["contact"].jobs == 3
+    assert (costs["contact (adopted)"].jobs, costs["contact (adopted)"].cpu_total) == (2, 80.0)
+    assert (costs["surface (adopted)"].jobs, costs["surface (adopted)"].cpu_total) == (1, 1.5)
+    runcost.main([str(run)])
+    out = capsys.readouterr().out.splitlines()
+    assert "| contact (adopted) | 2 | 0.02 | 40.0 / 40.0 / 45.0 | 80.0 | 310 |" in out
+    assert out[-1] == "| all | 8 | 0.09 | | | 310 |"
+    # a source without the case's benchmark file is named
+    (src / "benchmarks" / "contact" / "kl2_ks32_H0.8_s1.tsv").unlink()
+    with pytest.raises(ValueError, match=r"adopted.tsv: adopted case kl2_ks32_H0.8_s1.nc has no benchmark file"):
+        runcost.run_cost(run)

@@ -11,6 +11,10 @@ module sums them per rule, so a study's cost is measured rather than estimated::
 Only finished jobs have a file: on an interrupted run the table is the cost so far. A rerun
 job overwrites its file; files of jobs a later run no longer plans (an older grid or rule
 layout) stay and are counted, so measure a run in a fresh ``results/{scene}``.
+
+Cases the run adopted from another (:mod:`roughcontact.adopt`, listed in ``adopted.tsv``)
+have no benchmark file of their own: their cost where they were computed, the source
+run's benchmark file of each, is a row of its own (``contact (adopted)``).
 """
 
 from __future__ import annotations
@@ -77,6 +81,37 @@ def rule_files(benchmarks: str | Path) -> dict[str, list[Path]]:
     return out
 
 
+#: Per-case rules whose source-run benchmark files an adopted contact case brings: its solve
+#: (required) and the generation of the surface it solved (when the source run kept a file).
+ADOPTED_RULES = ("contact", "surface")
+
+
+def adopted_files(results: str | Path) -> dict[str, list[Path]]:
+    """Benchmark files of the cases ``results`` adopted, in their source runs, by ``"{rule} (adopted)"``.
+
+    A relative source path in the manifest is relative to the working directory that holds
+    ``results`` (``results/{scene}``). Raises ValueError naming the manifest and the case
+    when the source run has no benchmark file of the case's solve.
+    """
+    results = Path(results)
+    manifest = results / "adopted.tsv"
+    if not manifest.is_file():
+        return {}
+    out: dict[str, list[Path]] = {}
+    with manifest.open(newline="") as handle:
+        for row in csv.DictReader(handle, delimiter="\t"):
+            src = Path(row["source_file"])
+            src = src if src.is_absolute() else results.resolve().parents[1] / src
+            for rule in ADOPTED_RULES:
+                bench = src.parents[1] / "benchmarks" / rule / f"{src.stem}.tsv"
+                if bench.is_file():
+                    out.setdefault(f"{rule} (adopted)", []).append(bench)
+                elif rule == "contact":
+                    raise ValueError(f"{manifest}: adopted case {row['case_file']} has no benchmark file {bench} "
+                                     "in its source run")
+    return out
+
+
 def summarize(rows_by_rule: dict[str, list[dict[str, float]]]) -> list[RuleCost]:
     """One :class:`RuleCost` per rule with at least one job, rules sorted by name."""
     out = []
@@ -93,7 +128,7 @@ def summarize(rows_by_rule: dict[str, list[dict[str, float]]]) -> list[RuleCost]
 
 def run_cost(results: str | Path) -> list[RuleCost]:
     """The cost per rule of the run whose outputs are in ``results`` (``results/{scene}``)."""
-    files = rule_files(Path(results) / "benchmarks")
+    files = {**rule_files(Path(results) / "benchmarks"), **adopted_files(results)}
     return summarize({rule: [read_benchmark(p) for p in paths] for rule, paths in files.items()})
 
 
