@@ -134,11 +134,12 @@ def test_cli_dry_run_and_a_held_working_directory(tmp_path):
 
 @pytest.mark.slow
 def test_adopted_cases_leave_every_downstream_byte_as_a_full_run_makes_it(tmp_path):
-    # small runs; big runs one shared case, adopts the other, runs the rest: its aggregate and fit
-    # are byte for byte those of big run from scratch in another copy of the workflow
+    # small runs; big runs one shared case (s1), adopts the other (s0, the first input of the aggregate,
+    # whose attributes it starts from), runs the rest: its aggregate and fit are byte for byte those
+    # of big run from scratch in another copy of the workflow
     wd = copy_workflow(tmp_path / "wf", CONFIG)
     for args in (["-j2", "--config", "scene=small"],
-                 ["-j1", "--config", "scene=big", "--", "results/big/contact/kl2_ks8_H0.5_s0.nc"]):
+                 ["-j1", "--config", "scene=big", "--", "results/big/contact/kl2_ks8_H0.5_s1.nc"]):
         res = run_snakemake(wd, *args)
         assert res.returncode == 0, res.stderr[-3000:]
     res = _cli(wd, "results/small", "--scene", "big")

@@ -67,16 +67,26 @@ def test_a_run_without_benchmarks_says_so(tmp_path, capsys):
     assert "no job has finished" in capsys.readouterr().err
 
 
+def _adopted(run, name, source_file, content=b"copy"):
+    """A case file of ``run`` as adoption wrote it, and its manifest row."""
+    import hashlib
+
+    (run / "contact").mkdir(exist_ok=True)
+    (run / "contact" / name).write_bytes(content)
+    return f"{name}\t{source_file}\ta\t{hashlib.sha256(content).hexdigest()}\n"
+
+
 def test_adopted_cases_count_with_their_cost_in_the_source_run(run, capsys):
-    # two cases adopted from run "src" (one path absolute, one relative to the working directory)
+    # three cases adopted from run "src" (one path absolute, the others relative to the working directory)
     src = run.parents[1] / "results" / "src"
-    _bench(src / "benchmarks" / "contact" / "kl2_ks32_H0.8_s0.tsv", 80.0, 45.0, 310.0)
-    _bench(src / "benchmarks" / "contact" / "kl2_ks32_H0.8_s1.tsv", 80.0, 35.0, 290.0)
+    for seed, (cpu, rss) in enumerate([(45.0, 310.0), (35.0, 290.0), (99.0, 999.0)]):
+        _bench(src / "benchmarks" / "contact" / f"kl2_ks32_H0.8_s{seed}.tsv", 80.0, cpu, rss)
     _bench(src / "benchmarks" / "surface" / "kl2_ks32_H0.8_s1.tsv", 2.0, 1.5, 180.0)  # s0's surface: no file
-    (run / "adopted.tsv").write_text(
-        "case_file\tsource_file\tsource_sha256\tsha256\n"
-        f"kl2_ks32_H0.8_s0.nc\t{src / 'contact' / 'kl2_ks32_H0.8_s0.nc'}\ta\tb\n"
-        "kl2_ks32_H0.8_s1.nc\tresults/src/contact/kl2_ks32_H0.8_s1.nc\ta\tb\n")
+    rows = [_adopted(run, "kl2_ks32_H0.8_s0.nc", src / "contact" / "kl2_ks32_H0.8_s0.nc"),
+            _adopted(run, "kl2_ks32_H0.8_s1.nc", "results/src/contact/kl2_ks32_H0.8_s1.nc"),
+            _adopted(run, "kl2_ks32_H0.8_s2.nc", "results/src/contact/kl2_ks32_H0.8_s2.nc")]
+    (run / "adopted.tsv").write_text("case_file\tsource_file\tsource_sha256\tsha256\n" + "".join(rows))
+    (run / "contact" / "kl2_ks32_H0.8_s2.nc").write_bytes(b"solved here since")  # no longer the copy
     costs = {c.rule: c for c in runcost.run_cost(run)}
     assert costs["contact"].jobs == 3
     assert (costs["contact (adopted)"].jobs, costs["contact (adopted)"].cpu_total) == (2, 80.0)

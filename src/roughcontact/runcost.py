@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import hashlib
 import math
 import statistics
 from dataclasses import dataclass
@@ -86,12 +87,20 @@ def rule_files(benchmarks: str | Path) -> dict[str, list[Path]]:
 ADOPTED_RULES = ("contact", "surface")
 
 
+def _still_adopted(results: Path, row: dict) -> bool:
+    """Whether the case file of a manifest row is still the copy adoption wrote."""
+    target = results / Path(row["source_file"]).parent.name / row["case_file"]
+    return target.is_file() and hashlib.sha256(target.read_bytes()).hexdigest() == row["sha256"]
+
+
 def adopted_files(results: str | Path) -> dict[str, list[Path]]:
     """Benchmark files of the cases ``results`` adopted, in their source runs, by ``"{rule} (adopted)"``.
 
     A relative source path in the manifest is relative to the working directory that holds
-    ``results`` (``results/{scene}``). Raises ValueError naming the manifest and the case
-    when the source run has no benchmark file of the case's solve.
+    ``results`` (``results/{scene}``). A case whose file is no longer the adopted copy (its
+    sha256 differs: the run has since solved it itself, and has its own benchmark file) is
+    left out. Raises ValueError naming the manifest and the case when the source run has no
+    benchmark file of the case's solve.
     """
     results = Path(results)
     manifest = results / "adopted.tsv"
@@ -100,6 +109,8 @@ def adopted_files(results: str | Path) -> dict[str, list[Path]]:
     out: dict[str, list[Path]] = {}
     with manifest.open(newline="") as handle:
         for row in csv.DictReader(handle, delimiter="\t"):
+            if not _still_adopted(results, row):
+                continue
             src = Path(row["source_file"])
             src = src if src.is_absolute() else results.resolve().parents[1] / src
             for rule in ADOPTED_RULES:
