@@ -145,7 +145,9 @@ def test_adopted_cases_leave_every_downstream_byte_as_a_full_run_makes_it(tmp_pa
     res = _cli(wd, "results/small", "--scene", "big")
     assert res.returncode == 0 and "adopted 1 case(s)" in res.stdout, res.stderr
     res = run_snakemake(wd, "-n", "--config", "scene=big")
+    # neither the adopted case's solve nor its surface (kept by this scene, never made here) is planned
     assert res.returncode == 0 and _jobs(res.stdout)["contact"] == 2, res.stdout[-3000:]
+    assert _jobs(res.stdout)["surface"] == 2, res.stdout[-3000:]
     assert run_snakemake(wd, "-j2", "--config", "scene=big").returncode == 0
     fresh = copy_workflow(tmp_path / "fresh", CONFIG)
     assert run_snakemake(fresh, "-j2", "--config", "scene=big").returncode == 0
