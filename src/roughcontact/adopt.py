@@ -21,8 +21,9 @@ target's (in its place, so that the aggregate's bytes do not depend on which of 
 cases were adopted) and ``adopted_from`` names the source file. It is written
 atomically, and listed in ``results/{scene}/adopted.tsv`` (case file, source file and
 the sha256 of each). Snakemake then finds the output present and plans neither the job
-nor its temporary surface. The target's ``benchmarks/`` gets no file for an adopted
-case: :mod:`roughcontact.runcost` reports what the target run itself computed.
+nor its surface (temporary or kept). The target's ``benchmarks/`` gets no file for an
+adopted case: :mod:`roughcontact.runcost` reports its cost in the source run on a row of
+its own.
 
 Refuses while a Snakemake run holds the working directory: the jobs that run had
 planned would overwrite the copies.
