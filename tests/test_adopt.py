@@ -79,6 +79,24 @@ def test_adopts_the_missing_cases_with_only_scene_and_origin_changed(tmp_path):
     assert {p.name: p.read_bytes() for p in dst.rglob("*") if p.is_file()} == before
 
 
+def test_an_interrupted_adoption_lists_every_copy_it_made(tmp_path, monkeypatch):
+    src, dst = _runs(tmp_path, CASES, CASES[:1])
+    copy, calls = adopt.copy_case, []
+
+    def copy_then_fail(*args):
+        if calls:
+            raise KeyboardInterrupt
+        calls.append(args)
+        copy(*args)
+
+    monkeypatch.setattr(adopt, "copy_case", copy_then_fail)
+    with pytest.raises(KeyboardInterrupt):
+        adopt.adopt(src, dst, "big", SCENES["big"])
+    rows = list(csv.reader((dst / adopt.MANIFEST).open(), delimiter="\t"))[1:]
+    assert [r[0] for r in rows] == [_name(CASES[1])] and (dst / "contact" / _name(CASES[1])).is_file()
+    assert not (dst / "contact" / _name(CASES[2])).exists()
+
+
 def test_refuses_a_source_made_with_other_parameters(tmp_path):
     other = copy.deepcopy(adopt.expected_parameters(SCENES["big"]))
     other["solver"]["tol"] = 1e-6

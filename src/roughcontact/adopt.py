@@ -166,7 +166,10 @@ def copy_case(src: Path, dst: Path, scene_name: str) -> None:
 
 
 def _write_manifest(path: Path, rows: list[list[str]]) -> None:
-    old = list(csv.reader(path.open(newline=""), delimiter="\t"))[1:] if path.is_file() else []
+    old = []
+    if path.is_file():
+        with path.open(newline="") as handle:
+            old = list(csv.reader(handle, delimiter="\t"))[1:]
     merged = {row[0]: row for row in old + rows}
     buf = io.StringIO()
     writer = csv.writer(buf, delimiter="\t", lineterminator="\n")
@@ -194,11 +197,14 @@ def adopt(source: Path, target: Path, scene_name: str, scene: dict, *, trust_cod
     if dry_run or not todo.adopt:
         return todo
     rows = []
-    for name, src in todo.adopt.items():
-        dst = target / "contact" / name
-        copy_case(src, dst, scene_name)
-        rows.append([name, str(src), _sha256(src), _sha256(dst)])
-    _write_manifest(target / MANIFEST, rows)
+    try:
+        for name, src in todo.adopt.items():
+            dst = target / "contact" / name
+            copy_case(src, dst, scene_name)
+            rows.append([name, str(src), _sha256(src), _sha256(dst)])
+    finally:  # an interrupted adoption still lists every copy it made
+        if rows:
+            _write_manifest(target / MANIFEST, rows)
     return todo
 
 
