@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import hashlib
 import io
 import json
 import shutil
@@ -46,7 +45,7 @@ import yaml
 
 from . import __version__, params
 from .config import CASE_STEM, ConfigError, cases, validate_config
-from .io import atomic_output, write_text_atomic
+from .io import atomic_output, file_sha256, write_text_atomic
 
 #: Global attributes that may differ between two runs' files of one case.
 RUN_ATTRS = ("scene", "adopted_from")
@@ -148,10 +147,6 @@ def plan(source: Path, target: Path, scene: dict) -> Plan:
     return Plan(adopt, common, missing)
 
 
-def _sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
 def copy_case(src: Path, dst: Path, scene_name: str) -> None:
     """``src`` to ``dst`` atomically, ``scene`` set to ``scene_name`` in place and ``adopted_from`` added."""
     with atomic_output(dst) as tmp:
@@ -201,7 +196,7 @@ def adopt(source: Path, target: Path, scene_name: str, scene: dict, *, trust_cod
         for name, src in todo.adopt.items():
             dst = target / "contact" / name
             copy_case(src, dst, scene_name)
-            rows.append([name, str(src), _sha256(src), _sha256(dst)])
+            rows.append([name, str(src), file_sha256(src), file_sha256(dst)])
     finally:  # an interrupted adoption still lists every copy it made
         if rows:
             _write_manifest(target / MANIFEST, rows)

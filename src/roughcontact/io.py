@@ -56,6 +56,12 @@ def config_hash(obj) -> str:
     return hashlib.sha256(canonical_json(obj).encode()).hexdigest()[:16]
 
 
+def file_sha256(path: str | os.PathLike) -> str:
+    """Hex SHA-256 of a file's bytes, read in blocks (raises OSError if it cannot be read)."""
+    with open(path, "rb") as fh:
+        return hashlib.file_digest(fh, "sha256").hexdigest()
+
+
 def _check_labels(ds: xr.Dataset) -> None:
     missing = [
         name for name, var in list(ds.data_vars.items()) + list(ds.coords.items())

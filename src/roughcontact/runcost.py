@@ -21,11 +21,13 @@ from __future__ import annotations
 
 import argparse
 import csv
-import hashlib
 import math
 import statistics
 from dataclasses import dataclass
 from pathlib import Path
+
+from .adopt import MANIFEST
+from .io import file_sha256
 
 #: Columns of Snakemake's benchmark TSV this module reads.
 COLUMNS = ("s", "cpu_time", "max_rss", "mean_load")
@@ -90,7 +92,7 @@ ADOPTED_RULES = ("contact", "surface")
 def _still_adopted(results: Path, row: dict) -> bool:
     """Whether the case file of a manifest row is still the copy adoption wrote."""
     target = results / Path(row["source_file"]).parent.name / row["case_file"]
-    return target.is_file() and hashlib.sha256(target.read_bytes()).hexdigest() == row["sha256"]
+    return target.is_file() and file_sha256(target) == row["sha256"]
 
 
 def adopted_files(results: str | Path) -> dict[str, list[Path]]:
@@ -103,7 +105,7 @@ def adopted_files(results: str | Path) -> dict[str, list[Path]]:
     benchmark file of the case's solve.
     """
     results = Path(results)
-    manifest = results / "adopted.tsv"
+    manifest = results / MANIFEST
     if not manifest.is_file():
         return {}
     out: dict[str, list[Path]] = {}

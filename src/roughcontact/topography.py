@@ -22,7 +22,6 @@ what is wrong and what is allowed, and names the config field (``topography.<key
 
 from __future__ import annotations
 
-import hashlib
 import os
 import warnings
 from dataclasses import dataclass
@@ -32,6 +31,8 @@ from SurfaceTopography import Topography
 from SurfaceTopography.Exceptions import CannotDetectFileFormat, CorruptFile
 from SurfaceTopography.IO import open_topography, readers
 from SurfaceTopography.Support.UnitConversion import get_unit_conversion_factor, mangle_length_unit_ascii
+
+from .io import file_sha256
 
 #: The study's allowed length units (CF/UDUNITS spellings: micrometres are "um", not "µm").
 LENGTH_UNITS = ("m", "mm", "um", "nm")
@@ -148,8 +149,7 @@ def _sha256(name: str) -> str:
     if not os.path.isfile(name):
         raise TopographyError(f"{name}: the topography file does not exist (or is not a regular file)")
     try:
-        with open(name, "rb") as fh:
-            return hashlib.file_digest(fh, "sha256").hexdigest()
+        return file_sha256(name)
     except OSError as err:
         raise TopographyError(f"{name}: the topography file cannot be read ({err})") from err
 
