@@ -44,7 +44,7 @@ import numpy as np
 import yaml
 
 from . import __version__, params
-from .config import CASE_STEM, ConfigError, cases, validate_config
+from .config import ConfigError, cases, validate_config
 from .io import atomic_output, file_sha256, write_text_atomic
 
 #: Global attributes that may differ between two runs' files of one case.
@@ -69,13 +69,13 @@ class Plan:
 def expected_parameters(scene: dict) -> dict:
     """The ``scene_parameters`` a contact job of this validated scene records (JSON types)."""
     block = scene["contact"]
-    return json.loads(json.dumps(params.canonical({"surface": params.surface(block), **params.contact(block)})))
+    # as the contact script records it: the surface file's block, then the job's settings
+    return json.loads(json.dumps({"surface": params.surface(block), **params.contact(block)}))
 
 
 def planned_files(scene: dict) -> dict[str, tuple[float, float, float, int]]:
     """Each contact case file name the scene plans, with its case as numbers."""
-    return {CASE_STEM.format(k_l=c.k_l, k_s=c.k_s, H=c.H, seed=c.seed) + ".nc":
-            (float(c.k_l), float(c.k_s), float(c.H), int(c.seed)) for c in cases(scene["contact"])}
+    return {f"{c.stem}.nc": (float(c.k_l), float(c.k_s), float(c.H), int(c.seed)) for c in cases(scene["contact"])}
 
 
 def _attrs(ds: netCDF4.Dataset) -> dict:
