@@ -294,6 +294,8 @@ def python_runcost(cmd, ctx):
     _ok(res, f"`{cmd}` on a finished scene")
     assert re.search(r"^\| contact \| 3 \| ", res.stdout, re.M), (
         f"`{cmd}`: no row for the 3 contact jobs:\n{res.stdout}")
+    # every job of the current code logs its exact cost: no total is a sampled lower bound
+    assert "≥" not in res.stdout, f"`{cmd}`: jobs without their exact cost line:\n{res.stdout}"
 
 
 def python_adopt(cmd, ctx):

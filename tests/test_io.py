@@ -357,3 +357,30 @@ def test_netcdf_library_failure_is_named_too(tmp_path, monkeypatch):
     with pytest.raises(OutputFileError, match=r"c\.nc: could not be written \(NetCDF: HDF error\)"):
         write_dataset(ds, tmp_path / "c.nc", stage="surface", scene="s", scene_parameters={})
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_finished_job_logs_its_exact_cpu_and_memory_last(tmp_path):
+    """run_logged's last line: the process's CPU (its work included) and peak RSS, as runcost reads them."""
+    import logging
+    import time
+
+    from roughcontact.io import JOB_COST_PATTERN, run_logged
+
+    def work(logger):
+        start = time.process_time()
+        while time.process_time() - start < 0.3:  # 0.3 s of CPU, however long that takes
+            sum(range(1000))
+        logger.info("done")
+
+    before = time.process_time()
+    log = tmp_path / "job.log"
+    run_logged(log, work)
+    logging.getLogger("roughcontact").handlers.clear()
+    last = log.read_text().splitlines()[-1]
+    match = JOB_COST_PATTERN.search(last)
+    assert match, last
+    cpu, rss = float(match[1]), float(match[2])
+    # the whole process's CPU so far, its waited-for children included (a job's subprocesses)
+    now = os.times()
+    assert before + 0.3 - 0.01 <= cpu <= now.user + now.system + now.children_user + now.children_system + 0.01
+    assert 10.0 < rss < 1e5, f"peak RSS {rss} MiB is not a pytest process's size"

@@ -1,4 +1,4 @@
-"""roughcontact.runcost: a run's cost summed from Snakemake's benchmark files."""
+"""roughcontact.runcost: a run's cost summed from Snakemake's benchmark files and the jobs' logs."""
 
 import pytest
 
@@ -36,8 +36,41 @@ def test_markdown_has_a_row_per_rule_and_a_total(run, capsys):
     runcost.main([str(run)])
     out = capsys.readouterr().out.splitlines()
     assert out[0].startswith("| rule | jobs | CPU total [h]")
-    assert out[3] == "| contact | 3 | 0.05 | 60.0 / 40.0 / 110.0 | 60.0 | 300 |"
-    assert out[-1] == "| all | 5 | 0.07 | | | 300 |"
+    # no job logged its exact cost: every CPU total is Snakemake's sample, a lower bound
+    assert out[3] == "| contact | 3 | ≥ 0.05 | 60.0 / 40.0 / 110.0 | 0.05 | 60.0 | 300 |"
+    assert out[-3] == "| all | 5 | ≥ 0.07 | | 0.08 | | 300 |"
+    assert out[-1].startswith("≥: 5 of 5 jobs have no exact CPU line in their log")
+
+
+def _log(run, rel, *lines):
+    path = run / "logs" / rel
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("".join(f"2026-11-23 01:00:00,000 INFO {line}\n" for line in lines))
+
+
+def test_a_jobs_exact_cost_comes_from_the_last_line_of_its_log(run, capsys):
+    # Snakemake samples CPU every 30 s; run_logged's last log line is the exact figure
+    from roughcontact.io import JOB_COST_FORMAT
+
+    exact = JOB_COST_FORMAT.format(cpu=62.5, rss=333.0)
+    _log(run, "contact/kl16_ks32_H0.8_s0.log", "step 1/30", exact)
+    _log(run, "contact/kl16_ks32_H0.8_s1.log", exact, "ERROR a later failure")  # not the last line: sampled
+    _log(run, "contact/kl1_ks32_H0.8_s0.log", JOB_COST_FORMAT.format(cpu=111.0, rss=10.0))
+    _log(run, "fit_cel.log", JOB_COST_FORMAT.format(cpu=75.25, rss=150.0))
+    _log(run, "accuracy/N512/kl16_ks32_H0.8_s0.log", JOB_COST_FORMAT.format(cpu=4.5, rss=90.0))
+    costs = {c.rule: c for c in runcost.run_cost(run)}
+    c = costs["contact"]
+    assert (c.cpu_total, c.cpu_max, c.max_rss, c.sampled) == (62.5 + 30.0 + 111.0, 111.0, 333.0, 1)
+    assert (costs["fit_cel"].cpu_total, costs["fit_cel"].sampled) == (75.25, 0)
+    assert (costs["accuracy"].cpu_total, costs["accuracy"].max_rss) == (4.5, 90.0)  # nested folders too
+    runcost.main([str(run)])
+    out = capsys.readouterr().out.splitlines()
+    assert "| fit_cel | 1 | 0.02 | 75.2 / 75.2 / 75.2 | 0.03 | 90.0 | 150 |" in out
+    assert out[-1].startswith("≥: 1 of 5 jobs have no exact CPU line")
+    _log(run, "contact/kl16_ks32_H0.8_s1.log", JOB_COST_FORMAT.format(cpu=31.0, rss=1.0))
+    runcost.main([str(run)])
+    out = capsys.readouterr().out.splitlines()
+    assert out[-1] == "| all | 5 | 0.08 | | 0.08 | | 333 |" and "≥" not in "".join(out)
 
 
 @pytest.mark.parametrize("body, message", [
@@ -93,8 +126,14 @@ def test_adopted_cases_count_with_their_cost_in_the_source_run(run, capsys):
     assert (costs["surface (adopted)"].jobs, costs["surface (adopted)"].cpu_total) == (1, 1.5)
     runcost.main([str(run)])
     out = capsys.readouterr().out.splitlines()
-    assert "| contact (adopted) | 2 | 0.02 | 40.0 / 40.0 / 45.0 | 80.0 | 310 |" in out
-    assert out[-1] == "| all | 8 | 0.09 | | | 310 |"
+    assert "| contact (adopted) | 2 | ≥ 0.02 | 40.0 / 40.0 / 45.0 | 0.04 | 80.0 | 310 |" in out
+    assert out[-3] == "| all | 8 | ≥ 0.09 | | 0.12 | | 310 |"
+    # the source run's log of an adopted case gives its exact cost
+    from roughcontact.io import JOB_COST_FORMAT
+
+    _log(src, "contact/kl2_ks32_H0.8_s0.log", JOB_COST_FORMAT.format(cpu=70.0, rss=320.0))
+    adopted = {c.rule: c for c in runcost.run_cost(run)}["contact (adopted)"]
+    assert (adopted.cpu_total, adopted.max_rss, adopted.sampled) == (105.0, 320.0, 1)
     # a source without the case's benchmark file is named
     (src / "benchmarks" / "contact" / "kl2_ks32_H0.8_s1.tsv").unlink()
     with pytest.raises(ValueError, match=r"adopted.tsv: adopted case kl2_ks32_H0.8_s1.nc has no benchmark file"):

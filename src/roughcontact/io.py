@@ -24,6 +24,7 @@ import json
 import logging
 import os
 import re
+import resource
 import secrets
 import sys
 from collections.abc import Iterable, Iterator, Mapping
@@ -226,6 +227,23 @@ def read_dataset(path: str | os.PathLike, *, stage: str,
     return ds
 
 
+#: The last line :func:`run_logged` writes to a finished job's log: the job process's exact
+#: CPU time and peak memory. Snakemake's benchmark files sample a job every 30 s after its
+#: first 15 s (snakemake/snakemake#851), so their ``cpu_time`` misses up to 30 s of CPU a
+#: job; :mod:`roughcontact.runcost` reads this line instead where a log has it.
+JOB_COST_FORMAT = "job cost: {cpu:.3f} s CPU, {rss:.1f} MiB peak RSS"
+JOB_COST_PATTERN = re.compile(r"job cost: (\d+\.\d+) s CPU, (\d+\.\d+) MiB peak RSS$")
+
+
+def job_cost() -> tuple[float, float]:
+    """This process's CPU time [s] (user + system, its waited-for children included) and peak RSS [MiB]."""
+    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
+    # ru_maxrss is in KiB on Linux, in bytes on macOS
+    rss = max(own.ru_maxrss, kids.ru_maxrss) / (2**20 if sys.platform == "darwin" else 2**10)
+    return cpu, rss
+
+
 def run_logged(log_path: str | os.PathLike, main) -> None:
     """Run ``main(logger)`` for a workflow script, logging to ``log_path``.
 
@@ -233,7 +251,7 @@ def run_logged(log_path: str | os.PathLike, main) -> None:
     and config errors, and :class:`OutputFileError`: a full disk, a missing permission)
     are logged as one clear line and end the process with status 1
     instead of a traceback from deep inside a library; anything else is logged with its
-    traceback and re-raised.
+    traceback and re-raised. A job that succeeds ends its log with :data:`JOB_COST_FORMAT`.
     """
     logger = logging.getLogger("roughcontact")
     logger.setLevel(logging.INFO)
@@ -250,3 +268,5 @@ def run_logged(log_path: str | os.PathLike, main) -> None:
     except Exception:
         logger.exception("unexpected failure")
         raise
+    cpu, rss = job_cost()
+    logger.info(JOB_COST_FORMAT.format(cpu=cpu, rss=rss))

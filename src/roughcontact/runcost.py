@@ -1,4 +1,4 @@
-"""What a run cost, from the benchmark files Snakemake wrote for its jobs.
+"""What a run cost, from the logs and benchmark files Snakemake kept of its jobs.
 
 Every rule of the workflow has a ``benchmark:`` directive, so each finished job leaves a
 one-row TSV under ``results/{scene}/benchmarks/`` (``{rule}.tsv`` for a rule with one job,
@@ -8,13 +8,22 @@ module sums them per rule, so a study's cost is measured rather than estimated::
 
     python -m roughcontact.runcost results/paper            # markdown table on stdout
 
+Snakemake measures CPU and memory by sampling the job every 0.5 s for its first 15 s, then
+every 30 s (snakemake/snakemake#851), and keeps the last sample: ``cpu_time`` misses up to
+30 s of CPU a job, a quarter of the work of 40-120 s contact cases. So each job's CPU and
+peak memory are read from the last line of its log (``results/{scene}/logs/``, same path as
+the benchmark file), where :func:`roughcontact.io.run_logged` writes the job process's exact
+figures (getrusage). A job whose log lacks that line (run by older code) keeps the sampled
+value, a lower bound: its rule's CPU total is then printed with ``≥`` and counted in the
+note under the table. Wall time is exact either way.
+
 Only finished jobs have a file: on an interrupted run the table is the cost so far. A rerun
 job overwrites its file; files of jobs a later run no longer plans (an older grid or rule
 layout) stay and are counted, so measure a run in a fresh ``results/{scene}``.
 
 Cases the run adopted from another (:mod:`roughcontact.adopt`, listed in ``adopted.tsv``)
 have no benchmark file of their own: their cost where they were computed, the source
-run's benchmark file of each, is a row of its own (``contact (adopted)``).
+run's benchmark file (and log) of each, is a row of its own (``contact (adopted)``).
 """
 
 from __future__ import annotations
@@ -27,7 +36,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .adopt import MANIFEST
-from .io import file_sha256
+from .io import JOB_COST_PATTERN, file_sha256
 
 #: Columns of Snakemake's benchmark TSV this module reads.
 COLUMNS = ("s", "cpu_time", "max_rss", "mean_load")
@@ -45,6 +54,9 @@ class RuleCost:
     cpu_max: float
     wall_mean: float
     max_rss: float
+    wall_total: float = 0.0
+    #: jobs whose CPU and memory are Snakemake's samples (lower bounds): no exact line in their log
+    sampled: int = 0
 
 
 def read_benchmark(path: str | Path) -> dict[str, float]:
@@ -68,6 +80,38 @@ def read_benchmark(path: str | Path) -> dict[str, float]:
             raise ValueError(f"{path}: {col} = {rows[0][col]!r} is not a number") from None
         if not math.isfinite(row[col]):
             raise ValueError(f"{path}: {col} = {rows[0][col]!r} is not a finite number")
+    return row
+
+
+def log_of(bench: Path) -> Path:
+    """The log of the job whose benchmark file is ``bench``: ``logs/`` for ``benchmarks/``, ``.log`` for ``.tsv``."""
+    root = next((p for p in bench.parents if p.name == "benchmarks"), None)
+    if root is None:
+        raise ValueError(f"{bench}: not under a benchmarks/ folder")
+    return root.parent / "logs" / bench.relative_to(root).with_suffix(".log")
+
+
+def exact_cost(log: Path) -> tuple[float, float] | None:
+    """The exact (CPU [s], peak RSS [MiB]) a job's log ends with, or None (no log, no such line)."""
+    try:
+        lines = log.read_text(errors="replace").splitlines()
+    except OSError:
+        return None
+    match = JOB_COST_PATTERN.search(lines[-1]) if lines else None
+    return (float(match[1]), float(match[2])) if match else None
+
+
+def read_job(bench: Path) -> dict[str, float]:
+    """One job's cost: its benchmark row, with CPU and peak RSS from its log where exact.
+
+    ``exact`` is 1.0 where the log had the exact line, 0.0 where ``cpu_time`` and
+    ``max_rss`` are Snakemake's samples.
+    """
+    row = read_benchmark(bench)
+    cost = exact_cost(log_of(bench))
+    if cost is not None:
+        row["cpu_time"], row["max_rss"] = cost
+    row["exact"] = float(cost is not None)
     return row
 
 
@@ -134,29 +178,42 @@ def summarize(rows_by_rule: dict[str, list[dict[str, float]]]) -> list[RuleCost]
             continue
         cpu = [r["cpu_time"] for r in rows]
         wall = [r["s"] for r in rows]
+        sampled = sum(1 for r in rows if not r.get("exact", 0.0))
         out.append(RuleCost(rule, len(rows), sum(cpu), statistics.fmean(cpu), statistics.median(cpu), max(cpu),
-                            statistics.fmean(wall), max(r["max_rss"] for r in rows)))
+                            statistics.fmean(wall), max(r["max_rss"] for r in rows), sum(wall), sampled))
     return out
 
 
 def run_cost(results: str | Path) -> list[RuleCost]:
     """The cost per rule of the run whose outputs are in ``results`` (``results/{scene}``)."""
     files = {**rule_files(Path(results) / "benchmarks"), **adopted_files(results)}
-    return summarize({rule: [read_benchmark(p) for p in paths] for rule, paths in files.items()})
+    return summarize({rule: [read_job(p) for p in paths] for rule, paths in files.items()})
+
+
+def _hours(seconds: float, sampled: int) -> str:
+    return f"{'≥ ' if sampled else ''}{seconds / 3600:.2f}"
 
 
 def markdown(costs: list[RuleCost]) -> str:
-    """The costs as a markdown table, with a total row (CPU in hours there)."""
-    lines = ["| rule | jobs | CPU total [h] | CPU per job, mean / median / max [s] | wall per job, mean [s] "
-             "| peak RSS [MiB] |",
-             "|---|---:|---:|---:|---:|---:|"]
+    """The costs as a markdown table, with a total row (CPU and wall in hours there).
+
+    A CPU total marked ``≥`` includes jobs with only Snakemake's sampled CPU (a lower
+    bound); a note under the table counts them.
+    """
+    lines = ["| rule | jobs | CPU total [h] | CPU per job, mean / median / max [s] | wall total [h] "
+             "| wall per job, mean [s] | peak RSS [MiB] |",
+             "|---|---:|---:|---:|---:|---:|---:|"]
     for c in costs:
-        lines.append(f"| {c.rule} | {c.jobs} | {c.cpu_total / 3600:.2f} | {c.cpu_mean:.1f} / {c.cpu_median:.1f} / "
-                     f"{c.cpu_max:.1f} | {c.wall_mean:.1f} | {c.max_rss:.0f} |")
+        lines.append(f"| {c.rule} | {c.jobs} | {_hours(c.cpu_total, c.sampled)} | {c.cpu_mean:.1f} / "
+                     f"{c.cpu_median:.1f} / {c.cpu_max:.1f} | {c.wall_total / 3600:.2f} | {c.wall_mean:.1f} "
+                     f"| {c.max_rss:.0f} |")
     if costs:
-        jobs = sum(c.jobs for c in costs)
-        cpu = sum(c.cpu_total for c in costs)
-        lines.append(f"| all | {jobs} | {cpu / 3600:.2f} | | | {max(c.max_rss for c in costs):.0f} |")
+        jobs, sampled = sum(c.jobs for c in costs), sum(c.sampled for c in costs)
+        lines.append(f"| all | {jobs} | {_hours(sum(c.cpu_total for c in costs), sampled)} | | "
+                     f"{sum(c.wall_total for c in costs) / 3600:.2f} | | {max(c.max_rss for c in costs):.0f} |")
+        if sampled:
+            lines.append(f"\n≥: {sampled} of {jobs} jobs have no exact CPU line in their log (older code); "
+                         "theirs is Snakemake's sample, which misses up to 30 s of CPU a job.")
     return "\n".join(lines) + "\n"
 
 

@@ -254,7 +254,7 @@ def contact_mem_mb(n):
 
 
 def contact_runtime_min(n, n_steps):
-    """Wall-time request of one contact job [min]: 30 steps at N=1024 take well under a minute; x10 margin."""
+    """Wall-time request of one contact job [min]: 30 steps at N=1024 take 15-130 s (paper grid); x9 margin."""
     return max(5, int(10 * n_steps / 30 * (n / 1024) ** 2 * 2))
 
 
