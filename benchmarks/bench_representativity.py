@@ -7,8 +7,9 @@ and single-threaded numerical libraries, and reads back:
 
 - each job's **work**: the CPU and wall time of computing its surfaces, their eps and writing its
   file, from the ``computed ... in X s CPU, Y s wall`` line of the job's log;
-- each job's **whole CPU** as Snakemake's benchmark file has it (``cpu_time``, sampled by polling,
-  so it misses up to about a second of each job);
+- each job's **whole CPU**: the exact figure its log ends with (``getrusage``, read by
+  :func:`roughcontact.runcost.read_job`; Snakemake's own ``cpu_time`` samples a job every 30 s after
+  its first 15 s and can miss up to 30 s of it, snakemake/snakemake#851);
 - **start-up CPU**, measured directly: fresh interpreters that import what a representativity
   job imports (Snakemake's script preamble, ``roughcontact.datasets``, ``roughcontact.io``);
 - the **whole part**: wall time and CPU (``getrusage`` of the ``snakemake`` call and all its
@@ -27,7 +28,6 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import csv
 import datetime as dt
 import os
 import re
@@ -38,6 +38,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from roughcontact.runcost import read_job
 
 REPO = Path(__file__).resolve().parents[1]
 WORK_LINE = re.compile(r"computed (\d+) surfaces in ([0-9.]+) s CPU, ([0-9.]+) s wall")
@@ -85,15 +87,13 @@ def run_part(workdir: Path, scene: str, cores: int) -> tuple[float, float]:
 
 
 def job_times(workdir: Path, scene: str) -> list[dict]:
-    """Per representativity job: surfaces, work CPU and wall (its log), whole CPU and wall (its benchmark)."""
+    """Per representativity job: surfaces, work CPU and wall, whole CPU (its log), whole wall (its benchmark)."""
     rows = []
     for log in sorted((workdir / "results" / scene / "logs" / "representativity").glob("*.log")):
         match = WORK_LINE.search(log.read_text())
         if match is None:
             sys.exit(f"{log}: no 'computed ... surfaces in ... s CPU' line")
-        bench = workdir / "results" / scene / "benchmarks" / "representativity" / (log.stem + ".tsv")
-        with open(bench) as fh:
-            row = next(csv.DictReader(fh, delimiter="\t"))
+        row = read_job(workdir / "results" / scene / "benchmarks" / "representativity" / (log.stem + ".tsv"))
         rows.append({"job": log.stem, "surfaces": int(match[1]), "work_cpu": float(match[2]),
                      "work_wall": float(match[3]), "job_cpu": float(row["cpu_time"]), "job_wall": float(row["s"])})
     return rows
@@ -116,7 +116,7 @@ def report(rows: list[dict], wall: float, cpu: float, startup: float, cores: int
         "",
         f"Load before: {load_before}; after: {load()}. Python {sys.version.split()[0]}, {os.cpu_count()} CPUs.",
         "",
-        "| job | surfaces | work CPU [s] | job CPU, Snakemake benchmark [s] | work wall [s] | job wall [s] |",
+        "| job | surfaces | work CPU [s] | job CPU, its log [s] | work wall [s] | job wall [s] |",
         "|---|---:|---:|---:|---:|---:|",
     ]
     lines += [f"| {r['job']} | {r['surfaces']} | {r['work_cpu']:.2f} | {r['job_cpu']:.2f} | "
@@ -124,7 +124,7 @@ def report(rows: list[dict], wall: float, cpu: float, startup: float, cores: int
     lines += [
         "",
         f"- jobs: {n}, surfaces: {sum(r['surfaces'] for r in rows)}; work {work_cpu:.1f} s CPU "
-        f"(Snakemake's benchmark files: {job_cpu:.1f} s CPU for the whole jobs)",
+        f"(the whole jobs, their logs: {job_cpu:.1f} s CPU)",
         f"- start-up of one job, measured directly: {startup:.2f} s CPU; **{n} start-ups = "
         f"{100 * n * startup / work_cpu:.1f} % of the work**",
         f"- whole part (`snakemake` call: planning, jobs, aggregate): **{wall:.1f} s wall, {cpu:.1f} s CPU**; "
