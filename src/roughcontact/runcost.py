@@ -10,7 +10,7 @@ module sums them per rule, so a study's cost is measured rather than estimated::
 
 Snakemake measures CPU and memory by sampling the job every 0.5 s for its first 15 s, then
 every 30 s (snakemake/snakemake#851), and keeps the last sample: ``cpu_time`` misses up to
-30 s of CPU a job, a quarter of the work of 40-120 s contact cases. So each job's CPU and
+30 s of CPU a job (22 % of the paper grid's CPU, measured). So each job's CPU and
 peak memory are read from the last line of its log (``results/{scene}/logs/``, same path as
 the benchmark file), where :func:`roughcontact.io.run_logged` writes the job process's exact
 figures (getrusage). A job whose log lacks that line (run by older code) keeps the sampled
