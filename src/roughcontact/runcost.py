@@ -52,11 +52,14 @@ class RuleCost:
     cpu_mean: float
     cpu_median: float
     cpu_max: float
-    wall_mean: float
+    wall_total: float
     max_rss: float
-    wall_total: float = 0.0
     #: jobs whose CPU and memory are Snakemake's samples (lower bounds): no exact line in their log
-    sampled: int = 0
+    sampled: int
+
+    @property
+    def wall_mean(self) -> float:
+        return self.wall_total / self.jobs
 
 
 def read_benchmark(path: str | Path) -> dict[str, float]:
@@ -178,9 +181,9 @@ def summarize(rows_by_rule: dict[str, list[dict[str, float]]]) -> list[RuleCost]
             continue
         cpu = [r["cpu_time"] for r in rows]
         wall = [r["s"] for r in rows]
-        sampled = sum(1 for r in rows if not r.get("exact", 0.0))
+        sampled = sum(1 for r in rows if not r["exact"])
         out.append(RuleCost(rule, len(rows), sum(cpu), statistics.fmean(cpu), statistics.median(cpu), max(cpu),
-                            statistics.fmean(wall), max(r["max_rss"] for r in rows), sum(wall), sampled))
+                            sum(wall), max(r["max_rss"] for r in rows), sampled))
     return out
 
 
