@@ -206,6 +206,28 @@ def test_kappa_figure_names_paper_and_run_curves(contact):
                for line in ax.get_lines())
 
 
+def test_dpbar_legend_gives_no_number_for_an_unconstrained_fit(contact):
+    """mu and beta whose interval is wider than their value are "not constrained", never printed as numbers."""
+    agg, stats, fit = contact
+
+    def labels(f):
+        return [t.get_text() for t in fig_dpbar(agg, stats, f).legends[0].get_texts() if "this run" in t.get_text()]
+
+    assert fit["constrained"].sel(k_l=16.0, H_group="pooled", estimator="paper").all()
+    assert all("$\\mu$ = " in lab for lab in labels(fit)) and len(labels(fit)) == 2
+    loose = fit.copy(deep=True)
+    loose["constrained"].loc[{"k_l": 16.0, "k_s": 32.0, "H_group": "pooled", "estimator": "paper",
+                              "constant": "beta"}] = 0
+    first, second = labels(loose)
+    assert "32" in first and first.endswith("not constrained by the data") and "=" not in first.split(":")[-1]
+    assert "128" in second and "$\\mu$ = " in second
+    # kappa alone unconstrained leaves this figure's mu and beta as they are
+    loose = fit.copy(deep=True)
+    loose["constrained"].loc[{"k_l": 16.0, "k_s": 32.0, "H_group": "pooled", "estimator": "paper",
+                              "constant": "kappa"}] = 0
+    assert labels(loose) == labels(fit)
+
+
 def test_representativity_units_are_mathtext(rep_stats):
     """The units the pipeline writes for epsilon ("um^(-1/2)", cf_unit) appear as mathtext, not literally."""
     rep = rep_stats.copy()

@@ -819,11 +819,12 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
     return fig
 
 
-def _fit_constrained(fit: xr.Dataset, k_l: float, k_s: float, estimator: str) -> bool:
-    """Whether every constant of the H-pooled fit is constrained by the data (see fit.constrained_flags)."""
+def _fit_constrained(fit: xr.Dataset, k_l: float, k_s: float, estimator: str,
+                     constants: Sequence[str] = ("kappa", "mu", "beta")) -> bool:
+    """Whether ``constants`` of the H-pooled fit are all constrained by the data (see fit.constrained_flags)."""
     if "constrained" not in fit:
         return True
-    sel = {"k_l": k_l, "k_s": k_s, "H_group": "pooled", "estimator": estimator}
+    sel = {"k_l": k_l, "k_s": k_s, "H_group": "pooled", "estimator": estimator, "constant": list(constants)}
     return bool(fit["constrained"].sel(sel).all())
 
 
@@ -905,8 +906,11 @@ def _dpbar_family(ax, agg, stats, kl, ks, h, colour, marker, style, per_decade):
     return xr_[raw], yr_[raw], y[ok] - bars[0], y[ok] + bars[1]
 
 
-def _fit_law_label(consts, ks: float, many: bool, estimator: str, cel_kl: float) -> str:
+def _fit_law_label(consts, ks: float, many: bool, estimator: str, cel_kl: float, constrained: bool = True) -> str:
+    """Legend text of this run's fitted power law: its beta and mu, or "not constrained" (as _fit_label)."""
     where = _lambda_label(cel_kl, "l") + (", " + _lambda_label(ks, "s") if many else "")
+    if not constrained:  # an interval wider than the value is no number
+        return rf"this run (fit: {estimator}), {where}: $\beta$, $\mu$ not constrained by the data"
     return rf"this run (fit: {estimator}), {where}: $\beta$ = {consts[2]:.3f}, $\mu$ = {consts[1]:.3f}"
 
 
@@ -924,7 +928,8 @@ def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
     faint markers: the seed mean of the pointwise finite differences
     (``dpbar_dp0_mean``); those outside the axis range are counted in the legend. Lines:
     the paper's ``0.21 (A0/A)^0.55`` (black dashed) and, with ``fit``, the fitted
-    ``beta (A0/A)^mu`` of ``fit_k_l`` (thick grey), their constants in the legend.
+    ``beta (A0/A)^mu`` of ``fit_k_l`` (thick grey), their constants in the legend, or "not
+    constrained" where the fit's 95 % interval of mu or beta is wider than its value.
 
     Parameters
     ----------
@@ -962,7 +967,9 @@ def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
                 lines.append(cel_dpbar_dp0(a, mu=consts[1], beta=consts[2]))
                 ax.plot(a, lines[-1], **_FIT_LAW_STYLE)
                 fit_handles.append(Line2D([], [], **{k: v for k, v in _FIT_LAW_STYLE.items() if k != "zorder"},
-                                          label=_fit_law_label(consts, ks, len(ks_list) > 1, estimator, cel_kl)))
+                                          label=_fit_law_label(consts, ks, len(ks_list) > 1, estimator, cel_kl,
+                                                               _fit_constrained(fit, cel_kl, ks, estimator,
+                                                                                ("mu", "beta")))))
             # the range follows the window means and the laws; a bar longer than a factor 3 runs
             # off the axis rather than squeezing every other point into a sliver of it
             means = np.sqrt(lo * hi)  # bars are y e^(-s/y) .. y e^(s/y) around the mean y
