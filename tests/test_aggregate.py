@@ -60,6 +60,17 @@ def test_combine_builds_the_case_grid():
     np.testing.assert_array_equal(got.values, one["area_fraction"].values.ravel())
 
 
+def test_combine_keeps_the_global_attrs_every_case_shares():
+    """Kept: a value equal in every case (NaN included, a NaN is the same value); dropped: one that differs."""
+    dss, names = _cases()
+    dss = [ds.assign_attrs(tol=1e-8, note="same", missing=np.nan, grid=[1, 2], seed_attr=i)
+           for i, ds in enumerate(dss)]
+    dss[3] = dss[3].assign_attrs(note="other", grid=[1, 2, 3])
+    attrs = combine_cases(dss, names).attrs
+    assert attrs["tol"] == 1e-8 and np.isnan(attrs["missing"])
+    assert not {"note", "grid", "seed_attr"} & set(attrs)
+
+
 def test_combos_with_k_l_not_below_k_s_are_holes_not_errors():
     dss, names = _cases(k_l=(4.0, 16.0), k_s=(8.0, 32.0))  # (16, 8) is not a case
     ds = combine_cases(dss, names)

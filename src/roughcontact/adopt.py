@@ -45,7 +45,7 @@ import yaml
 
 from . import __version__, params
 from .config import ConfigError, cases, validate_config
-from .io import atomic_output, file_sha256, write_text_atomic
+from .io import atomic_output, file_sha256, same_value, write_text_atomic
 
 #: Global attributes that may differ between two runs' files of one case.
 RUN_ATTRS = ("scene", "adopted_from")
@@ -103,15 +103,8 @@ def check_source(path: Path, case: tuple, expected: dict) -> None:
                          f"job would use {json.dumps(expected, sort_keys=True)}")
 
 
-def _same_value(a, b) -> bool:
-    if isinstance(a, str) or isinstance(b, str):
-        return a == b
-    a, b = np.asarray(a), np.asarray(b)
-    return a.shape == b.shape and bool(np.array_equal(a, b, equal_nan=np.issubdtype(a.dtype, np.floating)))
-
-
 def _same_attrs(a: dict, b: dict) -> bool:
-    return list(a) == list(b) and all(_same_value(a[k], b[k]) for k in a)
+    return list(a) == list(b) and all(same_value(a[k], b[k]) for k in a)
 
 
 def same_case(a: Path, b: Path) -> str | None:
@@ -125,7 +118,7 @@ def same_case(a: Path, b: Path) -> str | None:
             u, v = x[name], y[name]
             if not _same_attrs(_attrs(u), _attrs(v)):
                 return f"attributes of {name}"
-            if u.dtype != v.dtype or not _same_value(np.ma.getdata(u[:]), np.ma.getdata(v[:])):
+            if u.dtype != v.dtype or not same_value(np.ma.getdata(u[:]), np.ma.getdata(v[:])):
                 return f"values of {name}"
     return None
 

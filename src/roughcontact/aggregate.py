@@ -26,6 +26,8 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 import xarray as xr
 
+from .io import same_value
+
 #: The four case dimensions, in the order of every combined array.
 CASE_DIMS = ("k_l", "k_s", "H", "seed")
 #: The case dimension of measured surfaces: one name per topography file.
@@ -67,13 +69,6 @@ def _normalise_expected(expected) -> set[tuple[float, float, float, int]]:
         kl, ks, h, s = item
         out.add((float(kl), float(ks), float(h), int(s)))
     return out
-
-
-def _attrs_equal(a, b) -> bool:
-    try:
-        return bool(np.array_equal(np.asarray(a), np.asarray(b)))
-    except Exception:  # pragma: no cover - exotic attribute types
-        return a == b
 
 
 def _check_like_first(ds: xr.Dataset, name: str, ref: xr.Dataset, ref_name: str, kind: str,
@@ -227,7 +222,7 @@ def _shared_attrs(datasets: Sequence[xr.Dataset]) -> dict:
     ref = datasets[0]
     attrs = {}
     for key_a, val in ref.attrs.items():
-        if all(key_a in ds.attrs and _attrs_equal(ds.attrs[key_a], val) for ds in datasets):
+        if all(key_a in ds.attrs and same_value(ds.attrs[key_a], val) for ds in datasets):
             attrs[key_a] = val
     return attrs
 

@@ -227,6 +227,17 @@ def read_dataset(path: str | os.PathLike, *, stage: str,
     return ds
 
 
+def same_value(a, b) -> bool:
+    """Whether two attribute or variable values are equal: strings as strings, anything else
+    as arrays of one shape with equal elements, NaN equal to NaN (a NaN is the same value
+    in two files, not a difference)."""
+    if isinstance(a, str) or isinstance(b, str):
+        return a == b
+    a, b = np.asarray(a), np.asarray(b)
+    floats = np.issubdtype(a.dtype, np.floating) and np.issubdtype(b.dtype, np.floating)
+    return a.shape == b.shape and bool(np.array_equal(a, b, equal_nan=floats))
+
+
 #: The last line :func:`run_logged` writes to a finished job's log: the job process's exact
 #: CPU time and peak memory. Snakemake's benchmark files sample a job every 30 s after its
 #: first 15 s (snakemake/snakemake#851), so their ``cpu_time`` misses up to 30 s of CPU a
