@@ -966,10 +966,10 @@ def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
             if consts is not None:
                 lines.append(cel_dpbar_dp0(a, mu=consts[1], beta=consts[2]))
                 ax.plot(a, lines[-1], **_FIT_LAW_STYLE)
+                constrained = _fit_constrained(fit, cel_kl, ks, estimator, ("mu", "beta"))
+                label = _fit_law_label(consts, ks, len(ks_list) > 1, estimator, cel_kl, constrained)
                 fit_handles.append(Line2D([], [], **{k: v for k, v in _FIT_LAW_STYLE.items() if k != "zorder"},
-                                          label=_fit_law_label(consts, ks, len(ks_list) > 1, estimator, cel_kl,
-                                                               _fit_constrained(fit, cel_kl, ks, estimator,
-                                                                                ("mu", "beta")))))
+                                          label=label))
             # the range follows the window means and the laws; a bar longer than a factor 3 runs
             # off the axis rather than squeezing every other point into a sliver of it
             means = np.sqrt(lo * hi)  # bars are y e^(-s/y) .. y e^(s/y) around the mean y
