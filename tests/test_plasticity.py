@@ -38,12 +38,15 @@ def test_issue_case_carries_the_load(issue_surface):
     # p <= H needs A/A0 >= p0 / H, and the mean contact pressure is at most H
     assert np.all(ds["area_fraction"].values >= np.array(loads) / hardness)
     assert np.all(ds["mean_contact_pressure"].values <= hardness)
-    # node counts of Tamaas' KatoSaturated on the same surface (tol 1e-12)
+    # node counts of Tamaas' KatoSaturated on the same surface (tol 1e-12), run on another
+    # machine: a node at the contact or plastic edge, its pressure within rounding of 0 or of
+    # the hardness, may fall either side there, so each count may differ by one node
     tight = solve_contact(h, loads, hardness=hardness, tol=TOL)
     n2 = h.size
-    assert list(np.rint(tight["area_fraction"].values * n2)) == [155, 309, 463, 616, 771, 925, 1080, 1234]
-    assert list(np.rint(tight["plastic_area_fraction"].values * n2)) == [151, 306, 458, 611, 766, 916, 1072,
-                                                                         1225]
+    np.testing.assert_allclose(tight["area_fraction"].values * n2, [155, 309, 463, 616, 771, 925, 1080, 1234],
+                               rtol=0, atol=1)
+    np.testing.assert_allclose(tight["plastic_area_fraction"].values * n2,
+                               [151, 306, 458, 611, 766, 916, 1072, 1225], rtol=0, atol=1)
 
 
 @pytest.mark.parametrize("hardness", [0.005, 0.01, 0.02])

@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from compare_outputs import assert_images_close, assert_text_close
 from roughcontact import reproduction
 
 
@@ -264,17 +265,21 @@ PUBLICATIONS = [p.parent for p in [PUBLISHED / "data", *sorted(PUBLISHED.glob("*
 @pytest.mark.parametrize("published", PUBLICATIONS, ids=lambda p: p.name)
 def test_published_claims_and_figures_follow_from_the_published_data(published, tmp_path):
     # The documented command, on a copy: the claim table and figures of a publication are
-    # exactly what its data give (nothing edited by hand, nothing stale).
+    # what its data give (nothing edited by hand, nothing stale). They were drawn on another
+    # machine, so numbers compare to their last printed digit and figures within rendering
+    # noise (tests/compare_outputs.py); byte identity of a rerun here is the test above.
     import shutil
 
     out = tmp_path / "repro"
     shutil.copytree(published / "data", out / "data")
     reproduction.main(["regenerate", str(out)])
-    assert (out / "claims.md").read_text() == (published / "claims.md").read_text()
+    assert_text_close((out / "claims.md").read_text(), (published / "claims.md").read_text(),
+                      where=str(published / "claims.md"))
     pngs = sorted((published / "figures").glob("*.png"))
     assert pngs, f"{published}: no figures"
+    assert {p.name for p in (out / "figures").glob("*.png")} == {p.name for p in pngs}
     for png in pngs:
-        assert (out / "figures" / png.name).read_bytes() == png.read_bytes(), png.name
+        assert_images_close(out / "figures" / png.name, png)
 
 
 @pytest.mark.skipif(not PUBLICATIONS, reason="no published reproduction in docs/reproduction")

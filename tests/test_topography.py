@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from SurfaceTopography import Topography
 
+from compare_outputs import assert_heights_close
 from roughcontact.topography import LENGTH_UNITS, MeasuredSurface, TopographyError, read_topography
 
 INFO_KEYS = {"file", "sha256", "reader", "channel", "file_unit", "unit_from", "physical_size_from", "original_shape",
@@ -228,7 +229,11 @@ def test_bad_arguments_are_named(tmp_path, kwargs, words):
 
 
 def test_shipped_example_files_hold_what_the_examples_module_writes(tmp_path):
-    """data/measured/ (the `measured` scene's inputs) equals a fresh `python -m roughcontact.examples`."""
+    """data/measured/ (the `measured` scene's inputs) equals a fresh `python -m roughcontact.examples`.
+
+    The shipped files were generated on another machine: heights agree to FFT rounding
+    (tests/compare_outputs.py), sizes and undefined points exactly.
+    """
     from roughcontact.examples import write_examples
 
     repo = Path(__file__).resolve().parents[1] / "data" / "measured"
@@ -238,5 +243,5 @@ def test_shipped_example_files_hold_what_the_examples_module_writes(tmp_path):
     for name, path in fresh.items():
         a = read_topography(repo / path.name, unit="um", **settings[name])
         b = read_topography(path, unit="um", **settings[name])
-        np.testing.assert_array_equal(a.heights, b.heights)
+        assert_heights_close(b.heights, a.heights, what=str(repo / path.name))
         assert a.length == b.length and a.info["n_undefined"] == b.info["n_undefined"]
