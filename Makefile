@@ -53,7 +53,7 @@ browser:
 	fi
 
 # The inner loop (under 3 min on 2 cores): every test not marked slow. Slow tests (real runs of
-# small scenes, the paper scene's 2100-job DAG, concurrency and bootstrap studies) run in `make test`.
+# small scenes, dry runs of the paper scene's full DAG, concurrency and bootstrap studies) run in `make test`.
 test-fast: install-test
 	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest -m "not slow"
 

@@ -7,6 +7,7 @@ from pathlib import Path
 from snakemake.utils import min_version
 
 from roughcontact import report as report_module
+from roughcontact.config import SHIPPED_CONFIG, ConfigError, read_config_file
 
 min_version("9.0")
 
@@ -18,7 +19,17 @@ report: "workflow/report/workflow.rst"
 report_module.render_maths_as_mathml(Path(workflow.basedir, "workflow", "report", "docutils.conf"))
 
 
-configfile: "config/config.yaml"
+# Snakemake's own message for a config file that is not YAML names neither the file nor the line:
+# check the workflow's config first (a file given with --configfile is read by Snakemake before
+# this line runs; `python -m roughcontact.config FILE` names the line of one of those).
+if Path(SHIPPED_CONFIG).is_file():
+    try:
+        read_config_file(SHIPPED_CONFIG)
+    except ConfigError as err:
+        raise WorkflowError(f"invalid config: {err}") from None
+
+
+configfile: str(SHIPPED_CONFIG)
 
 
 include: "workflow/rules/common.smk"

@@ -150,6 +150,25 @@ def test_cli_dry_run_and_a_held_working_directory(tmp_path):
     assert res.returncode == 2 and "nosuch" in res.stderr
 
 
+def test_cli_configfile_adds_to_the_shipped_config_as_snakemake_does(tmp_path):
+    """A scene kept in its own file, written over the shipped `defaults`, is adopted into as it is run."""
+    shipped = {"scene": "small", "defaults": {"contact": CONTACT, "fit": TINY["scenes"]["tiny"]["fit"]},
+               "scenes": {"small": {"contact": {"grid": {"k_l": ["2"], "k_s": ["8"], "H": ["0.5"]}}}}}
+    (tmp_path / "config").mkdir()
+    (tmp_path / "config" / "config.yaml").write_text(yaml.safe_dump(shipped))
+    (tmp_path / "big.yaml").write_text("scenes:\n  big:\n    contact: {}\n")  # the defaults' contact block
+    assert validate_config({**shipped, "scenes": {"big": {"contact": {}}}, "scene": "big"})["scenes"]["big"] == \
+        SCENES["big"]
+    _runs(tmp_path, CASES, CASES[:1])
+    res = _cli(tmp_path, "results/small", "--scene", "big", "--configfile", "big.yaml", "--dry-run")
+    assert res.returncode == 0, res.stderr
+    assert "would adopt 2 case(s)" in res.stdout and "1 computed by both runs agree" in res.stdout
+    # a file that is not YAML is named with its line and column
+    (tmp_path / "broken.yaml").write_text("scenes:\n  big: {contact: {}\n")
+    res = _cli(tmp_path, "results/small", "--scene", "big", "--configfile", "broken.yaml", "--dry-run")
+    assert res.returncode == 2 and "error: broken.yaml: not valid YAML at line 3, column 1" in res.stderr, res.stderr
+
+
 @pytest.mark.slow
 def test_adopted_cases_leave_every_downstream_byte_as_a_full_run_makes_it(tmp_path):
     # small runs; big runs one shared case (s1), adopts the other (s0, the first input of the aggregate,

@@ -233,6 +233,99 @@ def test_duplicate_yaml_keys_are_named(tmp_path):
         check_config_files([broken])
 
 
+@pytest.mark.parametrize(
+    "text, words",
+    [
+        ("scene: demo\nscenes:\n  demo:\n\tcontact: {}\n",
+         "tabbed.yaml: not valid YAML at line 4, column 1: found character '\\t' that cannot start any token"),
+        ("scene: demo: x\n", "tabbed.yaml: not valid YAML at line 1, column 12: mapping values are not allowed here"),
+        ("scenes: {demo: [1, 2}\n", "tabbed.yaml: not valid YAML at line 1, column 21"),
+        ("- scene\n- demo\n",
+         "tabbed.yaml: a config file must be a mapping of keys (scene, scenes, defaults) at its top level, got a list"),
+        ("", "got nothing"),
+    ],
+)
+def test_malformed_yaml_is_named_with_line_column_and_remedy(tmp_path, text, words):
+    from roughcontact.config import check_config_files
+
+    bad = tmp_path / "tabbed.yaml"
+    bad.write_text(text)
+    with pytest.raises(ConfigError) as info:
+        check_config_files([bad])
+    assert words in str(info.value), str(info.value)
+    if "not valid YAML" in words:
+        assert "indent with spaces, not tabs" in str(info.value)
+
+
+def test_config_files_add_to_the_shipped_config_as_snakemake_reads_them(tmp_path, monkeypatch, shipped_config):
+    """``--configfile mine.yaml`` adds its scene to config/config.yaml (mappings merged key by key)."""
+    import subprocess
+    import sys
+
+    import yaml
+
+    from roughcontact.config import load_config_files
+
+    (tmp_path / "config").mkdir()
+    (tmp_path / "config" / "config.yaml").write_text(yaml.safe_dump(shipped_config))
+    (tmp_path / "mine.yaml").write_text("scenes:\n  mine:\n    contact:\n      surface: {N: 128}\n"
+                                        "      grid: {k_l: ['4'], k_s: ['64'], H: ['0.5']}\n      seeds: 2\n"
+                                        "  demo: {contact: {seeds: 4}}\n")
+    monkeypatch.chdir(tmp_path)
+    cfg = load_config_files(["mine.yaml"])
+    assert set(cfg["scenes"]) == set(shipped_config["scenes"]) | {"mine"}
+    assert cfg["defaults"] == shipped_config["defaults"] and cfg["scene"] == "demo"
+    assert cfg["scenes"]["demo"]["contact"]["seeds"] == 4  # merged into the shipped demo, its grid kept
+    assert cfg["scenes"]["demo"]["contact"]["grid"] == shipped_config["scenes"]["demo"]["contact"]["grid"]
+    scenes = validate_config({**cfg, "scene": "mine"}, SCHEMA)["scenes"]
+    assert scenes["mine"]["contact"]["load"]["n_steps"] == 30  # from the shipped defaults
+    res = subprocess.run([sys.executable, "-m", "roughcontact.config", "mine.yaml", "--scene", "mine"],
+                         capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0 and "scene 'mine' plans 2 contact cases" in res.stdout, res.stderr
+    (tmp_path / "broken.yaml").write_text("scenes:\n  mine: {contact: {seeds: 2}\n")
+    res = subprocess.run([sys.executable, "-m", "roughcontact.config", "broken.yaml"], capture_output=True, text=True,
+                         timeout=120)
+    assert res.returncode == 2 and "error: broken.yaml: not valid YAML at line 3, column 1" in res.stderr, res.stderr
+
+
+def test_text_is_read_as_the_type_the_schema_asks_for(shipped_config):
+    """Snakemake's --config gives nested values as text: read as integer, number, boolean or null where
+    the schema asks for one, grid strings and descriptions left as text."""
+    cfg = _demo(shipped_config)
+    demo = cfg["scenes"]["demo"]
+    demo["description"] = "null"
+    demo["contact"].update(seeds="4", solver={"tol": "1e-9", "max_iter": "500.0"},
+                           outputs={"fields": ["1", "30"], "clusters": "true"}, load={"schedule": "geometric"},
+                           surface={"N": "256", "rms_slope": "null", "rms_height": "0.1"})
+    demo["fit"] = {"window": ["0.02", "0.3"], "include_unconverged": "False"}
+    cfg["defaults"]["contact"]["load"] = {"p_max": "0.005", "n_steps": "30"}
+    scene = validate_config(cfg, SCHEMA)["scenes"]["demo"]
+    con = scene["contact"]
+    assert con["seeds"] == 4 and con["solver"]["tol"] == 1e-9 and con["solver"]["max_iter"] == 500
+    assert con["outputs"] == {"fields": [1, 30], "clusters": True}
+    assert con["surface"] == {"N": 256, "L": 1.0, "rms_height": 0.1, "plateau": False, "unit": "1"}
+    assert con["load"]["p_max"] == 0.005 and con["load"]["n_steps"] == 30 and con["load"]["schedule"] == "geometric"
+    assert scene["fit"]["window"] == [0.02, 0.3] and scene["fit"]["include_unconverged"] is False
+    assert con["grid"]["H"] == ["0.36", "0.84"] and scene["description"] == "null"
+
+
+@pytest.mark.parametrize(
+    "path, value, words",
+    [
+        (("contact", "seeds"), "four", "field 'contact.seeds': 'four' is not a whole number (schema type 'integer'); "
+                                       "write a whole number, e.g. 4"),
+        (("contact", "seeds"), "4.5", "'4.5' is not a whole number"),
+        (("contact", "solver", "tol"), "small", "field 'contact.solver.tol': 'small' is not a number"),
+        (("contact", "outputs"), {"clusters": "maybe"}, "'maybe' is not true or false (schema type 'boolean')"),
+    ],
+)
+def test_text_that_is_not_the_schemas_type_is_named_with_the_remedy(shipped_config, path, value, words):
+    cfg = _edit(_demo(shipped_config), path, value)
+    with pytest.raises(ConfigError) as info:
+        validate_config(cfg, SCHEMA)
+    assert words in str(info.value) and "--config" in str(info.value), str(info.value)
+
+
 def test_geometric_load_schedule(shipped_config):
     cfg = _edit(_demo(shipped_config), ("contact", "load"), {"p_max": 0.005, "n_steps": 30,
                                                              "schedule": "geometric"})

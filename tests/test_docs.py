@@ -10,16 +10,20 @@ What the handlers check:
 - snakemake: a dry run (`-n` added) in a copy of the workflow with the shipped config and every
   documented scene file (a yaml block whose first line is `# NAME.yaml`), exit 0, each file
   target planned; `--unlock` and `--lint` run for real. `-f TARGET` and `--report` need finished
-  results: they run on a small finished scene (marked slow).
+  results: they run on a small finished scene (marked slow). `--rerun-triggers ...` (rerunning
+  one case with other settings): its whole bash block runs for real on a small finished scene
+  after a config edit; only the forced case is solved again, the next run plans nothing, and a
+  restored config reruns only that case (marked slow).
 - make: `make -n TARGET` succeeds (the target exists; nothing is run, so `make test` does not
   recurse). pip: the extra named in `pip install -e '.[X]'` exists in pyproject.toml.
   `. .venv/bin/activate`: the Makefile's VENV is `.venv` and it is made by `python -m venv`.
+- `python -m roughcontact.config FILE`: exit 0 in the workflow copy that holds the scene files.
 - python: run in a subprocess in an empty directory. yaml: parses; an excerpt of shipped scenes
   equals config/config.yaml's; a SLURM profile copy has only
   the shipped profile's keys and values (plus the site's partition and account), and the command
   in its first-line comment dry-runs with it; a scene file must be used by a documented
   `--configfile` command.
-Dry runs of the `paper` scene (2100 jobs, a minute or more), the finished-scene commands and the
+Dry runs of the `paper` scene (its full DAG, thousands of jobs), the finished-scene commands and the
 python block (a 512^2 solve) are marked slow: `make test` runs them, `make test-fast` does not.
 """
 from __future__ import annotations
@@ -37,15 +41,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pytest
+import xarray as xr
 import yaml
 
 from conftest import REPO, copy_workflow, run_snakemake
-from test_workflow import _jobs
+from test_workflow import PAPER_JOBS, _jobs
 
 DOCS = ("README.md", "config/README.md",
         *(f"docs/{name}.md" for name in ("cluster", "representative", "accuracy", "solver")))
 COMMAND_START = re.compile(r"^(snakemake|make|pip|python)(\s|$)|^\.\s")
-SLOW_COMMAND = re.compile(r"scene=paper\b")  # 2100-job DAG: over a minute on a busy machine
+SLOW_COMMAND = re.compile(r"scene=paper\b")  # the full paper DAG: thousands of jobs, slow on a busy machine
 SLURM_PROFILE = REPO / "workflow" / "profiles" / "slurm" / "config.yaml"
 USER_RESOURCES = {"slurm_partition", "slurm_account"}  # the site's own, commented out in the shipped profile
 PYTHON_BLOCK_TIMEOUT_S = 600  # the README's snippet takes ~15 s (N=512, 30 steps) on 2 busy cores
@@ -278,6 +283,59 @@ def snakemake_force_one(cmd, ctx):
                                        f"outdated, but `snakemake -n` plans {again}")
 
 
+def _bash_block_of(cmd: str) -> list[str]:
+    """The commands, in order, of the first documented bash block that holds ``cmd``."""
+    for doc in DOCS:
+        text = (REPO / doc).read_text()
+        for body in re.findall(r"^\s*```(?:bash|sh|shell|console)\s*\n(.*?)^\s*```\s*$", text, re.M | re.S):
+            commands = _commands_of_bash(body)
+            if cmd in commands:
+                return commands
+    raise AssertionError(f"`{cmd}` is in no documented bash block")
+
+
+def snakemake_rerun_edited(cmd, ctx):
+    """Rerunning one case with other settings, as documented: the config edited (the scene's
+    contact.solver.tol), then every command of the block that holds ``cmd``, in order, on a
+    finished small scene. Only the forced case is solved again, the aggregate records which case
+    had which tol, the same command then plans nothing, and once the config is restored a plain
+    dry run plans that one case (and what follows) only."""
+    commands = _bash_block_of(cmd)
+    forced = [c for c in commands if re.search(r"\s(-f|--force)\s", c)]
+    assert len(forced) == 1 and commands.index(forced[0]) < commands.index(cmd), (
+        f"the block of `{cmd}` must force one file first: {commands}")
+    target = _file_targets(_args(forced[0]))[0]
+    wd = ctx.finished()
+    config = wd / "config" / "config.yaml"
+    shipped = config.read_text()
+    cfg = yaml.safe_load(shipped)
+    cfg["scenes"][ctx.default_scene]["contact"]["solver"]["tol"] = 1e-9
+    config.write_text(yaml.safe_dump(cfg, sort_keys=False))
+    files = sorted((wd / "results").rglob("contact/*.nc"))
+    assert len(files) == 3 and (wd / target) in files
+
+    def state():
+        return {str(p.relative_to(wd)): (p.stat().st_mtime_ns, p.read_bytes()) for p in files}
+
+    before = state()
+    for command in commands:
+        _ok(run_snakemake(wd, *_args(command)), f"`{command}` after editing the config")
+    after = state()
+    assert {p for p in before if after[p] != before[p]} == {target}, "only the forced case may be solved again"
+    with xr.open_dataset(wd / "results" / ctx.default_scene / "aggregate" / "contact.nc") as agg:
+        tol = {int(s): agg["setting_solver_tol"].sel(seed=s).item() for s in agg["seed"].values}
+    seed = int(re.search(r"_s(\d+)\.nc$", target).group(1))
+    assert tol == {s: 1e-9 if s == seed else 1e-8 for s in tol}, f"the aggregate's per-case tol: {tol}"
+    res = run_snakemake(wd, *_dry(_args(cmd)))
+    _ok(res, f"`{cmd}` again")
+    assert "Nothing to be done" in res.stdout + res.stderr, f"`{cmd}` again plans:\n{res.stdout[-3000:]}"
+    config.write_text(shipped)
+    res = run_snakemake(wd, "-n")
+    _ok(res, "`snakemake -n` with the config restored")
+    assert _jobs(res.stdout).get("contact") == 1 and target in res.stdout, (
+        f"with the config restored only {target} is solved again, but `snakemake -n` plans {_jobs(res.stdout)}")
+
+
 def snakemake_report(cmd, ctx):
     args = _args(cmd)
     wd = ctx.finished()
@@ -323,6 +381,14 @@ def python_adopt(cmd, ctx):
                          timeout=120)
     _ok(res, f"`{cmd}` between two small runs")
     assert "adopted 1 case(s)" in res.stdout, f"`{cmd}`: {res.stdout}"
+
+
+def python_config(cmd, ctx):
+    """``python -m roughcontact.config FILE ...`` in the workflow copy holding the documented scene files."""
+    res = subprocess.run([sys.executable, *shlex.split(cmd)[1:]], cwd=ctx.workflow(), capture_output=True, text=True,
+                         timeout=120)
+    _ok(res, f"`{cmd}` in a workflow copy with the documented scene files")
+    assert "roughcontact: scene '" in res.stdout and " plans " in res.stdout, res.stdout
 
 
 def make_target(cmd, ctx):
@@ -427,12 +493,15 @@ COMMANDS = [
     # any forcing flag: `--forcerun contact FILE` (rule names: every contact job) must fail here
     (r"^snakemake\b.*\s(-f|--force|-F|--forceall|-R|--forcerun)\s", snakemake_force_one,
      "forced rerun of one file on a finished scene"),
+    (r"^snakemake\b.*\s--rerun-triggers\s", snakemake_rerun_edited,
+     "its block after a config edit on a finished scene: only the forced case reruns"),
     (r"^snakemake\b.*\s--(unlock|lint)\b", snakemake_for_real, "run for real (cheap)"),
     (r"^snakemake\b.*\s--workflow-profile\s", snakemake_profile, "dry run with the profile"),
     (r"^snakemake(\s|$)", snakemake_dry_run, "dry run in a workflow copy"),
     (r"^make\s+[\w-]+$", make_target, "make -n TARGET"),
     (r"^python -m roughcontact\.runcost\s", python_runcost, "a row per rule on a finished scene"),
     (r"^python -m roughcontact\.adopt\s", python_adopt, "adopts a case between two small runs"),
+    (r"^python -m roughcontact\.config(\s|$)", python_config, "checks the config with the scene files"),
     (r"^pip install -e ", pip_extra, "the extra exists"),
     (r"^\.\s+\S+/bin/activate$", activate_venv, "the Makefile makes that venv"),
 ]
@@ -444,7 +513,7 @@ BLOCKS = [
     ("yaml", _shipped_scene_excerpt, yaml_shipped_excerpt, "equals the scene in config/config.yaml"),
     ("yaml", lambda t: _yaml_header(t)[0] is None, yaml_other, "parses"),
 ]
-SLOW_HANDLERS = {snakemake_report, snakemake_force_one, python_runcost}  # a real run of a small scene first
+SLOW_HANDLERS = {snakemake_report, snakemake_force_one, snakemake_rerun_edited, python_runcost}  # a small run first
 SLOW_HANDLERS |= {python_block}  # the README's snippet: a 512^2 solve, ~13 s of CPU (make test-fast < 3 min)
 
 
@@ -483,6 +552,17 @@ def test_documented_item(item, ctx, tmp_path):
         handler(item.text, ctx)
     else:
         handler(item.text, ctx, tmp_path)
+
+
+def test_the_paper_dags_size_is_given_right_wherever_it_is_given():
+    """Text that gives the paper scene's job count must give the DAG's (test_workflow checks PAPER_JOBS)."""
+    texts = [REPO / "Makefile", *(REPO / d for d in DOCS), *sorted((REPO / "tests").glob("*.py")),
+             *sorted((REPO / "workflow").rglob("*.yaml")), *sorted((REPO / "workflow").rglob("*.smk"))]
+    stale = [f"{path.relative_to(REPO)}:{n}: {line.strip()}"
+             for path in texts for n, line in enumerate(path.read_text().splitlines(), 1)
+             for count in re.findall(r"\b(\d{3,})[- ]jobs?\b", line)
+             if "paper" in line and int(count) != PAPER_JOBS]
+    assert not stale, f"the paper scene plans {PAPER_JOBS} jobs, not:\n" + "\n".join(stale)
 
 
 def test_bash_blocks_split_into_commands():

@@ -1,5 +1,7 @@
 """The Snakemake workflow: dry runs of every scene, bad input stops early, a tiny real run."""
 import copy
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -40,6 +42,10 @@ TINY = {
 }
 
 
+#: Jobs of `snakemake -n --forceall --config scene=paper` (each text that gives the paper DAG's size must say this).
+PAPER_JOBS = 2418
+
+
 def _jobs(stdout):
     """Job counts from the 'Job stats' table of a dry run."""
     counts, table = {}, False
@@ -65,6 +71,7 @@ def test_dry_run_every_shipped_scene(repo, scene):
     if scene == "paper":
         # 900 representativity surfaces in one job per k_l (H = 0.8 only), each all 6 k_s x 30 seeds
         assert jobs["contact"] == 1200 and jobs["representativity"] == 5
+        assert sum(jobs.values()) == PAPER_JOBS, jobs
     if scene == "representative":
         assert jobs["contact"] == 60 and "representativity" not in jobs
     # the dry run says what the scene computes before anything runs
@@ -103,22 +110,107 @@ def test_invalid_config_stops_before_any_job(tmp_path, edit, words):
     assert not (wd / "results").exists()
 
 
+@pytest.fixture(scope="module")
+def shipped_copy(tmp_path_factory):
+    """A copy of the workflow with the shipped config (every shipped scene), for dry runs."""
+    return copy_workflow(tmp_path_factory.mktemp("shipped") / "wf")
+
+
+# A target outside its scene, for every wildcard and kind of output: the words its error must hold
+# (the wildcard, the value and the scene's allowed values). The issue's cases run in make test-fast.
+MISTYPED = [
+    ("results/demo/contact/kl5_ks32_H0.36_s0.nc",
+     "contact.grid.k_l: wildcard k_l=5 is not in the scene; allowed: 4, 16"),
+    ("results/demo/contact/kl4_ks32_H0.360_s0.nc",
+     "wildcard H=0.360 is not in the scene; allowed: 0.36, 0.84 (file names carry the config's text verbatim: "
+     "write H=0.36)"),
+    ("results/demo/representativity/kl2_H0.8.nc",
+     "representativity.grid.k_l: wildcard k_l=2 is not in the scene; allowed: 1, 4, 16"),
+    pytest.param("results/demo/surfaces/kl4_ks33_H0.36_s0.nc", "wildcard k_s=33 is not in the scene; allowed: 32",
+                 marks=pytest.mark.slow),
+    pytest.param("results/demo/surfaces_rep/kl1_ks32_H0.5_s0.nc", "wildcard H=0.5 is not in the scene; allowed: 0.8",
+                 marks=pytest.mark.slow),
+    pytest.param("results/demo/representativity/kl1_H0.80.nc", "write H=0.8", marks=pytest.mark.slow),
+    pytest.param("results/demo/contact/kl4_ks32_H0.36_s3.nc", "wildcard seed=3 is not one of the scene's seeds 0..2",
+                 marks=pytest.mark.slow),
+    # a seed with a leading zero would be a second file for seed 0
+    pytest.param("results/demo/contact/kl4_ks32_H0.36_s00.nc", "wildcard seed=00 is not one of the scene's seeds 0..2 "
+                 "(written without leading zeros)", marks=pytest.mark.slow),
+    pytest.param("results/nosuch/contact/kl4_ks32_H0.36_s0.nc",
+                 "wildcard scene=nosuch: no scene 'nosuch' in the config; defined scenes: demo, paper",
+                 marks=pytest.mark.slow),
+    pytest.param("results/accuracy/surfaces/kl4_ks32_H0.36_s0.nc", "scene 'accuracy' declares no 'contact' block",
+                 marks=pytest.mark.slow),
+    pytest.param("results/measured/contact/ground-d.nc", "wildcard topography=ground-d is not one of its topography "
+                 "files; allowed: ground-a, ground-b, ground-c", marks=pytest.mark.slow),
+    pytest.param("results/measured/contact/kl4_ks32_H0.36_s0.nc", "scene 'measured' runs on measured surfaces",
+                 marks=pytest.mark.slow),
+    pytest.param("results/demo/contact/ground-a.nc", "scene 'demo' has no topography block", marks=pytest.mark.slow),
+    pytest.param("results/demo/figures/nosuch.png", "wildcard figure=nosuch is not a figure of roughcontact",
+                 marks=pytest.mark.slow),
+    pytest.param("results/accuracy/accuracy/N512_tol1e-8_steps30/kl16_ks32_H0.5_s0.nc",
+                 "accuracy.H: wildcard H=0.5 is not in the scene; allowed: 0.36, 0.84", marks=pytest.mark.slow),
+    pytest.param("results/accuracy/accuracy/N513_tol1e-8_steps30/kl16_ks32_H0.36_s0.nc",
+                 "wildcard variant=N513_tol1e-8_steps30 is not one of its settings; allowed: N2048_tol1e-10_steps30",
+                 marks=pytest.mark.slow),
+]
+
+
+@pytest.mark.parametrize("target, words", MISTYPED)
+def test_a_target_outside_its_scene_is_named_with_the_allowed_values(shipped_copy, target, words):
+    res = run_snakemake(shipped_copy, "-n", target)
+    log = res.stdout + res.stderr
+    assert res.returncode != 0 and words in log, log[-3000:]
+    assert "MissingRuleException" not in log and "Job stats" not in log
+
+
 @pytest.mark.slow
 def test_mistyped_target_fails_at_once(tmp_path):
     wd = copy_workflow(tmp_path / "wf", TINY)
-    # H=0.7 is in no scene's grid: no rule can make it.
+    # H=0.7 is in no scene's grid: named with the grid's values
     res = run_snakemake(wd, "-n", "results/tiny/contact/kl2_ks8_H0.7_s0.nc")
-    assert res.returncode != 0 and "MissingRuleException" in res.stdout + res.stderr
+    assert res.returncode != 0 and "wildcard H=0.7 is not in the scene; allowed: 0.5, 0.8" in res.stdout + res.stderr
     # seed 5 matches the pattern but is outside the scene's seeds: named with the range.
     res = run_snakemake(wd, "-n", "results/tiny/contact/kl2_ks8_H0.5_s5.nc")
-    assert res.returncode != 0 and "seed=5 outside 0..1" in res.stdout + res.stderr
-    # a seed with a leading zero would be a second file for seed 0: no rule makes it
-    res = run_snakemake(wd, "-n", "results/tiny/contact/kl2_ks8_H0.5_s00.nc")
-    assert res.returncode != 0 and "MissingRuleException" in res.stdout + res.stderr
+    assert res.returncode != 0 and "seed=5 is not one of the scene's seeds 0..1" in res.stdout + res.stderr
     # a figure the scene does not ask for is named, with the scene's figures
     res = run_snakemake(wd, "-n", "--config", "scene=reponly", "--", "results/reponly/figures/kappa.png")
     assert res.returncode != 0
     assert "scene 'reponly' does not ask for figure 'kappa'; its figures: representativity" in res.stdout + res.stderr
+
+
+def test_nested_config_values_on_the_command_line_are_read_as_the_schema_types(shipped_copy):
+    """`--config 'scenes={demo: {contact: {seeds: 4}}}'`: Snakemake passes '4', the scene gets 4 seeds."""
+    res = run_snakemake(shipped_copy, "-n", "--config", "scenes={demo: {contact: {seeds: 4, solver: {tol: 1e-9}}}}")
+    log = res.stdout + res.stderr
+    assert res.returncode == 0, log[-3000:]
+    assert "16 contact cases x 30 load steps" in log and _jobs(res.stdout)["contact"] == 16
+    res = run_snakemake(shipped_copy, "-n", "--config", "scenes={demo: {contact: {seeds: four}}}")
+    log = res.stdout + res.stderr
+    assert res.returncode != 0 and "field 'contact.seeds': 'four' is not a whole number" in log, log[-3000:]
+    assert "write a whole number, e.g. 4" in log and "not of type" not in log
+
+
+def test_malformed_yaml_is_named_with_file_line_and_column(tmp_path):
+    wd = copy_workflow(tmp_path / "wf")
+    config = wd / "config" / "config.yaml"
+    lines = config.read_text().splitlines()
+    at = lines.index("scene: demo")
+    lines[at] = "scene: demo: x"  # a second ': ' on one line
+    config.write_text("\n".join(lines) + "\n")
+    res = run_snakemake(wd, "-n")
+    log = res.stdout + res.stderr
+    assert res.returncode != 0 and f"config/config.yaml: not valid YAML at line {at + 1}, column 12" in log, log[-3000:]
+    assert "close every bracket and quote" in log and "Config file is not valid JSON or YAML" not in log
+    # a --configfile is read by Snakemake before the workflow's code runs: its own message, then the
+    # documented check names the file and the line
+    (wd / "my_scene.yaml").write_text("scenes:\n  mine:\n\tcontact: {}\n")
+    config.write_text("\n".join(lines[:at] + ["scene: demo"] + lines[at + 1:]) + "\n")
+    res = run_snakemake(wd, "-n", "--configfile", "my_scene.yaml")
+    assert res.returncode != 0 and "Config file is not valid JSON or YAML" in res.stdout + res.stderr
+    res = subprocess.run([sys.executable, "-m", "roughcontact.config", "my_scene.yaml"], cwd=wd, capture_output=True,
+                         text=True, timeout=120)
+    assert res.returncode == 2 and "my_scene.yaml: not valid YAML at line 3, column 1" in res.stderr, res.stderr
 
 
 def test_own_scene_in_its_own_file(tmp_path):

@@ -1,6 +1,10 @@
 """Reuse the contact cases another run already computed with the same parameters.
 
-    python -m roughcontact.adopt results/reproduction --scene paper [--dry-run]
+    python -m roughcontact.adopt results/reproduction --scene paper [--dry-run] [--configfile FILE ...]
+
+Run from the workflow's folder. The config is read as Snakemake reads it: ``config/config.yaml``
+with each ``--configfile`` added over it (mappings merged key by key), so a scene kept in its own
+file is adopted into with ``--configfile my_scene.yaml --scene mine``, as it is run.
 
 A contact case's file depends on its case ``(k_l, k_s, H, seed)``, the surface block and
 the contact settings (all recorded in the file: case coordinates and the
@@ -41,10 +45,9 @@ from pathlib import Path
 
 import netCDF4
 import numpy as np
-import yaml
 
 from . import __version__, params
-from .config import ConfigError, cases, validate_config
+from .config import ConfigError, cases, load_config_files, validate_config
 from .io import atomic_output, file_sha256, same_value, write_text_atomic
 
 #: Global attributes that may differ between two runs' files of one case.
@@ -205,15 +208,16 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(prog="python -m roughcontact.adopt", description=__doc__.split("\n")[0])
     ap.add_argument("source", type=Path, help="the run to take cases from, results/<scene>")
     ap.add_argument("--scene", required=True, help="the target scene (its cases go to results/<scene>)")
-    ap.add_argument("--configfile", type=Path, default=Path("config/config.yaml"),
-                    help="the workflow's config (run from the workflow's folder: results/ and .snakemake/ are there)")
+    ap.add_argument("--configfile", type=Path, action="append", default=[], metavar="FILE",
+                    help="a config file added over config/config.yaml, as snakemake --configfile adds it (repeatable; "
+                         "run from the workflow's folder: config/, results/ and .snakemake/ are there)")
     ap.add_argument("--trust-code", action="store_true", help="adopt without a case computed by both runs")
     ap.add_argument("--dry-run", action="store_true", help="say what would be adopted, copy nothing")
     args = ap.parse_args(argv)
     try:
-        config = yaml.safe_load(args.configfile.read_text())
+        config = load_config_files(args.configfile)
         scenes = validate_config({**config, "scene": args.scene})["scenes"]
-    except (OSError, ConfigError) as exc:
+    except ConfigError as exc:
         ap.exit(2, f"error: {exc}\n")
     if "contact" not in scenes[args.scene]:
         ap.exit(2, f"error: scene {args.scene!r} has no contact study\n")

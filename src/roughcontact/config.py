@@ -19,15 +19,27 @@ bad value came from ``defaults``.
 
 The validated scene is canonical: schema defaults filled in, numbers typed as the schema
 says (``N: 32.0`` becomes ``32``, ``L: 1`` becomes ``1.0``), so that two configs meaning the
-same thing give the same job parameters (:mod:`roughcontact.params`).
+same thing give the same job parameters (:mod:`roughcontact.params`). Snakemake's ``--config``
+passes a nested value as text (``--config 'scenes={demo: {contact: {seeds: 4}}}'`` gives
+``seeds: '4'``): before validation, text where the schema asks for an integer, a number or a
+boolean is read as one when it reads unambiguously as one, and ``null`` where the schema takes
+no text removes a default as in a file (:func:`coerce_strings`).
+
+Config files are read as Snakemake reads them (:func:`load_config_files`: each file merged over
+the ones before, ``config/config.yaml`` first), and a file that is not YAML is named with its
+line and column (:func:`check_config_files`). ``python -m roughcontact.config [FILE ...]`` checks
+the shipped config with these files added, as ``snakemake --configfile FILE ...`` would read it.
 """
 
 from __future__ import annotations
 
+import argparse
 import copy
 import itertools
 import math
 import re
+import sys
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -51,6 +63,8 @@ BATCH_STEM = "kl{k_l}_H{H}"
 SCENE_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]*$")
 
 DEFAULT_SCHEMA = Path(__file__).resolve().parents[2] / "workflow" / "schemas" / "config.schema.yaml"
+#: The workflow's own config file (the Snakefile's ``configfile:``), relative to the working directory.
+SHIPPED_CONFIG = Path("config") / "config.yaml"
 
 
 class ConfigError(ValueError):
@@ -86,14 +100,72 @@ class _UniqueKeyLoader(yaml.SafeLoader):
         return super().construct_mapping(node, deep)
 
 
+def _yaml_error(path, exc: yaml.YAMLError) -> ConfigError:
+    """A :class:`ConfigError` naming ``path``, the line and column of a YAML error, and the remedy."""
+    mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+    where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+    problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+    context = getattr(exc, "context", None)
+    context_mark = getattr(exc, "context_mark", None)
+    if context and context_mark is not None:
+        problem += f" ({context} at line {context_mark.line + 1}, column {context_mark.column + 1})"
+    return ConfigError(f"{path}: not valid YAML{where}: {problem}; fix the file there: indent with spaces, "
+                       "not tabs, put ': ' after each key, close every bracket and quote")
+
+
+def read_config_file(path) -> dict:
+    """One config file as a mapping; :class:`ConfigError` naming the file (and the line) if it is not one.
+
+    Refuses what Snakemake would refuse without naming the file: text that is not YAML (line and
+    column given), a key written twice in one mapping (YAML would keep the last silently) and a
+    top level that is not a mapping of keys.
+    """
+    try:
+        with open(path, encoding="utf-8") as fh:
+            data = yaml.load(fh, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
+    except yaml.YAMLError as exc:
+        raise _yaml_error(path, exc) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"{path}: cannot be read as a config file ({exc})") from None
+    if not isinstance(data, dict):
+        got = "nothing" if data is None else f"a {type(data).__name__}"
+        raise ConfigError(f"{path}: a config file must be a mapping of keys (scene, scenes, defaults) at its "
+                          f"top level, got {got}")
+    return data
+
+
 def check_config_files(paths) -> None:
     """Raise :class:`ConfigError` naming the file if a config file is not YAML or repeats a key."""
     for path in paths:
-        with open(path) as fh:
-            try:
-                yaml.load(fh, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
-            except yaml.YAMLError as exc:
-                raise ConfigError(f"{path}: not valid YAML: {exc}") from None
+        read_config_file(path)
+
+
+def update_config(config: dict, overwrite: Mapping) -> dict:
+    """``overwrite`` merged into ``config`` in place, as Snakemake merges config files and ``--config``:
+    mappings key by key, anything else replaced."""
+    for key, value in overwrite.items():
+        if isinstance(value, Mapping):
+            base = config.get(key)
+            config[key] = update_config(base if isinstance(base, dict) else {}, value)
+        else:
+            config[key] = copy.deepcopy(value)
+    return config
+
+
+def load_config_files(paths, base: str | Path | None = SHIPPED_CONFIG) -> dict:
+    """The config Snakemake builds from ``base`` (the workflow's ``configfile:``) and ``--configfile paths``.
+
+    Each file is merged over the ones before (:func:`update_config`), so a file holding only a scene
+    adds it to the shipped config. Every file is checked by :func:`read_config_file` first.
+    """
+    files = ([Path(base)] if base is not None else []) + [Path(p) for p in paths]
+    if base is not None and not Path(base).is_file():
+        raise ConfigError(f"{base}: no such file; run from the workflow's folder (the one holding config/ "
+                          "and results/)")
+    config: dict = {}
+    for path in files:
+        update_config(config, read_config_file(path))
+    return config
 
 
 def load_schema(path: str | Path = DEFAULT_SCHEMA) -> dict:
@@ -111,6 +183,69 @@ def _resolve(schema: dict, root: dict) -> dict:
         merged = {**_resolve(node, root), **{k: v for k, v in schema.items() if k != "$ref"}}
         return merged
     return schema
+
+
+def _admits_text(schema: dict, root: dict) -> bool:
+    """Whether ``schema`` (resolved) may hold a string: its type, its enum or one of its alternatives."""
+    schema = _resolve(schema, root)
+    if schema.get("type") == "string" or any(isinstance(v, str) for v in schema.get("enum", ())):
+        return True
+    return any(_admits_text(sub, root) for key in ("oneOf", "anyOf") for sub in schema.get(key, ()))
+
+
+def _from_text(text: str, kind: str):
+    """``text`` read as the schema type ``kind`` (integer, number, boolean), or ``text`` if it is not one."""
+    try:
+        if kind == "integer":
+            value = float(text)
+            return int(value) if value.is_integer() else text
+        if kind == "number":
+            return float(text)
+    except ValueError:
+        return text
+    if kind == "boolean":
+        value = yaml.safe_load(text) if "\n" not in text else text
+        return value if isinstance(value, bool) else text
+    return text
+
+
+def _properties(schema: dict, root: dict) -> dict:
+    props: dict = {}
+    for sub in schema.get("allOf", []):
+        props.update(_properties(_resolve(sub, root), root))
+    props.update({k: v for k, v in schema.get("properties", {}).items() if v is not True})
+    return props
+
+
+def coerce_strings(instance, schema: dict, root: dict | None = None):
+    """``instance`` with text read as the type the schema asks for, where it reads as one (a copy).
+
+    Snakemake's ``--config`` gives nested values as text; a string at a place whose schema type is
+    ``integer``, ``number`` or ``boolean`` becomes that type when it reads as one (``"4"`` -> 4,
+    ``"1e-9"`` -> 1e-9, ``"true"`` -> True), and ``null`` (or ``~``) where the schema takes no text
+    becomes None (which removes a default). Anything else is left for validation to name.
+    """
+    root = schema if root is None else root
+    schema = _resolve(schema, root)
+    if isinstance(instance, str):
+        if instance.strip() in ("null", "Null", "NULL", "~") and not _admits_text(schema, root):
+            return None
+        kind = schema.get("type")
+        return _from_text(instance.strip(), kind) if kind in ("integer", "number", "boolean") else instance
+    if isinstance(instance, list):
+        items = schema.get("items")
+        return [coerce_strings(v, items, root) for v in instance] if isinstance(items, dict) else instance
+    if isinstance(instance, dict):
+        branches = [b for b in (_resolve(b, root) for b in schema.get("oneOf", ())) if b.get("type") == "object"]
+        if not schema.get("properties") and not schema.get("allOf") and len(branches) == 1:
+            schema = branches[0]
+        props, extra = _properties(schema, root), schema.get("additionalProperties")
+        out = {}
+        for key, value in instance.items():
+            sub = props.get(key, extra if isinstance(extra, dict) else None)
+            out[key] = coerce_strings(value, sub, root) if sub is not None else value
+        return out
+    return instance
 
 
 def _coerce_number(value, schema: dict):
@@ -218,7 +353,17 @@ def _schema_message(err) -> str:
     if err.validator == "pattern":
         what = err.schema.get("description", "a positive number written as a string")
         return f"{err.instance!r} is not {what} (no spaces or line breaks)"
+    kind = err.schema.get("type") if err.validator == "type" else None
+    if kind in _TYPE_REMEDY and isinstance(err.instance, str):
+        what, example = _TYPE_REMEDY[kind]
+        return (f"{err.instance!r} is not {what} (schema type '{kind}'); write {what}, e.g. {example} (text "
+                f"given with --config, which passes nested values as text, is read as {what} when it is one)")
     return err.message
+
+
+#: What each schema type takes, and an example, for the message on a string that is none of them.
+_TYPE_REMEDY = {"integer": ("a whole number", "4"), "number": ("a number", "0.005 or 1e-8"),
+                "boolean": ("true or false", "true")}
 
 
 def _non_finite(tree, path=()):
@@ -392,6 +537,8 @@ def validate_config(config: dict, schema: dict | None = None) -> dict:
     for key in defaults:
         if key not in allowed:
             raise ConfigError(f"config field 'defaults': unknown block {key!r}; allowed: {', '.join(allowed)}")
+    scene_schema = {**schema["$defs"]["scene"], "$defs": schema["$defs"]}
+    defaults = coerce_strings(defaults, scene_schema)
     validated = {}
     for name, block in scenes.items():
         if not isinstance(name, str) or not SCENE_NAME.match(name):
@@ -399,6 +546,7 @@ def validate_config(config: dict, schema: dict | None = None) -> dict:
                               "a letter and hold only letters, digits, '_' and '-' (they become folder names)")
         if not isinstance(block or {}, dict):
             raise ConfigError(f"scene {name!r}: must be a mapping of blocks, got {type(block).__name__}")
+        block = coerce_strings(block, scene_schema)
         validated[name] = validate_scene(name, merge_scene(defaults, block or {}), schema, delta=block or {},
                                          active=name == config.get("scene"))
     default = config.get("scene")
@@ -469,3 +617,26 @@ def plan_summary(scene_name: str, scene: dict) -> str:
     if "accuracy" in scene:
         parts.append("the accuracy study")
     return f"roughcontact: scene {scene_name!r} plans " + ("; ".join(parts) or "nothing") + "."
+
+
+def main(argv=None) -> None:
+    """``python -m roughcontact.config [FILE ...]``: check config files as ``snakemake --configfile`` reads them."""
+    ap = argparse.ArgumentParser(prog="python -m roughcontact.config",
+                                 description="Check config/config.yaml with FILEs added (as snakemake --configfile "
+                                             "FILE ... reads them): YAML syntax with file, line and column, repeated "
+                                             "keys, and every scene. Run from the workflow's folder.")
+    ap.add_argument("files", nargs="*", type=Path, help="config files added to config/config.yaml, in order")
+    ap.add_argument("--scene", help="the scene to run (as --config scene=NAME); default: the config's `scene`")
+    args = ap.parse_args(argv)
+    try:
+        config = load_config_files(args.files)
+        if args.scene is not None:
+            config["scene"] = args.scene
+        valid = validate_config(config)
+    except ConfigError as exc:
+        ap.exit(2, f"error: {exc}\n")
+    sys.stdout.write(plan_summary(valid["scene"], valid["scenes"][valid["scene"]]) + "\n")
+
+
+if __name__ == "__main__":
+    main()

@@ -2,6 +2,8 @@
 
 
 rule accuracy_case:
+    input:
+        accuracy_input,
     output:
         case_path("accuracy/{variant}"),
     log:

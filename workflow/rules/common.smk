@@ -1,6 +1,6 @@
 # Shared set-up: validate the config (every scene) before any job is planned, expose
-# the scenes, and build the wildcard constraints that make a mistyped target fail.
-import re
+# the scenes, and check every requested file's wildcards against its scene (a mistyped
+# target fails at once, naming the wildcard, its value and the scene's allowed values).
 from pathlib import Path
 
 from roughcontact import params
@@ -8,7 +8,6 @@ from roughcontact.accuracy import variants as accuracy_variants
 from roughcontact.config import (
     BATCH_STEM,
     CASE_STEM,
-    STUDIES,
     ConfigError,
     batches,
     cases,
@@ -42,81 +41,123 @@ def batch_path(folder, ext="nc"):
     return f"results/{{scene}}/{folder}/{BATCH_STEM}.{ext}"
 
 
-def _alternatives(values):
-    return "|".join(re.escape(v) for v in sorted(set(values), key=lambda v: (-len(v), v)))
-
-
 def topography_path(folder, ext="nc"):
     """Pattern of one measured case's file: ``results/{scene}/<folder>/{topography}.<ext>``."""
     return f"results/{{scene}}/{folder}/{{topography}}.{ext}"
 
 
-def _alternatives_or_none(values):
-    """A wildcard constraint matching exactly ``values`` (nothing at all when there are none)."""
-    return _alternatives(values) if values else "(?!)"
-
-
-def _all_grid_values(key):
-    values = [
-        value
-        for scene in SCENES.values()
-        for study in STUDIES
-        if study in scene and "grid" in scene[study]
-        for value in scene[study]["grid"][key]
-    ]
-    for scene in SCENES.values():
-        if "accuracy" in scene:
-            acc = scene["accuracy"]
-            values += acc["H"] if key == "H" else [acc[key]]
-    return values
+# Wildcard constraints fix only the shape of a file name, never the values a scene allows: any
+# target of the right shape reaches its rule, whose input function (below) then names a wrong
+# value with the scene's allowed ones. Constraints built from the configured values would leave
+# Snakemake's bare MissingRuleException instead. The shapes keep file names unambiguous: a grid
+# value holds no '_' or '/', a seed only digits, and a topography name never looks like a
+# generated case's or batch's file (roughcontact.measured refuses such names in the config).
+GRID_VALUE = r"[^_/]+"
+NOT_GENERATED = r"(?!kl[^_/]*(?:_ks[^_/]*)?_H[^_/]*(?:_s\d+)?\.[^./]+$)"
 
 
 wildcard_constraints:
-    scene=_alternatives(SCENES),
-    k_l=_alternatives(_all_grid_values("k_l")),
-    k_s=_alternatives(_all_grid_values("k_s")),
-    H=_alternatives(_all_grid_values("H")),
-    seed=r"0|[1-9]\d*",
-    variant=r"N\d+_tol[0-9.e-]+_steps\d+",
-    figure=_alternatives(FIGURES),
-    topography=_alternatives_or_none([n for s in SCENES.values() if is_measured(s) for n in topography_names(s)]),
+    scene=r"[A-Za-z][A-Za-z0-9_-]*",
+    k_l=GRID_VALUE,
+    k_s=GRID_VALUE,
+    H=GRID_VALUE,
+    seed=r"\d+",
+    variant=r"[^/]+",
+    figure=r"[A-Za-z0-9_-]+",
+    topography=NOT_GENERATED + r"[A-Za-z0-9][A-Za-z0-9._-]*",
+
+
+def scene_of(name):
+    """The validated scene called ``name`` (a job's ``scene`` wildcard), or a clear error."""
+    if name not in SCENES:
+        raise WorkflowError(
+            f"wildcard scene={name}: no scene {name!r} in the config; defined scenes: {', '.join(SCENES)}"
+        )
+    return SCENES[name]
 
 
 def study_block(scene, study):
     """The validated config block of `study` in `scene`, or a clear error."""
-    block = SCENES[scene].get(study)
+    block = scene_of(scene).get(study)
     if block is None:
         raise WorkflowError(f"scene {scene!r} declares no '{study}' block, so it has no {study} outputs")
     return block
 
 
+def _not_allowed(scene, where, key, value, allowed):
+    """The error for wildcard ``key`` = ``value`` outside ``allowed`` (the scene's own strings)."""
+    msg = f"scene {scene!r}, {where}: wildcard {key}={value} is not in the scene; allowed: {', '.join(allowed)}"
+    try:
+        same = [a for a in allowed if float(a) == float(value)]
+    except ValueError:
+        same = []
+    if same:
+        msg += f" (file names carry the config's text verbatim: write {key}={same[0]})"
+    return WorkflowError(msg)
+
+
+def _generated_block(scene, study):
+    """The study block of a generated scene; a measured scene's cases are its topography files."""
+    block = study_block(scene, study)
+    if is_measured(SCENES[scene]):
+        raise WorkflowError(
+            f"scene {scene!r} runs on measured surfaces: its {study} cases are named by topography file "
+            f"(results/{scene}/<stage>/<name>.nc), not kl.._ks.._H.._s..; allowed names: "
+            f"{', '.join(topography_names(SCENES[scene]))}"
+        )
+    return block
+
+
+def check_seed(scene, where, seed, n_seeds):
+    """Stop unless ``seed`` is one of the scene's seeds 0..n_seeds-1, written without leading zeros."""
+    if seed != str(int(seed)) or int(seed) >= n_seeds:
+        raise WorkflowError(
+            f"scene {scene!r}, {where}: wildcard seed={seed} is not one of the scene's seeds 0..{n_seeds - 1} "
+            "(written without leading zeros)"
+        )
+
+
 def check_case(wildcards, study):
     """Stop with the allowed values if a requested case is not in the scene's grid."""
-    block = study_block(wildcards.scene, study)
+    block = _generated_block(wildcards.scene, study)
     grid = block["grid"]
     for key in ("k_l", "k_s", "H"):
         if getattr(wildcards, key) not in grid[key]:
-            raise WorkflowError(
-                f"scene {wildcards.scene!r}, {study}: {key}={getattr(wildcards, key)} is not in its grid; "
-                f"allowed: {', '.join(grid[key])}"
-            )
-    if not 0 <= int(wildcards.seed) < block["seeds"]:
-        raise WorkflowError(
-            f"scene {wildcards.scene!r}, {study}: seed={wildcards.seed} outside 0..{block['seeds'] - 1}"
-        )
+            raise _not_allowed(wildcards.scene, f"{study}.grid.{key}", key, getattr(wildcards, key), grid[key])
+    check_seed(wildcards.scene, study, wildcards.seed, block["seeds"])
     return block
 
 
 def check_batch(wildcards, study):
     """Stop with the allowed values if a requested batch's k_l or H is not in the scene's grid."""
-    block = study_block(wildcards.scene, study)
+    block = _generated_block(wildcards.scene, study)
     for key in ("k_l", "H"):
         if getattr(wildcards, key) not in block["grid"][key]:
-            raise WorkflowError(
-                f"scene {wildcards.scene!r}, {study}: {key}={getattr(wildcards, key)} is not in its grid; "
-                f"allowed: {', '.join(block['grid'][key])}"
-            )
+            raise _not_allowed(wildcards.scene, f"{study}.grid.{key}", key, getattr(wildcards, key), block["grid"][key])
     return block
+
+
+def case_input(study, folder=None):
+    """An input function: the job's case checked against the scene's grid (a clear error if it is
+    not there), then the case's file in ``folder`` (no input without one)."""
+
+    def inputs(w):
+        check_case(w, study)
+        if folder is None:
+            return []
+        return f"results/{w.scene}/{folder}/{CASE_STEM.format(k_l=w.k_l, k_s=w.k_s, H=w.H, seed=w.seed)}.nc"
+
+    return inputs
+
+
+def batch_input(study):
+    """An input function (no input): the job's batch checked against the scene's grid."""
+
+    def inputs(w):
+        check_batch(w, study)
+        return []
+
+    return inputs
 
 
 def batch_params(study, provider):
@@ -165,12 +206,15 @@ def case_list(study):
 
 def check_topography(w, study=None):
     """The measured scene of the job, once its ``topography`` wildcard is checked (and its study exists)."""
-    scene = SCENES[w.scene]
+    scene = scene_of(w.scene)
     if not is_measured(scene):
-        raise WorkflowError(f"scene {w.scene!r} has no topography block, so it has no measured case {w.topography!r}")
+        raise WorkflowError(
+            f"scene {w.scene!r} has no topography block, so it has no measured case {w.topography!r}; "
+            "its cases' files are named kl{k_l}_ks{k_s}_H{H}_s{seed}.nc (representativity: kl{k_l}_H{H}.nc)"
+        )
     if w.topography not in scene["topography"]["files"]:
         raise WorkflowError(
-            f"scene {w.scene!r}: {w.topography!r} is not one of its topography files; "
+            f"scene {w.scene!r}: wildcard topography={w.topography} is not one of its topography files; "
             f"allowed: {', '.join(topography_names(scene))}"
         )
     if study is not None:
@@ -183,6 +227,16 @@ def topography_file(w):
     return check_topography(w)["topography"]["files"][w.topography]["path"]
 
 
+def topography_input(folder, study):
+    """An input function: the job's topography name checked against its scene, then its file in ``folder``."""
+
+    def inputs(w):
+        check_topography(w, study)
+        return f"results/{w.scene}/{folder}/{w.topography}.nc"
+
+    return inputs
+
+
 def topography_params(study=None, provider=None):
     """A params function: the reader settings of the job's file, or ``provider`` of its study block."""
     if provider is None:
@@ -192,13 +246,17 @@ def topography_params(study=None, provider=None):
 
 def figure_spec(w):
     """The registered figure named by the wildcards, if the scene asks for it."""
-    spec = FIGURES[w.figure]
-    if w.figure not in scene_figures(SCENES[w.scene]):
+    figures = scene_figures(scene_of(w.scene))
+    if w.figure not in FIGURES:
         raise WorkflowError(
-            f"scene {w.scene!r} does not ask for figure {w.figure!r}; "
-            f"its figures: {', '.join(scene_figures(SCENES[w.scene])) or 'none'}"
+            f"scene {w.scene!r}: wildcard figure={w.figure} is not a figure of roughcontact "
+            f"(roughcontact.figures.FIGURES); the scene's figures: {', '.join(figures) or 'none'}"
         )
-    return spec
+    if w.figure not in figures:
+        raise WorkflowError(
+            f"scene {w.scene!r} does not ask for figure {w.figure!r}; its figures: {', '.join(figures) or 'none'}"
+        )
+    return FIGURES[w.figure]
 
 
 def figure_inputs(w):
@@ -279,12 +337,21 @@ def accuracy_setting(w):
     block = study_block(w.scene, "accuracy")
     for s in accuracy_variants(block):
         if s["label"] == w.variant:
-            if w.k_l != block["k_l"] or w.k_s != block["k_s"] or w.H not in block["H"] or int(w.seed) >= s["seeds"]:
-                stem = CASE_STEM.format(k_l=w.k_l, k_s=w.k_s, H=w.H, seed=w.seed)
-                raise WorkflowError(f"scene {w.scene!r}, accuracy: case {stem} is not part of setting {w.variant}")
+            for key, allowed in (("k_l", [block["k_l"]]), ("k_s", [block["k_s"]]), ("H", block["H"])):
+                if getattr(w, key) not in allowed:
+                    raise _not_allowed(w.scene, f"accuracy.{key}", key, getattr(w, key), allowed)
+            check_seed(w.scene, f"accuracy setting {w.variant}", w.seed, s["seeds"])
             return s
     allowed = ", ".join(s["label"] for s in accuracy_variants(block))
-    raise WorkflowError(f"scene {w.scene!r}, accuracy: unknown setting {w.variant!r}; allowed: {allowed}")
+    raise WorkflowError(
+        f"scene {w.scene!r}, accuracy: wildcard variant={w.variant} is not one of its settings; allowed: {allowed}"
+    )
+
+
+def accuracy_input(w):
+    """An input function (no input): the job's setting and case checked against the accuracy study."""
+    accuracy_setting(w)
+    return []
 
 
 def accuracy_files(scene, pattern):

@@ -4,7 +4,7 @@
 
 rule contact:
     input:
-        case_path("surfaces"),
+        case_input("contact", "surfaces"),
     output:
         case_path("contact"),
     log:
@@ -30,7 +30,7 @@ rule contact:
 # Measured surfaces: the same load steps on one topography file (free boundary by default).
 rule contact_topography:
     input:
-        topography_path("surfaces"),
+        topography_input("surfaces", "contact"),
     output:
         topography_path("contact"),
     log:

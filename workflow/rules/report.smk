@@ -10,7 +10,7 @@ localrules:
 
 rule report_summary:
     input:
-        fit=lambda w: [f"results/{w.scene}/fit/cel.csv"] if "contact" in SCENES[w.scene] else [],
+        fit=lambda w: [f"results/{w.scene}/fit/cel.csv"] if "contact" in scene_of(w.scene) else [],
     output:
         report(
             "results/{scene}/report/summary.rst",

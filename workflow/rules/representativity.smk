@@ -6,6 +6,8 @@
 
 
 rule representativity:
+    input:
+        batch_input("representativity"),
     output:
         batch_path("representativity"),
     log:
@@ -26,7 +28,7 @@ rule representativity:
 # Measured surfaces: eps of one topography file's heights.
 rule representativity_topography:
     input:
-        topography_path("surfaces"),
+        topography_input("surfaces", "representativity"),
     output:
         topography_path("representativity"),
     log:

@@ -1,10 +1,13 @@
 # Stage 1: surfaces by FFT filtering of white noise, one NetCDF per case.
 # Two rules share one script: the representativity and contact studies may normalise
 # surfaces differently (rms height vs rms slope), so they live in separate folders.
-# params carry exactly what a surface depends on (roughcontact.params.surface).
+# params carry exactly what a surface depends on (roughcontact.params.surface). A generated
+# surface reads no file: its input function only checks the case against the scene's grid.
 
 
 rule surface_rep:
+    input:
+        case_input("representativity"),
     output:
         maybe_temp(case_path("surfaces_rep"), "representativity"),
     log:
@@ -23,6 +26,8 @@ rule surface_rep:
 
 
 rule surface:
+    input:
+        case_input("contact"),
     output:
         maybe_temp(case_path("surfaces"), "contact"),
     log:
