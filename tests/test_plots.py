@@ -206,26 +206,62 @@ def test_kappa_figure_names_paper_and_run_curves(contact):
                for line in ax.get_lines())
 
 
-def test_dpbar_legend_gives_no_number_for_an_unconstrained_fit(contact):
-    """mu and beta whose interval is wider than their value are "not constrained", never printed as numbers."""
+def _fit_law_labels(agg, stats, fit, **kw):
+    """The legend texts of this run's fitted power law in fig_dpbar, one per k_s panel."""
+    return [t.get_text() for t in fig_dpbar(agg, stats, fit, **kw).legends[0].get_texts()
+            if "this run" in t.get_text()]
+
+
+def _loosen(fit, constants, k_s=32.0, estimator="paper"):
+    """``fit`` with ``constants`` of the pooled k_l = 16 group at ``k_s`` flagged as not constrained."""
+    out = fit.copy(deep=True)
+    for c in constants:
+        out["constrained"].loc[{"k_l": 16.0, "k_s": k_s, "H_group": "pooled", "estimator": estimator,
+                                "constant": c}] = 0
+    return out
+
+
+def test_dpbar_legend_labels_each_constant_for_what_it_is(contact):
+    """Issue 24: each of mu and beta is printed when the data constrain it and called "not constrained
+    by the data" when they do not (an interval wider than the value is no number), never both for one."""
     agg, stats, fit = contact
-
-    def labels(f):
-        return [t.get_text() for t in fig_dpbar(agg, stats, f).legends[0].get_texts() if "this run" in t.get_text()]
-
+    head = r"this run (fit: paper), $\lambda_l = L/16$, $\lambda_s = L/32$: "
+    v = fit["value"].sel(k_l=16.0, k_s=32.0, H_group="pooled", estimator="paper")
+    mu, beta = f"{float(v.sel(constant='mu')):.3f}", f"{float(v.sel(constant='beta')):.3f}"
     assert fit["constrained"].sel(k_l=16.0, H_group="pooled", estimator="paper").all()
-    assert all("$\\mu$ = " in lab for lab in labels(fit)) and len(labels(fit)) == 2
-    loose = fit.copy(deep=True)
-    loose["constrained"].loc[{"k_l": 16.0, "k_s": 32.0, "H_group": "pooled", "estimator": "paper",
-                              "constant": "beta"}] = 0
-    first, second = labels(loose)
-    assert "32" in first and first.endswith("not constrained by the data") and "=" not in first.split(":")[-1]
-    assert "128" in second and "$\\mu$ = " in second
+    both, other = _fit_law_labels(agg, stats, fit)
+    assert both == head + rf"$\beta$ = {beta}, $\mu$ = {mu}", both
+    assert "128" in other and "$\\beta$ = " in other and "$\\mu$ = " in other
+    # mu constrained, beta not: mu's value, and beta named as not constrained; the other panel as it was
+    first, second = _fit_law_labels(agg, stats, _loosen(fit, ["beta"]))
+    assert first == head + rf"$\mu$ = {mu}, $\beta$ not constrained by the data", first
+    assert second == other
+    first, _ = _fit_law_labels(agg, stats, _loosen(fit, ["mu"]))
+    assert first == head + rf"$\beta$ = {beta}, $\mu$ not constrained by the data", first
+    first, _ = _fit_law_labels(agg, stats, _loosen(fit, ["mu", "beta"]))
+    assert first == head + r"$\beta$, $\mu$ not constrained by the data", first
     # kappa alone unconstrained leaves this figure's mu and beta as they are
-    loose = fit.copy(deep=True)
-    loose["constrained"].loc[{"k_l": 16.0, "k_s": 32.0, "H_group": "pooled", "estimator": "paper",
-                              "constant": "kappa"}] = 0
-    assert labels(loose) == labels(fit)
+    assert _fit_law_labels(agg, stats, _loosen(fit, ["kappa"])) == [both, other]
+
+
+def test_a_constant_on_a_bound_of_the_joint_fit_is_not_constrained(contact):
+    """A joint-fit constant sitting on its bound has a bootstrap interval of nothing (every draw on the
+    bound): flagged constrained by the interval rule, yet the data do not constrain it."""
+    from roughcontact.fit import JOINT_LOWER
+
+    agg, stats, fit = contact
+    sel = {"k_l": 16.0, "k_s": 32.0, "H_group": "pooled", "estimator": "joint", "constant": "mu"}
+    on_bound = fit.copy(deep=True)
+    for var in ("value", "ci_low", "ci_high"):
+        on_bound[var].loc[sel] = JOINT_LOWER[1]
+    assert int(on_bound["constrained"].sel(sel)) == 1
+    first, _ = _fit_law_labels(agg, stats, on_bound, estimator="joint")
+    assert first.endswith(r"$\mu$ not constrained by the data") and r"$\beta$ = " in first, first
+    first, _ = _fit_law_labels(agg, stats, fit, estimator="joint")
+    assert r"$\mu$ = " in first and "not constrained" not in first, first
+    labels = [t.get_text() for t in fig_kappa(agg, stats, on_bound, estimator="joint").legends[0].get_texts()]
+    assert any(lab.startswith("CEL, this run (joint)") and lab.endswith(r"not constrained by the data at "
+                                                                       r"$\lambda_s = L/32$") for lab in labels)
 
 
 def test_representativity_units_are_mathtext(rep_stats):
@@ -418,3 +454,106 @@ def test_the_longest_wavelength_reads_l_as_the_paper_writes_it():
     labels = [t.get_text() for leg in fig.legends for t in leg.get_texts()]
     assert r"$\lambda_l = L$" in labels and r"$\lambda_l = L/16$" in labels
     assert not any("L/1$" in text for text in labels)
+
+
+# ------------------------------------------------------ issue 24: unconverged steps
+#: The unconverged steps of the test: family (k_l, k_s, H) -> (seeds, steps).
+_UNCONVERGED = {(16.0, 32.0, 0.84): ([0, 1], list(range(20, 26))), (4.0, 128.0, 0.36): ([2], [30])}
+
+
+def _with_unconverged(agg, unconverged=None):
+    """``agg`` (and its seed statistics) with the steps of ``unconverged`` (default :data:`_UNCONVERGED`,
+    family -> (seeds, steps)) unconverged, as a solve
+    stopped by ``max_iter`` leaves them: ``pbar`` 20 times too small (kappa ~ 50), ``A/A0`` 3 times too
+    large; kappa, d pbar/d p0 and n_unconverged derived again. Returns ``(agg, stats, mask)``."""
+    from roughcontact.aggregate import add_derived
+
+    mask = xr.zeros_like(agg["converged"], dtype=bool)
+    for (kl, ks, h), (seeds, steps) in (unconverged or _UNCONVERGED).items():
+        mask.loc[{"k_l": kl, "k_s": ks, "H": h, "seed": seeds, "step": steps}] = True
+    out = agg.drop_vars(["kappa", "dpbar_dp0", "n_unconverged"])
+    out["converged"] = agg["converged"] & ~mask
+    out["mean_contact_pressure"] = agg["mean_contact_pressure"].where(~mask, agg["mean_contact_pressure"] / 20)
+    out["area_fraction"] = agg["area_fraction"].where(~mask, agg["area_fraction"] * 3)
+    out = add_derived(out)
+    return out, seed_statistics(out), mask
+
+
+def _unconverged_labels(fig):
+    return [t.get_text() for leg in fig.legends for t in leg.get_texts() if "unconverged" in t.get_text()]
+
+
+def _crosses(ax):
+    return [ln for ln in ax.get_lines() if ln.get_marker() == "x" and ln.get_linestyle() == "None"]
+
+
+def _converged_mean(agg, var, family):
+    case = agg.sel(dict(zip(("k_l", "k_s", "H"), family, strict=True)))
+    return case[var].where(case["converged"]).mean("seed").transpose("step").values
+
+
+def test_kappa_leaves_unconverged_steps_out_of_the_means_and_counts_them(contact):
+    """Issue 24: with max_iter too small kappa reaches ~50 at the unconverged steps; those steps are not
+    in the seed means (nor the axis range), are drawn as grey crosses and counted in the legend."""
+    agg, stats, fit = contact
+    bad_agg, bad_stats, mask = _with_unconverged(agg)
+    assert float(bad_agg["kappa"].where(mask).max()) > 40
+    fig = fig_kappa(bad_agg, bad_stats, fit)
+    ax = fig.axes[0]  # k_s = 32
+    means = [np.asarray(c.lines[0].get_ydata(), float) for c in ax.containers]
+    expected = _converged_mean(bad_agg, "kappa", (16.0, 32.0, 0.84))
+    assert any(np.allclose(y, expected, equal_nan=True) for y in means)
+    assert all(np.nanmax(y) < 4 for y in means) and ax.get_ylim()[1] < 4, ax.get_ylim()
+    (crosses,) = _crosses(ax)
+    np.testing.assert_allclose(np.sort(crosses.get_ydata()), np.sort(bad_agg["kappa"].sel(k_s=32.0).values[
+        mask.sel(k_s=32.0).values]))
+    (label,) = _unconverged_labels(fig)
+    assert label.startswith("13 unconverged load steps, left out of the lines and means"), label
+    # the workflow's aggregate holds the seed statistics too, and is passed as both
+    merged = bad_agg.merge(bad_stats)
+    assert _unconverged_labels(fig_kappa(merged, merged, fit)) == [label]
+    # all converged, or a file without `converged`: no such entry, no crosses
+    for data in (agg, agg.drop_vars("converged")):
+        fig = fig_kappa(data, stats, fit)
+        assert not _unconverged_labels(fig) and not _crosses(fig.axes[0])
+
+
+def test_area_load_and_dpbar_leave_unconverged_steps_out(contact):
+    """The same for A/A0(p0) (mean and s.d. band) and d pbar/d p0 (faint finite differences, windows)."""
+    agg, stats, fit = contact
+    bad_agg, bad_stats, mask = _with_unconverged(agg)
+    fig = fig_area_load(bad_agg, bad_stats, fit)
+    ys = [np.asarray(ln.get_ydata(), float) for ln in fig.axes[0].get_lines() if ln.get_markevery() == 3]
+    expected = _converged_mean(bad_agg, "area_fraction", (16.0, 32.0, 0.84))
+    assert any(y.size == expected.size and np.allclose(y, expected, equal_nan=True) for y in ys)
+    old = bad_stats["area_fraction_mean"].sel(k_l=16.0, k_s=32.0, H=0.84).values
+    assert not any(y.size == old.size and np.allclose(y, old) for y in ys)
+    assert len(_crosses(fig.axes[0])) == 1
+    assert [lab.split(";")[0] for lab in _unconverged_labels(fig)] == [
+        "13 unconverged load steps, left out of the lines and means"]
+    fig = fig_dpbar(bad_agg, bad_stats, fit)
+    faint = [np.asarray(ln.get_ydata(), float) for ln in fig.axes[0].get_lines() if (ln.get_alpha() or 1) < 0.5]
+    raw = _converged_mean(bad_agg, "dpbar_dp0", (16.0, 32.0, 0.84))
+    raw = raw[np.isfinite(raw) & (raw > 0)]
+    assert any(y.size == raw.size and np.allclose(y, raw) for y in faint)
+    assert [lab.split(";")[0] for lab in _unconverged_labels(fig)] == [
+        "13 unconverged load steps, left out of the lines and means"]
+    for draw in (fig_area_load, fig_dpbar):
+        assert not _unconverged_labels(draw(agg, stats, fit))
+
+
+def test_measured_figures_count_the_unconverged_steps_they_leave_out():
+    from roughcontact.plots_measured import fig_measured_area_load, fig_measured_kappa
+
+    dss, names = simulate_cel_cases(seeds=range(3), point_noise=1e-3, seed_scatter=0.0, area_max=0.13, rng_seed=3)
+    cases, _, _ = _with_unconverged(aggregate_contact(dss, names), {(16.0, 32.0, 0.5): ([1, 2], list(range(20, 26)))})
+    agg = cases.isel(k_l=0, k_s=0, H=0, drop=True).rename(seed="topography")
+    agg = agg.assign_coords(topography=np.array(["a", "b", "c"], dtype=object))
+    for draw in (fig_measured_area_load, fig_measured_kappa):
+        fig = draw(agg)
+        labels = _unconverged_labels(fig)
+        assert [lab.split(";")[0] for lab in labels] == ["12 unconverged load steps, left out of the lines"], labels
+        assert len(_crosses(fig.axes[0])) == 1
+        lines = [ln for ln in fig.axes[0].get_lines() if ln.get_linestyle() == "-" and len(ln.get_xdata()) in (24, 30)]
+        assert sorted(len(ln.get_xdata()) for ln in lines)[:2] == [24, 24]
+        assert not _unconverged_labels(draw(agg.assign(converged=agg["converged"] | True)))

@@ -719,7 +719,7 @@ def aggregate_contact(datasets: Sequence[xr.Dataset], names: Sequence[str], *,
 
 
 # ---------------------------------------------------------------- seed statistics
-def _seed_reduce(da: xr.DataArray, present: xr.DataArray, n: xr.DataArray, label: str,
+def seed_reduce(da: xr.DataArray, present: xr.DataArray, n: xr.DataArray, label: str,
                  units: str) -> dict[str, xr.DataArray]:
     """Mean, std (ddof=1) and sem over ``seed`` of the present cases; data NaNs propagate."""
     vals = da.where(present)
@@ -782,7 +782,7 @@ def seed_statistics(ds: xr.Dataset, *, variables: Sequence[str] = SEED_STAT_VARI
             raise ValueError(f"variables: {var!r} is not in the dataset (has {sorted(ds.data_vars)})")
         units = str(ds[var].attrs.get("units", "1"))
         label = str(ds[var].attrs.get("long_name", var))
-        stats = _seed_reduce(ds[var], present, n, label, units)
+        stats = seed_reduce(ds[var], present, n, label, units)
         if var in ("pressure", "rms_slope") and var not in variables:
             out[f"{var}_mean"] = stats["mean"]
             continue
@@ -815,13 +815,13 @@ def representativity_statistics(ds: xr.Dataset, *, min_seeds: int = 2) -> xr.Dat
     n = _n_seeds(present, min_seeds, "representativity_statistics")
     out = xr.Dataset(attrs=dict(ds.attrs))
     eps = ds["epsilon"]
-    stats = _seed_reduce(eps, present, n, str(eps.attrs.get("long_name", "epsilon")),
+    stats = seed_reduce(eps, present, n, str(eps.attrs.get("long_name", "epsilon")),
                          str(eps.attrs.get("units", "1")))
     for k, v in stats.items():
         out[f"epsilon_{k}"] = v
     for var in ("rms_height", "rms_slope"):
         if var in ds:
-            st = _seed_reduce(ds[var], present, n, str(ds[var].attrs.get("long_name", var)),
+            st = seed_reduce(ds[var], present, n, str(ds[var].attrs.get("long_name", var)),
                               str(ds[var].attrs.get("units", "1")))
             out[f"{var}_mean"] = st["mean"]
     out["n_seeds"] = n

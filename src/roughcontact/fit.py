@@ -213,8 +213,8 @@ def _log_cel(theta, x0):
     return f, J
 
 
-_JOINT_LOWER = np.array([1e-6, 1e-6, 1e-12])
-_JOINT_UPPER = np.array([np.inf, 1.0 - 1e-6, np.inf])
+JOINT_LOWER = np.array([1e-6, 1e-6, 1e-12])
+JOINT_UPPER = np.array([np.inf, 1.0 - 1e-6, np.inf])
 
 
 def _fit_joint(c: _Curves, e_star: float, min_points: int, x0_guess: np.ndarray):
@@ -224,8 +224,8 @@ def _fit_joint(c: _Curves, e_star: float, min_points: int, x0_guess: np.ndarray)
         raise FitError(f"{n} points in the window (need >= {max(min_points, 4)})")
     xs = (c.p0 / (c.hp[:, None] * e_star))[sel]
     la = np.log(c.a[sel])
-    guess = np.clip(np.asarray(x0_guess, float), _JOINT_LOWER * 10, np.where(
-        np.isfinite(_JOINT_UPPER), _JOINT_UPPER - 1e-3, np.inf))
+    guess = np.clip(np.asarray(x0_guess, float), JOINT_LOWER * 10, np.where(
+        np.isfinite(JOINT_UPPER), JOINT_UPPER - 1e-3, np.inf))
 
     def fun(th):
         return _log_cel(th, xs)[0] - la
@@ -233,7 +233,7 @@ def _fit_joint(c: _Curves, e_star: float, min_points: int, x0_guess: np.ndarray)
     def jac(th):
         return _log_cel(th, xs)[1]
 
-    res = least_squares(fun, guess, jac=jac, bounds=(_JOINT_LOWER, _JOINT_UPPER),
+    res = least_squares(fun, guess, jac=jac, bounds=(JOINT_LOWER, JOINT_UPPER),
                         x_scale="jac", method="trf", xtol=1e-12, ftol=1e-12, gtol=1e-12)
     if not res.success or not np.all(np.isfinite(res.x)):
         raise FitError(f"least_squares did not converge: {res.message}")

@@ -8,7 +8,9 @@ Conventions: single-column figures are 3.4 in wide, multi-panel ones 7 in; legen
 outside the axes; colours are the Okabe-Ito palette (distinguishable with the common
 colour-vision deficiencies), one colour per Hurst exponent; the long cutoff
 ``lambda_l = L / k_l`` is told apart by marker and line style. Theory curves are black
-or grey, except Persson's, in reddish purple (:data:`PERSSON_COLOUR`). Symbols: ``p0``
+or grey, except Persson's, in reddish purple (:data:`PERSSON_COLOUR`). Load steps whose solve
+did not converge are left out of every line and seed mean, drawn as grey crosses
+(:data:`UNCONVERGED_STYLE`) and counted in the legend. Symbols: ``p0``
 applied mean pressure, ``E*`` contact modulus, ``h'`` rms slope, ``A/A0`` contact-area
 fraction, ``pbar`` mean contact pressure, ``kappa = E* h' / pbar``.
 """
@@ -20,7 +22,7 @@ import logging
 import os
 import re
 import warnings
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import matplotlib
@@ -32,7 +34,8 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.ticker import FormatStrFormatter, FuncFormatter, NullFormatter
 
-from .aggregate import log_window_edges, windowed_load_slope
+from .aggregate import log_window_edges, seed_reduce, windowed_load_slope
+from .fit import CONSTANTS as FIT_CONSTANTS, JOINT_LOWER, JOINT_UPPER
 from .io import atomic_output
 from .quantities import LENGTH_UNITS, PRESSURE_UNITS
 from .representativity import scale_free_statistics
@@ -277,6 +280,94 @@ def _e_star(agg: xr.Dataset) -> float:
     if not (np.isfinite(e) and e > 0):
         raise ValueError(f"agg.attrs['e_star'] must be finite and > 0, got {agg.attrs['e_star']!r}")
     return e
+
+
+# -------------------------------------------------------------- unconverged steps
+#: Load steps whose solve did not converge: small grey crosses under the data, out of the means.
+UNCONVERGED_STYLE = {"color": "0.5", "marker": "x", "ls": "none", "ms": 3.0, "mew": 0.7}
+
+
+def _unconverged(ds: xr.Dataset, present: xr.DataArray | bool | None = None) -> xr.DataArray | None:
+    """The load steps that did not converge: boolean, dims of ``ds.converged`` (``(k_l, k_s, H,
+    seed, step)`` or ``(topography, step)``); None where ``ds`` has no ``converged`` (files of
+    older versions: every step is taken as converged).
+
+    Only the steps of cases in ``present`` count (default ``ds.case_present``: a grid hole, whose
+    ``converged`` is False, has no steps); ``True`` counts every case.
+    """
+    if "converged" not in ds:
+        return None
+    if present is None:
+        present = ds["case_present"].astype(bool) if "case_present" in ds else True
+    return ~ds["converged"].astype(bool) & present
+
+
+def _converged_family(agg: xr.Dataset, stats: xr.Dataset, bad: xr.DataArray | None, family: Mapping,
+                      names: Sequence[str]) -> dict[str, np.ndarray]:
+    """Seed statistics of one family over its converged steps, by name, shape ``(n_steps,)`` each.
+
+    ``family``: ``{"k_l": .., "k_s": .., "H": ..}``; ``names``: statistics of
+    :func:`roughcontact.aggregate.seed_statistics` (``"kappa_mean"``, ``"area_fraction_std"``,
+    ``"pressure_mean"`` ...), in the units of their variable; ``bad``: :func:`_unconverged` of
+    ``agg``. Taken from ``stats`` where every step of the family converged (or ``bad`` is None),
+    else recomputed from ``agg`` by :func:`roughcontact.aggregate.seed_statistics`' reduction
+    with the unconverged ``(seed, step)`` left out (a step none of whose seeds converged is NaN,
+    and so is the s.d. of a step with one converged seed).
+    """
+    fam_bad = None if bad is None else bad.sel(family)
+    if fam_bad is None or not bool(fam_bad.any()):
+        return {name: stats[name].sel(family).values for name in names}
+    case = agg.sel(family)
+    ok = ~fam_bad & (case["case_present"].astype(bool) if "case_present" in case else True)
+    n_ok = ok.sum("seed")
+    out = {}
+    for name in names:
+        var, stat = name.rsplit("_", 1)
+        out[name] = seed_reduce(case[var], ok, n_ok, var, "1")[stat].transpose("step").values
+    return out
+
+
+def _masked_points(x: xr.DataArray, y: xr.DataArray, mask: xr.DataArray) -> tuple[np.ndarray, np.ndarray]:
+    """``x`` and ``y`` where ``mask`` is True, broadcast against each other, flattened: shape ``(n,)`` each."""
+    x, y, mask = (v.transpose(*mask.dims) for v in xr.broadcast(x, y, mask))
+    m = mask.values.astype(bool)
+    return x.values[m].astype(float), y.values[m].astype(float)
+
+
+def _family_unconverged(agg: xr.Dataset, bad: xr.DataArray | None, family: Mapping, x: str,
+                        y: str) -> tuple[np.ndarray, np.ndarray]:
+    """Values of the variables ``x`` and ``y`` at the unconverged steps (``bad``, :func:`_unconverged`)
+    of one family, shape ``(n,)`` each."""
+    mask = None if bad is None else bad.sel(family)
+    if mask is None or not bool(mask.any()):
+        return np.array([]), np.array([])
+    case = agg.sel(family)
+    return _masked_points(case[x], case[y], mask)
+
+
+def _draw_unconverged(ax, x: np.ndarray, y: np.ndarray) -> None:
+    """The unconverged steps ``(x, y)``, shape ``(n,)`` each, as crosses (nothing for ``n = 0``)."""
+    if x.size:
+        ax.plot(x, y, zorder=1.5, **UNCONVERGED_STYLE)
+
+
+def _n_outside(ax, x: np.ndarray, y: np.ndarray) -> int:
+    """How many points ``(x, y)`` the axes do not show at their current limits (non-finite ones,
+    and non-positive ones on a log axis, included)."""
+    inside = np.isfinite(x) & np.isfinite(y)
+    with np.errstate(invalid="ignore"):
+        for v, (lo, hi), scale in ((x, ax.get_xlim(), ax.get_xscale()), (y, ax.get_ylim(), ax.get_yscale())):
+            inside &= (v >= min(lo, hi)) & (v <= max(lo, hi)) & ((v > 0) if scale == "log" else True)
+    return int(x.size - inside.sum())
+
+
+def _unconverged_handles(n: int, n_off: int, left_out_of: str = "lines and means") -> list[Line2D]:
+    """Legend entry of ``n`` unconverged steps, ``n_off`` of them outside the axes; none for ``n = 0``."""
+    if not n:
+        return []
+    off = f"; {n_off} outside the axes" if n_off else ""
+    return [Line2D([], [], **UNCONVERGED_STYLE,
+                   label=f"{n} unconverged load step{'s' if n != 1 else ''}, left out of the {left_out_of}{off}")]
 
 
 #: Finite-load asperity models drawn in the area-load and kappa figures: line style per model.
@@ -604,7 +695,9 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
 
     Each ``(lambda_l, lambda_s, H)`` family is its seed-mean curve with a +-1 standard
     deviation band (translucent, edged in the family's colour so that a thin band still
-    shows; the largest s.d. is in the legend). Black solid: the BGT asymptote
+    shows; the largest s.d. is in the legend), over the converged steps: a step whose solve
+    did not converge (``agg.converged`` False) is left out of the mean and band and drawn as
+    a grey cross, and the legend counts those steps. Black solid: the BGT asymptote
     ``A/A0 = sqrt(2 pi) p0 / (h' E*)``. Persson's two curves share one colour
     (:data:`PERSSON_COLOUR`): his small-load asymptote (``kappa = sqrt(8/pi)``) thin
     dashed, on top of his full ``erf`` curve, thick and translucent (the two coincide at
@@ -615,9 +708,12 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
     Parameters
     ----------
     agg : xarray.Dataset
-        Combined contact dataset (for ``e_star``).
+        Combined contact dataset: the attr ``e_star``, optionally ``converged``,
+        ``case_present`` and ``alpha``; where some ``converged(k_l, k_s, H, seed, step)`` is
+        False, also ``pressure`` [unit of e_star] and ``area_fraction`` [1] over those dims.
     stats : xarray.Dataset
-        :func:`roughcontact.aggregate.seed_statistics` output.
+        :func:`roughcontact.aggregate.seed_statistics` output (the workflow passes the
+        aggregate, which holds both).
     fit : xarray.Dataset, optional
         :func:`roughcontact.fit.fit_cel` output.
     k_l, k_s, hurst : sequences of float, optional
@@ -635,40 +731,30 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
                               "rms_slope_mean", "n_seeds"))
     e_star = _e_star(agg)
     hp = _mean_slope(stats)
-    alphas = _asperity_alphas(agg)
+    alphas, bad = _asperity_alphas(agg), _unconverged(agg)
     kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes = _family_panels(
         stats, k_l, k_s, hurst, fit_k_l)
     with matplotlib.rc_context(_STYLE):
-        extent = np.zeros(3)  # largest p0/E*, A/A0 + s.d., s.d.
+        extent, crosses = np.zeros(3), []  # largest p0/E*, A/A0 + s.d., s.d.
         for idx, ks in enumerate(ks_list):
-            for kl in kl_list:
-                for h in h_list:
-                    if _present(stats, kl, ks, h):
-                        extent = np.maximum(extent, _area_load_family(
-                            axes.flat[idx], stats.sel(k_l=kl, k_s=ks, H=h), e_star, colour[h], marker[kl],
-                            style[kl]))
+            families = [(kl, ks, h) for kl in kl_list for h in h_list if _present(stats, kl, ks, h)]
+            panel_extent, panel_crosses = _area_load_panel(axes.flat[idx], agg, stats, bad, families, e_star,
+                                                           colour, marker, style)
+            extent = np.fmax(extent, panel_extent)
+            crosses.append(panel_crosses)
             axes.flat[idx].set_title(_lambda_label(ks, "s"))
         xmax, ymax, sdmax = (float(v) for v in extent)
         drew_fit = False
         for idx, ks in enumerate(ks_list):
             # Second pass: theory over the common load range of all panels.
-            ax = axes.flat[idx]
-            p = np.linspace(0, xmax * e_star, 200)
             consts = _fit_constants(fit, cel_kl, ks, estimator)
-            if consts is not None:
-                ax.plot(p / e_star, cel_area(p, kappa=consts[0], mu=consts[1], beta=consts[2],
-                                             rms_slope=hp, e_star=e_star),
-                        color="0.45", lw=2.2, alpha=0.8, zorder=1)
-                drew_fit = True
-            _area_load_theory(ax, p, e_star, hp, alphas)
-            ax.set_xlim(0, xmax)
-            ax.set_ylim(0, ymax * 1.05)
-            ax.set_xlabel(r"$p_0/E^*$ [1]")
-            ax.set_ylabel(r"$A/A_0$ [1]")
+            _area_load_axes(axes.flat[idx], consts, xmax, ymax, e_star, hp, alphas)
+            drew_fit = drew_fit or consts is not None
         for ax in list(axes.flat)[len(ks_list):]:
             ax.set_visible(False)
         handles = _family_handles(kl_list, h_list, colour, marker, style) + _area_load_theory_handles(sdmax)
-        handles += _asperity_handles(alphas)
+        n_off = sum(_n_outside(ax, *c) for ax, c in zip(axes.flat, crosses, strict=False))  # hidden axes last
+        handles += _asperity_handles(alphas) + _unconverged_handles(sum(x.size for x, _ in crosses), n_off)
         if drew_fit:
             handles.append(Line2D([], [], color="0.45", lw=2.2, alpha=0.8,
                                   label=f"CEL fit ({estimator}), " + _lambda_label(cel_kl, "l")))
@@ -685,15 +771,52 @@ _PERSSON_LIMIT_STYLE = {"color": PERSSON_COLOUR, "lw": 1.0, "ls": (0, (4, 2))}
 _PERSSON_ERF_STYLE = {"color": PERSSON_COLOUR, "lw": 2.6, "ls": "-", "alpha": 0.45}
 
 
-def _area_load_family(ax, s: xr.Dataset, e_star: float, colour, marker, style) -> np.ndarray:
+def _area_load_family(ax, s: Mapping[str, np.ndarray], e_star: float, colour, marker, style) -> np.ndarray:
     """Seed-mean ``A/A0(p0/E*)`` of one family with its ``+-1`` s.d. band (edged, so it shows
-    when thin). Returns ``[max p0/E*, max A/A0 + s.d., max s.d.]`` [1]."""
-    x = s["pressure_mean"].values / e_star
-    y, sd = s["area_fraction_mean"].values, s["area_fraction_std"].values
+    when thin). ``s``: ``pressure_mean`` [unit of e_star], ``area_fraction_mean`` and ``_std``
+    [1], shape ``(n_steps,)`` each. Returns ``[max p0/E*, max A/A0 + s.d., max s.d.]`` [1]
+    (NaN where no step has a value)."""
+    x = s["pressure_mean"] / e_star
+    y, sd = s["area_fraction_mean"], s["area_fraction_std"]
     face, edge = mcolors.to_rgba(colour, _BAND_ALPHA), mcolors.to_rgba(colour, _BAND_EDGE_ALPHA)
     ax.fill_between(x, y - sd, y + sd, facecolor=face, edgecolor=edge, lw=_BAND_EDGE_LW, zorder=2)
     ax.plot(x, y, color=colour, marker=marker, ls=style, markevery=3, zorder=2.5)
-    return np.array([np.nanmax(x), np.nanmax(y + sd), np.nanmax(sd)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a family none of whose steps converged
+        return np.array([np.nanmax(x), np.nanmax(y + sd), np.nanmax(sd)])
+
+
+def _area_load_panel(ax, agg, stats, bad, families, e_star: float, colour, marker, style):
+    """The families ``(kl, ks, h)`` of one area-load panel over their converged steps
+    (:func:`_converged_family`), and their unconverged steps as crosses.
+
+    Returns ``(extent, (x, y))``: ``[max p0/E*, max A/A0 + s.d., max s.d.]`` [1] (NaN ignored)
+    and ``p0/E*``, ``A/A0`` [1] of the unconverged steps, shape ``(n,)`` each.
+    """
+    extent, crosses = np.zeros(3), [(np.array([]), np.array([]))]
+    for kl, ks, h in families:
+        family = {"k_l": kl, "k_s": ks, "H": h}
+        v = _converged_family(agg, stats, bad, family, ("pressure_mean", "area_fraction_mean", "area_fraction_std"))
+        extent = np.fmax(extent, _area_load_family(ax, v, e_star, colour[h], marker[kl], style[kl]))
+        p, a = _family_unconverged(agg, bad, family, "pressure", "area_fraction")
+        crosses.append((p / e_star, a))
+    x, y = (np.concatenate(v) for v in zip(*crosses, strict=True))
+    _draw_unconverged(ax, x, y)
+    return extent, (x, y)
+
+
+def _area_load_axes(ax, consts, xmax: float, ymax: float, e_star: float, hp: float, alphas) -> None:
+    """The fitted CEL (``consts``: ``(kappa, mu, beta)``, or None) and the theory of one area-load
+    panel over ``p0/E*`` in ``[0, xmax]``; limits (``A/A0`` up to ``1.05 ymax``) and labels."""
+    p = np.linspace(0, xmax * e_star, 200)
+    if consts is not None:
+        ax.plot(p / e_star, cel_area(p, kappa=consts[0], mu=consts[1], beta=consts[2], rms_slope=hp, e_star=e_star),
+                color="0.45", lw=2.2, alpha=0.8, zorder=1)
+    _area_load_theory(ax, p, e_star, hp, alphas)
+    ax.set_xlim(0, xmax)
+    ax.set_ylim(0, ymax * 1.05)
+    ax.set_xlabel(r"$p_0/E^*$ [1]")
+    ax.set_ylabel(r"$A/A_0$ [1]")
 
 
 def _area_load_theory(ax, p: np.ndarray, e_star: float, hp: float, alphas) -> None:
@@ -748,20 +871,60 @@ def _kappa_theory(ax, amax: float, alphas, ylo: float, yhi: float) -> list:
             Line2D([], [], color=OKABE_ITO[0], lw=1.4, ls=":", label=PAPER_CEL_LABEL)]
 
 
+def _kappa_panel(ax, agg, stats, bad, families, colour, marker, style):
+    """Seed-mean ``kappa(A/A0)`` with s.e.m. bars of each family ``(kl, ks, h)`` of one panel over
+    its converged steps (:func:`_converged_family`), and its unconverged steps as crosses.
+
+    Returns ``(amax, ylo, yhi, (x, y))``: the largest mean ``A/A0`` [1], the range of mean -+ s.e.m.
+    [1], and ``A/A0``, ``kappa`` [1] of the unconverged steps, shape ``(n,)`` each.
+    """
+    amax, ylo, yhi, crosses = 0.0, np.inf, -np.inf, [(np.array([]), np.array([]))]
+    for kl, ks, h in families:
+        family = {"k_l": kl, "k_s": ks, "H": h}
+        v = _converged_family(agg, stats, bad, family, ("area_fraction_mean", "kappa_mean", "kappa_sem"))
+        x, y, e = v["area_fraction_mean"], v["kappa_mean"], v["kappa_sem"]
+        ax.errorbar(x, y, yerr=e, color=colour[h], marker=marker[kl], ls=style[kl],
+                    markevery=2, errorevery=2, elinewidth=0.6)
+        if np.isfinite(x).any():  # else every step of the family failed
+            amax = max(amax, float(np.nanmax(x)))
+            ylo, yhi = min(ylo, float(np.nanmin(y - e))), max(yhi, float(np.nanmax(y + e)))
+        crosses.append(_family_unconverged(agg, bad, family, "area_fraction", "kappa"))
+    x, y = (np.concatenate(v) for v in zip(*crosses, strict=True))
+    _draw_unconverged(ax, x, y)
+    return amax, ylo, yhi, (x, y)
+
+
+def _kappa_fit_handles(fit, ks_list, cel_kl, estimator) -> list:
+    """Legend entries of the fitted CEL (its constants for one panel, or where it is not constrained) and its window."""
+    loose = [ks for ks in ks_list if not _fit_constrained(fit, cel_kl, ks, estimator)]
+    return [Line2D([], [], color="0.45", lw=2.2, alpha=0.8, label=_fit_label(
+                "this run", estimator, cel_kl, _fit_constants(fit, cel_kl, ks_list[0], estimator)
+                if len(ks_list) == 1 else None, not loose,
+                where=", ".join(_lambda_label(ks, "s") for ks in loose) if len(ks_list) > 1 else "")),
+            Patch(facecolor="0.9", edgecolor="none", label=(
+                f"fit window $A/A_0 \\in$ [{float(fit.attrs.get('window_low', np.nan)):g}, "
+                f"{float(fit.attrs.get('window_high', np.nan)):g}]"))]
+
+
 def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None, *,
               k_l: Sequence[float] | None = None, k_s: Sequence[float] | None = None,
               hurst: Sequence[float] | None = None, fit_k_l: float | None = None,
               estimator: str = "paper") -> Figure:
     """``kappa = E* h' / pbar`` versus ``A/A0`` (the paper's Fig. 3), one panel per ``k_s``.
 
-    Seed means with standard-error bars per ``(lambda_l, H)``; the BGT limit
-    ``sqrt(2 pi)`` (Persson's ``sqrt(8/pi) ~ 1.60`` lies below the usual range and is
+    Seed means with standard-error bars per ``(lambda_l, H)`` over the converged steps: a step
+    whose solve did not converge (``agg.converged`` False) is left out of the means and drawn
+    as a grey cross, and the legend counts those steps (none without ``converged``). The BGT
+    limit ``sqrt(2 pi)`` (Persson's ``sqrt(8/pi) ~ 1.60`` lies below the usual range and is
     only drawn if inside it); with ``fit``, the CEL's ``kappa(a) = kappa (1 - beta
     a^(1-mu))^(1/(1-mu))`` of ``fit_k_l`` and the fit window (shaded).
 
     Parameters
     ----------
-    agg, stats, fit, k_l, k_s, hurst, fit_k_l, estimator
+    agg : xarray.Dataset
+        As in :func:`fig_area_load`; where some ``converged(k_l, k_s, H, seed, step)`` is False
+        it must hold ``area_fraction`` and ``kappa`` [1] over the same dims.
+    stats, fit, k_l, k_s, hurst, fit_k_l, estimator
         As in :func:`fig_area_load`.
 
     Returns
@@ -770,24 +933,15 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
     """
     _require(stats, "stats", ("kappa_mean", "kappa_sem", "area_fraction_mean", "n_seeds"))
     _e_star(agg)
-    alphas = _asperity_alphas(agg)
+    alphas, bad = _asperity_alphas(agg), _unconverged(agg)
     kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes = _family_panels(
         stats, k_l, k_s, hurst, fit_k_l)
     with matplotlib.rc_context(_STYLE):
-        drew_fit = False
+        drew_fit, n_bad, n_off = False, 0, 0
         for idx, ks in enumerate(ks_list):
             ax = axes.flat[idx]
-            amax, ylo, yhi = 0.0, np.inf, -np.inf
-            for kl in kl_list:
-                for h in h_list:
-                    if not _present(stats, kl, ks, h):
-                        continue
-                    s = stats.sel(k_l=kl, k_s=ks, H=h)
-                    x, y, e = (s[v].values for v in ("area_fraction_mean", "kappa_mean", "kappa_sem"))
-                    ax.errorbar(x, y, yerr=e, color=colour[h], marker=marker[kl], ls=style[kl],
-                                markevery=2, errorevery=2, elinewidth=0.6)
-                    amax = max(amax, float(np.nanmax(x)))
-                    ylo, yhi = min(ylo, float(np.nanmin(y - e))), max(yhi, float(np.nanmax(y + e)))
+            families = [(kl, ks, h) for kl in kl_list for h in h_list if _present(stats, kl, ks, h)]
+            amax, ylo, yhi, crosses = _kappa_panel(ax, agg, stats, bad, families, colour, marker, style)
             consts = _fit_constants(fit, cel_kl, ks, estimator)
             if consts is not None:
                 a = np.linspace(0, amax, 200)
@@ -802,30 +956,56 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
             ax.set_title(_lambda_label(ks, "s"))
             ax.set_xlabel(r"$A/A_0$ [1]")
             ax.set_ylabel(r"$\kappa = E^* h'/\bar p$ [1]")
+            n_bad, n_off = n_bad + crosses[0].size, n_off + _n_outside(ax, *crosses)
         for ax in list(axes.flat)[len(ks_list):]:
             ax.set_visible(False)
         handles = _family_handles(kl_list, h_list, colour, marker, style) + theory
+        handles += _unconverged_handles(n_bad, n_off)
         if drew_fit:
-            loose = [ks for ks in ks_list if not _fit_constrained(fit, cel_kl, ks, estimator)]
-            handles.append(Line2D([], [], color="0.45", lw=2.2, alpha=0.8, label=_fit_label(
-                "this run", estimator, cel_kl, _fit_constants(fit, cel_kl, ks_list[0], estimator)
-                if len(ks_list) == 1 else None, not loose,
-                where=", ".join(_lambda_label(ks, "s") for ks in loose) if len(ks_list) > 1 else "")))
-            handles.append(Patch(facecolor="0.9", edgecolor="none", label=(
-                f"fit window $A/A_0 \\in$ [{float(fit.attrs.get('window_low', np.nan)):g}, "
-                f"{float(fit.attrs.get('window_high', np.nan)):g}]")))
+            handles += _kappa_fit_handles(fit, ks_list, cel_kl, estimator)
         fig.suptitle(_run_summary(agg, stats))
         _legend_below(fig, handles, "error bars: s.e.m.")
     return fig
 
 
+#: Distance to a bound of the joint fit, relative to ``max(1, |bound|)``, within which a constant
+#: sits on it (scipy's rule for an active bound, looser than its 1e-10).
+BOUND_RTOL = 1e-6
+
+
+def _at_fit_bound(estimator: str, constant: str, value: float) -> bool:
+    """Whether a fitted constant sits on a bound of its estimator: only the joint least squares
+    has bounds (:data:`roughcontact.fit.JOINT_LOWER`, ``JOINT_UPPER``); the paper route has none."""
+    if estimator != "joint":
+        return False
+    i = FIT_CONSTANTS.index(constant)
+    return any(np.isfinite(b) and abs(float(value) - b) <= BOUND_RTOL * max(1.0, abs(b))
+               for b in (float(JOINT_LOWER[i]), float(JOINT_UPPER[i])))
+
+
+def _constrained_constants(fit: xr.Dataset, where: Mapping, estimator: str,
+                           constants: Sequence[str]) -> dict[str, bool]:
+    """Per constant, whether the data constrain it: the fit's ``constrained`` flag (95 % interval
+    narrower than the value, :func:`roughcontact.fit.constrained_flags`; True for files without
+    the flag) and not sitting on a bound of the fit (:func:`_at_fit_bound`: there the bootstrap
+    draws pile up on the bound and the interval shrinks to nothing).
+
+    ``where``: the fit's group, e.g. ``{"k_l": 16.0, "k_s": 32.0, "H_group": "pooled"}`` (empty
+    for a fit of measured topographies).
+    """
+    sub = fit.sel({**where, "estimator": estimator})
+    out = {}
+    for c in constants:
+        flag = bool(sub["constrained"].sel(constant=c)) if "constrained" in sub else True
+        out[c] = flag and not _at_fit_bound(estimator, c, float(sub["value"].sel(constant=c)))
+    return out
+
+
 def _fit_constrained(fit: xr.Dataset, k_l: float, k_s: float, estimator: str,
                      constants: Sequence[str] = ("kappa", "mu", "beta")) -> bool:
-    """Whether ``constants`` of the H-pooled fit are all constrained by the data (see fit.constrained_flags)."""
-    if "constrained" not in fit:
-        return True
-    sel = {"k_l": k_l, "k_s": k_s, "H_group": "pooled", "estimator": estimator, "constant": list(constants)}
-    return bool(fit["constrained"].sel(sel).all())
+    """Whether ``constants`` of the H-pooled fit are all constrained by the data (:func:`_constrained_constants`)."""
+    where = {"k_l": k_l, "k_s": k_s, "H_group": "pooled"}
+    return all(_constrained_constants(fit, where, estimator, constants).values())
 
 
 def _fit_label(who: str, estimator: str, k_l: float, consts, constrained: bool = True, where: str = "") -> str:
@@ -848,17 +1028,21 @@ _PAPER_LAW_STYLE = {"color": OKABE_ITO[0], "lw": 1.0, "ls": (0, (4, 2)), "zorder
 _FIT_LAW_STYLE = {"color": "0.55", "lw": 2.6, "alpha": 0.6, "ls": "-", "zorder": 1}
 
 
-def _windowed_dpbar(agg: xr.Dataset, kl: float, ks: float, h: float, per_decade: int):
+def _windowed_dpbar(agg: xr.Dataset, kl: float, ks: float, h: float, per_decade: int,
+                    bad: xr.DataArray | None = None):
     """Seed mean and s.e.m. of the windowed ``d pbar / d p0`` of one family.
 
     Windows: :func:`roughcontact.aggregate.log_window_edges` of the seed-mean load curve;
-    slopes per seed by :func:`roughcontact.aggregate.windowed_load_slope`. Returns
+    slopes per seed by :func:`roughcontact.aggregate.windowed_load_slope`, the unconverged
+    steps (``bad``, :func:`_unconverged` of ``agg``) left out of both. Returns
     ``(a, mean, sem)``, each shape ``(n_windows,)``: mean ``A/A0`` [1], seed-mean slope [1]
     and its standard error [1] (NaN with fewer than two seeds in a window).
     """
     case = agg.sel(k_l=kl, k_s=ks, H=h)
     dims = ("seed", "step")
     a = case["area_fraction"].transpose(*dims).values
+    if bad is not None:
+        a = np.where(bad.sel(k_l=kl, k_s=ks, H=h).transpose(*dims).values, np.nan, a)
     pbar = case["mean_contact_pressure"].transpose(*dims).values
     p0 = case["pressure"].broadcast_like(case["area_fraction"]).transpose(*dims).values
     keep = case["case_present"].values if "case_present" in case else np.ones(a.shape[0], bool)
@@ -889,29 +1073,47 @@ def _log_bars(y: np.ndarray, sem: np.ndarray) -> np.ndarray:
     return np.vstack([y * (1.0 - np.exp(-r)), y * (np.exp(r) - 1.0)])
 
 
-def _dpbar_family(ax, agg, stats, kl, ks, h, colour, marker, style, per_decade):
-    """Draw one family: faint finite differences, windowed slopes with log-space bars.
+def _dpbar_family(ax, agg, stats, bad, family, colour, marker, style, per_decade):
+    """Draw one family over its converged steps: faint finite differences, windowed slopes with
+    log-space bars, and the unconverged steps' finite differences as crosses.
 
-    Returns ``(x_raw, y_raw, bar_lo, bar_hi)`` of what was drawn, for the axis limits.
+    ``family``: ``{"k_l": .., "k_s": .., "H": ..}``; ``bad``: :func:`_unconverged` of ``agg``.
+    Returns ``(x_raw, y_raw, bar_lo, bar_hi, x_bad, y_bad)`` [1] of what was drawn, 1-D each, for
+    the axis limits and the count of unconverged steps.
     """
-    s = stats.sel(k_l=kl, k_s=ks, H=h)
-    xr_, yr_ = s["area_fraction_mean"].values, s["dpbar_dp0_mean"].values
+    s = _converged_family(agg, stats, bad, family, ("area_fraction_mean", "dpbar_dp0_mean"))
+    xr_, yr_ = s["area_fraction_mean"], s["dpbar_dp0_mean"]
     raw = np.isfinite(xr_) & np.isfinite(yr_) & (xr_ > 0) & (yr_ > 0)
     ax.plot(xr_[raw], yr_[raw], ls="none", marker=marker, ms=1.6, color=colour, alpha=0.35, mew=0, zorder=2)
-    x, y, sem = _windowed_dpbar(agg, kl, ks, h, per_decade)
+    x, y, sem = _windowed_dpbar(agg, family["k_l"], family["k_s"], family["H"], per_decade, bad)
     ok = np.isfinite(x) & np.isfinite(y) & (x > 0) & (y > 0)
     bars = _log_bars(y[ok], sem[ok])
     ax.errorbar(x[ok], y[ok], yerr=bars, color=colour, marker=marker, ls=style, ms=3.5,
                 elinewidth=0.8, capsize=2.0, zorder=3)
-    return xr_[raw], yr_[raw], y[ok] - bars[0], y[ok] + bars[1]
+    x_bad, y_bad = _family_unconverged(agg, bad, family, "area_fraction", "dpbar_dp0")
+    _draw_unconverged(ax, x_bad, y_bad)
+    return xr_[raw], yr_[raw], y[ok] - bars[0], y[ok] + bars[1], x_bad, y_bad
 
 
-def _fit_law_label(consts, ks: float, many: bool, estimator: str, cel_kl: float, constrained: bool = True) -> str:
-    """Legend text of this run's fitted power law: its beta and mu, or "not constrained" (as _fit_label)."""
+#: The constants of the power law ``beta (A0/A)^mu``: name, mathtext, index in ``(kappa, mu, beta)``.
+_LAW_CONSTANTS = (("beta", r"$\beta$", 2), ("mu", r"$\mu$", 1))
+
+
+def _fit_law_label(consts, ks: float, many: bool, estimator: str, cel_kl: float,
+                   constrained: Mapping[str, bool] | None = None) -> str:
+    """Legend text of this run's fitted power law: the value of each of beta and mu that the data
+    constrain, and "not constrained by the data" for the others (an interval wider than the value
+    is no number), e.g. ``mu = 0.537, beta not constrained by the data``.
+
+    ``consts``: ``(kappa, mu, beta)``; ``constrained``: per name (default: all constrained).
+    """
     where = _lambda_label(cel_kl, "l") + (", " + _lambda_label(ks, "s") if many else "")
-    if not constrained:  # an interval wider than the value is no number
-        return rf"this run (fit: {estimator}), {where}: $\beta$, $\mu$ not constrained by the data"
-    return rf"this run (fit: {estimator}), {where}: $\beta$ = {consts[2]:.3f}, $\mu$ = {consts[1]:.3f}"
+    constrained = constrained or {}
+    parts = [f"{tex} = {consts[i]:.3f}" for name, tex, i in _LAW_CONSTANTS if constrained.get(name, True)]
+    loose = [tex for name, tex, _ in _LAW_CONSTANTS if not constrained.get(name, True)]
+    if loose:
+        parts.append(", ".join(loose) + " not constrained by the data")
+    return rf"this run (fit: {estimator}), {where}: " + ", ".join(parts)
 
 
 def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None, *,
@@ -926,16 +1128,19 @@ def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
     seeds, with ``+-1`` s.e.m. bars drawn in log space (``y e^(+-sem/y)``, always above
     zero); non-positive values cannot be drawn on the log axis and are left out. Small
     faint markers: the seed mean of the pointwise finite differences
-    (``dpbar_dp0_mean``); those outside the axis range are counted in the legend. Lines:
-    the paper's ``0.21 (A0/A)^0.55`` (black dashed) and, with ``fit``, the fitted
-    ``beta (A0/A)^mu`` of ``fit_k_l`` (thick grey), their constants in the legend, or "not
-    constrained" where the fit's 95 % interval of mu or beta is wider than its value.
+    (``dpbar_dp0_mean``); those outside the axis range are counted in the legend. Steps
+    whose solve did not converge (``agg.converged`` False) are left out of both and drawn
+    as grey crosses, counted in the legend. Lines: the paper's ``0.21 (A0/A)^0.55``
+    (black dashed) and, with ``fit``, the fitted ``beta (A0/A)^mu`` of ``fit_k_l`` (thick
+    grey); the legend gives the value of each of mu and beta that the data constrain and
+    says "not constrained" of the others (:func:`_constrained_constants`).
 
     Parameters
     ----------
     agg : xarray.Dataset
         Combined contact dataset with ``pressure``, ``mean_contact_pressure`` and
-        ``area_fraction`` over ``(k_l, k_s, H, seed, step)`` and the attr ``e_star``.
+        ``area_fraction`` over ``(k_l, k_s, H, seed, step)`` and the attr ``e_star``;
+        optionally ``converged`` (and then ``dpbar_dp0``) over the same dims.
     stats, fit, k_l, k_s, hurst, fit_k_l, estimator
         As in :func:`fig_area_load`.
     per_decade : int
@@ -948,46 +1153,62 @@ def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
     _require(stats, "stats", ("dpbar_dp0_mean", "area_fraction_mean", "n_seeds"))
     _require(agg, "agg", ("pressure", "mean_contact_pressure", "area_fraction"))
     _e_star(agg)
+    bad = _unconverged(agg)
     kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes = _family_panels(
         stats, k_l, k_s, hurst, fit_k_l)
-    fit_handles, n_off = [], 0
+    fit_handles, n_off, n_bad, n_bad_off = [], 0, 0, 0
     with matplotlib.rc_context(_STYLE):
         for idx, ks in enumerate(ks_list):
             ax = axes.flat[idx]
-            drawn = [_dpbar_family(ax, agg, stats, kl, ks, h, colour[h], marker[kl], style[kl], per_decade)
+            drawn = [_dpbar_family(ax, agg, stats, bad, {"k_l": kl, "k_s": ks, "H": h}, colour[h], marker[kl],
+                                   style[kl], per_decade)
                      for kl in kl_list for h in h_list if _present(stats, kl, ks, h)]
-            x_raw, y_raw, lo, hi = (np.concatenate(v) for v in zip(*drawn, strict=True))
+            x_raw, y_raw, lo, hi, x_bad, y_bad = (np.concatenate(v) for v in zip(*drawn, strict=True))
+            n_bad += x_bad.size
             if x_raw.size == 0 or lo.size == 0:
+                n_bad_off += x_bad.size
                 continue  # nothing drawable on log axes in this panel
-            a = np.geomspace(float(x_raw.min()), float(x_raw.max()), 100)
-            lines = [cel_dpbar_dp0(a, mu=PAPER_CONSTANTS["mu"], beta=PAPER_CONSTANTS["beta"])]
-            ax.plot(a, lines[0], **_PAPER_LAW_STYLE)
-            consts = _fit_constants(fit, cel_kl, ks, estimator)
-            if consts is not None:
-                lines.append(cel_dpbar_dp0(a, mu=consts[1], beta=consts[2]))
-                ax.plot(a, lines[-1], **_FIT_LAW_STYLE)
-                constrained = _fit_constrained(fit, cel_kl, ks, estimator, ("mu", "beta"))
-                label = _fit_law_label(consts, ks, len(ks_list) > 1, estimator, cel_kl, constrained)
-                fit_handles.append(Line2D([], [], **{k: v for k, v in _FIT_LAW_STYLE.items() if k != "zorder"},
-                                          label=label))
-            # the range follows the window means and the laws; a bar longer than a factor 3 runs
-            # off the axis rather than squeezing every other point into a sliver of it
-            means = np.sqrt(lo * hi)  # bars are y e^(-s/y) .. y e^(s/y) around the mean y
-            ylo = max(float(lo.min()), float(means.min()) / 3)
-            ylo = min(ylo, *(float(v.min()) for v in lines)) / 1.3
-            yhi = min(float(hi.max()), float(means.max()) * 3)
-            yhi = max(yhi, *(float(v.max()) for v in lines)) * 1.3
-            n_off += int(np.sum((y_raw < ylo) | (y_raw > yhi)))
-            ax.set_ylim(ylo, yhi)
-            ax.set_xlim(float(x_raw.min()) / 1.15, float(x_raw.max()) * 1.15)
-            _dpbar_axes(ax, ks)
+            label = _dpbar_panel(ax, fit, cel_kl, ks, estimator, len(ks_list) > 1, x_raw, lo, hi)
+            fit_handles += [Line2D([], [], **{k: v for k, v in _FIT_LAW_STYLE.items() if k != "zorder"},
+                                   label=label)] if label else []
+            n_off += int(np.sum((y_raw < ax.get_ylim()[0]) | (y_raw > ax.get_ylim()[1])))
+            n_bad_off += _n_outside(ax, x_bad, y_bad)
         for ax in list(axes.flat)[len(ks_list):]:
             ax.set_visible(False)
         handles = _family_handles(kl_list, h_list, colour, marker, style)
-        handles += _dpbar_handles(per_decade, n_off) + fit_handles
+        handles += _dpbar_handles(per_decade, n_off) + _unconverged_handles(n_bad, n_bad_off) + fit_handles
         fig.suptitle(_run_summary(agg, stats))
         _legend_below(fig, handles, r"bars: $\pm 1$ s.e.m. over seeds, in log space ($y\,e^{\pm s/y}$)")
     return fig
+
+
+def _dpbar_panel(ax, fit, cel_kl: float, ks: float, estimator: str, many: bool, x_raw, lo, hi) -> str:
+    """The paper's and the fitted power law of one panel, its limits and labels.
+
+    ``x_raw``: the drawn ``A/A0`` [1]; ``lo``, ``hi``: ends of the drawn bars [1], 1-D each.
+    Returns the fitted law's legend text (:func:`_fit_law_label`), "" without a fit.
+    """
+    a = np.geomspace(float(x_raw.min()), float(x_raw.max()), 100)
+    lines = [cel_dpbar_dp0(a, mu=PAPER_CONSTANTS["mu"], beta=PAPER_CONSTANTS["beta"])]
+    ax.plot(a, lines[0], **_PAPER_LAW_STYLE)
+    consts, label = _fit_constants(fit, cel_kl, ks, estimator), ""
+    if consts is not None:
+        lines.append(cel_dpbar_dp0(a, mu=consts[1], beta=consts[2]))
+        ax.plot(a, lines[-1], **_FIT_LAW_STYLE)
+        constrained = _constrained_constants(fit, {"k_l": cel_kl, "k_s": ks, "H_group": "pooled"},
+                                             estimator, ("mu", "beta"))
+        label = _fit_law_label(consts, ks, many, estimator, cel_kl, constrained)
+    # the range follows the window means and the laws; a bar longer than a factor 3 runs
+    # off the axis rather than squeezing every other point into a sliver of it
+    means = np.sqrt(lo * hi)  # bars are y e^(-s/y) .. y e^(s/y) around the mean y
+    ylo = max(float(lo.min()), float(means.min()) / 3)
+    ylo = min(ylo, *(float(v.min()) for v in lines)) / 1.3
+    yhi = min(float(hi.max()), float(means.max()) * 3)
+    yhi = max(yhi, *(float(v.max()) for v in lines)) * 1.3
+    ax.set_ylim(ylo, yhi)
+    ax.set_xlim(float(x_raw.min()) / 1.15, float(x_raw.max()) * 1.15)
+    _dpbar_axes(ax, ks)
+    return label
 
 
 def _dpbar_axes(ax, ks: float) -> None:

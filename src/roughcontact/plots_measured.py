@@ -72,8 +72,7 @@ def _fitted(fit: xr.Dataset | None, estimator: str):
     consts = tuple(float(v.sel(constant=c)) for c in ("kappa", "mu", "beta"))
     if not np.all(np.isfinite(consts)):
         return None, False
-    ok = bool(fit["constrained"].sel(estimator=estimator).all()) if "constrained" in fit else True
-    return consts, ok
+    return consts, all(plots._constrained_constants(fit, {}, estimator, ("kappa", "mu", "beta")).values())
 
 
 def _fit_label(estimator: str, consts, constrained: bool, n: int) -> str:
@@ -109,15 +108,34 @@ def _summary(agg: xr.Dataset, sizes: Mapping[str, int] | None) -> str:
     return ", ".join(parts)
 
 
-def _curve(agg: xr.Dataset, name: str) -> tuple[np.ndarray, np.ndarray]:
-    """``(p0/(E* h'), A/A0)`` of one topography at its converged steps with positive values, [1] each."""
-    case = agg.sel({_DIM: name})
-    a = case["area_fraction"].values.astype(float)
-    x = case["pressure"].broadcast_like(case["area_fraction"]).values / (
-        plots._e_star(agg) * float(case["rms_slope"]))
-    ok = case["converged"].values.astype(bool) if "converged" in case else np.ones(a.shape, bool)
-    ok &= np.isfinite(x) & np.isfinite(a) & (x > 0) & (a > 0)
+def _unconverged(agg: xr.Dataset) -> xr.DataArray:
+    """The unconverged steps, ``(topography, step)`` (:func:`roughcontact.plots._unconverged`), of
+    every topography: each is drawn, whether or not it entered the fit."""
+    bad = plots._unconverged(agg, present=True)
+    return xr.zeros_like(agg["area_fraction"], dtype=bool) if bad is None else bad.transpose(_DIM, "step")
+
+
+def _load(agg: xr.Dataset) -> xr.DataArray:
+    """``p0/(E* h')`` [1] of every step, each topography over its own rms slope ``h'``, dims of ``area_fraction``."""
+    return agg["pressure"].broadcast_like(agg["area_fraction"]) / (plots._e_star(agg) * agg["rms_slope"])
+
+
+def _curve(agg: xr.Dataset, name: str, bad: xr.DataArray) -> tuple[np.ndarray, np.ndarray]:
+    """``(p0/(E* h'), A/A0)`` of one topography at its converged steps (``bad``: :func:`_unconverged`)
+    with positive values, [1] each, shape ``(n,)``."""
+    sel = {_DIM: name}
+    a = agg["area_fraction"].sel(sel).transpose("step").values.astype(float)
+    x = _load(agg).sel(sel).transpose("step").values.astype(float)
+    ok = ~bad.sel(sel).values & np.isfinite(x) & np.isfinite(a) & (x > 0) & (a > 0)
     return x[ok], a[ok]
+
+
+def _draw_unconverged(ax, x: xr.DataArray, y: xr.DataArray, bad: xr.DataArray) -> tuple[np.ndarray, np.ndarray]:
+    """The unconverged steps as crosses at ``(x, y)`` (dims ``(topography, step)``); returns their
+    ``(x, y)``, shape ``(n,)`` each, to count those outside the axes once the limits are set."""
+    points = plots._masked_points(x, y, bad)
+    plots._draw_unconverged(ax, *points)
+    return points
 
 
 def _topography_handles(names: Sequence[str], used: np.ndarray, ls: str) -> list[Line2D]:
@@ -214,7 +232,8 @@ def fig_measured_area_load(agg: xr.Dataset, fit: xr.Dataset | None = None, *, es
     """``A/A0`` against ``p0/(E* h')`` per topography, log-log (cf. the paper's Fig. 2).
 
     Markers and thin lines: each topography's converged steps, its load normalised by its own
-    rms slope ``h'``. Theory as in :func:`roughcontact.plots.fig_area_load`: the BGT asymptote
+    rms slope ``h'``; grey crosses: the unconverged steps, counted in the legend. Theory as in
+    :func:`roughcontact.plots.fig_area_load`: the BGT asymptote
     ``A/A0 = sqrt(2 pi) p0/(E* h')`` (black), Persson's small-load asymptote (purple dashed)
     and full erf curve (thick translucent purple), the finite-load BGT and Greenwood asperity
     models at ``alpha = 2`` and at the topographies' mean ``alpha``; with ``fit``, the pooled
@@ -242,13 +261,15 @@ def fig_measured_area_load(agg: xr.Dataset, fit: xr.Dataset | None = None, *, es
     with matplotlib.rc_context(_STYLE):
         fig = plots._new_figure(plots.SINGLE_COLUMN_IN + 1.3, 3.0)
         ax = fig.subplots()
-        curves = [_curve(agg, name) for name in names]
+        bad = _unconverged(agg)
+        curves = [_curve(agg, name, bad) for name in names]
         for i, ((x, y), u) in enumerate(zip(curves, used, strict=True)):
             ax.plot(x, y, ls="-", lw=0.7, mfc=None if u else "none", zorder=4, **_style(i))
         xs = np.concatenate([x for x, _ in curves])
         ys = np.concatenate([y for _, y in curves])
         if xs.size == 0:
             raise ValueError("agg has no converged step with a positive load and contact area")
+        crosses = _draw_unconverged(ax, _load(agg), agg["area_fraction"], bad)
         grid = np.geomspace(xs.min() / 1.2, xs.max() * 1.2, 200)
         # Loads normalised by E* h': the theory takes p0 = x with E* = h' = 1.
         plots._area_load_theory(ax, grid, 1.0, 1.0, alphas)
@@ -268,6 +289,7 @@ def fig_measured_area_load(agg: xr.Dataset, fit: xr.Dataset | None = None, *, es
             plots._plain_log_labels(axis)
         ax.set_xlim(grid[0], grid[-1])
         ax.set_ylim(ys.min() / 1.5, min(1.0, ys.max() * 1.5))
+        handles += plots._unconverged_handles(crosses[0].size, plots._n_outside(ax, *crosses), "lines")
         ax.set_xlabel(r"$p_0/(E^* h')$ [1]")
         ax.set_ylabel(r"$A/A_0$ [1]")
         fig.suptitle(_summary(agg, sizes))
@@ -279,7 +301,8 @@ def fig_measured_kappa(agg: xr.Dataset, fit: xr.Dataset | None = None, *, estima
                        sizes: Mapping[str, int] | None = None) -> Figure:
     """``kappa = E* h'/pbar`` against ``A/A0`` per topography (cf. the paper's Fig. 3).
 
-    Markers and thin lines: each topography's converged steps. The BGT limit ``sqrt(2 pi)``
+    Markers and thin lines: each topography's converged steps; grey crosses: the unconverged
+    steps, counted in the legend. The BGT limit ``sqrt(2 pi)``
     (black), Persson's ``sqrt(8/pi)`` (purple dashed, or named in the legend when below the
     axis), the paper's CEL (black dotted), the finite-load BGT and Greenwood asperity models
     as in :func:`roughcontact.plots.fig_kappa`; with ``fit``, the pooled CEL's
@@ -301,17 +324,17 @@ def fig_measured_kappa(agg: xr.Dataset, fit: xr.Dataset | None = None, *, estima
     with matplotlib.rc_context(_STYLE):
         fig = plots._new_figure(plots.SINGLE_COLUMN_IN + 1.3, 3.0)
         ax = fig.subplots()
-        amax, ylo, yhi = 0.0, KAPPA_BGT, KAPPA_BGT
+        amax, ylo, yhi, bad = 0.0, KAPPA_BGT, KAPPA_BGT, _unconverged(agg)
         for i, (name, u) in enumerate(zip(names, used, strict=True)):
             case = agg.sel({_DIM: name})
-            a, k = case["area_fraction"].values.astype(float), case["kappa"].values.astype(float)
-            ok = np.isfinite(a) & np.isfinite(k) & (a > 0)
-            ok &= case["converged"].values.astype(bool) if "converged" in case else True
+            a, k = (case[v].transpose("step").values.astype(float) for v in ("area_fraction", "kappa"))
+            ok = np.isfinite(a) & np.isfinite(k) & (a > 0) & ~bad.sel({_DIM: name}).values
             ax.plot(a[ok], k[ok], ls="-", lw=0.7, mfc=None if u else "none", zorder=4, **_style(i))
             if ok.any():
                 amax, ylo, yhi = max(amax, a[ok].max()), min(ylo, k[ok].min()), max(yhi, k[ok].max())
         if amax == 0.0:
             raise ValueError("agg has no converged step with a positive contact area")
+        crosses = _draw_unconverged(ax, agg["area_fraction"], agg["kappa"], bad)
         handles = _topography_handles(names, used, "-")
         if consts is not None:
             a = np.linspace(0.0, min(amax, 0.99 * cel_area_limit(consts[1], consts[2])), 200)
@@ -324,6 +347,7 @@ def fig_measured_kappa(agg: xr.Dataset, fit: xr.Dataset | None = None, *, estima
                         _window_patch(fit)]
         handles += plots._kappa_theory(ax, amax, alphas, ylo, yhi)
         ax.set_xlim(0, amax * 1.02)
+        handles += plots._unconverged_handles(crosses[0].size, plots._n_outside(ax, *crosses), "lines")
         ax.set_xlabel(r"$A/A_0$ [1]")
         ax.set_ylabel(r"$\kappa = E^* h'/\bar p$ [1]")
         fig.suptitle(_summary(agg, sizes))
