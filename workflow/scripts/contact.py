@@ -1,11 +1,13 @@
 """Stage 3: solve the contact of one surface (generated or measured) over the scene's load steps."""
+from pathlib import Path
+
 import numpy as np
 
 from roughcontact.config import load_steps
 from roughcontact.datasets import contact_dataset, surface_heights
 from roughcontact.io import read_dataset, run_logged, write_dataset
 from roughcontact.params import recorded, require_made_for
-from roughcontact.solver import solve_contact
+from roughcontact.solver import solve_contact, step_notes
 
 
 def case_of(w) -> dict:
@@ -56,6 +58,8 @@ def main(log):
     )
     ds = contact_dataset(result, rms_slope=float(surf.rms_slope.squeeze()), alpha=float(surf.alpha.squeeze()),
                          e_star=solver["e_star"], **labels_of(case))
+    for note in step_notes(result):
+        log.warning("%s: %s", Path(snakemake.output[0]).stem, note)
     unconverged = int((~result.converged.values).sum())
     if unconverged:
         log.warning("%d of %d load steps did not converge to tol=%g (max residual %.3g); "

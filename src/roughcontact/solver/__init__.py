@@ -222,10 +222,11 @@ from .results import (
                       SOLVER_NAME,
                       StepResult,
                       contact_perimeter,
+                      step_notes,
 )
 from .units import LOAD_RANGE, gap_scale
 from .validation import BOUNDARIES
-from .workspace import ELASTIC_METHODS, STALL_WINDOW
+from .workspace import ELASTIC_METHODS, FALLBACKS, SOLVER_PATHS, STALL_WINDOW
 
 #: Elastic iteration used by :func:`solve_contact` and :func:`solve_step`, one of
 #: :data:`ELASTIC_METHODS` (read at each call: set it here to switch).
@@ -236,11 +237,13 @@ __all__ = [
     "DEFAULT_MAX_ITER",
     "ELASTIC_METHOD",
     "ELASTIC_METHODS",
+    "FALLBACKS",
     "FRACTION_UNITS",
     "LOAD_RANGE",
     "MEAN_RTOL",
     "SOLVER_DESCRIPTION",
     "SOLVER_NAME",
+    "SOLVER_PATHS",
     "STALL_WINDOW",
     "ContactSolver",
     "FreeHalfSpace",
@@ -254,4 +257,5 @@ __all__ = [
     "gap_scale",
     "solve_contact",
     "solve_step",
+    "step_notes",
 ]

@@ -15,6 +15,7 @@ import numpy as np
 import xarray as xr
 
 from ..quantities import cf_unit
+from .workspace import SOLVER_PATHS
 
 #: ``units`` attribute of dimensionless fractions, counts and flags.
 FRACTION_UNITS = "1"
@@ -97,6 +98,7 @@ class StepRecord:
     residual: float
     converged: bool
     effect_columns: dict
+    path: str  # the iteration that ended the step: one of workspace.SOLVER_PATHS
 
 
 def contact_perimeter(mask: np.ndarray, length: float = 1.0, periodic: bool = True) -> float:
@@ -130,7 +132,20 @@ def contact_perimeter(mask: np.ndarray, length: float = 1.0, periodic: bool = Tr
 
 
 
-def to_dataset(p, cols, iters, conv, fields, store_fields, n, attrs: dict, effects=(), *,
+def solver_path_variable(codes) -> xr.Variable:
+    """The per-step ``solver_path`` variable: a CF flag (``flag_values``, ``flag_meanings``) over ``step``.
+
+    ``codes`` (int8, shape (n_steps,)) index :data:`~.workspace.SOLVER_PATHS`; a code other than
+    the scene's method says that the step stalled on it and a fallback ended it.
+    """
+    codes = np.asarray(codes, dtype=np.int8)
+    return xr.Variable(("step",), codes, {
+        "units": FRACTION_UNITS, "long_name": "iteration that ended the load step (after a stall, a fallback)",
+        "flag_values": np.arange(len(SOLVER_PATHS), dtype=np.int8),
+        "flag_meanings": " ".join(name.replace("-", "_") for name in SOLVER_PATHS)})
+
+
+def to_dataset(p, cols, iters, conv, fields, store_fields, n, attrs: dict, effects=(), *, paths=None,
                length_unit: str = "1", pressure_unit: str = "1") -> xr.Dataset:
     """The solver's output dataset (see :func:`roughcontact.solver.solve_contact`).
 
@@ -138,7 +153,9 @@ def to_dataset(p, cols, iters, conv, fields, store_fields, n, attrs: dict, effec
     (including each effect's); ``iters``, ``conv`` per-step iterations and
     flags; ``fields`` a ``(pressures, gaps, step numbers)`` triple of the
     stored fields; ``attrs`` the solver's global attributes; ``effects`` add
-    their variables and attributes. ``length_unit`` and ``pressure_unit`` (one of
+    their variables and attributes; ``paths`` the per-step codes into
+    :data:`~.workspace.SOLVER_PATHS` (int8, shape (n_steps,)) of the iteration that ended each step
+    (:func:`solver_path_variable`). ``length_unit`` and ``pressure_unit`` (one of
     :data:`roughcontact.quantities.LENGTH_UNITS` / ``PRESSURE_UNITS``) give the
     ``units`` of lengths, pressures and ``contact_perimeter`` [length^-1], and the
     global attributes ``length_units`` and ``pressure_units``.
@@ -174,6 +191,8 @@ def to_dataset(p, cols, iters, conv, fields, store_fields, n, attrs: dict, effec
             meta[name] = (cols[name], units, long_name)
     data_vars = {name: xr.Variable(("step",), val, {"units": u, "long_name": ln})
                  for name, (val, u, ln) in meta.items()}
+    if paths is not None:
+        data_vars["solver_path"] = solver_path_variable(paths)
     coords = {"step": xr.Variable(("step",), steps, {"units": FRACTION_UNITS,
                                                       "long_name": "load step number (1-based)"})}
     if field_steps:
@@ -195,3 +214,23 @@ def to_dataset(p, cols, iters, conv, fields, store_fields, n, attrs: dict, effec
     for effect in effects:
         attrs.update(effect.attrs())
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+
+
+def step_notes(ds: xr.Dataset) -> list[str]:
+    """One line per load step of :func:`~roughcontact.solver.solve_contact`'s ``ds`` that was not plain.
+
+    A step ended by a fallback says which iteration stalled and which converged it; an
+    unconverged step says why: ``max_iter`` reached (cap) or every iteration stalled (stall), with
+    its residual. Steps solved by the scene's own iteration, converged, give no line.
+    """
+    method, max_iter = ds.attrs.get("elastic_method"), int(ds.attrs["max_iter"])
+    notes = []
+    for k, step in enumerate(ds["step"].values):
+        path = SOLVER_PATHS[int(ds["solver_path"].values[k])] if "solver_path" in ds else method
+        its, residual = int(ds["iterations"].values[k]), float(ds["residual"].values[k])
+        if not bool(ds["converged"].values[k]):
+            why = f"max_iter = {max_iter} reached" if its >= max_iter else f"stalled, last on {path}"
+            notes.append(f"step {step}: NOT converged ({why}; residual {residual:.3g} after {its} iterations)")
+        elif path not in (method, "exact", "box"):
+            notes.append(f"step {step}: {method} stalled; converged by the fallback {path} ({its} iterations in all)")
+    return notes

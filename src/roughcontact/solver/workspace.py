@@ -15,6 +15,14 @@ from .units import rms_about_mean
 #: ``"pk-fourier-f32"``, the latter with single-precision transforms in the loop.
 ELASTIC_METHODS = ("pk", "pk-fourier", "pk-fourier-f32")
 
+#: The iterations a stalled step moves on to, in turn, from its starting pressure (each more
+#: robust and slower): single-precision products -> float64 products -> the reference CG.
+FALLBACKS = {"pk-fourier-f32": ("pk-fourier", "pk"), "pk-fourier": ("pk",), "pk": ()}
+
+#: Every way a step can end (the per-step ``solver_path`` codes): the exact answer of a flat
+#: surface, one of the elastic iterations, or the bounded (hardness) iteration.
+SOLVER_PATHS = ("exact", *ELASTIC_METHODS, "box")
+
 
 #: A step that does not halve its best residual within this many iterations is
 #: declared stalled (round-off floor or breakdown); when it progresses, the CG
