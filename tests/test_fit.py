@@ -255,6 +255,16 @@ def test_unconverged_seeds_are_excluded_and_the_rest_fitted():
     assert agg["case_present"].all(), "the input is not modified"
 
 
+def test_a_joint_constant_on_its_bound_is_not_constrained():
+    """The joint fit's bounds (mu >= 1e-6, beta >= 1e-12): a value there is no estimate, whatever its interval."""
+    from roughcontact.fit import JOINT_LOWER, constrained_flags
+
+    value = np.array([[2.5, JOINT_LOWER[1], 0.3], [2.5, JOINT_LOWER[1], JOINT_LOWER[2]]])
+    lo, hi = value * 0.99, value * 1.01  # narrow intervals everywhere
+    assert constrained_flags(value, lo, hi).tolist() == [[1, 1, 1], [1, 1, 1]]
+    assert constrained_flags(value, lo, hi, ["paper", "joint"]).tolist() == [[1, 1, 1], [1, 0, 0]]
+
+
 def test_unconstrained_constants_are_flagged():
     """A bootstrap interval wider than the value (kappa = 4.79 in [3.1, 6368]) is flagged, not reported as a number."""
     from roughcontact.fit import constrained_flags

@@ -385,11 +385,11 @@ def _fit_group(curves: _Curves, *, methods: Sequence[str], e_star: float, min_po
 
 
 def _estimate_vars(dims: tuple[str, ...], value, stderr, bstd, clo, chi, npts, *, confidence: float,
-                   resampled: str, points: str) -> dict:
+                   resampled: str, points: str, methods: Sequence[str]) -> dict:
     """The per-constant variables of a fit result, over ``dims`` (ending in estimator, constant).
 
     ``resampled`` names what the bootstrap draws (seeds, topographies); ``points`` says what
-    the paper route's points are.
+    the paper route's points are; ``methods`` the estimators, in order.
     """
     one = {"units": "1"}
     pct = f"{100 * float(confidence):g}%"
@@ -401,9 +401,10 @@ def _estimate_vars(dims: tuple[str, ...], value, stderr, bstd, clo, chi, npts, *
                              f"({resampled} resampled with replacement; times sqrt(n/(n-1)))"}),
         "ci_low": (dims, clo, {**one, "long_name": f"lower end of the {pct} bootstrap percentile interval"}),
         "ci_high": (dims, chi, {**one, "long_name": f"upper end of the {pct} bootstrap percentile interval"}),
-        "constrained": (dims, constrained_flags(value, clo, chi), {**one, "long_name": "1 if the "
+        "constrained": (dims, constrained_flags(value, clo, chi, methods), {**one, "long_name": "1 if the "
                         "bootstrap interval is narrower than the value itself, 0 if the data do not "
-                        "constrain the constant (interval wider than the value, or no interval)"}),
+                        "constrain the constant (interval wider than the value, no interval, or the "
+                        "value on a bound of the joint fit)"}),
         "n_points": (dims, npts, {**one, "long_name": f"in-window points used by the fit ({points})"}),
     }
 
@@ -624,7 +625,7 @@ def _cel_dataset(agg: xr.Dataset, grid: _CelGrid, labels: list[str], methods: Se
     return xr.Dataset(
         {
             **_estimate_vars(dims5, grid.value, grid.stderr, grid.bstd, grid.clo, grid.chi, grid.npts,
-                             confidence=confidence, resampled="seeds",
+                             confidence=confidence, resampled="seeds", methods=methods,
                              points="paper route with paper_average='seeds': seed-mean points, one per H and step"),
             "n_seeds": (dims5[:3], grid.nseeds, {**one, "long_name": "number of seeds (surfaces) in the group"}),
             "n_boot_ok": (dims5[:4], grid.nboot_ok, {**one, "long_name": "bootstrap resamples that fitted"}),
@@ -778,7 +779,7 @@ def _topography_dataset(agg: xr.Dataset, res: _GroupFit, n_fitted: int, fitted: 
     return xr.Dataset(
         {
             **_estimate_vars(dims, res.value, res.stderr, res.bstd, res.clo, res.chi, res.npts,
-                             confidence=confidence, resampled="topographies",
+                             confidence=confidence, resampled="topographies", methods=methods,
                              points="paper route with paper_average='seeds': topography-mean points, one per step"),
             "n_topographies": ((), np.int64(n_fitted), {**one, "long_name": "number of topographies fitted"}),
             "n_boot_ok": (dims[:1], res.nboot_ok, {**one, "long_name": "bootstrap resamples that fitted"}),
@@ -839,15 +840,36 @@ def kappa_spread(fit_ds: xr.Dataset, *, estimator: str = "paper") -> xr.Dataset:
                        "max_abs_relative_deviation": mx})
 
 
-def constrained_flags(value, ci_low, ci_high) -> np.ndarray:
+#: Distance to a bound of the joint fit, relative to ``max(1, |bound|)``, within which a constant
+#: sits on it (scipy's rule for an active bound, looser than its 1e-10).
+BOUND_RTOL = 1e-6
+
+
+def at_bound(estimator: str, constant: str, value: float) -> bool:
+    """Whether a fitted constant sits on a bound of its estimator: only the joint least squares has
+    bounds (:data:`JOINT_LOWER`, :data:`JOINT_UPPER`); there the bootstrap draws pile up on the
+    bound and the interval shrinks to nothing, so the data do not constrain the constant."""
+    if estimator != "joint":
+        return False
+    i = CONSTANTS.index(constant)
+    return any(np.isfinite(b) and abs(float(value) - b) <= BOUND_RTOL * max(1.0, abs(b))
+               for b in (float(JOINT_LOWER[i]), float(JOINT_UPPER[i])))
+
+
+def constrained_flags(value, ci_low, ci_high, estimators: Sequence[str] | None = None) -> np.ndarray:
     """1 where the bootstrap interval ``[ci_low, ci_high]`` is narrower than ``|value|``, else 0 (int8).
 
     A constant whose 95 % interval is wider than itself (e.g. kappa = 4.79 with the
     interval [3.1, 6368]) is not determined by the data and must not be reported as a number.
+    With ``estimators`` (the names along the second-last axis; constants along the last, in
+    :data:`CONSTANTS` order), a constant on a bound of its estimator (:func:`at_bound`) is 0 too.
     """
     value, lo, hi = (np.asarray(x, dtype=float) for x in (value, ci_low, ci_high))
     with np.errstate(invalid="ignore"):
         ok = np.isfinite(value) & np.isfinite(lo) & np.isfinite(hi) & ((hi - lo) < np.abs(value))
+    if estimators is not None:
+        for idx in np.ndindex(value.shape):
+            ok[idx] &= not at_bound(estimators[idx[-2]], CONSTANTS[idx[-1]], value[idx])
     return ok.astype(np.int8)
 
 

@@ -35,7 +35,7 @@ from matplotlib.patches import Patch
 from matplotlib.ticker import FormatStrFormatter, FuncFormatter, NullFormatter
 
 from .aggregate import log_window_edges, seed_reduce, windowed_load_slope
-from .fit import CONSTANTS as FIT_CONSTANTS, JOINT_LOWER, JOINT_UPPER
+from .fit import at_bound
 from .io import atomic_output
 from .quantities import LENGTH_UNITS, PRESSURE_UNITS
 from .representativity import scale_free_statistics
@@ -968,27 +968,12 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
     return fig
 
 
-#: Distance to a bound of the joint fit, relative to ``max(1, |bound|)``, within which a constant
-#: sits on it (scipy's rule for an active bound, looser than its 1e-10).
-BOUND_RTOL = 1e-6
-
-
-def _at_fit_bound(estimator: str, constant: str, value: float) -> bool:
-    """Whether a fitted constant sits on a bound of its estimator: only the joint least squares
-    has bounds (:data:`roughcontact.fit.JOINT_LOWER`, ``JOINT_UPPER``); the paper route has none."""
-    if estimator != "joint":
-        return False
-    i = FIT_CONSTANTS.index(constant)
-    return any(np.isfinite(b) and abs(float(value) - b) <= BOUND_RTOL * max(1.0, abs(b))
-               for b in (float(JOINT_LOWER[i]), float(JOINT_UPPER[i])))
-
-
 def _constrained_constants(fit: xr.Dataset, where: Mapping, estimator: str,
                            constants: Sequence[str]) -> dict[str, bool]:
     """Per constant, whether the data constrain it: the fit's ``constrained`` flag (95 % interval
     narrower than the value, :func:`roughcontact.fit.constrained_flags`; True for files without
-    the flag) and not sitting on a bound of the fit (:func:`_at_fit_bound`: there the bootstrap
-    draws pile up on the bound and the interval shrinks to nothing).
+    the flag) and not sitting on a bound of the fit (:func:`roughcontact.fit.at_bound`; the flag
+    of fits made before that check was part of it does not say so).
 
     ``where``: the fit's group, e.g. ``{"k_l": 16.0, "k_s": 32.0, "H_group": "pooled"}`` (empty
     for a fit of measured topographies).
@@ -997,7 +982,7 @@ def _constrained_constants(fit: xr.Dataset, where: Mapping, estimator: str,
     out = {}
     for c in constants:
         flag = bool(sub["constrained"].sel(constant=c)) if "constrained" in sub else True
-        out[c] = flag and not _at_fit_bound(estimator, c, float(sub["value"].sel(constant=c)))
+        out[c] = flag and not at_bound(estimator, c, float(sub["value"].sel(constant=c)))
     return out
 
 
