@@ -388,3 +388,25 @@ def test_a_finished_job_logs_its_exact_cpu_and_memory_last(tmp_path):
                                                  resource.getrusage(resource.RUSAGE_CHILDREN)))
     assert before + 0.3 - 0.01 <= cpu <= now + 1e-3
     assert 10.0 < rss < 1e5, f"peak RSS {rss} MiB is not a pytest process's size"
+
+
+@pytest.mark.parametrize("names", [["frt", "frt2", "ibwspot", "ünï-ß"], ["ibwspot", "frt2", "frt", "a"]])
+def test_names_of_unequal_lengths_are_written_whole(tmp_path, names):
+    # Per-case files read back carry their name's width in the encoding (dtype <U3); an aggregate
+    # stacked from them must still write every name whole, in any order, with a shared prefix and
+    # non-ASCII letters (once, "frt2" was written as "frt").
+    from roughcontact.aggregate import combine_topographies
+    from roughcontact.datasets import expand_case
+
+    parts = []
+    for k, name in enumerate(names):
+        ds = expand_case(xr.Dataset({"epsilon": ((), float(k), {"units": "1", "long_name": "a value"})}),
+                         topography=name)
+        path = write_dataset(ds, tmp_path / f"case{k}.nc", stage="contact", scene="s", scene_parameters={})
+        parts.append(read_dataset(path, stage="contact"))
+    agg = combine_topographies(parts, [f"case{k}.nc" for k in range(len(names))], expected=names,
+                               kind="representativity")
+    path = write_dataset(agg, tmp_path / "agg.nc", stage="aggregate", scene="s", scene_parameters={})
+    back = read_dataset(path, stage="aggregate")
+    assert [str(t) for t in back["topography"].values] == names
+    np.testing.assert_array_equal(back["epsilon"].values, np.arange(len(names), dtype=float))

@@ -28,7 +28,7 @@ def test_measured_scene_is_expanded_and_generator_keys_dropped(tmp_path):
     assert topography_names(scene) == ["a", "b"]
     assert not {"surface", "grid", "seeds"} & set(scene["contact"])
     assert scene["contact"]["solver"]["boundary"] == "free"
-    assert scene["topography"]["undefined"] == "reject" and scene["topography"]["non_square"] == "reject"
+    assert scene["topography"]["undefined"] == "reject" and scene["topography"]["non_square"] == "keep"
     # a file's own unit and size override the scene's; each job's params hold only its file's settings
     got = reader_settings(scene, "b")
     assert got["file_unit"] == "nm" and got["physical_size"] == [1.0, 2.0] and got["path"].endswith("b.nc")

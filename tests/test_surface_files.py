@@ -16,11 +16,20 @@ def test_good_surface():
     assert heights.shape == (8, 8) and length == 1.0
 
 
+def test_rectangular_surface_gives_both_sides():
+    ds = _surface().isel(y=slice(0, 6))
+    ds.attrs = {"length_x": 1.0, "length_y": 0.5, "nx": 8, "ny": 6}
+    heights, length = surface_heights(ds, "s.nc")
+    assert heights.shape == (8, 6) and length == (1.0, 0.5)
+
+
 @pytest.mark.parametrize(
     "spoil, words",
     [
-        (lambda ds: ds.isel(y=slice(0, 6)), "must be a square 2-D field over (x, y)"),
-        (lambda ds: ds.isel(y=0), "must be a square 2-D field over (x, y)"),
+        (lambda ds: ds.isel(y=slice(0, 6)), "is 8 x 6 but the file gives one side 'length'; a rectangular cell "
+                                            "needs the attributes 'length_x' and 'length_y'"),
+        (lambda ds: ds.isel(y=0), "must be a 2-D field over (x, y)"),
+        (lambda ds: ds.assign_attrs(length_x=1.0, length_y=0.0), "'length_y' must be a finite number > 0, got 0.0"),
         (lambda ds: ds.isel(x=slice(0, 2), y=slice(0, 2)), "at least 4 x 4"),
         (lambda ds: ds.assign(heights=ds.heights.where(ds.x > 0)), "holds 8 NaN or infinite value(s)"),
         (lambda ds: ds.drop_vars("heights"), "lacks the variable 'heights'"),

@@ -118,13 +118,17 @@ def test_mean_fill_after_detrend_lies_on_the_trend(tmp_path):
 
 
 @pytest.mark.parametrize("shape, crop", [((48, 32), [8, 0, 32]), ((32, 48), [0, 8, 32]), ((33, 30), [1, 0, 30])])
-def test_non_square_map_rejected_or_cropped(tmp_path, shape, crop):
+def test_non_square_map_kept_cropped_or_rejected(tmp_path, shape, crop):
     h = _noise(shape, seed=2)
     fn = _netcdf(tmp_path, h, (shape[0] * 0.5, shape[1] * 0.5))
+    whole = read_topography(fn, unit="um")  # the default: the whole map, sides (Lx, Ly)
+    np.testing.assert_array_equal(whole.heights, h)
+    assert not whole.square and whole.lengths == pytest.approx((shape[0] * 0.5, shape[1] * 0.5), rel=1e-12)
+    assert whole.length == whole.lengths and whole.info["crop"] is None
     with pytest.raises(TopographyError) as err:
-        read_topography(fn, unit="um")
+        read_topography(fn, unit="um", non_square="reject")
     msg = str(err.value)
-    assert msg.startswith(f"{fn}: ") and f"{shape[0]} x {shape[1]}" in msg and "set topography.non_square: crop" in msg
+    assert msg.startswith(f"{fn}: ") and f"{shape[0]} x {shape[1]}" in msg and "set it to keep" in msg
     surface = read_topography(fn, unit="um", non_square="crop")
     i0, j0, n = crop
     np.testing.assert_array_equal(surface.heights, h[i0:i0 + n, j0:j0 + n])
@@ -148,13 +152,14 @@ def test_file_without_unit_or_size_needs_the_scene(tmp_path):
     assert surface.info["reader"] == "NPYReader" and surface.info["file_unit"] == "nm"
 
 
-def test_non_square_pixels_rejected(tmp_path):
-    fn = _netcdf(tmp_path, _noise((16, 16)), (16.0, 8.0))
-    with pytest.raises(TopographyError, match=r"not square: dx = 1 um along axis 0 and dy = 0.5 um"):
-        read_topography(fn, unit="um")
-    # Within the tolerance |dx/dy - 1| <= 1e-6 the pixels count as square.
-    fn = _netcdf(tmp_path, _noise((16, 16)), (16.0, 16.0 * (1 + 1e-7)), name="almost.nc")
-    assert read_topography(fn, unit="um").heights.shape == (16, 16)
+def test_non_square_pixels_are_kept(tmp_path):
+    h = _noise((16, 16))
+    surface = read_topography(_netcdf(tmp_path, h, (16.0, 8.0)), unit="um")
+    np.testing.assert_array_equal(surface.heights, h)
+    assert not surface.square and surface.length == (16.0, 8.0)  # dx = 1 um, dy = 0.5 um
+    # Within the tolerance |dx/dy - 1| <= 1e-6 the pixels count as square: one side, as for a generated surface.
+    almost = read_topography(_netcdf(tmp_path, h, (16.0, 16.0 * (1 + 1e-7)), name="almost.nc"), unit="um")
+    assert almost.square and almost.length == 16.0
 
 
 def test_detrend_modes(tmp_path):
@@ -214,7 +219,7 @@ def test_unknown_and_missing_files(tmp_path):
         (dict(file_unit="inch"), "topography.file_unit 'inch' is not allowed"),
         (dict(undefined="zero"), "topography.undefined 'zero' is not allowed; use one of reject, mean, harmonic"),
         (dict(detrend="plane"), "use one of none, center, height, curvature"),
-        (dict(non_square="pad"), "topography.non_square 'pad' is not allowed; use one of reject, crop"),
+        (dict(non_square="pad"), "topography.non_square 'pad' is not allowed; use one of keep, crop, reject"),
         (dict(physical_size=(1.0, -1.0)), "topography.physical_size (1.0, -1.0) is not allowed"),
         (dict(physical_size=(1.0,)), "use two finite numbers > 0"),
         (dict(channel=-1), "topography.channel -1 is not allowed"),

@@ -1,8 +1,11 @@
 """Contact-cluster statistics on the periodic cell.
 
 A *cluster* (contact spot) is a connected component of the contact set
-``p > 0`` on the ``(n, n)`` node grid of the periodic cell. Two conventions fix
-what "connected" means here, and both are deliberate:
+``p > 0`` on the ``(n, n)`` node grid of the periodic cell, or the ``(nx, ny)``
+grid of a rectangular cell of sides ``(Lx, Ly)`` (pixels ``dx = Lx / nx`` by
+``dy = Ly / ny``; a float ``length`` means a square cell, a pair ``(Lx, Ly)`` a
+rectangular one, as for the solver). Two conventions fix what "connected" means
+here, and both are deliberate:
 
 * **Periodic.** The cell is a torus (the solver uses a periodic half-space), so
   a spot that leaves the cell through one edge and re-enters through the
@@ -19,8 +22,8 @@ what "connected" means here, and both are deliberate:
   patterns, which are a discretisation artefact, into one large spot.
 
 All functions are pure (no I/O). Areas are fractions of the nominal area
-``A0 = L**2`` unless the key/variable name says otherwise; one node has area
-``1 / n**2``.
+``A0 = L**2`` (``Lx * Ly``) unless the key/variable name says otherwise; one node
+has area ``1 / n**2`` (``1 / (nx * ny)``) of it, the pixel area ``dx * dy``.
 """
 from __future__ import annotations
 
@@ -46,15 +49,16 @@ DEFAULT_N_BINS = 24
 
 
 # --------------------------------------------------------------------------- validation
-def _check_mask(mask) -> np.ndarray:
+def _check_mask(mask, square: bool = True) -> np.ndarray:
     if not isinstance(mask, np.ndarray):
         raise ValueError(f"mask must be a numpy.ndarray of bool, got {type(mask).__name__}")
     if mask.ndim != 2:
-        raise ValueError(f"mask must be 2-D (n, n), got {mask.ndim}-D array of shape {mask.shape}")
-    if mask.shape[0] != mask.shape[1]:
-        raise ValueError(f"mask must be square (n, n), got shape {mask.shape}")
-    if mask.shape[0] < 1:
-        raise ValueError(f"mask must have n >= 1, got shape {mask.shape}")
+        raise ValueError(f"mask must be 2-D (n, n) or (nx, ny), got {mask.ndim}-D array of shape {mask.shape}")
+    if square and mask.shape[0] != mask.shape[1]:
+        raise ValueError(f"mask must be square (n, n) for a square cell (a float length), got shape {mask.shape}; "
+                         "a rectangular cell needs length=(Lx, Ly)")
+    if min(mask.shape) < 1:
+        raise ValueError(f"mask must have n >= 1 (nx, ny >= 1), got shape {mask.shape}")
     if mask.dtype != np.bool_:
         raise ValueError(
             f"mask must have dtype bool, got dtype {mask.dtype}; "
@@ -62,10 +66,26 @@ def _check_mask(mask) -> np.ndarray:
     return mask
 
 
-def _check_length(length) -> float:
-    if isinstance(length, bool) or not isinstance(length, numbers.Real):
-        raise ValueError(f"length must be a positive real number, got {length!r}")
-    value = float(length)
+def _check_length(length):
+    """A float ``L`` (square cell) or a pair ``(Lx, Ly)`` of floats, each finite and > 0."""
+    if isinstance(length, (tuple, list, np.ndarray)) and np.ndim(length) == 1:
+        if len(length) != 2:
+            raise ValueError(f"length must be a positive real number or a pair (Lx, Ly) of them, got {length!r}")
+        return tuple(_check_side(v, length) for v in length)
+    return _check_side(length, length)
+
+
+def _cell_length(length, shape):
+    """``length`` as the solver takes it for a grid of ``shape``: ``(L, L)`` on ``(n, n)`` is the float ``L``."""
+    if np.ndim(length) == 1 and shape[0] == shape[1] and length[0] == length[1]:
+        return length[0]
+    return length
+
+
+def _check_side(value, length) -> float:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ValueError(f"length must be a positive real number or a pair (Lx, Ly) of them, got {length!r}")
+    value = float(value)
     if not (np.isfinite(value) and value > 0):
         raise ValueError(f"length must be finite and > 0, got {length!r}")
     return value
@@ -91,7 +111,7 @@ def default_area_bins(n_total_pixels: int, n_bins: int = DEFAULT_N_BINS) -> np.n
     Parameters
     ----------
     n_total_pixels : int
-        Number of nodes of the cell, ``n**2`` (>= 1).
+        Number of nodes of the cell, ``n**2`` or ``nx * ny`` (>= 1).
     n_bins : int
         Number of bins (>= 1).
 
@@ -123,7 +143,7 @@ def default_area_bins(n_total_pixels: int, n_bins: int = DEFAULT_N_BINS) -> np.n
 
 
 # --------------------------------------------------------------------------- labelling
-def label_clusters(mask: np.ndarray, periodic: bool = True) -> tuple[np.ndarray, int]:
+def label_clusters(mask: np.ndarray, periodic: bool = True, *, square: bool = True) -> tuple[np.ndarray, int]:
     """Label the contact clusters of a periodic cell (4-connectivity).
 
     ``scipy.ndimage.label`` labels the open square; labels facing each other
@@ -134,15 +154,19 @@ def label_clusters(mask: np.ndarray, periodic: bool = True) -> tuple[np.ndarray,
 
     Parameters
     ----------
-    mask : numpy.ndarray of bool, shape (n, n)
+    mask : numpy.ndarray of bool, shape (n, n), or (nx, ny) with ``square=False``
         Contact set (``True`` where the node is in contact), axis 0 = x,
         axis 1 = y, on a periodic square cell; any ``n >= 1``, odd or even.
     periodic : bool
         ``False``: a free patch, no merge across its edges.
+    square : bool
+        ``True`` (default): the cell is square and ``mask`` must be ``(n, n)``.
+        ``False``: a rectangular cell, any ``(nx, ny)``; labelled the same way (the
+        x edges wrap onto each other, and the y edges; pixel sizes do not matter).
 
     Returns
     -------
-    labels : numpy.ndarray of int32, shape (n, n)
+    labels : numpy.ndarray of int32, shape of ``mask``
         0 for non-contact nodes, ``1..n_clusters`` for contact nodes. Numbering
         is deterministic: clusters are ordered by their first node in C
         (row-major) order, so cluster 1 holds the contact node with the
@@ -153,12 +177,12 @@ def label_clusters(mask: np.ndarray, periodic: bool = True) -> tuple[np.ndarray,
     Raises
     ------
     ValueError
-        If ``mask`` is not a 2-D, square, non-empty numpy array of dtype bool.
+        If ``mask`` is not a 2-D, square (with ``square=True``), non-empty numpy
+        array of dtype bool.
     """
-    mask = _check_mask(mask)
-    n = mask.shape[0]
+    mask = _check_mask(mask, square)
     raw, n_raw = ndimage.label(mask, structure=_CROSS)
-    out = np.zeros((n, n), dtype=np.int32)
+    out = np.zeros(mask.shape, dtype=np.int32)
     if n_raw == 0:
         return out, 0
 
@@ -169,7 +193,7 @@ def label_clusters(mask: np.ndarray, periodic: bool = True) -> tuple[np.ndarray,
     if not periodic:
         both[:] = False
     a, b = a[both], b[both]
-    # Vertex 0 (background) stays isolated; the graph is tiny (<= 2n edges) but
+    # Vertex 0 (background) stays isolated; the graph is tiny (<= nx + ny edges) but
     # csgraph keeps the merge O(n_raw) without a Python loop over all labels.
     graph = coo_matrix((np.ones(a.size, dtype=np.int8), (a, b)), shape=(n_raw + 1, n_raw + 1))
     n_comp, comp = connected_components(graph, directed=False)
@@ -200,7 +224,7 @@ def cluster_area_histogram(areas_in_pixels, n_total_pixels: int, bins=None) -> n
     areas_in_pixels : array_like of int, shape (n_clusters,)
         Cluster areas as node counts (>= 1 each); any order.
     n_total_pixels : int
-        Nodes in the cell, ``n**2``; converts node counts to fractions of A0.
+        Nodes in the cell, ``n**2`` (``nx * ny``); converts node counts to fractions of A0.
     bins : array_like of float, shape (n_bins + 1,), optional
         Strictly increasing, positive bin edges in units of A0. Bins are
         ``[e_i, e_{i+1})`` except the last, which also includes its right edge
@@ -242,16 +266,16 @@ def cluster_area_histogram(areas_in_pixels, n_total_pixels: int, bins=None) -> n
     return counts.astype(np.int64)
 
 
-def cluster_statistics(mask: np.ndarray, length: float = 1.0, periodic: bool = True) -> dict:
+def cluster_statistics(mask: np.ndarray, length=1.0, periodic: bool = True) -> dict:
     """Count and areas of the contact clusters of one periodic contact mask.
 
     Parameters
     ----------
-    mask : numpy.ndarray of bool, shape (n, n)
+    mask : numpy.ndarray of bool, shape (n, n), or (nx, ny) for a pair ``length``
         Contact set, as for :func:`label_clusters`.
-    length : float
-        Side ``L`` of the periodic cell [length], > 0; only enters
-        ``areas_physical``.
+    length : float or (float, float)
+        Side ``L`` of the square cell, or sides ``(Lx, Ly)`` of a rectangular one
+        [length], > 0; only enters ``areas_physical``.
     periodic : bool
         As for :func:`label_clusters`.
 
@@ -266,12 +290,13 @@ def cluster_statistics(mask: np.ndarray, length: float = 1.0, periodic: bool = T
         ``areas_pixels`` : numpy.ndarray of int64, shape (count,)
             The same areas as node counts, same order.
         ``areas_physical`` : numpy.ndarray of float64, shape (count,)
-            The same areas in [length**2], ``areas * L**2``.
+            The same areas in [length**2], ``areas * L**2`` (a rectangle:
+            ``areas_pixels * dx * dy``).
         ``mean_area``, ``max_area`` : float
             Mean and largest cluster area as fractions of A0 [-]; 0.0 (not
             NaN) when there is no cluster.
         ``n_total_pixels`` : int
-            ``n**2``, to feed :func:`cluster_area_histogram`.
+            ``n**2`` (``nx * ny``), to feed :func:`cluster_area_histogram`.
 
     Raises
     ------
@@ -279,27 +304,36 @@ def cluster_statistics(mask: np.ndarray, length: float = 1.0, periodic: bool = T
         For a bad mask (see :func:`label_clusters`) or a non-positive length.
     """
     length = _check_length(length)
-    labels, count = label_clusters(mask, periodic)
+    if isinstance(mask, np.ndarray) and mask.ndim == 2:
+        length = _cell_length(length, mask.shape)
+    square = np.ndim(length) == 0
+    labels, count = label_clusters(mask, periodic, square=square)
     n_total = labels.size
     # bincount over labels gives every cluster's node count in one pass.
     px = np.bincount(labels.ravel(), minlength=count + 1)[1:].astype(np.int64)
     px = np.sort(px)[::-1]
     areas = px / n_total
+    if square:
+        physical = areas * length**2
+    else:
+        (lx, ly), (nx, ny) = length, labels.shape
+        physical = px * ((lx / nx) * (ly / ny))  # pixel area dx * dy
     return {
         "count": int(count),
         "areas": areas,
         "areas_pixels": px,
-        "areas_physical": areas * length**2,
+        "areas_physical": physical,
         "mean_area": float(areas.mean()) if count else 0.0,
         "max_area": float(areas[0]) if count else 0.0,
         "n_total_pixels": int(n_total),
     }
 
 
-def _to_mask(field, index: int) -> np.ndarray:
+def _to_mask(field, index: int, square: bool = True) -> np.ndarray:
     arr = np.asarray(field)
-    if arr.ndim != 2 or arr.shape[0] != arr.shape[1]:
-        raise ValueError(f"field {index} must be a square 2-D array (n, n), got shape {arr.shape}")
+    if arr.ndim != 2 or (square and arr.shape[0] != arr.shape[1]):
+        raise ValueError(f"field {index} must be a square 2-D array (n, n) (or (nx, ny) with length=(Lx, Ly)), "
+                         f"got shape {arr.shape}")
     if arr.dtype == np.bool_:
         return arr
     if not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
@@ -311,25 +345,28 @@ def _to_mask(field, index: int) -> np.ndarray:
     return arr > 0
 
 
-def cluster_dataset(masks_or_pressures: Iterable, steps, length: float, bins=None,
+def cluster_dataset(masks_or_pressures: Iterable, steps, length, bins=None,
                     periodic: bool = True, *, length_unit: str = "1") -> xr.Dataset:
     """Per-step cluster statistics as an xarray.Dataset.
 
     Parameters
     ----------
-    masks_or_pressures : iterable of array_like, each shape (n, n)
+    masks_or_pressures : iterable of array_like, each shape (n, n) or (nx, ny)
         One field per load step: a bool contact mask, or a real contact
         pressure field (contact where ``p > 0``). A 3-D array or DataArray
         ``(step, x, y)`` (e.g. ``solve_contact(...).contact_pressure``) works as
-        it iterates over its first axis. All fields share the same ``n``.
+        it iterates over its first axis. All fields share one shape; ``(nx, ny)``
+        with ``nx != ny`` needs a pair ``length``.
     steps : array_like, shape (n_steps,)
         Step coordinate values (e.g. the solver's 1-based step numbers).
-    length : float
-        Side ``L`` of the periodic cell [length], > 0; stored as an attribute
-        (every area here is a fraction of A0 = L**2).
+    length : float or (float, float)
+        Side ``L`` of the square cell, or sides ``(Lx, Ly)`` of a rectangular one
+        [length], > 0; stored as attributes (every area here is a fraction of
+        A0 = L**2 or Lx * Ly): ``length`` and ``n`` for a square cell,
+        ``length_x`` and ``length_y`` for a rectangle, and ``nx``, ``ny`` always.
     bins : array_like of float, shape (n_bins + 1,), optional
         Histogram bin edges in units of A0 (see :func:`cluster_area_histogram`);
-        default ``default_area_bins(n**2)``.
+        default ``default_area_bins(nx * ny)``.
     periodic : bool
         As for :func:`label_clusters` (``False`` for a free patch).
     length_unit : str
@@ -361,25 +398,29 @@ def cluster_dataset(masks_or_pressures: Iterable, steps, length: float, bins=Non
     """
     length = _check_length(length)
     length_units = cf_unit(length_unit, length_power=1)
-    masks, steps = _fields_and_steps(masks_or_pressures, steps)
+    masks, steps = _fields_and_steps(masks_or_pressures, steps, np.ndim(length) == 0)
+    length = _cell_length(length, masks[0].shape)
     n_total = masks[0].size
     edges = default_area_bins(n_total) if bins is None else _check_edges(bins)
     boundary = "periodic" if periodic else "free"
-    attrs = {"length": length, "length_units": length_units, "n": int(masks[0].shape[0]),
-             "cluster_connectivity": 4,
-             "cluster_boundary": boundary}
+    nx, ny = masks[0].shape
+    if np.ndim(length) == 0:
+        cell = {"length": length, "length_units": length_units, "n": int(nx)}
+    else:
+        cell = {"length_x": length[0], "length_y": length[1], "length_units": length_units}
+    attrs = {**cell, "nx": int(nx), "ny": int(ny), "cluster_connectivity": 4, "cluster_boundary": boundary}
     return xr.Dataset(_cluster_variables(masks, length, periodic, edges),
                       coords=_cluster_coords(steps, edges), attrs=attrs)
 
 
-def _fields_and_steps(masks_or_pressures: Iterable, steps) -> tuple[list[np.ndarray], np.ndarray]:
-    """Contact masks (one per field, one shared shape) and the matching 1-D ``steps``."""
-    masks = [_to_mask(f, i) for i, f in enumerate(masks_or_pressures)]
+def _fields_and_steps(masks_or_pressures: Iterable, steps, square: bool = True) -> tuple[list[np.ndarray], np.ndarray]:
+    """Contact masks (one per field, one shared shape, square if ``square``) and the matching 1-D ``steps``."""
+    masks = [_to_mask(f, i, square) for i, f in enumerate(masks_or_pressures)]
     if not masks:
         raise ValueError("masks_or_pressures is empty: need at least one (n, n) field")
     shapes = {m.shape for m in masks}
     if len(shapes) != 1:
-        raise ValueError(f"all fields must share one shape (n, n), got {sorted(shapes)}")
+        raise ValueError(f"all fields must share one shape (n, n) or (nx, ny), got {sorted(shapes)}")
     steps = np.asarray(steps)
     if steps.ndim != 1 or steps.size != len(masks):
         raise ValueError(
@@ -387,7 +428,7 @@ def _fields_and_steps(masks_or_pressures: Iterable, steps) -> tuple[list[np.ndar
     return masks, steps
 
 
-def _cluster_variables(masks: list[np.ndarray], length: float, periodic: bool,
+def _cluster_variables(masks: list[np.ndarray], length, periodic: bool,
                        edges: np.ndarray) -> dict[str, xr.Variable]:
     """Count, mean and largest area, and area histogram of each mask's clusters."""
     n_total = masks[0].size

@@ -19,6 +19,7 @@ import xarray as xr
 from .accuracy import PERIMETER_C, perimeter_corrected_area
 from .aggregate import CASE_DIMS, TOPOGRAPHY_DIM
 from .quantities import cf_unit
+from .solver.results import cell_attrs as solver_cell_attrs
 from .surface import finite_difference_rms_slope, nonperiodic_moments, spectral_moments
 
 _CASE_COORD_ATTRS = {
@@ -139,12 +140,13 @@ def contact_dataset(result: xr.Dataset, *, rms_slope: float, alpha: float, e_sta
     ``e_star`` in its ``pressure_units``); what this adds is dimensionless.
     """
     ds = result.drop_vars("wall_time", errors="ignore")
-    dx = float(result.attrs["length"]) / int(result.attrs["n"])
+    dx, rect = pixel_scale(result.attrs)
     ds["area_fraction_corrected"] = xr.DataArray(
         perimeter_corrected_area(ds["area_fraction"].values, ds["contact_perimeter"].values, dx),
         dims=("step",),
         attrs={"units": "1",
-               "long_name": f"perimeter-corrected contact area fraction A_pix/A0 - c P dx, c = {PERIMETER_C:.4f}"},
+               "long_name": f"perimeter-corrected contact area fraction A_pix/A0 - c P dx, c = {PERIMETER_C:.4f}"
+                            + (", dx = sqrt(dx dy) for rectangular pixels" if rect else "")},
     )
     ds["kappa"] = (e_star * rms_slope / ds["mean_contact_pressure"]).assign_attrs(
         units="1", long_name="kappa = E* h' / mean contact pressure")
@@ -159,18 +161,18 @@ def contact_dataset(result: xr.Dataset, *, rms_slope: float, alpha: float, e_sta
 def measured_surface_dataset(measured, *, name: str) -> xr.Dataset:
     """Dataset of one measured surface (a :class:`roughcontact.topography.MeasuredSurface`).
 
-    ``heights`` (n, n) and ``x``, ``y`` in the study's length unit ``measured.unit``; the
+    ``heights`` (nx, ny) and ``x``, ``y`` in the study's length unit ``measured.unit``; the
     statistics come from differences inside the patch (:func:`roughcontact.surface.nonperiodic_moments`:
     a measured patch is not periodic, and its spectrum would count the jump between opposite
-    edges as roughness). Global attributes: ``length`` (side L), ``length_units``, ``n`` and
-    ``source`` (the reader's provenance as JSON: file, sha256, reader, units and
-    sizes before conversion, undefined points, detrending, cropping).
+    edges as roughness). Global attributes (:func:`cell_attrs`): ``length`` and ``n`` for a square
+    cell with square pixels, else ``length_x``, ``length_y``, ``nx`` and ``ny``; ``length_units``
+    and ``source`` (the reader's provenance as JSON: file, sha256, reader, units and sizes before
+    conversion, undefined points, detrending, cropping).
     """
-    h, length, unit = measured.heights, float(measured.length), measured.unit
-    n = h.shape[0]
-    stats = nonperiodic_moments(h, length)
+    h, unit = measured.heights, measured.unit
+    stats = nonperiodic_moments(h, measured.lengths)
     u_len = cf_unit(unit, length_power=1)
-    x = np.arange(n) * (length / n)
+    (nx, ny), (lx, ly) = h.shape, measured.lengths
     ds = xr.Dataset(
         {
             "heights": (("x", "y"), h, {"units": u_len, "long_name": "surface height h(x, y)"}),
@@ -184,41 +186,82 @@ def measured_surface_dataset(measured, *, name: str) -> xr.Dataset:
             "alpha": ((), stats["alpha"], {"units": "1", "long_name": "Nayak bandwidth alpha = m0 m4 / m2^2"}),
         },
         coords={
-            "x": ("x", x, {"units": u_len, "long_name": "position along x"}),
-            "y": ("y", x.copy(), {"units": u_len, "long_name": "position along y"}),
+            "x": ("x", np.arange(nx) * (lx / nx), {"units": u_len, "long_name": "position along x"}),
+            "y": ("y", np.arange(ny) * (ly / ny), {"units": u_len, "long_name": "position along y"}),
         },
-        attrs={"length": length, "length_units": u_len, "n": int(n),
+        attrs={**cell_attrs(h.shape, measured.length), "length_units": u_len,
                "source": json.dumps(measured.info, sort_keys=True)},
     )
     return expand_case(ds, topography=name)
 
 
-def surface_heights(ds: xr.Dataset, source) -> tuple[np.ndarray, float]:
-    """The ``(n, n)`` heights and the cell side ``L`` of a surface dataset, checked.
+def cell_attrs(shape: tuple[int, int], length) -> dict:
+    """Global attributes of a surface file's cell: ``length`` (L) and ``n`` when square, else its sides and counts.
+
+    ``length`` is the solver's argument: a float for a square cell, the pair (Lx, Ly) otherwise.
+    As the solver's (:func:`roughcontact.solver.results.cell_attrs`): a square cell keeps the
+    attributes of a generated surface; a rectangular one (nx != ny or dx != dy) gets ``length_x``,
+    ``length_y``, ``nx`` and ``ny`` instead, so that no reader can take one side for both.
+    """
+    sides, grid = solver_cell_attrs(shape, length)
+    return {**sides, "n": grid["n"]} if "n" in grid else {**sides, **grid}
+
+
+def pixel_scale(attrs) -> tuple[float, bool]:
+    """The pixel size of a cell from its attributes, and whether its pixels are rectangular.
+
+    ``dx = L / n`` for a square cell (:func:`cell_attrs`); for a rectangular one the geometric mean
+    ``sqrt(dx dy)`` of ``dx = Lx / nx`` and ``dy = Ly / ny`` (the perimeter correction's length
+    scale, exact for square pixels and a first-order estimate otherwise).
+    """
+    if "length_x" not in attrs:
+        return float(attrs["length"]) / int(attrs["n"]), False
+    dx, dy = float(attrs["length_x"]) / int(attrs["nx"]), float(attrs["length_y"]) / int(attrs["ny"])
+    return (dx if dx == dy else float(np.sqrt(dx * dy))), dx != dy
+
+
+def cell_length(attrs, shape: tuple[int, int], source):
+    """The solver's ``length`` from :func:`cell_attrs`' attributes: L, or (Lx, Ly); checked.
+
+    ``source`` names the file in messages. Raises ``ValueError`` when the attributes are missing or
+    not finite numbers > 0.
+    """
+    keys = ("length_x", "length_y") if "length_x" in attrs else ("length",)
+    values = []
+    for key in keys:
+        value = attrs.get(key)
+        try:
+            value = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"{source}: the global attribute {key!r} (side of the cell) is missing or not a "
+                             f"number: {value!r}") from None
+        if not (np.isfinite(value) and value > 0):
+            raise ValueError(f"{source}: the global attribute {key!r} must be a finite number > 0, got {value!r}")
+        values.append(value)
+    if len(values) == 1 and shape[0] != shape[1]:
+        raise ValueError(f"{source}: 'heights' is {shape[0]} x {shape[1]} but the file gives one side 'length'; a "
+                         "rectangular cell needs the attributes 'length_x' and 'length_y'")
+    return values[0] if len(values) == 1 else tuple(values)
+
+
+def surface_heights(ds: xr.Dataset, source):
+    """The ``(nx, ny)`` heights and the solver's ``length`` (L, or (Lx, Ly)) of a surface dataset, checked.
 
     ``source`` names the file in messages. Raises ``ValueError`` when the heights are
-    missing, not a square 2-D field of at least 4 x 4 points over ``x, y``, or not all
-    finite, or when the global attribute ``length`` is missing or not a positive number.
+    missing, not a 2-D field of at least 4 x 4 points over ``x, y``, or not all
+    finite, or when the cell's sides (:func:`cell_attrs`) are missing or not positive numbers.
     """
     if "heights" not in ds:
         raise ValueError(f"{source}: lacks the variable 'heights'")
     da = ds["heights"].squeeze([d for d in (*CASE_DIMS, TOPOGRAPHY_DIM) if d in ds["heights"].dims])
-    if da.dims != ("x", "y") or da.shape[0] != da.shape[1] or da.shape[0] < 4:
-        raise ValueError(f"{source}: 'heights' must be a square 2-D field over (x, y) of at least 4 x 4 points, "
+    if da.dims != ("x", "y") or min(da.shape) < 4:
+        raise ValueError(f"{source}: 'heights' must be a 2-D field over (x, y) of at least 4 x 4 points, "
                          f"got dims {da.dims} and shape {da.shape}")
     heights = np.asarray(da.values, dtype=float)
     if not np.all(np.isfinite(heights)):
         raise ValueError(f"{source}: 'heights' holds {int(np.sum(~np.isfinite(heights)))} NaN or infinite "
                          "value(s); every height must be finite")
-    length = ds.attrs.get("length")
-    try:
-        length = float(length)
-    except (TypeError, ValueError):
-        raise ValueError(f"{source}: the global attribute 'length' (side of the cell) is missing or not a "
-                         f"number: {length!r}") from None
-    if not (np.isfinite(length) and length > 0):
-        raise ValueError(f"{source}: the global attribute 'length' must be a finite number > 0, got {length!r}")
-    return heights, length
+    return heights, cell_length(ds.attrs, heights.shape, source)
 
 
 def representativity_batch(surface: dict, *, k_l: str, k_s: Sequence[str], hurst: str, seeds: int,

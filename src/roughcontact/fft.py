@@ -223,16 +223,28 @@ def get_fft(shape: tuple[int, int], threads: int = 1, backend: str | None = None
     return _cached_fft(*key, name)
 
 
-def wavenumbers(n: int, length: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
-    """Mode numbers of the rfft2 grid for an ``n x n`` periodic domain of side ``length``.
+def wavenumbers(shape, length=1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Wavenumbers of the rfft2 grid of a periodic ``nx x ny`` domain of sides ``Lx x Ly``.
 
-    Returns ``(kx, ky)`` broadcastable to ``(n, n//2+1)``, in cycles per ``length``
-    (integers for ``length = 1``): ``kx`` along axis 0 (``fftfreq``), ``ky`` along
-    axis 1 (``rfftfreq``). Multiply by ``2*pi/length`` for angular wavenumbers in
-    rad per unit length.
+    Parameters
+    ----------
+    shape : int or (int, int)
+        Grid points ``(nx, ny)`` along axis 0 (x) and axis 1 (y); an int ``n`` means ``(n, n)``.
+    length : float or (float, float)
+        Sides ``(Lx, Ly)`` of the domain [length]; a float ``L`` means ``(L, L)``.
+
+    Returns
+    -------
+    (kx, ky) : numpy.ndarray, float64, shapes (nx, 1) and (1, ny//2+1)
+        Broadcastable to ``(nx, ny//2+1)``: ``kx = mx / Lx`` along axis 0 (``fftfreq``
+        mode numbers ``mx``), ``ky = my / Ly`` along axis 1 (``rfftfreq``), in cycles per
+        unit length (the integer mode numbers for unit sides). Multiply by ``2*pi`` for
+        angular wavenumbers in rad per unit length: ``|q| = 2 pi sqrt(kx^2 + ky^2)``.
     """
-    kx = np.fft.fftfreq(n, d=1.0 / n)[:, None] / length
-    ky = np.fft.rfftfreq(n, d=1.0 / n)[None, :] / length
+    nx, ny = (shape, shape) if np.ndim(shape) == 0 else shape
+    lx, ly = (length, length) if np.ndim(length) == 0 else length
+    kx = np.fft.fftfreq(nx, d=1.0 / nx)[:, None] / lx
+    ky = np.fft.rfftfreq(ny, d=1.0 / ny)[None, :] / ly
     return kx, ky
 
 

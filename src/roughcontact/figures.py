@@ -123,14 +123,14 @@ def _measured_contact_inputs(scene: Mapping) -> dict[str, Paths]:
     return {"agg": "aggregate/contact.nc", "fit": "fit/cel.nc", "surfaces": _surface_files(scene)}
 
 
-def _grid_sizes(paths: Sequence[str]) -> dict[str, int]:
-    """Grid size ``N`` of each surface file by topography name, from its attributes alone (a
+def _grid_sizes(paths: Sequence[str]) -> dict[str, tuple[int, int]]:
+    """Grid ``(nx, ny)`` of each surface file by topography name, from its dimensions alone (a
     measured height map can be large, and only its size is needed)."""
     sizes = {}
     for path in paths:
         with xr.open_dataset(path, engine="netcdf4") as ds:
             name = str(ds["topography"].values.ravel()[0]) if "topography" in ds.coords else path
-            sizes[name] = int(ds.attrs["n"]) if "n" in ds.attrs else int(ds.sizes["x"])
+            sizes[name] = (int(ds.sizes["x"]), int(ds.sizes["y"]))
     return sizes
 
 

@@ -173,6 +173,21 @@ def write_text_atomic(path: str | os.PathLike, text: str, *, encoding: str = "ut
     return Path(path)
 
 
+def _full_strings(ds: xr.Dataset) -> xr.Dataset:
+    """``ds`` with no fixed string width in any variable's encoding (every string is written whole).
+
+    A string variable read from NetCDF keeps the width of what it held (``dtype <U3``) in its
+    encoding, and ``xr.concat`` keeps the first dataset's: written with it, longer names of
+    the later datasets would be cut to that width ("frt2" -> "frt"). Without it, strings are
+    written as NetCDF-4 variable-length strings, whatever their lengths and characters.
+    """
+    for var in ds.variables.values():
+        if var.dtype.kind in "USO":
+            for key in ("dtype", "char_dim_name"):
+                var.encoding.pop(key, None)
+    return ds
+
+
 def write_dataset(ds: xr.Dataset, path: str | os.PathLike, *, stage: str, scene: str,
                   scene_parameters: Mapping) -> Path:
     """Write ``ds`` atomically to ``path`` as NetCDF-4 with provenance attributes.
@@ -186,7 +201,7 @@ def write_dataset(ds: xr.Dataset, path: str | os.PathLike, *, stage: str, scene:
             if not np.all(np.isfinite(var.values)):
                 raise ValueError(f"variable {name!r} holds NaN or inf; refusing to write {path}")
     path = Path(path)
-    out = ds.copy()
+    out = _full_strings(ds.copy())
     out.attrs = {**ds.attrs, **provenance_attrs(stage, scene, scene_parameters)}
     with atomic_output(path) as tmp:
         try:

@@ -91,13 +91,21 @@ def _recorded(ds: xr.Dataset) -> dict:
     return recorded if isinstance(recorded, dict) else {}
 
 
-def _summary(agg: xr.Dataset, sizes: Mapping[str, int] | None) -> str:
-    """Title: number of topographies, grid N, boundary of the half-space, load range ``p0/E*``."""
+def _grid_text(sizes: Mapping[str, tuple[int, int]]) -> str:
+    """The grids of the files: ``N = 256``, ``N = 150-480`` when all are square, else each ``nx x ny``."""
+    shapes = sorted(set(sizes.values()), key=lambda s: (s[0] * s[1], s))
+    if all(nx == ny for nx, ny in shapes):
+        lo, hi = shapes[0][0], shapes[-1][0]
+        return f"$N = {lo}$" if lo == hi else f"$N$ = {lo}-{hi}"
+    return "grids " + ", ".join(rf"${nx} \times {ny}$" for nx, ny in shapes)
+
+
+def _summary(agg: xr.Dataset, sizes: Mapping[str, tuple[int, int]] | None) -> str:
+    """Title: number of topographies, grids, boundary of the half-space, load range ``p0/E*``."""
     n = len(_names(agg))
     parts = [f"{n} topograph{'y' if n == 1 else 'ies'}"]
     if sizes:
-        lo, hi = min(sizes.values()), max(sizes.values())
-        parts.append(f"$N = {lo}$" if lo == hi else f"$N$ = {lo}-{hi}")
+        parts.append(_grid_text(sizes))
     solver = _recorded(agg).get("solver", {})
     boundary = agg.attrs.get("boundary", solver.get("boundary") if isinstance(solver, dict) else None)
     if boundary:
@@ -151,12 +159,21 @@ def _window_patch(fit: xr.Dataset) -> Patch:
 
 
 def _block_mean(h: np.ndarray, pixels: int) -> np.ndarray:
-    """``h`` averaged over ``f x f`` blocks (``f = ceil(n / pixels)``; a ragged edge is cropped)."""
-    f = -(-h.shape[0] // pixels)
+    """``h`` (nx, ny) averaged over ``f x f`` blocks (``f = ceil(max(nx, ny) / pixels)``; ragged edges cropped)."""
+    f = -(-max(h.shape) // pixels)
     if f <= 1:
         return h
-    m = h.shape[0] // f
-    return h[:m * f, :m * f].reshape(m, f, m, f).mean(axis=(1, 3))
+    mx, my = h.shape[0] // f, h.shape[1] // f
+    return h[:mx * f, :my * f].reshape(mx, f, my, f).mean(axis=(1, 3))
+
+
+def _cell_label(ds: xr.Dataset, shape: tuple[int, int], utex: str) -> tuple[tuple[float, float], str]:
+    """The sides (Lx, Ly) of a surface file's cell and its title text (``L``, ``N`` or both sides)."""
+    if "length_x" in ds.attrs:
+        lx, ly = float(ds.attrs["length_x"]), float(ds.attrs["length_y"])
+        return (lx, ly), rf"${lx:.3g} \times {ly:.3g}$ {utex}, ${shape[0]} \times {shape[1]}$"
+    length = float(ds.attrs.get("length", shape[0]))
+    return (length, length), f"$L$ = {length:.3g} {utex}, $N$ = {int(ds.attrs.get('n', shape[0]))}"
 
 
 def _scalar(ds: xr.Dataset, name: str) -> float:
@@ -170,10 +187,12 @@ def fig_topographies(surfaces: Sequence[xr.Dataset]) -> Figure:
     Parameters
     ----------
     surfaces : sequence of xarray.Dataset
-        One per topography (``results/{scene}/surfaces/{name}.nc``): ``heights(x, y)``, square
-        ``(n, n)`` [unit]; ``rms_height``, ``rms_slope`` [1] and ``alpha`` [1] (Nayak
+        One per topography (``results/{scene}/surfaces/{name}.nc``): ``heights(x, y)``,
+        ``(nx, ny)`` [unit]; ``rms_height``, ``rms_slope`` [1] and ``alpha`` [1] (Nayak
         bandwidth), each scalar or along a length-1 ``topography`` dim whose label is the
-        name; global attrs ``length`` (side ``L``) [unit], ``n`` and ``length_units``.
+        name; global attrs ``length`` (side ``L``) [unit] and ``n`` for a square cell, or
+        ``length_x``, ``length_y``, ``nx``, ``ny`` (:func:`roughcontact.datasets.cell_attrs`),
+        and ``length_units``. Each map is drawn to scale.
 
     Returns
     -------
@@ -195,17 +214,18 @@ def fig_topographies(surfaces: Sequence[xr.Dataset]) -> Figure:
         axes = fig.subplots(nrows, ncols, squeeze=False)
         for ax, ds in zip(axes.flat, surfaces, strict=False):
             h = np.asarray(ds["heights"].transpose(..., "x", "y").values, dtype=float).squeeze()
-            if h.ndim != 2 or h.shape[0] != h.shape[1]:
-                raise ValueError(f"heights must be a square 2-D map, got shape {h.shape}")
-            length, unit = float(ds.attrs.get("length", h.shape[0])), str(ds.attrs.get("length_units", "1"))
-            utex = plots._unit_tex(unit)
+            if h.ndim != 2:
+                raise ValueError(f"heights must be a 2-D map, got shape {h.shape}")
+            utex = plots._unit_tex(str(ds.attrs.get("length_units", "1")))
+            (lx, ly), cell = _cell_label(ds, h.shape, utex)
             name = str(ds[_DIM].values.ravel()[0]) if _DIM in ds.coords else str(ds.attrs.get("source_file", ""))
-            im = ax.imshow(_block_mean(h, MAP_PIXELS).T, origin="lower", extent=(0, length, 0, length),
+            im = ax.imshow(_block_mean(h, MAP_PIXELS).T, origin="lower", extent=(0, lx, 0, ly),
                            interpolation="nearest")
-            ax.set_title(f"{name}\n$L$ = {length:.3g} {utex}, $N$ = {int(ds.attrs.get('n', h.shape[0]))}, "
-                         rf"$\sigma$ = {_scalar(ds, 'rms_height'):.3g} {utex}" "\n"
-                         rf"$h'$ = {_scalar(ds, 'rms_slope'):.3g}, $\alpha$ = {_scalar(ds, 'alpha'):.3g}",
-                         fontsize=7)
+            sigma = rf"$\sigma$ = {_scalar(ds, 'rms_height'):.3g} {utex}"
+            slope = rf"$h'$ = {_scalar(ds, 'rms_slope'):.3g}, $\alpha$ = {_scalar(ds, 'alpha'):.3g}"
+            # a rectangle's two sizes fill the line: its sigma goes to the next one
+            lines = [cell, f"{sigma}, {slope}"] if "length_x" in ds.attrs else [f"{cell}, {sigma}", slope]
+            ax.set_title("\n".join([name, *lines]), fontsize=7)
             ax.set_xlabel(f"$x$ [{utex}]")
             ax.set_ylabel(f"$y$ [{utex}]")
             # Below the map: a colour bar at the side would sit under the (wider) title.
@@ -228,7 +248,7 @@ def _prepare(agg: xr.Dataset, fit: xr.Dataset | None, estimator: str, required):
 
 
 def fig_measured_area_load(agg: xr.Dataset, fit: xr.Dataset | None = None, *, estimator: str = "joint",
-                           sizes: Mapping[str, int] | None = None) -> Figure:
+                           sizes: Mapping[str, tuple[int, int]] | None = None) -> Figure:
     """``A/A0`` against ``p0/(E* h')`` per topography, log-log (cf. the paper's Fig. 2).
 
     Markers and thin lines: each topography's converged steps, its load normalised by its own
@@ -249,8 +269,8 @@ def fig_measured_area_load(agg: xr.Dataset, fit: xr.Dataset | None = None, *, es
         :func:`roughcontact.fit.fit_topographies` output.
     estimator : str
         Which estimator of ``fit`` to draw.
-    sizes : mapping of str to int, optional
-        Grid size ``N`` per topography, for the title.
+    sizes : mapping of str to (int, int), optional
+        Grid ``(nx, ny)`` per topography, for the title.
 
     Returns
     -------
@@ -298,7 +318,7 @@ def fig_measured_area_load(agg: xr.Dataset, fit: xr.Dataset | None = None, *, es
 
 
 def fig_measured_kappa(agg: xr.Dataset, fit: xr.Dataset | None = None, *, estimator: str = "paper",
-                       sizes: Mapping[str, int] | None = None) -> Figure:
+                       sizes: Mapping[str, tuple[int, int]] | None = None) -> Figure:
     """``kappa = E* h'/pbar`` against ``A/A0`` per topography (cf. the paper's Fig. 3).
 
     Markers and thin lines: each topography's converged steps; grey crosses: the unconverged

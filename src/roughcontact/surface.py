@@ -133,23 +133,29 @@ def finite_difference_rms_slope(heights: np.ndarray, length: float = 1.0) -> flo
     return float(np.sqrt(np.mean(gx**2 + gy**2)))
 
 
-def nonperiodic_moments(heights: np.ndarray, length: float = 1.0) -> dict[str, float]:
-    """Statistics of a measured ``(n, n)`` patch (not periodic), from finite differences.
+def nonperiodic_moments(heights: np.ndarray, length=1.0) -> dict[str, float]:
+    """Statistics of a measured ``(nx, ny)`` patch (not periodic), from finite differences.
 
-    A measured patch's spectrum would count the jump between opposite edges as roughness,
-    so its moments come from differences taken inside the patch only: forward first and
-    second differences along x and along y, averaged over both directions. Same keys and
-    units as :func:`spectral_moments` (``rms_slope`` = sqrt(<|grad h|^2>) = sqrt(2 m2));
-    differences are biased low against the spectral derivative at the pixel scale, as
-    :func:`finite_difference_rms_slope` is.
+    ``length`` is the side L of a square patch or its sides ``(Lx, Ly)``; pixels
+    ``dx = Lx / nx``, ``dy = Ly / ny``. A measured patch's spectrum would count the jump
+    between opposite edges as roughness, so its moments come from differences taken inside
+    the patch only: forward first and second differences along x and along y, averaged over
+    both directions. Same keys and units as :func:`spectral_moments` (``rms_slope`` =
+    sqrt(<|grad h|^2>) = sqrt(2 m2)); differences are biased low against the spectral
+    derivative at the pixel scale, as :func:`finite_difference_rms_slope` is.
     """
     h = np.asarray(heights, dtype=float)
-    if h.ndim != 2 or h.shape[0] != h.shape[1] or h.shape[0] < 3:
-        raise ValueError(f"heights must be a square 2-D array of at least 3 x 3, got shape {h.shape}")
-    dx = length / h.shape[0]
+    if h.ndim != 2 or min(h.shape) < 3:
+        raise ValueError(f"heights must be a 2-D array of at least 3 x 3, got shape {h.shape}")
+    lx, ly = (float(length),) * 2 if np.ndim(length) == 0 else (float(v) for v in length)
+    dx, dy = lx / h.shape[0], ly / h.shape[1]
     m0 = float(np.mean((h - h.mean()) ** 2))
-    m2 = 0.5 * float(np.mean(np.diff(h, axis=0) ** 2) + np.mean(np.diff(h, axis=1) ** 2)) / dx**2
-    m4 = 0.5 * float(np.mean(np.diff(h, 2, axis=0) ** 2) + np.mean(np.diff(h, 2, axis=1) ** 2)) / dx**4
+    d1 = float(np.mean(np.diff(h, axis=0) ** 2)), float(np.mean(np.diff(h, axis=1) ** 2))
+    d2 = float(np.mean(np.diff(h, 2, axis=0) ** 2)), float(np.mean(np.diff(h, 2, axis=1) ** 2))
+    if dx == dy:  # the square pixel's expressions, bit for bit those of earlier releases
+        m2, m4 = 0.5 * (d1[0] + d1[1]) / dx**2, 0.5 * (d2[0] + d2[1]) / dx**4
+    else:
+        m2, m4 = 0.5 * (d1[0] / dx**2 + d1[1] / dy**2), 0.5 * (d2[0] / dx**4 + d2[1] / dy**4)
     return {
         "rms_height": float(np.sqrt(m0)),
         "rms_slope": float(np.sqrt(2.0 * m2)),

@@ -1,8 +1,9 @@
-"""Measured topography files, read with SurfaceTopography into the contact solver's square height array.
+"""Measured topography files, read with SurfaceTopography into the contact solver's height array.
 
 Every file format is read by SurfaceTopography (``open_topography`` picks the reader from the
-file's contents); this module only checks that the data suits the solver (one 2-D uniform map
-with square pixels), converts it to the study's length unit and prepares it:
+file's contents); this module only checks that the data suits the solver (one 2-D uniform map;
+any number of points along each axis, pixels of any aspect ratio), converts it to the study's
+length unit and prepares it:
 
 1. **read** the channel, in the file's own unit and size where it carries them (the scene's
    ``file_unit`` / ``physical_size`` are only used where it does not), then convert heights and
@@ -14,7 +15,8 @@ with square pixels), converts it to the study's length unit and prepares it:
    contact spots. Fitting before cropping uses every measured point for the instrument's tilt or
    form (a property of the whole scan), rather than re-levelling the cropped patch by itself;
 3. **fill** the undefined (not measured) points of the detrended heights ("mean" or "harmonic");
-4. **crop** to the centred largest square when the map is not square and cropping is allowed.
+4. **crop** to the centred largest square block when the map is not square and the scene asks for
+   it (``non_square: crop``); by default (``keep``) the whole rectangular map is used.
 
 Every failure raises :class:`TopographyError`, whose message starts with the file path, says
 what is wrong and what is allowed, and names the config field (``topography.<key>``) to change.
@@ -40,9 +42,11 @@ LENGTH_UNITS = ("m", "mm", "um", "nm")
 UNDEFINED_MODES = ("reject", "mean", "harmonic")
 #: SurfaceTopography detrend modes offered (config ``topography.detrend``); "none" keeps the heights.
 DETREND_MODES = ("none", "center", "height", "curvature")
-#: What to do with a map that is not square (config ``topography.non_square``).
-NON_SQUARE_MODES = ("reject", "crop")
-#: Largest relative difference |dx/dy - 1| of the pixel sizes still taken as square.
+#: What to do with a map that is not square (config ``topography.non_square``): use it whole
+#: (``keep``, the default), the centred largest square block (``crop``) or refuse it (``reject``).
+NON_SQUARE_MODES = ("keep", "crop", "reject")
+#: Largest relative difference |dx/dy - 1| of the pixel sizes still taken as square (the cell's
+#: sides are then recorded as one length, as for a generated surface).
 PIXEL_RTOL = 1e-6
 
 
@@ -52,15 +56,15 @@ class TopographyError(ValueError):
 
 @dataclass(frozen=True)
 class MeasuredSurface:
-    """A measured surface on the contact solver's square grid.
+    """A measured surface on the contact solver's grid.
 
     Attributes
     ----------
     heights : np.ndarray
-        Heights, float64, shape (n, n), C-contiguous, finite everywhere, in ``unit``; axis 0 is
+        Heights, float64, shape (nx, ny), C-contiguous, finite everywhere, in ``unit``; axis 0 is
         the file's x axis, axis 1 its y axis.
-    length : float
-        Side L of the square patch, in ``unit`` (the pixel size is ``length / n``).
+    lengths : (float, float)
+        Sides (Lx, Ly) of the patch, in ``unit``; pixels ``dx = Lx / nx``, ``dy = Ly / ny``.
     unit : str
         The study's length unit, one of :data:`LENGTH_UNITS`.
     info : dict
@@ -68,15 +72,26 @@ class MeasuredSurface:
     """
 
     heights: np.ndarray
-    length: float
+    lengths: tuple[float, float]
     unit: str
     info: dict
+
+    @property
+    def square(self) -> bool:
+        """Whether the cell is square with square pixels (nx == ny and |dx/dy - 1| <= PIXEL_RTOL)."""
+        (nx, ny), (lx, ly) = self.heights.shape, self.lengths
+        return nx == ny and abs(lx / ly - 1.0) <= PIXEL_RTOL
+
+    @property
+    def length(self) -> float | tuple[float, float]:
+        """The solver's ``length`` argument: the side L of a square cell, else the pair (Lx, Ly)."""
+        return self.lengths[0] if self.square else self.lengths
 
 
 def read_topography(path, *, unit: str, file_unit: str | None = None,
                     physical_size: tuple[float, float] | None = None, undefined: str = "reject",
-                    detrend: str = "none", non_square: str = "reject", channel: int = 0) -> MeasuredSurface:
-    """Read a measured topography file into a square height array in the study's unit.
+                    detrend: str = "none", non_square: str = "keep", channel: int = 0) -> MeasuredSurface:
+    """Read a measured topography file into a height array in the study's unit.
 
     Parameters
     ----------
@@ -97,14 +112,15 @@ def read_topography(path, *, unit: str, file_unit: str | None = None,
         "none", "center" (mean), "height" (best plane) or "curvature" (best quadric), fitted to the
         defined points of the full measured area, before filling and cropping.
     non_square : str
-        "reject" a map with nx != ny, or "crop" it to the centred n x n block, n = min(nx, ny).
+        "keep" a map with nx != ny whole, "crop" it to the centred n x n block, n = min(nx, ny),
+        or "reject" it.
     channel : int
         Index of the data channel in a multi-channel file (0: the first).
 
     Returns
     -------
     MeasuredSurface
-        Heights of shape (n, n) and side length in ``unit``, and provenance ``info``.
+        Heights of shape (nx, ny) and the sides (Lx, Ly) in ``unit``, and provenance ``info``.
 
     Raises
     ------
@@ -115,10 +131,13 @@ def read_topography(path, *, unit: str, file_unit: str | None = None,
     physical_size = _check_arguments(name, unit, file_unit, physical_size, undefined, detrend, non_square, channel)
     info = {"file": name, "sha256": _sha256(name)}
     topo = _load(name, info, unit=unit, file_unit=file_unit, physical_size=physical_size, channel=channel)
-    pixel = _check_grid(name, topo, non_square)
+    dx, dy = _check_grid(name, topo, non_square)
     heights = _detrend_and_fill(name, topo, info, undefined=undefined, detrend=detrend)
-    heights, info["crop"] = _crop(heights)
-    return MeasuredSurface(heights=heights, length=heights.shape[0] * pixel, unit=unit, info=info)
+    heights, info["crop"] = _crop(heights) if non_square == "crop" else (heights, None)
+    nx, ny = heights.shape
+    lx = nx * dx
+    ly = lx if nx == ny and abs(dx / dy - 1.0) <= PIXEL_RTOL else ny * dy  # square: one side, exactly
+    return MeasuredSurface(heights=heights, lengths=(lx, ly), unit=unit, info=info)
 
 
 def _check_arguments(name, unit, file_unit, physical_size, undefined, detrend, non_square, channel):
@@ -267,21 +286,16 @@ def _to_unit(name, topo, unit):
     return topo.to_unit(unit)
 
 
-def _check_grid(name, topo, non_square) -> float:
-    """Check the sizes, square pixels and (unless cropping) a square map; returns the pixel size in ``unit``."""
+def _check_grid(name, topo, non_square) -> tuple[float, float]:
+    """Check the sizes and (with ``non_square: reject``) a square map; the pixel sizes (dx, dy) in ``unit``."""
     (nx, ny), (lx, ly) = topo.nb_grid_pts, topo.physical_sizes
     if not all(np.isfinite(s) and s > 0 for s in (lx, ly)):
         raise TopographyError(f"{name}: the physical size ({lx}, {ly}) {topo.unit} is not positive and finite")
-    dx, dy = lx / nx, ly / ny
-    if not abs(dx / dy - 1) <= PIXEL_RTOL:
-        raise TopographyError(f"{name}: the pixels are not square: dx = {dx:.9g} {topo.unit} along axis 0 and "
-                              f"dy = {dy:.9g} {topo.unit} along axis 1; the contact solver needs "
-                              f"|dx/dy - 1| <= {PIXEL_RTOL:g}")
     if nx != ny and non_square == "reject":
-        raise TopographyError(f"{name}: the map is {nx} x {ny} points, not square; the contact solver needs a "
-                              f"square one: set topography.non_square: crop to use the centred "
+        raise TopographyError(f"{name}: the map is {nx} x {ny} points, not square, and topography.non_square is "
+                              f"reject: set it to keep to use the whole map, or to crop to use the centred "
                               f"{min(nx, ny)} x {min(nx, ny)} block")
-    return dx
+    return lx / nx, ly / ny
 
 
 def _detrend_and_fill(name, topo, info, *, undefined, detrend) -> np.ndarray:

@@ -6,12 +6,18 @@ A rigid rough surface with heights ``h(x, y)`` (highest points touch first; the
 same convention as Tamaas, where ``h`` is the combined roughness) is pressed onto
 a periodic elastic half-space of plane-strain modulus ``E*`` over a square cell of
 side ``L`` sampled on ``n x n`` nodes (spacing ``dx = L / n``, node ``i`` at
-``x = i * dx``, axis 0 = x, axis 1 = y). With ``p >= 0`` the nodal contact
-pressure, the surface displacement into the half-space is, in Fourier space,
+``x = i * dx``, axis 0 = x, axis 1 = y), or over a rectangular cell of sides
+``Lx x Ly`` (``length=(Lx, Ly)``) sampled on ``nx x ny`` nodes (heights of shape
+``(nx, ny)``, ``nx, ny >= 4``; pixels ``dx = Lx / nx`` by ``dy = Ly / ny``, which may
+differ; node ``(i, j)`` at ``(i dx, j dy)``). A float ``length`` means the square
+cell and needs square heights; ``(L, L)`` on an ``n x n`` grid is that same
+problem, bit for bit. With ``p >= 0`` the nodal contact pressure, the surface
+displacement into the half-space is, in Fourier space,
 
     u(q) = 2 p(q) / (E* |q|)   for q != 0,      u(q = 0) = 0,
 
-``|q| = 2 pi |k| / L`` in rad per length. Fixing ``u(0) = 0`` makes ``u`` the
+``|q| = 2 pi |k| / L`` in rad per length (``|q| = 2 pi sqrt((kx / Lx)^2 + (ky / Ly)^2)``
+with integer mode numbers ``kx``, ``ky`` on a rectangle). Fixing ``u(0) = 0`` makes ``u`` the
 displacement relative to its mean; the rigid-body approach is the Lagrange
 multiplier of the mean-pressure constraint ``mean(p) = p0``. The gap is
 
@@ -31,21 +37,24 @@ being the multiplier of the mean constraint; the solution is unique.
 
 That is ``boundary="periodic"``, the default. A measured patch is not periodic,
 and the periodic half-space glues its edges together; with ``boundary="free"``
-the ``n x n`` cell is an isolated patch on an infinite elastic half-space loaded
+the ``n x n`` (``nx x ny``) cell is an isolated patch on an infinite elastic half-space loaded
 there alone (no periodic images, nothing outside the patch touches). Each
-node's pressure acts uniformly on its pixel of side ``dx``, and
+node's pressure acts uniformly on its pixel of side ``dx`` (``dx x dy``), and
 
-    u(x_i) = sum_j G(x_i - x_j) p_j,   G = Love's displacement under unit
-                                       pressure on one square pixel, ~ dx^2 / (pi E* r) far away,
+    u(x_i) = sum_j G(x_i - x_j) p_j,   G = Love's displacement under unit pressure on
+                                       one pixel, ~ dx dy / (pi E* r) far away,
 
-computed by zero-padding ``p`` to ``2n x 2n`` and one FFT pair there
+computed by zero-padding ``p`` to ``2n x 2n`` (``2nx x 2ny``) and one FFT pair there
 (Hockney's method, :class:`FreeHalfSpace`; an iteration costs 3-5x a periodic
 one). ``u`` is then the true displacement,
 not zero mean, ``-d`` the true approach of the rigid surface and
 ``mean(g) = mean(u) + d - mean(h)``; the iterations use ``u`` only through the
 gap ``g`` (with ``d`` the free offset), so they, the final check and every
 output are otherwise the same. The contact perimeter and cluster labelling do
-not wrap around.
+not wrap around. On a rectangle the contact perimeter counts an edge between
+neighbours along x as ``dy`` long and one between neighbours along y as ``dx``
+long (:func:`contact_perimeter`), and a node's area is ``dx dy`` (cluster areas);
+the output's attributes name the cell as :func:`~.results.cell_attrs` says.
 
 Units
 -----
@@ -54,7 +63,11 @@ counted in ``c``, the power of two just above the rms height ``s`` of ``h``
 (so the internal heights have rms in [0.5, 1) and are an exact copy of ``h``);
 pressures are counted in ``E* c / L``. Both operators are ``L / E*`` times
 their form for ``E* = L = 1`` (Love's influence scales with ``dx = L / n``), so
-the internal operator is the one for ``E* = L = 1``. Every load then enters through the
+the internal operator is the one for ``E* = L = 1``. On a rectangle ``L`` is ``Lx``
+throughout this section: internally ``E* = Lx = 1`` and the cell is ``1 x Ly / Lx``
+(the operators take its aspect ``Ly / Lx``; Love's influence scales with ``dx`` at a
+fixed pixel aspect ``dy / dx``), so a square cell's units and scalings are exactly
+those above. Every load then enters through the
 dimensionless ``p0 L / (E* s)``, which must lie in :data:`LOAD_RANGE` (as must
 ``hardness L / (E* s)``): outside it float64 cannot represent the contact
 (squares of pressures or gaps overflow or underflow) and the load is refused
@@ -62,7 +75,7 @@ with a ``ValueError`` naming the argument. When ``|mean(h)| > s`` the mean is
 subtracted first (a rigid shift absorbed by ``d``). A perfectly flat surface
 (all heights equal) has the exact solution ``p = p0`` everywhere, ``g = 0``;
 it is returned directly, with ``iterations = 0``. On the free half-space a
-flat surface is instead the rigid square flat punch (its pressure peaks at the
+flat surface is instead the rigid square (rectangular) flat punch (its pressure peaks at the
 edges): solved once at unit load, with gap scale ``s = p0 L / E*``
 (:func:`gap_scale`), and scaled to every load (``iterations = 0`` after the
 first step); a hardness is refused there. For the default
@@ -173,14 +186,15 @@ Let ``s`` be the gap scale: the rms height of ``h`` about its mean, see
 ``F = {0 < p < H}`` (``H = inf`` without hardness; when ``F`` is empty, the
 offset in the middle of the admissible interval). The solver forms
 
-    e_orth = sum_F(p |g|) / (n^2 p0 * s)      (complementarity, pressure-weighted:
+    e_orth = sum_F(p |g|) / (N p0 * s)        (complementarity, pressure-weighted,
+                                               N = n^2 = nx ny nodes:
                                                g ~ 0 on the elastic contact set;
                                                pointwise |g| <= ~6 tol s measured)
     e_pen  = max(0, -min g over all nodes below the cap) / s   (gap sign)
     e_cap  = max(0, max g over nodes at the cap) / s           (hardness only)
 
 and ``residual = max(e_orth, e_pen, e_cap)``. All three terms are ratios of
-gaps to ``s`` and do not depend on ``n``. A step is converged only when a final
+gaps to ``s`` and do not depend on ``n`` (``nx``, ``ny``). A step is converged only when a final
 check on ``u = K p`` recomputed by FFT from the returned pressure finds
 
 * every value finite, ``0 <= p`` (``<= H``), ``|mean(p) - p0| <= MEAN_RTOL p0``
@@ -196,8 +210,13 @@ carries a round-off error of order ``1e-16 * max|h - mean(h)| / s`` (about
 (``p0 L / (E* s)`` above roughly ``tol * 1e16``) the pressure field itself cannot
 resolve the gap to ``tol`` and the step ends ``converged = False``. Should the
 iteration stall (no halving of the residual within :data:`STALL_WINDOW`
-iterations, or a breakdown of the step length), the step ends with
-``converged = False`` and finite fields instead of running to ``max_iter``.
+iterations, or a breakdown of the step length), the step moves on from its
+pressure to the next iteration of :data:`FALLBACKS` (float64 products, then the
+monotone gradient projection of the capped problem with a cap no node can reach,
+which cannot cycle), within the same ``max_iter``; the per-step ``solver_path``
+says which ended it, and later steps start on it. Only when the last stalls too
+does the step end with ``converged = False`` and finite fields, instead of
+running to ``max_iter``.
 
 Parts
 -----

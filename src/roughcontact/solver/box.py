@@ -62,7 +62,7 @@ def box_solve(ws: Workspace, p0: float, tol: float, max_iter: int, cap: float, f
 class BoxIteration:
     """Gradient projection / CG with proportioning for one capped load step.
 
-    Flat views ``P`` and ``w`` of ``ws``'s pressure and gap (shape ``(n*n,)``);
+    Flat views ``P`` and ``w`` of ``ws``'s pressure and gap (shape ``(nx*ny,)``);
     boolean masks ``zero_m`` (``p = 0``) and ``cap_m`` (``p = H``) and the free
     set ``idx`` (flat indices, ``0 < p < H``); ``t`` the CG direction, zero off
     ``idx``. Each :meth:`_measure` leaves the zero-mean gap ``g_f`` on the free

@@ -22,12 +22,12 @@ from .elastic import pk_solve
 from .halfspace import plans
 from .projection import enforce_mean
 from .results import (
-    SOLVER_DESCRIPTION,
-    SOLVER_DESCRIPTION_FREE,
     SOLVER_NAME,
     StepRecord,
     StepResult,
+    cell_attrs,
     contact_perimeter,
+    solver_description,
     to_dataset,
 )
 from .units import Units, check_loads, frexp_ratio
@@ -40,7 +40,7 @@ from .validation import (
     validate_solver_args,
     validate_store,
 )
-from .workspace import FALLBACKS, SOLVER_PATHS, Workspace
+from .workspace import FALLBACKS, SOLVER_PATHS, STICKY, Workspace
 
 #: Default iteration cap per load step.
 DEFAULT_MAX_ITER = 10000
@@ -53,19 +53,22 @@ def _effects(hardness) -> list:
 class ContactSolver:
     """Validated problem of one surface: units, effects, workspace and warm starts.
 
-    ``heights`` (n, n) and the scalars are already validated; ``effects`` act on
-    the iteration (:mod:`.effects`); ``method`` is the elastic iteration;
-    ``boundary`` the half-space, one of :data:`~.validation.BOUNDARIES`.
+    ``heights`` (nx, ny) and the scalars are already validated, ``length`` a float
+    ``L`` (square cell) or a pair ``(Lx, Ly)`` (:func:`~.validation.validate_length`);
+    ``effects`` act on the iteration (:mod:`.effects`); ``method`` is the elastic
+    iteration; ``boundary`` the half-space, one of :data:`~.validation.BOUNDARIES`.
     """
 
     def __init__(self, h, e_star, length, tol, max_iter, effects, threads, method, boundary="periodic"):
-        self.n = h.shape[0]
+        self.shape = h.shape
+        self.size = h.size
         self.length = length
         self.tol, self.max_iter = tol, max_iter
         self.effects = list(effects)
         self.units = Units(h, e_star, length)
         self.threads = threads
         self.method = method
+        self.start_method = method  # the iteration each step starts on (_iterate)
         self.boundary = boundary
         self.periodic = boundary == "periodic"
         if self.units.flat and not self.periodic and self.effects:
@@ -85,19 +88,19 @@ class ContactSolver:
         self.prev = None  # internal p0 of the last solved step
         self._older = None  # (p0, pressure) of the step before the last
         self._last = None  # pressure of the last step
-        self._pbuf = np.empty((self.n, self.n))
+        self._pbuf = np.empty(self.shape)
 
     def check_loads(self, p: np.ndarray, name: str) -> None:
         """Refuse loads an effect cannot carry or float64 cannot represent."""
         for effect in self.effects:
             effect.check_loads(self.units, p, name)
-        check_loads(self.units, p, self.n, name)
+        check_loads(self.units, p, self.shape, name)
         for effect in self.effects:
             effect.check_range(self.units)
 
     @property
     def backend(self) -> str:
-        return self.ws.backend if self.ws is not None else plans(self.n, self.threads).backend
+        return self.ws.backend if self.ws is not None else plans(self.shape, self.threads).backend
 
     def _extrapolation(self, p_int: float) -> float:
         """Factor ``c`` of the linear extrapolation in the load, 0 when not used."""
@@ -156,29 +159,28 @@ class ContactSolver:
 
     def _flat(self, p0: float, keep_gap: bool):
         # exact solution: u = K p0 = 0, so g = 0 with d = h
-        n2 = self.n * self.n
-        p = np.full((self.n, self.n), p0)
+        n2 = self.size
+        p = np.full(self.shape, p0)
         mean_ok = abs(float(p.sum()) - p0 * n2) <= MEAN_RTOL * p0 * n2
-        gap = np.zeros((self.n, self.n)) if keep_gap else None
+        gap = np.zeros(self.shape) if keep_gap else None
         cols = {}
         for effect in self.effects:
             cols.update(effect.finish(p, None, p0))
         return StepRecord(p, p > 0, 1.0, 0.0, 0.0, 0, 0.0, mean_ok, cols, "exact"), gap
 
     def _flat_punch(self, p0: float, keep_gap: bool):
-        """A flat surface on the free half-space: the rigid square flat punch.
+        """A flat surface on the free half-space: the rigid square (or rectangular) flat punch.
 
         ``u = K p`` is no longer uniform under a uniform pressure, so the
-        problem is solved, once, at unit load in units ``E* = L = 1`` with the
-        gap scale ``p0 L / E*`` (:func:`gap_scale` of a flat surface) as unit;
+        problem is solved, once, at unit load in units ``E* = Lx = 1`` with the
+        gap scale ``p0 Lx / E*`` (:func:`gap_scale` of a flat surface) as unit;
         without a cap it is linear in ``p0``, so every step is that solution
         scaled (``iterations`` counts the solve at the first step, 0 after).
         """
-        n = self.n
-        n2 = n * n
+        n2 = self.size
         its = 0
         if self._punch is None:
-            ws = Workspace(np.zeros((n, n)), self.length, self.threads, self.method, self.boundary,
+            ws = Workspace(np.zeros(self.shape), self.length, self.threads, self.method, self.boundary,
                            scale=1.0)
             ws.P.fill(1.0)
             its = pk_solve(ws, 1.0, self.tol, self.max_iter, False)[0]
@@ -187,7 +189,7 @@ class ContactSolver:
         x, g1, mg1, residual, ok = self._punch
         p = x * p0
         mean_ok = ok and abs(float(p.sum()) - p0 * n2) <= MEAN_RTOL * p0 * n2
-        fm, fe = frexp_ratio((p0, self.length), (self.units.e_star,))  # the gap scale p0 L / E*
+        fm, fe = frexp_ratio((p0, self.units.length), (self.units.e_star,))  # the gap scale p0 Lx / E*
         try:
             mean_gap = math.ldexp(mg1 * fm, fe)
         except OverflowError:
@@ -207,31 +209,54 @@ class ContactSolver:
     def _iterate(self, p_int: float, fresh: bool) -> tuple[int, str]:
         """Iterate the step to ``tol``; ``(iterations, path)``, the path being the iteration that ended it.
 
-        A preconditioned iteration that stalls (its residual stops falling, :class:`StallGuard`)
-        before ``max_iter`` hands its pressure to the next, more robust one in
-        :data:`FALLBACKS` (float64 products, then the reference CG), within the same
-        ``max_iter`` in all: single-precision products stall at ~1e-5 on some measured surfaces
-        whose gaps span many decades, where float64 converges (tests/test_solver_hard_cases.py).
+        A step starts on :attr:`start_method`, the scene's iteration until a step has needed a
+        fallback. An iteration that stalls (its residual stops falling, :class:`StallGuard`) before
+        ``max_iter`` hands its pressure to the next, more robust one in :data:`FALLBACKS`, within the
+        same ``max_iter`` in all: single-precision products stall at ~1e-5 on some measured surfaces
+        whose gaps span many decades, where float64 converges; Polonsky & Keer's active-set rule can
+        cycle far from the solution on a plateau with isolated spikes, where the monotone gradient
+        projection (``"box"``, the capped iteration with a cap no node can reach) converges
+        (tests/test_solver_hard_cases.py). A step that needed a fallback makes the method that
+        converged it the start of the next steps (``STICKY``), so that one hard surface pays the
+        stall window once, not at every step.
         """
         if self.cap is not None:
             return box_solve(self.ws, p_int, self.tol, self.max_iter, self.cap, fresh)[0], "box"
-        its, ok = pk_solve(self.ws, p_int, self.tol, self.max_iter, fresh)
-        path = self.method
-        for method in FALLBACKS[self.method]:
+        path = self.start_method
+        its, ok = self._run(path, p_int, self.max_iter, fresh)
+        for method in FALLBACKS[path]:
             if ok or its >= self.max_iter:
                 break
-            self.ws.method, path = method, method
-            more, ok = pk_solve(self.ws, p_int, self.tol, self.max_iter - its, True)
+            path = method
+            more, ok = self._run(method, p_int, self.max_iter - its, True)
             its += more
-        self.ws.method = self.method
+        if ok and STICKY and path != self.start_method:
+            self.start_method = path
         return its, path
+
+    def _run(self, path: str, p_int: float, max_iter: int, fresh: bool) -> tuple[int, bool]:
+        """One iteration of :data:`SOLVER_PATHS` on the workspace; ``(iterations, converged)``.
+
+        ``"box"`` is the capped iteration with the cap at twice the total load, which no node can
+        reach (every node's pressure is at most the total), preconditioned unless the scene's
+        iteration is the reference ``"pk"``.
+        """
+        ws = self.ws
+        try:
+            if path == "box":
+                ws.method = "pk" if self.method == "pk" else "pk-fourier"
+                return box_solve(ws, p_int, self.tol, max_iter, 2.0 * p_int * ws.size, fresh)
+            ws.method = path
+            return pk_solve(ws, p_int, self.tol, max_iter, fresh)
+        finally:
+            ws.method = self.method
 
     def solve(self, p0: float, initial=None, keep_gap: bool = False):
         """Solve the step for the physical mean pressure ``p0``; returns ``(StepRecord, gap)``."""
         if self.units.flat:
             return self._flat(p0, keep_gap) if self.periodic else self._flat_punch(p0, keep_gap)
         ws, units = self.ws, self.units
-        n2 = self.n * self.n
+        n2 = self.size
         fresh = self.start(p0, initial)
         p_int = units.to_internal(p0)
         its, path = self._iterate(p_int, fresh)
@@ -264,7 +289,7 @@ def _method() -> str:
     return sys.modules[__package__].ELASTIC_METHOD
 
 
-def solve_step(heights, p0: float, *, e_star: float = 1.0, length: float = 1.0,
+def solve_step(heights, p0: float, *, e_star: float = 1.0, length=1.0,
                tol: float = 1e-8, max_iter: int = DEFAULT_MAX_ITER, threads: int = 1,
                hardness: float | None = None, initial_pressure=None,
                boundary: str = "periodic") -> StepResult:
@@ -272,15 +297,16 @@ def solve_step(heights, p0: float, *, e_star: float = 1.0, length: float = 1.0,
 
     Parameters
     ----------
-    heights : array_like, shape (n, n)
-        Rigid surface heights [length]; the highest points touch first.
+    heights : array_like, shape (n, n) or (nx, ny)
+        Rigid surface heights [length]; the highest points touch first; as in
+        :func:`solve_contact`.
     p0 : float
         Applied mean pressure [pressure]: ``0 < p0``, ``p0 < hardness`` if a
-        hardness is given, and ``p0 * length / (e_star * s)`` in
-        :data:`LOAD_RANGE` (``s`` the rms height).
+        hardness is given, and ``p0 * L / (e_star * s)`` in
+        :data:`LOAD_RANGE` (``s`` the rms height, ``L`` the float ``length`` or ``Lx``).
     e_star, length, tol, max_iter, threads, hardness, boundary
-        As in :func:`solve_contact`.
-    initial_pressure : array_like, shape (n, n), optional
+        As in :func:`solve_contact` (``length`` a float ``L`` or a pair ``(Lx, Ly)``).
+    initial_pressure : array_like, same shape as ``heights``, optional
         Starting pressure (clipped to ``[0, hardness]`` and brought to mean
         ``p0``); uniform ``p0`` when omitted.
 
@@ -294,18 +320,18 @@ def solve_step(heights, p0: float, *, e_star: float = 1.0, length: float = 1.0,
     ValueError
         For invalid input, naming the argument and its allowed range.
     """
-    h = validate_heights(heights)
+    h = validate_heights(heights, square=False)
     p0_f = real_scalar("p0", p0, "a finite number > 0")
     if not (math.isfinite(p0_f) and p0_f > 0):
         raise ValueError(f"p0 must be a finite number > 0, got {p0!r}")
     e_star, length, tol, max_iter, hardness, threads = validate_solver_args(
-        e_star, length, tol, max_iter, hardness, threads)
+        e_star, length, tol, max_iter, hardness, threads, shape=h.shape)
     boundary = validate_boundary(boundary)
     init = None
     if initial_pressure is not None:
-        init = validate_heights(initial_pressure, name="initial_pressure")
+        init = validate_heights(initial_pressure, name="initial_pressure", square=False)
         if init.shape != h.shape:
-            raise ValueError(f"initial_pressure must have shape {h.shape}, got {init.shape}")
+            raise ValueError(f"initial_pressure must have shape {h.shape}, the shape of heights, got {init.shape}")
     solver = ContactSolver(h, e_star, length, tol, max_iter, _effects(hardness), threads, _method(), boundary)
     solver.check_loads(np.array([p0_f]), "p0")
     t0 = time.perf_counter()
@@ -317,7 +343,7 @@ def solve_step(heights, p0: float, *, e_star: float = 1.0, length: float = 1.0,
                       st.effect_columns.get("plastic_load_fraction"))
 
 
-def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.0,
+def solve_contact(heights, pressures, *, e_star: float = 1.0, length=1.0,
                   tol: float = 1e-8, max_iter: int = DEFAULT_MAX_ITER, store_fields=False,
                   threads: int = 1, hardness: float | None = None,
                   clusters: bool = False, boundary: str = "periodic", progress=None,
@@ -326,21 +352,27 @@ def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.
 
     Parameters
     ----------
-    heights : array_like, shape (n, n)
-        Rigid surface heights [length] on the square cell (periodic, or the
-        whole patch for ``boundary="free"``), axis 0 = x, axis 1 = y; the
-        highest points touch first. Any ``n >= 4``, odd or not.
+    heights : array_like, shape (n, n) or (nx, ny)
+        Rigid surface heights [length] on the cell (periodic, or the whole
+        patch for ``boundary="free"``), axis 0 = x, axis 1 = y; the highest
+        points touch first. Any ``n >= 4`` (``nx, ny >= 4``), odd or not;
+        ``(nx, ny)`` with ``nx != ny`` needs ``length=(Lx, Ly)``.
     pressures : sequence of float, shape (n_steps,)
         Applied mean pressures ``p0 > 0``, one load step each [pressure, same unit
-        as ``e_star``], each with ``p0 * length / (e_star * s)`` in
-        :data:`LOAD_RANGE` (``s`` the rms height of ``heights``) and, with a
+        as ``e_star``], each with ``p0 * L / (e_star * s)`` in
+        :data:`LOAD_RANGE` (``s`` the rms height of ``heights``, ``L`` the float
+        ``length`` or ``Lx``) and, with a
         hardness, ``p0 < hardness``. Any order is accepted; each step
         warm-starts from the previous one, which pays off most for increasing
         loads.
     e_star : float
         Plane-strain modulus ``E* = E / (1 - nu**2)`` of the half-space, > 0.
-    length : float
-        Side ``L`` of the cell [length], > 0.
+    length : float or (float, float)
+        A float ``L``: side of the square cell [length], > 0, for square
+        ``heights`` only. A pair ``(Lx, Ly)``: the sides along x (axis 0) and
+        y (axis 1) of a rectangular cell, each finite and > 0; pixels
+        ``dx = Lx / nx`` and ``dy = Ly / ny`` (anisotropic when they differ).
+        ``(L, L)`` on an ``n x n`` grid is the float ``L``, bit for bit.
     tol : float
         Convergence tolerance in (0, 1) on the scale-free residual of the module
         docstring.
@@ -354,7 +386,7 @@ def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.
         FFTW threads (default 1).
     hardness : float, optional
         Cap on the pressure (perfectly plastic interface) [pressure], > every p0,
-        with ``hardness * length / (e_star * s)`` in :data:`LOAD_RANGE`.
+        with ``hardness * L / (e_star * s)`` in :data:`LOAD_RANGE` (``L = Lx`` on a rectangle).
     clusters : bool
         Add contact-cluster statistics per step (4-connected labelling, periodic
         unless ``boundary="free"``, see :mod:`roughcontact.clusters`):
@@ -366,9 +398,9 @@ def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.
         ``"free"``: the cell is an isolated patch (a measured, non-periodic
         surface) on an infinite half-space loaded only there; nothing wraps
         around, ``u`` is the true (not zero-mean) displacement and ``d`` the true
-        rigid-body approach; each product costs a ``2n x 2n`` FFT pair
+        rigid-body approach; each product costs a ``2nx x 2ny`` FFT pair
         (:class:`~.halfspace.FreeHalfSpace`). A flat surface is then the rigid
-        square flat punch (no hardness allowed).
+        square (rectangular) flat punch (no hardness allowed).
     progress : callable, optional
         Called after each load step as ``progress(step, p0, area_fraction,
         iterations, converged, seconds)`` (``step`` 1-based, ``seconds`` the
@@ -395,8 +427,13 @@ def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.
         stored. Every variable carries ``units`` and ``long_name`` (CF strings from
         :func:`roughcontact.quantities.cf_unit`); the global attributes
         ``length_units`` and ``pressure_units`` are the units of the attributes
-        ``length`` and ``e_star`` (and ``hardness``); ``boundary`` records the
-        half-space.
+        ``length`` (or ``length_x``, ``length_y``) and ``e_star`` (and
+        ``hardness``); ``boundary`` records the half-space. The cell
+        (:func:`~.results.cell_attrs`): a square cell has ``length`` (L) and
+        ``n``; a rectangular one (``length=(Lx, Ly)`` with ``nx != ny`` or
+        ``Lx != Ly``) has ``length_x`` and ``length_y`` instead, and no
+        ``length`` or ``n``; ``nx`` and ``ny`` (nodes along x and y) are always
+        there. Stored fields have ``x`` and ``y`` coordinates ``i dx`` and ``j dy``.
         ``converged`` is True only when the final check of the module docstring
         passed on a freshly recomputed displacement.
 
@@ -405,10 +442,10 @@ def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.
     ValueError
         For invalid input, naming the argument and its allowed range.
     """
-    h = validate_heights(heights)
+    h = validate_heights(heights, square=False)
     p = validate_pressures(pressures)
     e_star, length, tol, max_iter, hardness, threads = validate_solver_args(
-        e_star, length, tol, max_iter, hardness, threads)
+        e_star, length, tol, max_iter, hardness, threads, shape=h.shape)
     store = validate_store(store_fields, p.size)
     clusters = validate_flag("clusters", clusters)
     boundary = validate_boundary(boundary)
@@ -418,10 +455,11 @@ def solve_contact(heights, pressures, *, e_star: float = 1.0, length: float = 1.
     solver = ContactSolver(h, e_star, length, tol, max_iter, _effects(hardness), threads, _method(), boundary)
     solver.check_loads(p, "pressures")
     cols, iters, conv, paths, fields, masks = _run_steps(solver, p, store, clusters, progress)
-    attrs = {"e_star": e_star, "length": length, "tol": tol, "max_iter": max_iter, "threads": threads,
-             "fft_backend": solver.backend, "n": h.shape[0], "solver": SOLVER_NAME,
-             "solver_description": SOLVER_DESCRIPTION if solver.periodic else SOLVER_DESCRIPTION_FREE}
-    ds = to_dataset(p, cols, iters, conv, fields, store_fields, h.shape[0], attrs, solver.effects, paths=paths,
+    sides, grid = cell_attrs(h.shape, length)
+    attrs = {"e_star": e_star, **sides, "tol": tol, "max_iter": max_iter, "threads": threads,
+             "fft_backend": solver.backend, **grid, "solver": SOLVER_NAME,
+             "solver_description": solver_description(solver.periodic, np.ndim(length) == 0)}
+    ds = to_dataset(p, cols, iters, conv, fields, store_fields, h.shape, attrs, solver.effects, paths=paths,
                     length_unit=length_unit, pressure_unit=pressure_unit)
     ds.attrs["elastic_method"] = solver.method
     ds.attrs["boundary"] = boundary

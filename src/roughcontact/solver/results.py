@@ -38,6 +38,16 @@ SOLVER_DESCRIPTION_FREE = SOLVER_DESCRIPTION.replace(
     "influence function of a uniformly loaded square pixel, Hockney's method; no periodic images)",
 ).replace("(|q| E*/2 on the contact set)", "(periodic |q| E*/2 on the contact set, an approximate inverse)")
 
+
+def solver_description(periodic: bool, square: bool = True) -> str:
+    """The ``solver_description`` attribute for the half-space and the cell (square or not)."""
+    if periodic:
+        return SOLVER_DESCRIPTION
+    if square:
+        return SOLVER_DESCRIPTION_FREE
+    return SOLVER_DESCRIPTION_FREE.replace("2n x 2n", "2nx x 2ny").replace("square pixel", "rectangular pixel")
+
+
 @dataclass
 class StepResult:
     """Outcome of one load step of :func:`solve_step`.
@@ -46,9 +56,9 @@ class StepResult:
     ----------
     p0 : float
         Applied mean pressure [pressure].
-    pressure : numpy.ndarray, shape (n, n)
+    pressure : numpy.ndarray, shape (nx, ny)
         Nodal contact pressure ``0 <= p (<= hardness)`` [pressure].
-    gap : numpy.ndarray, shape (n, n)
+    gap : numpy.ndarray, shape (nx, ny)
         Gap ``g = u - h + d`` [length]; zero (to ``tol``) on the elastic contact set.
     area_fraction : float
         Fraction of nodes with ``p > 0`` [-].
@@ -101,35 +111,69 @@ class StepRecord:
     path: str  # the iteration that ended the step: one of workspace.SOLVER_PATHS
 
 
-def contact_perimeter(mask: np.ndarray, length: float = 1.0, periodic: bool = True) -> float:
+def contact_perimeter(mask: np.ndarray, length=1.0, periodic: bool = True) -> float:
     """Length of the contact-set boundary per unit nominal area [1/length].
 
-    Counts pixel edges between a contact and a non-contact node, times
-    ``dx = L / n``, divided by ``L**2``: with periodic wrap in both directions
-    (``periodic=True``, the periodic cell), or without it (``periodic=False``,
-    a free patch), where nothing touches outside the patch, so that the outer
-    edge of a contact node on the patch's border counts too.
+    Counts pixel edges between a contact and a non-contact node, each edge with its
+    length: an edge between two nodes along x (neighbours along axis 0) is ``dy = Ly / ny``
+    long, one between nodes along y is ``dx = Lx / nx`` long; the sum is divided by the
+    cell's area ``Lx * Ly``. With periodic wrap in both directions (``periodic=True``, the
+    periodic cell), or without it (``periodic=False``, a free patch), where nothing touches
+    outside the patch, so that the outer edge of a contact node on the patch's border
+    counts too.
 
     Parameters
     ----------
-    mask : numpy.ndarray of bool, shape (n, n)
-        Contact set.
-    length : float
-        Side L of the cell [length].
+    mask : numpy.ndarray of bool, shape (nx, ny)
+        Contact set; square ``(n, n)`` when ``length`` is a float.
+    length : float or (float, float)
+        Side ``L`` of a square cell, or its sides ``(Lx, Ly)`` [length].
     periodic : bool
         Whether the cell wraps around (the solver's ``boundary="periodic"``).
     """
     m = np.asarray(mask, dtype=bool)
-    n = m.shape[0]
+    edges_x, edges_y = _boundary_edges(m, periodic)
+    if np.ndim(length) == 1 and m.shape[0] == m.shape[1] and length[0] == length[1]:
+        length = float(length[0])  # (L, L) on an n x n grid is the square cell L, as in the solver
+    if np.ndim(length) == 0:
+        if m.shape[0] != m.shape[1]:
+            raise ValueError(f"length: a single float means a square cell, but mask has shape {m.shape}: give "
+                             "length=(Lx, Ly)")
+        return float(edges_x + edges_y) * (length / m.shape[0]) / length**2
+    (lx, ly), (nx, ny) = length, m.shape
+    return (float(edges_x) * (ly / ny) + float(edges_y) * (lx / nx)) / (lx * ly)
+
+
+def _boundary_edges(m: np.ndarray, periodic: bool) -> tuple[int, int]:
+    """Edges between contact and non-contact nodes: ``(along x, along y)`` (neighbours on axis 0, axis 1)."""
     if periodic:
-        edges = np.count_nonzero(m != np.roll(m, 1, axis=0)) + np.count_nonzero(m != np.roll(m, 1, axis=1))
-    else:
-        padded = np.pad(m, 1)  # no contact outside the patch
-        edges = (np.count_nonzero(padded[1:, :] != padded[:-1, :])
-                 + np.count_nonzero(padded[:, 1:] != padded[:, :-1]))
-    return float(edges) * (length / n) / length**2
+        return (np.count_nonzero(m != np.roll(m, 1, axis=0)), np.count_nonzero(m != np.roll(m, 1, axis=1)))
+    padded = np.pad(m, 1)  # no contact outside the patch
+    return (np.count_nonzero(padded[1:, :] != padded[:-1, :]), np.count_nonzero(padded[:, 1:] != padded[:, :-1]))
 
 
+def cell_attrs(shape: tuple[int, int], length) -> tuple[dict, dict]:
+    """The global attributes of the solver's cell: ``(sides, grid)``.
+
+    A square cell (a float ``length``, ``nx == ny``) has ``length`` (L) and ``n``, as always;
+    a rectangular one (``length = (Lx, Ly)``: ``nx != ny`` or ``Lx != Ly``) has ``length_x``
+    and ``length_y`` instead (no ``length``, no ``n``: no reader can take one side or count for
+    both, as in :func:`roughcontact.datasets.cell_attrs`). ``nx`` and ``ny``, the node counts
+    along x (axis 0) and y (axis 1), are always in ``grid``. Every value is a number (netCDF
+    attributes); the two dicts go in their places among the solver's attributes.
+    """
+    nx, ny = (int(v) for v in shape)
+    if np.ndim(length) == 0:
+        return {"length": float(length)}, {"n": nx, "nx": nx, "ny": ny}
+    lx, ly = (float(v) for v in length)
+    return {"length_x": lx, "length_y": ly}, {"nx": nx, "ny": ny}
+
+
+def cell_sides(attrs: dict) -> tuple[float, float]:
+    """``(Lx, Ly)`` from :func:`cell_attrs`' attributes (``length`` for both sides of a square cell)."""
+    if "length_x" in attrs:
+        return float(attrs["length_x"]), float(attrs["length_y"])
+    return attrs["length"], attrs["length"]
 
 
 def solver_path_variable(codes) -> xr.Variable:
@@ -145,12 +189,14 @@ def solver_path_variable(codes) -> xr.Variable:
         "flag_meanings": " ".join(name.replace("-", "_") for name in SOLVER_PATHS)})
 
 
-def to_dataset(p, cols, iters, conv, fields, store_fields, n, attrs: dict, effects=(), *, paths=None,
+def to_dataset(p, cols, iters, conv, fields, store_fields, shape, attrs: dict, effects=(), *, paths=None,
                length_unit: str = "1", pressure_unit: str = "1") -> xr.Dataset:
     """The solver's output dataset (see :func:`roughcontact.solver.solve_contact`).
 
-    ``p`` the loads, shape (n_steps,); ``cols`` per-step float columns by name
-    (including each effect's); ``iters``, ``conv`` per-step iterations and
+    ``shape`` the grid ``(nx, ny)`` (an int ``n``: ``(n, n)``), the cell's sides being in
+    ``attrs`` (:func:`cell_attrs`): the stored fields' ``x`` and ``y`` coordinates step by
+    ``dx = Lx / nx`` and ``dy = Ly / ny``. ``p`` the loads, shape (n_steps,); ``cols``
+    per-step float columns by name (including each effect's); ``iters``, ``conv`` per-step iterations and
     flags; ``fields`` a ``(pressures, gaps, step numbers)`` triple of the
     stored fields; ``attrs`` the solver's global attributes; ``effects`` add
     their variables and attributes; ``paths`` the per-step codes into
@@ -161,7 +207,6 @@ def to_dataset(p, cols, iters, conv, fields, store_fields, n, attrs: dict, effec
     global attributes ``length_units`` and ``pressure_units``.
     """
     fields_p, fields_g, field_steps = fields
-    length = attrs["length"]
     steps = np.arange(1, p.size + 1)
     pressure_units = cf_unit(pressure=pressure_unit, pressure_power=1)
     length_units = cf_unit(length_unit, length_power=1)
@@ -175,7 +220,9 @@ def to_dataset(p, cols, iters, conv, fields, store_fields, n, attrs: dict, effec
         "mean_gap": (cols["mean_gap"], length_units,
                      "mean gap between the rigid surface and the deformed half-space"),
         "contact_perimeter": (cols["contact_perimeter"], inverse_length_units,
-                              "contact-set boundary length (pixel edges x dx) per unit nominal area"),
+                              # one text for every cell, so that square and rectangular cases aggregate
+                              "contact-set boundary length (pixel edges, dy long between neighbours along x and dx "
+                              "along y) per unit nominal area"),
         "iterations": (iters, FRACTION_UNITS, "solver iterations (CG or gradient-projection steps)"),
         "residual": (cols["residual"], FRACTION_UNITS,
                      "final scale-free residual max(sum_F(p|g|)/(sum(p) s), max(0,-min g below cap)/s, "
@@ -198,9 +245,9 @@ def to_dataset(p, cols, iters, conv, fields, store_fields, n, attrs: dict, effec
     if field_steps:
         dim = "step" if (isinstance(store_fields, (bool, np.bool_)) and store_fields) else "field_step"
         dims = (dim, "x", "y")
-        xs = np.arange(n) * (length / n)
+        xs, ys = _node_positions(shape, attrs)
         coords["x"] = xr.Variable(("x",), xs, {"units": length_units, "long_name": "node position along axis 0"})
-        coords["y"] = xr.Variable(("y",), xs.copy(), {"units": length_units, "long_name": "node position along axis 1"})
+        coords["y"] = xr.Variable(("y",), ys, {"units": length_units, "long_name": "node position along axis 1"})
         if dim == "field_step":
             coords["field_step"] = xr.Variable(("field_step",), np.array(field_steps),
                                                {"units": FRACTION_UNITS,
@@ -216,14 +263,27 @@ def to_dataset(p, cols, iters, conv, fields, store_fields, n, attrs: dict, effec
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 
 
+def _node_positions(shape, attrs: dict) -> tuple[np.ndarray, np.ndarray]:
+    """Node positions ``i dx`` along x and ``j dy`` along y [length], shapes (nx,) and (ny,)."""
+    nx, ny = (shape, shape) if np.ndim(shape) == 0 else shape
+    lx, ly = cell_sides(attrs)
+    xs = np.arange(nx) * (lx / nx)
+    if "length_x" not in attrs:  # square cell: the same positions along y
+        return xs, xs.copy()
+    return xs, np.arange(ny) * (ly / ny)
+
+
 def step_notes(ds: xr.Dataset) -> list[str]:
     """One line per load step of :func:`~roughcontact.solver.solve_contact`'s ``ds`` that was not plain.
 
-    A step ended by a fallback says which iteration stalled and which converged it; an
-    unconverged step says why: ``max_iter`` reached (cap) or every iteration stalled (stall), with
-    its residual. Steps solved by the scene's own iteration, converged, give no line.
+    A step ended by a fallback says which iteration converged it (the scene's own stalled on that
+    step, or on an earlier one, after which the steps start on the fallback); an unconverged step
+    says why: ``max_iter`` reached (cap) or every iteration stalled (stall), with its residual. Steps
+    solved by the scene's own iteration (the capped ``box`` iteration when there is a hardness),
+    converged, give no line.
     """
     method, max_iter = ds.attrs.get("elastic_method"), int(ds.attrs["max_iter"])
+    plain = {method, "exact"} | ({"box"} if "hardness" in ds.attrs else set())
     notes = []
     for k, step in enumerate(ds["step"].values):
         path = SOLVER_PATHS[int(ds["solver_path"].values[k])] if "solver_path" in ds else method
@@ -231,6 +291,7 @@ def step_notes(ds: xr.Dataset) -> list[str]:
         if not bool(ds["converged"].values[k]):
             why = f"max_iter = {max_iter} reached" if its >= max_iter else f"stalled, last on {path}"
             notes.append(f"step {step}: NOT converged ({why}; residual {residual:.3g} after {its} iterations)")
-        elif path not in (method, "exact", "box"):
-            notes.append(f"step {step}: {method} stalled; converged by the fallback {path} ({its} iterations in all)")
+        elif path not in plain:
+            notes.append(f"step {step}: converged by the fallback {path} ({its} iterations in all; {method} "
+                         "stalled on this step or an earlier one)")
     return notes

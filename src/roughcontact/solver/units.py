@@ -1,4 +1,9 @@
-"""Internal units of one surface (package docstring, "Units") and the range of loads."""
+"""Internal units of one surface (package docstring, "Units") and the range of loads.
+
+A cell's ``length`` is a float ``L`` (square cell) or a pair ``(Lx, Ly)`` (rectangle, as
+validated by :func:`.validation.validate_length`); the internal length unit of the operators is
+``Lx`` (:func:`side_x`), so ``L`` for a square cell.
+"""
 
 from __future__ import annotations
 
@@ -7,11 +12,22 @@ import math
 import numpy as np
 
 #: Allowed range of the dimensionless loads ``p0 * L / (E* * s)`` and
-#: ``hardness * L / (E* * s)`` (``s`` the rms height): beyond it squares of the
-#: pressures or gaps leave the float64 range.
+#: ``hardness * L / (E* * s)`` (``s`` the rms height; ``L = Lx`` for a rectangular cell):
+#: beyond it squares of the pressures or gaps leave the float64 range.
 LOAD_RANGE = (1e-100, 1e100)
-#: Largest float64 with some head room: a single node may carry ``n^2 p0``.
+#: Largest float64 with some head room: a single node may carry ``nx * ny * p0``.
 _FLOAT_CEILING = 1e300
+
+
+def side_x(length) -> float:
+    """``Lx``: the side along x (axis 0) of a cell's ``length``, a float ``L`` or a pair ``(Lx, Ly)``."""
+    return float(length) if np.ndim(length) == 0 else float(length[0])
+
+
+def cell_aspect(length) -> float:
+    """``Ly / Lx`` of a cell's ``length`` (exactly 1.0 for a float ``L``): its y side in units of ``Lx``."""
+    return 1.0 if np.ndim(length) == 0 else float(length[1]) / float(length[0])
+
 
 def rms_about_mean(h: np.ndarray) -> tuple[float, float]:
     """``(mean, rms about the mean)`` of ``h`` without overflow or underflow.
@@ -30,16 +46,17 @@ def rms_about_mean(h: np.ndarray) -> tuple[float, float]:
     return math.ldexp(float(mu), e), math.ldexp(float(np.sqrt(np.mean(hs * hs))), e)
 
 
-def gap_scale(heights: np.ndarray, p0: float, e_star: float = 1.0, length: float = 1.0) -> float:
+def gap_scale(heights: np.ndarray, p0: float, e_star: float = 1.0, length=1.0) -> float:
     """Gap scale ``s`` of the convergence criterion [length].
 
-    The rms height of ``heights`` about its mean (computed without overflow);
-    for a perfectly flat surface, where that is 0, the displacement scale
-    ``p0 * L / E*`` instead.
+    The rms height of ``heights`` (shape ``(nx, ny)``) about its mean (computed without
+    overflow); for a perfectly flat surface, where that is 0, the displacement scale
+    ``p0 * L / E*`` instead, with ``L`` the float ``length`` or, for a pair ``(Lx, Ly)``, ``Lx``
+    (the solver's internal length unit).
     """
     h = np.asarray(heights, dtype=float)
     rms = rms_about_mean(h)[1] if h.size and h.max() > h.min() else 0.0
-    return rms if rms > 0 else float(p0) * float(length) / float(e_star)
+    return rms if rms > 0 else float(p0) * side_x(length) / float(e_star)
 
 
 def frexp_ratio(num, den) -> tuple[float, int]:
@@ -59,13 +76,17 @@ class Units:
     """Internal units of one surface (module docstring, "Units").
 
     Lengths are counted in ``c = 2**e_len`` (``s / c`` in [0.5, 1) with ``s`` the
-    rms height), pressures in ``E* c / L = pm * 2**pe``; ``heights`` holds the
+    rms height), pressures in ``E* c / L = pm * 2**pe`` with ``L = length`` for a
+    square cell and ``L = Lx`` for a rectangle ``length = (Lx, Ly)`` (stored as
+    ``self.length``; ``label`` is its name in messages); ``heights`` holds the
     internal (exactly scaled) heights. ``flat`` marks a surface whose heights
     are all equal.
     """
 
-    def __init__(self, h: np.ndarray, e_star: float, length: float):
-        self.e_star, self.length = e_star, length
+    def __init__(self, h: np.ndarray, e_star: float, length):
+        self.e_star, self.length = e_star, side_x(length)
+        self.label = "length" if np.ndim(length) == 0 else "Lx"
+        length = self.length
         self.flat = not bool(h.max() > h.min())
         if self.flat:
             self.rms = 0.0
@@ -100,26 +121,32 @@ class Units:
         return np.ldexp(g_int, self.e_len)
 
 
-def check_loads(units: Units, p: np.ndarray, n: int, name: str) -> None:
-    """Refuse mean pressures ``p`` outside float64's reach (``name`` is the argument)."""
+def check_loads(units: Units, p: np.ndarray, shape: tuple[int, int], name: str) -> None:
+    """Refuse mean pressures ``p`` outside float64's reach (``name`` is the argument).
+
+    ``shape`` is the grid ``(nx, ny)``: a single node may carry the whole load ``nx * ny * p0``.
+    """
     label = "p0" if name == "p0" else "every p0"
     top = float(p.max())
-    if top * float(n) * float(n) > _FLOAT_CEILING:
+    nx, ny = shape
+    if top * float(nx) * float(ny) > _FLOAT_CEILING:
+        nodes = "n**2" if nx == ny else "(nx * ny)"
         raise ValueError(
-            f"{name}: {label} must be <= {_FLOAT_CEILING:g} / n**2 = {_FLOAT_CEILING / n / n:.3g} (a single "
-            f"node may carry the whole load n**2 p0); got {top!r}")
+            f"{name}: {label} must be <= {_FLOAT_CEILING:g} / {nodes} = {_FLOAT_CEILING / nx / ny:.3g} (a single "
+            f"node may carry the whole load {nodes} p0); got {top!r}")
     for value in (p.min(), p.max()):
         check_range(units, name, label, float(value))
 
 
 def check_range(units: Units, arg: str, what: str, value: float) -> None:
-    """Refuse a pressure ``value`` whose ``value * L / (E* s)`` is outside :data:`LOAD_RANGE`."""
+    """Refuse a pressure ``value`` whose ``value * L / (E* s)`` is outside :data:`LOAD_RANGE` (``L = Lx``
+    for a rectangle)."""
     if units.flat:
         return
     lo, hi = LOAD_RANGE
     r = units.ratio_log10(value)
     if not (math.log10(lo) <= r <= math.log10(hi)):
         raise ValueError(
-            f"{arg}: {what} * length / (e_star * s) must be in [{lo:g}, {hi:g}] with s = "
+            f"{arg}: {what} * {units.label} / (e_star * s) must be in [{lo:g}, {hi:g}] with s = "
             f"{units.rms:.6g} the rms height of heights (outside it float64 cannot represent the "
             f"contact); got {what.split()[-1]} = {value!r}, i.e. 10**{r:.1f}")

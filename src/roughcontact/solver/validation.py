@@ -31,25 +31,74 @@ def check_positive(name: str, value) -> float:
     return v
 
 
-def validate_heights(heights, name: str = "heights") -> np.ndarray:
+def validate_heights(heights, name: str = "heights", square: bool = True) -> np.ndarray:
+    """``heights`` as a C-contiguous float64 array, checked: 2-D, at least 4 x 4, finite.
+
+    ``square=True`` asks for a square array ``(n, n)`` (the grid of a float ``length``);
+    ``square=False`` accepts any ``(nx, ny)`` with ``nx, ny >= 4`` (a rectangular cell, whose
+    ``length`` is then checked against the shape by :func:`validate_length`).
+    """
     if isinstance(heights, (str, bytes)):
         raise ValueError(f"{name} must be a real numeric array, got the string {heights!r}")
     try:
         a = np.asarray(heights)
     except Exception as exc:  # ragged lists and the like
-        raise ValueError(f"{name} must be a real 2-D square array of finite numbers: {exc}") from None
+        raise ValueError(f"{name} must be a real 2-D square array of finite numbers (or (nx, ny) with "
+                         f"length=(Lx, Ly)): {exc}") from None
     if a.dtype == object or a.dtype.kind not in "iuf":
         if a.dtype.kind == "c":
             raise ValueError(f"{name} must be real, got complex dtype {a.dtype}")
         raise ValueError(f"{name} must be a real numeric array, got dtype {a.dtype}")
-    if a.ndim != 2 or a.shape[0] != a.shape[1]:
-        raise ValueError(f"{name} must be a 2-D square array (n, n), got shape {a.shape}")
-    if a.shape[0] < 4:
-        raise ValueError(f"{name} must be at least 4 x 4, got shape {a.shape}")
+    if a.ndim != 2 or (square and a.shape[0] != a.shape[1]):
+        raise ValueError(f"{name} must be a 2-D square array (n, n), or (nx, ny) with length=(Lx, Ly), "
+                         f"got shape {a.shape}")
+    if min(a.shape) < 4:
+        raise ValueError(f"{name} must be at least 4 x 4 (nx, ny >= 4), got shape {a.shape}")
     a = np.ascontiguousarray(a, dtype=np.float64)
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name} must contain only finite values (found NaN or inf)")
     return a
+
+
+def validate_length(length, shape: tuple[int, int], name: str = "heights"):
+    """The cell's sides for the array ``name`` of ``shape`` ``(nx, ny)``: a float ``L`` or a pair ``(Lx, Ly)``.
+
+    A float (a real scalar) means the square cell ``Lx = Ly = L`` and needs ``nx == ny``; a pair
+    (tuple, list or 1-D array of two real numbers) gives the sides along x (axis 0) and y (axis 1),
+    pixels ``dx = Lx / nx`` and ``dy = Ly / ny``. Every side must be finite and > 0.
+
+    Returns
+    -------
+    float or (float, float)
+        ``L`` for a square cell (``nx == ny`` and ``Lx == Ly``: a pair ``(L, L)`` on an ``n x n``
+        grid is returned as the float ``L``, so that it is the same problem bit for bit), else
+        the pair ``(Lx, Ly)`` of floats.
+    """
+    nx, ny = shape
+    if isinstance(length, (tuple, list)) or (isinstance(length, np.ndarray) and length.ndim > 0):
+        return _length_pair(length, nx, ny)
+    value = check_positive("length", length)
+    if nx != ny:
+        raise ValueError(
+            f"length: a single float means a square cell, and {name} must be a 2-D square array (n, n) "
+            f"for it; got length={length!r} and {name} of shape {(nx, ny)}: for a rectangular cell give "
+            f"length=(Lx, Ly), the sides along x (axis 0) and y (axis 1)")
+    return value
+
+
+def _length_pair(length, nx: int, ny: int):
+    expected = "a finite real number > 0 (square cell) or a pair (Lx, Ly) of finite real numbers > 0"
+    values = list(np.asarray(length, dtype=object).ravel()) if isinstance(length, np.ndarray) else list(length)
+    if len(values) != 2 or (isinstance(length, np.ndarray) and length.ndim != 1):
+        raise ValueError(f"length must be {expected}, got {len(values)} values {length!r}")
+    sides = []
+    for value in values:
+        side = real_scalar("length", value, expected)
+        if not (math.isfinite(side) and side > 0):
+            raise ValueError(f"length must be {expected}, got {length!r}")
+        sides.append(side)
+    lx, ly = sides
+    return lx if (nx == ny and lx == ly) else (lx, ly)
 
 
 def validate_pressures(pressures) -> np.ndarray:
@@ -88,9 +137,11 @@ def validate_threads(threads) -> int:
     return int(threads)
 
 
-def validate_solver_args(e_star, length, tol, max_iter, hardness, threads):
+def validate_solver_args(e_star, length, tol, max_iter, hardness, threads, shape=None):
+    """The solver's scalar arguments, checked; ``length`` against the heights' ``shape``
+    (:func:`validate_length`; a float ``> 0`` when ``shape`` is None)."""
     e_star = check_positive("e_star", e_star)
-    length = check_positive("length", length)
+    length = check_positive("length", length) if shape is None else validate_length(length, shape)
     tol_f = real_scalar("tol", tol, "a number in the open interval (0, 1)")
     if not (0.0 < tol_f < 1.0):
         raise ValueError(f"tol must be a number in the open interval (0, 1), got {tol!r}")

@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from .halfspace import half_space
-from .units import rms_about_mean
+from .units import cell_aspect, rms_about_mean
 
 #: Iterations of the elastic path (package docstring): ``"pk"``, Polonsky & Keer's
 #: CG as in Tamaas' ``PolonskyKeerRey`` (the reference); ``"pk-fourier"``, the same
@@ -15,9 +15,14 @@ from .units import rms_about_mean
 #: ``"pk-fourier-f32"``, the latter with single-precision transforms in the loop.
 ELASTIC_METHODS = ("pk", "pk-fourier", "pk-fourier-f32")
 
-#: The iterations a stalled step moves on to, in turn, from its starting pressure (each more
-#: robust and slower): single-precision products -> float64 products -> the reference CG.
-FALLBACKS = {"pk-fourier-f32": ("pk-fourier", "pk"), "pk-fourier": ("pk",), "pk": ()}
+#: The iterations a stalled step moves on to, in turn, from its pressure when it stalled (each
+#: more robust and slower): single-precision products -> float64 products -> the monotone gradient
+#: projection ``"box"`` (Moré & Toraldo; every move lowers the energy, so it cannot cycle).
+FALLBACKS = {"pk-fourier-f32": ("pk-fourier", "box"), "pk-fourier": ("box",), "pk": ("box",), "box": ()}
+
+#: Whether a step that needed a fallback makes the method that converged it the start of the
+#: following steps of the same surface (contact.ContactSolver._iterate).
+STICKY = True
 
 #: Every way a step can end (the per-step ``solver_path`` codes): the exact answer of a flat
 #: surface, one of the elastic iterations, or the bounded (hardness) iteration.
@@ -58,9 +63,11 @@ def dot(a: np.ndarray, b: np.ndarray) -> float:
 
 
 class Workspace:
-    """Fields of one surface in internal units (``E* = L = 1``, lengths in powers of two).
+    """Fields of one surface in internal units (``E* = Lx = 1``, lengths in powers of two).
 
-    ``P`` the pressure, ``w = K P - h`` the gap without the rigid-body offset,
+    The fields have the heights' shape ``(nx, ny)`` (``shape``; ``size = nx * ny`` nodes);
+    ``length`` is the cell's, a float ``L`` or a pair ``(Lx, Ly)``, of which the operator
+    takes the aspect ``Ly / Lx``. ``P`` the pressure, ``w = K P - h`` the gap without the rigid-body offset,
     ``T`` the search direction (zero off the free set), ``mask`` the contact
     set; ``op`` the elastic operator (:func:`~.halfspace.half_space` for
     ``boundary``) and ``method`` the elastic iteration, one of
@@ -74,24 +81,23 @@ class Workspace:
                  boundary: str = "periodic", scale: float | None = None):
         if method not in ELASTIC_METHODS:
             raise ValueError(f"ELASTIC_METHOD must be one of {ELASTIC_METHODS}, got {method!r}")
-        n = heights.shape[0]
-        self.n = n
-        self.size = n * n
+        shape = self.shape = heights.shape
+        self.size = shape[0] * shape[1]
         self.length = length
         self.method = method
         self.boundary = boundary
-        self.op = half_space(boundary, n, threads)
+        self.op = half_space(boundary, shape, threads, cell_aspect(length))
         self.h = heights
         self.hf = heights.ravel()
         self.h_rms = rms_about_mean(heights)[1] if scale is None else scale
-        self.w = np.empty((n, n))
+        self.w = np.empty(shape)
         self.wf = self.w.ravel()
-        self.P = np.zeros((n, n))
+        self.P = np.zeros(shape)
         self.Pf = self.P.ravel()
-        self.T = np.zeros((n, n))
+        self.T = np.zeros(shape)
         self.Tf = self.T.ravel()
-        self.mask = np.zeros((n, n), dtype=bool)
-        self.bbuf = np.empty((n, n), dtype=bool)
+        self.mask = np.zeros(shape, dtype=bool)
+        self.bbuf = np.empty(shape, dtype=bool)
         self.Z = None  # preconditioner input, zero off the free set
 
     @property
@@ -106,7 +112,7 @@ class Workspace:
     def setup_method(self) -> None:
         """Preconditioner buffer and, for ``-f32``, the single-precision products."""
         if self.method != "pk" and self.Z is None:
-            self.Z = np.zeros((self.n, self.n))
+            self.Z = np.zeros(self.shape)
         if self.method == "pk-fourier-f32":
             self.op.single(self.h_rms)
 
