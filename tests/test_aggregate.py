@@ -316,3 +316,26 @@ def test_windowed_slope_needs_points_and_increasing_edges():
         windowed_load_slope(p0, p0, p0, np.array([1.0, 0.5]))
     with pytest.raises(ValueError, match="min_points"):
         windowed_load_slope(p0, p0, p0, np.array([0.5, 1.0]), min_points=1)
+
+
+@pytest.mark.parametrize("boundary", ["periodic", "free"])
+def test_square_and_rectangular_cases_aggregate_with_every_label(boundary):
+    # Measured files may be square or not, with square pixels or not: their per-case contact files
+    # must stack along `topography` with every variable's units and long_name kept (a text that
+    # differed between the two kinds of cell was once dropped as a conflict, and the aggregate refused).
+    from roughcontact.aggregate import combine_topographies
+    from roughcontact.datasets import contact_dataset
+    from roughcontact.solver import solve_contact
+    from roughcontact.surface import generate_surface
+
+    cells = {"square": ((32, 32), 1.0), "rect": ((32, 24), (1.0, 0.5))}
+    parts = []
+    for name, (shape, length) in cells.items():
+        h = generate_surface(32, 2, 8, 0.8, 0, rms_slope=0.1)[:shape[0], :shape[1]].copy()
+        result = solve_contact(h, [0.001, 0.002, 0.003], length=length, boundary=boundary)
+        parts.append(contact_dataset(result, rms_slope=0.1, alpha=2.0, e_star=1.0, topography=name))
+    agg = combine_topographies(parts, list(cells), expected=list(cells))
+    for name, var in agg.data_vars.items():
+        assert "units" in var.attrs and "long_name" in var.attrs, name
+        texts = [{key: str(value) for key, value in v.attrs.items()} for v in (var, parts[0][name], parts[1][name])]
+        assert texts[0] == texts[1] == texts[2], name

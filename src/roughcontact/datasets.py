@@ -140,13 +140,14 @@ def contact_dataset(result: xr.Dataset, *, rms_slope: float, alpha: float, e_sta
     ``e_star`` in its ``pressure_units``); what this adds is dimensionless.
     """
     ds = result.drop_vars("wall_time", errors="ignore")
-    dx, rect = pixel_scale(result.attrs)
+    dx = pixel_scale(result.attrs)
     ds["area_fraction_corrected"] = xr.DataArray(
         perimeter_corrected_area(ds["area_fraction"].values, ds["contact_perimeter"].values, dx),
         dims=("step",),
         attrs={"units": "1",
-               "long_name": f"perimeter-corrected contact area fraction A_pix/A0 - c P dx, c = {PERIMETER_C:.4f}"
-                            + (", dx = sqrt(dx dy) for rectangular pixels" if rect else "")},
+               # one text for every cell, so that square and rectangular cases aggregate
+               "long_name": f"perimeter-corrected contact area fraction A_pix/A0 - c P dx, c = {PERIMETER_C:.4f}, "
+                            "dx = sqrt(dx dy) the pixel side"},
     )
     ds["kappa"] = (e_star * rms_slope / ds["mean_contact_pressure"]).assign_attrs(
         units="1", long_name="kappa = E* h' / mean contact pressure")
@@ -207,17 +208,17 @@ def cell_attrs(shape: tuple[int, int], length) -> dict:
     return {**sides, "n": grid["n"]} if "n" in grid else {**sides, **grid}
 
 
-def pixel_scale(attrs) -> tuple[float, bool]:
-    """The pixel size of a cell from its attributes, and whether its pixels are rectangular.
+def pixel_scale(attrs) -> float:
+    """The pixel size of a cell from its attributes (:func:`cell_attrs`).
 
-    ``dx = L / n`` for a square cell (:func:`cell_attrs`); for a rectangular one the geometric mean
-    ``sqrt(dx dy)`` of ``dx = Lx / nx`` and ``dy = Ly / ny`` (the perimeter correction's length
-    scale, exact for square pixels and a first-order estimate otherwise).
+    ``dx = L / n`` for a square cell; for a rectangular one the geometric mean ``sqrt(dx dy)`` of
+    ``dx = Lx / nx`` and ``dy = Ly / ny`` (the perimeter correction's length scale, exact for
+    square pixels and a first-order estimate otherwise).
     """
     if "length_x" not in attrs:
-        return float(attrs["length"]) / int(attrs["n"]), False
+        return float(attrs["length"]) / int(attrs["n"])
     dx, dy = float(attrs["length_x"]) / int(attrs["nx"]), float(attrs["length_y"]) / int(attrs["ny"])
-    return (dx if dx == dy else float(np.sqrt(dx * dy))), dx != dy
+    return dx if dx == dy else float(np.sqrt(dx * dy))
 
 
 def cell_length(attrs, shape: tuple[int, int], source):
