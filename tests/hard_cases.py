@@ -55,7 +55,7 @@ from pathlib import Path
 import numpy as np
 
 from roughcontact.solver import STALL_WINDOW
-from roughcontact.surface import generate_surface, spectral_moments
+from roughcontact.surface import generate_surface, nonperiodic_moments, spectral_moments
 
 Shape = int | tuple[int, int]
 Length = float | tuple[float, float]
@@ -147,11 +147,13 @@ class Rough:
     rms_height: float | None = None
 
     def build(self, seed: int, length: Length, rng: np.random.Generator) -> np.ndarray:
-        (nx, ny), (lx, ly) = grid(self.shape), lengths(length)
-        if nx != ny or lx != ly:
-            raise NotImplementedError("generate_surface makes square cells only")
-        return generate_surface(nx, self.k_l, self.k_s, self.hurst, seed, rms_slope=self.rms_slope,
-                                rms_height=self.rms_height, length=lx)
+        """The surface on the square ``max(nx, ny)`` grid of side ``Lx``; a rectangle is its corner
+        ``(nx, ny)`` block, read on the rectangle's pixels (stretched when ``dy != dx``, and not periodic:
+        a harder input for the periodic operator, the same one for its peer)."""
+        (nx, ny), (lx, _) = grid(self.shape), lengths(length)
+        h = generate_surface(max(nx, ny), self.k_l, self.k_s, self.hurst, seed, rms_slope=self.rms_slope,
+                             rms_height=self.rms_height, length=lx)
+        return h if nx == ny else np.ascontiguousarray(h[:nx, :ny])
 
 
 @dataclass(frozen=True)
@@ -331,7 +333,9 @@ class Loads:
     def __call__(self, h: np.ndarray, e_star: float, length: Length) -> np.ndarray:
         out = list(self.values)
         if self.area:
-            m = spectral_moments(h, lengths(length)[0])["rms_slope"]
+            lx, ly = lengths(length)
+            square = h.shape[0] == h.shape[1] and lx == ly
+            m = (spectral_moments(h, lx) if square else nonperiodic_moments(h, (lx, ly)))["rms_slope"]
             out += [a * e_star * m / KAPPA for a in self.area]
         if self.bridge or self.full:
             p_fc = full_contact_load(h, e_star, length)
@@ -467,6 +471,15 @@ CASES: tuple[HardCase, ...] = (
              # from there too; the monotone gradient projection converges (~10 iterations after two stall
              # windows) and steps 2-5 start on it (STICKY; alone, pk-fourier-f32 also stalls at steps 2-3)
              paths=("box",), max_iterations=2 * STALL_WINDOW + MAX_ITERATIONS),
+    HardCase("rect-periodic-aniso", Recipe(_rough((96, 64))), PARTIAL, "tamaas", 1e-4,
+             TAMAAS_WHY + "; nx != ny and dx != dy (1.5 / 96 along x, 0.6 / 64 along y)", length=(1.5, 0.6)),
+    HardCase("rect-plateau-periodic-aniso", Recipe(_rough((64, 128)), (Plateau(0.25, "mean"),)),
+             Loads(area=(1e-3, 1e-2, 0.1), bridge=1, full=(1.5,)), "tamaas", 1e-4,
+             TAMAAS_WHY + "; a filled block on a rectangle with dy = 2.5 dx", length=(1.0, 5.0)),
+    HardCase("rect-free-aniso", Recipe(_rough((64, 40), k_l=2)), Loads(area=(1e-3, 1e-2, 0.05, 0.2)),
+             "contactmechanics", 1e-7,
+             "max |p - p_cm| / max p on a rectangular patch with dy = 0.8 dx: the same discrete problem to each "
+             "solver's tolerance", boundary="free", length=(1.0, 0.5)),
     HardCase("paper-4096", Recipe(_rough(4096, 16, 64)), Loads(area=(0.01, 0.03, 0.1)), "coarse-grid", 2e-5,
              "mean gap relative to N = 2048's: converges faster than dx (measured <= 3.0e-6; 4.9e-5 at 2048 vs "
              "1024); Tamaas would take ~30 min (2.6 s per iteration at N = 4096)", slow=True),

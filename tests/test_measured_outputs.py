@@ -242,6 +242,22 @@ def test_figure_contents(agg, result):
         fig_measured_kappa(_cases(n=2))
 
 
+def test_loads_beyond_an_asperity_model_leave_it_cut_not_the_figure_failed(agg, result):
+    # A surface of rms slope 0.003 pushed to p0/E* = 0.005 reaches p0/(E* h') ~ 1.7, beyond where
+    # BGT and Greenwood reach full contact (their tables end there): the figure once failed with
+    # "p0 (= E* h' pbar; ...) must be finite and lie in [0, 1.79]"; the models are now drawn up to
+    # their full contact, with a note in the legend.
+    from roughcontact.theory import asperity_max_load
+
+    alpha = float(np.median(agg["alpha"].values))
+    limit = min(asperity_max_load(alpha=alpha, rms_slope=1.0, e_star=1.0, model=m) for m in ("bgt", "greenwood"))
+    steep = agg.assign(rms_slope=agg["rms_slope"] * 0 + float(agg["pressure"].max()) / (2.0 * limit))
+    labels = [t.get_text() for t in fig_measured_area_load(steep, result).legends[0].get_texts()]
+    assert "BGT, Greenwood: drawn up to their full contact" in labels
+    assert "BGT, Greenwood: drawn up to their full contact" not in [
+        t.get_text() for t in fig_measured_area_load(agg, result).legends[0].get_texts()]
+
+
 def test_a_measured_scene_gets_exactly_the_measured_figures():
     scene = _scene(["ground-b", "ground-a"])
     assert scene_figures(scene) == MEASURED_FIGURES

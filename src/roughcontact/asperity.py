@@ -510,6 +510,16 @@ def asperity_reduced_pressure(area_fraction, *, alpha: float, model: str) -> np.
     return _at_load(af, a, m, 0)[1]
 
 
+def asperity_max_load(*, alpha: float, rms_slope: float, e_star: float, model: str) -> float:
+    """The largest mean pressure ``p0`` [pressure unit of ``e_star``] the BGT / Greenwood model covers.
+
+    Its table ends at ``xi_d = -10`` (the separation at which ``A/A0`` reaches 1): above this load
+    the model has no answer, and :func:`asperity_area` refuses the load.
+    """
+    a, m = _alpha(alpha), _model(model)
+    return _load_range(a, m, 1) * _positive_scalar("rms_slope", rms_slope) * _positive_scalar("e_star", e_star)
+
+
 def asperity_area(p0, *, alpha: float, rms_slope: float, e_star: float, model: str) -> np.ndarray:
     """BGT / Greenwood ``A/A0`` at applied pressure ``p0`` (cf. :func:`~roughcontact.theory.persson_area`).
 

@@ -45,6 +45,7 @@ from .theory import (
     NAYAK_ALPHA_MIN,
     asperity_area,
     asperity_kappa,
+    asperity_max_load,
     cel_area,
     cel_dpbar_dp0,
     cel_kappa,
@@ -819,18 +820,26 @@ def _area_load_axes(ax, consts, xmax: float, ymax: float, e_star: float, hp: flo
     ax.set_ylabel(r"$A/A_0$ [1]")
 
 
-def _area_load_theory(ax, p: np.ndarray, e_star: float, hp: float, alphas) -> None:
-    """BGT and Persson small-load limits, Persson's erf curve and the asperity models at loads ``p``."""
+def _area_load_theory(ax, p: np.ndarray, e_star: float, hp: float, alphas) -> bool:
+    """BGT and Persson small-load limits, Persson's erf curve and the asperity models at loads ``p``.
+
+    An asperity model is drawn only up to the largest load it covers (its A/A0 = 1,
+    :func:`~roughcontact.asperity.asperity_max_load`); returns whether one was cut there, for a note.
+    """
     x = p / e_star
     ax.plot(x, linear_area(p, kappa=KAPPA_BGT, rms_slope=hp, e_star=e_star),
             color=OKABE_ITO[0], lw=0.9, ls="-", zorder=3)
     ax.plot(x, persson_area(p, rms_slope=hp, e_star=e_star), **_PERSSON_ERF_STYLE, zorder=3)
     ax.plot(x, linear_area(p, kappa=KAPPA_PERSSON, rms_slope=hp, e_star=e_star), **_PERSSON_LIMIT_STYLE,
             zorder=4)
+    cut = False
     for alpha, shade, _ in alphas:
         for model, (ls, _name) in ASPERITY_STYLES.items():
-            ax.plot(x, asperity_area(p, alpha=alpha, rms_slope=hp, e_star=e_star, model=model),
+            inside = p <= asperity_max_load(alpha=alpha, rms_slope=hp, e_star=e_star, model=model)
+            cut |= not inside.all()
+            ax.plot(x[inside], asperity_area(p[inside], alpha=alpha, rms_slope=hp, e_star=e_star, model=model),
                     color=shade, lw=1.1, ls=ls, zorder=3)
+    return cut
 
 
 def _area_load_theory_handles(sdmax: float) -> list:

@@ -292,9 +292,11 @@ def fig_measured_area_load(agg: xr.Dataset, fit: xr.Dataset | None = None, *, es
         crosses = _draw_unconverged(ax, _load(agg), agg["area_fraction"], bad)
         grid = np.geomspace(xs.min() / 1.2, xs.max() * 1.2, 200)
         # Loads normalised by E* h': the theory takes p0 = x with E* = h' = 1.
-        plots._area_load_theory(ax, grid, 1.0, 1.0, alphas)
+        cut = plots._area_load_theory(ax, grid, 1.0, 1.0, alphas)
         handles = _topography_handles(names, used, "-") + plots._area_load_theory_handles(0.0)[1:]
         handles += plots._asperity_handles(alphas)
+        if cut:
+            handles.append(Line2D([], [], ls="none", label="BGT, Greenwood: drawn up to their full contact"))
         if consts is not None:
             ax.plot(grid, cel_area(grid, kappa=consts[0], mu=consts[1], beta=consts[2], rms_slope=1.0, e_star=1.0),
                     zorder=1, **_FIT_STYLE)

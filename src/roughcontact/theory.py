@@ -48,6 +48,7 @@ from .asperity import (  # noqa: F401  (re-exported: the finite-load asperity th
     XI_D_RANGE,
     asperity_area,
     asperity_kappa,
+    asperity_max_load,
     asperity_model,
     asperity_reduced_area,
     asperity_reduced_pressure,
