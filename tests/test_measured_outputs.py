@@ -302,3 +302,22 @@ def test_report_fit_table_of_a_measured_scene(agg, result):
     assert "all measured topographies pooled" in summary and "pooled (6 topographies)" in summary
     with pytest.raises(ValueError, match="n_topographies"):
         report.fit_table(csv_text.replace("n_topographies", "n_surfaces"))
+
+
+def test_rectangular_maps_are_drawn_to_scale_with_both_sides():
+    # A map kept whole (nx != ny, dx != dy): drawn over Lx x Ly, its title giving both sides and
+    # counts, and the area-load title the range of grids.
+    from roughcontact.datasets import measured_surface_dataset
+    from roughcontact.plots_measured import _grid_text
+    from roughcontact.topography import MeasuredSurface
+
+    h = generate_surface(64, 4, 32, 0.8, 0, rms_height=1.5)[:64, :40].copy()
+    ds = measured_surface_dataset(MeasuredSurface(h, (30000.0, 7500.0), "um", {}), name="frt-2")
+    assert ds.attrs["length_x"] == 30000.0 and ds.attrs["ny"] == 40 and "length" not in ds.attrs
+    ax = fig_topographies([ds]).axes[0]
+    assert r"$3e+04" not in ax.get_title() and r"$3.0e+04" not in ax.get_title()
+    assert r"$30000 \times 7500$" in ax.get_title() and r"$64 \times 40$" in ax.get_title()
+    assert ax.get_images()[0].get_extent() == [0.0, 30000.0, 0.0, 7500.0]
+    grids = {"a": (150, 300), "b": (256, 256), "c": (650, 650)}
+    assert _grid_text(grids) == r"grids $150 \times 300$ to $650 \times 650$"
+    assert _grid_text({"a": (256, 256), "b": (64, 64)}) == "$N$ = 64-256"

@@ -92,12 +92,13 @@ def _recorded(ds: xr.Dataset) -> dict:
 
 
 def _grid_text(sizes: Mapping[str, tuple[int, int]]) -> str:
-    """The grids of the files: ``N = 256``, ``N = 150-480`` when all are square, else each ``nx x ny``."""
+    """The grids of the files: ``N = 256``, ``N = 150-480`` when all are square, else the smallest and largest."""
     shapes = sorted(set(sizes.values()), key=lambda s: (s[0] * s[1], s))
     if all(nx == ny for nx, ny in shapes):
         lo, hi = shapes[0][0], shapes[-1][0]
         return f"$N = {lo}$" if lo == hi else f"$N$ = {lo}-{hi}"
-    return "grids " + ", ".join(rf"${nx} \times {ny}$" for nx, ny in shapes)
+    (ax, ay), (bx, by) = shapes[0], shapes[-1]
+    return rf"grid ${ax} \times {ay}$" if len(shapes) == 1 else rf"grids ${ax} \times {ay}$ to ${bx} \times {by}$"
 
 
 def _summary(agg: xr.Dataset, sizes: Mapping[str, tuple[int, int]] | None) -> str:
@@ -171,7 +172,10 @@ def _cell_label(ds: xr.Dataset, shape: tuple[int, int], utex: str) -> tuple[tupl
     """The sides (Lx, Ly) of a surface file's cell and its title text (``L``, ``N`` or both sides)."""
     if "length_x" in ds.attrs:
         lx, ly = float(ds.attrs["length_x"]), float(ds.attrs["length_y"])
-        return (lx, ly), rf"${lx:.3g} \times {ly:.3g}$ {utex}, ${shape[0]} \times {shape[1]}$"
+        # four significant digits, never an exponent (30000, not 3e+04)
+        sides = r" \times ".join(np.format_float_positional(v, precision=4, fractional=False, trim="-")
+                                  for v in (lx, ly))
+        return (lx, ly), rf"${sides}$ {utex}, ${shape[0]} \times {shape[1]}$"
     length = float(ds.attrs.get("length", shape[0]))
     return (length, length), f"$L$ = {length:.3g} {utex}, $N$ = {int(ds.attrs.get('n', shape[0]))}"
 
