@@ -50,3 +50,22 @@ def test_constraints_pin_every_dependency_the_tests_need():
     for req in wanted:
         name = re.sub(r"[-_.]+", "-", re.split(r"[<>=\[ ]", req)[0]).lower()
         assert name in pins, f"{name} is not pinned in constraints.txt"
+
+
+def test_the_install_step_brings_what_the_report_needs():
+    # `snakemake --report` imports some packages only when it runs and stops with "Python package X
+    # must be installed to create reports" (pygments, once, after a plain `pip install -e .`): every
+    # such X must come with the project's own dependencies or with Snakemake's.
+    import importlib.metadata
+    import re
+    from pathlib import Path as _Path
+
+    import snakemake.report
+
+    needed = set()
+    for path in _Path(snakemake.report.__file__).parent.rglob("*.py"):
+        needed |= set(re.findall(r"Python package (\w+) must be installed", path.read_text()))
+    assert "pygments" in needed  # the scan sees what Snakemake asks for
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["dependencies"]
+    brought = {re.split(r"[<>=\[ ;]", r)[0].lower() for r in project + importlib.metadata.requires("snakemake")}
+    assert needed <= brought, f"not installed by `pip install -e .`: {sorted(needed - brought)}"

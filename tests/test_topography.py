@@ -250,3 +250,24 @@ def test_shipped_example_files_hold_what_the_examples_module_writes(tmp_path):
         b = read_topography(path, unit="um", **settings[name])
         assert_heights_close(b.heights, a.heights, what=str(repo / path.name))
         assert a.length == b.length and a.info["n_undefined"] == b.info["n_undefined"]
+
+
+def test_mostly_undefined_maps_are_refused_and_the_fraction_recorded(tmp_path):
+    # A map 60 % undefined would be mostly the fill's invention: refused above topography.max_undefined
+    # (default 0.5), naming the file, the fraction and the remedy; accepted when the scene allows it,
+    # with the fraction in the provenance and in the surface file.
+    from roughcontact.datasets import measured_surface_dataset
+
+    h = _noise((20, 20), seed=4)
+    mask = np.zeros(h.shape, dtype=bool)
+    mask[:12] = True  # 240 of 400 points
+    fn = _netcdf(tmp_path, np.ma.masked_array(h, mask=mask), (20.0, 20.0))
+    with pytest.raises(TopographyError) as err:
+        read_topography(fn, unit="um", undefined="mean")
+    msg = str(err.value)
+    assert msg.startswith(f"{fn}: 240 of 400 points (60.0%) are undefined") and "topography.max_undefined = 0.5" in msg
+    surface = read_topography(fn, unit="um", undefined="mean", max_undefined=0.7)
+    assert surface.info["undefined_fraction"] == 0.6
+    assert float(measured_surface_dataset(surface, name="m")["undefined_fraction"].squeeze()) == 0.6
+    with pytest.raises(TopographyError, match=r"topography.max_undefined 1.5 is not allowed; use a number in \[0, 1\]"):
+        read_topography(fn, unit="um", max_undefined=1.5)

@@ -185,6 +185,8 @@ def measured_surface_dataset(measured, *, name: str) -> xr.Dataset:
             "m4": ((), stats["m4"], {"units": cf_unit(unit, length_power=-2),
                                      "long_name": "profile moment m4 = <(d2h/dx2)^2>, differences"}),
             "alpha": ((), stats["alpha"], {"units": "1", "long_name": "Nayak bandwidth alpha = m0 m4 / m2^2"}),
+            "undefined_fraction": ((), float(measured.info.get("undefined_fraction", 0.0)), {
+                "units": "1", "long_name": "fraction of the file's points not measured (filled before contact)"}),
         },
         coords={
             "x": ("x", np.arange(nx) * (lx / nx), {"units": u_len, "long_name": "position along x"}),

@@ -32,7 +32,7 @@ GENERATOR_KEYS = ("surface", "grid", "seeds", "examples")
 #: Per-file reader settings a ``files`` entry may override.
 FILE_KEYS = ("file_unit", "physical_size")
 #: Reader settings shared by every file of the scene.
-SCENE_KEYS = ("unit", "file_unit", "physical_size", "undefined", "detrend", "non_square", "channel")
+SCENE_KEYS = ("unit", "file_unit", "physical_size", "undefined", "detrend", "non_square", "channel", "max_undefined")
 
 
 class MeasuredConfigError(ValueError):

@@ -24,6 +24,7 @@ what is wrong and what is allowed, and names the config field (``topography.<key
 
 from __future__ import annotations
 
+import numbers
 import os
 import warnings
 from dataclasses import dataclass
@@ -45,6 +46,11 @@ DETREND_MODES = ("none", "center", "height", "curvature")
 #: What to do with a map that is not square (config ``topography.non_square``): use it whole
 #: (``keep``, the default), the centred largest square block (``crop``) or refuse it (``reject``).
 NON_SQUARE_MODES = ("keep", "crop", "reject")
+#: Default largest fraction of undefined (not measured) points a file may have (config
+#: ``topography.max_undefined``): above it the filled map would be mostly invented.
+MAX_UNDEFINED = 0.5
+#: Fraction of undefined points above which the scene's log warns (the filled points are recorded).
+WARN_UNDEFINED = 0.1
 #: Largest relative difference |dx/dy - 1| of the pixel sizes still taken as square (the cell's
 #: sides are then recorded as one length, as for a generated surface).
 PIXEL_RTOL = 1e-6
@@ -90,7 +96,8 @@ class MeasuredSurface:
 
 def read_topography(path, *, unit: str, file_unit: str | None = None,
                     physical_size: tuple[float, float] | None = None, undefined: str = "reject",
-                    detrend: str = "none", non_square: str = "keep", channel: int = 0) -> MeasuredSurface:
+                    detrend: str = "none", non_square: str = "keep", channel: int = 0,
+                    max_undefined: float = MAX_UNDEFINED) -> MeasuredSurface:
     """Read a measured topography file into a height array in the study's unit.
 
     Parameters
@@ -116,6 +123,9 @@ def read_topography(path, *, unit: str, file_unit: str | None = None,
         or "reject" it.
     channel : int
         Index of the data channel in a multi-channel file (0: the first).
+    max_undefined : float
+        Largest accepted fraction of undefined points, in [0, 1] (default :data:`MAX_UNDEFINED`); the
+        fraction is recorded in ``info["undefined_fraction"]``.
 
     Returns
     -------
@@ -129,10 +139,11 @@ def read_topography(path, *, unit: str, file_unit: str | None = None,
     """
     name = os.fspath(path)
     physical_size = _check_arguments(name, unit, file_unit, physical_size, undefined, detrend, non_square, channel)
+    _check_fraction(name, max_undefined)
     info = {"file": name, "sha256": _sha256(name)}
     topo = _load(name, info, unit=unit, file_unit=file_unit, physical_size=physical_size, channel=channel)
     dx, dy = _check_grid(name, topo, non_square)
-    heights = _detrend_and_fill(name, topo, info, undefined=undefined, detrend=detrend)
+    heights = _detrend_and_fill(name, topo, info, undefined=undefined, detrend=detrend, max_undefined=max_undefined)
     heights, info["crop"] = _crop(heights) if non_square == "crop" else (heights, None)
     nx, ny = heights.shape
     lx = nx * dx
@@ -161,6 +172,13 @@ def _check_arguments(name, unit, file_unit, physical_size, undefined, detrend, n
         raise TopographyError(f"{name}: topography.physical_size {physical_size!r} is not allowed; "
                               "use two finite numbers > 0, (Lx, Ly) in the file's unit")
     return size
+
+
+def _check_fraction(name, max_undefined) -> None:
+    if isinstance(max_undefined, bool) or not isinstance(max_undefined, numbers.Real) \
+            or not 0.0 <= float(max_undefined) <= 1.0:
+        raise TopographyError(f"{name}: topography.max_undefined {max_undefined!r} is not allowed; use a number "
+                              "in [0, 1] (the largest accepted fraction of undefined points)")
 
 
 def _sha256(name: str) -> str:
@@ -298,11 +316,15 @@ def _check_grid(name, topo, non_square) -> tuple[float, float]:
     return lx / nx, ly / ny
 
 
-def _detrend_and_fill(name, topo, info, *, undefined, detrend) -> np.ndarray:
+def _detrend_and_fill(name, topo, info, *, undefined, detrend, max_undefined=MAX_UNDEFINED) -> np.ndarray:
     """Detrend (fit on the defined points), then fill the undefined points; returns finite heights (nx, ny)."""
     n_undefined = int(np.ma.getmaskarray(topo.heights()).sum())
-    info.update(n_undefined=n_undefined, undefined=undefined, detrend=detrend)
     size = topo.heights().size
+    info.update(n_undefined=n_undefined, undefined_fraction=n_undefined / size, undefined=undefined, detrend=detrend)
+    if n_undefined > max_undefined * size and undefined != "reject":
+        raise TopographyError(f"{name}: {n_undefined} of {size} points ({n_undefined / size:.1%}) are undefined (not "
+                              f"measured), more than topography.max_undefined = {max_undefined:g}: the filled map "
+                              "would be mostly invented; raise max_undefined if this is the map you want")
     if n_undefined and undefined == "reject":
         raise TopographyError(f"{name}: {n_undefined} of {size} points ({n_undefined / size:.3%}) are undefined "
                               "(not measured); set topography.undefined to mean or harmonic to fill them")

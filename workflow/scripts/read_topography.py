@@ -3,7 +3,7 @@ import json
 
 from roughcontact.datasets import measured_surface_dataset
 from roughcontact.io import run_logged, write_dataset
-from roughcontact.topography import read_topography
+from roughcontact.topography import WARN_UNDEFINED, read_topography
 
 
 def main(log):
@@ -11,7 +11,12 @@ def main(log):
     measured = read_topography(
         s["path"], unit=s["unit"], file_unit=s.get("file_unit"), physical_size=s.get("physical_size"),
         undefined=s["undefined"], detrend=s["detrend"], non_square=s["non_square"], channel=s["channel"],
+        max_undefined=s["max_undefined"],
     )
+    if measured.info["undefined_fraction"] > WARN_UNDEFINED:
+        log.warning("%s: %.1f%% of the points are undefined (not measured) and were filled (%s); the map's "
+                    "statistics and contact there are the fill's", w.topography,
+                    100 * measured.info["undefined_fraction"], s["undefined"])
     ds = measured_surface_dataset(measured, name=w.topography)
     write_dataset(ds, snakemake.output[0], stage="surface", scene=w.scene, scene_parameters={"topography": s})
     log.info("topography %s from %s: %s", w.topography, s["path"], json.dumps(measured.info, sort_keys=True))
