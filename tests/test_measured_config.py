@@ -1,15 +1,20 @@
 """Scenes of measured surfaces: the topography block is checked before any job is planned."""
 import copy
+import shutil
+from pathlib import Path
 
 import pytest
 
 from roughcontact.config import ConfigError, plan_summary, validate_config
 from roughcontact.measured import reader_settings, topography_names
 
+EXAMPLES = Path(__file__).resolve().parents[1] / "data" / "measured"
+
 
 def _config(tmp_path, topography=None, **scene_blocks):
-    for name in ("a.x3p", "b.nc"):
-        (tmp_path / name).write_bytes(b"placeholder")  # existence is what validation checks
+    # real files: each header is read when the scene is checked
+    for name, example in (("a.x3p", "ground-a.x3p"), ("b.nc", "ground-b.nc")):
+        shutil.copyfile(EXAMPLES / example, tmp_path / name)
     topo = topography or {"files": {"a": str(tmp_path / "a.x3p"), "b": {"path": str(tmp_path / "b.nc"),
                                                                        "file_unit": "nm",
                                                                        "physical_size": [1.0, 2.0]}},
@@ -104,3 +109,20 @@ def test_unknown_units_name_the_field_and_the_allowed_units(tmp_path, block, key
     cfg["scenes"]["gen"] = {"contact": {block: {key: "inch"}}}
     with pytest.raises(ConfigError, match=words):
         validate_config(cfg)
+
+
+@pytest.mark.parametrize("spoil, words", [
+    (lambda p: p.write_bytes(b"\x00" * 37), "not a topography file SurfaceTopography can read"),
+    (lambda p: shutil.copyfile(EXAMPLES / "ground-c.txt", p), "the file carries no length unit; give "
+                                                             "topography.file_unit"),
+])
+def test_a_file_header_is_checked_before_any_job(tmp_path, spoil, words):
+    # Each file's header (readable, channel, unit, size, grid) is read when the scene is checked, so
+    # that a bad file stops the run before planning, naming the scene, the field, the file and the remedy.
+    config = _config(tmp_path)
+    bad = tmp_path / "c.dat"
+    spoil(bad)
+    config["scenes"]["m"]["topography"]["files"]["c"] = str(bad)
+    with pytest.raises(ConfigError) as err:
+        validate_config(config)
+    assert f"scene 'm', field 'topography.files.c': {bad}: " in str(err.value) and words in str(err.value)

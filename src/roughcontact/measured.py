@@ -110,7 +110,28 @@ def check_measured_scene(name: str, scene: dict, delta: Mapping | None = None, *
         out["contact"]["solver"].setdefault("boundary", "free")
     out["topography"]["files"] = topography_files(name, out["topography"], check_files)
     out["topography"].pop("glob", None)
+    if check_files:
+        check_headers(name, out)
     return out
+
+
+def check_headers(name: str, scene: Mapping) -> None:
+    """Every file's header checked now (:func:`roughcontact.topography.check_header`), before any job.
+
+    A file SurfaceTopography cannot read, a missing channel, unit or size, or a map the scene
+    refuses fails here with the file, what is wrong and the remedy, instead of in its job.
+    """
+    from .topography import TopographyError, check_header  # SurfaceTopography: only for measured scenes
+
+    block = scene["topography"]
+    defaults = {key: block[key] for key in SCENE_KEYS if key in block}
+    for file in block["files"]:
+        settings = {**defaults, **reader_settings(scene, file)}
+        path = settings.pop("path")
+        try:
+            check_header(path, **settings)
+        except TopographyError as err:
+            _fail(name, f"topography.files.{file}", str(err))
 
 
 def is_measured(scene: Mapping) -> bool:

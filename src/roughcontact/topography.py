@@ -151,6 +151,54 @@ def read_topography(path, *, unit: str, file_unit: str | None = None,
     return MeasuredSurface(heights=heights, lengths=(lx, ly), unit=unit, info=info)
 
 
+def check_header(path, *, unit: str, file_unit: str | None = None,
+                 physical_size: tuple[float, float] | None = None, undefined: str = "reject",
+                 detrend: str = "none", non_square: str = "keep", channel: int = 0,
+                 max_undefined: float = MAX_UNDEFINED) -> None:
+    """The checks of :func:`read_topography` that need only the file's header, without its heights.
+
+    Readable by SurfaceTopography, the channel present and holding a 2-D uniform height map, a unit
+    and a size (the file's or the scene's), the unit convertible to ``unit``, the sizes positive,
+    and a square map when ``non_square`` is ``reject``. Run when a scene is checked, before any job
+    is planned (a few tens of ms a file); raises :class:`TopographyError` as the reader would.
+    """
+    name = os.fspath(path)
+    physical_size = _check_arguments(name, unit, file_unit, physical_size, undefined, detrend, non_square, channel)
+    _check_fraction(name, max_undefined)
+    if not os.path.isfile(name):
+        raise TopographyError(f"{name}: the topography file does not exist (or is not a regular file)")
+    with warnings.catch_warnings():
+        # as in _load: the NetCDF reader's close warns about its memory map, harmlessly
+        warnings.filterwarnings("ignore", message="Cannot close a netcdf_file", category=RuntimeWarning)
+        _check_header(name, _open(name), unit, file_unit, physical_size, non_square, channel)
+
+
+def _check_header(name, reader, unit, file_unit, physical_size, non_square, channel) -> None:
+    """:func:`check_header` on an open ``reader``, which it closes."""
+    try:
+        chan = _channel(name, reader, channel)
+        kwargs = _metadata(name, chan, {}, file_unit=file_unit, physical_size=physical_size)
+        file_unit = mangle_length_unit_ascii(kwargs.get("unit", chan.unit))
+        try:
+            factor = get_unit_conversion_factor(file_unit, unit)
+        except ValueError as err:
+            raise TopographyError(f"{name}: the file's unit {file_unit!r} cannot be converted to {unit!r} "
+                                  f"({err})") from err
+        (nx, ny), sizes = chan.nb_grid_pts, kwargs.get("physical_sizes", chan.physical_sizes)
+        _check_grid(name, _Header((nx, ny), tuple(float(v) * factor for v in sizes), unit), non_square)
+    finally:
+        _close(reader)
+
+
+@dataclass(frozen=True)
+class _Header:
+    """What :func:`_check_grid` reads of a topography: grid, sizes and unit."""
+
+    nb_grid_pts: tuple[int, int]
+    physical_sizes: tuple[float, float]
+    unit: str
+
+
 def _check_arguments(name, unit, file_unit, physical_size, undefined, detrend, non_square, channel):
     """Validate the reader settings; returns ``physical_size`` as a (Lx, Ly) float tuple or None."""
     choices = {"unit": (unit, LENGTH_UNITS), "undefined": (undefined, UNDEFINED_MODES),
