@@ -271,3 +271,33 @@ def test_mostly_undefined_maps_are_refused_and_the_fraction_recorded(tmp_path):
     assert float(measured_surface_dataset(surface, name="m")["undefined_fraction"].squeeze()) == 0.6
     with pytest.raises(TopographyError, match=r"topography.max_undefined 1.5 is not allowed; use a number in \[0, 1\]"):
         read_topography(fn, unit="um", max_undefined=1.5)
+
+
+@pytest.mark.parametrize("name", ["a.x3p", "a.txt", "a.bin"])
+def test_random_bytes_are_not_a_height_map(tmp_path, name):
+    # SurfaceTopography's HGT reader takes any file whose size is a square number of 16-bit values:
+    # 5000 random bytes were once read as a 50 x 50 map with rms slope 19 140 and solved. A format
+    # found by size alone must agree with the extension, unless the scene names the format.
+    fn = tmp_path / name
+    fn.write_bytes(np.random.default_rng(0).bytes(5000))
+    with pytest.raises(TopographyError) as err:
+        read_topography(fn, unit="um", file_unit="nm", physical_size=(1.0, 1.0))
+    msg = str(err.value)
+    assert msg.startswith(f"{fn}: SurfaceTopography reads it only as 'hgt' data") and "topography.format" in msg
+    named = read_topography(fn, unit="um", file_unit="nm", physical_size=(1.0, 1.0), format="hgt")
+    assert named.heights.shape == (50, 50)
+    with pytest.raises(TopographyError, match="topography.format 'x3' is not allowed; use one of al3d"):
+        read_topography(fn, unit="um", format="x3")
+
+
+def test_empty_tiny_and_flat_maps_are_named(tmp_path):
+    empty = tmp_path / "e.x3p"
+    empty.write_bytes(b"")
+    with pytest.raises(TopographyError, match=r"e.x3p: the file is empty \(0 bytes\)"):
+        read_topography(empty, unit="um")
+    tiny = _netcdf(tmp_path, _noise((3, 7)), (3.0, 7.0), name="tiny.nc")
+    with pytest.raises(TopographyError, match=r"tiny.nc: the map is 3 x 7 points; the contact solver needs at least"):
+        read_topography(tiny, unit="um")
+    flat = _netcdf(tmp_path, np.full((8, 8), 2.5), (8.0, 8.0), name="flat.nc")
+    with pytest.raises(TopographyError, match=r"flat.nc: the map is flat \(every height equal after detrend 'none'\)"):
+        read_topography(flat, unit="um")

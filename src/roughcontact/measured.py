@@ -30,9 +30,10 @@ _GENERATED_STEM = re.compile(r"^kl[^_]*(_ks[^_]*)?_H[^_]*(_s\d+)?$")
 #: Keys of a study block that only the generator uses.
 GENERATOR_KEYS = ("surface", "grid", "seeds", "examples")
 #: Per-file reader settings a ``files`` entry may override.
-FILE_KEYS = ("file_unit", "physical_size")
+FILE_KEYS = ("file_unit", "physical_size", "format")
 #: Reader settings shared by every file of the scene.
-SCENE_KEYS = ("unit", "file_unit", "physical_size", "undefined", "detrend", "non_square", "channel", "max_undefined")
+SCENE_KEYS = ("unit", "file_unit", "physical_size", "undefined", "detrend", "non_square", "channel", "max_undefined",
+              "format")
 
 
 class MeasuredConfigError(ValueError):

@@ -46,6 +46,10 @@ DETREND_MODES = ("none", "center", "height", "curvature")
 #: What to do with a map that is not square (config ``topography.non_square``): use it whole
 #: (``keep``, the default), the centred largest square block (``crop``) or refuse it (``reject``).
 NON_SQUARE_MODES = ("keep", "crop", "reject")
+#: SurfaceTopography formats whose reader accepts a file by its size alone: random bytes of 7 sizes
+#: (5000 to 131072) named .bin, .x3p and .txt were all read as HGT elevation maps when their size
+#: was a square number of 16-bit values, and by no other reader (SurfaceTopography 1.27, 2026-11-25).
+CONTENT_BLIND = ("hgt",)
 #: Default largest fraction of undefined (not measured) points a file may have (config
 #: ``topography.max_undefined``): above it the filled map would be mostly invented.
 MAX_UNDEFINED = 0.5
@@ -97,7 +101,7 @@ class MeasuredSurface:
 def read_topography(path, *, unit: str, file_unit: str | None = None,
                     physical_size: tuple[float, float] | None = None, undefined: str = "reject",
                     detrend: str = "none", non_square: str = "keep", channel: int = 0,
-                    max_undefined: float = MAX_UNDEFINED) -> MeasuredSurface:
+                    max_undefined: float = MAX_UNDEFINED, format: str | None = None) -> MeasuredSurface:
     """Read a measured topography file into a height array in the study's unit.
 
     Parameters
@@ -126,6 +130,9 @@ def read_topography(path, *, unit: str, file_unit: str | None = None,
     max_undefined : float
         Largest accepted fraction of undefined points, in [0, 1] (default :data:`MAX_UNDEFINED`); the
         fraction is recorded in ``info["undefined_fraction"]``.
+    format : str, optional
+        SurfaceTopography's name of the file's format (e.g. "x3p"). Without it the format is
+        detected from the contents and must be one that uses the file's extension.
 
     Returns
     -------
@@ -141,7 +148,8 @@ def read_topography(path, *, unit: str, file_unit: str | None = None,
     physical_size = _check_arguments(name, unit, file_unit, physical_size, undefined, detrend, non_square, channel)
     _check_fraction(name, max_undefined)
     info = {"file": name, "sha256": _sha256(name)}
-    topo = _load(name, info, unit=unit, file_unit=file_unit, physical_size=physical_size, channel=channel)
+    topo = _load(name, info, unit=unit, file_unit=file_unit, physical_size=physical_size, channel=channel,
+                 fmt=_check_format(name, format))
     dx, dy = _check_grid(name, topo, non_square)
     heights = _detrend_and_fill(name, topo, info, undefined=undefined, detrend=detrend, max_undefined=max_undefined)
     heights, info["crop"] = _crop(heights) if non_square == "crop" else (heights, None)
@@ -154,7 +162,7 @@ def read_topography(path, *, unit: str, file_unit: str | None = None,
 def check_header(path, *, unit: str, file_unit: str | None = None,
                  physical_size: tuple[float, float] | None = None, undefined: str = "reject",
                  detrend: str = "none", non_square: str = "keep", channel: int = 0,
-                 max_undefined: float = MAX_UNDEFINED) -> None:
+                 max_undefined: float = MAX_UNDEFINED, format: str | None = None) -> None:
     """The checks of :func:`read_topography` that need only the file's header, without its heights.
 
     Readable by SurfaceTopography, the channel present and holding a 2-D uniform height map, a unit
@@ -165,12 +173,13 @@ def check_header(path, *, unit: str, file_unit: str | None = None,
     name = os.fspath(path)
     physical_size = _check_arguments(name, unit, file_unit, physical_size, undefined, detrend, non_square, channel)
     _check_fraction(name, max_undefined)
+    fmt = _check_format(name, format)
     if not os.path.isfile(name):
         raise TopographyError(f"{name}: the topography file does not exist (or is not a regular file)")
     with warnings.catch_warnings():
         # as in _load: the NetCDF reader's close warns about its memory map, harmlessly
         warnings.filterwarnings("ignore", message="Cannot close a netcdf_file", category=RuntimeWarning)
-        _check_header(name, _open(name), unit, file_unit, physical_size, non_square, channel)
+        _check_header(name, _open(name, fmt), unit, file_unit, physical_size, non_square, channel)
 
 
 def _check_header(name, reader, unit, file_unit, physical_size, non_square, channel) -> None:
@@ -239,7 +248,7 @@ def _sha256(name: str) -> str:
         raise TopographyError(f"{name}: the topography file cannot be read ({err})") from err
 
 
-def _load(name, info, *, unit, file_unit, physical_size, channel) -> Topography:
+def _load(name, info, *, unit, file_unit, physical_size, channel, fmt=None) -> Topography:
     """Read one channel with SurfaceTopography; returns a plain Topography in ``unit``.
 
     Undefined points (masked by the reader, or non-finite) are masked in the result. ``info`` gets
@@ -249,7 +258,7 @@ def _load(name, info, *, unit, file_unit, physical_size, channel) -> Topography:
         # SurfaceTopography's NetCDF reader closes scipy's memory-mapped file while its variables
         # still exist, which only warns; the heights have been copied by then.
         warnings.filterwarnings("ignore", message="Cannot close a netcdf_file", category=RuntimeWarning)
-        reader = _open(name)
+        reader = _open(name, fmt)
         try:
             chan = _channel(name, reader, channel)
             kwargs = _metadata(name, chan, info, file_unit=file_unit, physical_size=physical_size)
@@ -275,10 +284,47 @@ def _load(name, info, *, unit, file_unit, physical_size, channel) -> Topography:
                       periodic=bool(raw.is_periodic), unit=unit)
 
 
-def _open(name: str):
-    """SurfaceTopography's reader for the file, its format detected from the contents."""
+def _open(name: str, fmt: str | None = None):
+    """SurfaceTopography's reader for the file: of format ``fmt``, else detected from the contents.
+
+    A format detected without looking at the contents (:data:`CONTENT_BLIND`) must be one whose
+    reader uses the file's extension: random bytes named ``a.x3p`` would otherwise be read as a
+    height map. (Other readers' extension lists are incomplete, e.g. .di files and .txt columns.)
+    """
+    if os.path.getsize(name) == 0:
+        raise TopographyError(f"{name}: the file is empty (0 bytes)")
+    reader = _open_reader(name, fmt)
+    ext = os.path.splitext(name)[1].lower().lstrip(".")
+    own = _extensions(type(reader))
+    if fmt is None and reader.format() in CONTENT_BLIND and ext not in own:
+        detected = reader.format()
+        _close(reader)
+        claimed = sorted({r.format() for r in readers if ext in _extensions(r)})
+        what = f"that of {', '.join(repr(c) for c in claimed)}" if claimed else "not one of them"
+        raise TopographyError(f"{name}: SurfaceTopography reads it only as {detected!r} data (extensions "
+                              f"{', '.join('.' + e for e in own)}), but its extension .{ext} is {what}: the file is "
+                              "damaged or misnamed; give it its format's extension, or name the format in "
+                              "topography.format")
+    return reader
+
+
+def _check_format(name: str, fmt) -> str | None:
+    """``fmt`` if it is None or one of SurfaceTopography's formats, else a TopographyError."""
+    formats = sorted(r.format() for r in readers)
+    if fmt is not None and fmt not in formats:
+        raise TopographyError(f"{name}: topography.format {fmt!r} is not allowed; use one of {', '.join(formats)}")
+    return fmt
+
+
+def _extensions(reader) -> list[str]:
+    """The file extensions a SurfaceTopography reader class claims (lower case, no dot)."""
+    return [e.lower() for e in (getattr(reader, "_file_extensions", None) or [])]
+
+
+def _open_reader(name: str, fmt: str | None):
+    """``open_topography``, its failures as :class:`TopographyError`."""
     try:
-        return open_topography(name)
+        return open_topography(name, format=fmt)
     except CannotDetectFileFormat as err:
         # Its message lists every reader's complaint; the chained exception keeps them.
         formats = ", ".join(sorted(r.format() for r in readers))
@@ -355,6 +401,8 @@ def _to_unit(name, topo, unit):
 def _check_grid(name, topo, non_square) -> tuple[float, float]:
     """Check the sizes and (with ``non_square: reject``) a square map; the pixel sizes (dx, dy) in ``unit``."""
     (nx, ny), (lx, ly) = topo.nb_grid_pts, topo.physical_sizes
+    if min(nx, ny) < 4:
+        raise TopographyError(f"{name}: the map is {nx} x {ny} points; the contact solver needs at least 4 x 4")
     if not all(np.isfinite(s) and s > 0 for s in (lx, ly)):
         raise TopographyError(f"{name}: the physical size ({lx}, {ly}) {topo.unit} is not positive and finite")
     if nx != ny and non_square == "reject":
@@ -394,6 +442,9 @@ def _detrend_and_fill(name, topo, info, *, undefined, detrend, max_undefined=MAX
     if n_bad:
         raise TopographyError(f"{name}: {n_bad} heights are not finite after detrend {detrend!r} and filling "
                               f"{undefined!r}; the contact solver needs finite heights everywhere")
+    if not heights.max() > heights.min():
+        raise TopographyError(f"{name}: the map is flat (every height equal after detrend {detrend!r}): it has no "
+                              "roughness to study")
     return heights
 
 

@@ -11,7 +11,7 @@ def main(log):
     measured = read_topography(
         s["path"], unit=s["unit"], file_unit=s.get("file_unit"), physical_size=s.get("physical_size"),
         undefined=s["undefined"], detrend=s["detrend"], non_square=s["non_square"], channel=s["channel"],
-        max_undefined=s["max_undefined"],
+        max_undefined=s["max_undefined"], format=s.get("format"),
     )
     if measured.info["undefined_fraction"] > WARN_UNDEFINED:
         log.warning("%s: %.1f%% of the points are undefined (not measured) and were filled (%s); the map's "
