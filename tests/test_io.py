@@ -410,3 +410,12 @@ def test_names_of_unequal_lengths_are_written_whole(tmp_path, names):
     back = read_dataset(path, stage="aggregate")
     assert [str(t) for t in back["topography"].values] == names
     np.testing.assert_array_equal(back["epsilon"].values, np.arange(len(names), dtype=float))
+
+
+def test_eta_from_the_recent_pace():
+    from roughcontact.io import eta
+
+    assert eta([1.0, 1.0], 5) == "about 3 s left (3 of 5 to go)"
+    # the last five steps set the pace (steps slow down as the contact grows)
+    assert eta([100.0] + [2.0] * 5, 36) == "about 1 min 00 s left (30 of 36 to go)"
+    assert eta([1.0] * 4, 4) == "done"

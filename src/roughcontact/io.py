@@ -27,7 +27,7 @@ import re
 import resource
 import secrets
 import sys
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -171,6 +171,22 @@ def write_text_atomic(path: str | os.PathLike, text: str, *, encoding: str = "ut
     with atomic_output(path) as tmp, open(tmp, "w", encoding=encoding) as fh:
         fh.write(text)
     return Path(path)
+
+
+def eta(seconds: Sequence[float], total: int) -> str:
+    """What is left of a job of ``total`` equal parts after those timed in ``seconds``, as log text.
+
+    The pace is that of the last (up to) five parts: load steps slow down as the contact grows,
+    so the recent pace predicts better than the mean. ``"done"`` when nothing is left.
+    """
+    left = total - len(seconds)
+    if left <= 0:
+        return "done"
+    recent = list(seconds)[-5:]
+    rest = left * sum(recent) / len(recent)
+    minutes, secs = divmod(round(rest), 60)
+    return f"about {minutes} min {secs:02d} s left ({left} of {total} to go)" if minutes else \
+        f"about {secs} s left ({left} of {total} to go)"
 
 
 def _full_strings(ds: xr.Dataset) -> xr.Dataset:

@@ -5,7 +5,7 @@ import numpy as np
 
 from roughcontact.config import load_steps
 from roughcontact.datasets import contact_dataset, surface_heights
-from roughcontact.io import read_dataset, run_logged, write_dataset
+from roughcontact.io import eta, read_dataset, run_logged, write_dataset
 from roughcontact.params import recorded, require_made_for
 from roughcontact.solver import solve_contact, step_notes
 
@@ -34,10 +34,13 @@ def main(log):
     plastic = settings["effects"].get("plasticity")
     loads = load_steps(settings)
 
+    spent = []
+
     def progress(step, p0, area, iterations, converged, seconds):
-        # one line per load step as it goes (the log handler flushes every record)
-        log.info("step %d/%d: p0 = %.6g, A/A0 = %.6g, %d iterations, %.2f s%s", step, len(loads), p0, area,
-                 iterations, seconds, "" if converged else ", NOT converged")
+        # one line per load step as it goes (the log handler flushes every record), with what is left
+        spent.append(seconds)
+        log.info("step %d/%d: p0 = %.6g, A/A0 = %.6g, %d iterations, %.2f s%s; %s", step, len(loads), p0, area,
+                 iterations, seconds, "" if converged else ", NOT converged", eta(spent, len(loads)))
 
     result = solve_contact(
         heights,
