@@ -358,9 +358,12 @@ def test_measured_scene_runs_end_to_end(tmp_path):
     assert list(agg["topography"].values) == ["ground-a", "ground-b", "ground-c"]
     assert agg.attrs["boundary"] == "free" and agg["pressure"].attrs["units"] == "MPa"
     assert bool(agg["converged"].all()) and np.all(np.isfinite(agg["kappa"].values))
-    # ground-c (160 x 128 text, no unit or size) was cropped to 128 x 128 in um; ground-b's holes filled
+    # ground-c (160 x 128 text, no unit or size) is solved whole, 128 x 160 points over 100 x 125 um;
+    # ground-b's holes filled
     c = read_dataset(root / "surfaces" / "ground-c.nc", stage="surface")
-    assert c.sizes["x"] == c.sizes["y"] == 128 and c["heights"].attrs["units"] == "um"
+    assert (c.sizes["x"], c.sizes["y"]) == (128, 160) and c["heights"].attrs["units"] == "um"
+    assert (c.attrs["length_x"], c.attrs["length_y"]) == (100.0, 125.0)
+    assert read_dataset(root / "contact" / "ground-c.nc", stage="contact").attrs["ny"] == 160
     assert '"n_undefined": 42' in read_dataset(root / "surfaces" / "ground-b.nc", stage="surface").attrs["source"]
     rep = read_dataset(root / "aggregate" / "representativity.nc", stage="aggregate")
     assert rep["epsilon"].attrs["units"] == "um^(-1/2)" and rep.sizes["topography"] == 3
