@@ -3,7 +3,8 @@ import copy
 
 import pytest
 
-from roughcontact.config import ConfigError, cases, load_schema, load_steps, validate_config
+from roughcontact.config import ConfigError, cases, load_schema, validate_config
+from roughcontact.loading import load_steps
 
 SCHEMA = load_schema()
 

@@ -126,3 +126,34 @@ def test_a_file_header_is_checked_before_any_job(tmp_path, spoil, words):
     with pytest.raises(ConfigError) as err:
         validate_config(config)
     assert f"scene 'm', field 'topography.files.c': {bad}: " in str(err.value) and words in str(err.value)
+
+
+def test_measured_loads_default_to_each_files_rms_slope(tmp_path):
+    load = validate_config(_config(tmp_path))["scenes"]["m"]["contact"]["load"]
+    assert load["relative_to"] == "rms_slope" and load["p_max"] == 0.05
+    assert "final load p0/(E* h') = 0.05, h' each surface's rms slope" in plan_summary(
+        "m", validate_config(_config(tmp_path))["scenes"]["m"])
+    # generated scenes keep p0/E*
+    gen = validate_config(_config(tmp_path))["scenes"]["gen"]["contact"]["load"]
+    assert gen["relative_to"] == "e_star" and gen["p_max"] == 0.005
+    cfg = _config(tmp_path, contact={"load": {"relative_to": "e_star", "p_max": 0.002}})
+    load = validate_config(cfg)["scenes"]["m"]["contact"]["load"]
+    assert load["relative_to"] == "e_star" and load["p_max"] == 0.002
+
+
+@pytest.mark.parametrize("load, field, words", [
+    ({"p_max": 0.01}, "contact.load.p_max", "add load.relative_to: rms_slope"),
+    ({"target_area": 0.1, "p_max": 0.01}, "contact.load.p_max", "not used with load.target_area"),
+    ({"target_area": 0.1, "schedule": "geometric", "p_min": 0.001}, "contact.load.p_min",
+     "not used with load.target_area"),
+    ({"relative_to": "e_star", "p_max": 2.0}, "contact.load.p_max", "p0/E\\* .* must be <= 1"),
+    ({"target_area": 1.0}, "contact.load.target_area", "maximum"),
+])
+def test_ambiguous_or_conflicting_loads_are_refused(tmp_path, load, field, words):
+    with pytest.raises(ConfigError, match=rf"scene 'm', field '{field}'.*{words}"):
+        validate_config(_config(tmp_path, contact={"load": load}))
+
+
+def test_target_area_drops_the_inherited_p_max(tmp_path):
+    load = validate_config(_config(tmp_path, contact={"load": {"target_area": 0.1}}))["scenes"]["m"]["contact"]["load"]
+    assert load["target_area"] == 0.1 and "p_max" not in load and "relative_to" not in load

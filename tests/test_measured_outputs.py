@@ -321,3 +321,27 @@ def test_rectangular_maps_are_drawn_to_scale_with_both_sides():
     grids = {"a": (150, 300), "b": (256, 256), "c": (650, 650)}
     assert _grid_text(grids) == r"grids $150 \times 300$ to $650 \times 650$"
     assert _grid_text({"a": (256, 256), "b": (64, 64)}) == "$N$ = 64-256"
+
+
+def _rescaled(agg, factors):
+    """``agg`` with each topography's rms slope, loads and contact pressures times its factor:
+    the same curves in p0 / (E* h'), as files of different slopes loaded relative to them."""
+    f = xr.DataArray(np.asarray(factors, float), dims="topography", coords={"topography": agg["topography"]})
+    out = agg.drop_vars([v for v in ("kappa", "dpbar_dp0") if v in agg])
+    for var in ("rms_slope", "pressure", "mean_contact_pressure"):
+        out[var] = (out[var] * f).assign_attrs(agg[var].attrs)
+    return out
+
+
+def test_files_loaded_relative_to_their_slopes_average_like_seeds(agg, result):
+    """The topography-mean curve needs one schedule p0 / (E* h'), not one p0 (load.relative_to: rms_slope)."""
+    scaled = _rescaled(agg, [1.0, 0.03, 2.0, 0.5, 10.0, 0.2])
+    again = fit.fit_topographies(scaled, n_boot=40)
+    np.testing.assert_allclose(again["value"].values, result["value"].values, rtol=1e-7)
+    assert again.attrs["paper_average"] == "seeds"
+    # the loads scaled but not the slopes: different normalised schedules, named, and "auto" stops averaging
+    shifted = _rescaled(agg, [1.0, 1.1, 1.0, 1.0, 1.0, 1.0]).assign(rms_slope=agg["rms_slope"])
+    with pytest.raises(ValueError, match=r"different load schedules p0/\(E\* h'\).*relative_to: rms_slope"):
+        fit.fit_topographies(shifted, n_boot=10)
+    auto = fit.fit_topographies(shifted, n_boot=10, paper_average="auto")
+    assert auto.attrs["paper_average"] == "none" and np.all(np.isfinite(auto["value"].values))

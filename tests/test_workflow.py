@@ -364,6 +364,13 @@ def test_measured_scene_runs_end_to_end(tmp_path):
     assert (c.sizes["x"], c.sizes["y"]) == (128, 160) and c["heights"].attrs["units"] == "um"
     assert (c.attrs["length_x"], c.attrs["length_y"]) == (100.0, 125.0)
     assert read_dataset(root / "contact" / "ground-c.nc", stage="contact").attrs["ny"] == 160
+    # each file is loaded to the paper's regime of its own slope: p0 / (E* h') = 0.05 at the last step
+    for name in agg["topography"].values:
+        con = read_dataset(root / "contact" / f"{name}.nc", stage="contact")
+        assert con.attrs["load_relative_to"] == "rms_slope" and con.attrs["load_p_max"] == 0.05
+        last, slope = float(con["pressure"].isel(step=-1).squeeze()), float(con["rms_slope"].squeeze())
+        assert last == pytest.approx(0.05 * 1e5 * slope, rel=1e-12)
+        assert con.attrs["load_pbar_max"] == pytest.approx(0.05, rel=1e-12)
     assert '"n_undefined": 42' in read_dataset(root / "surfaces" / "ground-b.nc", stage="surface").attrs["source"]
     rep = read_dataset(root / "aggregate" / "representativity.nc", stage="aggregate")
     assert rep["epsilon"].attrs["units"] == "um^(-1/2)" and rep.sizes["topography"] == 3

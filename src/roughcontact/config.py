@@ -435,13 +435,60 @@ def _check_contact(scene: str, block: dict) -> None:
     load = block["load"]
     if "p_min" in load and load["schedule"] != "geometric":
         fail("load.p_min", f"only used by load.schedule: geometric (here {load['schedule']!r}); remove it")
+    if "target_area" in load:
+        _check_target_area(fail, load)
+        return
     if "p_min" in load and not load["p_min"] < load["p_max"]:
         fail("load.p_min", f"{load['p_min']:g} must be < load.p_max = {load['p_max']:g}")
+    relative = load.get("relative_to", "e_star")
+    if relative == "e_star" and load["p_max"] > 1:
+        fail("load.p_max", f"{load['p_max']:g} is p0/E* (load.relative_to: e_star) and must be <= 1")
     plastic = block["effects"].get("plasticity")
-    if plastic and not plastic["hardness"] > block["load"]["p_max"]:
+    # relative to the rms slope, p_max is compared with the hardness when each case's h' is known
+    if plastic and relative == "e_star" and not plastic["hardness"] > block["load"]["p_max"]:
         fail("effects.plasticity.hardness", f"{plastic['hardness']:g} must exceed load.p_max = "
              f"{block['load']['p_max']:g}: a pressure capped at the hardness cannot carry a mean load p0 "
              ">= hardness")
+
+
+def _check_target_area(fail, load: dict) -> None:
+    """A ``load.target_area`` block: the final load is found per case (:func:`_resolve_load` dropped p_max)."""
+    if "p_min" in load:
+        fail("load.p_min", "not used with load.target_area: the geometric schedule then starts at "
+                           "(final load) / n_steps; remove it")
+
+
+#: A measured scene's final load when it says nothing: p0 / (E* h') = 0.05, the paper's regime
+#: (about 10 % contact on its surfaces; p0/E* = 0.005 at their h' = 0.1).
+MEASURED_P_MAX = 0.05
+
+
+def _resolve_load(scene: str, load: dict, given: Mapping, measured: bool) -> None:
+    """Fill ``load.relative_to`` in place from what the scene wrote (``given``: its own ``contact.load``).
+
+    With ``target_area`` the final load is found per case, and ``p_max`` (inherited) is dropped. A
+    measured scene that writes neither ``relative_to`` nor a load gets ``p_max: 0.05`` relative to
+    each file's rms slope; one that writes ``p_max`` or ``p_min`` without ``relative_to`` is asked
+    which it means, since the same number means a load ten times larger or smaller on a typical file.
+    """
+    def fail(field, msg):
+        raise ConfigError(f"scene {scene!r}, field 'contact.{field}': {msg}")
+
+    if "target_area" in load:
+        for key in ("p_max", "relative_to"):
+            if key in given:
+                fail(f"load.{key}", f"not used with load.target_area (the final load is the one that gives "
+                                    f"A/A0 = {load['target_area']:g} on each case); remove one of them")
+            load.pop(key, None)
+        return
+    if measured and "relative_to" not in given:
+        for key in ("p_max", "p_min"):
+            if key in given:
+                fail(f"load.{key}", "a measured scene's load is relative to each file's rms slope unless it says "
+                                    "otherwise: add load.relative_to: rms_slope (the value is p0/(E* h'), the "
+                                    "paper's pbar) or load.relative_to: e_star (p0/E*)")
+        load["relative_to"], load["p_max"] = "rms_slope", MEASURED_P_MAX
+    load.setdefault("relative_to", "e_star")
 
 
 def _check_accuracy(scene: str, block: dict) -> None:
@@ -506,6 +553,8 @@ def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = No
         if "contact" in out:
             out["contact"]["solver"].setdefault("boundary", "periodic")
     if "contact" in out:
+        given = ((delta or {}).get("contact") or {}).get("load") or {}
+        _resolve_load(name, out["contact"]["load"], given, "topography" in out)
         _check_contact(name, out["contact"])
     if "accuracy" in out:
         _check_accuracy(name, out["accuracy"])
@@ -573,24 +622,14 @@ def cases(block: dict) -> list[Case]:
     ]
 
 
-def load_steps(block: dict) -> list[float]:
-    """Applied mean pressures p0 of a contact block [pressure, E*'s unit], increasing, n of them.
-
-    ``load.schedule: uniform`` (the paper's): ``p_max E* k / n`` for k = 1..n.
-    ``geometric``: ``p_min E* (p_max / p_min)**((k - 1) / (n - 1))``, equal ratios
-    from ``p_min`` (default ``p_max / n``, the uniform schedule's first step) to
-    ``p_max``; it puts more steps at small A/A0, where the CEL's mu and beta are
-    read off dp_bar/dp0.
-    """
-    load = block["load"]
-    n, e_star = load["n_steps"], block["solver"]["e_star"]
-    p_max = load["p_max"] * e_star
-    if load.get("schedule", "uniform") == "uniform":
-        return [p_max * (i + 1) / n for i in range(n)]
-    p_min = load.get("p_min", load["p_max"] / n) * e_star
-    steps = [p_min * (p_max / p_min) ** (i / (n - 1)) for i in range(n)]
-    steps[-1] = p_max  # exact end point
-    return steps
+def _load_summary(load: Mapping) -> str:
+    """The final load in words: what a case receives (:mod:`roughcontact.loading`)."""
+    if "target_area" in load:
+        return (f"final load: the p0 giving A/A0 = {load['target_area']:g} on each case, found first "
+                f"(a few extra solves a case)")
+    if load["relative_to"] == "rms_slope":
+        return f"final load p0/(E* h') = {load['p_max']:g}, h' each surface's rms slope"
+    return f"final load p0/E* = {load['p_max']:g}"
 
 
 def plan_summary(scene_name: str, scene: dict) -> str:
@@ -603,6 +642,8 @@ def plan_summary(scene_name: str, scene: dict) -> str:
                 steps = scene[study]["load"]["n_steps"] if study == "contact" else 0
                 parts.append(f"{study} of {n_files} topography file(s)" +
                              (f" x {steps} load steps = {n_files * steps} solves" if steps else ""))
+        if "contact" in scene:
+            parts.append(_load_summary(scene["contact"]["load"]))
         return f"roughcontact: scene {scene_name!r} plans " + "; ".join(parts) + "."
     if "representativity" in scene:
         rep = scene["representativity"]
@@ -614,6 +655,7 @@ def plan_summary(scene_name: str, scene: dict) -> str:
         n_cases, n_steps = len(cases(con)), con["load"]["n_steps"]
         parts.append(f"{n_cases} contact cases x {n_steps} load steps = {n_cases * n_steps} solves at "
                      f"N={con['surface']['N']}")
+        parts.append(_load_summary(con["load"]))
     if "accuracy" in scene:
         parts.append("the accuracy study")
     return f"roughcontact: scene {scene_name!r} plans " + ("; ".join(parts) or "nothing") + "."

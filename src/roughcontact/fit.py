@@ -298,16 +298,30 @@ def _check_settings(window, n_boot, rng_seed, methods, min_points, kappa_extrapo
     return (lo, hi), methods
 
 
+def _shared_schedule(curves: _Curves) -> bool:
+    """Whether every row of ``curves`` has the same normalised load schedule (see :func:`_check_schedules`)."""
+    try:
+        _check_schedules(curves, ["rows"])
+    except ValueError:
+        return False
+    return True
+
+
 def _check_schedules(curves: _Curves, who: Sequence[str]) -> None:
     """ValueError unless the rows of each stratum share one load schedule (the seed mean needs it).
 
-    ``who[label]`` names the rows of stratum ``label`` in the message.
+    The schedule compared is the normalised load ``p0 / (E* h')`` that the CEL is a function of:
+    surfaces of different rms slope loaded relative to it (``load.relative_to: rms_slope``) share
+    it, as seeds of one generated surface type share ``p0``. ``who[label]`` names the rows of
+    stratum ``label`` in the message.
     """
+    normalised = curves.p0 / curves.hp[:, None]
     for lab in np.unique(curves.strata):
-        sched = curves.p0[curves.strata == lab]
+        sched = normalised[curves.strata == lab]
         if not np.allclose(sched, sched[0], rtol=1e-12, atol=0.0, equal_nan=True):
-            raise ValueError(f"{who[lab]} have different load schedules, so their curves cannot be averaged "
-                             "step by step; pass paper_average='none'")
+            raise ValueError(f"{who[lab]} have different load schedules p0/(E* h'), so their curves cannot be "
+                             "averaged step by step; pass paper_average='none' or load them alike "
+                             "(load.relative_to: rms_slope)")
 
 
 class _GroupFit:
@@ -705,9 +719,11 @@ def fit_topographies(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.
         ``dpbar_dp0`` are derived if absent.
     window, n_boot, rng_seed, methods, min_points, kappa_extrapolation, confidence
         As in :func:`fit_cel`. The bootstrap stream is keyed by ``rng_seed`` alone.
-    paper_average : {"seeds", "none"}
-        ``"seeds"``: the paper route fits the topography-mean curve (needs one load
-        schedule for all topographies); ``"none"``: every (topography, step) point.
+    paper_average : {"seeds", "none", "auto"}
+        ``"seeds"``: the paper route fits the topography-mean curve (needs one normalised load
+        schedule ``p0 / (E* h')`` for all topographies); ``"none"``: every (topography, step)
+        point; ``"auto"``: ``"seeds"`` where the schedules agree, else ``"none"`` (the choice is
+        the result's ``paper_average`` attribute).
     on_insufficient : {"nan", "raise"}
         Too few in-window points: NaN values (default; a measured surface may simply not
         reach the window) or a ValueError naming the window.
@@ -723,13 +739,15 @@ def fit_topographies(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.
         ``agg`` has no ``alpha``), ``paper_value(constant)``, ``paper_stderr(constant)``.
         Attrs record the settings, as :func:`fit_cel`'s, and ``layout = "topographies"``.
     """
-    (lo, hi), methods = _check_settings(window, n_boot, rng_seed, methods, min_points, kappa_extrapolation,
-                                        confidence, paper_average, on_insufficient)
     _check_topography_aggregate(agg)
     if "dpbar_dp0" not in agg or "kappa" not in agg:
         agg = _derive_topographies(agg)
+    curves, fitted = _topography_curves(agg, _check_window(window))
+    if paper_average == "auto":
+        paper_average = "seeds" if _shared_schedule(curves) else "none"
+    (lo, hi), methods = _check_settings(window, n_boot, rng_seed, methods, min_points, kappa_extrapolation,
+                                        confidence, paper_average, on_insufficient)
     e_star = float(agg.attrs["e_star"])
-    curves, fitted = _topography_curves(agg, (lo, hi))
     if paper_average == "seeds" and "paper" in methods and curves.n_seeds:
         _check_schedules(curves, ["fit_topographies: the topographies"])
     res = _GroupFit(len(methods))

@@ -1,11 +1,12 @@
 """Stage 3: solve the contact of one surface (generated or measured) over the scene's load steps."""
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
-from roughcontact.config import load_steps
 from roughcontact.datasets import contact_dataset, surface_heights
 from roughcontact.io import eta, read_dataset, run_logged, write_dataset
+from roughcontact.loading import case_loads
 from roughcontact.params import recorded, require_made_for
 from roughcontact.solver import solve_contact, step_notes
 
@@ -32,7 +33,22 @@ def main(log):
     heights, length = surface_heights(surf, snakemake.input[0])
     solver = settings["solver"]
     plastic = settings["effects"].get("plasticity")
-    loads = load_steps(settings)
+    solve = partial(
+        solve_contact,
+        heights,
+        e_star=solver["e_star"],
+        length=length,
+        tol=solver["tol"],
+        max_iter=solver["max_iter"],
+        threads=snakemake.threads,
+        hardness=plastic["hardness"] * solver["e_star"] if plastic else None,
+        boundary=solver["boundary"],
+        # both a generator block and a reader's settings name the study's length unit
+        length_unit=snakemake.params.surface["unit"],
+        pressure_unit=solver["pressure_unit"],
+    )
+    rms_slope = float(surf.rms_slope.squeeze())
+    loads, load_info = case_loads(settings, rms_slope, heights.size, solve, log)
 
     spent = []
 
@@ -42,25 +58,15 @@ def main(log):
         log.info("step %d/%d: p0 = %.6g, A/A0 = %.6g, %d iterations, %.2f s%s; %s", step, len(loads), p0, area,
                  iterations, seconds, "" if converged else ", NOT converged", eta(spent, len(loads)))
 
-    result = solve_contact(
-        heights,
+    result = solve(
         loads,
-        e_star=solver["e_star"],
-        length=length,
-        tol=solver["tol"],
-        max_iter=solver["max_iter"],
         store_fields=settings["outputs"]["fields"] or False,
-        threads=snakemake.threads,
-        hardness=plastic["hardness"] * solver["e_star"] if plastic else None,
         clusters=settings["outputs"]["clusters"],
-        boundary=solver["boundary"],
         progress=progress,
-        # both a generator block and a reader's settings name the study's length unit
-        length_unit=snakemake.params.surface["unit"],
-        pressure_unit=solver["pressure_unit"],
     )
-    ds = contact_dataset(result, rms_slope=float(surf.rms_slope.squeeze()), alpha=float(surf.alpha.squeeze()),
+    ds = contact_dataset(result, rms_slope=rms_slope, alpha=float(surf.alpha.squeeze()),
                          e_star=solver["e_star"], **labels_of(case))
+    ds.attrs.update(load_info)
     for note in step_notes(result):
         log.warning("%s: %s", Path(snakemake.output[0]).stem, note)
     unconverged = int((~result.converged.values).sum())

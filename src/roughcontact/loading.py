@@ -1,0 +1,147 @@
+"""The load steps a contact case receives: applied mean pressures p0, from a scene's ``load`` block.
+
+A scene gives the final load in one of three ways (``config/README.md``, ``contact.load``):
+
+- ``p_max`` with ``relative_to: e_star`` (generated scenes' default): ``p0 = p_max E*``, the
+  same for every case;
+- ``p_max`` with ``relative_to: rms_slope`` (measured scenes' default, ``p_max: 0.05``):
+  ``p0 = p_max E* h'`` with ``h'`` the case's own rms slope, the paper's normalised pressure
+  ``pbar``, so that a rough and a smooth file both reach the paper's regime (about 10 % contact
+  at 0.05);
+- ``target_area``: the final ``p0`` is the one whose contact area fraction is ``target_area``,
+  found on the case's own surface by :func:`pressure_for_area` before the load steps run.
+
+The load schedule (``uniform`` or ``geometric``) then runs from zero (or ``p_min``, on the same
+scale as ``p_max``) to that final load: :func:`schedule`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+
+#: A/A0 ~ kappa p0 / (E* h') at small loads (kappa about 2 on the paper's surfaces): the first
+#: guess of :func:`pressure_for_area`, refined by the solver itself.
+KAPPA_GUESS = 2.0
+#: Relative tolerance on the target area fraction (a grid of n nodes cannot do better than 1/n).
+AREA_RTOL = 0.01
+#: Solves :func:`pressure_for_area` may spend before it stops and says how close it came.
+MAX_PROBES = 12
+
+
+def schedule(p_max: float, n_steps: int, kind: str = "uniform", p_min: float | None = None) -> list[float]:
+    """``n_steps`` increasing loads ending at ``p_max`` [pressure].
+
+    ``uniform`` (the paper's): ``p_max k / n`` for k = 1..n. ``geometric``: equal ratios
+    from ``p_min`` (default ``p_max / n``, the uniform schedule's first step) to ``p_max``;
+    it puts more steps at small A/A0, where the CEL's mu and beta are read off dp_bar/dp0.
+    """
+    if kind == "uniform":
+        return [p_max * (i + 1) / n_steps for i in range(n_steps)]
+    p_min = p_max / n_steps if p_min is None else p_min
+    steps = [p_min * (p_max / p_min) ** (i / (n_steps - 1)) for i in range(n_steps)]
+    steps[-1] = p_max  # exact end point
+    return steps
+
+
+def pressure_scale(block: Mapping, rms_slope: float | None = None) -> float:
+    """What ``load.p_max`` and ``load.p_min`` are in units of [pressure]: ``E*`` or ``E* h'``.
+
+    ``rms_slope`` (h', the case's surface) is needed for ``relative_to: rms_slope``.
+    """
+    e_star = block["solver"]["e_star"]
+    if block["load"].get("relative_to", "e_star") == "e_star":
+        return e_star
+    if rms_slope is None or not (math.isfinite(rms_slope) and rms_slope > 0):
+        raise ValueError(f"load.relative_to: rms_slope needs the surface's rms slope, a finite number > 0, "
+                         f"got {rms_slope!r}")
+    return e_star * rms_slope
+
+
+def load_steps(block: Mapping, rms_slope: float | None = None, p_final: float | None = None) -> list[float]:
+    """Applied mean pressures p0 of a contact block [pressure, E*'s unit], increasing, n of them.
+
+    ``p_final`` (from :func:`pressure_for_area`) replaces ``p_max`` for a ``target_area`` block;
+    ``rms_slope`` is the case's h' for ``relative_to: rms_slope``.
+    """
+    load = block["load"]
+    if "target_area" in load and p_final is None:
+        raise ValueError("load.target_area: find the final load first (pressure_for_area) and pass it as p_final")
+    p_max = p_final if p_final is not None else load["p_max"] * pressure_scale(block, rms_slope)
+    p_min = load["p_min"] * pressure_scale(block, rms_slope) if "p_min" in load else None
+    return schedule(p_max, load["n_steps"], load.get("schedule", "uniform"), p_min)
+
+
+def pressure_for_area(area_at: Callable[[float], float], target: float, *, e_star: float, rms_slope: float,
+                      n_nodes: int, rtol: float = AREA_RTOL, max_probes: int = MAX_PROBES) -> dict:
+    """The applied mean pressure p0 [pressure] at which the contact area fraction is ``target``.
+
+    ``area_at(p0)`` solves the case at one load and returns A/A0 [1] (it grows with p0). The
+    search starts at ``p0 = target E* h' / KAPPA_GUESS`` and steps in log-log (secant on
+    ``ln A`` against ``ln p0``, the slope kept in [0.2, 5]), keeping a bracket once it has one.
+    It stops when ``|A - target| <= max(rtol target, 1.5 / n_nodes)`` (a grid's area moves in
+    steps of 1 / n_nodes) or after ``max_probes`` solves.
+
+    Returns ``{"pressure", "area", "probes", "reached"}``: the best p0 found, its A/A0, the
+    number of solves and whether the tolerance was met.
+    """
+    if not 0 < target < 1:
+        raise ValueError(f"target_area must lie in (0, 1), got {target!r}")
+    tol = max(rtol * target, 1.5 / n_nodes)
+    p = target * e_star * rms_slope / KAPPA_GUESS
+    below, above, last, best = None, None, None, None
+    for probe in range(1, max_probes + 1):
+        area = float(area_at(p))
+        if best is None or abs(area - target) < abs(best[1] - target):
+            best = (p, area)
+        if abs(area - target) <= tol:
+            return {"pressure": p, "area": area, "probes": probe, "reached": True}
+        if area < target:
+            below = (p, area) if below is None or p > below[0] else below
+        else:
+            above = (p, area) if above is None or p < above[0] else above
+        p_next = _next_pressure(p, area, target, last)
+        if below and above and not below[0] < p_next < above[0]:
+            p_next = math.sqrt(below[0] * above[0])  # the secant left the bracket: bisect in log
+        last, p = (p, area), p_next
+    return {"pressure": best[0], "area": best[1], "probes": max_probes, "reached": False}
+
+
+def _next_pressure(p: float, area: float, target: float, last: tuple[float, float] | None) -> float:
+    """One log-log secant step towards ``target`` from ``(p, area)`` (slope 1 without a previous probe)."""
+    slope = 1.0
+    if last is not None and last[0] != p and last[1] > 0 and area > 0 and last[1] != area:
+        slope = min(5.0, max(0.2, math.log(area / last[1]) / math.log(p / last[0])))
+    if area <= 0:
+        return 10.0 * p
+    return p * (target / area) ** (1.0 / slope)
+
+
+def case_loads(block: Mapping, rms_slope: float, n_nodes: int, solve: Callable, log=None) -> tuple[list[float], dict]:
+    """The load steps of one case and what to record of them: ``(loads, attrs)``.
+
+    ``solve(loads)`` solves the case's surface (the solver's dataset), used only for a
+    ``target_area`` block (:func:`pressure_for_area`). ``attrs`` (netCDF global attributes):
+    ``load_relative_to`` and ``load_p_max`` as the scene gave them, or ``load_target_area``,
+    ``load_target_area_reached`` (the probe's A/A0) and ``load_probes``; always ``load_p0_max``,
+    the final p0 [pressure], and ``load_pbar_max`` = p0 / (E* h') of the last step.
+    """
+    load, e_star = block["load"], block["solver"]["e_star"]
+    if "target_area" in load:
+        found = pressure_for_area(lambda p: float(solve([p]).area_fraction[-1]), load["target_area"],
+                                  e_star=e_star, rms_slope=rms_slope, n_nodes=n_nodes)
+        if log is not None:
+            log.log(20 if found["reached"] else 30, "target A/A0 = %g: p0 = %.6g gives A/A0 = %.6g after %d solves%s",
+                    load["target_area"], found["pressure"], found["area"], found["probes"],
+                    "" if found["reached"] else " (not within tolerance: the closest is used)")
+        loads = load_steps(block, rms_slope, p_final=found["pressure"])
+        attrs = {"load_target_area": float(load["target_area"]), "load_target_area_reached": found["area"],
+                 "load_probes": int(found["probes"])}
+    else:
+        loads = load_steps(block, rms_slope)
+        attrs = {"load_relative_to": load.get("relative_to", "e_star"), "load_p_max": float(load["p_max"])}
+    attrs.update(load_p0_max=float(loads[-1]), load_pbar_max=float(loads[-1] / (e_star * rms_slope)))
+    if log is not None:
+        log.info("loads: p0 from %.6g to %.6g (p0/E* up to %.4g, p0/(E* h') up to %.4g) in %d steps", loads[0],
+                 loads[-1], loads[-1] / e_star, attrs["load_pbar_max"], len(loads))
+    return loads, attrs
