@@ -62,7 +62,14 @@ def test_glob_names_cases_by_file_stem(tmp_path):
 
 @pytest.mark.parametrize("edit, words", [
     (lambda c, t: c["scenes"]["m"]["topography"]["files"].update(c=str(t / "missing.x3p")),
-     r"scene 'm', field 'topography.files.c': file '.*missing.x3p' does not exist"),
+     r"scene 'm', field 'topography.files.c': '.*missing.x3p' does not exist"),
+    (lambda c, t: c["scenes"]["m"]["topography"]["files"].update(c=str(t)),
+     r"field 'topography.files.c': '.*' is a directory, not a file: name one file in it, or list them with "
+     r"topography.glob"),
+    (lambda c, t: c["scenes"]["m"]["topography"]["files"].update(c="/dev/null"),
+     r"field 'topography.files.c': '/dev/null' is not a regular file \(a device, pipe or socket\)"),
+    (lambda c, t: c["scenes"]["m"]["topography"]["files"].update({"../evil": str(t / "a.x3p")}),
+     r"field 'topography.files': '../evil' is not a case name: .*no '/', spaces or leading '.'\)$"),
     (lambda c, t: c["scenes"]["m"].update(topography={"glob": str(t / "*.sur"), "unit": "um"}),
      r"field 'topography.glob': '.*\*.sur' matches no file"),
     (lambda c, t: c["scenes"]["m"]["topography"]["files"].update({"kl2_ks8_H0.5_s0": str(t / "a.x3p")}),

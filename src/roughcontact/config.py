@@ -351,8 +351,8 @@ def _schema_message(err) -> str:
         return (f"{err.instance!r} must be written as a string (e.g. \"{err.instance}\") so that "
                 "file names carry the config's text, not float formatting")
     if err.validator == "pattern":
-        what = err.schema.get("description", "a positive number written as a string")
-        return f"{err.instance!r} is not {what} (no spaces or line breaks)"
+        what = err.schema.get("description", f"text matching {err.schema['pattern']!r}")
+        return f"{err.instance!r} is not {what}" + ("" if "spaces" in what else " (no spaces or line breaks)")
     kind = err.schema.get("type") if err.validator == "type" else None
     if kind in _TYPE_REMEDY and isinstance(err.instance, str):
         what, example = _TYPE_REMEDY[kind]

@@ -68,6 +68,20 @@ def _from_glob(scene: str, pattern: str, check: bool) -> dict[str, dict]:
     return files
 
 
+def _check_path(scene: str, field: str, path: str) -> None:
+    """A regular file at ``path``, or an error saying what is there instead."""
+    where = Path(path)
+    if where.is_file():
+        return
+    if where.is_dir():
+        what = "is a directory, not a file: name one file in it, or list them with topography.glob"
+    elif where.exists():
+        what = "is not a regular file (a device, pipe or socket): name a topography file"
+    else:
+        what = f"does not exist (paths are relative to {Path.cwd()})"
+    _fail(scene, field, f"{path!r} {what}")
+
+
 def topography_files(scene: str, block: Mapping, check: bool = True) -> dict[str, dict]:
     """The files of a ``topography`` block: ``{name: {"path": ..., [file_unit, physical_size]}}``.
 
@@ -83,9 +97,8 @@ def topography_files(scene: str, block: Mapping, check: bool = True) -> dict[str
             _check_name(scene, f"topography.files.{name}", name)
             files[name] = {"path": entry} if isinstance(entry, str) else dict(entry)
     for name, entry in files.items():
-        if check and not Path(entry["path"]).is_file():
-            _fail(scene, f"topography.files.{name}", f"file {entry['path']!r} does not exist "
-                                                     f"(paths are relative to {Path.cwd()})")
+        if check:
+            _check_path(scene, f"topography.files.{name}", entry["path"])
     return dict(sorted(files.items()))
 
 
