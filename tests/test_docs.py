@@ -356,6 +356,16 @@ def python_runcost(cmd, ctx):
     assert "≥" not in res.stdout, f"`{cmd}`: jobs without their exact cost line:\n{res.stdout}"
 
 
+def python_progress(cmd, ctx):
+    """``python -m roughcontact.progress results/<scene>`` on a finished small scene: every planned solve done."""
+    wd = ctx.finished()
+    res = subprocess.run([sys.executable, *shlex.split(cmd)[1:]], cwd=wd, capture_output=True, text=True,
+                         timeout=120)
+    _ok(res, f"`{cmd}` on a finished scene")
+    assert re.search(r"^scene '[\w-]+': (\d+) of \1 contact solves done \(all\)$", res.stdout, re.M), (
+        f"`{cmd}`: the finished scene is not reported done:\n{res.stdout}")
+
+
 def python_adopt(cmd, ctx):
     """``python -m roughcontact.adopt results/<a> --scene <b>`` between two small runs of the shipped scenes.
 
@@ -500,6 +510,7 @@ COMMANDS = [
     (r"^snakemake(\s|$)", snakemake_dry_run, "dry run in a workflow copy"),
     (r"^make\s+[\w-]+$", make_target, "make -n TARGET"),
     (r"^python -m roughcontact\.runcost\s", python_runcost, "a row per rule on a finished scene"),
+    (r"^python -m roughcontact\.progress\s", python_progress, "every solve done on a finished scene"),
     (r"^python -m roughcontact\.adopt\s", python_adopt, "adopts a case between two small runs"),
     (r"^python -m roughcontact\.config(\s|$)", python_config, "checks the config with the scene files"),
     (r"^pip install -e ", pip_extra, "the extra exists"),
@@ -513,7 +524,8 @@ BLOCKS = [
     ("yaml", _shipped_scene_excerpt, yaml_shipped_excerpt, "equals the scene in config/config.yaml"),
     ("yaml", lambda t: _yaml_header(t)[0] is None, yaml_other, "parses"),
 ]
-SLOW_HANDLERS = {snakemake_report, snakemake_force_one, snakemake_rerun_edited, python_runcost}  # a small run first
+# a small run first
+SLOW_HANDLERS = {snakemake_report, snakemake_force_one, snakemake_rerun_edited, python_runcost, python_progress}
 SLOW_HANDLERS |= {python_block}  # the README's snippet: a 512^2 solve, ~13 s of CPU (make test-fast < 3 min)
 
 

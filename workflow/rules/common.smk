@@ -18,6 +18,7 @@ from roughcontact.config import (
 )
 from roughcontact.figures import FIGURES, scene_figures
 from roughcontact.measured import is_measured, reader_settings, topography_names
+from roughcontact.progress import write_plan
 
 try:
     check_config_files(workflow.configfiles)
@@ -29,6 +30,11 @@ SCENES = _VALID["scenes"]
 ACTIVE_SCENE = _VALID["scene"]
 # What the active scene computes, before any job runs (a large scene's cost at a glance).
 logger.info(plan_summary(ACTIVE_SCENE, SCENES[ACTIVE_SCENE]))
+
+
+# The plan each contact job's scene ETA is read against (python -m roughcontact.progress).
+onstart:
+    write_plan(Path("results", ACTIVE_SCENE), ACTIVE_SCENE, SCENES[ACTIVE_SCENE], workflow.cores)
 
 
 def case_path(folder, ext="nc"):

@@ -8,6 +8,7 @@ from roughcontact.datasets import contact_dataset, surface_heights
 from roughcontact.io import eta, read_dataset, run_logged, write_dataset
 from roughcontact.loading import case_loads
 from roughcontact.params import recorded, require_made_for
+from roughcontact.progress import scene_progress
 from roughcontact.solver import solve_contact, step_notes
 
 
@@ -79,6 +80,9 @@ def main(log):
     log.info("contact %s: A/A0 %.4g -> %.4g, %d iterations in %.2f s", snakemake.output[0],
              float(result.area_fraction[0]), float(result.area_fraction[-1]),
              int(result.iterations.sum()), float(np.sum(result.wall_time)))
+    scene = scene_progress(Path(snakemake.output[0]).parents[1])  # results/{scene}
+    if scene is not None:
+        log.info(scene[1].text(scene[0]))
 
 
 run_logged(snakemake.log[0], main)
