@@ -344,12 +344,17 @@ def snakemake_report(cmd, ctx):
     assert (wd / out).stat().st_size > 10_000, f"`{cmd}` wrote a near-empty {out}"
 
 
+def _on_finished(cmd, ctx) -> subprocess.CompletedProcess:
+    """``python -m ...`` run in the finished small scene's folder; it must exit 0."""
+    res = subprocess.run([sys.executable, *shlex.split(cmd)[1:]], cwd=ctx.finished(), capture_output=True,
+                         text=True, timeout=120)
+    _ok(res, f"`{cmd}` on a finished scene")
+    return res
+
+
 def python_runcost(cmd, ctx):
     """``python -m roughcontact.runcost results/<scene>`` on a finished small scene: a row per rule."""
-    wd = ctx.finished()
-    res = subprocess.run([sys.executable, *shlex.split(cmd)[1:]], cwd=wd, capture_output=True, text=True,
-                         timeout=120)
-    _ok(res, f"`{cmd}` on a finished scene")
+    res = _on_finished(cmd, ctx)
     assert re.search(r"^\| contact \| 3 \| ", res.stdout, re.M), (
         f"`{cmd}`: no row for the 3 contact jobs:\n{res.stdout}")
     # every job of the current code logs its exact cost: no total is a sampled lower bound
@@ -358,10 +363,7 @@ def python_runcost(cmd, ctx):
 
 def python_progress(cmd, ctx):
     """``python -m roughcontact.progress results/<scene>`` on a finished small scene: every planned solve done."""
-    wd = ctx.finished()
-    res = subprocess.run([sys.executable, *shlex.split(cmd)[1:]], cwd=wd, capture_output=True, text=True,
-                         timeout=120)
-    _ok(res, f"`{cmd}` on a finished scene")
+    res = _on_finished(cmd, ctx)
     assert re.search(r"^scene '[\w-]+': (\d+) of \1 contact solves done \(all\)$", res.stdout, re.M), (
         f"`{cmd}`: the finished scene is not reported done:\n{res.stdout}")
 
