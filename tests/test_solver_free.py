@@ -75,7 +75,19 @@ def test_influence_matches_quadrature_and_wraps_around():
     np.testing.assert_allclose(free_influence(n, e_star=2.0, length=3.0), 1.5 * k, rtol=1e-15)
 
 
-@pytest.mark.parametrize("n", [21, 32])
+def test_padding_takes_fast_even_lengths_and_keeps_2n_where_it_is_fast():
+    from roughcontact.solver.halfspace import padded_shape
+
+    # 2n already 5-smooth: unchanged (the paper's grids, bit for bit as before)
+    assert padded_shape(1024) == (2048, 2048) and padded_shape((150, 480)) == (300, 960)
+    # a prime side (a measured 563 x 484 map) and 2n with factors 11 or 13
+    assert padded_shape((563, 484)) == (1152, 972) and padded_shape(650) == (1350, 1350)
+    assert padded_shape(21) == (48, 48) and padded_shape(37) == (80, 80)
+    with pytest.raises(ValueError, match="smaller than twice the patch"):
+        free_influence(8, padded=(15, 16))
+
+
+@pytest.mark.parametrize("n", [21, 32, 37])  # 21 and 37 are padded beyond 2n (48, 80)
 @pytest.mark.parametrize("backend", ["pyfftw", "numpy"])
 def test_free_product_is_the_direct_convolution(n, backend, monkeypatch):
     if backend == "numpy":

@@ -238,15 +238,16 @@ def _love(x, y, a, b):
 
 @pytest.mark.parametrize("backend", ["pyfftw", "numpy"])
 def test_free_product_is_the_pixel_pair_sum(backend, monkeypatch):
-    # 6 x 9 nodes, dx = 0.5, dy = 0.3: the Hockney FFT product equals the brute-force sum over
-    # every pair of pixels of Love's closed form (evaluated plainly above, ~1e-15 at these
-    # offsets), to 1e-13 of max |u| (round-off of the transforms, as the square test), and the
-    # quadrature-based direct sum of solver_invariants to the same.
+    # 7 x 9 nodes (x padded to 16 > 2 nx: padded_shape), dx = 0.5, dy = 0.3: the Hockney FFT
+    # product equals the brute-force sum over every pair of pixels of Love's closed form
+    # (evaluated plainly above, ~1e-15 at these offsets), to 1e-13 of max |u| (round-off of the
+    # transforms, as the square test), and the quadrature-based direct sum of solver_invariants
+    # to the same.
     if backend == "numpy":
         monkeypatch.setenv("ROUGHCONTACT_FFT", "numpy")
     else:
         pytest.importorskip("pyfftw")
-    (nx, ny), (lx, ly), e_star = (6, 9), (3.0, 2.7), 1.7
+    (nx, ny), (lx, ly), e_star = (7, 9), (3.5, 2.7), 1.7
     dx, dy = lx / nx, ly / ny
     p = np.random.default_rng(7).random((nx, ny))
     ref = np.zeros((nx, ny))

@@ -12,7 +12,7 @@ inverse off ``q = 0``) and single-precision variants of both products.
 
 :class:`FreeHalfSpace` is the free-boundary (non-periodic) operator with the same
 methods: the ``nx x ny`` pressure, uniform on each ``dx x dy`` pixel, is
-zero-padded to ``2nx x 2ny`` and convolved by FFT with Love's influence function of
+zero-padded to at least ``2nx x 2ny`` (:func:`padded_shape`) and convolved by FFT with Love's influence function of
 one pixel sampled at wrap-around distances (:func:`free_influence`; Hockney's
 construction, as ContactMechanics' ``FreeFFTElasticHalfSpace``); the ``nx x ny``
 corner of the result is the exact displacement of the infinite half-space under
@@ -217,8 +217,35 @@ def pixel_influence(shape, aspect: float = 1.0) -> np.ndarray:
     return _pixel_influence_rect(nx, ny, aspect * nx / ny)
 
 
-def free_influence(shape, e_star: float = 1.0, length=1.0) -> np.ndarray:
-    """Influence coefficients of the free half-space on the ``2nx x 2ny`` padded grid.
+def padded_shape(shape) -> tuple[int, int]:
+    """The FFT grid of :class:`FreeHalfSpace` for an ``nx x ny`` patch: ``(fast(2 nx), fast(2 ny))``.
+
+    Hockney's construction needs at least ``2n - 1`` points along each axis; ``2n`` is the
+    textbook choice, but for a measured map of ``n = 563`` (a prime) FFTW then transforms a
+    length with a large prime factor, ~3x slower than the next even 2-3-5 length (1152,
+    measured). Any length >= 2n gives the same corner (the kernel is laid out by wrap-around
+    offsets), so each axis takes the smallest even 5-smooth length >= 2n: ``2n`` itself for
+    every ``n`` whose ``2n`` is already 5-smooth (powers of two, 150, 480, 640: bit for bit
+    as before).
+    """
+    return tuple(_even_5_smooth(2 * n) for n in grid(shape))
+
+
+def _even_5_smooth(n: int) -> int:
+    """The smallest even integer >= ``n`` with no prime factor above 5."""
+    m = n + (n % 2)
+    while True:
+        rest = m
+        for f in (2, 3, 5):
+            while rest % f == 0:
+                rest //= f
+        if rest == 1:
+            return m
+        m += 2
+
+
+def free_influence(shape, e_star: float = 1.0, length=1.0, padded=None) -> np.ndarray:
+    """Influence coefficients of the free half-space on the padded grid (default ``2nx x 2ny``).
 
     Parameters
     ----------
@@ -230,13 +257,18 @@ def free_influence(shape, e_star: float = 1.0, length=1.0) -> np.ndarray:
         Sides ``(Lx, Ly)`` of the patch [length] (a float ``L``: ``(L, L)``); pixels of sides
         ``dx = Lx / nx`` and ``dy = Ly / ny``.
 
+    padded : (int, int), optional
+        The padded grid ``(Mx, My)``, each ``M >= 2n`` (default ``(2nx, 2ny)``;
+        :class:`FreeHalfSpace` uses :func:`padded_shape`).
+
     Returns
     -------
-    numpy.ndarray, float64, shape (2nx, 2ny)
+    numpy.ndarray, float64, shape (Mx, My)
         Entry ``[i, j]``: displacement [length / pressure] at a node offset by
         ``(i' dx, j' dy)`` from the centre of a pixel under unit uniform pressure,
-        ``i' = i`` for ``i <= nx`` and ``2nx - i`` above (``j'`` likewise with ``ny``:
-        wrap-around distances, the influence being even in both offsets): Love's solution
+        ``i' = min(i, Mx - i, nx)`` (``j'`` likewise with ``My`` and ``ny``: wrap-around
+        distances, the influence being even in both offsets; offsets beyond ``n`` never
+        reach the corner and repeat the value at ``n``): Love's solution
         ``u = 1 / (pi E*) sum_{+-} F(x +- dx/2, y +- dy/2)`` (signs of the mixed
         difference) with ``F(X, Y) = X ln(Y + r) + Y ln(X + r)``, ``r = sqrt(X^2 + Y^2)``
         (~ ``dx dy / (pi E* r)`` far away). Its cyclic convolution with a pressure
@@ -244,21 +276,24 @@ def free_influence(shape, e_star: float = 1.0, length=1.0) -> np.ndarray:
         (Hockney 1970).
     """
     nx, ny = grid(shape)
+    mx, my = (2 * nx, 2 * ny) if padded is None else (int(v) for v in padded)
+    if mx < 2 * nx or my < 2 * ny:
+        raise ValueError(f"padded grid {(mx, my)} is smaller than twice the patch {(nx, ny)}")
     c = pixel_influence((nx, ny), cell_aspect(length))
-    i, j = np.arange(2 * nx), np.arange(2 * ny)
-    di, dj = np.minimum(i, 2 * nx - i), np.minimum(j, 2 * ny - j)
+    i, j = np.arange(mx), np.arange(my)
+    di, dj = np.minimum(np.minimum(i, mx - i), nx), np.minimum(np.minimum(j, my - j), ny)
     return c[di[:, None], dj[None, :]] * (side_x(length) / (math.pi * nx * e_star))
 
 
 @functools.lru_cache(maxsize=4)
 def _free_multiplier(shape: tuple[int, int], aspect: float) -> np.ndarray:
-    """rfft2 of :func:`free_influence` for ``E* = Lx = 1``, interleaved (re, im) real copy.
+    """rfft2 of :func:`free_influence` on :func:`padded_shape` for ``E* = Lx = 1``, interleaved (re, im) real copy.
 
     The influence is real and even, so its transform is real (the imaginary
-    round-off is dropped); the backward normalisation ``1 / (4 nx ny)`` is applied
+    round-off is dropped); the backward normalisation ``1 / (Mx My)`` is applied
     by the caller.
     """
-    mult = np.fft.rfft2(free_influence(shape, 1.0, internal_length(aspect))).real
+    mult = np.fft.rfft2(free_influence(shape, 1.0, internal_length(aspect), padded_shape(shape))).real
     out = np.repeat(mult[..., None], 2, axis=-1)
     out.setflags(write=False)
     return out
@@ -266,13 +301,12 @@ def _free_multiplier(shape: tuple[int, int], aspect: float) -> np.ndarray:
 
 @functools.lru_cache(maxsize=8)
 def _padded_fft(shape: tuple[int, int], threads: int, backend: str, dtype: str) -> RealFFT2:
-    """A ``2nx x 2ny`` FFT pair owned by :class:`FreeHalfSpace` (never shared with ``get_fft``).
+    """A :func:`padded_shape` FFT pair owned by :class:`FreeHalfSpace` (never shared with ``get_fft``).
 
     Only the ``nx x ny`` corner of its input buffer is ever written, so the
     padding stays zero from here on.
     """
-    nx, ny = shape
-    fft = RealFFT2((2 * nx, 2 * ny), threads=threads, backend=backend, dtype=np.dtype(dtype))
+    fft = RealFFT2(padded_shape(shape), threads=threads, backend=backend, dtype=np.dtype(dtype))
     if fft.backend == "pyfftw":
         fft._real.fill(0.0)
     return fft
@@ -374,9 +408,9 @@ class FreeHalfSpace:
     """Free-boundary elastic half-space on an ``nx x ny`` patch in internal units (``E* = Lx = 1``).
 
     Same methods and parameters as :class:`PeriodicHalfSpace`. ``K`` is the
-    zero-padded (Hockney) convolution with :func:`free_influence`: one
-    ``2nx x 2ny`` FFT pair per product; the displacement is that of the infinite
-    half-space (not zero mean). ``M`` is the periodic preconditioner
+    zero-padded (Hockney) convolution with :func:`free_influence`: one FFT pair on
+    :func:`padded_shape` (``2nx x 2ny`` or the next fast even lengths) per product; the
+    displacement is that of the infinite half-space (not zero mean). ``M`` is the periodic preconditioner
     ``|q| E* / 2`` on the ``nx x ny`` cell, an approximate inverse of this ``K``
     (the CG stays exact with it).
 
@@ -385,13 +419,14 @@ class FreeHalfSpace:
     """
 
     def __init__(self, shape, threads: int = 1, aspect: float = 1.0):
-        self.shape = nx, ny = grid(shape)
+        self.shape = grid(shape)
         backend = plans(self.shape, threads).backend
         self.fft = _padded_fft(self.shape, threads, backend, "float64")
         self.kern2 = _free_multiplier(self.shape, aspect)
-        self.norm = 1.0 / (4.0 * nx * ny)
+        mx, my = padded_shape(self.shape)
+        self.norm = 1.0 / (mx * my)
         self.out = np.empty(self.shape)
-        self.pad = None if backend == "pyfftw" else np.zeros((2 * nx, 2 * ny))
+        self.pad = None if backend == "pyfftw" else np.zeros((mx, my))
         self.precond = PeriodicHalfSpace(self.shape, threads, aspect)
         self.fft32 = None
 

@@ -1,0 +1,117 @@
+"""Seven real instrument files from SurfaceTopography's test suite, whole, through every stage and the report.
+
+The files (tests/data/surfacetopography, MIT licence: see its LICENSE.md) are one of each format a
+new user brought: Bruker .di, FRT .frt (27 % undefined), Igor .ibw, Agilent .mi, Wyko .opd (640 x
+480, undefined points), Mountains .sur (563 x 484, a prime side) and ISO .x3p (dx != dy). Their
+case names differ in length and the shortest sorts first: once, every aggregate cut each name to
+the first one's length (frt2 -> fr). Checked: the run and ``snakemake --report`` succeed, every
+load step converges, and every name is whole in every NetCDF, CSV, log line, figure text and the
+report. Loads are small and few (4 steps to p0/(E* h') = 0.02) to keep CI short: about 3 min of
+2 busy cores, most of it the two largest maps.
+"""
+import base64
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+import yaml
+
+from conftest import REPO, copy_workflow, run_snakemake
+
+pytestmark = pytest.mark.slow
+
+DATA = REPO / "tests" / "data" / "surfacetopography"
+FILES = {"di": "di-3.di", "frt2": "frt-2.frt", "ibwspot": "spot_1-1000nm.ibw", "mi": "mi-1.mi",
+         "opd1": "opd-1.opd", "sur2": "sur-2.sur", "x3p2": "x3p-2.x3p"}
+NAMES = sorted(FILES)
+#: What a name cut to a shorter name's length would read (2 letters and up; the shortest name has 2).
+CUT = sorted({name[:k] for name in NAMES for k in range(2, len(name))} - set(NAMES))
+#: A cut name standing alone (not part of a longer word, a path or a file extension such as '.opd').
+CUT_TOKEN = re.compile(r"(?<![\w./-])(" + "|".join(map(re.escape, CUT)) + r")(?![\w-])")
+SCENE = {
+    "scene": "seven",
+    "scenes": {"seven": {
+        "description": "Seven instrument files from SurfaceTopography's test suite, whole.",
+        "topography": {"files": {name: f"st/{file}" for name, file in FILES.items()}, "unit": "um",
+                       "undefined": "harmonic", "detrend": "height"},
+        "representativity": {"n_bins": 50},
+        "contact": {"load": {"relative_to": "rms_slope", "p_max": 0.02, "n_steps": 4},
+                    "solver": {"e_star": 1.0e5, "pressure_unit": "MPa"}},
+    }},
+}
+
+
+@pytest.fixture(scope="module")
+def seven(tmp_path_factory):
+    wd = copy_workflow(tmp_path_factory.mktemp("seven") / "wf")
+    (wd / "st").mkdir()
+    for file in FILES.values():
+        (wd / "st" / file).write_bytes((DATA / file).read_bytes())
+    (wd / "seven.yaml").write_text(yaml.safe_dump(SCENE, sort_keys=False))
+    res = run_snakemake(wd, "-j2", "--configfile", "seven.yaml", timeout=1500)
+    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
+    rep = run_snakemake(wd, "--configfile", "seven.yaml", "--report", "report.html")
+    assert rep.returncode == 0, rep.stdout[-3000:] + rep.stderr[-3000:]
+    return wd
+
+
+def _no_cut_names(text: str, where: str) -> None:
+    found = sorted({m.group(1) for m in CUT_TOKEN.finditer(text)})
+    assert not found, f"{where}: names cut short: {found}"
+
+
+def test_every_step_of_every_file_converges(seven):
+    agg = xr.open_dataset(seven / "results" / "seven" / "aggregate" / "contact.nc")
+    assert bool(agg["converged"].all()), agg["converged"].to_series()[~agg["converged"].to_series()]
+    # each file loaded to p0/(E* h') = 0.02 of its own slope
+    np.testing.assert_allclose(agg["pressure"].isel(step=-1) / (1e5 * agg["rms_slope"]), 0.02, rtol=1e-12)
+
+
+def test_names_are_whole_in_every_netcdf(seven):
+    root = seven / "results" / "seven"
+    for path in sorted(root.rglob("*.nc")):
+        with xr.open_dataset(path) as ds:
+            names = [str(v) for v in ds["topography"].values.ravel()] if "topography" in ds.variables else []
+            if path.parent.name in ("aggregate", "fit"):
+                assert names == NAMES, (path, names)
+            else:
+                assert names == [path.stem], (path, names)
+            for var in ds.variables.values():
+                if var.dtype.kind in "USO":
+                    _no_cut_names(" ".join(map(str, var.values.ravel())), f"{path}: {var.name}")
+            _no_cut_names(" ".join(str(v) for v in ds.attrs.values()), f"{path}: global attributes")
+
+
+def test_names_are_whole_in_csv_logs_and_the_report(seven):
+    root = seven / "results" / "seven"
+    for path in sorted([*root.rglob("*.csv"), *root.rglob("*.log"), *root.rglob("*.rst")]):
+        _no_cut_names(path.read_text(errors="replace"), str(path))
+    fit_log = (root / "logs" / "fit_cel.log").read_text()
+    assert f"topographies pooled in the fit (7): {', '.join(NAMES)}" in fit_log
+    html = (seven / "report.html").read_text(errors="replace")
+    # the report embeds its pages as base64 data: search them decoded too
+    decoded = [base64.b64decode(chunk).decode("utf-8", "replace")
+               for chunk in re.findall(r"data:text/[\w+-]+(?:;charset=[\w-]+)?;base64,([A-Za-z0-9+/=]+)", html)]
+    _no_cut_names(html + "\n".join(decoded), "report.html")
+    text = html + "\n".join(decoded)
+    missing = [name for name in NAMES if not re.search(rf"(?<![\w-]){re.escape(name)}(?![\w-])", text)]
+    assert not missing, f"report.html does not name {missing}"
+
+
+def test_names_are_whole_in_every_figure(seven, monkeypatch):
+    from roughcontact.config import load_config_files, validate_config
+    from roughcontact.figures import FIGURES, scene_figures
+
+    monkeypatch.chdir(seven)
+    scene = validate_config(load_config_files([Path("seven.yaml")]))["scenes"]["seven"]
+    root = seven / "results" / "seven"
+    for name in scene_figures(scene):
+        paths = {role: [str(root / p) for p in v] if isinstance(v, list) else str(root / v)
+                 for role, v in FIGURES[name].input_paths(scene).items()}
+        fig = FIGURES[name].render(paths)
+        texts = [t.get_text() for t in fig.findobj(lambda a: hasattr(a, "get_text"))]
+        _no_cut_names("\n".join(texts), f"figure {name}")
+        shown = [n for n in NAMES if any(re.search(rf"(?<![\w-]){re.escape(n)}(?![\w-])", t) for t in texts)]
+        assert shown == NAMES, f"figure {name} names {shown}, not every file"
