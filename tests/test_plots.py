@@ -265,9 +265,15 @@ def test_a_constant_on_a_bound_of_the_joint_fit_is_not_constrained(contact):
 
 
 def test_representativity_units_are_mathtext(rep_stats):
-    """The units the pipeline writes for epsilon ("um^(-1/2)", cf_unit) appear as mathtext, not literally."""
+    """epsilon's unit appears as mathtext: its number's unit (units "1" for lengths in a reference unit, as the
+    pipeline writes it, roughcontact.representativity.epsilon_attrs), or the "um^(-1/2)" of older files."""
     rep = rep_stats.copy()
-    rep["epsilon_mean"].attrs["units"] = "um^(-1/2)"
+    rep["epsilon_mean"].attrs.update(units="1", reference_length_units="um", reference_length_power="-1/2")
+    label = fig_representativity(rep).axes[0].get_ylabel()
+    assert "^(" not in label and r"$\mathrm{\mu m}^{-1/2}$" in label, label
+    rep["epsilon_mean"].attrs.update(reference_length_units="1")  # nondimensional heights
+    assert fig_representativity(rep).axes[0].get_ylabel().endswith("[1]")
+    rep["epsilon_mean"].attrs = {"units": "um^(-1/2)", "long_name": "files of older versions"}
     label = fig_representativity(rep).axes[0].get_ylabel()
     assert "^(" not in label and r"$\mathrm{\mu m}^{-1/2}$" in label, label
     rep["epsilon_mean"].attrs["units"] = "length unit^-1/2"  # files of older versions

@@ -1,8 +1,9 @@
 """Every variable and coordinate the package writes carries a ``units`` string CF tools parse.
 
-Integer powers must parse with UDUNITS-2 (``cf_units``, the CF conventions' reference)
-and pint to the same unit; fractional powers (``epsilon`` [length^-1/2]) exist in pint
-only, and UDUNITS-2 must reject them rather than misread them (roughcontact.quantities).
+Every ``units`` must parse with UDUNITS-2 (``cf_units``, the CF conventions' reference) and pint
+to the same unit. UDUNITS-2 has integer powers only, so ``cf_unit`` refuses fractional ones and
+``epsilon`` [length^-1/2] is written as its number for lengths in the study's unit, ``units``
+``"1"`` with its reference length alongside (roughcontact.quantities.per_reference_length).
 """
 import ast
 import math
@@ -23,7 +24,7 @@ from roughcontact.datasets import (
 )
 from roughcontact.fit import fit_cel
 from roughcontact.plots import _unit_tex
-from roughcontact.quantities import LENGTH_UNITS, PRESSURE_UNITS, cf_unit
+from roughcontact.quantities import LENGTH_UNITS, PRESSURE_UNITS, cf_unit, per_reference_length
 from roughcontact.representativity import gaussian_l2_error, scale_free_statistics
 from roughcontact.solver import solve_contact
 from roughcontact.surface import generate_surface, spectral_moments
@@ -32,27 +33,24 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "roughcontact"
 UREG = pint.UnitRegistry()
 
 #: (length_power, pressure_power) of the quantities the package writes (and a pressure gradient).
-POWERS = [(0, 0), (1, 0), (2, 0), (-1, 0), (-2, 0), (Fraction(-1, 2), 0), (0, 1), (-1, 1)]
+POWERS = [(0, 0), (1, 0), (2, 0), (-1, 0), (-2, 0), (0, 1), (-1, 1)]
 #: Size of each declared unit in SI.
 SI = {"1": 1.0, "m": 1.0, "mm": 1e-3, "um": 1e-6, "nm": 1e-9,
       "Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9}
 
 
-def _fractional(units: str) -> bool:
-    return "^(" in units
-
-
 def assert_parses(units: str) -> None:
-    """``units`` parses with UDUNITS-2 (cf_units), or, for a fractional power, with pint only."""
+    """``units`` parses with UDUNITS-2 (cf_units) to a unit, and with pint."""
     assert isinstance(units, str) and units.strip(), repr(units)
-    if _fractional(units):
-        UREG.parse_units(units)
-        with pytest.raises(ValueError):
-            Unit(units)
-    else:
-        unit = Unit(units)
-        assert not unit.is_unknown() and not unit.is_no_unit(), units
-        UREG.parse_expression(units)
+    unit = Unit(units)
+    assert not unit.is_unknown() and not unit.is_no_unit(), units
+    assert UREG.parse_expression(units).dimensionless == unit.is_dimensionless(), units
+
+
+def assert_reference(attrs: dict) -> None:
+    """A value written as a number for lengths in a reference unit: units "1", the unit UDUNITS-2's."""
+    assert attrs["units"] == "1" and Fraction(attrs["reference_length_power"]).denominator > 1, attrs
+    assert_parses(attrs["reference_length_units"])
 
 
 def assert_all_units_parse(ds) -> dict:
@@ -61,6 +59,8 @@ def assert_all_units_parse(ds) -> dict:
     for name, var in ds.variables.items():
         assert "units" in var.attrs, f"{name} has no units attribute"
         assert_parses(var.attrs["units"])
+        if "reference_length_units" in var.attrs:
+            assert_reference(var.attrs)
         units[name] = var.attrs["units"]
     return units
 
@@ -76,11 +76,8 @@ def test_composed_units_parse_to_the_right_size_with_udunits_and_pint(length, pr
         factor = SI[length] ** float(lp) * SI[pressure] ** float(pp)
         assert UREG.Quantity(1.0, UREG.parse_units(units)).to(UREG.parse_units(si)).magnitude == \
             pytest.approx(factor, rel=1e-12), units
-        if _fractional(units):
-            with pytest.raises(ValueError):  # UDUNITS-2 has integer exponents only
-                Unit(units)
-        else:
-            assert Unit(units).convert(1.0, Unit(si)) == pytest.approx(factor, rel=1e-12), units
+        assert Unit(units).convert(1.0, Unit(si)) == pytest.approx(factor, rel=1e-12), units
+        assert units.isascii() and "(" not in units and "." not in units, units
         if length == "1" and pressure == "1":
             assert units == "1"
 
@@ -89,20 +86,39 @@ def test_composer_spellings():
     assert cf_unit("um", length_power=1) == "um"
     assert cf_unit("um", length_power=2) == "um^2"
     assert cf_unit("um", length_power=-2) == "um^-2"
-    assert cf_unit("um", length_power=Fraction(-1, 2)) == cf_unit("um", length_power=-0.5) == "um^(-1/2)"
+    assert cf_unit("nm", length_power=2.0) == cf_unit("nm", length_power=Fraction(2)) == "nm^2"
     assert cf_unit("um", "MPa", pressure_power=1) == "MPa"
     assert cf_unit("um", "MPa", length_power=-1, pressure_power=1) == "MPa um^-1"
     assert cf_unit("1", "MPa", length_power=-1, pressure_power=1) == "MPa"
     assert cf_unit("um", "MPa") == "1"
-    for bad in ({"length": "cm"}, {"pressure": "bar"}, {"length": "um", "length_power": math.pi}):
+    for bad in ({"length": "cm"}, {"pressure": "bar"}, {"length": "um", "length_power": math.pi},
+                {"length": "um", "pressure_power": True}):
         with pytest.raises(ValueError):
             cf_unit(**bad)
 
 
-def test_udunits_misreads_decimal_fractional_powers():
-    """Why epsilon is spelled ``um^(-1/2)``: UDUNITS-2 reads ``um^-0.5`` as ``um^-0 . 5``, the number 5."""
+@pytest.mark.parametrize("power", [Fraction(-1, 2), -0.5, Fraction(3, 2)])
+def test_fractional_powers_are_refused_and_written_as_numbers(power):
+    with pytest.raises(ValueError, match="integer powers only.*per_reference_length"):
+        cf_unit("um", length_power=power)
+    attrs = per_reference_length("um", power)
+    assert attrs == {"units": "1", "reference_length_units": "um", "reference_length_power": str(Fraction(power))}
+    assert_reference(attrs)
+    assert per_reference_length("1", power)["reference_length_units"] == "1"
+    with pytest.raises(ValueError):
+        per_reference_length("um", math.pi)
+
+
+def test_udunits_has_no_fractional_powers():
+    """Why epsilon is written as a number: UDUNITS-2 reads ``um^-0.5`` as ``um^-0 . 5``, the number 5, and
+    rejects every other spelling of um^-1/2 (pint reads them all)."""
     assert Unit("um^-0.5").is_dimensionless() and Unit("um^-0.5").convert(1.0, "1") == pytest.approx(5.0)
-    assert UREG.parse_units("um^(-1/2)").dimensionality == UREG.parse_units("um^-0.5").dimensionality
+    for spelling in ("um^(-1/2)", "um^(-0.5)", "um**(-1/2)"):
+        with pytest.raises(ValueError):
+            Unit(spelling)
+        assert UREG.parse_units(spelling).dimensionality == UREG.parse_units("um^-0.5").dimensionality
+    with pytest.raises(ValueError):
+        Unit("um").root(2)
 
 
 def test_axis_labels_render_the_unit_strings():
@@ -177,8 +193,7 @@ def test_units_follow_the_declared_length_and_pressure_units(written):
         "surface": {"heights": length, "rms_height": length, "x": length, "y": length, "rms_slope": "1",
                     "m0": cf_unit(lu, length_power=2), "m2": "1", "m4": cf_unit(lu, length_power=-2), "alpha": "1",
                     "k_l": "1", "seed": "1"},
-        "representativity": {"epsilon": cf_unit(lu, length_power=Fraction(-1, 2)), "mean_height": length,
-                             "std_height": length},
+        "representativity": {"epsilon": "1", "mean_height": length, "std_height": length},
         "solver": {"pressure": pressure, "mean_contact_pressure": pressure, "contact_pressure": pressure,
                    "mean_gap": length, "gap": length, "x": length, "contact_perimeter": cf_unit(lu, length_power=-1),
                    "area_fraction": "1", "cluster_mean_area": "1", "area_bin": "1", "wall_time": "s",
@@ -188,9 +203,8 @@ def test_units_follow_the_declared_length_and_pressure_units(written):
                               "mean_contact_pressure_sem": pressure, "pressure_mean": pressure,
                               "kappa_mean": "1", "dpbar_dp0_std": "1", "mean_gap": length,
                               "contact_perimeter": cf_unit(lu, length_power=-1), "n_seeds": "1"},
-        "representativity_batch": {"epsilon": cf_unit(lu, length_power=-0.5), "std_height": length},
-        "aggregate_representativity": {"epsilon_mean": cf_unit(lu, length_power=-0.5),
-                                       "epsilon_sem": cf_unit(lu, length_power=-0.5), "std_height": length},
+        "representativity_batch": {"epsilon": "1", "std_height": length},
+        "aggregate_representativity": {"epsilon_mean": "1", "epsilon_sem": "1", "std_height": length},
         "scale_free": {"epsilon_mean": "1"},
         "accuracy": {"time_per_case": "s", "max_rss": "2^20 byte", "err_kappa": "1"},
     }
@@ -201,8 +215,14 @@ def test_units_follow_the_declared_length_and_pressure_units(written):
         assert out[kind].attrs["pressure_units"] == pressure and out[kind].attrs["length_units"] == length
     for kind in ("surface", "accuracy"):
         assert out[kind].attrs["length_units"] == length
+    for kind, name in [("representativity", "epsilon"), ("representativity_batch", "epsilon"),
+                       ("aggregate_representativity", "epsilon"), ("aggregate_representativity", "epsilon_mean"),
+                       ("aggregate_representativity", "epsilon_std")]:
+        attrs = out[kind][name].attrs
+        assert (attrs["reference_length_units"], attrs["reference_length_power"]) == (length, "-1/2"), (kind, name)
+    assert "reference_length_units" not in out["scale_free"]["epsilon_mean"].attrs  # normalised by sigma instead
     if lu == "um":
-        assert out["representativity"]["epsilon"].attrs["units"] == "um^(-1/2)"
+        assert out["representativity"]["epsilon"].attrs["reference_length_units"] == "um"
         assert out["solver"]["contact_perimeter"].attrs["units"] == "um^-1"
         assert out["surface"]["m4"].attrs["units"] == "um^-2" and out["solver"]["pressure"].attrs["units"] == "MPa"
 
@@ -213,6 +233,11 @@ def test_aggregation_refuses_cases_in_different_units(written):
     other["pressure"] = other["pressure"].assign_attrs(units="GPa" if pu != "GPa" else "Pa")
     with pytest.raises(ValueError, match="units"):
         aggregate.combine_cases([out["contact"], other.assign_coords(seed=[7])], ["a.nc", "b.nc"])
+    # epsilon's units are "1" in every length unit: its reference length tells the cases apart
+    rep = out["representativity"]
+    other = rep.assign(epsilon=rep["epsilon"].assign_attrs(reference_length_units="nm" if lu != "nm" else "m"))
+    with pytest.raises(ValueError, match="variable 'epsilon' has units '1 \\(lengths in n?m\\)'"):
+        aggregate.combine_cases([rep, other.assign_coords(seed=[7])], ["a.nc", "b.nc"], kind="representativity")
 
 
 def test_kappa_needs_one_pressure_unit(written):

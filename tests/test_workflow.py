@@ -8,6 +8,7 @@ import pytest
 import xarray as xr
 import yaml
 
+from cfcheck import assert_cf_clean
 from conftest import copy_workflow, run_snakemake
 
 TINY = {
@@ -255,6 +256,11 @@ def test_tiny_real_run(tmp_path):
         for ext in ("png", "pdf"):
             assert (out / "figures" / f"{fig}.{ext}").stat().st_size > 1000
     assert "kappa" in (out / "fit" / "cel.csv").read_text()
+    # one file of every kind: no error or warning of the CF checker (tests/cfcheck.py)
+    assert_cf_clean([out / "surfaces" / "kl2_ks8_H0.5_s1.nc", out / "surfaces_rep" / "kl1_ks8_H0.8_s0.nc",
+                     out / "representativity" / "kl1_H0.8.nc", out / "contact" / "kl2_ks8_H0.5_s0.nc",
+                     out / "aggregate" / "contact.nc", out / "aggregate" / "representativity.nc",
+                     out / "fit" / "cel.nc"], tmp_path / "tables")
     # nothing left to do, and a rerun of one case by its file name works
     again = run_snakemake(wd, "-n")
     assert "Nothing to be done" in again.stdout + again.stderr
@@ -377,9 +383,14 @@ def test_measured_scene_runs_end_to_end(tmp_path):
         assert con.attrs["load_pbar_max"] == pytest.approx(0.05, rel=1e-12)
     assert '"n_undefined": 42' in read_dataset(root / "surfaces" / "ground-b.nc", stage="surface").attrs["source"]
     rep = read_dataset(root / "aggregate" / "representativity.nc", stage="aggregate")
-    assert rep["epsilon"].attrs["units"] == "um^(-1/2)" and rep.sizes["topography"] == 3
+    assert rep["epsilon"].attrs["units"] == "1" and rep["epsilon"].attrs["reference_length_units"] == "um"
+    assert rep.sizes["topography"] == 3
     for path in sorted(root.rglob("*.nc")):  # every variable of every file: CF/pint-parseable units
         assert_all_units_parse(xr.open_dataset(path))
+    # one file of every kind: no error or warning of the CF checker (tests/cfcheck.py)
+    assert_cf_clean([root / f"{kind}/ground-c.nc" for kind in ("surfaces", "representativity", "contact")]
+                    + [root / "aggregate/contact.nc", root / "aggregate/representativity.nc", root / "fit/cel.nc"],
+                    tmp_path / "tables")
     assert "pooled (3 topographies)" in (root / "fit" / "cel.csv").read_text()
     for name in ("topographies", "measured_area_load", "measured_kappa"):
         assert (root / "figures" / f"{name}.png").stat().st_size > 10_000

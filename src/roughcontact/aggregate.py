@@ -11,11 +11,13 @@ coordinates; :func:`add_derived` adds ``kappa``, ``dpbar_dp0`` and ``n_unconverg
 
 Every variable these functions create has ``units`` and ``long_name`` attributes.
 Units propagate from the inputs, which must agree on them: :func:`combine_cases`
-refuses a variable whose ``units`` differ between files; ``pressure`` and
+refuses a variable whose ``units`` (or ``reference_length_units``, the unit of a value written
+as a number, :func:`roughcontact.quantities.per_reference_length`) differ between files; ``pressure`` and
 ``mean_contact_pressure`` share the unit of the global attribute ``e_star`` (its
 ``pressure_units`` where recorded, e.g. ``"MPa"``), so that ``kappa = E* h' / pbar``
 and ``dpbar_dp0`` are dimensionless ("1"), as are area fractions and slopes; the
-seed statistics ``<var>_mean/_std/_sem`` keep the ``units`` of ``<var>``.
+seed statistics ``<var>_mean/_std/_sem`` keep the ``units`` of ``<var>`` (and for
+``epsilon`` its reference length).
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ import numpy as np
 import xarray as xr
 
 from .io import same_value
+from .quantities import REFERENCE_ATTRS
 
 #: The four case dimensions, in the order of every combined array.
 CASE_DIMS = ("k_l", "k_s", "H", "seed")
@@ -71,6 +74,12 @@ def _normalise_expected(expected) -> set[tuple[float, float, float, int]]:
     return out
 
 
+def _units_label(da: xr.DataArray) -> str | None:
+    """``units``, with the reference length of a value written as a number: ``"1 (lengths in um)"``."""
+    units, ref = da.attrs.get("units"), da.attrs.get("reference_length_units")
+    return units if ref is None else f"{units} (lengths in {ref})"
+
+
 def _check_like_first(ds: xr.Dataset, name: str, ref: xr.Dataset, ref_name: str, kind: str,
                       case_dims: Sequence[str]) -> None:
     """Raise ``ValueError`` naming ``name`` unless ``ds`` can be stacked with the first case ``ref``.
@@ -87,7 +96,7 @@ def _check_like_first(ds: xr.Dataset, name: str, ref: xr.Dataset, ref_name: str,
         only_here = sorted(set(ds.data_vars) - ref_vars)
         raise ValueError(f"{name}: variables differ from {ref_name}: missing {only_ref}, extra {only_here}")
     for var in sorted(ref_vars):
-        got, want = ds[var].attrs.get("units"), ref[var].attrs.get("units")
+        got, want = _units_label(ds[var]), _units_label(ref[var])
         if got != want:
             raise ValueError(f"{name}: variable {var!r} has units {got!r}, but {ref_name} has "
                              f"{want!r} (cases of one study share its length and pressure units)")
@@ -806,8 +815,8 @@ def representativity_statistics(ds: xr.Dataset, *, min_seeds: int = 2) -> xr.Dat
     Returns
     -------
     xarray.Dataset
-        Dims ``(k_l, k_s, H)``: ``epsilon_mean``, ``epsilon_std``, ``epsilon_sem`` [unit of
-        epsilon], ``rms_height_mean``/``rms_slope_mean`` where available, ``n_seeds``.
+        Dims ``(k_l, k_s, H)``: ``epsilon_mean``, ``epsilon_std``, ``epsilon_sem`` [unit and
+        reference length of epsilon], ``rms_height_mean``/``rms_slope_mean`` where available, ``n_seeds``.
     """
     if "epsilon" not in ds:
         raise ValueError("ds lacks variable 'epsilon'; pass combine_cases(..., kind='representativity')")
@@ -818,7 +827,7 @@ def representativity_statistics(ds: xr.Dataset, *, min_seeds: int = 2) -> xr.Dat
     stats = seed_reduce(eps, present, n, str(eps.attrs.get("long_name", "epsilon")),
                          str(eps.attrs.get("units", "1")))
     for k, v in stats.items():
-        out[f"epsilon_{k}"] = v
+        out[f"epsilon_{k}"] = v.assign_attrs({a: eps.attrs[a] for a in REFERENCE_ATTRS if a in eps.attrs})
     for var in ("rms_height", "rms_slope"):
         if var in ds:
             st = seed_reduce(ds[var], present, n, str(ds[var].attrs.get("long_name", var)),

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import json
 from collections.abc import Sequence
-from fractions import Fraction
 
 import numpy as np
 import xarray as xr
@@ -19,6 +18,7 @@ import xarray as xr
 from .accuracy import PERIMETER_C, perimeter_corrected_area
 from .aggregate import CASE_DIMS, TOPOGRAPHY_DIM
 from .quantities import cf_unit
+from .representativity import epsilon_attrs
 from .solver.results import cell_attrs as solver_cell_attrs
 from .surface import finite_difference_rms_slope, nonperiodic_moments, spectral_moments
 
@@ -107,15 +107,14 @@ def representativity_dataset(epsilon: float, heights: np.ndarray, *, n_bins: int
 
     The case is a generated one's ``k_l, k_s, hurst, seed`` or a measured one's ``topography``.
 
-    ``length_unit`` is the unit of the heights (:data:`roughcontact.quantities.LENGTH_UNITS`);
-    eps has that unit to the power -1/2 (``"um^(-1/2)"``, which pint parses and UDUNITS
-    cannot, see :mod:`roughcontact.quantities`; ``"1"`` when nondimensional).
+    ``length_unit`` is the unit of the heights (:data:`roughcontact.quantities.LENGTH_UNITS`).
+    eps, of unit length^-1/2, which no CF ``units`` string can write, is written as its number
+    for heights in ``length_unit`` (``units`` ``"1"``, :func:`roughcontact.representativity.epsilon_attrs`).
     """
     u_len = cf_unit(length_unit, length_power=1)
     ds = xr.Dataset(
         {
-            "epsilon": ((), float(epsilon), {"units": cf_unit(length_unit, length_power=Fraction(-1, 2)),
-                                            "long_name": "L2 error between the heights PDF and its Gaussian"}),
+            "epsilon": ((), float(epsilon), epsilon_attrs(length_unit)),
             "mean_height": ((), float(np.mean(heights)), {"units": u_len, "long_name": "mean height"}),
             "std_height": ((), float(np.std(heights)), {"units": u_len,
                                                         "long_name": "standard deviation of heights"}),

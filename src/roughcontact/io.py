@@ -5,6 +5,10 @@ Every file this package writes is a labelled xarray dataset with:
 - ``units`` and ``long_name`` on every data variable and coordinate (checked on write);
 - global attributes ``roughcontact_version``, ``roughcontact_stage``, ``scene``,
   ``scene_parameters`` (the scene's config as JSON) and ``config_hash``;
+- strings (case names such as ``topography``, estimator labels) as CF character arrays
+  ``name(..., name_strlen)`` of UTF-8 bytes, each string whole (:func:`_char_strings`), and
+  ``units`` strings that UDUNITS-2 parses (:mod:`roughcontact.quantities`): ``cfchecks``
+  (CF-1.8) finds no error in any of them;
 - no timestamps, so a rerun with the same config gives byte-identical files;
 - an atomic write: the data go to a temporary file in the target folder, which is
   renamed over the target only once complete, so an interrupted job never leaves a
@@ -189,18 +193,46 @@ def eta(seconds: Sequence[float], total: int) -> str:
         f"about {secs} s left ({left} of {total} to go)"
 
 
-def _full_strings(ds: xr.Dataset) -> xr.Dataset:
-    """``ds`` with no fixed string width in any variable's encoding (every string is written whole).
-
-    A string variable read from NetCDF keeps the width of what it held (``dtype <U3``) in its
-    encoding, and ``xr.concat`` keeps the first dataset's: written with it, longer names of
-    the later datasets would be cut to that width ("frt2" -> "frt"). Without it, strings are
-    written as NetCDF-4 variable-length strings, whatever their lengths and characters.
-    """
-    for var in ds.variables.values():
+def _string_names(ds: xr.Dataset) -> list[str]:
+    """Names of the string variables of ``ds``; raises ``ValueError`` for an object array of non-strings."""
+    names = []
+    for name, var in ds.variables.items():
+        if var.dtype.kind == "O" and not all(isinstance(v, str) for v in np.asarray(var.values).ravel()):
+            raise ValueError(f"variable {name!r} holds objects that are not strings; cannot write it")
         if var.dtype.kind in "USO":
-            for key in ("dtype", "char_dim_name"):
-                var.encoding.pop(key, None)
+            names.append(str(name))
+    return names
+
+
+def _char_strings(ds: xr.Dataset) -> xr.Dataset:
+    """``ds`` with every string variable encoded as a CF character array holding each string whole.
+
+    CF (section 2.2) and its checker want strings as ``char`` arrays: ``name(..., name_strlen)``,
+    UTF-8 bytes (attribute ``_Encoding``), not NetCDF-4 variable-length strings. The width
+    ``name_strlen`` is the longest value's length in UTF-8 bytes, taken from all values: the
+    width a variable read from NetCDF keeps in its encoding (``dtype <U3``, which ``xr.concat``
+    keeps from the first dataset) is dropped, so a longer name of a later case is not cut
+    ("frt2" -> "frt"), nor is a non-ASCII one ("Oberfläche": 11 bytes for 10 letters).
+
+    A string dimension coordinate (``topography``, ``estimator``) is then a 2-D label variable,
+    which CF reads as an auxiliary coordinate (section 6.1): every data variable along its
+    dimension lists it in its ``coordinates`` attribute (with the auxiliary coordinates xarray
+    lists), as CF requires. Its name stays that of its dimension, so xarray reads the file back
+    with the strings as the dimension's index (CF only recommends other names for 2-D coordinates).
+    """
+    strings = _string_names(ds)
+    for name in strings:
+        var = ds.variables[name]
+        for key in ("dtype", "char_dim_name", "_Encoding", "original_shape"):
+            var.encoding.pop(key, None)
+        var.encoding.update(dtype="S1", char_dim_name=f"{name}_strlen")
+    labels = [name for name in strings if name in ds.dims]
+    for name, var in ds.data_vars.items():
+        var.encoding.pop("coordinates", None)
+        listed = {c for c in labels if c in var.dims}
+        if listed:
+            listed |= {str(c) for c in ds.coords if c not in ds.dims and c != name and set(ds[c].dims) <= set(var.dims)}
+            var.encoding["coordinates"] = " ".join(sorted(listed))
     return ds
 
 
@@ -217,7 +249,7 @@ def write_dataset(ds: xr.Dataset, path: str | os.PathLike, *, stage: str, scene:
             if not np.all(np.isfinite(var.values)):
                 raise ValueError(f"variable {name!r} holds NaN or inf; refusing to write {path}")
     path = Path(path)
-    out = _full_strings(ds.copy())
+    out = _char_strings(ds.copy())
     out.attrs = {**ds.attrs, **provenance_attrs(stage, scene, scene_parameters)}
     with atomic_output(path) as tmp:
         try:

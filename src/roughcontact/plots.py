@@ -162,8 +162,8 @@ def _pick(values: np.ndarray, wanted, name: str) -> list[float]:
     return out
 
 
-#: One factor of a unit string of :func:`roughcontact.quantities.cf_unit`: ``um``, ``um^-2``,
-#: ``um^(-1/2)`` (also ``um**-2`` and ``um^-0.5``).
+#: One factor of a unit string of :func:`roughcontact.quantities.cf_unit` (``um``, ``um^-2``), of
+#: :func:`_number_unit` (``um^(-1/2)``) or of files of older versions (``um**-2``, ``um^-0.5``).
 _UNIT_FACTOR = re.compile(r"^([A-Za-z]+)(?:(?:\^|\*\*)\(?([-+]?\d+(?:/\d+|\.\d+)?)\)?)?$")
 _UNIT_SYMBOLS = frozenset(LENGTH_UNITS + PRESSURE_UNITS + ("s",)) - {"1"}
 
@@ -171,8 +171,8 @@ _UNIT_SYMBOLS = frozenset(LENGTH_UNITS + PRESSURE_UNITS + ("s",)) - {"1"}
 def _unit_tex(units: str) -> str:
     """A unit string as mathtext, upright, factors separated by a thin space.
 
-    The strings of :func:`roughcontact.quantities.cf_unit`: ``"um^(-1/2)"`` ->
-    ``$\\mathrm{\\mu m}^{-1/2}$``, ``"MPa um^-1"`` -> ``$\\mathrm{MPa}\\,\\mathrm{\\mu m}^{-1}$``,
+    The strings of :func:`roughcontact.quantities.cf_unit` and :func:`_number_unit`: ``"um^(-1/2)"``
+    -> ``$\\mathrm{\\mu m}^{-1/2}$``, ``"MPa um^-1"`` -> ``$\\mathrm{MPa}\\,\\mathrm{\\mu m}^{-1}$``,
     ``"1"`` -> ``"1"``. Other strings (files of older versions) as one upright word with
     its power: ``"length unit^-1/2"`` -> ``$(\\mathrm{length\\ unit})^{-1/2}$``.
     """
@@ -192,6 +192,16 @@ def _unit_tex(units: str) -> str:
     if " " in base.strip() and power:
         tex = f"({tex})"
     return f"${tex}^{{{power}}}$" if power else f"${tex}$"
+
+
+def _number_unit(attrs) -> str:
+    """The unit a variable's number is in, for a label: its ``units``, or for a value written for lengths in
+    a reference unit (:func:`roughcontact.quantities.per_reference_length`) that unit to its power, e.g.
+    ``"um^(-1/2)"`` for ``epsilon`` (``units`` ``"1"``, ``reference_length_units`` ``"um"``, power ``"-1/2"``)."""
+    ref, power = attrs.get("reference_length_units"), attrs.get("reference_length_power")
+    if ref is None or power is None or ref == "1":
+        return str(attrs.get("units", "1"))
+    return f"{ref}^({power})"
 
 
 def _fmt(v: float) -> str:
@@ -552,7 +562,7 @@ def _rep_map(fig: Figure, ax, sub: xr.Dataset, symbol: str, unit: str) -> None:
 def _rep_panels(rep: xr.Dataset, h: float) -> list[tuple[xr.Dataset, str, str, str]]:
     """``(statistics at H=h, symbol, unit, title)`` of the paper's eps and, when the per-case
     data allow it, of the scale-free eps (:func:`roughcontact.representativity.scale_free_statistics`)."""
-    units = _unit_tex(str(rep["epsilon_mean"].attrs.get("units", "1")))
+    units = _unit_tex(_number_unit(rep["epsilon_mean"].attrs))
     panels = [(rep.sel(H=h), r"$\bar\varepsilon$", units, r"(a) heights $h$ (paper's $\varepsilon$)")]
     free = scale_free_statistics(rep)
     if free is not None:

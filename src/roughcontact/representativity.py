@@ -10,9 +10,14 @@ P is piecewise constant on ``n_bins`` equal bins spanning [min h, max h] and zer
 outside. The integral is evaluated exactly for that piecewise-constant P (bin integrals
 of G and G^2 through erf), including the Gaussian tails outside the histogram's range,
 so the only approximation left is the histogram itself. eps has units of
-1/sqrt(height unit): the ``units`` attribute ``cf_unit(length_unit, length_power=-1/2)``
-(:mod:`roughcontact.quantities`), e.g. ``"um^(-1/2)"``, which pint parses and UDUNITS
-cannot express, or ``"1"`` for nondimensional heights.
+1/sqrt(height unit), which UDUNITS-2, and so CF, cannot write (integer powers only,
+:mod:`roughcontact.quantities`). Files therefore hold eps as the number it is for heights
+in the study's length unit ``ell`` (``"um"``, or ``"1"`` for nondimensional heights):
+eps of the dimensionless heights ``h / (1 ell)``, which is ``eps(h) sqrt(1 ell)``, with
+``units: "1"`` and the attributes ``reference_length_units`` (``ell``) and
+``reference_length_power`` (``"-1/2"``) that restore the dimension: ``epsilon`` 0.8 with
+``"um"`` is 0.8 um^-1/2 (:func:`epsilon_attrs`). In a nondimensional study, as in the
+paper (lengths in units of the side L = 1), this is eps itself.
 
 eps depends on the height scale: heights ``c h`` give ``eps / sqrt(c)`` (the histogram
 and G are densities in h, and the bins follow [min, max]). The scale-free measure is eps
@@ -23,11 +28,20 @@ the paper's rms height 0.1 it is ``sqrt(0.1) = 0.316`` times eps.
 
 from __future__ import annotations
 
+from fractions import Fraction
+
 import numpy as np
 import xarray as xr
 from scipy.special import erf, erfc
 
 from .aggregate import representativity_statistics
+from .quantities import per_reference_length
+
+#: What the ``comment`` of ``epsilon`` says (the same for every length unit).
+EPSILON_COMMENT = ("eps = sqrt(int (G - P)^2 dz) of the heights as numbers z = h / ell in units of ell = 1 "
+                   "reference_length_units: eps of h in reference_length_units^reference_length_power "
+                   "(UDUNITS-2, and so CF, has no fractional powers); epsilon sqrt(std_height) is the "
+                   "scale-free eps of (h - mean height) / std_height")
 
 
 def _gauss_cdf(z: np.ndarray) -> np.ndarray:
@@ -70,6 +84,19 @@ def gaussian_l2_error(heights: np.ndarray, n_bins: int = 500) -> float:
     tails = (0.5 * erfc(-z[0]) + 0.5 * erfc(z[-1])) / (2.0 * sigma * np.sqrt(np.pi))
     # Mathematically >= 0; a tiny negative value can only be roundoff.
     return float(np.sqrt(max(inside + tails, 0.0)))
+
+
+def epsilon_attrs(length_unit: str) -> dict:
+    """CF attributes of eps (:func:`gaussian_l2_error`) of heights in ``length_unit``.
+
+    ``units`` ``"1"``: eps is written as its number for heights in ``length_unit`` (one of
+    :data:`roughcontact.quantities.LENGTH_UNITS`), i.e. eps of the dimensionless heights
+    ``h / (1 length_unit)``; ``reference_length_units`` (``length_unit``) and
+    ``reference_length_power`` (``"-1/2"``) give its dimension back
+    (:func:`roughcontact.quantities.per_reference_length`), ``comment`` says so in words.
+    """
+    return {**per_reference_length(length_unit, Fraction(-1, 2)),
+            "long_name": "L2 error between the heights PDF and its Gaussian", "comment": EPSILON_COMMENT}
 
 
 def binning_noise_floor(n_samples: int, n_bins: int, range_in_sigma: float,
@@ -149,7 +176,8 @@ def scale_free_statistics(rep: xr.Dataset) -> xr.Dataset | None:
         return None
     present = rep["case_present"] if "case_present" in rep else True
     sigma = rep["std_height"].where(present & (rep["std_height"] > 0))
-    eps = (rep["epsilon"] * np.sqrt(sigma)).assign_attrs(
-        units="1", long_name="L2 error of the normalised heights (h - hbar)/sigma")
+    eps = rep["epsilon"] * np.sqrt(sigma)
+    # its own attributes only: not epsilon's reference length (xarray may keep the first operand's)
+    eps.attrs = {"units": "1", "long_name": "L2 error of the normalised heights (h - hbar)/sigma"}
     keep = [v for v in ("case_present",) if v in rep]
     return representativity_statistics(rep[keep].assign(epsilon=eps), min_seeds=1)
