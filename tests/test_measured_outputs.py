@@ -304,6 +304,25 @@ def test_report_fit_table_of_a_measured_scene(agg, result):
         report.fit_table(csv_text.replace("n_topographies", "n_surfaces"))
 
 
+def test_report_lists_every_topography_with_its_loads(scene_dir):
+    root, scene = scene_dir
+    agg = read_dataset(root / "aggregate" / "contact.nc", stage="aggregate")
+    rows = []
+    for name in scene["topography"]["files"]:
+        surface = read_dataset(root / "surfaces" / f"{name}.nc", stage="surface")
+        surface.attrs["source"] = f'{{"file": "data/{name}.x3p"}}'
+        rows.append(report.topography_row(name, surface, agg.sel(topography=name)))
+    html = _html(report.summary_rst("measured", {"fit": {"n_boot": 40}}, version="1", commit="unknown",
+                                    topographies=report.topographies_table(rows)))
+    assert "Topographies</h" in html and html.split("Topographies</h")[1].count("<tr") == 1 + 3
+    for name, row in zip(scene["topography"]["files"], rows, strict=True):
+        assert f">{name}<" in html and f"{name}.x3p" in html and "64 x 64" in row[2]
+        assert row[-1] == "30 of 30" and float(row[-2]) == pytest.approx(
+            float(agg["area_fraction"].sel(topography=name).isel(step=-1)), rel=1e-2)
+    # without a contact study: the load columns stay empty
+    assert report.topography_row("ground-a", surface)[-3:] == ["", "", ""]
+
+
 def test_rectangular_maps_are_drawn_to_scale_with_both_sides():
     # A map kept whole (nx != ny, dx != dy): drawn over Lx x Ly, its title giving both sides and
     # counts, and the area-load title the range of grids.

@@ -20,6 +20,7 @@ import json
 import os
 import subprocess
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 
 from .provenance import flatten
 
@@ -207,12 +208,49 @@ def fit_table(csv_text: str) -> str:
     return text
 
 
+#: Columns of :func:`topographies_table`, and what each row of it must give.
+TOPOGRAPHY_COLUMNS = ("name", "file", "points", "size", "rms slope h'", "undefined", "final p0/(E* h')",
+                      "final A/A0", "converged steps")
+
+
+def topography_row(name: str, surface, contact=None) -> list[str]:
+    """One measured case as a row of :func:`topographies_table`, as RST text.
+
+    ``surface``: its surface dataset (``heights``, ``rms_slope``, ``undefined_fraction``, the cell's
+    attributes and ``source``); ``contact``: its slice of the contact aggregate (``pressure``,
+    ``area_fraction``, ``converged`` over ``step``, attribute ``e_star``) or None without a contact study.
+    """
+    source = json.loads(surface.attrs.get("source", "{}"))
+    nx, ny = (int(surface.sizes[d]) for d in ("x", "y"))
+    lx, ly = ((surface.attrs["length_x"], surface.attrs["length_y"]) if "length_x" in surface.attrs
+              else (surface.attrs["length"],) * 2)
+    unit = surface.attrs.get("length_units", "1")
+    # a case's file holds its name as a length-1 dimension: its scalars have that one element
+    slope = float(surface["rms_slope"].squeeze())
+    undefined = float(surface["undefined_fraction"].squeeze()) if "undefined_fraction" in surface else 0.0
+    row = [f"``{name}``", _literal(Path(source.get("file", "?")).name), f"{nx} x {ny}", f"{lx:.4g} x {ly:.4g} {unit}",
+           f"{slope:.3g}", f"{100 * undefined:.1f} %"]
+    if contact is None:
+        return row + ["", "", ""]
+    p_last = float(contact["pressure"].isel(step=-1)) / (float(contact.attrs["e_star"]) * slope)
+    conv = contact["converged"].values.astype(bool)
+    return row + [f"{p_last:.3g}", f"{float(contact['area_fraction'].isel(step=-1)):.3g}",
+                  f"{int(conv.sum())} of {conv.size}"]
+
+
+def topographies_table(rows: Sequence[Sequence[str]]) -> str:
+    """The measured cases of a scene (:func:`topography_row` each) as an RST table, with a lead-in."""
+    return ("Each topography file, as read (size and unit after conversion, undefined points filled) and "
+            "as loaded: the last load step's p0/(E* h') and contact area fraction, and the load steps "
+            "that converged.\n\n" + _list_table(list(TOPOGRAPHY_COLUMNS), rows))
+
+
 def _heading(title: str, underline: str = "-") -> str:
     return f"{title}\n{underline * len(title)}\n"
 
 
 def summary_rst(scene: str, parameters: Mapping, *, version: str, commit: str,
-                fit_csv: str | None = None) -> str:
+                fit_csv: str | None = None, topographies: str | None = None) -> str:
     """The report's landing-page fragment for ``scene``: code, parameters and the CEL fit.
 
     Parameters
@@ -225,6 +263,8 @@ def summary_rst(scene: str, parameters: Mapping, *, version: str, commit: str,
         The package version and the git commit (:func:`git_commit`) of the code.
     fit_csv : str, optional
         The text of the scene's ``fit/cel.csv``; ``None`` for a scene without a contact study.
+    topographies : str, optional
+        A measured scene's :func:`topographies_table`, shown after the parameters.
     """
     if not version or not commit:
         raise ValueError("the version and the commit must be given (the commit may be 'unknown')")
@@ -236,6 +276,8 @@ def summary_rst(scene: str, parameters: Mapping, *, version: str, commit: str,
         "description and ``keep_surfaces`` aside: they change no result).\n",
         parameters_table(parameters),
     ]
+    if topographies is not None:
+        parts += [_heading("Topographies"), topographies]
     if fit_csv is not None and not list(csv.DictReader(io.StringIO(fit_csv))):
         # a fit with no row: every case was excluded (e.g. unconverged steps) or none fitted
         parts += [_heading("Contact evolution law fit"),

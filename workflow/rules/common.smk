@@ -82,6 +82,12 @@ def scene_of(name):
     return SCENES[name]
 
 
+def measured_names(name):
+    """The topography names of scene ``name``, sorted; [] for a generated scene."""
+    scene = scene_of(name)
+    return topography_names(scene) if is_measured(scene) else []
+
+
 def study_block(scene, study):
     """The validated config block of `study` in `scene`, or a clear error."""
     block = scene_of(scene).get(study)

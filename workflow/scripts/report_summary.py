@@ -2,7 +2,22 @@
 from pathlib import Path
 
 from roughcontact import __version__, report
-from roughcontact.io import run_logged, write_text_atomic
+from roughcontact.io import read_dataset, run_logged, write_text_atomic
+
+
+def topographies():
+    """A measured scene's table of its files (report.topographies_table), or None for a generated one."""
+    surfaces = snakemake.input.surfaces
+    if not surfaces:
+        return None
+    contact = snakemake.input.contact
+    agg = read_dataset(contact[0], stage="aggregate", variables=["pressure"]) if contact else None
+    rows = []
+    for path in surfaces:
+        name = Path(path).stem
+        surface = read_dataset(path, stage="surface", variables=["rms_slope"])
+        rows.append(report.topography_row(name, surface, None if agg is None else agg.sel(topography=name)))
+    return report.topographies_table(rows)
 
 
 def main(log):
@@ -11,7 +26,7 @@ def main(log):
     # The checkout that holds this workflow; "unknown" when it is not a git work tree.
     commit = report.git_commit(Path(snakemake.scriptdir))
     text = report.summary_rst(snakemake.wildcards.scene, snakemake.params.parameters, version=__version__,
-                              commit=commit, fit_csv=fit_csv)
+                              commit=commit, fit_csv=fit_csv, topographies=topographies())
     write_text_atomic(snakemake.output[0], text)
     log.info("report summary written to %s (version %s, commit %s)", snakemake.output[0], __version__, commit)
 
