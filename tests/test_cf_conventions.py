@@ -92,8 +92,10 @@ def _measured(root: Path) -> dict[str, Path]:
         surfaces.append(_write(measured_surface_dataset(measured, name=name), root / f"surface_{k}.nc", "surface"))
         rep = representativity_dataset(gaussian_l2_error(h, 20), h, n_bins=20, topography=name, length_unit="um")
         reps.append(_write(rep, root / f"rep_{k}.nc", "representativity", {"path": f"data/{name}.x3p"}))
-        result = solve_contact(h, LOADS, length=(100.0, 75.0), boundary="free", length_unit="um", pressure_unit="MPa")
         slope = nonperiodic_moments(h, (100.0, 75.0))["rms_slope"]
+        # loaded relative to its own slope, as a measured scene does (load.relative_to: rms_slope)
+        loads = [p0 * slope / 0.1 for p0 in LOADS]
+        result = solve_contact(h, loads, length=(100.0, 75.0), boundary="free", length_unit="um", pressure_unit="MPa")
         case = contact_dataset(result, rms_slope=slope, alpha=4.0, e_star=1.0, topography=name)
         contacts.append(_write(case, root / f"contact_{k}.nc", "contact", {"path": f"data/{name}.x3p"}))
     out.update(surface=surfaces[-1], representativity=reps[-1], contact=contacts[-1])
