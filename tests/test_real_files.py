@@ -5,8 +5,8 @@ new user brought: Bruker .di, FRT .frt (27 % undefined), Igor .ibw, Agilent .mi,
 480, undefined points), Mountains .sur (563 x 484, a prime side) and ISO .x3p (dx != dy). Their
 case names differ in length and the shortest sorts first: once, every aggregate cut each name to
 the first one's length (frt2 -> fr). Checked: the run and ``snakemake --report`` succeed, every
-load step converges, and every name is whole in every NetCDF, CSV, log line, figure text and the
-report. Loads are small and few (4 steps to p0/(E* h') = 0.02) to keep CI short: about 3 min of
+load step converges, every name is whole in every NetCDF, CSV, log line, figure text and the
+report, and one file of every kind is CF-clean. Loads are small and few (4 steps to p0/(E* h') = 0.02) to keep CI short: about 3 min of
 2 busy cores, most of it the two largest maps.
 """
 import base64
@@ -119,3 +119,13 @@ def test_names_are_whole_in_every_figure(seven, monkeypatch):
         _no_cut_names("\n".join(texts), f"figure {name}")
         shown = [n for n in NAMES if any(re.search(rf"(?<![\w-]){re.escape(n)}(?![\w-])", t) for t in texts)]
         assert shown == NAMES, f"figure {name} names {shown}, not every file"
+
+
+def test_one_file_of_every_kind_is_cf_clean(seven, tmp_path):
+    """cfchecks (where it runs, else the same checks through cf_units): no error or warning on real maps."""
+    from cfcheck import assert_cf_clean
+
+    root = seven / "results" / "seven"
+    assert_cf_clean([root / "surfaces" / "sur2.nc", root / "representativity" / "x3p2.nc",
+                     root / "contact" / "frt2.nc", root / "aggregate" / "contact.nc",
+                     root / "aggregate" / "representativity.nc", root / "fit" / "cel.nc"], tmp_path)
