@@ -6,8 +6,8 @@ new user brought: Bruker .di, FRT .frt (27 % undefined), Igor .ibw, Agilent .mi,
 case names differ in length and the shortest sorts first: once, every aggregate cut each name to
 the first one's length (frt2 -> fr). Checked: the run and ``snakemake --report`` succeed, every
 load step converges, every name is whole in every NetCDF, CSV, log line, figure text and the
-report, and one file of every kind is CF-clean. Loads are small and few (4 steps to p0/(E* h') = 0.02) to keep CI short: about 3 min of
-2 busy cores, most of it the two largest maps.
+report, and one file of every kind is CF-clean. Loads are small and few (4 steps to p0/(E* h') =
+0.02) to keep CI short: about 1.5 min of 2 cores, most of it the two largest maps.
 """
 import base64
 import re
