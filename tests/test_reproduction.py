@@ -132,12 +132,13 @@ def test_the_claim_table_says_when_the_grid_is_incomplete():
     rep = xr.Dataset({"epsilon": (("k_l", "k_s", "H", "seed"), np.ones((2, 1, 1, 2)))},
                      coords={"k_l": [1.0, 16.0], "k_s": [32.0], "H": [0.8], "seed": [0, 1]})
     rep["case_present"] = rep["epsilon"] > 0
+    rep.attrs.update(scene_parameters='{"surface": {"N": 32}}', n_bins=10)  # the noise floor's maps and bins
     complete = reproduction.claims(rep, con, fit)
     assert not any("incomplete grid" in r["ours"] for r in complete)
     partial = reproduction.claims(rep, _drop_cases(con, k_l=1.0, H=0.2, seed=0), fit)
     noted = [r for r in partial if "incomplete grid: 11 of 12 cases" in r["ours"]]
     assert noted and all(r["verdict"] != "pending" for r in noted)
-    assert not any("incomplete" in r["ours"] for r in partial[:2])  # representativity rows: another aggregate
+    assert not any("incomplete" in r["ours"] for r in partial[:3])  # representativity rows: another aggregate
 
 
 def _lambda_l_equal_l(area_of_p0, scatter):
@@ -244,9 +245,9 @@ def test_publish_then_regenerate_from_the_published_files_alone(demo_run, tmp_pa
     for claim in ("representativity grows with k_l", "independent of H", "higher H gives smaller κ", "seed scatter",
                   "κ rises", "not confined", "κ decreases with A/A0", "Persson's small-load asymptote",
                   "BGT and Greenwood (α = 2)", "kappa = paper value", "mu = paper value", "beta = paper value",
-                  "λ_s = L/128", "≈ 10 %"):
+                  "λ_s = L/128", "≈ 10 %", "ε decreases with k_s"):
         assert claim in table
-    assert table.count("\n| ") == 15  # fifteen claim rows after the header and the rule
+    assert table.count("\n| ") == 16  # sixteen claim rows after the header and the rule
     figures = {p.name for p in (out / "figures").glob("*.png")}
     assert figures == {f"{n}.png" for n in ("representativity", "surface_examples", "area_load", "kappa", "dpbar")}
     first = {p.name: p.read_bytes() for p in (out / "figures").glob("*.png")}
@@ -289,3 +290,30 @@ def test_the_readme_shows_the_generated_claim_table(published):
     readme = (published / "README.md").read_text()
     for row in (published / "claims.md").read_text().splitlines():
         assert row in readme, f"{published / 'README.md'} lacks the generated row {row[:60]!r}"
+
+
+@pytest.mark.skipif(not PUBLICATIONS, reason="no published reproduction in docs/reproduction")
+@pytest.mark.parametrize("published", PUBLICATIONS, ids=lambda p: p.name)
+def test_every_published_verdict_follows_its_printed_rule_and_numbers(published):
+    # Read from the published text alone: each row's printed test is its claim's rule, and that
+    # rule applied to the row's printed numbers gives the printed verdict.
+    from roughcontact.verdicts import check_table
+
+    assert check_table((published / "claims.md").read_text()) == []
+
+
+def test_a_verdict_looser_than_its_rule_is_caught():
+    from roughcontact.verdicts import RULES, check_table
+
+    claim = "kappa = paper value (λ_l = L/16, λ_s = L/32, pooled H)"
+    row = (f"| {claim} | (1.145 ± 0.002)·√(2π) | 1.066·√(2π), 95 % bootstrap interval [1.037, 1.089] | "
+           f"**{{}}** | {RULES[claim].test} |")
+    head = "| claim | paper | ours | verdict | test |\n|---|---|---|---|---|\n"
+    assert check_table(head + row.format("not")) == []
+    # the old 10 % rule's "partly", and a reproduced on an interval that misses the paper's range
+    assert "gives 'not'" in check_table(head + row.format("partly"))[0]
+    overlap = row.replace("[1.037, 1.089]", "[1.037, 1.144]")
+    assert check_table(head + overlap.format("reproduced")) == []
+    assert "printed test is not the rule's" in check_table(head + row.format("not").replace("not otherwise (",
+                                                                                              "else ("))[0]
+    assert "no rule" in check_table(head + row.format("not").replace(claim, "a new claim"))[0]
