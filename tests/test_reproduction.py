@@ -262,6 +262,7 @@ PUBLISHED = __import__("pathlib").Path(__file__).resolve().parents[1] / "docs" /
 PUBLICATIONS = [p.parent for p in [PUBLISHED / "data", *sorted(PUBLISHED.glob("*/data"))] if p.is_dir()]
 
 
+@pytest.mark.slow  # 15-20 s each on a quiet machine (figures and the noise floor): make test runs them
 @pytest.mark.skipif(not PUBLICATIONS, reason="no published reproduction in docs/reproduction")
 @pytest.mark.parametrize("published", PUBLICATIONS, ids=lambda p: p.name)
 def test_published_claims_and_figures_follow_from_the_published_data(published, tmp_path):
