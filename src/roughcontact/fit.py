@@ -298,30 +298,36 @@ def _check_settings(window, n_boot, rng_seed, methods, min_points, kappa_extrapo
     return (lo, hi), methods
 
 
-def _shared_schedule(curves: _Curves) -> bool:
-    """Whether every row of ``curves`` has the same normalised load schedule (see :func:`_check_schedules`)."""
-    try:
-        _check_schedules(curves, ["rows"])
-    except ValueError:
-        return False
-    return True
+def _differing_stratum(curves: _Curves):
+    """The first stratum whose rows have different normalised load schedules ``p0 / (E* h')``, or None.
 
-
-def _check_schedules(curves: _Curves, who: Sequence[str]) -> None:
-    """ValueError unless the rows of each stratum share one load schedule (the seed mean needs it).
-
-    The schedule compared is the normalised load ``p0 / (E* h')`` that the CEL is a function of:
-    surfaces of different rms slope loaded relative to it (``load.relative_to: rms_slope``) share
-    it, as seeds of one generated surface type share ``p0``. ``who[label]`` names the rows of
-    stratum ``label`` in the message.
+    That schedule is what the CEL is a function of: surfaces of different rms slope loaded
+    relative to it (``load.relative_to: rms_slope``) share it, as seeds of one generated surface
+    type share ``p0``.
     """
     normalised = curves.p0 / curves.hp[:, None]
     for lab in np.unique(curves.strata):
         sched = normalised[curves.strata == lab]
         if not np.allclose(sched, sched[0], rtol=1e-12, atol=0.0, equal_nan=True):
-            raise ValueError(f"{who[lab]} have different load schedules p0/(E* h'), so their curves cannot be "
-                             "averaged step by step; pass paper_average='none' or load them alike "
-                             "(load.relative_to: rms_slope)")
+            return lab
+    return None
+
+
+def _shared_schedule(curves: _Curves) -> bool:
+    """Whether every stratum of ``curves`` has one normalised load schedule (see :func:`_differing_stratum`)."""
+    return _differing_stratum(curves) is None
+
+
+def _check_schedules(curves: _Curves, who: Sequence[str]) -> None:
+    """ValueError unless the rows of each stratum share one load schedule (the seed mean needs it).
+
+    ``who[label]`` names the rows of stratum ``label`` in the message.
+    """
+    lab = _differing_stratum(curves)
+    if lab is not None:
+        raise ValueError(f"{who[lab]} have different load schedules p0/(E* h'), so their curves cannot be "
+                         "averaged step by step; pass paper_average='none' or load them alike "
+                         "(load.relative_to: rms_slope)")
 
 
 class _GroupFit:

@@ -187,10 +187,16 @@ def eta(seconds: Sequence[float], total: int) -> str:
     if left <= 0:
         return "done"
     recent = list(seconds)[-5:]
-    rest = left * sum(recent) / len(recent)
-    minutes, secs = divmod(round(rest), 60)
-    return f"about {minutes} min {secs:02d} s left ({left} of {total} to go)" if minutes else \
-        f"about {secs} s left ({left} of {total} to go)"
+    return f"about {duration_text(left * sum(recent) / len(recent))} left ({left} of {total} to go)"
+
+
+def duration_text(seconds: float) -> str:
+    """A duration [s] as log text: ``"42 s"``, ``"3 min 05 s"``, ``"1 h 23 min"``."""
+    minutes, secs = divmod(round(seconds), 60)
+    hours, minutes = divmod(minutes, 60)
+    if hours:
+        return f"{hours} h {minutes:02d} min"
+    return f"{minutes} min {secs:02d} s" if minutes else f"{secs} s"
 
 
 def _string_names(ds: xr.Dataset) -> list[str]:

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .config import cases
-from .io import write_text_atomic
+from .io import duration_text, write_text_atomic
 from .measured import topography_names
 
 #: The per-step line of a contact job's log (workflow/scripts/contact.py).
@@ -65,15 +65,7 @@ class Progress:
         if self.done >= self.planned:
             return head + " (all)"
         return (f"{head} ({100 * self.done / self.planned:.0f} %), {self.seconds / self.done:.3g} s a solve: "
-                f"about {_duration(left)} left on {self.cores} core(s)")
-
-
-def _duration(seconds: float) -> str:
-    minutes, secs = divmod(round(seconds), 60)
-    hours, minutes = divmod(minutes, 60)
-    if hours:
-        return f"{hours} h {minutes:02d} min"
-    return f"{minutes} min {secs:02d} s" if minutes else f"{secs} s"
+                f"about {duration_text(left)} left on {self.cores} core(s)")
 
 
 def read_log_steps(text: str) -> list[float]:

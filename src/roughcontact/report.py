@@ -23,6 +23,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from .provenance import flatten
+from .solver.results import cell_sides
 
 #: What the commit is called when the code is not a git checkout (or git is missing).
 UNKNOWN = "unknown"
@@ -222,8 +223,7 @@ def topography_row(name: str, surface, contact=None) -> list[str]:
     """
     source = json.loads(surface.attrs.get("source", "{}"))
     nx, ny = (int(surface.sizes[d]) for d in ("x", "y"))
-    lx, ly = ((surface.attrs["length_x"], surface.attrs["length_y"]) if "length_x" in surface.attrs
-              else (surface.attrs["length"],) * 2)
+    lx, ly = cell_sides(surface.attrs)
     unit = surface.attrs.get("length_units", "1")
     # a case's file holds its name as a length-1 dimension: its scalars have that one element
     slope = float(surface["rms_slope"].squeeze())

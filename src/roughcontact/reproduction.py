@@ -76,10 +76,15 @@ def _judged(claim: str, paper: str, ours: str) -> dict:
     return _row(claim, paper, ours, judge(claim, paper, ours), RULES[claim].test)
 
 
+def _eps_sigma(rep: xr.Dataset) -> xr.DataArray:
+    """Scale-free eps (eps sqrt(sigma)) of the present cases, mean over H: dims (k_l, k_s, seed)."""
+    eps = rep["epsilon"] * np.sqrt(rep["std_height"]) if "std_height" in rep else rep["epsilon"]
+    return eps.where(rep["case_present"]).mean("H")
+
+
 def _eps_by_kl(rep: xr.Dataset) -> xr.DataArray:
     """Scale-free eps (eps sqrt(sigma)), mean over seeds, per (k_l, k_s)."""
-    eps = rep["epsilon"] * np.sqrt(rep["std_height"]) if "std_height" in rep else rep["epsilon"]
-    return eps.where(rep["case_present"]).mean("seed").mean("H")
+    return _eps_sigma(rep).mean("seed")
 
 
 #: Draws of i.i.d. Gaussian heights behind the representativity noise floor, and their seed.
@@ -120,8 +125,7 @@ def representativity_claims(rep: xr.Dataset) -> list[dict]:
 
 def _ks_falls_row(rep: xr.Dataset) -> dict:
     """Per k_l, eps_σ at the smallest k_s minus that at the largest, with its standard error over seeds."""
-    eps = rep["epsilon"] * np.sqrt(rep["std_height"]) if "std_height" in rep else rep["epsilon"]
-    eps = eps.where(rep["case_present"]).mean("H")
+    eps = _eps_sigma(rep)
     ends = eps.isel(k_s=[0, -1])
     mean, sem = ends.mean("seed"), ends.std("seed", ddof=1) / np.sqrt(ends.notnull().sum("seed"))
     drop = mean.isel(k_s=0) - mean.isel(k_s=1)

@@ -33,8 +33,9 @@ def _floats(pattern: str, text: str) -> list[tuple[float, ...]]:
     return [tuple(float(g) for g in m.groups()) for m in re.finditer(pattern, text)]
 
 
-def _count(fraction: float, *, all_: str = "reproduced") -> str:
-    return all_ if fraction == 1 else "partly" if fraction >= 0.5 else "not"
+def _count(fraction: float) -> str:
+    """Reproduced for all, partly for at least half, not otherwise."""
+    return "reproduced" if fraction == 1 else "partly" if fraction >= 0.5 else "not"
 
 
 # ------------------------------------------------------------------------------- representativity
