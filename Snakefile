@@ -39,6 +39,7 @@ include: "workflow/rules/contact.smk"
 include: "workflow/rules/aggregate.smk"
 include: "workflow/rules/figures.smk"
 include: "workflow/rules/accuracy.smk"
+include: "workflow/rules/kappa_gap.smk"
 include: "workflow/rules/report.smk"
 
 

@@ -86,7 +86,7 @@ def test_unknown_scene_is_named(shipped_config):
 def test_scene_without_studies(shipped_config):
     cfg = _demo(shipped_config)
     cfg["scenes"]["demo"] = {"description": "nothing"}
-    with pytest.raises(ConfigError, match="at least one of 'representativity', 'contact' or 'accuracy'"):
+    with pytest.raises(ConfigError, match="at least one of 'representativity', 'contact', 'accuracy' or 'kappa_gap'"):
         validate_config(cfg, SCHEMA)
 
 
@@ -210,12 +210,17 @@ def test_hostile_values_are_named_before_planning(shipped_config, path, value, f
     ],
 )
 def test_malformed_accuracy_settings_are_named(shipped_config, edit, field, words):
+    _assert_study_error_named(shipped_config, "accuracy", "accuracy", edit, field, words)
+
+
+def _assert_study_error_named(shipped_config, study, scene, edit, field, words):
+    """``edit`` the defaults' ``study`` block: the error names ``scene``, ``field`` and ``words``."""
     cfg = copy.deepcopy(shipped_config)
-    edit(cfg["defaults"]["accuracy"])
+    edit(cfg["defaults"][study])
     with pytest.raises(ConfigError) as info:
         validate_config(cfg, SCHEMA)
     msg = str(info.value)
-    assert "scene 'accuracy'" in msg and f"field '{field}'" in msg and words in msg, msg
+    assert f"scene '{scene}'" in msg and f"field '{field}'" in msg and words in msg, msg
 
 
 def test_duplicate_yaml_keys_are_named(tmp_path):
@@ -356,3 +361,31 @@ def test_bad_load_schedule_is_named(shipped_config, load, words):
     with pytest.raises(ConfigError, match="contact.load") as err:
         validate_config(cfg, SCHEMA)
     assert words in str(err.value)
+
+
+@pytest.mark.parametrize(
+    "edit, field, words",
+    [
+        (lambda k: k["variants"]["N512"].update(N="32"), "kappa_gap.variants.N512.N", "too coarse for k_s=32"),
+        (lambda k: k["variants"]["N512"].update(role="baseline"), "kappa_gap.variants",
+         "exactly one variant with role: baseline"),
+        (lambda k: k["variants"].pop("bem-N512"), "kappa_gap.variants",
+         "needs a role: solver variant with method: bem"),
+        (lambda k: [k["variants"].pop(v) for v in ("N512", "N1024")], "kappa_gap.variants", "at least three N"),
+        (lambda k: k["variants"]["N512"].update(method="cg"), "kappa_gap.variants.N512.method", "bem"),
+        (lambda k: k["variants"].update({"a b": {"role": "load", "N": "64", "seeds": 1}}), "kappa_gap.variants",
+         "a variant name"),
+    ],
+)
+def test_malformed_kappa_gap_settings_are_named(shipped_config, edit, field, words):
+    _assert_study_error_named(shipped_config, "kappa_gap", "kappa-gap", edit, field, words)
+
+
+def test_kappa_gap_job_params_leave_out_seeds_and_role(shipped_config):
+    # adding seeds to a variant must not rerun its finished surfaces
+    from roughcontact import params
+
+    block = validate_config(shipped_config, SCHEMA)["scenes"]["kappa-gap"]["kappa_gap"]
+    one = params.kappa_gap_case(block, "N4096")
+    block["variants"]["N4096"]["seeds"] = 7
+    assert params.kappa_gap_case(block, "N4096") == one and "seeds" not in one["setting"]

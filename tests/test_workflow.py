@@ -63,7 +63,8 @@ def _jobs(stdout):
     return counts
 
 
-@pytest.mark.parametrize("scene", ["demo", pytest.param("paper", marks=pytest.mark.slow), "representative"])
+@pytest.mark.parametrize("scene", ["demo", pytest.param("paper", marks=pytest.mark.slow), "representative",
+                                   "kappa-gap"])
 def test_dry_run_every_shipped_scene(repo, scene):
     # --forceall: the full job list, whatever a local results/ already holds
     res = run_snakemake(repo, "-n", "--forceall", "--config", f"scene={scene}", timeout=600)
@@ -75,10 +76,14 @@ def test_dry_run_every_shipped_scene(repo, scene):
         assert sum(jobs.values()) == PAPER_JOBS, jobs
     if scene == "representative":
         assert jobs["contact"] == 60 and "representativity" not in jobs
+    if scene == "kappa-gap":
+        # every variant's seeds x 3 H, one summary, and nothing of the other studies
+        assert jobs["kappa_gap_case"] == 63 and jobs["kappa_gap_summary"] == 1 and "contact" not in jobs
     # the dry run says what the scene computes before anything runs
     solves = {"demo": "12 contact cases x 30 load steps = 360 solves at N=256",
               "paper": "1200 contact cases x 30 load steps = 36000 solves at N=1024",
-              "representative": "60 contact cases x 30 load steps = 1800 solves at N=1024"}[scene]
+              "representative": "60 contact cases x 30 load steps = 1800 solves at N=1024",
+              "kappa-gap": "the kappa-gap study (63 solves in 9 variants)"}[scene]
     assert f"roughcontact: scene '{scene}' plans" in res.stderr + res.stdout and solves in res.stderr + res.stdout
 
 
@@ -151,6 +156,12 @@ MISTYPED = [
                  marks=pytest.mark.slow),
     pytest.param("results/accuracy/accuracy/N512_tol1e-8_steps30/kl16_ks32_H0.5_s0.nc",
                  "accuracy.H: wildcard H=0.5 is not in the scene; allowed: 0.36, 0.84", marks=pytest.mark.slow),
+    pytest.param("results/kappa-gap/kappa_gap/N8192/kl16_ks32_H0.2_s0.nc",
+                 "wildcard variant=N8192 is not one of its variants; allowed: baseline, load-0.05, N512, N1024",
+                 marks=pytest.mark.slow),
+    pytest.param("results/kappa-gap/kappa_gap/N4096/kl16_ks32_H0.2_s2.nc",
+                 "kappa_gap variant N4096: wildcard seed=2 is not one of the scene's seeds 0..1",
+                 marks=pytest.mark.slow),
     pytest.param("results/accuracy/accuracy/N513_tol1e-8_steps30/kl16_ks32_H0.36_s0.nc",
                  "wildcard variant=N513_tol1e-8_steps30 is not one of its settings; allowed: N2048_tol1e-10_steps30",
                  marks=pytest.mark.slow),

@@ -52,7 +52,7 @@ from .measured import MeasuredConfigError, check_measured_scene, topography_name
 STUDIES = ("representativity", "contact")
 
 #: Every block a scene may declare that computes something.
-SCENE_STUDIES = (*STUDIES, "accuracy")
+SCENE_STUDIES = (*STUDIES, "accuracy", "kappa_gap")
 
 #: File stem of one case: the config's own strings for k_l, k_s, H and the seed.
 CASE_STEM = "kl{k_l}_ks{k_s}_H{H}_s{seed}"
@@ -346,7 +346,7 @@ def _schema_message(err) -> str:
     if err.validator == "oneOf" and "rms_slope" in str(err.schema):
         return "give exactly one of rms_slope or rms_height"
     if err.validator == "anyOf" and "representativity" in str(err.schema):
-        return "a scene must declare at least one of 'representativity', 'contact' or 'accuracy'"
+        return "a scene must declare at least one of 'representativity', 'contact', 'accuracy' or 'kappa_gap'"
     if err.validator == "type" and err.schema.get("type") == "string" and "pattern" in err.schema:
         return (f"{err.instance!r} must be written as a string (e.g. \"{err.instance}\") so that "
                 "file names carry the config's text, not float formatting")
@@ -491,10 +491,16 @@ def _resolve_load(scene: str, load: dict, given: Mapping, measured: bool) -> Non
     load.setdefault("relative_to", "e_star")
 
 
-def _check_accuracy(scene: str, block: dict) -> None:
+def _study_failure(scene: str, study: str):
+    """A function raising the ConfigError of one field of a study block."""
     def fail(field, msg):
-        raise ConfigError(f"scene {scene!r}, field 'accuracy.{field}': {msg}")
+        raise ConfigError(f"scene {scene!r}, field '{study}.{field}': {msg}")
 
+    return fail
+
+
+def _check_one_case(block: dict, fail) -> float:
+    """The cutoffs and H list of a one-case study (accuracy, kappa_gap); returns k_s."""
     k_l, k_s = float(block["k_l"]), float(block["k_s"])
     if not k_l < k_s:
         fail("k_l", f"k_l={block['k_l']} must be < k_s={block['k_s']}")
@@ -504,6 +510,12 @@ def _check_accuracy(scene: str, block: dict) -> None:
     dups = _duplicates_by_value(block["H"])
     if dups:
         fail("H", f"{dups[0]} are the same number: each case would be computed twice")
+    return k_s
+
+
+def _check_accuracy(scene: str, block: dict) -> None:
+    fail = _study_failure(scene, "accuracy")
+    k_s = _check_one_case(block, fail)
     settings = [("reference", block["reference"]), ("defaults", block["defaults"])]
     settings += [(f"axes.{axis}", {axis: v}) for axis, vals in block["axes"].items() for v in vals]
     for where, setting in settings:
@@ -517,6 +529,28 @@ def _check_accuracy(scene: str, block: dict) -> None:
         fail("seed_axis", "needs at least one entry >= 1")
 
 
+def _check_kappa_gap(scene: str, block: dict) -> None:
+    fail = _study_failure(scene, "kappa_gap")
+    k_s = _check_one_case(block, fail)
+    variants = block["variants"]
+    for label, v in variants.items():
+        if k_s > int(v["N"]) / 2:
+            fail(f"variants.{label}.N", f"N={v['N']} is too coarse for k_s={block['k_s']} (needs N >= {2 * k_s:g})")
+        if not 0.0 < float(v["tol"]) < 1.0:
+            fail(f"variants.{label}.tol", f"tol={v['tol']} is outside the allowed range 0 < tol < 1")
+    roles = [v["role"] for v in variants.values()]
+    if roles.count("baseline") != 1:
+        fail("variants", f"needs exactly one variant with role: baseline, got {roles.count('baseline')}")
+    if 0 < roles.count("resolution") < 3:
+        fail("variants", "a continuum series (role: resolution) needs at least three N")
+    sk = [v for v in variants.values() if v["role"] == "solver" and v["method"] == "stanley-kato"]
+    refs = {v["N"] for v in variants.values() if v["role"] == "solver" and v["method"] == "bem"}
+    for v in sk:
+        if v["N"] not in refs:
+            fail("variants", f"a Stanley & Kato variant at N={v['N']} needs a role: solver variant with method: bem "
+                             "at the same N to be compared with")
+
+
 def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = None, *, active: bool = True) -> dict:
     """Validate one (merged) scene and return a canonical copy: defaults filled, numbers typed.
 
@@ -528,9 +562,10 @@ def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = No
     bad = _non_finite(scene)
     if bad:
         raise ConfigError(f"scene {name!r}, field '{_field(bad[0])}': {bad[1]} is not a finite number")
-    if "topography" in scene and "accuracy" in scene:
-        raise ConfigError(f"scene {name!r}, field 'accuracy': the accuracy study runs on generated surfaces only; "
-                          "remove it from a scene with a topography block")
+    for study in ("accuracy", "kappa_gap"):
+        if "topography" in scene and study in scene:
+            raise ConfigError(f"scene {name!r}, field '{study}': the {study} study runs on generated surfaces only; "
+                              "remove it from a scene with a topography block")
     scene_schema = {**schema["$defs"]["scene"], "$defs": schema["$defs"]}
     validator = Draft202012Validator(scene_schema)
     errors = sorted(validator.iter_errors(scene), key=lambda e: (len(e.path), list(e.path)))
@@ -558,6 +593,8 @@ def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = No
         _check_contact(name, out["contact"])
     if "accuracy" in out:
         _check_accuracy(name, out["accuracy"])
+    if "kappa_gap" in out:
+        _check_kappa_gap(name, out["kappa_gap"])
     lo, hi = out["fit"]["window"]
     if not lo < hi:
         raise ConfigError(f"scene {name!r}, field 'fit.window': needs low < high, got [{lo}, {hi}]")
@@ -658,6 +695,10 @@ def plan_summary(scene_name: str, scene: dict) -> str:
         parts.append(_load_summary(con["load"]))
     if "accuracy" in scene:
         parts.append("the accuracy study")
+    if "kappa_gap" in scene:
+        kg = scene["kappa_gap"]
+        n_jobs = sum(v["seeds"] for v in kg["variants"].values()) * len(kg["H"])
+        parts.append(f"the kappa-gap study ({n_jobs} solves in {len(kg['variants'])} variants)")
     return f"roughcontact: scene {scene_name!r} plans " + ("; ".join(parts) or "nothing") + "."
 
 

@@ -40,7 +40,7 @@ import xarray as xr
 from . import __version__
 
 #: Stages whose files carry the ``roughcontact_stage`` attribute.
-STAGES = ("surface", "representativity", "contact", "aggregate", "fit", "accuracy")
+STAGES = ("surface", "representativity", "contact", "aggregate", "fit", "accuracy", "kappa_gap")
 
 
 class InputFileError(ValueError):

@@ -73,13 +73,29 @@ def accuracy_summary(block: Mapping) -> dict:
     return canonical(block)
 
 
+def kappa_gap_case(block: Mapping, label: str) -> dict:
+    """One kappa-gap solve: the surface normalisation, gap thresholds and the variant's setting."""
+    return canonical({
+        "surface": block["surface"],
+        "gap_thresholds": block["gap_thresholds"],
+        "variant": label,
+        # What the job computes, not how many seeds its variant has nor the role it plays in the table.
+        "setting": {k: v for k, v in block["variants"][label].items() if k not in ("seeds", "role")},
+    })
+
+
+def kappa_gap_summary(block: Mapping) -> dict:
+    """The kappa-gap table: the whole block (every variant)."""
+    return canonical(block)
+
+
 def summary(scene: Mapping) -> dict:
     """The report's summary of a scene: its study blocks and, with a contact study, its fit.
 
     Not its description (free text), nor ``keep_surfaces`` (whether surface files are kept,
     which changes no result).
     """
-    blocks = {key: scene[key] for key in ("representativity", "contact", "accuracy") if key in scene}
+    blocks = {key: scene[key] for key in ("representativity", "contact", "accuracy", "kappa_gap") if key in scene}
     if "contact" in scene:
         blocks["fit"] = scene["fit"]
     return canonical({

@@ -297,6 +297,8 @@ def scene_targets(scene):
         out += [f"results/{scene}/aggregate/contact.nc", f"results/{scene}/fit/cel.nc", f"results/{scene}/fit/cel.csv"]
     if "accuracy" in s:
         out += [f"results/{scene}/accuracy/summary.{ext}" for ext in ("nc", "csv", "md")]
+    if "kappa_gap" in s:
+        out += [f"results/{scene}/kappa_gap/kappa-gap.{ext}" for ext in ("nc", "md")]
     out += expand("results/{scene}/figures/{fig}.{ext}", scene=scene, fig=scene_figures(s), ext=("png", "pdf"))
     out += [f"results/{scene}/report/summary.rst"]
     return out
@@ -376,4 +378,39 @@ def accuracy_files(scene, pattern):
         for s in accuracy_variants(block)
         for h in block["H"]
         for seed in range(s["seeds"])
+    ]
+
+
+def kappa_gap_setting(w):
+    """The kappa-gap variant named by the `variant` wildcard, its case checked, or a clear error."""
+    block = study_block(w.scene, "kappa_gap")
+    if w.variant not in block["variants"]:
+        allowed = ", ".join(block["variants"])
+        raise WorkflowError(
+            f"scene {w.scene!r}, kappa_gap: wildcard variant={w.variant} is not one of its variants; allowed: {allowed}"
+        )
+    for key, allowed in (("k_l", [block["k_l"]]), ("k_s", [block["k_s"]]), ("H", block["H"])):
+        if getattr(w, key) not in allowed:
+            raise _not_allowed(w.scene, f"kappa_gap.{key}", key, getattr(w, key), allowed)
+    setting = block["variants"][w.variant]
+    check_seed(w.scene, f"kappa_gap variant {w.variant}", w.seed, setting["seeds"])
+    return setting
+
+
+def kappa_gap_input(w):
+    """An input function (no input): the job's variant and case checked against the kappa-gap study."""
+    kappa_gap_setting(w)
+    return []
+
+
+def kappa_gap_files(scene):
+    """Every case file of every variant of the scene's kappa-gap study."""
+    block = study_block(scene, "kappa_gap")
+    return [
+        f"results/{scene}/kappa_gap/{label}/"
+        + CASE_STEM.format(k_l=block["k_l"], k_s=block["k_s"], H=h, seed=seed)
+        + ".nc"
+        for label, v in block["variants"].items()
+        for h in block["H"]
+        for seed in range(v["seeds"])
     ]

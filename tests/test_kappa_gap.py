@@ -1,0 +1,119 @@
+"""The κ-gap study: its pieces against exact answers, a tiny run end to end, the published page."""
+import math
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from conftest import copy_workflow, run_snakemake
+from roughcontact import kappa_gap
+from roughcontact.fit import PAPER_CEL
+
+REPO = Path(__file__).resolve().parents[1]
+PUBLISHED = REPO / "docs" / "reproduction"
+
+
+def _cel_area(x, kappa, mu, beta):
+    return (beta + (kappa * x) ** (mu - 1.0)) ** (1.0 / (mu - 1.0))
+
+
+def test_kappa_at_areas_of_a_linear_law_is_its_constant():
+    p0 = np.linspace(1e-4, 5e-3, 30)
+    area = 2.3 * p0 / 0.1           # A/A0 = κ p0 / h', κ = 2.3
+    k = kappa_gap.kappa_at_areas(area, p0, 0.1, areas=(0.01, 0.05, 0.1))
+    np.testing.assert_allclose(k, 2.3, rtol=1e-12)
+    assert np.isnan(kappa_gap.kappa_at_areas(area, p0, 0.1, areas=(0.5,))[0])
+
+
+def test_paper_kappa_inverts_the_cel():
+    kappa, mu, beta = (PAPER_CEL[c][0] for c in ("kappa", "mu", "beta"))
+    x = np.array([0.004, 0.01, 0.03])
+    a = _cel_area(x, kappa, mu, beta)
+    np.testing.assert_allclose(kappa_gap.paper_kappa(a), a / x, rtol=1e-12)
+    # κ_eff tends to κ at small areas and falls with A (the paper's Fig. 3)
+    k = kappa_gap.paper_kappa((1e-6, 0.01, 0.1))
+    assert abs(k[0] / kappa - 1) < 1e-3 and k[0] > k[1] > k[2]
+
+
+def test_fit_kappa_recovers_the_constant_with_mu_beta_held():
+    mu, beta = PAPER_CEL["mu"][0], PAPER_CEL["beta"][0]
+    x = np.linspace(0.002, 0.05, 30)
+    slopes = np.array([0.1, 0.12])
+    area = np.stack([_cel_area(x, 2.7, mu, beta)] * 2)
+    p0 = x[None, :] * slopes[:, None]
+    assert kappa_gap.fit_kappa(area, p0, slopes) == pytest.approx(2.7, rel=1e-7)
+
+
+def test_richardson_recovers_limit_and_order():
+    n = np.array([512, 1024, 2048, 4096])
+    v = 2.4 + 0.7 * (1024 / n) ** 1.3
+    limit, order = kappa_gap.richardson(v)
+    assert limit == pytest.approx(2.4, rel=1e-12) and order == pytest.approx(1.3, rel=1e-10)
+    limit, order = kappa_gap.richardson([1.0, 1.1, 1.0])   # differences that grow or flip sign
+    assert limit == 1.0 and math.isnan(order)
+
+
+@pytest.mark.parametrize("shift, se, verdict", [
+    ([0.03, 0.03], [0.001, 0.001], "**yes**"),     # moves κ up by the gap's size
+    ([0.01, 0.0], [0.001, 0.001], "**part**"),     # up by > 2 s.e. somewhere, short of the gap
+    ([0.001, -0.02], [0.001, 0.001], "**no**"),    # within noise upward, or down
+])
+def test_closes_follows_its_printed_rule(shift, se, verdict):
+    gap = np.array([0.03, 0.03])   # the paper's κ lies 3 % above ours
+    assert kappa_gap._closes(np.array(shift), np.array(se), gap, np.array([0.002, 0.002])) == verdict
+
+
+TINY = {
+    "scene": "kg",
+    "scenes": {"kg": {"kappa_gap": {
+        "surface": {"L": 1.0, "rms_slope": 0.1},
+        "k_l": "2", "k_s": "8", "H": ["0.5", "0.8"],
+        "variants": {
+            "baseline": {"role": "baseline", "N": "64", "seeds": 2, "p_max": 0.004},
+            "load": {"role": "load", "N": "64", "seeds": 2, "p_max": 0.03},
+            "N32": {"role": "resolution", "N": "32", "seeds": 2, "p_max": 0.004, "n_steps": 8,
+                    "schedule": "geometric"},
+            "N64": {"role": "resolution", "N": "64", "seeds": 2, "p_max": 0.004, "n_steps": 8,
+                    "schedule": "geometric"},
+            "N128": {"role": "resolution", "N": "128", "seeds": 1, "p_max": 0.004, "n_steps": 8,
+                     "schedule": "geometric"},
+            "ref": {"role": "solver", "N": "32", "seeds": 1, "p_max": 0.004},
+            "sk": {"role": "solver", "N": "32", "seeds": 1, "p_max": 0.004, "method": "stanley-kato",
+                   "tol": "1e-3"},
+        },
+    }}},
+}
+
+
+@pytest.mark.slow
+def test_tiny_kappa_gap_scene_end_to_end(tmp_path):
+    wd = copy_workflow(tmp_path / "wf", TINY)
+    res = run_snakemake(wd, "-j2")
+    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
+    out = wd / "results" / "kg" / "kappa_gap"
+    data = xr.open_dataset(out / "kappa-gap.nc")
+    assert sorted(data.variant.values) == sorted(TINY["scenes"]["kg"]["kappa_gap"]["variants"])
+    assert data.sizes["case"] == 4 and int(data["converged"].sel(variant="baseline").sum()) == 4 * 30
+    # p > 0 is the smallest of the definitions that count touching nodes; the corrected one is smaller still
+    base = data.sel(variant="baseline")
+    assert np.all(base["area_gap_1e-3"] >= base["area_gap_1e-4"])
+    assert np.all(base["area_gap_1e-4"] >= base["area_pressure"])
+    assert np.all(base["area_corrected"] < base["area_pressure"])
+    page = (out / "kappa-gap.md").read_text()
+    for words in ("## The gap to explain", "Stanley & Kato, stopped at tol = 1e-3", "**Conclusion.**",
+                  "continuum limit of the perimeter-corrected area"):
+        assert words in page
+    # the page is a pure function of the data file: regenerate it elsewhere, byte for byte
+    pub = tmp_path / "pub"
+    kappa_gap.publish(wd / "results" / "kg", pub)
+    assert (pub / "kappa-gap.md").read_text() == page
+    assert (pub / "data" / "kappa-gap.nc").read_bytes() == (out / "kappa-gap.nc").read_bytes()
+
+
+@pytest.mark.skipif(not (PUBLISHED / "data" / "kappa-gap.nc").exists(), reason="no published kappa-gap data")
+def test_published_page_regenerates_byte_for_byte(tmp_path):
+    shutil.copytree(PUBLISHED / "data", tmp_path / "data")
+    page = kappa_gap.regenerate(tmp_path)
+    assert page.read_text() == (PUBLISHED / "kappa-gap.md").read_text()
