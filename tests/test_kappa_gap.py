@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from cfcheck import assert_cf_clean
 from conftest import copy_workflow, run_snakemake
 from roughcontact import kappa_gap
 from roughcontact.fit import PAPER_CEL
@@ -98,13 +99,16 @@ def test_tiny_kappa_gap_scene_end_to_end(tmp_path):
     assert data.sizes["case"] == 4 and int(data["converged"].sel(variant="baseline").sum()) == 4 * 30
     # p > 0 is the smallest of the definitions that count touching nodes; the corrected one is smaller still
     base = data.sel(variant="baseline")
-    assert np.all(base["area_gap_1e-3"] >= base["area_gap_1e-4"])
-    assert np.all(base["area_gap_1e-4"] >= base["area_pressure"])
+    assert np.all(base["area_gap_1em3"] >= base["area_gap_1em4"])
+    assert np.all(base["area_gap_1em4"] >= base["area_pressure"])
     assert np.all(base["area_corrected"] < base["area_pressure"])
     page = (out / "kappa-gap.md").read_text()
     for words in ("## The gap to explain", "Stanley & Kato, stopped at tol = 1e-3", "**Conclusion.**",
                   "continuum limit of the perimeter-corrected area"):
         assert words in page
+    # CF-clean, the table and a case of each solver (variable names hold no '-': area_gap_1em4)
+    assert_cf_clean([out / "kappa-gap.nc", out / "sk" / "kl2_ks8_H0.5_s0.nc", out / "ref" / "kl2_ks8_H0.5_s0.nc"],
+                    tmp_path / "tables")
     # the page is a pure function of the data file: regenerate it elsewhere, byte for byte
     pub = tmp_path / "pub"
     kappa_gap.publish(wd / "results" / "kg", pub)

@@ -60,6 +60,14 @@ def definitions(thresholds: Sequence[str]) -> list[str]:
     return ["pressure", *[f"gap_{t}" for t in thresholds], "corrected"]
 
 
+def area_variable(definition: str) -> str:
+    """The NetCDF variable of a definition's area: CF names hold letters, digits and '_' only.
+
+    ``gap_1e-4`` -> ``area_gap_1em4`` ('-' as 'm', '.' as 'p').
+    """
+    return "area_" + definition.replace("-", "m").replace(".", "p")
+
+
 def _areas(pressure: np.ndarray, gap: np.ndarray, scale: float, thresholds: Sequence[str],
            length: float, contact: np.ndarray) -> dict[str, float]:
     """Area fractions [1] of one solved step under every definition."""
@@ -127,7 +135,7 @@ def _case_dataset(rows: list[dict], h: np.ndarray, length: float, thresholds: Se
     ds["p0"] = var("p0", "1", "applied mean pressure p0 / E*")
     ds["carried_load"] = var("carried_load", "1", "mean contact pressure carried / E*")
     for d in definitions(thresholds):
-        ds[f"area_{d}"] = var(d, "1", f"contact area fraction A/A0, {describe(d)}")
+        ds[area_variable(d)] = var(d, "1", f"contact area fraction A/A0, {describe(d)}")
     ds["contact_perimeter"] = var("perimeter", "1", "contact perimeter per unit area times L")
     ds["iterations"] = var("iterations", "1", "iterations of the load step", np.int64)
     ds["converged"] = var("converged", "1", "load step converged (or stopped by its rule)", np.int8)
@@ -248,6 +256,7 @@ def collect(cases: Mapping[str, Sequence[xr.Dataset]], block: Mapping) -> xr.Dat
     for k in keys:
         res[k] = (("variant", "case", "step"), out[k], {**first[k].attrs, "allow_nan": 1})
     res.attrs.update(k_l=block["k_l"], k_s=block["k_s"], H=", ".join(block["H"]),
+                     gap_thresholds=", ".join(block["gap_thresholds"]),
                      rms_slope=float(block["surface"]["rms_slope"]))
     for k, v in slopes.items():
         what = {"rms_slope_spectral": "rms slope from the spectrum", "rms_slope_discrete":
@@ -263,7 +272,7 @@ def collect(cases: Mapping[str, Sequence[xr.Dataset]], block: Mapping) -> xr.Dat
 def _kappa(data: xr.Dataset, label: str, definition: str, slope: str = "spectral", load: str = "p0") -> np.ndarray:
     """κ at :data:`TARGET_AREAS` for every case of a variant: ``(n_case, n_area)``, NaN where not reached."""
     v = data.sel(variant=label)
-    area, p0 = v[f"area_{definition}"].values, v[load].values
+    area, p0 = v[area_variable(definition)].values, v[load].values
     h = v[f"rms_slope_{slope}"].values
     return np.array([kappa_at_areas(area[i], p0[i], h[i]) if np.isfinite(h[i]) else np.full(len(TARGET_AREAS), np.nan)
                      for i in range(area.shape[0])])
@@ -287,7 +296,7 @@ def _role(data: xr.Dataset, role: str) -> list[str]:
 def _fit(data: xr.Dataset, label: str, definition: str) -> float:
     v = data.sel(variant=label)
     ok = np.isfinite(v["rms_slope_spectral"].values)
-    return fit_kappa(v[f"area_{definition}"].values[ok], v["p0"].values[ok], v["rms_slope_spectral"].values[ok])
+    return fit_kappa(v[area_variable(definition)].values[ok], v["p0"].values[ok], v["rms_slope_spectral"].values[ok])
 
 
 # --------------------------------------------------------------------------- the table
@@ -374,8 +383,7 @@ def summarise(data: xr.Dataset) -> dict:
         for load, what in (("p0", "applied p0"), ("carried_load", "carried load")):
             row("solver", f"Stanley & Kato, stopped at tol = {tol} (N = {n}), κ from the {what}",
                 *_paired(_kappa(data, v, "pressure", load=load), _kappa(data, r, "pressure")))
-    for d in [d for d in (str(k).removeprefix("area_") for k in data.data_vars if str(k).startswith("area_"))
-              if d != "pressure"]:
+    for d in definitions(data.attrs["gap_thresholds"].split(", "))[1:]:
         row("definition", describe(d), *_paired(_kappa(data, base, d), k_base), _fit(data, base, d))
     for d in ("pressure", "corrected"):
         c = _continuum(data, d, meta["N"])
