@@ -1,5 +1,6 @@
 """The κ-gap study: its pieces against exact answers, a tiny run end to end, the published page."""
 import math
+import re
 import shutil
 from pathlib import Path
 
@@ -121,3 +122,31 @@ def test_published_page_regenerates_byte_for_byte(tmp_path):
     shutil.copytree(PUBLISHED / "data", tmp_path / "data")
     page = kappa_gap.regenerate(tmp_path)
     assert page.read_text() == (PUBLISHED / "kappa-gap.md").read_text()
+
+
+def _numbers(cell: str) -> tuple[float, float]:
+    """A printed shift "+1.23 ± 0.45" (percent) as fractions; "—" as NaN; no "±" as s.e. NaN."""
+    if cell.strip() == "—":
+        return math.nan, math.nan
+    m, _, e = cell.partition("±")
+    return float(m) / 100, (float(e) / 100 if e.strip() else math.nan)
+
+
+@pytest.mark.skipif(not (PUBLISHED / "kappa-gap.md").exists(), reason="no published kappa-gap page")
+def test_published_verdicts_follow_their_printed_rule():
+    # Each "closes the gap?" verdict re-derived from the printed shifts and the printed gap alone.
+    lines = (PUBLISHED / "kappa-gap.md").read_text().splitlines()
+    gap_rows = [ln for ln in lines if re.match(r"^\| 0\.\d+ \| ", ln)]
+    gap = np.array([_numbers(ln.split("|")[4]) for ln in gap_rows])
+    needed = 1 / (1 + gap[:, 0]) - 1
+    needed_se = gap[:, 1] / (1 + gap[:, 0]) ** 2
+    rows = [ln for ln in lines if re.match(r"^\| \d\. (solver|contact|continuum|convention) \|", ln)]
+    assert len(rows) >= 8 and len(gap_rows) == len(kappa_gap.TARGET_AREAS)
+    for ln in rows:
+        cells = ln.split("|")[1:-1]
+        shifts = np.array([_numbers(c) for c in cells[2:2 + len(kappa_gap.TARGET_AREAS)]])
+        printed = cells[-1].strip()
+        if np.any(np.isnan(shifts)):
+            assert printed == "**no**", ln
+            continue
+        assert kappa_gap._closes(shifts[:, 0], shifts[:, 1], needed, needed_se) == printed, ln

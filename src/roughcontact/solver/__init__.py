@@ -224,7 +224,9 @@ Parts
 of one surface, :mod:`.elastic` and :mod:`.box` the two iterations,
 :mod:`.effects` what acts on them (the plasticity cap), :mod:`.check` the
 final check, :mod:`.results` the assembly of the output, :mod:`.units` and
-:mod:`.validation` the checks of the input, :mod:`.contact` the step loop.
+:mod:`.validation` the checks of the input, :mod:`.contact` the step loop;
+:mod:`.stanley_kato` a reference iteration of the paper's kind (Stanley & Kato's displacement
+relaxation), used by the κ-gap study only.
 
 The FFT plans and buffers are shared per grid size within a process, so two
 solves of the same size must not run concurrently in threads of one process
