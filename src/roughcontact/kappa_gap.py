@@ -233,8 +233,11 @@ def collect(cases: Mapping[str, Sequence[xr.Dataset]], block: Mapping) -> xr.Dat
     """
     variants = block["variants"]
     labels = list(variants)
-    names = sorted({f"H{ds.attrs['H']}_s{int(ds.attrs['seed'])}" for label in labels for ds in cases[label]},
-                   key=lambda s: (float(s[1:].split("_s")[0]), int(s.split("_s")[1])))
+    def name(ds):
+        return f"H{ds.attrs['H']}_s{int(ds.attrs['seed'])}"
+
+    keyed = {(float(ds.attrs["H"]), int(ds.attrs["seed"])): name(ds) for label in labels for ds in cases[label]}
+    names = [keyed[k] for k in sorted(keyed)]
     n_steps = max(ds.sizes["step"] for label in labels for ds in cases[label])
     keys = [k for k in next(iter(cases[labels[0]])).data_vars]
     out = {k: np.full((len(labels), len(names), n_steps), np.nan) for k in keys}
@@ -242,7 +245,7 @@ def collect(cases: Mapping[str, Sequence[xr.Dataset]], block: Mapping) -> xr.Dat
                                                                       "rms_height")}
     for i, label in enumerate(labels):
         for ds in cases[label]:
-            j = names.index(f"H{ds.attrs['H']}_s{int(ds.attrs['seed'])}")
+            j = names.index(name(ds))
             for k in keys:
                 out[k][i, j, : ds.sizes["step"]] = ds[k].values
             for k in slopes:

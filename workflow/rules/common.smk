@@ -346,14 +346,19 @@ def maybe_temp(path, study):
     return path if keep else temp(path)
 
 
+def check_one_case(w, block, study):
+    """Stop unless the wildcards' k_l, k_s and H are those of a one-case study block (accuracy, kappa_gap)."""
+    for key, allowed in (("k_l", [block["k_l"]]), ("k_s", [block["k_s"]]), ("H", block["H"])):
+        if getattr(w, key) not in allowed:
+            raise _not_allowed(w.scene, f"{study}.{key}", key, getattr(w, key), allowed)
+
+
 def accuracy_setting(w):
     """The setting (N, tol, n_steps, seeds) named by the `variant` wildcard, or a clear error."""
     block = study_block(w.scene, "accuracy")
     for s in accuracy_variants(block):
         if s["label"] == w.variant:
-            for key, allowed in (("k_l", [block["k_l"]]), ("k_s", [block["k_s"]]), ("H", block["H"])):
-                if getattr(w, key) not in allowed:
-                    raise _not_allowed(w.scene, f"accuracy.{key}", key, getattr(w, key), allowed)
+            check_one_case(w, block, "accuracy")
             check_seed(w.scene, f"accuracy setting {w.variant}", w.seed, s["seeds"])
             return s
     allowed = ", ".join(s["label"] for s in accuracy_variants(block))
@@ -389,9 +394,7 @@ def kappa_gap_setting(w):
         raise WorkflowError(
             f"scene {w.scene!r}, kappa_gap: wildcard variant={w.variant} is not one of its variants; allowed: {allowed}"
         )
-    for key, allowed in (("k_l", [block["k_l"]]), ("k_s", [block["k_s"]]), ("H", block["H"])):
-        if getattr(w, key) not in allowed:
-            raise _not_allowed(w.scene, f"kappa_gap.{key}", key, getattr(w, key), allowed)
+    check_one_case(w, block, "kappa_gap")
     setting = block["variants"][w.variant]
     check_seed(w.scene, f"kappa_gap variant {w.variant}", w.seed, setting["seeds"])
     return setting
