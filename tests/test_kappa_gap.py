@@ -9,6 +9,7 @@ import pytest
 import xarray as xr
 
 from cfcheck import assert_cf_clean
+from compare_outputs import assert_text_close
 from conftest import copy_workflow, run_snakemake
 from roughcontact import kappa_gap
 from roughcontact.fit import PAPER_CEL
@@ -99,7 +100,7 @@ def test_tiny_kappa_gap_scene_end_to_end(tmp_path):
     out = wd / "results" / "kg" / "kappa_gap"
     data = xr.open_dataset(out / "kappa-gap.nc")
     assert sorted(data.variant.values) == sorted(TINY["scenes"]["kg"]["kappa_gap"]["variants"])
-    assert data.sizes["case"] == 4 and int(data["converged"].sel(variant="baseline").sum()) == 4 * 30
+    assert data.sizes["case"] == 4 and int(data["stopped"].sel(variant="baseline").sum()) == 4 * 30
     # p > 0 is the smallest of the definitions that count touching nodes; the corrected one is smaller still
     base = data.sel(variant="baseline")
     assert np.all(base["area_gap_1em3"] >= base["area_gap_1em4"])
@@ -120,10 +121,13 @@ def test_tiny_kappa_gap_scene_end_to_end(tmp_path):
 
 
 @pytest.mark.skipif(not (PUBLISHED / "data" / "kappa-gap.nc").exists(), reason="no published kappa-gap data")
-def test_published_page_regenerates_byte_for_byte(tmp_path):
+def test_published_page_follows_from_the_published_data(tmp_path):
+    # The page was generated on another machine: numbers compare to their last printed digit
+    # (tests/compare_outputs.py); byte identity of a rerun on one machine is the tiny scene's test.
     shutil.copytree(PUBLISHED / "data", tmp_path / "data")
     page = kappa_gap.regenerate(tmp_path)
-    assert page.read_text() == (PUBLISHED / "kappa-gap.md").read_text()
+    assert_text_close(page.read_text(), (PUBLISHED / "kappa-gap.md").read_text(),
+                      where=str(PUBLISHED / "kappa-gap.md"))
 
 
 def _numbers(cell: str) -> tuple[float, float]:

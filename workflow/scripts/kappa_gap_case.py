@@ -10,8 +10,8 @@ def main(log):
     ds = solve_case(h, s, length=block["surface"]["L"], thresholds=block["gap_thresholds"])
     ds.attrs.update(variant=w.variant, k_l=w.k_l, k_s=w.k_s, H=w.H, seed=int(w.seed))
     write_dataset(ds, snakemake.output[0], stage="kappa_gap", scene=w.scene, scene_parameters=block)
-    log.info("%s: %s N=%s, %d iterations, %.1f s, all converged %s", snakemake.output[0], s["method"], s["N"],
-             int(ds.iterations.sum()), float(ds.wall_time.sum()), bool(ds.converged.all()))
+    log.info("%s: %s N=%s, %d iterations, %.1f s, every step ended by its solver's rule %s", snakemake.output[0],
+             s["method"], s["N"], int(ds.iterations.sum()), float(ds.wall_time.sum()), bool(ds.stopped.all()))
 
 
 run_logged(snakemake.log[0], main)
