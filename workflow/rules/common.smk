@@ -406,13 +406,13 @@ def kappa_gap_input(w):
     return []
 
 
-def kappa_gap_files(scene):
-    """Every case file of every variant of the scene's kappa-gap study."""
+def kappa_gap_files(scene, folder, ext="nc"):
+    """Every case's file under ``results/{scene}/<folder>/<variant>/`` (cases, benchmarks) of the kappa-gap study."""
     block = study_block(scene, "kappa_gap")
     return [
-        f"results/{scene}/kappa_gap/{label}/"
+        f"results/{scene}/{folder}/{label}/"
         + CASE_STEM.format(k_l=block["k_l"], k_s=block["k_s"], H=h, seed=seed)
-        + ".nc"
+        + f".{ext}"
         for label, v in block["variants"].items()
         for h in block["H"]
         for seed in range(v["seeds"])

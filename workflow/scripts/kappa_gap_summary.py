@@ -1,4 +1,5 @@
 """Kappa gap: pair the variants surface by surface and write the table."""
+import csv
 from collections import defaultdict
 from pathlib import Path
 
@@ -8,10 +9,12 @@ from roughcontact.io import read_dataset, run_logged, write_dataset, write_text_
 
 def main(log):
     block = snakemake.params.settings
-    cases = defaultdict(list)
-    for path in snakemake.input:
+    cases, seconds = defaultdict(list), defaultdict(list)
+    for path, tsv in zip(snakemake.input.cases, snakemake.input.benchmarks, strict=True):
         cases[Path(path).parent.name].append(read_dataset(path, stage="kappa_gap"))
-    data = kappa_gap.collect(cases, block)
+        with open(tsv) as fh:
+            seconds[Path(path).parent.name].append(float(next(csv.DictReader(fh, delimiter="\t"))["s"]))
+    data = kappa_gap.collect(cases, block, seconds)
     write_dataset(data, snakemake.output.nc, stage="kappa_gap", scene=snakemake.wildcards.scene,
                   scene_parameters=block)
     text = kappa_gap.markdown(kappa_gap.summarise(data))
