@@ -176,8 +176,9 @@ def test_a_false_elastic_claim_is_caught(monkeypatch, issue_surface):
 
 def test_wrong_mean_fails_the_check(issue_surface):
     # A pressure field that is right but for its mean (1e-9 relative) is refused.
-    s = solver_mod.ContactSolver(validation.validate_heights(issue_surface), 1.0, 1.0, 1e-8, 1000,
-                                 [solver_mod.PlasticityCap(0.01)], 1, solver_mod.ELASTIC_METHOD)
+    h = validation.validate_heights(issue_surface)
+    settings = solver_mod.SolverSettings(max_iter=1000, effects=(solver_mod.PlasticityCap(0.01),)).checked(h.shape)
+    s = solver_mod.ContactSolver(h, settings)
     st, _ = s.solve(0.004)
     assert st.converged
     p_int = s.units.to_internal(0.004)

@@ -9,7 +9,7 @@ from roughcontact.io import eta, read_dataset, run_logged, write_dataset
 from roughcontact.loading import case_loads
 from roughcontact.params import recorded, require_made_for
 from roughcontact.progress import scene_progress
-from roughcontact.solver import solve_contact, step_notes
+from roughcontact.solver import effects_from_config, solve_contact, step_notes
 
 
 def case_of(w) -> dict:
@@ -33,7 +33,6 @@ def main(log):
     require_made_for(surf, snakemake.input[0], case, **{source: snakemake.params.surface})
     heights, length = surface_heights(surf, snakemake.input[0])
     solver = settings["solver"]
-    plastic = settings["effects"].get("plasticity")
     solve = partial(
         solve_contact,
         heights,
@@ -42,7 +41,7 @@ def main(log):
         tol=solver["tol"],
         max_iter=solver["max_iter"],
         threads=snakemake.threads,
-        hardness=plastic["hardness"] * solver["e_star"] if plastic else None,
+        effects=effects_from_config(settings["effects"], e_star=solver["e_star"]),
         boundary=solver["boundary"],
         # both a generator block and a reader's settings name the study's length unit
         length_unit=snakemake.params.surface["unit"],

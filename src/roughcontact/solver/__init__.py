@@ -222,9 +222,11 @@ Parts
 -----
 :mod:`.halfspace` the elastic operators (periodic, free), :mod:`.workspace` the fields
 of one surface, :mod:`.elastic` and :mod:`.box` the two iterations,
-:mod:`.effects` what acts on them (the plasticity cap), :mod:`.check` the
-final check, :mod:`.results` the assembly of the output, :mod:`.units` and
-:mod:`.validation` the checks of the input, :mod:`.contact` the step loop;
+:mod:`.effects` what acts on them (one module per effect, found by name: the plasticity
+cap), :mod:`.check` the final check, :mod:`.results` the assembly of the output,
+:mod:`.units` and :mod:`.validation` the checks of the input, :mod:`.settings` what a solve
+is asked to do (:class:`SolverSettings`), :mod:`.contact` one surface's solver (warm starts,
+the step), :mod:`.solve` the entry points and the step loop;
 :mod:`.stanley_kato` a reference iteration of the paper's kind (Stanley & Kato's displacement
 relaxation), used by the κ-gap study only.
 
@@ -234,8 +236,8 @@ solves of the same size must not run concurrently in threads of one process
 """
 
 from .check import MEAN_RTOL
-from .contact import DEFAULT_MAX_ITER, ContactSolver, solve_contact, solve_step
-from .effects import PlasticityCap
+from .contact import ContactSolver
+from .effects import EFFECTS, Effect, PlasticityCap, effects_from_config
 from .halfspace import FreeHalfSpace, PeriodicHalfSpace, displacement, elastic_kernel, free_influence
 from .results import (
                       FRACTION_UNITS,
@@ -245,6 +247,8 @@ from .results import (
                       contact_perimeter,
                       step_notes,
 )
+from .settings import DEFAULT_MAX_ITER, SolverSettings
+from .solve import solve_contact, solve_step
 from .units import LOAD_RANGE, gap_scale
 from .validation import BOUNDARIES
 from .workspace import ELASTIC_METHODS, FALLBACKS, SOLVER_PATHS, STALL_WINDOW
@@ -256,6 +260,7 @@ ELASTIC_METHOD = "pk-fourier-f32"
 __all__ = [
     "BOUNDARIES",
     "DEFAULT_MAX_ITER",
+    "EFFECTS",
     "ELASTIC_METHOD",
     "ELASTIC_METHODS",
     "FALLBACKS",
@@ -267,12 +272,15 @@ __all__ = [
     "SOLVER_PATHS",
     "STALL_WINDOW",
     "ContactSolver",
+    "Effect",
     "FreeHalfSpace",
     "PeriodicHalfSpace",
     "PlasticityCap",
+    "SolverSettings",
     "StepResult",
     "contact_perimeter",
     "displacement",
+    "effects_from_config",
     "elastic_kernel",
     "free_influence",
     "gap_scale",

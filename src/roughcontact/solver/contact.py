@@ -8,83 +8,50 @@ the algorithms and the convergence criterion).
 from __future__ import annotations
 
 import math
-import sys
-import time
 
 import numpy as np
-import xarray as xr
 
-from ..quantities import cf_unit
 from .box import box_solve
 from .check import MEAN_RTOL, final_check
-from .effects import PlasticityCap
 from .elastic import pk_solve
 from .halfspace import plans
 from .projection import enforce_mean
-from .results import (
-    SOLVER_NAME,
-    StepRecord,
-    StepResult,
-    cell_attrs,
-    contact_perimeter,
-    solver_description,
-    to_dataset,
-)
+from .results import StepRecord, contact_perimeter
+from .settings import SolverSettings
 from .units import Units, check_loads, frexp_ratio
-from .validation import (
-    real_scalar,
-    validate_boundary,
-    validate_flag,
-    validate_heights,
-    validate_pressures,
-    validate_solver_args,
-    validate_store,
-)
-from .workspace import FALLBACKS, SOLVER_PATHS, STICKY, Workspace
-
-#: Default iteration cap per load step.
-DEFAULT_MAX_ITER = 10000
-
-
-def _effects(hardness) -> list:
-    return [] if hardness is None else [PlasticityCap(hardness)]
+from .workspace import FALLBACKS, STICKY, Workspace
 
 
 class ContactSolver:
     """Validated problem of one surface: units, effects, workspace and warm starts.
 
-    ``heights`` (nx, ny) and the scalars are already validated, ``length`` a float
-    ``L`` (square cell) or a pair ``(Lx, Ly)`` (:func:`~.validation.validate_length`);
-    ``effects`` act on the iteration (:mod:`.effects`); ``method`` is the elastic
-    iteration; ``boundary`` the half-space, one of :data:`~.validation.BOUNDARIES`.
+    ``h`` (nx, ny) is validated heights [length]; ``settings`` a :class:`~.settings.SolverSettings`
+    already :meth:`~.settings.SolverSettings.checked` for ``h.shape`` (the cell, the elastic
+    iteration, the half-space and the effects acting on the iteration, :mod:`.effects`).
     """
 
-    def __init__(self, h, e_star, length, tol, max_iter, effects, threads, method, boundary="periodic"):
-        self.shape = h.shape
-        self.size = h.size
-        self.length = length
-        self.tol, self.max_iter = tol, max_iter
-        self.effects = list(effects)
-        self.units = Units(h, e_star, length)
-        self.threads = threads
-        self.method = method
-        self.start_method = method  # the iteration each step starts on (_iterate)
-        self.boundary = boundary
-        self.periodic = boundary == "periodic"
-        if self.units.flat and not self.periodic and self.effects:
-            raise ValueError(
-                "hardness: a perfectly flat surface (all heights equal) on the free half-space is a rigid "
-                "flat punch, whose edge pressures would reach any hardness; boundary='free' with a "
-                "hardness is not supported for a flat surface (give hardness=None or a rough surface)")
+    def __init__(self, h: np.ndarray, settings: SolverSettings):
+        self.settings = settings
+        self.shape, self.size = h.shape, h.size
+        self.length = settings.length
+        self.tol, self.max_iter = settings.tol, settings.max_iter
+        self.effects = list(settings.effects)
+        self.units = Units(h, settings.e_star, settings.length)
+        self.threads = settings.threads
+        self.method = settings.method
+        self.start_method = self.method  # the iteration each step starts on (_iterate)
+        self.boundary = settings.boundary
+        self.periodic = self.boundary == "periodic"
+        for effect in self.effects:
+            effect.check_surface(self.units, self.periodic)
         self._punch = None  # flat surface on the free half-space: solution at unit load
-        self.ws = None if self.units.flat else Workspace(self.units.heights, length, threads, method,
-                                                         boundary)
+        self.ws = None if self.units.flat else Workspace(self.units.heights, self.length, self.threads,
+                                                         self.method, self.boundary)
         for effect in self.effects:
             effect.bind(self.units)
         caps = [e.upper_bound for e in self.effects if e.upper_bound is not None]
         self.cap = min(caps) if caps else None
-        # the physical cap, for starting pressures given by the caller
-        self.hardness = min((e.hardness for e in self.effects if isinstance(e, PlasticityCap)), default=None)
+        self.hardness = settings.hardness  # the physical cap, for starting pressures given by the caller
         self.prev = None  # internal p0 of the last solved step
         self._older = None  # (p0, pressure) of the step before the last
         self._last = None  # pressure of the last step
@@ -282,228 +249,3 @@ class ContactSolver:
         step = StepRecord(p, mask, area, mean_gap, contact_perimeter(mask, self.length, self.periodic), its,
                           float(residual), bool(ok), cols, path)
         return step, gap
-
-
-def _method() -> str:
-    """The elastic iteration: the switch ``roughcontact.solver.ELASTIC_METHOD`` (set there)."""
-    return sys.modules[__package__].ELASTIC_METHOD
-
-
-def solve_step(heights, p0: float, *, e_star: float = 1.0, length=1.0,
-               tol: float = 1e-8, max_iter: int = DEFAULT_MAX_ITER, threads: int = 1,
-               hardness: float | None = None, initial_pressure=None,
-               boundary: str = "periodic") -> StepResult:
-    """Solve the contact for one mean pressure.
-
-    Parameters
-    ----------
-    heights : array_like, shape (n, n) or (nx, ny)
-        Rigid surface heights [length]; the highest points touch first; as in
-        :func:`solve_contact`.
-    p0 : float
-        Applied mean pressure [pressure]: ``0 < p0``, ``p0 < hardness`` if a
-        hardness is given, and ``p0 * L / (e_star * s)`` in
-        :data:`LOAD_RANGE` (``s`` the rms height, ``L`` the float ``length`` or ``Lx``).
-    e_star, length, tol, max_iter, threads, hardness, boundary
-        As in :func:`solve_contact` (``length`` a float ``L`` or a pair ``(Lx, Ly)``).
-    initial_pressure : array_like, same shape as ``heights``, optional
-        Starting pressure (clipped to ``[0, hardness]`` and brought to mean
-        ``p0``); uniform ``p0`` when omitted.
-
-    Returns
-    -------
-    StepResult
-        Fields are fresh arrays owned by the caller.
-
-    Raises
-    ------
-    ValueError
-        For invalid input, naming the argument and its allowed range.
-    """
-    h = validate_heights(heights, square=False)
-    p0_f = real_scalar("p0", p0, "a finite number > 0")
-    if not (math.isfinite(p0_f) and p0_f > 0):
-        raise ValueError(f"p0 must be a finite number > 0, got {p0!r}")
-    e_star, length, tol, max_iter, hardness, threads = validate_solver_args(
-        e_star, length, tol, max_iter, hardness, threads, shape=h.shape)
-    boundary = validate_boundary(boundary)
-    init = None
-    if initial_pressure is not None:
-        init = validate_heights(initial_pressure, name="initial_pressure", square=False)
-        if init.shape != h.shape:
-            raise ValueError(f"initial_pressure must have shape {h.shape}, the shape of heights, got {init.shape}")
-    solver = ContactSolver(h, e_star, length, tol, max_iter, _effects(hardness), threads, _method(), boundary)
-    solver.check_loads(np.array([p0_f]), "p0")
-    t0 = time.perf_counter()
-    st, gap = solver.solve(p0_f, initial=init, keep_gap=True)
-    wall = time.perf_counter() - t0
-    return StepResult(p0_f, st.pressure.copy(), gap, st.area, st.mean_gap, st.perimeter,
-                      st.iterations, st.residual, st.converged, wall,
-                      st.effect_columns.get("plastic_area_fraction"),
-                      st.effect_columns.get("plastic_load_fraction"))
-
-
-def solve_contact(heights, pressures, *, e_star: float = 1.0, length=1.0,
-                  tol: float = 1e-8, max_iter: int = DEFAULT_MAX_ITER, store_fields=False,
-                  threads: int = 1, hardness: float | None = None,
-                  clusters: bool = False, boundary: str = "periodic", progress=None,
-                  length_unit: str = "1", pressure_unit: str = "1") -> xr.Dataset:
-    """Solve the normal contact of a rigid rough surface on an elastic half-space.
-
-    Parameters
-    ----------
-    heights : array_like, shape (n, n) or (nx, ny)
-        Rigid surface heights [length] on the cell (periodic, or the whole
-        patch for ``boundary="free"``), axis 0 = x, axis 1 = y; the highest
-        points touch first. Any ``n >= 4`` (``nx, ny >= 4``), odd or not;
-        ``(nx, ny)`` with ``nx != ny`` needs ``length=(Lx, Ly)``.
-    pressures : sequence of float, shape (n_steps,)
-        Applied mean pressures ``p0 > 0``, one load step each [pressure, same unit
-        as ``e_star``], each with ``p0 * L / (e_star * s)`` in
-        :data:`LOAD_RANGE` (``s`` the rms height of ``heights``, ``L`` the float
-        ``length`` or ``Lx``) and, with a
-        hardness, ``p0 < hardness``. Any order is accepted; each step
-        warm-starts from the previous one, which pays off most for increasing
-        loads.
-    e_star : float
-        Plane-strain modulus ``E* = E / (1 - nu**2)`` of the half-space, > 0.
-    length : float or (float, float)
-        A float ``L``: side of the square cell [length], > 0, for square
-        ``heights`` only. A pair ``(Lx, Ly)``: the sides along x (axis 0) and
-        y (axis 1) of a rectangular cell, each finite and > 0; pixels
-        ``dx = Lx / nx`` and ``dy = Ly / ny`` (anisotropic when they differ).
-        ``(L, L)`` on an ``n x n`` grid is the float ``L``, bit for bit.
-    tol : float
-        Convergence tolerance in (0, 1) on the scale-free residual of the module
-        docstring.
-    max_iter : int
-        Iteration cap per step, >= 1.
-    store_fields : bool or iterable of int
-        ``True`` stores ``contact_pressure`` and ``gap`` for every step (dims
-        ``step, x, y``); an iterable of 1-based step numbers stores only those
-        (dims ``field_step, x, y``, coordinate ``field_step`` = step numbers).
-    threads : int
-        FFTW threads (default 1).
-    hardness : float, optional
-        Cap on the pressure (perfectly plastic interface) [pressure], > every p0,
-        with ``hardness * L / (e_star * s)`` in :data:`LOAD_RANGE` (``L = Lx`` on a rectangle).
-    clusters : bool
-        Add contact-cluster statistics per step (4-connected labelling, periodic
-        unless ``boundary="free"``, see :mod:`roughcontact.clusters`):
-        ``cluster_count``, ``cluster_mean_area``, ``cluster_max_area`` and
-        ``cluster_area_histogram``. Off: no labelling work.
-    boundary : {"periodic", "free"}
-        The elastic half-space. ``"periodic"`` (default): the cell is one
-        period of an infinite periodic surface, ``u(q) = 2 p(q) / (E* |q|)``.
-        ``"free"``: the cell is an isolated patch (a measured, non-periodic
-        surface) on an infinite half-space loaded only there; nothing wraps
-        around, ``u`` is the true (not zero-mean) displacement and ``d`` the true
-        rigid-body approach; each product costs a ``2nx x 2ny`` FFT pair
-        (:class:`~.halfspace.FreeHalfSpace`). A flat surface is then the rigid
-        square (rectangular) flat punch (no hardness allowed).
-    progress : callable, optional
-        Called after each load step as ``progress(step, p0, area_fraction,
-        iterations, converged, seconds)`` (``step`` 1-based, ``seconds`` the
-        step's wall time), e.g. to log a long solve as it goes.
-    length_unit : str
-        Unit of ``heights`` and ``length``, one of
-        :data:`roughcontact.quantities.LENGTH_UNITS` (default ``"1"``: nondimensional);
-        only labels the output (the ``units`` of ``mean_gap``, ``gap``, ``x``, ``y``
-        and, as its inverse, ``contact_perimeter``), the numbers do not depend on it.
-    pressure_unit : str
-        Unit of ``e_star``, ``pressures`` and ``hardness``, one of
-        :data:`roughcontact.quantities.PRESSURE_UNITS` (default ``"1"``); labels
-        ``pressure``, ``mean_contact_pressure`` and ``contact_pressure``.
-
-    Returns
-    -------
-    xarray.Dataset
-        Dimension ``step`` (coordinate 1..n_steps) with ``pressure``,
-        ``area_fraction``, ``mean_contact_pressure``, ``mean_gap``,
-        ``contact_perimeter``, ``iterations``, ``residual``, ``converged``,
-        ``wall_time``, ``solver_path`` (the iteration that ended the step, a CF flag)
-        and, with a hardness, ``plastic_area_fraction`` and
-        ``plastic_load_fraction``; fields and ``x``/``y`` coordinates only when
-        stored. Every variable carries ``units`` and ``long_name`` (CF strings from
-        :func:`roughcontact.quantities.cf_unit`); the global attributes
-        ``length_units`` and ``pressure_units`` are the units of the attributes
-        ``length`` (or ``length_x``, ``length_y``) and ``e_star`` (and
-        ``hardness``); ``boundary`` records the half-space. The cell
-        (:func:`~.results.cell_attrs`): a square cell has ``length`` (L) and
-        ``n``; a rectangular one (``length=(Lx, Ly)`` with ``nx != ny`` or
-        ``Lx != Ly``) has ``length_x`` and ``length_y`` instead, and no
-        ``length`` or ``n``; ``nx`` and ``ny`` (nodes along x and y) are always
-        there. Stored fields have ``x`` and ``y`` coordinates ``i dx`` and ``j dy``.
-        ``converged`` is True only when the final check of the module docstring
-        passed on a freshly recomputed displacement.
-
-    Raises
-    ------
-    ValueError
-        For invalid input, naming the argument and its allowed range.
-    """
-    h = validate_heights(heights, square=False)
-    p = validate_pressures(pressures)
-    e_star, length, tol, max_iter, hardness, threads = validate_solver_args(
-        e_star, length, tol, max_iter, hardness, threads, shape=h.shape)
-    store = validate_store(store_fields, p.size)
-    clusters = validate_flag("clusters", clusters)
-    boundary = validate_boundary(boundary)
-    cf_unit(length_unit, pressure_unit)  # ValueError for a unit outside the declared sets
-    if progress is not None and not callable(progress):
-        raise ValueError(f"progress must be a callable or None, got {type(progress).__name__} {progress!r}")
-    solver = ContactSolver(h, e_star, length, tol, max_iter, _effects(hardness), threads, _method(), boundary)
-    solver.check_loads(p, "pressures")
-    cols, iters, conv, paths, fields, masks = _run_steps(solver, p, store, clusters, progress)
-    sides, grid = cell_attrs(h.shape, length)
-    attrs = {"e_star": e_star, **sides, "tol": tol, "max_iter": max_iter, "threads": threads,
-             "fft_backend": solver.backend, **grid, "solver": SOLVER_NAME,
-             "solver_description": solver_description(solver.periodic, np.ndim(length) == 0)}
-    ds = to_dataset(p, cols, iters, conv, fields, store_fields, h.shape, attrs, solver.effects, paths=paths,
-                    length_unit=length_unit, pressure_unit=pressure_unit)
-    ds.attrs["elastic_method"] = solver.method
-    ds.attrs["boundary"] = boundary
-    if masks is not None:
-        from ..clusters import cluster_dataset
-
-        stats = cluster_dataset(masks, ds["step"].values, length, periodic=solver.periodic,
-                                length_unit=length_unit)
-        ds = ds.merge(stats.drop_vars("step"), combine_attrs="override")
-    return ds
-
-
-def _run_steps(solver: ContactSolver, p: np.ndarray, store: set, clusters: bool, progress=None):
-    """Solve every load step; per-step columns, iterations, flags, path codes, stored fields, masks."""
-    n_steps = p.size
-    names = ["area_fraction", "mean_contact_pressure", "mean_gap", "contact_perimeter", "residual",
-             "wall_time"] + [v for e in solver.effects for v in e.variables()]
-    cols = {k: np.empty(n_steps) for k in names}
-    iters = np.empty(n_steps, dtype=np.int64)
-    conv = np.empty(n_steps, dtype=bool)
-    paths = np.empty(n_steps, dtype=np.int8)
-    fields_p, fields_g, field_steps = [], [], []
-    masks = [] if clusters else None
-    for k, p0 in enumerate(p):
-        p0 = float(p0)
-        t0 = time.perf_counter()
-        st, gap = solver.solve(p0, keep_gap=k + 1 in store)
-        cols["wall_time"][k] = time.perf_counter() - t0
-        cols["area_fraction"][k] = st.area
-        cols["mean_contact_pressure"][k] = p0 / st.area
-        cols["mean_gap"][k] = st.mean_gap
-        cols["contact_perimeter"][k] = st.perimeter
-        cols["residual"][k] = st.residual
-        for name, value in st.effect_columns.items():
-            cols[name][k] = value
-        iters[k] = st.iterations
-        conv[k] = st.converged
-        paths[k] = SOLVER_PATHS.index(st.path)
-        if k + 1 in store:
-            fields_p.append(st.pressure.copy())
-            fields_g.append(gap)
-            field_steps.append(k + 1)
-        if masks is not None:
-            masks.append(st.mask.copy())
-        if progress is not None:
-            progress(k + 1, p0, st.area, st.iterations, st.converged, cols["wall_time"][k])
-    return cols, iters, conv, paths, (fields_p, fields_g, field_steps), masks

@@ -1,33 +1,17 @@
-"""Effects that act on the contact iteration without living inside its loop.
-
-An effect changes the problem the iteration solves (today: a bound on the
-pressure) and what each step reports. The solver asks its effects for
-
-* ``check_loads(units, p, name)``: refuse loads the effect cannot carry, with
-  a ``ValueError`` naming the argument;
-* ``bind(units)``: convert its parameters to the solver's internal units;
-* ``upper_bound``: an internal cap on the pressure, or ``None``; a cap makes the
-  solver use the bounded iteration (:mod:`.box`), whose free set excludes the
-  capped nodes and whose gradient-projection steps release them;
-* ``finish(p, p_int)``: its per-step columns from the physical pressure ``p``
-  (which it may correct in place, e.g. exactly to the cap);
-* ``variables(length_unit="1", pressure_unit="1")`` and ``attrs()``: the output
-  variables (name -> (units, long name), units composed from the caller's length and
-  pressure units with :func:`roughcontact.quantities.cf_unit`) and the global
-  attributes it adds (a pressure there is in the dataset's ``pressure_units``).
-
-Adhesion, for example, would be a second effect of this kind.
-"""
+"""Perfect plasticity of the interface: the pressure is capped at the hardness."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from .results import FRACTION_UNITS
-from .units import Units, check_range
+from ..results import FRACTION_UNITS
+from ..units import Units, check_range
+from ..validation import check_positive
+from .base import Effect, register
 
 
-class PlasticityCap:
+@register
+class PlasticityCap(Effect):
     """Perfectly plastic interface: the pressure is capped at the hardness ``H``.
 
     As Tamaas' ``KatoSaturated``: ``0 <= p <= H``; nodes at the cap may
@@ -37,14 +21,27 @@ class PlasticityCap:
     Parameters
     ----------
     hardness : float
-        Cap ``H`` [pressure], > 0 (validated by the caller) and > every load.
+        Cap ``H`` [pressure], finite and > 0, and > every load.
     """
 
     name = "plasticity"
 
     def __init__(self, hardness: float):
-        self.hardness = float(hardness)
+        self.hardness = check_positive("hardness", hardness)
+        self.pressure_cap = self.hardness
         self.upper_bound = None
+
+    @classmethod
+    def from_config(cls, block: dict, *, e_star: float) -> PlasticityCap:
+        """``contact.effects.plasticity``: ``hardness`` relative to ``E*``."""
+        return cls(block["hardness"] * e_star)
+
+    def check_surface(self, units: Units, periodic: bool) -> None:
+        if units.flat and not periodic:
+            raise ValueError(
+                "hardness: a perfectly flat surface (all heights equal) on the free half-space is a rigid "
+                "flat punch, whose edge pressures would reach any hardness; boundary='free' with a "
+                "hardness is not supported for a flat surface (give hardness=None or a rough surface)")
 
     def check_loads(self, units: Units, p: np.ndarray, name: str) -> None:
         label = "p0" if name == "p0" else "every p0"
@@ -61,7 +58,7 @@ class PlasticityCap:
     def bind(self, units: Units) -> None:
         self.upper_bound = None if units.flat else units.to_internal(self.hardness)
 
-    def finish(self, p: np.ndarray, p_int: np.ndarray, p0: float) -> dict:
+    def finish(self, p: np.ndarray, p_int: np.ndarray | None, p0: float) -> dict:
         """Set capped nodes exactly to ``H``; the plastic area and load fractions."""
         n2 = p.size
         if self.upper_bound is not None:

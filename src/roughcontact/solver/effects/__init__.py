@@ -1,0 +1,11 @@
+"""Effects that act on the contact iteration, one module each, found by name (:data:`EFFECTS`).
+
+Adding an effect: one module here with an :class:`Effect` subclass decorated with
+:func:`register`, imported below; its config keys in the schema (``contact.effects.<name>``)
+and config/README.md. :mod:`.base` states what an effect supplies.
+"""
+
+from .base import EFFECTS, Effect, effects_from_config, register
+from .plasticity import PlasticityCap
+
+__all__ = ["EFFECTS", "Effect", "PlasticityCap", "effects_from_config", "register"]

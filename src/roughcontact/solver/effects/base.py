@@ -1,0 +1,89 @@
+"""What an effect supplies to the contact iteration, and the registry that finds one by name.
+
+An effect changes the problem the iteration solves and what each step reports, without
+living inside the iteration's loop (Tamaas' functionals added to a solver). Each effect is
+one module in this package holding one :class:`Effect` subclass, registered with
+:func:`register` under the name a scene uses (``contact.effects.<name>`` in the config).
+The solver asks every effect it is given for
+
+* ``check_surface(units, periodic)`` and ``check_loads(units, p, name)``: refuse a surface or
+  loads the effect cannot act on, with a ``ValueError`` naming the argument;
+* ``check_range(units)``: refuse parameters float64 cannot represent in internal units;
+* ``bind(units)``: convert its parameters to the solver's internal units;
+* ``upper_bound`` (internal) and ``pressure_cap`` (physical): a cap on the pressure, or
+  ``None``; a cap makes the solver use the bounded iteration (:mod:`..box`);
+* ``functional``: an interaction energy of the gap (with its gradient) for the gap iteration,
+  or ``None``;
+* ``finish(p, p_int, p0)``: its per-step columns from the physical pressure ``p`` (which it
+  may correct in place, e.g. exactly to the cap);
+* ``variables(length_unit, pressure_unit)`` and ``attrs()``: its output variables (name ->
+  (CF units, long name)) and the global attributes it adds;
+* ``from_config(block, e_star=...)``: the effect from its config block (``contact.effects.<name>``,
+  already schema-checked), ``e_star`` the modulus its relative parameters scale with.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..units import Units
+
+#: The effects a scene can name, by name (filled by :func:`register`).
+EFFECTS: dict[str, type[Effect]] = {}
+
+
+def register(cls: type[Effect]) -> type[Effect]:
+    """Class decorator: make ``cls`` available to scenes under ``cls.name``."""
+    if not cls.name or cls.name in EFFECTS:
+        raise ValueError(f"effect name {cls.name!r} is empty or already registered")
+    EFFECTS[cls.name] = cls
+    return cls
+
+
+class Effect:
+    """An effect that does nothing: the defaults every effect starts from."""
+
+    name = ""
+    #: internal cap on the pressure after :meth:`bind`, or None
+    upper_bound: float | None = None
+    #: physical cap on the pressure [pressure], or None
+    pressure_cap: float | None = None
+    #: interaction energy of the gap for the gap iteration, or None
+    functional = None
+
+    def check_surface(self, units: Units, periodic: bool) -> None:
+        """Refuse a surface the effect cannot act on (``ValueError`` naming the argument)."""
+
+    def check_loads(self, units: Units, p: np.ndarray, name: str) -> None:
+        """Refuse loads ``p`` (the argument ``name``) the effect cannot carry."""
+
+    def check_range(self, units: Units) -> None:
+        """Refuse parameters outside what float64 represents in internal units."""
+
+    def bind(self, units: Units) -> None:
+        """Convert the parameters to the solver's internal units."""
+
+    def finish(self, p: np.ndarray, p_int: np.ndarray | None, p0: float) -> dict:
+        """The effect's per-step columns from the physical pressure ``p`` (n, n)."""
+        return {}
+
+    def variables(self, length_unit: str = "1", pressure_unit: str = "1") -> dict:
+        """Output variables: name -> (CF units, long name)."""
+        return {}
+
+    def attrs(self) -> dict:
+        """Global attributes the effect adds to the output."""
+        return {}
+
+    @classmethod
+    def from_config(cls, block: dict, *, e_star: float) -> Effect:
+        """The effect from its schema-checked config block."""
+        raise NotImplementedError(f"effect {cls.name!r} has no config block")
+
+
+def effects_from_config(blocks: dict, *, e_star: float) -> tuple[Effect, ...]:
+    """The effects a scene's ``contact.effects`` mapping names, in its order."""
+    unknown = sorted(set(blocks) - set(EFFECTS))
+    if unknown:
+        raise ValueError(f"contact.effects: unknown effect(s) {unknown}; known: {sorted(EFFECTS)}")
+    return tuple(EFFECTS[name].from_config(block, e_star=e_star) for name, block in blocks.items())

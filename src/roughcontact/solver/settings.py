@@ -1,0 +1,106 @@
+"""What a solve is asked to do besides the surface and the loads: :class:`SolverSettings`."""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+from dataclasses import dataclass
+
+from ..quantities import cf_unit
+from .effects import Effect, PlasticityCap
+from .validation import check_positive, validate_boundary, validate_solver_args, validate_threads
+from .workspace import ELASTIC_METHODS
+
+#: Default iteration cap per load step.
+DEFAULT_MAX_ITER = 10000
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    """The elastic half-space, the iteration, its effects and the output's unit labels.
+
+    Attributes
+    ----------
+    e_star : float
+        Plane-strain modulus ``E* = E / (1 - nu**2)`` of the half-space [pressure], > 0.
+    length : float or (float, float)
+        A float ``L``: side of the square cell [length], > 0, for square heights only. A pair
+        ``(Lx, Ly)``: the sides along x (axis 0) and y (axis 1) of a rectangular cell, each
+        finite and > 0; pixels ``dx = Lx / nx`` and ``dy = Ly / ny``. ``(L, L)`` on an
+        ``n x n`` grid is the float ``L``, bit for bit.
+    tol : float
+        Convergence tolerance in (0, 1) on the scale-free residual of :mod:`roughcontact.solver`.
+    max_iter : int
+        Iteration cap per load step, >= 1.
+    threads : int
+        FFTW threads, >= 1.
+    boundary : {"periodic", "free"}
+        ``"periodic"``: the cell is one period of an infinite periodic surface. ``"free"``: an
+        isolated patch on an infinite half-space loaded only there (:class:`~.halfspace.FreeHalfSpace`).
+    method : str or None
+        The elastic iteration, one of :data:`~.workspace.ELASTIC_METHODS`; None: the package's
+        switch ``roughcontact.solver.ELASTIC_METHOD`` when the solve starts.
+    effects : tuple of Effect
+        What acts on the iteration besides elasticity (:mod:`.effects`), e.g.
+        ``(PlasticityCap(hardness),)``.
+    length_unit, pressure_unit : str
+        Labels of the output's units (:data:`roughcontact.quantities.LENGTH_UNITS` and
+        ``PRESSURE_UNITS``); the numbers do not depend on them.
+    """
+
+    e_star: float = 1.0
+    length: float | tuple[float, float] = 1.0
+    tol: float = 1e-8
+    max_iter: int = DEFAULT_MAX_ITER
+    threads: int = 1
+    boundary: str = "periodic"
+    method: str | None = None
+    effects: tuple[Effect, ...] = ()
+    length_unit: str = "1"
+    pressure_unit: str = "1"
+
+    @classmethod
+    def from_options(cls, settings: SolverSettings | None = None, **options) -> SolverSettings:
+        """``settings`` (default: the defaults) with ``options`` replacing its fields.
+
+        ``hardness`` is accepted as an option: a float adds ``PlasticityCap(hardness)`` to the
+        effects, ``None`` adds nothing. An unknown option is a ``TypeError``, as for any function.
+        """
+        base = cls() if settings is None else settings
+        if not isinstance(base, SolverSettings):
+            raise ValueError(f"settings must be a SolverSettings or None, got {type(base).__name__}")
+        hardness = options.pop("hardness", None)
+        fields = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(options) - fields)
+        if unknown:
+            raise TypeError(f"unexpected keyword argument(s) {unknown}; solver settings are {sorted(fields)}")
+        if hardness is not None:
+            check_positive("hardness", hardness)
+            options["effects"] = (*options.get("effects", base.effects), PlasticityCap(hardness))
+        return dataclasses.replace(base, **options)
+
+    def checked(self, shape) -> SolverSettings:
+        """These settings validated for heights of ``shape``, the method resolved.
+
+        Raises ``ValueError`` naming the field and its allowed range.
+        """
+        e_star, length, tol, max_iter, _, threads = validate_solver_args(
+            self.e_star, self.length, self.tol, self.max_iter, None, self.threads, shape=shape)
+        method = sys.modules[__package__].ELASTIC_METHOD if self.method is None else self.method
+        if method not in ELASTIC_METHODS:
+            source = "method" if self.method is not None else "roughcontact.solver.ELASTIC_METHOD"
+            raise ValueError(f"{source} must be one of {ELASTIC_METHODS}, got {method!r}")
+        effects = tuple(self.effects)
+        for effect in effects:
+            if not isinstance(effect, Effect):
+                raise ValueError(f"effects must be Effect objects (roughcontact.solver.effects), got "
+                                 f"{type(effect).__name__} {effect!r}")
+        cf_unit(self.length_unit, self.pressure_unit)  # ValueError for a unit outside the declared sets
+        return dataclasses.replace(self, e_star=e_star, length=length, tol=tol, max_iter=max_iter,
+                                   threads=validate_threads(threads), boundary=validate_boundary(self.boundary),
+                                   method=method, effects=effects)
+
+    @property
+    def hardness(self) -> float | None:
+        """The lowest pressure cap of the effects [pressure], or None."""
+        return min((e.pressure_cap for e in self.effects if e.pressure_cap is not None), default=None)

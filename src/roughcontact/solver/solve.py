@@ -1,0 +1,209 @@
+"""The public entry points: :func:`solve_contact` (a load schedule) and :func:`solve_step` (one load).
+
+Both take the surface, the loads and a :class:`~.settings.SolverSettings` (or its fields as
+keyword options), validate them once (:func:`prepare`) and run a :class:`~.contact.ContactSolver`.
+The package docstring (:mod:`roughcontact.solver`) states the problem, units, algorithms and
+convergence criterion.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import xarray as xr
+
+from .contact import ContactSolver
+from .results import SOLVER_NAME, StepResult, cell_attrs, solver_description, to_dataset
+from .settings import SolverSettings
+from .validation import real_scalar, validate_flag, validate_heights, validate_pressures, validate_store
+from .workspace import SOLVER_PATHS
+
+
+def prepare(heights, loads: np.ndarray, name: str, settings: SolverSettings | None,
+            options: dict) -> ContactSolver:
+    """The validated solver of ``heights`` for ``settings`` with ``options`` replacing its fields.
+
+    ``loads`` (already validated numbers) are checked against the effects and float64's range,
+    the error naming the argument ``name``.
+    """
+    h = validate_heights(heights, square=False)
+    checked = SolverSettings.from_options(settings, **options).checked(h.shape)
+    solver = ContactSolver(h, checked)
+    solver.check_loads(loads, name)
+    return solver
+
+
+def solve_step(heights, p0: float, settings: SolverSettings | None = None, *, initial_pressure=None,
+               **options) -> StepResult:
+    """Solve the contact for one mean pressure.
+
+    Parameters
+    ----------
+    heights : array_like, shape (n, n) or (nx, ny)
+        Rigid surface heights [length]; the highest points touch first; as in
+        :func:`solve_contact`.
+    p0 : float
+        Applied mean pressure [pressure]: ``0 < p0``, ``p0 < hardness`` if a
+        hardness is given, and ``p0 * L / (e_star * s)`` in
+        :data:`LOAD_RANGE` (``s`` the rms height, ``L`` the float ``length`` or ``Lx``).
+    settings : SolverSettings, optional
+        The half-space, iteration and effects (defaults when omitted).
+    initial_pressure : array_like, same shape as ``heights``, optional
+        Starting pressure (clipped to ``[0, hardness]`` and brought to mean
+        ``p0``); uniform ``p0`` when omitted.
+    **options
+        Fields of :class:`SolverSettings` replacing those of ``settings`` (``e_star``, ``length``,
+        ``tol``, ...), and ``hardness`` (adds the plasticity cap).
+
+    Returns
+    -------
+    StepResult
+        Fields are fresh arrays owned by the caller.
+
+    Raises
+    ------
+    ValueError
+        For invalid input, naming the argument and its allowed range.
+    """
+    p0_f = real_scalar("p0", p0, "a finite number > 0")
+    if not (math.isfinite(p0_f) and p0_f > 0):
+        raise ValueError(f"p0 must be a finite number > 0, got {p0!r}")
+    solver = prepare(heights, np.array([p0_f]), "p0", settings, options)
+    init = None
+    if initial_pressure is not None:
+        init = validate_heights(initial_pressure, name="initial_pressure", square=False)
+        if init.shape != solver.shape:
+            raise ValueError(f"initial_pressure must have shape {solver.shape}, the shape of heights, "
+                             f"got {init.shape}")
+    t0 = time.perf_counter()
+    st, gap = solver.solve(p0_f, initial=init, keep_gap=True)
+    wall = time.perf_counter() - t0
+    return StepResult(p0_f, st.pressure.copy(), gap, st.area, st.mean_gap, st.perimeter,
+                      st.iterations, st.residual, st.converged, wall,
+                      st.effect_columns.get("plastic_area_fraction"),
+                      st.effect_columns.get("plastic_load_fraction"))
+
+
+def solve_contact(heights, pressures, settings: SolverSettings | None = None, *, store_fields=False,
+                  clusters: bool = False, progress=None, **options) -> xr.Dataset:
+    """Solve the normal contact of a rigid rough surface on an elastic half-space.
+
+    Parameters
+    ----------
+    heights : array_like, shape (n, n) or (nx, ny)
+        Rigid surface heights [length] on the cell (periodic, or the whole
+        patch for ``boundary="free"``), axis 0 = x, axis 1 = y; the highest
+        points touch first. Any ``n >= 4`` (``nx, ny >= 4``), odd or not;
+        ``(nx, ny)`` with ``nx != ny`` needs ``length=(Lx, Ly)``.
+    pressures : sequence of float, shape (n_steps,)
+        Applied mean pressures ``p0 > 0``, one load step each [pressure, same unit
+        as ``e_star``], each with ``p0 * L / (e_star * s)`` in :data:`LOAD_RANGE`
+        (``s`` the rms height of ``heights``, ``L`` the float ``length`` or ``Lx``) and,
+        with a hardness, ``p0 < hardness``. Any order; each step warm-starts from the
+        previous one, which pays off most for increasing loads.
+    settings : SolverSettings, optional
+        The half-space (``e_star``, ``length``, ``boundary``), the iteration (``tol``,
+        ``max_iter``, ``threads``, ``method``), the effects and the unit labels; defaults
+        when omitted.
+    store_fields : bool or iterable of int
+        ``True`` stores ``contact_pressure`` and ``gap`` for every step (dims
+        ``step, x, y``); an iterable of 1-based step numbers stores only those
+        (dims ``field_step, x, y``, coordinate ``field_step`` = step numbers).
+    clusters : bool
+        Add contact-cluster statistics per step (:mod:`roughcontact.clusters`):
+        ``cluster_count``, ``cluster_mean_area``, ``cluster_max_area`` and
+        ``cluster_area_histogram``. Off: no labelling work.
+    progress : callable, optional
+        Called after each load step as ``progress(step, p0, area_fraction,
+        iterations, converged, seconds)`` (``step`` 1-based, ``seconds`` the step's wall time).
+    **options
+        Fields of :class:`SolverSettings` replacing those of ``settings``, and ``hardness``
+        [pressure] (adds :class:`~.effects.PlasticityCap`: the pressure capped, > every p0).
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimension ``step`` (coordinate 1..n_steps) with ``pressure``, ``area_fraction``,
+        ``mean_contact_pressure``, ``mean_gap``, ``contact_perimeter``, ``iterations``,
+        ``residual``, ``converged``, ``wall_time``, ``solver_path`` (the iteration that
+        ended the step, a CF flag) and each effect's variables (with a hardness:
+        ``plastic_area_fraction``, ``plastic_load_fraction``); fields and ``x``/``y``
+        coordinates only when stored. Every variable carries CF ``units`` and
+        ``long_name``; the global attributes record the settings, the cell
+        (:func:`~.results.cell_attrs`: ``length`` and ``n`` for a square cell, ``length_x``,
+        ``length_y`` otherwise, ``nx`` and ``ny`` always), ``boundary`` and
+        ``elastic_method``. ``converged`` is True only when the final check of the package
+        docstring passed on a freshly recomputed displacement.
+
+    Raises
+    ------
+    ValueError
+        For invalid input, naming the argument and its allowed range.
+    """
+    p = validate_pressures(pressures)
+    store = validate_store(store_fields, p.size)
+    clusters = validate_flag("clusters", clusters)
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be a callable or None, got {type(progress).__name__} {progress!r}")
+    solver = prepare(heights, p, "pressures", settings, options)
+    cols, iters, conv, paths, fields, masks = _run_steps(solver, p, store, clusters, progress)
+    return _dataset(solver, p, cols, iters, conv, paths, fields, masks, store_fields)
+
+
+def _dataset(solver: ContactSolver, p, cols, iters, conv, paths, fields, masks, store_fields) -> xr.Dataset:
+    """The solve's output dataset (:func:`solve_contact`'s Returns)."""
+    s = solver.settings
+    sides, grid = cell_attrs(solver.shape, s.length)
+    attrs = {"e_star": s.e_star, **sides, "tol": s.tol, "max_iter": s.max_iter, "threads": s.threads,
+             "fft_backend": solver.backend, **grid, "solver": SOLVER_NAME,
+             "solver_description": solver_description(solver.periodic, np.ndim(s.length) == 0)}
+    ds = to_dataset(p, cols, iters, conv, fields, store_fields, solver.shape, attrs, solver.effects, paths=paths,
+                    length_unit=s.length_unit, pressure_unit=s.pressure_unit)
+    ds.attrs["elastic_method"] = solver.method
+    ds.attrs["boundary"] = s.boundary
+    if masks is not None:
+        from ..clusters import cluster_dataset
+
+        stats = cluster_dataset(masks, ds["step"].values, s.length, periodic=solver.periodic,
+                                length_unit=s.length_unit)
+        ds = ds.merge(stats.drop_vars("step"), combine_attrs="override")
+    return ds
+
+
+def _run_steps(solver: ContactSolver, p: np.ndarray, store: set, clusters: bool, progress=None):
+    """Solve every load step; per-step columns, iterations, flags, path codes, stored fields, masks."""
+    n_steps = p.size
+    names = ["area_fraction", "mean_contact_pressure", "mean_gap", "contact_perimeter", "residual",
+             "wall_time"] + [v for e in solver.effects for v in e.variables()]
+    cols = {k: np.empty(n_steps) for k in names}
+    iters = np.empty(n_steps, dtype=np.int64)
+    conv = np.empty(n_steps, dtype=bool)
+    paths = np.empty(n_steps, dtype=np.int8)
+    fields_p, fields_g, field_steps = [], [], []
+    masks = [] if clusters else None
+    for k, p0 in enumerate(p):
+        p0 = float(p0)
+        t0 = time.perf_counter()
+        st, gap = solver.solve(p0, keep_gap=k + 1 in store)
+        cols["wall_time"][k] = time.perf_counter() - t0
+        cols["area_fraction"][k] = st.area
+        cols["mean_contact_pressure"][k] = p0 / st.area
+        cols["mean_gap"][k] = st.mean_gap
+        cols["contact_perimeter"][k] = st.perimeter
+        cols["residual"][k] = st.residual
+        for name, value in st.effect_columns.items():
+            cols[name][k] = value
+        iters[k] = st.iterations
+        conv[k] = st.converged
+        paths[k] = SOLVER_PATHS.index(st.path)
+        if k + 1 in store:
+            fields_p.append(st.pressure.copy())
+            fields_g.append(gap)
+            field_steps.append(k + 1)
+        if masks is not None:
+            masks.append(st.mask.copy())
+        if progress is not None:
+            progress(k + 1, p0, st.area, st.iterations, st.converged, cols["wall_time"][k])
+    return cols, iters, conv, paths, (fields_p, fields_g, field_steps), masks
