@@ -2,6 +2,7 @@
 import copy
 import re
 
+import numpy as np
 import pytest
 import xarray as xr
 
@@ -27,7 +28,7 @@ def _variables(tmp_path, name, cfg):
 
 @pytest.mark.slow
 def test_optional_outputs_and_effects_add_exactly_their_variables(tmp_path):
-    base, _ = _variables(tmp_path, "base", _scene())
+    base, ds_base = _variables(tmp_path, "base", _scene())
     fields, ds_f = _variables(tmp_path, "fields", _scene(outputs={"fields": [3, 12]}))
     plastic, ds_p = _variables(tmp_path, "plastic", _scene(effects={"plasticity": {"hardness": 0.02}}))
     clusters, ds_c = _variables(tmp_path, "clusters", _scene(outputs={"clusters": True}))
@@ -40,6 +41,13 @@ def test_optional_outputs_and_effects_add_exactly_their_variables(tmp_path):
     assert ds_f["field_step"].values.tolist() == [3, 12]
     assert plastic - base == {"plastic_area_fraction", "plastic_load_fraction"}
     assert float(ds_p["plastic_area_fraction"].max()) > 0
+    adhesive, ds_a = _variables(tmp_path, "adhesion", _scene(
+        effects={"adhesion": {"law": "exponential", "work": 1e-5, "range": 1e-3}}))
+    assert adhesive - base == {"adhesive_pressure", "tensile_area_fraction", "pull_off_pressure"}
+    assert ds_a.attrs["adhesion_law"] == "exponential" and ds_a.attrs["elastic_method"] == "adhesive"
+    assert bool(ds_a["converged"].all()) and float(ds_a["pull_off_pressure"].min()) > 0
+    # adhesion pulls more of the surface into contact at every load
+    assert np.all(ds_a["area_fraction"].values > ds_base["area_fraction"].values)
 
 
 def test_scene_without_contact_block_plans_no_contact_jobs(tmp_path):

@@ -449,6 +449,18 @@ def _check_contact(scene: str, block: dict) -> None:
         fail("effects.plasticity.hardness", f"{plastic['hardness']:g} must exceed load.p_max = "
              f"{block['load']['p_max']:g}: a pressure capped at the hardness cannot carry a mean load p0 "
              ">= hardness")
+    if "adhesion" in block["effects"]:
+        _check_adhesion(fail, block)
+
+
+def _check_adhesion(fail, block: dict) -> None:
+    """``effects.adhesion``: the gap iteration runs on the periodic half-space and alone."""
+    if "plasticity" in block["effects"]:
+        fail("effects.adhesion", "cannot be combined with effects.plasticity (one effect on the gap iteration "
+             "at a time); remove one of them")
+    if block["solver"].get("boundary", "periodic") != "periodic":
+        fail("effects.adhesion", f"needs solver.boundary: periodic (the adhesive iteration is periodic), got "
+             f"{block['solver']['boundary']!r}")
 
 
 def _check_target_area(fail, load: dict) -> None:

@@ -237,7 +237,7 @@ solves of the same size must not run concurrently in threads of one process
 
 from .check import MEAN_RTOL
 from .contact import ContactSolver
-from .effects import EFFECTS, Effect, PlasticityCap, effects_from_config
+from .effects import EFFECTS, Adhesion, Effect, PlasticityCap, effects_from_config
 from .halfspace import FreeHalfSpace, PeriodicHalfSpace, displacement, elastic_kernel, free_influence
 from .results import (
                       FRACTION_UNITS,
@@ -259,6 +259,7 @@ ELASTIC_METHOD = "pk-fourier-f32"
 
 __all__ = [
     "BOUNDARIES",
+    "Adhesion",
     "DEFAULT_MAX_ITER",
     "EFFECTS",
     "ELASTIC_METHOD",

@@ -19,7 +19,7 @@ from .projection import enforce_mean
 from .results import StepRecord, contact_perimeter
 from .settings import SolverSettings
 from .units import Units, check_loads, frexp_ratio
-from .workspace import FALLBACKS, STICKY, Workspace
+from .workspace import FALLBACKS, SOLVER_PATHS, STICKY, Workspace
 
 
 class ContactSolver:
@@ -29,6 +29,11 @@ class ContactSolver:
     already :meth:`~.settings.SolverSettings.checked` for ``h.shape`` (the cell, the elastic
     iteration, the half-space and the effects acting on the iteration, :mod:`.effects`).
     """
+
+    #: the iterations a step can end on (the ``solver_path`` flag)
+    paths = SOLVER_PATHS
+    #: per-step long names that differ from :func:`~.results.to_dataset`'s (none)
+    long_names: dict = {}
 
     def __init__(self, h: np.ndarray, settings: SolverSettings):
         self.settings = settings

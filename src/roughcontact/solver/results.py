@@ -176,21 +176,28 @@ def cell_sides(attrs: dict) -> tuple[float, float]:
     return attrs["length"], attrs["length"]
 
 
-def solver_path_variable(codes) -> xr.Variable:
+def solver_path_variable(codes, names=SOLVER_PATHS) -> xr.Variable:
     """The per-step ``solver_path`` variable: a CF flag (``flag_values``, ``flag_meanings``) over ``step``.
 
-    ``codes`` (int8, shape (n_steps,)) index :data:`~.workspace.SOLVER_PATHS`; a code other than
-    the scene's method says that the step stalled on it and a fallback ended it.
+    ``codes`` (int8, shape (n_steps,)) index ``names``, the iterations the solver can end a step
+    on (:data:`~.workspace.SOLVER_PATHS` for the pressure iterations); a code other than the
+    scene's method says that the step stalled on it and a fallback ended it.
     """
     codes = np.asarray(codes, dtype=np.int8)
     return xr.Variable(("step",), codes, {
         "units": FRACTION_UNITS, "long_name": "iteration that ended the load step (after a stall, a fallback)",
-        "flag_values": np.arange(len(SOLVER_PATHS), dtype=np.int8),
-        "flag_meanings": " ".join(name.replace("-", "_") for name in SOLVER_PATHS)})
+        "flag_values": np.arange(len(names), dtype=np.int8),
+        "flag_meanings": " ".join(name.replace("-", "_") for name in names)})
+
+
+def path_names(ds: xr.Dataset) -> tuple[str, ...]:
+    """The iterations ``ds["solver_path"]`` codes index, read back from its ``flag_meanings``."""
+    return tuple(name.replace("_", "-") for name in ds["solver_path"].attrs["flag_meanings"].split())
 
 
 def to_dataset(p, cols, iters, conv, fields, store_fields, shape, attrs: dict, effects=(), *, paths=None,
-               length_unit: str = "1", pressure_unit: str = "1") -> xr.Dataset:
+               length_unit: str = "1", pressure_unit: str = "1", path_names=SOLVER_PATHS,
+               long_names: dict | None = None) -> xr.Dataset:
     """The solver's output dataset (see :func:`roughcontact.solver.solve_contact`).
 
     ``shape`` the grid ``(nx, ny)`` (an int ``n``: ``(n, n)``), the cell's sides being in
@@ -204,7 +211,9 @@ def to_dataset(p, cols, iters, conv, fields, store_fields, shape, attrs: dict, e
     (:func:`solver_path_variable`). ``length_unit`` and ``pressure_unit`` (one of
     :data:`roughcontact.quantities.LENGTH_UNITS` / ``PRESSURE_UNITS``) give the
     ``units`` of lengths, pressures and ``contact_perimeter`` [length^-1], and the
-    global attributes ``length_units`` and ``pressure_units``.
+    global attributes ``length_units`` and ``pressure_units``. ``path_names`` are the
+    iterations ``paths`` index; ``long_names`` replace the default long names of the per-step
+    variables where the solver defines them otherwise (the adhesive solver's contact area).
     """
     fields_p, fields_g, field_steps = fields
     steps = np.arange(1, p.size + 1)
@@ -232,6 +241,8 @@ def to_dataset(p, cols, iters, conv, fields, store_fields, shape, attrs: dict, e
                       "recomputed displacement"),
         "wall_time": (cols["wall_time"], "s", "wall-clock time of the load step"),
     }
+    for name, long_name in (long_names or {}).items():
+        meta[name] = (*meta[name][:2], long_name)
     for effect in effects:
         for name, (units, long_name) in effect.variables(length_unit=length_unit,
                                                          pressure_unit=pressure_unit).items():
@@ -239,7 +250,7 @@ def to_dataset(p, cols, iters, conv, fields, store_fields, shape, attrs: dict, e
     data_vars = {name: xr.Variable(("step",), val, {"units": u, "long_name": ln})
                  for name, (val, u, ln) in meta.items()}
     if paths is not None:
-        data_vars["solver_path"] = solver_path_variable(paths)
+        data_vars["solver_path"] = solver_path_variable(paths, path_names)
     coords = {"step": xr.Variable(("step",), steps, {"units": FRACTION_UNITS,
                                                       "long_name": "load step number (1-based)"})}
     if field_steps:
@@ -286,7 +297,7 @@ def step_notes(ds: xr.Dataset) -> list[str]:
     plain = {method, "exact"} | ({"box"} if "hardness" in ds.attrs else set())
     notes = []
     for k, step in enumerate(ds["step"].values):
-        path = SOLVER_PATHS[int(ds["solver_path"].values[k])] if "solver_path" in ds else method
+        path = path_names(ds)[int(ds["solver_path"].values[k])] if "solver_path" in ds else method
         its, residual = int(ds["iterations"].values[k]), float(ds["residual"].values[k])
         if not bool(ds["converged"].values[k]):
             why = f"max_iter = {max_iter} reached" if its >= max_iter else f"stalled, last on {path}"

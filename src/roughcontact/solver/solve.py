@@ -14,23 +14,26 @@ import time
 import numpy as np
 import xarray as xr
 
+from .adhesive import AdhesiveSolver
 from .contact import ContactSolver
 from .results import SOLVER_NAME, StepResult, cell_attrs, solver_description, to_dataset
 from .settings import SolverSettings
 from .validation import real_scalar, validate_flag, validate_heights, validate_pressures, validate_store
-from .workspace import SOLVER_PATHS
 
 
 def prepare(heights, loads: np.ndarray, name: str, settings: SolverSettings | None,
-            options: dict) -> ContactSolver:
+            options: dict) -> ContactSolver | AdhesiveSolver:
     """The validated solver of ``heights`` for ``settings`` with ``options`` replacing its fields.
 
-    ``loads`` (already validated numbers) are checked against the effects and float64's range,
-    the error naming the argument ``name``.
+    The iteration follows from what the effects supply: an interaction energy (``functional``)
+    needs the gap iteration (:class:`~.adhesive.AdhesiveSolver`), anything else the pressure
+    iterations (:class:`~.contact.ContactSolver`). ``loads`` (already validated numbers) are
+    checked against the effects and float64's range, the error naming the argument ``name``.
     """
     h = validate_heights(heights, square=False)
     checked = SolverSettings.from_options(settings, **options).checked(h.shape)
-    solver = ContactSolver(h, checked)
+    kind = AdhesiveSolver if any(e.functional is not None for e in checked.effects) else ContactSolver
+    solver = kind(h, checked)
     solver.check_loads(loads, name)
     return solver
 
@@ -152,7 +155,8 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
     return _dataset(solver, p, cols, iters, conv, paths, fields, masks, store_fields)
 
 
-def _dataset(solver: ContactSolver, p, cols, iters, conv, paths, fields, masks, store_fields) -> xr.Dataset:
+def _dataset(solver: ContactSolver | AdhesiveSolver, p, cols, iters, conv, paths, fields, masks,
+             store_fields) -> xr.Dataset:
     """The solve's output dataset (:func:`solve_contact`'s Returns)."""
     s = solver.settings
     sides, grid = cell_attrs(solver.shape, s.length)
@@ -160,9 +164,13 @@ def _dataset(solver: ContactSolver, p, cols, iters, conv, paths, fields, masks, 
              "fft_backend": solver.backend, **grid, "solver": SOLVER_NAME,
              "solver_description": solver_description(solver.periodic, np.ndim(s.length) == 0)}
     ds = to_dataset(p, cols, iters, conv, fields, store_fields, solver.shape, attrs, solver.effects, paths=paths,
-                    length_unit=s.length_unit, pressure_unit=s.pressure_unit)
+                    length_unit=s.length_unit, pressure_unit=s.pressure_unit, path_names=solver.paths,
+                    long_names=solver.long_names)
     ds.attrs["elastic_method"] = solver.method
     ds.attrs["boundary"] = s.boundary
+    for effect in solver.effects:
+        for name, (value, units, long_name) in effect.after_steps(solver, s.length_unit, s.pressure_unit).items():
+            ds[name] = xr.Variable((), value, {"units": units, "long_name": long_name})
     if masks is not None:
         from ..clusters import cluster_dataset
 
@@ -172,7 +180,7 @@ def _dataset(solver: ContactSolver, p, cols, iters, conv, paths, fields, masks, 
     return ds
 
 
-def _run_steps(solver: ContactSolver, p: np.ndarray, store: set, clusters: bool, progress=None):
+def _run_steps(solver: ContactSolver | AdhesiveSolver, p: np.ndarray, store: set, clusters: bool, progress=None):
     """Solve every load step; per-step columns, iterations, flags, path codes, stored fields, masks."""
     n_steps = p.size
     names = ["area_fraction", "mean_contact_pressure", "mean_gap", "contact_perimeter", "residual",
@@ -197,7 +205,7 @@ def _run_steps(solver: ContactSolver, p: np.ndarray, store: set, clusters: bool,
             cols[name][k] = value
         iters[k] = st.iterations
         conv[k] = st.converged
-        paths[k] = SOLVER_PATHS.index(st.path)
+        paths[k] = solver.paths.index(st.path)
         if k + 1 in store:
             fields_p.append(st.pressure.copy())
             fields_g.append(gap)

@@ -5,7 +5,8 @@ Adding an effect: one module here with an :class:`Effect` subclass decorated wit
 and config/README.md. :mod:`.base` states what an effect supplies.
 """
 
+from .adhesion import Adhesion
 from .base import EFFECTS, Effect, effects_from_config, register
 from .plasticity import PlasticityCap
 
-__all__ = ["EFFECTS", "Effect", "PlasticityCap", "effects_from_config", "register"]
+__all__ = ["EFFECTS", "Adhesion", "Effect", "PlasticityCap", "effects_from_config", "register"]

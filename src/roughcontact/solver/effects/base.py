@@ -18,6 +18,8 @@ The solver asks every effect it is given for
   may correct in place, e.g. exactly to the cap);
 * ``variables(length_unit, pressure_unit)`` and ``attrs()``: its output variables (name ->
   (CF units, long name)) and the global attributes it adds;
+* ``after_steps(solver, length_unit, pressure_unit)``: per-solve scalars computed after the
+  load steps (name -> (value, CF units, long name)), e.g. a pull-off force;
 * ``from_config(block, e_star=...)``: the effect from its config block (``contact.effects.<name>``,
   already schema-checked), ``e_star`` the modulus its relative parameters scale with.
 """
@@ -73,6 +75,10 @@ class Effect:
 
     def attrs(self) -> dict:
         """Global attributes the effect adds to the output."""
+        return {}
+
+    def after_steps(self, solver, length_unit: str = "1", pressure_unit: str = "1") -> dict:
+        """Scalars of the whole solve, after its load steps: name -> (value, units, long name)."""
         return {}
 
     @classmethod
