@@ -70,6 +70,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..fft import wavenumbers
+from .workspace import dot
 
 #: Default iteration cap of :func:`solve_adhesive` (all inner iterations of one call).
 DEFAULT_MAX_ITER = 20000
@@ -272,16 +273,16 @@ class AdhesiveIteration:
             it += 1
             lam = float(self.r[free].mean())
             z = np.where(free, self.r - lam, 0.0)
-            zz = float(np.dot(z.ravel(), z.ravel()))
+            zz = dot(z.ravel(), z.ravel())
             if joined or zz_old == 0.0:
                 t = z
             else:
                 t = z + (zz / zz_old) * t
-            zt = float(np.dot(z.ravel(), t.ravel()))
+            zt = dot(z.ravel(), t.ravel())
             if zt <= 0.0:  # not a descent direction: restart
                 t, zt = z, zz
             mt = self._m(t)
-            curv = float(np.dot(t.ravel(), mt.ravel()))
+            curv = dot(t.ravel(), mt.ravel())  # no BLAS (workspace.dot)
             if not (curv > 0.0 and math.isfinite(curv)):
                 break
             tau = zt / curv
