@@ -55,7 +55,7 @@ def dmt_pull_off(w: float, radius: float) -> float:
 def jkr_force(a, *, radius: float, w: float, e_star: float):
     """JKR load against contact radius ``a`` [length]: ``4 E* a^3 / (3 R) - sqrt(8 pi w E* a^3)``.
 
-    Johnson (1985), Contact Mechanics, eq. (5.59); compressive positive [force].
+    Johnson (1985), Contact Mechanics, section 5.5; compressive positive [force].
     """
     a = np.asarray(a, dtype=float)
     return 4.0 * e_star * a ** 3 / (3.0 * radius) - np.sqrt(8.0 * math.pi * w * e_star * a ** 3)
@@ -93,7 +93,7 @@ def maugis_parameter(radius: float, w: float, e_star: float, sigma0: float) -> f
 def maugis_curve(lam: float, m):
     """Maugis-Dugdale sphere in reduced units against ``m = c / a > 1`` (``c`` the cohesive-zone edge).
 
-    Maugis (1992), eqs. (6.17), (6.18), (6.20) as written by Johnson & Greenwood (1997):
+    Maugis (1992), as written by Johnson & Greenwood (1997):
 
         lam A^2 / 2 [s + (m^2 - 2) atan s] + 4 lam^2 A / 3 [s atan s - m + 1] = 1,  s = sqrt(m^2 - 1)
         P = A^3 - lam A^2 [s + m^2 atan s],           D = A^2 - 4 A lam s / 3
@@ -144,7 +144,7 @@ def johnson_wavy_alpha(w: float, wavelength: float, amplitude: float, e_star: fl
 def johnson_wavy_pressure(a, *, wavelength: float, amplitude: float, w: float, e_star: float):
     """Mean pressure of the JKR-type adhesive contact of ``h = Delta cos(2 pi x / lam)`` [pressure].
 
-    Johnson (1995), Int. J. Solids Struct. 32(3/4), 423-430, eq. (11): contact on
+    Johnson (1995), Int. J. Solids Struct. 32(3/4), 423-430: contact on
     ``|x| < a`` of each period, plane strain,
 
         pbar = p* sin^2(pi a / lam) - sqrt(2 E* w tan(pi a / lam) / lam),   p* = pi E* Delta / lam

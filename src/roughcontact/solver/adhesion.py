@@ -24,7 +24,7 @@ The discrete adhesive problem (the invariants that a converged step satisfies):
   ``mean(p) = p0`` (``p0 < 0`` is a tensile load).
 
 These are the stationarity conditions of the total energy (Rey, Anciaux & Molinari 2017,
-Comput. Mech. 60, 69-81, eq. (9)-(12)), written with the gap as primal variable:
+Comput. Mech. 60, 69-81), written with the gap as primal variable:
 
     E(g) = 1/2 <(g + h), M (g + h)> + sum phi(g)    over {g >= 0, mean(g) = gbar},
 
@@ -60,6 +60,13 @@ law's ``tension(0)`` when ``h`` is flat), the residual is
 when this residual, recomputed from the returned gap with a fresh FFT, is ``<= tol``, every
 value is finite, ``g >= 0`` and the mean gap is the imposed one to 1e-12 relative. The
 contact area fraction is the fraction of nodes with ``g == 0`` exactly.
+
+The energy is not convex when ``w / rho^2`` exceeds ``pi E* / L`` (the smallest eigenvalue
+of ``M`` on zero-mean fields): equilibria then depend on the start (hysteresis), and a
+converged step is *an* equilibrium, not necessarily the one another solver finds. With
+the Maugis-Dugdale law each node's tension jumps at ``g = rho``; unless the cohesive zone
+spans many nodes the discrete system is trapped in many states (measured on the 1-D wavy
+surface: loading and unloading curves 0.04 p* apart where the exponential law's agree).
 """
 
 from __future__ import annotations
@@ -70,6 +77,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..fft import wavenumbers
+from .workspace import dot
 
 #: Default iteration cap of :func:`solve_adhesive` (all inner iterations of one call).
 DEFAULT_MAX_ITER = 20000
@@ -272,16 +280,16 @@ class AdhesiveIteration:
             it += 1
             lam = float(self.r[free].mean())
             z = np.where(free, self.r - lam, 0.0)
-            zz = float(np.dot(z.ravel(), z.ravel()))
+            zz = dot(z.ravel(), z.ravel())
             if joined or zz_old == 0.0:
                 t = z
             else:
                 t = z + (zz / zz_old) * t
-            zt = float(np.dot(z.ravel(), t.ravel()))
+            zt = dot(z.ravel(), t.ravel())
             if zt <= 0.0:  # not a descent direction: restart
                 t, zt = z, zz
             mt = self._m(t)
-            curv = float(np.dot(t.ravel(), mt.ravel()))
+            curv = dot(t.ravel(), mt.ravel())  # no BLAS (workspace.dot)
             if not (curv > 0.0 and math.isfinite(curv)):
                 break
             tau = zt / curv
