@@ -413,6 +413,17 @@ def solve_adhesive(heights, *, law, e_star=1.0, length=1.0, mean_gap=None, p0=No
 MAX_OUTER = 100
 
 
+def _expand(cur, prev, step):
+    """Next mean gap before the root is bracketed: a secant step with a negative slope (at most 4x
+    the previous step), else a doubling step towards the root; never below half the current gap."""
+    gbar, f = cur[0], cur[1]
+    slope = (f - prev[1]) / (gbar - prev[0]) if prev is not None and gbar != prev[0] else 0.0
+    new = gbar - f / slope if slope < 0 else gbar + math.copysign(2 * abs(step), f)
+    if abs(new - gbar) > 4 * abs(step):
+        new = gbar + math.copysign(4 * abs(step), new - gbar)
+    return gbar / 2 if new <= 0 else new
+
+
 def _pressure_control(it, p0, start, tol, max_iter):
     """Mean gap with ``mean(p) = p0``: secant search, then Illinois regula falsi once bracketed.
 
@@ -434,25 +445,22 @@ def _pressure_control(it, p0, start, tol, max_iter):
         gbar, f, gap, res, out = cur
         if res <= tol or it.iterations >= max_iter:
             break
-        if f > 0 and (lo is None or hi is None or abs(gbar - hi[0]) < abs(lo[0] - hi[0])):
-            lo = cur
-        elif f < 0 and (hi is None or lo is None or abs(gbar - lo[0]) < abs(hi[0] - lo[0])):
-            hi = cur
+        # lo: the latest evaluation with f > 0, hi: with f <= 0. Illinois: an end kept twice in a
+        # row has its stored f halved (persistently), so regula falsi cannot stall on one side.
+        if f > 0:
+            if side == 1 and hi is not None:
+                hi[1] /= 2
+            lo, side = cur, 1
+        else:
+            if side == -1 and lo is not None:
+                lo[1] /= 2
+            hi, side = cur, -1
         if lo is not None and hi is not None:
             if abs(lo[0] - hi[0]) <= 1e-14 * max(lo[0], hi[0]):
                 break  # a jump of the mean pressure: no equilibrium at p0 on this branch
-            fl, fh = lo[1], hi[1]
-            if side == (1 if f > 0 else -1):  # Illinois: the other end was kept twice
-                fl, fh = (fl / 2, fh) if f < 0 else (fl, fh / 2)
-            new = (lo[0] * fh - hi[0] * fl) / (fh - fl)
-            side = 1 if f > 0 else -1
+            new = (lo[0] * hi[1] - hi[0] * lo[1]) / (hi[1] - lo[1])
         else:
-            slope = (f - prev[1]) / (gbar - prev[0]) if prev is not None and gbar != prev[0] else 0.0
-            new = gbar - f / slope if slope < 0 else gbar + math.copysign(2 * abs(step), f)
-            if abs(new - gbar) > 4 * abs(step):
-                new = gbar + math.copysign(4 * abs(step), new - gbar)
-            if new <= 0:
-                new = gbar / 2
+            new = _expand(cur, prev, step)
             if out.area_fraction == 0 and f > 0 and gbar > g0 + 1e3 * it.law.rho:
                 break  # separated: the load is beyond the pull-off
         step, prev = new - gbar, cur
