@@ -39,7 +39,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from roughcontact.runcost import read_job
+from roughcontact.pipeline.runcost import read_job
 
 REPO = Path(__file__).resolve().parents[1]
 WORK_LINE = re.compile(r"computed (\d+) surfaces in ([0-9.]+) s CPU, ([0-9.]+) s wall")

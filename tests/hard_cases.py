@@ -55,7 +55,7 @@ from pathlib import Path
 import numpy as np
 
 from roughcontact.solver import STALL_WINDOW
-from roughcontact.surface import generate_surface, nonperiodic_moments, spectral_moments
+from roughcontact.surfaces.synthetic import generate_surface, nonperiodic_moments, spectral_moments
 
 Shape = int | tuple[int, int]
 Length = float | tuple[float, float]
@@ -212,7 +212,7 @@ class Measured:
     unit: str = "um"
 
     def build(self, seed: int, length: Length, rng: np.random.Generator) -> np.ndarray:
-        from roughcontact.topography import read_topography
+        from roughcontact.surfaces.topography import read_topography
 
         path = MEASURED / self.file
         if not path.is_file():

@@ -11,9 +11,9 @@ import xarray as xr
 import yaml
 
 from conftest import copy_workflow, run_snakemake
-from roughcontact import adopt
-from roughcontact.config import validate_config
-from roughcontact.io import write_dataset
+from roughcontact.pipeline import adopt
+from roughcontact.pipeline.config.scenes import validate_config
+from roughcontact.pipeline.io import write_dataset
 from test_workflow import TINY, _jobs
 
 # "big" holds every case of "small" and more: same surfaces, loads and solver

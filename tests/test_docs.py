@@ -374,8 +374,8 @@ def python_adopt(cmd, ctx):
     Two of b's planned cases exist in a (as its contact rule writes them, no solve), one of them
     also in b: the command adopts the other.
     """
-    from roughcontact import adopt
-    from roughcontact.config import validate_config
+    from roughcontact.pipeline import adopt
+    from roughcontact.pipeline.config.scenes import validate_config
     from test_adopt import _case_file
 
     args = shlex.split(cmd)[3:]

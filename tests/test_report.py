@@ -13,8 +13,10 @@ import xarray as xr
 from docutils.core import publish_parts
 
 from conftest import REPO, run_snakemake
-from roughcontact import __version__, fit, report
-from roughcontact.figures import FIGURES
+from roughcontact import __version__
+from roughcontact.analysis import fit
+from roughcontact.figures.registry import FIGURES
+from roughcontact.studies import report
 
 REPORT_DIR = REPO / "workflow" / "report"
 DOCUTILS_CONF = REPORT_DIR / "docutils.conf"

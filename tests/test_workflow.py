@@ -368,7 +368,7 @@ def test_contact_jobs_log_one_line_per_load_step(demo_run):
 @pytest.mark.slow  # ~1 min: make test (CI) runs it, make test-fast does not
 def test_measured_scene_runs_end_to_end(tmp_path):
     """The shipped `measured` scene: three files in three formats through every stage, twice (~1 min)."""
-    from roughcontact.io import read_dataset
+    from roughcontact.pipeline.io import read_dataset
     from test_units import assert_all_units_parse
 
     wd = copy_workflow(tmp_path / "wf")

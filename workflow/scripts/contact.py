@@ -4,11 +4,11 @@ from pathlib import Path
 
 import numpy as np
 
-from roughcontact.datasets import contact_dataset, surface_heights
-from roughcontact.io import eta, read_dataset, run_logged, write_dataset
-from roughcontact.loading import case_loads
-from roughcontact.params import recorded, require_made_for
-from roughcontact.progress import scene_progress
+from roughcontact.pipeline.datasets import contact_dataset, surface_heights
+from roughcontact.pipeline.io import eta, read_dataset, run_logged, write_dataset
+from roughcontact.pipeline.loading import case_loads
+from roughcontact.pipeline.params import recorded, require_made_for
+from roughcontact.pipeline.progress import scene_progress
 from roughcontact.solver import solve_contact, step_notes
 
 

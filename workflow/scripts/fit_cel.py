@@ -4,8 +4,9 @@ A generated scene's aggregate (dims k_l, k_s, H, seed, step) is fitted per (k_l,
 over H by fit.fit_cel; a measured scene's (dims topography, step) by fit.fit_topographies, all its
 topographies pooled as one surface type.
 """
-from roughcontact import fit
-from roughcontact.io import read_dataset, run_logged, write_dataset, write_text_atomic
+from roughcontact.analysis import fit
+from roughcontact.core.files import write_text_atomic
+from roughcontact.pipeline.io import read_dataset, run_logged, write_dataset
 
 
 def main(log):

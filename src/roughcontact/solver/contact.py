@@ -14,7 +14,7 @@ import time
 import numpy as np
 import xarray as xr
 
-from ..quantities import cf_unit
+from ..core.quantities import cf_unit
 from .box import box_solve
 from .check import MEAN_RTOL, final_check
 from .effects import PlasticityCap
@@ -464,7 +464,7 @@ def solve_contact(heights, pressures, *, e_star: float = 1.0, length=1.0,
     ds.attrs["elastic_method"] = solver.method
     ds.attrs["boundary"] = boundary
     if masks is not None:
-        from ..clusters import cluster_dataset
+        from ..statistics.clusters import cluster_dataset
 
         stats = cluster_dataset(masks, ds["step"].values, length, periodic=solver.periodic,
                                 length_unit=length_unit)
