@@ -15,13 +15,13 @@ min_version("9.0")
 report: "workflow/report/workflow.rst"
 
 
-# Report captions render their maths (:math:, .. math::) as MathML: see roughcontact.report.
+# Report captions render their maths (:math:, .. math::) as MathML: see roughcontact.studies.report.
 report_module.render_maths_as_mathml(Path(workflow.basedir, "workflow", "report", "docutils.conf"))
 
 
 # Snakemake's own message for a config file that is not YAML names neither the file nor the line:
 # check the workflow's config first (a file given with --configfile is read by Snakemake before
-# this line runs; `python -m roughcontact.config FILE` names the line of one of those).
+# this line runs; `python -m roughcontact.pipeline.config FILE` names the line of one of those).
 if Path(SHIPPED_CONFIG).is_file():
     try:
         read_config_file(SHIPPED_CONFIG)

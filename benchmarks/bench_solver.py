@@ -5,9 +5,9 @@ For each grid size N (one fresh subprocess per N, so that peak memory and FFT
 plans of one size do not leak into the next) it:
 
 1. generates the paper surface (k_l = 16, k_s = 32, H = 0.8, rms slope 0.1,
-   seed 0) with :func:`roughcontact.surface.generate_surface`;
+   seed 0) with :func:`roughcontact.surfaces.synthetic.generate_surface`;
 2. times one rfft2 + irfft2 pair with the solver's own pyFFTW plan
-   (:func:`roughcontact.fft.get_fft`, planned with ``FFTW_ESTIMATE``), with the
+   (:func:`roughcontact.core.fft.get_fft`, planned with ``FFTW_ESTIMATE``), with the
    same pair planned with ``FFTW_MEASURE`` (what earlier versions used; timing-based,
    so not reproducible bit for bit between processes) and with ``numpy.fft`` (best
    of batches, i.e. hot caches: inside the solver the same pair runs between other

@@ -137,7 +137,7 @@ def full_contact_bound(p: np.ndarray, p0: float, s: float, tol: float, e_star: f
 # --------------------------------------------------------------------------- bases
 @dataclass(frozen=True)
 class Rough:
-    """A self-affine Gaussian surface, :func:`roughcontact.surface.generate_surface`."""
+    """A self-affine Gaussian surface, :func:`roughcontact.surfaces.synthetic.generate_surface`."""
 
     shape: Shape
     k_l: float
@@ -203,7 +203,7 @@ class Wavy:
 @dataclass(frozen=True)
 class Measured:
     """A measured topography read as the ``measured`` scene reads it
-    (:func:`roughcontact.topography.read_topography`: heights in ``unit``, undefined points filled
+    (:func:`roughcontact.surfaces.topography.read_topography`: heights in ``unit``, undefined points filled
     harmonically, levelled, cropped to the centred square); ``shape`` is the grid it gives.
     FileNotFoundError when the file is not in :data:`MEASURED` (the suite then skips the case)."""
 

@@ -130,7 +130,7 @@ def test_refuses_a_file_holding_another_case(tmp_path):
 
 
 def _cli(cwd, *args):
-    return subprocess.run([sys.executable, "-m", "roughcontact.adopt", *args], cwd=cwd, capture_output=True,
+    return subprocess.run([sys.executable, "-m", "roughcontact.pipeline.adopt", *args], cwd=cwd, capture_output=True,
                           text=True, timeout=300)
 
 

@@ -287,12 +287,12 @@ def test_config_files_add_to_the_shipped_config_as_snakemake_reads_them(tmp_path
     assert cfg["scenes"]["demo"]["contact"]["grid"] == shipped_config["scenes"]["demo"]["contact"]["grid"]
     scenes = validate_config({**cfg, "scene": "mine"}, SCHEMA)["scenes"]
     assert scenes["mine"]["contact"]["load"]["n_steps"] == 30  # from the shipped defaults
-    res = subprocess.run([sys.executable, "-m", "roughcontact.config", "mine.yaml", "--scene", "mine"],
+    res = subprocess.run([sys.executable, "-m", "roughcontact.pipeline.config", "mine.yaml", "--scene", "mine"],
                          capture_output=True, text=True, timeout=120)
     assert res.returncode == 0 and "scene 'mine' plans 2 contact cases" in res.stdout, res.stderr
     (tmp_path / "broken.yaml").write_text("scenes:\n  mine: {contact: {seeds: 2}\n")
-    res = subprocess.run([sys.executable, "-m", "roughcontact.config", "broken.yaml"], capture_output=True, text=True,
-                         timeout=120)
+    res = subprocess.run([sys.executable, "-m", "roughcontact.pipeline.config", "broken.yaml"],
+                         capture_output=True, text=True, timeout=120)
     assert res.returncode == 2 and "error: broken.yaml: not valid YAML at line 3, column 1" in res.stderr, res.stderr
 
 

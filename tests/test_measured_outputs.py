@@ -1,7 +1,7 @@
 """Outputs of measured scenes: the pooled CEL fit of topographies, its table, figures and report table.
 
 Test data follow the layout of a measured scene (cases named by strings along ``topography``):
-the contact aggregate is roughcontact.fit.simulate_cel_cases' synthetic CEL data for one
+the contact aggregate is cel_synthetic.simulate_cel_cases' synthetic CEL data for one
 (k_l, k_s, H), its seeds renamed into named topographies; the surfaces are small generated maps
 written as ``surfaces/{name}.nc`` with the measured statistics.
 """
@@ -174,7 +174,7 @@ def _surface(name: str, seed: int) -> xr.Dataset:
 
 
 def _scene(names, contact=True) -> dict:
-    """A validated measured scene, as roughcontact.config leaves it."""
+    """A validated measured scene, as roughcontact.pipeline.config leaves it."""
     scene = {"description": "measured", "topography": {"files": {n: {"path": f"data/{n}.x3p"} for n in names},
                                                        "unit": "um", "undefined": "reject"},
              "representativity": {"n_bins": 100}, "fit": {"window": [0.01, 0.11], "n_boot": 40}}

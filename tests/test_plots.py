@@ -261,7 +261,7 @@ def test_a_constant_on_a_bound_of_the_joint_fit_is_not_constrained(contact):
 
 def test_representativity_units_are_mathtext(rep_stats):
     """epsilon's unit appears as mathtext: its number's unit (units "1" for lengths in a reference unit, as the
-    pipeline writes it, roughcontact.representativity.epsilon_attrs), or the "um^(-1/2)" of older files."""
+    pipeline writes it, roughcontact.statistics.representativity.epsilon_attrs), or the "um^(-1/2)" of older files."""
     rep = rep_stats.copy()
     rep["epsilon_mean"].attrs.update(units="1", reference_length_units="um", reference_length_power="-1/2")
     label = fig_representativity(rep).axes[0].get_ylabel()

@@ -1,4 +1,5 @@
-"""The Snakemake report: its landing page (roughcontact.report) and captions, and the demo's report in a browser."""
+"""The Snakemake report: its landing page (roughcontact.studies.report) and captions, and the demo's report
+in a browser."""
 import os
 import re
 import shutil
@@ -122,7 +123,7 @@ def test_parameters_table_lists_every_dotted_key_sorted(mathml):
 
 
 def _fit_result(n_seeds=3, ci=True):
-    """A small dataset shaped like roughcontact.fit.fit_cel's result, for fit.to_csv_table."""
+    """A small dataset shaped like roughcontact.analysis.fit.fit_cel's result, for fit.to_csv_table."""
     coords = {"k_l": [4.0, 16.0], "k_s": [32.0], "H_group": ["0.36", "pooled"], "estimator": ["paper", "joint"],
               "constant": list(fit.CONSTANTS)}
     dims = tuple(coords)

@@ -5,17 +5,6 @@ import xarray as xr
 
 from compare_outputs import assert_images_close, assert_text_close
 from roughcontact.studies import reproduction
-from roughcontact.studies.reproduction.claims import (
-    _asperity_row,
-    _asymptote_claim,
-    _h_direction_row,
-    _kappa_decreasing_row,
-    _kl_row,
-    _persson_row,
-    _rough_cel_row,
-    _row,
-    _seed_stats,
-)
 
 
 def _contact(kappa_of_area):
@@ -36,13 +25,13 @@ def _with_presence(con):
 @pytest.mark.parametrize("kappa, verdict", [(lambda a: 3.0 - 0.2 * np.log(a), "reproduced"),
                                             (lambda a: 2.0 + 0.2 * np.log(a), "not")])
 def test_kappa_decreasing_row(kappa, verdict):
-    assert _kappa_decreasing_row(_contact(kappa))["verdict"] == verdict
+    assert reproduction._kappa_decreasing_row(_contact(kappa))["verdict"] == verdict
 
 
 @pytest.mark.parametrize("level, verdict", [(1.7, "reproduced"), (1.5, "not")])
 def test_persson_row_needs_every_kappa_above_its_asymptote(level, verdict):
     con = _with_presence(_contact(lambda a: level + 0 * a))
-    row = _persson_row(con)
+    row = reproduction._persson_row(con)
     assert row["verdict"] == verdict and f"{level:.3f}" in row["ours"]
 
 
@@ -51,10 +40,10 @@ def test_h_direction_row_over_non_representative_families():
     h = [0.2, 0.5, 0.8]
     vals = np.array([[[3.0, 2.8, 2.6], [3.2, 3.0, 2.9]], [[2.7, 2.7, 2.7], [2.9, 2.8, 2.7]]])
     mean = xr.DataArray(vals, dims=("k_l", "k_s", "H"), coords={"k_l": [1.0, 16.0], "k_s": [32.0, 128.0], "H": h})
-    row = _h_direction_row(mean, 16.0, 32.0)
+    row = reproduction._h_direction_row(mean, 16.0, 32.0)
     assert row["verdict"] == "reproduced" and "falls in 3 of 3 families, monotonically in 3" in row["ours"]
     mean.loc[{"k_l": 1.0, "k_s": 128.0}] = [2.9, 3.0, 3.1]
-    assert _h_direction_row(mean, 16.0, 32.0)["verdict"] == "partly"
+    assert reproduction._h_direction_row(mean, 16.0, 32.0)["verdict"] == "partly"
 
 
 def _grid(kappa, seeds=3):
@@ -107,17 +96,17 @@ def test_kappa_against_k_l_reads_a_plateau_inside_the_scatter_as_partly(sem, ver
     # 2.20 -> 2.50 -> 2.49: the last step falls by 0.01, inside two standard errors only when sem = 0.02
     coords = {"k_l": [1.0, 8.0, 16.0], "k_s": [32.0], "H": [0.2]}
     mean = xr.DataArray(np.array([2.20, 2.50, 2.49]).reshape(3, 1, 1), dims=("k_l", "k_s", "H"), coords=coords)
-    row = _kl_row(mean, xr.full_like(mean, sem))
+    row = reproduction._kl_row(mean, xr.full_like(mean, sem))
     assert row["verdict"] == verdict and f"2.490 ± {sem:.3f} (k_l=16)" in row["ours"]
     rising = mean.copy(data=np.array([2.20, 2.49, 2.50]).reshape(3, 1, 1))
-    assert _kl_row(rising, xr.full_like(mean, sem))["verdict"] == "reproduced"
+    assert reproduction._kl_row(rising, xr.full_like(mean, sem))["verdict"] == "reproduced"
 
 
 def test_kappa_against_k_l_averages_the_standard_error_over_cells():
     # two independent cells of sem 0.02 each: their mean has sem 0.02 / sqrt(2)
     coords = {"k_l": [1.0, 16.0], "k_s": [32.0, 64.0], "H": [0.2]}
     mean = xr.DataArray(np.array([[2.2, 2.2], [2.5, 2.5]]).reshape(2, 2, 1), dims=("k_l", "k_s", "H"), coords=coords)
-    row = _kl_row(mean, xr.full_like(mean, 0.02))
+    row = reproduction._kl_row(mean, xr.full_like(mean, 0.02))
     assert f"2.500 ± {0.02 / np.sqrt(2):.3f} (k_l=16)" in row["ours"]
 
 
@@ -127,11 +116,11 @@ def test_a_cell_missing_one_seed_is_left_out():
         return 2.0 + 0.1 * kl / 16 + (1.0 if (kl, h, seed) == (16, 0.8, 2) else 0.0)
 
     con = _drop_cases(_grid(kappa), k_l=16.0, H=0.8, seed=2)
-    mean, _ = _seed_stats(reproduction.kappa_at(con), con)
+    mean, _ = reproduction._seed_stats(reproduction.kappa_at(con), con)
     assert np.isnan(float(mean.sel(k_l=16.0, H=0.8, k_s=32.0)))
     assert np.isfinite(mean.sel(H=0.2)).all()
     # the asymptote row counts its fraction over the cells present, not over the grid
-    row = _asymptote_claim(con)[0]
+    row = reproduction._asymptote_claim(con)[0]
     assert "for 0 % of" in row["ours"]
 
 
@@ -176,13 +165,13 @@ def test_asperity_row_inside_and_outside_the_seed_scatter():
         return asperity_area(p, alpha=2.0, rms_slope=0.1, e_star=1.0, model="bgt")
 
     # BGT itself with a 10 % seed scatter: Greenwood lies within a few % of it at alpha = 2
-    assert _asperity_row(_lambda_l_equal_l(bgt, 0.1))["verdict"] == "reproduced"
+    assert reproduction._asperity_row(_lambda_l_equal_l(bgt, 0.1))["verdict"] == "reproduced"
     # twice the area with a 1 % scatter: neither model inside
-    row = _asperity_row(_lambda_l_equal_l(lambda p: 2 * bgt(p), 0.01))
+    row = reproduction._asperity_row(_lambda_l_equal_l(lambda p: 2 * bgt(p), 0.01))
     assert row["verdict"] == "not" and "BGT 0 %" in row["ours"]
     # no k_l = 1 in the aggregate: pending
     con = _lambda_l_equal_l(bgt, 0.1).assign_coords(k_l=[16.0])
-    assert _asperity_row(con)["verdict"] == "pending"
+    assert reproduction._asperity_row(con)["verdict"] == "pending"
 
 
 def test_asperity_row_skips_a_family_without_cases():
@@ -198,7 +187,7 @@ def test_asperity_row_skips_a_family_without_cases():
         hole[name] = hole[name] * np.nan
     hole["case_present"] = ~hole["case_present"]
     both = xr.concat([full, hole], dim="k_s")
-    assert _asperity_row(both) == _asperity_row(full)
+    assert reproduction._asperity_row(both) == reproduction._asperity_row(full)
 
 
 def _fit(k_s, values, ci):
@@ -214,9 +203,9 @@ def _fit(k_s, values, ci):
 
 def test_rough_cel_row_compares_all_three_constants():
     kappa = reproduction.PAPER_KAPPA
-    assert _rough_cel_row(_fit(128.0, [kappa, 0.56, 1.15], 0.01))["verdict"] == "reproduced"
-    assert _rough_cel_row(_fit(128.0, [kappa, 0.56, 0.3], 0.01))["verdict"] == "partly"
-    assert _rough_cel_row(_fit(32.0, [kappa, 0.56, 1.15], 0.01))["verdict"] == "pending"
+    assert reproduction._rough_cel_row(_fit(128.0, [kappa, 0.56, 1.15], 0.01))["verdict"] == "reproduced"
+    assert reproduction._rough_cel_row(_fit(128.0, [kappa, 0.56, 0.3], 0.01))["verdict"] == "partly"
+    assert reproduction._rough_cel_row(_fit(32.0, [kappa, 0.56, 1.15], 0.01))["verdict"] == "pending"
 
 
 def test_cel_rows_at_the_representative_point():
@@ -243,7 +232,7 @@ def test_kappa_at_outside_the_loads_is_nan():
 
 
 def test_markdown_table_has_one_row_per_claim():
-    rows = [_row("c1", "p", "o", "reproduced", "t"), _row("c2", "p", "o", "not", "t")]
+    rows = [reproduction._row("c1", "p", "o", "reproduced", "t"), reproduction._row("c2", "p", "o", "not", "t")]
     text = reproduction.markdown_table(rows)
     assert text.count("\n") == 4 and "**not**" in text and "**reproduced**" in text
 

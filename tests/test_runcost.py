@@ -1,4 +1,4 @@
-"""roughcontact.runcost: a run's cost summed from Snakemake's benchmark files and the jobs' logs."""
+"""roughcontact.pipeline.runcost: a run's cost summed from Snakemake's benchmark files and the jobs' logs."""
 
 import pytest
 

@@ -270,7 +270,7 @@ def test_discrete_moments_validate_the_grid():
 # ===================================================== finite-load asperity theories
 # Reference values: shared/reference/bgt-greenwood.md ("the note"), computed there by two
 # deterministic quadratures that agree to 1e-9 and confirmed by Monte Carlo. The code here
-# integrates in another order (t | xi conditional, then xi; see roughcontact.asperity).
+# integrates in another order (t | xi conditional, then xi; see roughcontact.theory.asperity).
 MODELS = ("bgt", "greenwood")
 SQRT_2PI = math.sqrt(2 * math.pi)
 

@@ -234,7 +234,7 @@ def test_bad_arguments_are_named(tmp_path, kwargs, words):
 
 
 def test_shipped_example_files_hold_what_the_examples_module_writes(tmp_path):
-    """data/measured/ (the `measured` scene's inputs) equals a fresh `python -m roughcontact.examples`.
+    """data/measured/ (the `measured` scene's inputs) equals a fresh `python -m roughcontact.pipeline.examples`.
 
     The shipped files were generated on another machine: heights agree to FFT rounding
     (tests/compare_outputs.py), sizes and undefined points exactly.

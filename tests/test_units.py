@@ -3,7 +3,7 @@
 Every ``units`` must parse with UDUNITS-2 (``cf_units``, the CF conventions' reference) and pint
 to the same unit. UDUNITS-2 has integer powers only, so ``cf_unit`` refuses fractional ones and
 ``epsilon`` [length^-1/2] is written as its number for lengths in the study's unit, ``units``
-``"1"`` with its reference length alongside (roughcontact.quantities.per_reference_length).
+``"1"`` with its reference length alongside (roughcontact.core.quantities.per_reference_length).
 """
 import ast
 import math

@@ -220,8 +220,8 @@ def test_malformed_yaml_is_named_with_file_line_and_column(tmp_path):
     config.write_text("\n".join(lines[:at] + ["scene: demo"] + lines[at + 1:]) + "\n")
     res = run_snakemake(wd, "-n", "--configfile", "my_scene.yaml")
     assert res.returncode != 0 and "Config file is not valid JSON or YAML" in res.stdout + res.stderr
-    res = subprocess.run([sys.executable, "-m", "roughcontact.config", "my_scene.yaml"], cwd=wd, capture_output=True,
-                         text=True, timeout=120)
+    res = subprocess.run([sys.executable, "-m", "roughcontact.pipeline.config", "my_scene.yaml"], cwd=wd,
+                         capture_output=True, text=True, timeout=120)
     assert res.returncode == 2 and "my_scene.yaml: not valid YAML at line 3, column 1" in res.stderr, res.stderr
 
 

@@ -24,7 +24,7 @@ ACTIVE_SCENE = _VALID["scene"]
 logger.info(plan_summary(ACTIVE_SCENE, SCENES[ACTIVE_SCENE]))
 
 
-# The plan each contact job's scene ETA is read against (python -m roughcontact.progress).
+# The plan each contact job's scene ETA is read against (python -m roughcontact.pipeline.progress).
 onstart:
     write_plan(Path("results", ACTIVE_SCENE), ACTIVE_SCENE, SCENES[ACTIVE_SCENE], workflow.cores)
 
@@ -49,7 +49,7 @@ def topography_path(folder, ext="nc"):
 # value with the scene's allowed ones. Constraints built from the configured values would leave
 # Snakemake's bare MissingRuleException instead. The shapes keep file names unambiguous: a grid
 # value holds no '_' or '/', a seed only digits, and a topography name never looks like a
-# generated case's or batch's file (roughcontact.measured refuses such names in the config).
+# generated case's or batch's file (roughcontact.pipeline.measured refuses such names in the config).
 GRID_VALUE = r"[^_/]+"
 NOT_GENERATED = r"(?!kl[^_/]*(?:_ks[^_/]*)?_H[^_/]*(?:_s\d+)?\.[^./]+$)"
 
@@ -254,7 +254,7 @@ def figure_spec(w):
     if w.figure not in FIGURES:
         raise WorkflowError(
             f"scene {w.scene!r}: wildcard figure={w.figure} is not a figure of roughcontact "
-            f"(roughcontact.figures.FIGURES); the scene's figures: {', '.join(figures) or 'none'}"
+            f"(roughcontact.figures.registry.FIGURES); the scene's figures: {', '.join(figures) or 'none'}"
         )
     if w.figure not in figures:
         raise WorkflowError(

@@ -20,7 +20,7 @@ def case_of(w) -> dict:
 
 
 def labels_of(case: dict) -> dict:
-    """The case as roughcontact.datasets' keyword arguments."""
+    """The case as roughcontact.pipeline.datasets' keyword arguments."""
     return {"hurst" if key == "H" else key: value for key, value in case.items()}
 
 

@@ -1,4 +1,4 @@
-"""Stage 1: generate one surface and write it (thin wrapper over roughcontact.surface)."""
+"""Stage 1: generate one surface and write it (thin wrapper over roughcontact.surfaces.synthetic)."""
 from roughcontact.pipeline.datasets import surface_dataset
 from roughcontact.pipeline.io import run_logged, write_dataset
 from roughcontact.surfaces.synthetic import generate_surface

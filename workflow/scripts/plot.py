@@ -1,4 +1,4 @@
-"""Render one registered figure (roughcontact.figures) to PNG and PDF (deterministic bytes)."""
+"""Render one registered figure (roughcontact.figures.registry) to PNG and PDF (deterministic bytes)."""
 from roughcontact.figures.registry import FIGURES
 from roughcontact.figures.style import save_figure
 from roughcontact.pipeline.io import run_logged

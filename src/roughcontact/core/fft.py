@@ -89,7 +89,7 @@ def _shipped_wisdom_only():
 def write_wisdom(path: str | os.PathLike = WISDOM_FILE, sizes=WISDOM_SIZES, flags=("FFTW_MEASURE",)) -> Path:
     """Measure single-threaded plans for ``n x n`` pairs of both precisions; write them to ``path``.
 
-    Run once per FFTW build (``python -c "from roughcontact.fft import write_wisdom;
+    Run once per FFTW build (``python -c "from roughcontact.core.fft import write_wisdom;
     write_wisdom()"``), on a machine of the kind the pipeline runs on; the file's
     plans are then used by every process (module docstring). Takes about a minute.
     """

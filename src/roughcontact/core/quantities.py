@@ -55,7 +55,7 @@ def _udunits_format(unit, registry, **options) -> str:
         if not float(power).is_integer():
             raise ValueError(f"UDUNITS-2 (and so CF) has integer powers only; {symbol}^{power} has no units "
                              "string: write the value for lengths in a reference unit instead "
-                             "(roughcontact.quantities.per_reference_length)")
+                             "(roughcontact.core.quantities.per_reference_length)")
         name = str(symbol).replace("\N{MICRO SIGN}", "u").replace("\N{GREEK SMALL LETTER MU}", "u")
         factors.append(name if power == 1 else f"{name}^{int(power)}")
     return " ".join(factors)
@@ -81,7 +81,7 @@ def _power(name: str, value) -> int:
         raise ValueError(f"{name} must be an integer, got {value!r}")
     if exact.denominator != 1:
         raise ValueError(f"{name} = {exact}: UDUNITS-2 (and so CF) has integer powers only; write the value "
-                         "for lengths in a reference unit instead (roughcontact.quantities.per_reference_length)")
+                         "for lengths in a reference unit instead (roughcontact.core.quantities.per_reference_length)")
     return exact.numerator
 
 

@@ -65,10 +65,10 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
         ``case_present`` and ``alpha``; where some ``converged(k_l, k_s, H, seed, step)`` is
         False, also ``pressure`` [unit of e_star] and ``area_fraction`` [1] over those dims.
     stats : xarray.Dataset
-        :func:`roughcontact.aggregate.seed_statistics` output (the workflow passes the
+        :func:`roughcontact.analysis.aggregate.seed_statistics` output (the workflow passes the
         aggregate, which holds both).
     fit : xarray.Dataset, optional
-        :func:`roughcontact.fit.fit_cel` output.
+        :func:`roughcontact.analysis.fit.fit_cel` output.
     k_l, k_s, hurst : sequences of float, optional
         Subsets to show (default: all with data).
     fit_k_l : float, optional
@@ -178,7 +178,7 @@ def _area_load_theory(ax, p: np.ndarray, e_star: float, hp: float, alphas) -> bo
     """BGT and Persson small-load limits, Persson's erf curve and the asperity models at loads ``p``.
 
     An asperity model is drawn only up to the largest load it covers (its A/A0 = 1,
-    :func:`~roughcontact.asperity.asperity_max_load`); returns whether one was cut there, for a note.
+    :func:`~roughcontact.theory.asperity.asperity_max_load`); returns whether one was cut there, for a note.
     """
     x = p / e_star
     ax.plot(x, linear_area(p, kappa=KAPPA_BGT, rms_slope=hp, e_star=e_star),

@@ -48,8 +48,8 @@ def _windowed_dpbar(agg: xr.Dataset, kl: float, ks: float, h: float, per_decade:
                     bad: xr.DataArray | None = None):
     """Seed mean and s.e.m. of the windowed ``d pbar / d p0`` of one family.
 
-    Windows: :func:`roughcontact.aggregate.log_window_edges` of the seed-mean load curve;
-    slopes per seed by :func:`roughcontact.aggregate.windowed_load_slope`, the unconverged
+    Windows: :func:`roughcontact.analysis.aggregate.log_window_edges` of the seed-mean load curve;
+    slopes per seed by :func:`roughcontact.analysis.aggregate.windowed_load_slope`, the unconverged
     steps (``bad``, :func:`_unconverged` of ``agg``) left out of both. Returns
     ``(a, mean, sem)``, each shape ``(n_windows,)``: mean ``A/A0`` [1], seed-mean slope [1]
     and its standard error [1] (NaN with fewer than two seeds in a window).
@@ -140,7 +140,7 @@ def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
 
     Large markers: per seed, the least-squares slope of ``pbar`` against ``p0`` over
     windows of equal width ``1/per_decade`` decade in ``A/A0`` (merged where the load
-    steps are sparse; :func:`roughcontact.aggregate.windowed_load_slope`), averaged over
+    steps are sparse; :func:`roughcontact.analysis.aggregate.windowed_load_slope`), averaged over
     seeds, with ``+-1`` s.e.m. bars drawn in log space (``y e^(+-sem/y)``, always above
     zero); non-positive values cannot be drawn on the log axis and are left out. Small
     faint markers: the seed mean of the pointwise finite differences

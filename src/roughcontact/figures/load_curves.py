@@ -106,10 +106,10 @@ def _converged_family(agg: xr.Dataset, stats: xr.Dataset, bad: xr.DataArray | No
     """Seed statistics of one family over its converged steps, by name, shape ``(n_steps,)`` each.
 
     ``family``: ``{"k_l": .., "k_s": .., "H": ..}``; ``names``: statistics of
-    :func:`roughcontact.aggregate.seed_statistics` (``"kappa_mean"``, ``"area_fraction_std"``,
+    :func:`roughcontact.analysis.aggregate.seed_statistics` (``"kappa_mean"``, ``"area_fraction_std"``,
     ``"pressure_mean"`` ...), in the units of their variable; ``bad``: :func:`_unconverged` of
     ``agg``. Taken from ``stats`` where every step of the family converged (or ``bad`` is None),
-    else recomputed from ``agg`` by :func:`roughcontact.aggregate.seed_statistics`' reduction
+    else recomputed from ``agg`` by :func:`roughcontact.analysis.aggregate.seed_statistics`' reduction
     with the unconverged ``(seed, step)`` left out (a step none of whose seeds converged is NaN,
     and so is the s.d. of a step with one converged seed).
     """
@@ -258,8 +258,8 @@ _BAND_ALPHA, _BAND_EDGE_ALPHA, _BAND_EDGE_LW = 0.3, 0.8, 0.6
 def _constrained_constants(fit: xr.Dataset, where: Mapping, estimator: str,
                            constants: Sequence[str]) -> dict[str, bool]:
     """Per constant, whether the data constrain it: the fit's ``constrained`` flag (95 % interval
-    narrower than the value, :func:`roughcontact.fit.constrained_flags`; True for files without
-    the flag) and not sitting on a bound of the fit (:func:`roughcontact.fit.at_bound`; the flag
+    narrower than the value, :func:`roughcontact.analysis.fit.constrained_flags`; True for files without
+    the flag) and not sitting on a bound of the fit (:func:`roughcontact.analysis.fit.at_bound`; the flag
     of fits made before that check was part of it does not say so).
 
     ``where``: the fit's group, e.g. ``{"k_l": 16.0, "k_s": 32.0, "H_group": "pooled"}`` (empty

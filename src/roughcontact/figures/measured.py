@@ -2,10 +2,10 @@
 
 A measured scene's cases are topography files named by strings (dim ``topography``) rather
 than the generator's ``(k_l, k_s, H, seed)`` grid, and its CEL fit pools them all
-(:func:`roughcontact.fit.fit_topographies`). These figures follow the conventions of
-:mod:`roughcontact.plots` (Okabe-Ito colours, legend below the panels, theory in black and grey,
+(:func:`roughcontact.analysis.fit.fit_topographies`). These figures follow the conventions of
+:mod:`roughcontact.figures` (Okabe-Ito colours, legend below the panels, theory in black and grey,
 Persson in reddish purple) and reuse its helpers and theory lines; they are built without pyplot
-and saved byte-reproducibly by :func:`roughcontact.plots.save_figure`.
+and saved byte-reproducibly by :func:`roughcontact.figures.style.save_figure`.
 
 One colour and marker per topography (the marker changes after the seven data colours, so no
 two of the first 49 topographies look alike). The load axis of the area figure is
@@ -55,7 +55,7 @@ from .style import (
 #: Largest side, in pixels, of a height map as drawn: larger maps are block-averaged (the
 #: figure is ~2 in wide per panel, so more pixels only bloat the PDF).
 MAP_PIXELS = 512
-#: Style of the fitted CEL (as in :mod:`roughcontact.plots`: thick translucent grey).
+#: Style of the fitted CEL (as in :mod:`roughcontact.figures`: thick translucent grey).
 _FIT_STYLE = {"color": "0.45", "lw": 2.2, "alpha": 0.8}
 
 
@@ -217,7 +217,7 @@ def fig_topographies(surfaces: Sequence[xr.Dataset]) -> Figure:
         ``(nx, ny)`` [unit]; ``rms_height``, ``rms_slope`` [1] and ``alpha`` [1] (Nayak
         bandwidth), each scalar or along a length-1 ``topography`` dim whose label is the
         name; global attrs ``length`` (side ``L``) [unit] and ``n`` for a square cell, or
-        ``length_x``, ``length_y``, ``nx``, ``ny`` (:func:`roughcontact.datasets.cell_attrs`),
+        ``length_x``, ``length_y``, ``nx``, ``ny`` (:func:`roughcontact.pipeline.datasets.cell_attrs`),
         and ``length_units``. Each map is drawn to scale.
 
     Returns
@@ -279,7 +279,7 @@ def fig_measured_area_load(agg: xr.Dataset, fit: xr.Dataset | None = None, *, es
 
     Markers and thin lines: each topography's converged steps, its load normalised by its own
     rms slope ``h'``; grey crosses: the unconverged steps, counted in the legend. Theory as in
-    :func:`roughcontact.plots.fig_area_load`: the BGT asymptote
+    :func:`roughcontact.figures.area_load.fig_area_load`: the BGT asymptote
     ``A/A0 = sqrt(2 pi) p0/(E* h')`` (black), Persson's small-load asymptote (purple dashed)
     and full erf curve (thick translucent purple), the finite-load BGT and Greenwood asperity
     models at ``alpha = 2`` and at the topographies' mean ``alpha``; with ``fit``, the pooled
@@ -292,7 +292,7 @@ def fig_measured_area_load(agg: xr.Dataset, fit: xr.Dataset | None = None, *, es
         [1], ``pressure`` [unit of the attr ``e_star``], ``rms_slope(topography)`` [1],
         optionally ``converged``, ``alpha(topography)``, ``case_present(topography)``.
     fit : xarray.Dataset, optional
-        :func:`roughcontact.fit.fit_topographies` output.
+        :func:`roughcontact.analysis.fit.fit_topographies` output.
     estimator : str
         Which estimator of ``fit`` to draw.
     sizes : mapping of str to (int, int), optional
@@ -353,7 +353,7 @@ def fig_measured_kappa(agg: xr.Dataset, fit: xr.Dataset | None = None, *, estima
     steps, counted in the legend. The BGT limit ``sqrt(2 pi)``
     (black), Persson's ``sqrt(8/pi)`` (purple dashed, or named in the legend when below the
     axis), the paper's CEL (black dotted), the finite-load BGT and Greenwood asperity models
-    as in :func:`roughcontact.plots.fig_kappa`; with ``fit``, the pooled CEL's
+    as in :func:`roughcontact.figures.kappa.fig_kappa`; with ``fit``, the pooled CEL's
     ``kappa(A/A0) = kappa (1 - beta a^(1-mu))^(1/(1-mu))`` (thick grey) and its window (shaded).
 
     Parameters

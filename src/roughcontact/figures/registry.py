@@ -8,7 +8,7 @@ report caption lives. A new figure is one entry here and one caption file in
 ``workflow/report/``.
 
 A measured scene (one with a ``topography`` block: its cases are topography files named by
-strings) gets only the figures marked ``measured`` (:mod:`roughcontact.plots_measured`), and a
+strings) gets only the figures marked ``measured`` (:mod:`roughcontact.figures.measured`), and a
 generated scene only the others: the generator's figures index cases by ``(k_l, k_s, H, seed)``.
 """
 

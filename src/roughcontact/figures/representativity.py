@@ -126,7 +126,7 @@ def _rep_map(fig: Figure, ax, sub: xr.Dataset, symbol: str, unit: str) -> None:
 
 def _rep_panels(rep: xr.Dataset, h: float) -> list[tuple[xr.Dataset, str, str, str]]:
     """``(statistics at H=h, symbol, unit, title)`` of the paper's eps and, when the per-case
-    data allow it, of the scale-free eps (:func:`roughcontact.representativity.scale_free_statistics`)."""
+    data allow it, of the scale-free eps (:func:`roughcontact.analysis.aggregate.seeds.scale_free_statistics`)."""
     units = _unit_tex(_number_unit(rep["epsilon_mean"].attrs))
     panels = [(rep.sel(H=h), r"$\bar\varepsilon$", units, r"(a) heights $h$ (paper's $\varepsilon$)")]
     free = scale_free_statistics(rep)
@@ -146,7 +146,7 @@ def fig_representativity(rep_stats: xr.Dataset, *, hurst: float | None = None) -
     paper defines it [height unit^-1/2], which scales as ``sigma^(-1/2)`` with the rms
     height ``sigma``; panel (b), when ``rep_stats`` holds the per-case ``epsilon`` and
     ``std_height``: the scale-free eps of ``(h - hbar)/sigma`` [1], ``eps sqrt(sigma)``
-    (:func:`roughcontact.representativity.scale_free_epsilon`). Log-log axes, error bars
+    (:func:`roughcontact.statistics.representativity.scale_free_epsilon`). Log-log axes, error bars
     the standard error of the seed mean. Panel (c), when data exist for at least two
     ``k_l`` and two ``k_s``: the paper's Fig. 1a as a map, the seed-mean eps (scale-free
     where available) as colour over ``k_l x k_s``. The title states N, seeds, bins, H
@@ -155,7 +155,7 @@ def fig_representativity(rep_stats: xr.Dataset, *, hurst: float | None = None) -
     Parameters
     ----------
     rep_stats : xarray.Dataset
-        :func:`roughcontact.aggregate.representativity_statistics` output: ``epsilon_mean``,
+        :func:`roughcontact.analysis.aggregate.representativity_statistics` output: ``epsilon_mean``,
         ``epsilon_sem``, ``n_seeds`` over ``(k_l, k_s, H)``, optionally merged with the
         per-case ``epsilon`` and ``std_height`` over ``(k_l, k_s, H, seed)`` as in the
         workflow's ``aggregate/representativity.nc``.

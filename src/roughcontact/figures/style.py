@@ -77,7 +77,7 @@ def save_figure(fig: Figure, path: str | os.PathLike) -> list[Path]:
     ``CreationDate``, ``Creator`` and ``Producer`` (dates and versions are the only
     varying bytes; Agg rasterisation and PDF object numbering are deterministic, and
     TrueType embedding (``pdf.fonttype`` 42) subsets fonts deterministically).
-    Each file is written atomically (:func:`roughcontact.io.atomic_output`): an
+    Each file is written atomically (:func:`roughcontact.core.files.atomic_output`): an
     interrupted save leaves the previous complete file or none, never a truncated one,
     and the files get the mode the umask gives.
 
@@ -146,7 +146,7 @@ def _pick(values: np.ndarray, wanted, name: str) -> list[float]:
     return out
 
 
-#: One factor of a unit string of :func:`roughcontact.quantities.cf_unit` (``um``, ``um^-2``), of
+#: One factor of a unit string of :func:`roughcontact.core.quantities.cf_unit` (``um``, ``um^-2``), of
 #: :func:`_number_unit` (``um^(-1/2)``) or of files of older versions (``um**-2``, ``um^-0.5``).
 _UNIT_FACTOR = re.compile(r"^([A-Za-z]+)(?:(?:\^|\*\*)\(?([-+]?\d+(?:/\d+|\.\d+)?)\)?)?$")
 
@@ -157,7 +157,7 @@ _UNIT_SYMBOLS = frozenset(LENGTH_UNITS + PRESSURE_UNITS + ("s",)) - {"1"}
 def _unit_tex(units: str) -> str:
     """A unit string as mathtext, upright, factors separated by a thin space.
 
-    The strings of :func:`roughcontact.quantities.cf_unit` and :func:`_number_unit`: ``"um^(-1/2)"``
+    The strings of :func:`roughcontact.core.quantities.cf_unit` and :func:`_number_unit`: ``"um^(-1/2)"``
     -> ``$\\mathrm{\\mu m}^{-1/2}$``, ``"MPa um^-1"`` -> ``$\\mathrm{MPa}\\,\\mathrm{\\mu m}^{-1}$``,
     ``"1"`` -> ``"1"``. Other strings (files of older versions) as one upright word with
     its power: ``"length unit^-1/2"`` -> ``$(\\mathrm{length\\ unit})^{-1/2}$``.
@@ -182,7 +182,7 @@ def _unit_tex(units: str) -> str:
 
 def _number_unit(attrs) -> str:
     """The unit a variable's number is in, for a label: its ``units``, or for a value written for lengths in
-    a reference unit (:func:`roughcontact.quantities.per_reference_length`) that unit to its power, e.g.
+    a reference unit (:func:`roughcontact.core.quantities.per_reference_length`) that unit to its power, e.g.
     ``"um^(-1/2)"`` for ``epsilon`` (``units`` ``"1"``, ``reference_length_units`` ``"um"``, power ``"-1/2"``)."""
     ref, power = attrs.get("reference_length_units"), attrs.get("reference_length_power")
     if ref is None or power is None or ref == "1":

@@ -1,6 +1,6 @@
 """Reuse the contact cases another run already computed with the same parameters.
 
-    python -m roughcontact.adopt results/reproduction --scene paper [--dry-run] [--configfile FILE ...]
+    python -m roughcontact.pipeline.adopt results/reproduction --scene paper [--dry-run] [--configfile FILE ...]
 
 Run from the workflow's folder. The config is read as Snakemake reads it: ``config/config.yaml``
 with each ``--configfile`` added over it (mappings merged key by key), so a scene kept in its own
@@ -26,7 +26,7 @@ cases were adopted) and ``adopted_from`` names the source file. It is written
 atomically, and listed in ``results/{scene}/adopted.tsv`` (case file, source file and
 the sha256 of each). Snakemake then finds the output present and plans neither the job
 nor its surface (temporary or kept). The target's ``benchmarks/`` gets no file for an
-adopted case: :mod:`roughcontact.runcost` reports its cost in the source run on a row of
+adopted case: :mod:`roughcontact.pipeline.runcost` reports its cost in the source run on a row of
 its own.
 
 Refuses while a Snakemake run holds the working directory: the jobs that run had
@@ -208,7 +208,7 @@ def _locked(workdir: Path) -> bool:
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(prog="python -m roughcontact.adopt", description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog="python -m roughcontact.pipeline.adopt", description=__doc__.split("\n")[0])
     ap.add_argument("source", type=Path, help="the run to take cases from, results/<scene>")
     ap.add_argument("--scene", required=True, help="the target scene (its cases go to results/<scene>)")
     ap.add_argument("--configfile", type=Path, action="append", default=[], metavar="FILE",

@@ -63,7 +63,7 @@ def surface_dataset(heights: np.ndarray, *, k_l: str, k_s: str, hurst: str, seed
     """Dataset of one generated surface.
 
     ``heights`` is (n, n) [``length_unit``, the unit of ``length`` too, one of
-    :data:`roughcontact.quantities.LENGTH_UNITS`; ``"1"``: nondimensional]; ``normalisation``
+    :data:`roughcontact.core.quantities.LENGTH_UNITS`; ``"1"``: nondimensional]; ``normalisation``
     is ``{"rms_slope": v}`` or ``{"rms_height": v}``, recorded as an attribute. Adds scalar
     statistics: rms height, spectral and finite-difference rms slope, profile moments
     (``m0`` [length^2], ``m2`` [1], ``m4`` [length^-2]) and Nayak's alpha. The global
@@ -107,9 +107,9 @@ def representativity_dataset(epsilon: float, heights: np.ndarray, *, n_bins: int
 
     The case is a generated one's ``k_l, k_s, hurst, seed`` or a measured one's ``topography``.
 
-    ``length_unit`` is the unit of the heights (:data:`roughcontact.quantities.LENGTH_UNITS`).
+    ``length_unit`` is the unit of the heights (:data:`roughcontact.core.quantities.LENGTH_UNITS`).
     eps, of unit length^-1/2, which no CF ``units`` string can write, is written as its number
-    for heights in ``length_unit`` (``units`` ``"1"``, :func:`roughcontact.representativity.epsilon_attrs`).
+    for heights in ``length_unit`` (``units`` ``"1"``, :func:`roughcontact.statistics.representativity.epsilon_attrs`).
     """
     u_len = cf_unit(length_unit, length_power=1)
     ds = xr.Dataset(
@@ -159,10 +159,10 @@ def contact_dataset(result: xr.Dataset, *, rms_slope: float, alpha: float, e_sta
 
 
 def measured_surface_dataset(measured, *, name: str) -> xr.Dataset:
-    """Dataset of one measured surface (a :class:`roughcontact.topography.MeasuredSurface`).
+    """Dataset of one measured surface (a :class:`roughcontact.surfaces.topography.MeasuredSurface`).
 
     ``heights`` (nx, ny) and ``x``, ``y`` in the study's length unit ``measured.unit``; the
-    statistics come from differences inside the patch (:func:`roughcontact.surface.nonperiodic_moments`:
+    statistics come from differences inside the patch (:func:`roughcontact.surfaces.synthetic.nonperiodic_moments`:
     a measured patch is not periodic, and its spectrum would count the jump between opposite
     edges as roughness). Global attributes (:func:`cell_attrs`): ``length`` and ``n`` for a square
     cell with square pixels, else ``length_x``, ``length_y``, ``nx`` and ``ny``; ``length_units``

@@ -1,7 +1,7 @@
 """Example topography files in instrument formats: the ``measured`` scene's inputs.
 
 They stand in for measurements until you bring your own: generated rough surfaces
-(:func:`roughcontact.surface.generate_surface`), cut out of a larger periodic surface so
+(:func:`roughcontact.surfaces.synthetic.generate_surface`), cut out of a larger periodic surface so
 that they are not periodic, and written by SurfaceTopography's own writers in three
 formats that exercise the reader's cases:
 
@@ -12,7 +12,7 @@ formats that exercise the reader's cases:
 - ``ground-c.txt``: a plain text matrix, 160 x 128 points (not square), with no unit and no
   size: the scene supplies both (in nanometres).
 
-``python -m roughcontact.examples data/measured`` writes them; the files in
+``python -m roughcontact.pipeline.examples data/measured`` writes them; the files in
 ``data/measured/`` were made so. A test checks that the committed files hold what this
 module writes (heights, sizes, units, undefined points).
 """
@@ -72,6 +72,6 @@ def write_examples(folder: str | Path) -> dict[str, Path]:
 
 if __name__ == "__main__":
     if len(sys.argv) != 2:
-        sys.exit("usage: python -m roughcontact.examples FOLDER")
+        sys.exit("usage: python -m roughcontact.pipeline.examples FOLDER")
     for name, path in write_examples(sys.argv[1]).items():
         print(f"{name}: {path}")

@@ -7,7 +7,7 @@ Every file this package writes is a labelled xarray dataset with:
   ``scene_parameters`` (the scene's config as JSON) and ``config_hash``;
 - strings (case names such as ``topography``, estimator labels) as CF character arrays
   ``name(..., name_strlen)`` of UTF-8 bytes, each string whole (:func:`_char_strings`), and
-  ``units`` strings that UDUNITS-2 parses (:mod:`roughcontact.quantities`): ``cfchecks``
+  ``units`` strings that UDUNITS-2 parses (:mod:`roughcontact.core.quantities`): ``cfchecks``
   (CF-1.8) finds no error in any of them;
 - no timestamps, so a rerun with the same config gives byte-identical files;
 - an atomic write: the data go to a temporary file in the target folder, which is
@@ -202,7 +202,7 @@ def read_dataset(path: str | os.PathLike, *, stage: str,
 #: The last line :func:`run_logged` writes to a finished job's log: the job process's exact
 #: CPU time and peak memory. Snakemake's benchmark files sample a job every 30 s after its
 #: first 15 s (snakemake/snakemake#851), so their ``cpu_time`` misses up to 30 s of CPU a
-#: job; :mod:`roughcontact.runcost` reads this line instead where a log has it.
+#: job; :mod:`roughcontact.pipeline.runcost` reads this line instead where a log has it.
 JOB_COST_FORMAT = "job cost: {cpu:.3f} s CPU, {rss:.1f} MiB peak RSS"
 
 

@@ -1,7 +1,7 @@
 """Scenes of measured surfaces: the ``topography`` block of a scene, checked and expanded.
 
 A scene with a ``topography`` block takes its surfaces from files (read by
-:mod:`roughcontact.topography` with SurfaceTopography) instead of the generator. Each file
+:mod:`roughcontact.surfaces.topography` with SurfaceTopography) instead of the generator. Each file
 is a case named by its key under ``files`` (or by its file stem when ``glob`` lists them),
 and every study of the scene runs on each: representativity (eps of the heights' PDF) and
 contact (the load steps), then the aggregate, the fit (all files pooled as one surface
@@ -130,7 +130,7 @@ def check_measured_scene(name: str, scene: dict, delta: Mapping | None = None, *
 
 
 def check_headers(name: str, scene: Mapping) -> None:
-    """Every file's header checked now (:func:`roughcontact.topography.check_header`), before any job.
+    """Every file's header checked now (:func:`roughcontact.surfaces.topography.check_header`), before any job.
 
     A file SurfaceTopography cannot read, a missing channel, unit or size, or a map the scene
     refuses fails here with the file, what is wrong and the remedy, instead of in its job.

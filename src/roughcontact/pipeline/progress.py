@@ -5,7 +5,7 @@ When a run starts, the workflow writes the scene's plan, ``results/{scene}/logs/
 (:func:`write_plan`: the number of planned solves and the cores Snakemake was given). From the
 plan and the step lines so far, :func:`scene_progress` tells what is done and estimates what is
 left: the solves still to do, at the mean pace of the solves done, spread over the cores. Each
-contact job logs it when it ends, and ``python -m roughcontact.progress results/SCENE`` prints it
+contact job logs it when it ends, and ``python -m roughcontact.pipeline.progress results/SCENE`` prints it
 at any time (from another terminal while a run goes on).
 """
 
@@ -95,8 +95,8 @@ def scene_progress(scene_dir: str | Path) -> tuple[str, Progress] | None:
 
 
 def main(argv=None) -> None:
-    """``python -m roughcontact.progress results/SCENE``: print how far the scene's contact study has got."""
-    ap = argparse.ArgumentParser(prog="python -m roughcontact.progress", description=__doc__.split("\n\n")[0])
+    """``python -m roughcontact.pipeline.progress results/SCENE``: print how far the scene's contact study has got."""
+    ap = argparse.ArgumentParser(prog="python -m roughcontact.pipeline.progress", description=__doc__.split("\n\n")[0])
     ap.add_argument("scene_dir", type=Path, help="the scene's results folder, e.g. results/demo")
     args = ap.parse_args(argv)
     got = scene_progress(args.scene_dir)

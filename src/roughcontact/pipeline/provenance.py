@@ -1,7 +1,7 @@
 """Which settings produced which case, once cases are combined into one file.
 
 Every per-case file records the exact parameters of the jobs behind it (its
-``scene_parameters`` attribute, see :mod:`roughcontact.params`). A combined file must not
+``scene_parameters`` attribute, see :mod:`roughcontact.pipeline.params`). A combined file must not
 claim one set of settings for all its cases when a targeted rerun solved some of them
 differently: :func:`split_settings` finds what all cases share and what varies, and
 :func:`settings_variables` turns each varying setting into a per-case variable.
@@ -97,7 +97,7 @@ def attach_settings(combined: xr.Dataset, datasets: Sequence[xr.Dataset]) -> tup
     """``combined`` with a variable per varying setting, the shared settings, the varying keys.
 
     ``datasets`` are the per-case files ``combined`` was made from; each one's recorded
-    parameters (:func:`roughcontact.params.recorded`) are its settings.
+    parameters (:func:`roughcontact.pipeline.params.recorded`) are its settings.
     """
     settings = [recorded(ds) for ds in datasets]
     cases = [{d: ds[d].values[0] for d in case_dims(combined)} for ds in datasets]

@@ -6,13 +6,13 @@ one-row TSV under ``results/{scene}/benchmarks/`` (``{rule}.tsv`` for a rule wit
 [s], peak resident memory ``max_rss`` [MiB] and ``mean_load`` [% of one core]. This
 module sums them per rule, so a study's cost is measured rather than estimated::
 
-    python -m roughcontact.runcost results/paper            # markdown table on stdout
+    python -m roughcontact.pipeline.runcost results/paper            # markdown table on stdout
 
 Snakemake measures CPU and memory by sampling the job every 0.5 s for its first 15 s, then
 every 30 s (snakemake/snakemake#851), and keeps the last sample: ``cpu_time`` misses up to
 30 s of CPU a job (22 % of the paper grid's CPU, measured). So each job's CPU and
 peak memory are read from the last line of its log (``results/{scene}/logs/``, same path as
-the benchmark file), where :func:`roughcontact.io.run_logged` writes the job process's exact
+the benchmark file), where :func:`roughcontact.pipeline.io.run_logged` writes the job process's exact
 figures (getrusage). A job whose log lacks that line (run by older code) keeps the sampled
 value, a lower bound: its rule's CPU total is then printed with ``≥`` and counted in the
 note under the table. Wall time is exact either way.
@@ -21,7 +21,7 @@ Only finished jobs have a file: on an interrupted run the table is the cost so f
 job overwrites its file; files of jobs a later run no longer plans (an older grid or rule
 layout) stay and are counted, so measure a run in a fresh ``results/{scene}``.
 
-Cases the run adopted from another (:mod:`roughcontact.adopt`, listed in ``adopted.tsv``)
+Cases the run adopted from another (:mod:`roughcontact.pipeline.adopt`, listed in ``adopted.tsv``)
 have no benchmark file of their own: their cost where they were computed, the source
 run's benchmark file (and log) of each, is a row of its own (``contact (adopted)``).
 """
@@ -222,7 +222,7 @@ def markdown(costs: list[RuleCost]) -> str:
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(prog="python -m roughcontact.runcost", description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog="python -m roughcontact.pipeline.runcost", description=__doc__.split("\n")[0])
     ap.add_argument("results", help="a run's output folder, results/<scene>")
     args = ap.parse_args(argv)
     try:

@@ -370,7 +370,7 @@ def cluster_dataset(masks_or_pressures: Iterable, steps, length, bins=None,
     periodic : bool
         As for :func:`label_clusters` (``False`` for a free patch).
     length_unit : str
-        Unit of ``length``, one of :data:`roughcontact.quantities.LENGTH_UNITS`
+        Unit of ``length``, one of :data:`roughcontact.core.quantities.LENGTH_UNITS`
         (default ``"1"``: nondimensional), recorded as the global attribute
         ``length_units``; every variable is dimensionless whatever it is.
 

@@ -11,7 +11,7 @@ outside. The integral is evaluated exactly for that piecewise-constant P (bin in
 of G and G^2 through erf), including the Gaussian tails outside the histogram's range,
 so the only approximation left is the histogram itself. eps has units of
 1/sqrt(height unit), which UDUNITS-2, and so CF, cannot write (integer powers only,
-:mod:`roughcontact.quantities`). Files therefore hold eps as the number it is for heights
+:mod:`roughcontact.core.quantities`). Files therefore hold eps as the number it is for heights
 in the study's length unit ``ell`` (``"um"``, or ``"1"`` for nondimensional heights):
 eps of the dimensionless heights ``h / (1 ell)``, which is ``eps(h) sqrt(1 ell)``, with
 ``units: "1"`` and the attributes ``reference_length_units`` (``ell``) and
@@ -88,10 +88,10 @@ def epsilon_attrs(length_unit: str) -> dict:
     """CF attributes of eps (:func:`gaussian_l2_error`) of heights in ``length_unit``.
 
     ``units`` ``"1"``: eps is written as its number for heights in ``length_unit`` (one of
-    :data:`roughcontact.quantities.LENGTH_UNITS`), i.e. eps of the dimensionless heights
+    :data:`roughcontact.core.quantities.LENGTH_UNITS`), i.e. eps of the dimensionless heights
     ``h / (1 length_unit)``; ``reference_length_units`` (``length_unit``) and
     ``reference_length_power`` (``"-1/2"``) give its dimension back
-    (:func:`roughcontact.quantities.per_reference_length`), ``comment`` says so in words.
+    (:func:`roughcontact.core.quantities.per_reference_length`), ``comment`` says so in words.
     """
     return {**per_reference_length(length_unit, Fraction(-1, 2)),
             "long_name": "L2 error between the heights PDF and its Gaussian", "comment": EPSILON_COMMENT}

@@ -180,7 +180,7 @@ def summarize(results: Mapping[str, tuple[xr.Dataset, Sequence[float], Sequence[
     settings : the output of :func:`variants`
     length : domain side L (grid spacing L/N)
     seed_axis : numbers of seeds (strings) compared at the "defaults" setting
-    length_unit : unit of ``length`` (:data:`roughcontact.quantities.LENGTH_UNITS`, default
+    length_unit : unit of ``length`` (:data:`roughcontact.core.quantities.LENGTH_UNITS`, default
         ``"1"``), recorded as the attribute ``length_units``; the metrics are dimensionless
 
     Returns

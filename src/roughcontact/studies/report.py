@@ -134,7 +134,7 @@ def is_measured_fit(rows: Sequence[Mapping[str, str]]) -> bool:
 
 
 def read_fit_csv(text: str) -> list[dict[str, str]]:
-    """Rows of a cel.csv (:func:`roughcontact.fit.to_csv_table`) as dictionaries of strings.
+    """Rows of a cel.csv (:func:`roughcontact.analysis.fit.to_csv_table`) as dictionaries of strings.
 
     Either layout: a generated scene's (``k_l, k_s, H_group, ...``) or a measured scene's
     (``group, ...``, one pooled group of topographies).
@@ -258,7 +258,7 @@ def summary_rst(scene: str, parameters: Mapping, *, version: str, commit: str,
     scene : str
         The scene's name.
     parameters : mapping
-        Its parameters (:func:`roughcontact.params.summary`), shown flattened to dotted keys.
+        Its parameters (:func:`roughcontact.pipeline.params.summary`), shown flattened to dotted keys.
     version, commit : str
         The package version and the git commit (:func:`git_commit`) of the code.
     fit_csv : str, optional

@@ -1,6 +1,6 @@
 """The reproduction's verdicts, each derived from the numbers its claim row prints by the rule it prints.
 
-A claim row (:mod:`roughcontact.reproduction`) is ``claim, paper, ours, verdict, test``. Its
+A claim row (:mod:`roughcontact.studies.reproduction`) is ``claim, paper, ours, verdict, test``. Its
 verdict is not computed beside the text: :func:`judge` reads the printed ``paper`` and ``ours``
 columns back and applies the claim's :class:`Rule`, whose ``test`` text is the one printed. So a
 verdict can never be looser (or stricter) than the rule beside it, and a published table can be
@@ -202,7 +202,7 @@ RULES: dict[str, Rule] = {
 def judge(claim: str, paper: str, ours: str) -> str:
     """The verdict of ``claim`` by its rule, from the printed ``paper`` and ``ours`` texts."""
     if claim not in RULES:
-        raise KeyError(f"no verdict rule for claim {claim!r}: add one to roughcontact.verdicts.RULES")
+        raise KeyError(f"no verdict rule for claim {claim!r}: add one to roughcontact.studies.verdicts.RULES")
     return RULES[claim].verdict(paper, ours)
 
 
@@ -229,3 +229,13 @@ def check_table(markdown: str) -> list[str]:
         if (got := judge(claim, paper, ours)) != verdict:
             problems.append(f"{claim!r}: printed verdict {verdict!r}, its rule on its numbers gives {got!r}")
     return problems
+
+
+def row(claim: str, paper: str, ours: str, verdict: str, test: str) -> dict:
+    """One row of a claim table."""
+    return {"claim": claim, "paper": paper, "ours": ours, "verdict": verdict, "test": test}
+
+
+def judged_row(claim: str, paper: str, ours: str) -> dict:
+    """A claim row whose verdict is its printed rule applied to its printed numbers (:func:`judge`)."""
+    return row(claim, paper, ours, judge(claim, paper, ours), RULES[claim].test)

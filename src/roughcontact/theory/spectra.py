@@ -72,7 +72,7 @@ def power_law_moments(k_l: float, k_s: float, hurst: float, *, length: float = 1
 
     (integrals from ``k_l`` to ``k_s``; a logarithm where the exponent is -1). These are
     moments of a 1-D cross-section (Nayak's ``m_i``), as returned by
-    :func:`roughcontact.surface.spectral_moments`; the rms slope is ``sqrt(2 m2)``.
+    :func:`roughcontact.surfaces.synthetic.spectral_moments`; the rms slope is ``sqrt(2 m2)``.
 
     Parameters
     ----------
@@ -109,10 +109,10 @@ def discrete_power_law_moments(n: int, k_l: float, k_s: float, hurst: float, *,
 
     Same spectrum as :func:`power_law_moments`, but summed over the integer modes
     ``(k_x, k_y)`` of an ``n x n`` periodic grid with ``k_l <= |k| <= k_s`` (the exact
-    mode set of :func:`roughcontact.surface.psd_filter`), and with the x/y-averaged
-    derivatives of :func:`roughcontact.surface.spectral_moments`. A surface whose Fourier
+    mode set of :func:`roughcontact.surfaces.synthetic.psd_filter`), and with the x/y-averaged
+    derivatives of :func:`roughcontact.surfaces.synthetic.spectral_moments`. A surface whose Fourier
     amplitudes equal ``sqrt(C)`` mode by mode has these moments to round-off; a surface
-    from :func:`~roughcontact.surface.generate_surface` has them in expectation (its
+    from :func:`~roughcontact.surfaces.synthetic.generate_surface` has them in expectation (its
     white noise gives each mode a random chi-square weight).
 
     Parameters

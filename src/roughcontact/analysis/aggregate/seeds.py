@@ -142,7 +142,7 @@ def scale_free_statistics(rep: xr.Dataset) -> xr.Dataset | None:
     Returns
     -------
     xarray.Dataset or None
-        :func:`roughcontact.aggregate.representativity_statistics` of
+        :func:`roughcontact.analysis.aggregate.representativity_statistics` of
         ``epsilon * sqrt(std_height)``: ``epsilon_mean``, ``epsilon_sem``, ... [1] and
         ``n_seeds`` over ``(k_l, k_s, H)``.
     """

@@ -42,7 +42,7 @@ seeds x 30 steps: with independent 0.1 % noise on ``A/A0`` both estimators land 
 2 bootstrap standard errors of the truth in 90-97 % of draws, and the joint fit's
 Jacobian error matches the actual scatter. The paper route keeps a small bias from
 differentiating ``pbar`` (``mu`` about +0.002 on 30 steps, see
-:func:`roughcontact.aggregate.load_derivative`). When the seeds differ in the *shape*
+:func:`roughcontact.analysis.aggregate.load_derivative`). When the seeds differ in the *shape*
 of their curves (constants scattered by 1-3 % per seed), the H-pooled joint fit is
 pulled by the mixture (``kappa, mu, beta`` off by about 1.4, 1.7, 5 % at 3 %
 scatter) while the paper route stays within 0.4 %; prefer ``"paper"`` as the primary

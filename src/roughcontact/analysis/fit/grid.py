@@ -53,7 +53,7 @@ def fit_cel(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.11), n_bo
     Parameters
     ----------
     agg : xarray.Dataset
-        Combined contact dataset (:func:`roughcontact.aggregate.combine_cases`), dims
+        Combined contact dataset (:func:`roughcontact.analysis.aggregate.combine_cases`), dims
         ``(k_l, k_s, H, seed, step)``, global attr ``e_star``; ``kappa`` and
         ``dpbar_dp0`` are derived if absent.
     window : (float, float)

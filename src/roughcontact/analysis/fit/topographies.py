@@ -23,7 +23,7 @@ from .settings import _check_settings, _check_window, _estimate_vars, _estimator
 def _derive_topographies(agg: xr.Dataset) -> xr.Dataset:
     """``agg`` (dims ``topography, step``) with ``kappa`` and ``dpbar_dp0`` derived as for generated cases.
 
-    :func:`roughcontact.aggregate.add_derived` works on the generated layout, so the
+    :func:`roughcontact.analysis.aggregate.add_derived` works on the generated layout, so the
     topographies are mapped onto it (as seeds of one placeholder ``(k_l, k_s, H)``) and back.
     """
     case = agg.rename({TOPOGRAPHY_DIM: "seed"}).expand_dims({d: [0.0] for d in CASE_DIMS[:3]})

@@ -8,7 +8,8 @@ with the defaults) is the defaults' block of that study deep-merged with the sce
 ``rms_slope: null`` to normalise by ``rms_height`` instead). Validation runs on the merged
 scene, in two passes, both before Snakemake plans any job:
 
-1. the JSON schema ``workflow/schemas/config.schema.yaml`` (types, ranges, unknown keys),
+1. the JSON schema ``config.schema.yaml`` (package data, :mod:`roughcontact.pipeline.config.schema`; types,
+   ranges, unknown keys),
    whose ``default`` values are filled in;
 2. the cross-field rules a schema cannot express (k_l < k_s <= N/2, 0 < H < 1, examples
    inside the grid, fit window ordered, field steps within the load schedule).
@@ -19,7 +20,7 @@ bad value came from ``defaults``.
 
 The validated scene is canonical: schema defaults filled in, numbers typed as the schema
 says (``N: 32.0`` becomes ``32``, ``L: 1`` becomes ``1.0``), so that two configs meaning the
-same thing give the same job parameters (:mod:`roughcontact.params`). Snakemake's ``--config``
+same thing give the same job parameters (:mod:`roughcontact.pipeline.params`). Snakemake's ``--config``
 passes a nested value as text (``--config 'scenes={demo: {contact: {seeds: 4}}}'`` gives
 ``seeds: '4'``): before validation, text where the schema asks for an integer, a number or a
 boolean is read as one when it reads unambiguously as one, and ``null`` where the schema takes
@@ -27,7 +28,7 @@ no text removes a default as in a file (:func:`coerce_strings`).
 
 Config files are read as Snakemake reads them (:func:`load_config_files`: each file merged over
 the ones before, ``config/config.yaml`` first), and a file that is not YAML is named with its
-line and column (:func:`check_config_files`). ``python -m roughcontact.config [FILE ...]`` checks
+line and column (:func:`check_config_files`). ``python -m roughcontact.pipeline.config [FILE ...]`` checks
 the shipped config with these files added, as ``snakemake --configfile FILE ...`` would read it.
 """
 
@@ -196,7 +197,7 @@ def cases(block: dict) -> list[Case]:
 
 
 def _load_summary(load: Mapping) -> str:
-    """The final load in words: what a case receives (:mod:`roughcontact.loading`)."""
+    """The final load in words: what a case receives (:mod:`roughcontact.pipeline.loading`)."""
     if "target_area" in load:
         return (f"final load: the p0 giving A/A0 = {load['target_area']:g} on each case, found first "
                 f"(a few extra solves a case)")
@@ -239,8 +240,9 @@ def plan_summary(scene_name: str, scene: dict) -> str:
 
 
 def main(argv=None) -> None:
-    """``python -m roughcontact.config [FILE ...]``: check config files as ``snakemake --configfile`` reads them."""
-    ap = argparse.ArgumentParser(prog="python -m roughcontact.config",
+    """``python -m roughcontact.pipeline.config [FILE ...]``: check config files as ``snakemake --configfile``
+    reads them."""
+    ap = argparse.ArgumentParser(prog="python -m roughcontact.pipeline.config",
                                  description="Check config/config.yaml with FILEs added (as snakemake --configfile "
                                              "FILE ... reads them): YAML syntax with file, line and column, repeated "
                                              "keys, and every scene. Run from the workflow's folder.")

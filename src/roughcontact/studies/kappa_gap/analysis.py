@@ -9,7 +9,7 @@ to a one-constant CEL fit (μ, β held at the paper's values, :func:`fit_kappa`)
    (:mod:`roughcontact.solver.stanley_kato`) against ours, on the same surfaces and loads;
 2. what counts as contact: ``p > 0`` (ours), ``gap < t s`` (``s`` the rms height) for each
    threshold ``t``, and the perimeter-corrected area A_pix − c P Δx
-   (:func:`roughcontact.accuracy.perimeter_corrected_area`);
+   (:func:`roughcontact.theory.perimeter.perimeter_corrected_area`);
 3. the continuum limit: the same continuous surfaces at several N, pixel-counted and
    corrected, Richardson-extrapolated per surface (:func:`richardson`);
 4. conventions: the rms slope from finite differences against the spectral one (κ is

@@ -1,4 +1,13 @@
-"""The paper's claims measured on a run: numbers and verdicts, pure functions over the aggregates (:func:`claims`).
+"""The paper's claims measured on a run: numbers, verdicts and figures for docs/reproduction/.
+
+Pure functions over the aggregates (:func:`claims`), and the two commands of the
+reproduction (``python -m roughcontact.reproduction``):
+
+* ``publish RESULTS OUT``: copy a run's aggregates and fit (``results/{scene}/aggregate/*.nc``,
+  ``fit/cel.{nc,csv}``; not the per-case files) into ``OUT/data``, then ``regenerate``;
+* ``regenerate OUT``: from ``OUT/data`` alone, in seconds and without a solve, redraw the
+  figures into ``OUT/figures`` (the example surfaces are regenerated from their seeds)
+  and write the claim table ``OUT/claims.md``.
 
 Every verdict states the test it applies, so a reader can disagree with a threshold
 without recomputing anything.
@@ -6,15 +15,23 @@ without recomputing anything.
 
 from __future__ import annotations
 
+import argparse
 import json
+import shutil
+import tempfile
+from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
-from ...figures.load_curves import PAPER_ALPHA
-from ...statistics.representativity import scale_free_l2_error
-from ...theory.asperity import asperity_area
-from ..verdicts import RULES, judge
+from ..core.files import write_text_atomic
+from ..figures.load_curves import PAPER_ALPHA
+from ..figures.registry import FIGURES
+from ..figures.style import save_figure
+from ..pipeline.io import read_dataset
+from ..theory.asperity import asperity_area
+from .representativity_claims import representativity_claims
+from .verdicts import judged_row as _judged, row as _row
 
 #: The constants the paper states for lambda_l = L/16, lambda_s = L/32 (its Figs. 3-4).
 PAPER_KAPPA = 1.145 * np.sqrt(2 * np.pi)
@@ -38,6 +55,10 @@ KAPPA_AREAS = (0.01, 0.02, 0.05, 0.1)
 KAPPA_AREA = 0.05
 
 
+#: Files of a published reproduction, relative to its data folder.
+DATA_FILES = ("representativity.nc", "contact.nc", "cel.nc", "cel.csv")
+
+
 def kappa_at(con: xr.Dataset, area: float = KAPPA_AREA) -> xr.DataArray:
     """kappa of every case at ``A/A0 = area``, log-linear in A between load steps.
 
@@ -54,77 +75,6 @@ def kappa_at(con: xr.Dataset, area: float = KAPPA_AREA) -> xr.DataArray:
 
     return xr.apply_ufunc(interp, con["area_fraction"], con["kappa"], input_core_dims=[["step"], ["step"]],
                           vectorize=True)
-
-
-def _row(claim: str, paper: str, ours: str, verdict: str, test: str) -> dict:
-    return {"claim": claim, "paper": paper, "ours": ours, "verdict": verdict, "test": test}
-
-
-def _judged(claim: str, paper: str, ours: str) -> dict:
-    """A claim row whose verdict is its printed rule applied to its printed numbers (:mod:`roughcontact.verdicts`)."""
-    return _row(claim, paper, ours, judge(claim, paper, ours), RULES[claim].test)
-
-
-def _eps_sigma(rep: xr.Dataset) -> xr.DataArray:
-    """Scale-free eps (eps sqrt(sigma)) of the present cases, mean over H: dims (k_l, k_s, seed)."""
-    eps = rep["epsilon"] * np.sqrt(rep["std_height"]) if "std_height" in rep else rep["epsilon"]
-    return eps.where(rep["case_present"]).mean("H")
-
-
-def _eps_by_kl(rep: xr.Dataset) -> xr.DataArray:
-    """Scale-free eps (eps sqrt(sigma)), mean over seeds, per (k_l, k_s)."""
-    return _eps_sigma(rep).mean("seed")
-
-
-#: Draws of i.i.d. Gaussian heights behind the representativity noise floor, and their seed.
-NOISE_DRAWS, NOISE_SEED = 30, 2012
-
-
-def noise_floor(n: int, n_bins: int, draws: int = NOISE_DRAWS, seed: int = NOISE_SEED) -> float:
-    """ε_σ of exactly Gaussian heights with the study's bins and number of points: mean of ``draws`` maps [1].
-
-    ``n x n`` i.i.d. standard normal heights, ``n_bins`` bins: what ε_σ reads for a perfectly
-    Gaussian sample of that size, below which no surface can be called more representative.
-    """
-    rng = np.random.default_rng(seed)
-    return float(np.mean([scale_free_l2_error(rng.standard_normal((n, n)), n_bins) for _ in range(draws)]))
-
-
-def representativity_claims(rep: xr.Dataset) -> list[dict]:
-    """The threshold k_l >~ 8-16, the weak dependence on k_s and eps falling with k_s (Fig. 1a, appendix)."""
-    eps = _eps_by_kl(rep)
-    by_kl = eps.mean("k_s")
-    kls = [float(k) for k in by_kl.k_l.values]
-    vals = [float(v) for v in by_kl.values]
-    surface = json.loads(rep.attrs["scene_parameters"])["surface"]
-    floor = noise_floor(int(surface["N"]), int(rep.attrs["n_bins"]))
-    rows = [_judged(
-        "representativity grows with k_l up to k_l ≈ 8–16", "k_l ≈ 8–16",
-        "eps_σ: " + ", ".join(f"{v:.3g} (k_l={k:g})" for k, v in zip(kls, vals, strict=True))
-        + f"; noise floor {floor:.3g}; ratios to it: " + ", ".join(f"{v / floor:.2f}" for v in vals))]
-    spread_ks = (eps.max("k_s") - eps.min("k_s")) / eps.mean("k_s")
-    spread_kl = (by_kl.max() - by_kl.min()) / by_kl.mean()
-    rows.append(_judged(
-        "k_s has a weaker effect than k_l (for k_s ≫ k_l)", "weak",
-        f"relative spread over k_s at fixed k_l: {float(spread_ks.median()):.2f} (median over k_l); "
-        f"over k_l: {float(spread_kl):.2f}"))
-    rows.append(_ks_falls_row(rep))
-    return rows
-
-
-def _ks_falls_row(rep: xr.Dataset) -> dict:
-    """Per k_l, eps_σ at the smallest k_s minus that at the largest, with its standard error over seeds."""
-    eps = _eps_sigma(rep)
-    ends = eps.isel(k_s=[0, -1])
-    mean, sem = ends.mean("seed"), ends.std("seed", ddof=1) / np.sqrt(ends.notnull().sum("seed"))
-    drop = mean.isel(k_s=0) - mean.isel(k_s=1)
-    err = np.hypot(sem.isel(k_s=0), sem.isel(k_s=1))
-    ks_lo, ks_hi = float(eps.k_s[0]), float(eps.k_s[-1])
-    return _judged(
-        "ε decreases with k_s for all k_l (appendix)", "decreases for all k_l",
-        f"ε_σ(k_s={ks_lo:g}) − ε_σ(k_s={ks_hi:g}): " + ", ".join(
-            f"Δ = {float(d):.2g} ± {float(e):.2g} (k_l={float(k):g})"
-            for k, d, e in zip(drop.k_l.values, drop.values, err.values, strict=True)))
 
 
 def _sel(da: xr.DataArray, **coords) -> xr.DataArray:
@@ -412,3 +362,100 @@ def claims(rep: xr.Dataset, con: xr.Dataset, fit: xr.Dataset) -> list[dict]:
         if row["verdict"] != "pending":
             row["ours"] += note
     return representativity_claims(rep) + contact
+
+
+def markdown_table(rows: list[dict]) -> str:
+    """The claim rows as a Markdown table."""
+    out = ["| claim | paper | ours | verdict | test |", "|---|---|---|---|---|"]
+    out += [f"| {r['claim']} | {r['paper']} | {r['ours']} | **{r['verdict']}** | {r['test']} |" for r in rows]
+    return "\n".join(out) + "\n"
+
+
+def _scene_tree(data: Path, tmp: Path) -> Path:
+    """The published files laid out as ``results/{scene}/`` for the figure registry."""
+    (tmp / "aggregate").mkdir(parents=True)
+    (tmp / "fit").mkdir()
+    shutil.copy(data / "representativity.nc", tmp / "aggregate" / "representativity.nc")
+    shutil.copy(data / "contact.nc", tmp / "aggregate" / "contact.nc")
+    shutil.copy(data / "cel.nc", tmp / "fit" / "cel.nc")
+    return tmp
+
+
+def _example_surfaces(rep: xr.Dataset, tmp: Path) -> list[str]:
+    """The paper's Fig. 1 b-d surfaces (k_l = 1, 4, 16 at k_s = 40, seed 0), regenerated."""
+
+    from ..pipeline.datasets import surface_dataset
+    from ..pipeline.io import write_dataset
+    from ..surfaces.synthetic import generate_surface
+
+    surf = json.loads(rep.attrs["scene_parameters"])["surface"]
+    norm = {k: surf[k] for k in ("rms_slope", "rms_height") if k in surf}
+    paths = []
+    for kl in ("1", "4", "16"):
+        h = generate_surface(surf["N"], float(kl), 40.0, 0.8, 0, length=surf["L"], plateau=surf["plateau"], **norm)
+        ds = surface_dataset(h, k_l=kl, k_s="40", hurst="0.8", seed=0, length=surf["L"], normalisation=norm)
+        path = tmp / f"surface_{kl}.nc"
+        write_dataset(ds, path, stage="surface", scene="reproduction", scene_parameters={"surface": surf})
+        paths.append(str(path))
+    return paths
+
+
+def regenerate(out: Path) -> None:
+    """Figures and claim table of ``out`` from ``out/data`` (no solve)."""
+    data = out / "data"
+    figs = out / "figures"
+    figs.mkdir(parents=True, exist_ok=True)
+    rep = read_dataset(data / "representativity.nc", stage="aggregate", variables=["epsilon"])
+    con = read_dataset(data / "contact.nc", stage="aggregate", variables=["area_fraction", "kappa"])
+    fit = read_dataset(data / "cel.nc", stage="fit")
+    with tempfile.TemporaryDirectory() as td:
+        root = _scene_tree(data, Path(td))
+        for name in ("representativity", "area_load", "kappa", "dpbar"):
+            spec = FIGURES[name]
+            paths = {role: str(root / p) for role, p in spec.inputs({}).items()} if name != "representativity" \
+                else {"rep": str(root / "aggregate" / "representativity.nc")}
+            save_figure(spec.render(paths), figs / f"{name}.png")
+        surfaces = _example_surfaces(rep, Path(td))
+        save_figure(FIGURES["surface_examples"].render({"surfaces": surfaces}), figs / "surface_examples.png")
+    write_text_atomic(out / "claims.md", markdown_table(claims(rep, con, fit)))
+
+
+def publish(results: Path, out: Path, contact_results: Path | None = None) -> None:
+    """Copy a run's aggregates and fit into ``out/data``, then :func:`regenerate`.
+
+    ``contact_results`` takes the contact aggregate and fit from another run (e.g. the
+    ``representative`` scene while the ``reproduction`` scene's contact part is running).
+    """
+    data = out / "data"
+    data.mkdir(parents=True, exist_ok=True)
+    con = contact_results or results
+    sources = {"representativity.nc": results / "aggregate" / "representativity.nc",
+               "contact.nc": con / "aggregate" / "contact.nc",
+               "cel.nc": con / "fit" / "cel.nc", "cel.csv": con / "fit" / "cel.csv"}
+    for name, src in sources.items():
+        if not src.is_file():
+            raise FileNotFoundError(f"publish: {src} is missing; run the scene first "
+                                    "(snakemake -j2 --config scene=reproduction)")
+        shutil.copy(src, data / name)
+    regenerate(out)
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(prog="python -m roughcontact.reproduction", description=__doc__.split("\n")[0])
+    sub = ap.add_subparsers(dest="command", required=True)
+    p = sub.add_parser("publish", help="copy a run's aggregates into OUT/data, then regenerate")
+    p.add_argument("results", type=Path, help="results/{scene} of a finished run")
+    p.add_argument("out", type=Path, help="publication folder, e.g. docs/reproduction")
+    p.add_argument("--contact-from", type=Path, default=None,
+                   help="results/{scene} to take the contact aggregate and fit from instead")
+    r = sub.add_parser("regenerate", help="figures and claim table from OUT/data (seconds, no solve)")
+    r.add_argument("out", type=Path, help="publication folder, e.g. docs/reproduction")
+    args = ap.parse_args(argv)
+    if args.command == "publish":
+        publish(args.results, args.out, args.contact_from)
+    else:
+        regenerate(args.out)
+
+
+if __name__ == "__main__":
+    main()
