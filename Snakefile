@@ -6,8 +6,8 @@ from pathlib import Path
 
 from snakemake.utils import min_version
 
+from roughcontact.pipeline.config import SHIPPED_CONFIG, ConfigError, read_config_file
 from roughcontact.studies import report as report_module
-from roughcontact.pipeline.config.files import SHIPPED_CONFIG, ConfigError, read_config_file
 
 min_version("9.0")
 

@@ -3,14 +3,22 @@
 # target fails at once, naming the wildcard, its value and the scene's allowed values).
 from pathlib import Path
 
-from roughcontact.pipeline import params
-from roughcontact.studies.accuracy import variants as accuracy_variants
-from roughcontact.pipeline.config.scenes import BATCH_STEM, CASE_STEM, batches, cases, plan_summary, validate_config
-from roughcontact.pipeline.config.files import ConfigError, check_config_files
-from roughcontact.pipeline.config.schema import load_schema
 from roughcontact.figures.registry import FIGURES, scene_figures
+from roughcontact.pipeline import params
+from roughcontact.pipeline.config import (
+    BATCH_STEM,
+    CASE_STEM,
+    ConfigError,
+    batches,
+    cases,
+    check_config_files,
+    load_schema,
+    plan_summary,
+    validate_config,
+)
 from roughcontact.pipeline.measured import is_measured, reader_settings, topography_names
 from roughcontact.pipeline.progress import write_plan
+from roughcontact.studies.accuracy import variants as accuracy_variants
 
 try:
     check_config_files(workflow.configfiles)

@@ -1,4 +1,4 @@
-"""Figures of the study (Yastrebov, Anciaux & Molinari 2012, Figs. 1-4 and appendix).
+"""What the load-curve figures share (Yastrebov, Anciaux & Molinari 2012, Figs. 2-4; the measured scene's too).
 
 Each ``fig_*`` function takes datasets and returns a :class:`matplotlib.figure.Figure`
 built without pyplot (no global figure registry, no GUI backend); :func:`save_figure`

@@ -15,7 +15,7 @@ Every file this package writes is a labelled xarray dataset with:
   half-written file that looks valid.
 
 Every other output (CSV, Markdown, figures) goes through the same helper,
-:func:`atomic_output` (or :func:`write_text_atomic` for text): the target either keeps
+:func:`roughcontact.core.files.atomic_output` (or ``write_text_atomic`` for text): the target either keeps
 its previous complete content or gets the new complete content, and it gets the mode the
 umask gives to a newly created file (``0o666 & ~umask``, e.g. 0644 under umask 022).
 """

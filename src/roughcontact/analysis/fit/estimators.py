@@ -37,8 +37,8 @@ the unbiased one; the percentile interval is left as drawn. Groups with a single
 per stratum get no bootstrap (NaN, ``n_boot_ok = 0``): one surface says nothing about
 the scatter between surfaces.
 
-Behaviour on synthetic CEL data (tests/test_fit.py and :func:`simulate_cel_cases`), 12
-seeds x 30 steps: with independent 0.1 % noise on ``A/A0`` both estimators land within
+Behaviour on synthetic CEL data (tests/test_fit.py and ``simulate_cel_cases`` in tests/cel_synthetic.py),
+12 seeds x 30 steps: with independent 0.1 % noise on ``A/A0`` both estimators land within
 2 bootstrap standard errors of the truth in 90-97 % of draws, and the joint fit's
 Jacobian error matches the actual scatter. The paper route keeps a small bias from
 differentiating ``pbar`` (``mu`` about +0.002 on 30 steps, see
@@ -49,9 +49,10 @@ scatter) while the paper route stays within 0.4 %; prefer ``"paper"`` as the pri
 estimate and read ``"joint"`` as a cross-check.
 
 Measured scenes (aggregate dims ``(topography, step)``, one case per topography file) are fitted
-by :func:`fit_topographies`: all topographies pooled as one surface type, the topographies in
-the place of the seeds (topography-mean curve for the paper route, bootstrap over whole
-topographies). It runs the same per-group machinery as :func:`fit_cel` (``_fit_group``).
+by :func:`~roughcontact.analysis.fit.topographies.fit_topographies`: all topographies pooled as one
+surface type, the topographies in the place of the seeds (topography-mean curve for the paper route,
+bootstrap over whole topographies), with the same per-group machinery as
+:func:`~roughcontact.analysis.fit.grid.fit_cel` (``bootstrap._fit_group``).
 """
 
 from __future__ import annotations
