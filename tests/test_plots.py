@@ -121,10 +121,9 @@ def test_data_colours_are_okabe_ito(contact):
 def test_save_is_reproducible_across_processes(tmp_path):
     script = textwrap.dedent("""
         import sys
-        from roughcontact.analysis.aggregate.derived import aggregate_contact
-        from roughcontact.analysis.aggregate.seeds import seed_statistics
-        from roughcontact.analysis.fit.grid import fit_cel
-        from cel_synthetic import simulate_cel_cases
+        from cel_synthetic import simulate_cel_cases  # tests/ is the working directory
+        from roughcontact.analysis.aggregate import aggregate_contact, seed_statistics
+        from roughcontact.analysis.fit import fit_cel
         from roughcontact.figures.area_load import fig_area_load
         from roughcontact.figures.style import save_figure
         dss, names = simulate_cel_cases(hurst=(0.36, 0.84), seeds=range(3), point_noise=1e-4)
@@ -135,7 +134,8 @@ def test_save_is_reproducible_across_processes(tmp_path):
     for salt in ("1", "12345"):
         env = dict(os.environ, PYTHONHASHSEED=salt)
         base = tmp_path / salt / "fig"
-        subprocess.run([sys.executable, "-c", script, str(base)], check=True, env=env, timeout=300)
+        subprocess.run([sys.executable, "-c", script, str(base)], check=True, env=env, timeout=300,
+                       cwd=os.path.dirname(os.path.abspath(__file__)))
         outs.append([base.with_suffix(".png").read_bytes(), base.with_suffix(".pdf").read_bytes()])
     assert outs[0] == outs[1]
 
