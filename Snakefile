@@ -6,8 +6,8 @@ from pathlib import Path
 
 from snakemake.utils import min_version
 
-from roughcontact import report as report_module
-from roughcontact.config import SHIPPED_CONFIG, ConfigError, read_config_file
+from roughcontact.pipeline.config import SHIPPED_CONFIG, ConfigError, read_config_file
+from roughcontact.studies import report as report_module
 
 min_version("9.0")
 
@@ -15,13 +15,13 @@ min_version("9.0")
 report: "workflow/report/workflow.rst"
 
 
-# Report captions render their maths (:math:, .. math::) as MathML: see roughcontact.report.
+# Report captions render their maths (:math:, .. math::) as MathML: see roughcontact.studies.report.
 report_module.render_maths_as_mathml(Path(workflow.basedir, "workflow", "report", "docutils.conf"))
 
 
 # Snakemake's own message for a config file that is not YAML names neither the file nor the line:
 # check the workflow's config first (a file given with --configfile is read by Snakemake before
-# this line runs; `python -m roughcontact.config FILE` names the line of one of those).
+# this line runs; `python -m roughcontact.pipeline.config FILE` names the line of one of those).
 if Path(SHIPPED_CONFIG).is_file():
     try:
         read_config_file(SHIPPED_CONFIG)

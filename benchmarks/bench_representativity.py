@@ -8,10 +8,10 @@ and single-threaded numerical libraries, and reads back:
 - each job's **work**: the CPU and wall time of computing its surfaces, their eps and writing its
   file, from the ``computed ... in X s CPU, Y s wall`` line of the job's log;
 - each job's **whole CPU**: the exact figure its log ends with (``getrusage``, read by
-  :func:`roughcontact.runcost.read_job`; Snakemake's own ``cpu_time`` samples a job every 30 s after
+  :func:`roughcontact.pipeline.runcost.read_job`; Snakemake's own ``cpu_time`` samples a job every 30 s after
   its first 15 s and can miss up to 30 s of it, snakemake/snakemake#851);
 - **start-up CPU**, measured directly: fresh interpreters that import what a representativity
-  job imports (Snakemake's script preamble, ``roughcontact.datasets``, ``roughcontact.io``);
+  job imports (Snakemake's script preamble, ``roughcontact.pipeline.datasets``, ``roughcontact.pipeline.io``);
 - the **whole part**: wall time and CPU (``getrusage`` of the ``snakemake`` call and all its
   children: planning, every job, the aggregate).
 
@@ -39,7 +39,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from roughcontact.runcost import read_job
+from roughcontact.pipeline.runcost import read_job
 
 REPO = Path(__file__).resolve().parents[1]
 WORK_LINE = re.compile(r"computed (\d+) surfaces in ([0-9.]+) s CPU, ([0-9.]+) s wall")
@@ -60,7 +60,7 @@ def _children_cpu() -> float:
 
 def startup_cpu(repeats: int = 5) -> float:
     """CPU [s] of a fresh interpreter importing what a representativity job imports (best of ``repeats``)."""
-    code = "import snakemake.script, roughcontact.datasets, roughcontact.io"
+    code = "import snakemake.script, roughcontact.pipeline.datasets, roughcontact.pipeline.io"
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(REPO / "src"),
                                                                       os.environ.get("PYTHONPATH")]))}
     best = float("inf")

@@ -5,9 +5,9 @@ For each grid size N (one fresh subprocess per N, so that peak memory and FFT
 plans of one size do not leak into the next) it:
 
 1. generates the paper surface (k_l = 16, k_s = 32, H = 0.8, rms slope 0.1,
-   seed 0) with :func:`roughcontact.surface.generate_surface`;
+   seed 0) with :func:`roughcontact.surfaces.synthetic.generate_surface`;
 2. times one rfft2 + irfft2 pair with the solver's own pyFFTW plan
-   (:func:`roughcontact.fft.get_fft`, planned with ``FFTW_ESTIMATE``), with the
+   (:func:`roughcontact.core.fft.get_fft`, planned with ``FFTW_ESTIMATE``), with the
    same pair planned with ``FFTW_MEASURE`` (what earlier versions used; timing-based,
    so not reproducible bit for bit between processes) and with ``numpy.fft`` (best
    of batches, i.e. hot caches: inside the solver the same pair runs between other
@@ -63,7 +63,7 @@ import numpy as np
 @contextlib.contextmanager
 def _planner(flags: tuple[str, ...] | None = None, backend: str | None = None):
     """Make the solver's cached FFTs use FFTW ``flags`` / ``backend`` inside the block."""
-    from roughcontact import fft as _fft
+    from roughcontact.core import fft as _fft
 
     saved_flags, saved_env = _fft.PLANNER_FLAGS, os.environ.get("ROUGHCONTACT_FFT")
     _fft._cached_fft.cache_clear()
@@ -87,7 +87,7 @@ def _time_fft_pairs(n: int, repeats: int = 5) -> dict:
 
     Also the seconds it takes to make the ESTIMATE and the MEASURE plan pair.
     """
-    from roughcontact.fft import RealFFT2, get_fft
+    from roughcontact.core.fft import RealFFT2, get_fft
 
     rng = np.random.default_rng(1)
     a = rng.standard_normal((n, n))
@@ -135,7 +135,7 @@ def _plan_solves(h, loads, tol, repeats: int) -> dict:
     Plans are made before the timing (as ``generate_surface`` does for the main solve);
     the candidates run in turn ``repeats`` times so that load drift hits all alike.
     """
-    from roughcontact.fft import get_fft
+    from roughcontact.core.fft import get_fft
     from roughcontact.solver import solve_contact
 
     out = {k: {"wall": [], "cpu": []} for k in PLAN_SOLVES}
@@ -269,9 +269,9 @@ def _method_solves(h, loads, tol, methods, repeats: int) -> dict:
 
 def worker(n: int, steps: int, p_max: float, tol: float, tamaas: bool, plan_repeats: int = 2,
            methods: tuple[str, ...] = (), method_repeats: int = 2) -> dict:
-    from roughcontact.fft import PLANNER_FLAGS
+    from roughcontact.core.fft import PLANNER_FLAGS
     from roughcontact.solver import ELASTIC_METHOD, solve_contact
-    from roughcontact.surface import generate_surface
+    from roughcontact.surfaces.synthetic import generate_surface
 
     rss_start = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     h = generate_surface(n, 16, 32, 0.8, 0, rms_slope=0.1)

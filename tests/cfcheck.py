@@ -91,7 +91,7 @@ def _variable_problems(name: str, var, listed: set[str]) -> list[str]:
     if "units" in var.ncattrs() and (problem := _units_problem(var.getncattr("units"))):
         problems.append(f"ERROR (3.1): {problem}")
     elif "units" not in var.ncattrs() and var.dtype != "S1":
-        problems.append("WARN (project): no units attribute (roughcontact.io writes units on every variable)")
+        problems.append("WARN (project): no units attribute (roughcontact.pipeline.io writes units on every variable)")
     dims = var.dimensions
     if dims == (name,):  # a coordinate variable
         values = var[:]

@@ -55,7 +55,7 @@ from pathlib import Path
 import numpy as np
 
 from roughcontact.solver import STALL_WINDOW
-from roughcontact.surface import generate_surface, nonperiodic_moments, spectral_moments
+from roughcontact.surfaces.synthetic import generate_surface, nonperiodic_moments, spectral_moments
 
 Shape = int | tuple[int, int]
 Length = float | tuple[float, float]
@@ -137,7 +137,7 @@ def full_contact_bound(p: np.ndarray, p0: float, s: float, tol: float, e_star: f
 # --------------------------------------------------------------------------- bases
 @dataclass(frozen=True)
 class Rough:
-    """A self-affine Gaussian surface, :func:`roughcontact.surface.generate_surface`."""
+    """A self-affine Gaussian surface, :func:`roughcontact.surfaces.synthetic.generate_surface`."""
 
     shape: Shape
     k_l: float
@@ -203,7 +203,7 @@ class Wavy:
 @dataclass(frozen=True)
 class Measured:
     """A measured topography read as the ``measured`` scene reads it
-    (:func:`roughcontact.topography.read_topography`: heights in ``unit``, undefined points filled
+    (:func:`roughcontact.surfaces.topography.read_topography`: heights in ``unit``, undefined points filled
     harmonically, levelled, cropped to the centred square); ``shape`` is the grid it gives.
     FileNotFoundError when the file is not in :data:`MEASURED` (the suite then skips the case)."""
 
@@ -212,7 +212,7 @@ class Measured:
     unit: str = "um"
 
     def build(self, seed: int, length: Length, rng: np.random.Generator) -> np.ndarray:
-        from roughcontact.topography import read_topography
+        from roughcontact.surfaces.topography import read_topography
 
         path = MEASURED / self.file
         if not path.is_file():

@@ -20,7 +20,7 @@ import numpy as np
 
 from roughcontact import solver as solver_mod
 from roughcontact.solver import solve_contact, solve_step
-from roughcontact.surface import generate_surface
+from roughcontact.surfaces.synthetic import generate_surface
 
 LOADS = [0.002 * k for k in range(1, 7)]
 

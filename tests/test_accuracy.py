@@ -4,8 +4,10 @@ import pytest
 import xarray as xr
 
 from conftest import copy_workflow, run_snakemake
-from roughcontact import accuracy, generate_surface
+from roughcontact import generate_surface
 from roughcontact.solver import solve_contact
+from roughcontact.studies import accuracy
+from roughcontact.theory.perimeter import perimeter_corrected_area
 
 ACC = {
     "scene": "acc",
@@ -48,9 +50,9 @@ def test_perimeter_correction_reduces_the_pixel_bias():
         ds = solve_contact(h, [p0], tol=1e-10)
         res[n] = (float(ds.area_fraction[0]), float(ds.contact_perimeter[0]), 1.0 / n)
     ref = res[512][0]
-    ref_corr = accuracy.perimeter_corrected_area(*res[512])
+    ref_corr = perimeter_corrected_area(*res[512])
     raw = [abs(res[n][0] - ref) / ref for n in (64, 128, 256)]
-    corr = [abs(accuracy.perimeter_corrected_area(*res[n]) - ref_corr) / ref_corr for n in (64, 128, 256)]
+    corr = [abs(perimeter_corrected_area(*res[n]) - ref_corr) / ref_corr for n in (64, 128, 256)]
     assert raw[0] > raw[1] > raw[2]
     # corrected, even 8 points per shortest wavelength beat the pixel count at 32
     assert max(corr) < raw[2], (raw, corr)

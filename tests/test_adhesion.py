@@ -12,10 +12,10 @@ import math
 import numpy as np
 import pytest
 
-from roughcontact import adhesion_theory as th
 from roughcontact.solver import elastic_kernel, solve_contact
 from roughcontact.solver.adhesion import Exponential, MaugisDugdale, solve_adhesive
-from roughcontact.surface import generate_surface
+from roughcontact.surfaces.synthetic import generate_surface
+from roughcontact.theory import adhesion as th
 
 
 # ------------------------------------------------------------------------ invariants

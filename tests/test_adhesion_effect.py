@@ -8,7 +8,7 @@ import pytest
 
 from roughcontact.solver import Adhesion, SolverSettings, effects_from_config, solve_contact
 from roughcontact.solver.adhesion import Exponential, MaugisDugdale
-from roughcontact.surface import generate_surface
+from roughcontact.surfaces.synthetic import generate_surface
 
 LOADS = [0.001, 0.002, 0.004]
 

@@ -11,9 +11,9 @@ import xarray as xr
 import yaml
 
 from conftest import copy_workflow, run_snakemake
-from roughcontact import adopt
-from roughcontact.config import validate_config
-from roughcontact.io import write_dataset
+from roughcontact.pipeline import adopt
+from roughcontact.pipeline.config.scenes import validate_config
+from roughcontact.pipeline.io import write_dataset
 from test_workflow import TINY, _jobs
 
 # "big" holds every case of "small" and more: same surfaces, loads and solver
@@ -130,7 +130,7 @@ def test_refuses_a_file_holding_another_case(tmp_path):
 
 
 def _cli(cwd, *args):
-    return subprocess.run([sys.executable, "-m", "roughcontact.adopt", *args], cwd=cwd, capture_output=True,
+    return subprocess.run([sys.executable, "-m", "roughcontact.pipeline.adopt", *args], cwd=cwd, capture_output=True,
                           text=True, timeout=300)
 
 

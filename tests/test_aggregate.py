@@ -4,20 +4,17 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from roughcontact.aggregate import (
-    CASE_DIMS,
-    add_derived,
-    aggregate_contact,
-    combine_cases,
+from cel_synthetic import simulate_cel_cases
+from roughcontact.analysis.aggregate.combine import CASE_DIMS, combine_cases
+from roughcontact.analysis.aggregate.derivatives import (
     fd_weights,
     load_derivative,
     log_window_edges,
-    representativity_statistics,
-    seed_statistics,
     windowed_load_slope,
 )
-from roughcontact.fit import simulate_cel_cases
-from roughcontact.theory import cel_area, cel_dpbar_dp0, cel_pressure
+from roughcontact.analysis.aggregate.derived import add_derived, aggregate_contact
+from roughcontact.analysis.aggregate.seeds import representativity_statistics, seed_statistics
+from roughcontact.theory.laws import cel_area, cel_dpbar_dp0, cel_pressure
 
 
 def _cases(**kw):
@@ -323,10 +320,10 @@ def test_square_and_rectangular_cases_aggregate_with_every_label(boundary):
     # Measured files may be square or not, with square pixels or not: their per-case contact files
     # must stack along `topography` with every variable's units and long_name kept (a text that
     # differed between the two kinds of cell was once dropped as a conflict, and the aggregate refused).
-    from roughcontact.aggregate import combine_topographies
-    from roughcontact.datasets import contact_dataset
+    from roughcontact.analysis.aggregate.combine import combine_topographies
+    from roughcontact.pipeline.datasets import contact_dataset
     from roughcontact.solver import solve_contact
-    from roughcontact.surface import generate_surface
+    from roughcontact.surfaces.synthetic import generate_surface
 
     cells = {"square": ((32, 32), 1.0), "rect": ((32, 24), (1.0, 0.5))}
     parts = []

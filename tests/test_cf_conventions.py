@@ -14,8 +14,9 @@ import pytest
 import xarray as xr
 
 from cfcheck import assert_cf_clean, cfchecks_command, own_checks, run_cfchecks
-from roughcontact import accuracy, aggregate, fit, provenance
-from roughcontact.datasets import (
+from roughcontact.analysis import aggregate, fit
+from roughcontact.pipeline import provenance
+from roughcontact.pipeline.datasets import (
     contact_dataset,
     measured_surface_dataset,
     representativity_batch,
@@ -23,11 +24,12 @@ from roughcontact.datasets import (
     split_cases,
     surface_dataset,
 )
-from roughcontact.io import read_dataset, write_dataset
-from roughcontact.representativity import gaussian_l2_error
+from roughcontact.pipeline.io import read_dataset, write_dataset
 from roughcontact.solver import solve_contact
-from roughcontact.surface import generate_surface, nonperiodic_moments, spectral_moments
-from roughcontact.topography import MeasuredSurface
+from roughcontact.statistics.representativity import gaussian_l2_error
+from roughcontact.studies import accuracy
+from roughcontact.surfaces.synthetic import generate_surface, nonperiodic_moments, spectral_moments
+from roughcontact.surfaces.topography import MeasuredSurface
 
 #: Measured topographies, the shortest first (a width taken from the first name would cut the others)
 #: and one whose name is longer in UTF-8 bytes (11) than in letters (10).

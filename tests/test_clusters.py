@@ -4,7 +4,7 @@ from collections import deque
 import numpy as np
 import pytest
 
-from roughcontact.clusters import (
+from roughcontact.statistics.clusters import (
     cluster_area_histogram,
     cluster_dataset,
     cluster_statistics,

@@ -3,8 +3,10 @@ import copy
 
 import pytest
 
-from roughcontact.config import ConfigError, cases, load_schema, validate_config
-from roughcontact.loading import load_steps
+from roughcontact.pipeline.config.files import ConfigError
+from roughcontact.pipeline.config.scenes import cases, validate_config
+from roughcontact.pipeline.config.schema import load_schema
+from roughcontact.pipeline.loading import load_steps
 
 SCHEMA = load_schema()
 
@@ -233,7 +235,7 @@ def _assert_study_error_named(shipped_config, study, scene, edit, field, words):
 
 
 def test_duplicate_yaml_keys_are_named(tmp_path):
-    from roughcontact.config import check_config_files
+    from roughcontact.pipeline.config.files import check_config_files
 
     good = tmp_path / "good.yaml"
     good.write_text("scene: demo\nscenes: {demo: {contact: {seeds: 2}}}\n")
@@ -261,7 +263,7 @@ def test_duplicate_yaml_keys_are_named(tmp_path):
     ],
 )
 def test_malformed_yaml_is_named_with_line_column_and_remedy(tmp_path, text, words):
-    from roughcontact.config import check_config_files
+    from roughcontact.pipeline.config.files import check_config_files
 
     bad = tmp_path / "tabbed.yaml"
     bad.write_text(text)
@@ -279,7 +281,7 @@ def test_config_files_add_to_the_shipped_config_as_snakemake_reads_them(tmp_path
 
     import yaml
 
-    from roughcontact.config import load_config_files
+    from roughcontact.pipeline.config.files import load_config_files
 
     (tmp_path / "config").mkdir()
     (tmp_path / "config" / "config.yaml").write_text(yaml.safe_dump(shipped_config))
@@ -294,12 +296,12 @@ def test_config_files_add_to_the_shipped_config_as_snakemake_reads_them(tmp_path
     assert cfg["scenes"]["demo"]["contact"]["grid"] == shipped_config["scenes"]["demo"]["contact"]["grid"]
     scenes = validate_config({**cfg, "scene": "mine"}, SCHEMA)["scenes"]
     assert scenes["mine"]["contact"]["load"]["n_steps"] == 30  # from the shipped defaults
-    res = subprocess.run([sys.executable, "-m", "roughcontact.config", "mine.yaml", "--scene", "mine"],
+    res = subprocess.run([sys.executable, "-m", "roughcontact.pipeline.config", "mine.yaml", "--scene", "mine"],
                          capture_output=True, text=True, timeout=120)
     assert res.returncode == 0 and "scene 'mine' plans 2 contact cases" in res.stdout, res.stderr
     (tmp_path / "broken.yaml").write_text("scenes:\n  mine: {contact: {seeds: 2}\n")
-    res = subprocess.run([sys.executable, "-m", "roughcontact.config", "broken.yaml"], capture_output=True, text=True,
-                         timeout=120)
+    res = subprocess.run([sys.executable, "-m", "roughcontact.pipeline.config", "broken.yaml"],
+                         capture_output=True, text=True, timeout=120)
     assert res.returncode == 2 and "error: broken.yaml: not valid YAML at line 3, column 1" in res.stderr, res.stderr
 
 
@@ -392,7 +394,7 @@ def test_malformed_kappa_gap_settings_are_named(shipped_config, edit, field, wor
 
 def test_kappa_gap_job_params_leave_out_seeds_and_role(shipped_config):
     # adding seeds to a variant must not rerun its finished surfaces
-    from roughcontact import params
+    from roughcontact.pipeline import params
 
     block = validate_config(shipped_config, SCHEMA)["scenes"]["kappa-gap"]["kappa_gap"]
     one = params.kappa_gap_case(block, "N4096")

@@ -25,7 +25,7 @@ WORKER = textwrap.dedent(
     """
     import hashlib, json
     from roughcontact.solver import solve_contact
-    from roughcontact.surface import generate_surface
+    from roughcontact.surfaces.synthetic import generate_surface
 
     out = {}
     for n in (128, 256):
@@ -102,7 +102,7 @@ def test_estimate_plan_ignores_measured_wisdom(n):
         """
         import hashlib, json, sys
         import numpy as np, pyfftw
-        from roughcontact.fft import RealFFT2
+        from roughcontact.core.fft import RealFFT2
         n = int(sys.argv[1])
         a = np.random.default_rng(0).standard_normal((n, n))
         def digest():
@@ -126,7 +126,7 @@ def test_estimate_plan_ignores_measured_wisdom(n):
 def test_shipped_plans_are_loaded_before_planning(monkeypatch):
     # The measured plans shipped with the package are in FFTW's store when a pair is planned.
     pyfftw = pytest.importorskip("pyfftw")
-    from roughcontact import fft
+    from roughcontact.core import fft
 
     shipped = fft.shipped_wisdom()
     assert shipped is not None, "src/roughcontact/fftw_wisdom.json is missing"
@@ -149,7 +149,7 @@ def test_shipped_plans_are_loaded_before_planning(monkeypatch):
 def test_planning_keeps_the_callers_wisdom():
     """Another pyFFTW user's wisdom survives this package's planning, entry for entry."""
     pyfftw = pytest.importorskip("pyfftw")
-    from roughcontact.fft import RealFFT2
+    from roughcontact.core.fft import RealFFT2
 
     pyfftw.forget_wisdom()
     r = pyfftw.empty_aligned((24, 24), dtype="float64")
@@ -167,7 +167,7 @@ def test_planning_keeps_the_callers_wisdom():
 
 def test_write_wisdom_round_trip(tmp_path, monkeypatch):
     pytest.importorskip("pyfftw")
-    from roughcontact import fft
+    from roughcontact.core import fft
 
     path = fft.write_wisdom(tmp_path / "w.json", sizes=(8, 16))
     monkeypatch.setattr(fft, "WISDOM_FILE", path)

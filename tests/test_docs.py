@@ -17,7 +17,7 @@ What the handlers check:
 - make: `make -n TARGET` succeeds (the target exists; nothing is run, so `make test` does not
   recurse). pip: the extra named in `pip install -e '.[X]'` exists in pyproject.toml.
   `. .venv/bin/activate`: the Makefile's VENV is `.venv` and it is made by `python -m venv`.
-- `python -m roughcontact.config FILE`: exit 0 in the workflow copy that holds the scene files.
+- `python -m roughcontact.pipeline.config FILE`: exit 0 in the workflow copy that holds the scene files.
 - python: run in a subprocess in an empty directory. yaml: parses; an excerpt of shipped scenes
   equals config/config.yaml's; a SLURM profile copy has only
   the shipped profile's keys and values (plus the site's partition and account), and the command
@@ -353,7 +353,7 @@ def _on_finished(cmd, ctx) -> subprocess.CompletedProcess:
 
 
 def python_runcost(cmd, ctx):
-    """``python -m roughcontact.runcost results/<scene>`` on a finished small scene: a row per rule."""
+    """``python -m roughcontact.pipeline.runcost results/<scene>`` on a finished small scene: a row per rule."""
     res = _on_finished(cmd, ctx)
     assert re.search(r"^\| contact \| 3 \| ", res.stdout, re.M), (
         f"`{cmd}`: no row for the 3 contact jobs:\n{res.stdout}")
@@ -362,20 +362,21 @@ def python_runcost(cmd, ctx):
 
 
 def python_progress(cmd, ctx):
-    """``python -m roughcontact.progress results/<scene>`` on a finished small scene: every planned solve done."""
+    """``python -m roughcontact.pipeline.progress results/<scene>`` on a finished small scene: every planned
+    solve done."""
     res = _on_finished(cmd, ctx)
     assert re.search(r"^scene '[\w-]+': (\d+) of \1 contact solves done \(all\)$", res.stdout, re.M), (
         f"`{cmd}`: the finished scene is not reported done:\n{res.stdout}")
 
 
 def python_adopt(cmd, ctx):
-    """``python -m roughcontact.adopt results/<a> --scene <b>`` between two small runs of the shipped scenes.
+    """``python -m roughcontact.pipeline.adopt results/<a> --scene <b>`` between two small runs of the shipped scenes.
 
     Two of b's planned cases exist in a (as its contact rule writes them, no solve), one of them
     also in b: the command adopts the other.
     """
-    from roughcontact import adopt
-    from roughcontact.config import validate_config
+    from roughcontact.pipeline import adopt
+    from roughcontact.pipeline.config.scenes import validate_config
     from test_adopt import _case_file
 
     args = shlex.split(cmd)[3:]
@@ -396,7 +397,7 @@ def python_adopt(cmd, ctx):
 
 
 def python_config(cmd, ctx):
-    """``python -m roughcontact.config FILE ...`` in the workflow copy holding the documented scene files."""
+    """``python -m roughcontact.pipeline.config FILE ...`` in the workflow copy holding the documented scene files."""
     res = subprocess.run([sys.executable, *shlex.split(cmd)[1:]], cwd=ctx.workflow(), capture_output=True, text=True,
                          timeout=120)
     _ok(res, f"`{cmd}` in a workflow copy with the documented scene files")
@@ -511,10 +512,10 @@ COMMANDS = [
     (r"^snakemake\b.*\s--workflow-profile\s", snakemake_profile, "dry run with the profile"),
     (r"^snakemake(\s|$)", snakemake_dry_run, "dry run in a workflow copy"),
     (r"^make\s+[\w-]+$", make_target, "make -n TARGET"),
-    (r"^python -m roughcontact\.runcost\s", python_runcost, "a row per rule on a finished scene"),
-    (r"^python -m roughcontact\.progress\s", python_progress, "every solve done on a finished scene"),
-    (r"^python -m roughcontact\.adopt\s", python_adopt, "adopts a case between two small runs"),
-    (r"^python -m roughcontact\.config(\s|$)", python_config, "checks the config with the scene files"),
+    (r"^python -m roughcontact\.pipeline\.runcost\s", python_runcost, "a row per rule on a finished scene"),
+    (r"^python -m roughcontact\.pipeline\.progress\s", python_progress, "every solve done on a finished scene"),
+    (r"^python -m roughcontact\.pipeline\.adopt\s", python_adopt, "adopts a case between two small runs"),
+    (r"^python -m roughcontact\.pipeline\.config(\s|$)", python_config, "checks the config with the scene files"),
     (r"^pip install -e ", pip_extra, "the extra exists"),
     (r"^\.\s+\S+/bin/activate$", activate_venv, "the Makefile makes that venv"),
 ]

@@ -2,8 +2,9 @@
 import copy
 
 from conftest import REPO
-from roughcontact.config import load_schema, validate_config
-from roughcontact.figures import FIGURES, scene_figures
+from roughcontact.figures.registry import FIGURES, scene_figures
+from roughcontact.pipeline.config.scenes import validate_config
+from roughcontact.pipeline.config.schema import load_schema
 
 
 def test_every_registered_figure_has_a_caption_file():

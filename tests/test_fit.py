@@ -8,16 +8,11 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from roughcontact.aggregate import aggregate_contact
-from roughcontact.fit import (
-    CONSTANTS,
-    PAPER_CEL,
-    POOLED,
-    fit_cel,
-    kappa_spread,
-    simulate_cel_cases,
-    to_csv_table,
-)
+from cel_synthetic import kappa_spread, simulate_cel_cases
+from roughcontact.analysis.aggregate.derived import aggregate_contact
+from roughcontact.analysis.fit.estimators import CONSTANTS, PAPER_CEL, POOLED
+from roughcontact.analysis.fit.grid import fit_cel
+from roughcontact.analysis.fit.table import to_csv_table
 
 TRUTH = np.array([PAPER_CEL[c][0] for c in CONSTANTS])
 
@@ -237,8 +232,9 @@ def test_kappa_of_paper_is_sqrt_2pi_times_1145():
 
 def test_unconverged_seeds_are_excluded_and_the_rest_fitted():
     """Only some seeds of a group have unconverged steps: they leave, the others are fitted."""
-    from roughcontact.aggregate import add_derived, combine_cases
-    from roughcontact.fit import exclude_unconverged
+    from roughcontact.analysis.aggregate.combine import combine_cases
+    from roughcontact.analysis.aggregate.derived import add_derived
+    from roughcontact.analysis.fit.cases import exclude_unconverged
 
     dss, names = simulate_cel_cases(seeds=range(4), hurst=(0.5,), point_noise=1e-3, area_max=0.13, rng_seed=0)
     for ds in dss[:2]:  # seeds 0 and 1: one unconverged step each
@@ -257,7 +253,7 @@ def test_unconverged_seeds_are_excluded_and_the_rest_fitted():
 
 def test_a_joint_constant_on_its_bound_is_not_constrained():
     """The joint fit's bounds (mu >= 1e-6, beta >= 1e-12): a value there is no estimate, whatever its interval."""
-    from roughcontact.fit import JOINT_LOWER, constrained_flags
+    from roughcontact.analysis.fit.estimators import JOINT_LOWER, constrained_flags
 
     value = np.array([[2.5, JOINT_LOWER[1], 0.3], [2.5, JOINT_LOWER[1], JOINT_LOWER[2]]])
     lo, hi = value * 0.99, value * 1.01  # narrow intervals everywhere
@@ -267,7 +263,7 @@ def test_a_joint_constant_on_its_bound_is_not_constrained():
 
 def test_unconstrained_constants_are_flagged():
     """A bootstrap interval wider than the value (kappa = 4.79 in [3.1, 6368]) is flagged, not reported as a number."""
-    from roughcontact.fit import constrained_flags
+    from roughcontact.analysis.fit.estimators import constrained_flags
 
     flags = constrained_flags([4.79, 2.87, 0.5, np.nan, 1.0], [3.1, 2.80, 0.3, 0.0, np.nan], [6368, 2.95, 0.7, 1, 2])
     assert flags.tolist() == [0, 1, 1, 0, 0]

@@ -38,7 +38,7 @@ from hard_cases import (
     sneddon_load_and_approach,
 )
 from roughcontact.solver import SOLVER_PATHS, displacement, gap_scale, solve_contact, step_notes
-from roughcontact.surface import generate_surface
+from roughcontact.surfaces.synthetic import generate_surface
 from solver_invariants import check_solution
 
 PEERS = {"tamaas", "contactmechanics"}

@@ -17,17 +17,10 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 from roughcontact import generate_surface
-from roughcontact.datasets import surface_dataset
-from roughcontact.io import (
-    InputFileError,
-    atomic_output,
-    config_hash,
-    current_umask,
-    read_dataset,
-    write_dataset,
-    write_text_atomic,
-)
-from roughcontact.plots import save_figure
+from roughcontact.core.files import atomic_output, current_umask, write_text_atomic
+from roughcontact.figures.style import save_figure
+from roughcontact.pipeline.datasets import surface_dataset
+from roughcontact.pipeline.io import InputFileError, config_hash, read_dataset, write_dataset
 
 PARAMS = {"surface": {"N": 16}, "seeds": 1}
 
@@ -201,7 +194,7 @@ def test_write_dataset_uses_the_helper(tmp_path):
 CSV_CHILD = textwrap.dedent(
     """
     import sys, time
-    from roughcontact.io import atomic_output
+    from roughcontact.core.files import atomic_output
     with atomic_output(sys.argv[1]) as tmp:
         with open(tmp, "w") as fh:
             fh.write("kappa,mu,beta\\n1.1,0.5,")
@@ -215,7 +208,7 @@ FIGURE_CHILD = textwrap.dedent(
     """
     import io, sys, time
     from matplotlib.figure import Figure
-    from roughcontact.plots import save_figure
+    from roughcontact.figures.style import save_figure
 
     target, kill_format = sys.argv[1], sys.argv[2]
     real_savefig = Figure.savefig
@@ -311,7 +304,8 @@ def test_full_disk_is_one_line_naming_the_file_and_leaves_nothing(tmp_path, monk
     import errno
     import logging
 
-    from roughcontact.io import OutputFileError, run_logged, write_dataset, write_text_atomic
+    from roughcontact.core.files import OutputFileError, write_text_atomic
+    from roughcontact.pipeline.io import run_logged, write_dataset
 
     target = tmp_path / "out" / "case.nc"
     write_text_atomic(target, "previous complete content")
@@ -346,7 +340,8 @@ def test_directory_in_place_of_a_file_is_named(tmp_path):
 
 def test_netcdf_library_failure_is_named_too(tmp_path, monkeypatch):
     """netCDF4 reports a failed write as RuntimeError ("NetCDF: HDF error"): named like any I/O failure."""
-    from roughcontact.io import OutputFileError, write_dataset
+    from roughcontact.core.files import OutputFileError
+    from roughcontact.pipeline.io import write_dataset
 
     def hdf_error(self, tmp, **kwargs):
         raise RuntimeError("NetCDF: HDF error")
@@ -364,7 +359,7 @@ def test_a_finished_job_logs_its_exact_cpu_and_memory_last(tmp_path):
     import logging
     import time
 
-    from roughcontact.io import JOB_COST_PATTERN, run_logged
+    from roughcontact.pipeline.io import JOB_COST_PATTERN, run_logged
 
     def work(logger):
         start = time.process_time()
@@ -395,8 +390,8 @@ def test_names_of_unequal_lengths_are_written_whole(tmp_path, names):
     # Per-case files read back carry their name's width in the encoding (dtype <U3); an aggregate
     # stacked from them must still write every name whole, in any order, with a shared prefix and
     # non-ASCII letters (once, "frt2" was written as "frt").
-    from roughcontact.aggregate import combine_topographies
-    from roughcontact.datasets import expand_case
+    from roughcontact.analysis.aggregate.combine import combine_topographies
+    from roughcontact.pipeline.datasets import expand_case
 
     parts = []
     for k, name in enumerate(names):
@@ -413,7 +408,7 @@ def test_names_of_unequal_lengths_are_written_whole(tmp_path, names):
 
 
 def test_eta_from_the_recent_pace():
-    from roughcontact.io import eta
+    from roughcontact.pipeline.io import eta
 
     assert eta([1.0, 1.0], 5) == "about 3 s left (3 of 5 to go)"
     # the last five steps set the pace (steps slow down as the contact grows)

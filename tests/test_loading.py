@@ -4,9 +4,9 @@ import math
 import numpy as np
 import pytest
 
-from roughcontact.loading import AREA_RTOL, case_loads, load_steps, pressure_for_area, schedule
+from roughcontact.pipeline.loading import AREA_RTOL, case_loads, load_steps, pressure_for_area, schedule
 from roughcontact.solver import solve_contact
-from roughcontact.surface import generate_surface
+from roughcontact.surfaces.synthetic import generate_surface
 
 
 def _block(**load):

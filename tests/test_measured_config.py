@@ -5,8 +5,9 @@ from pathlib import Path
 
 import pytest
 
-from roughcontact.config import ConfigError, plan_summary, validate_config
-from roughcontact.measured import reader_settings, topography_names
+from roughcontact.pipeline.config.files import ConfigError
+from roughcontact.pipeline.config.scenes import plan_summary, validate_config
+from roughcontact.pipeline.measured import reader_settings, topography_names
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "data" / "measured"
 

@@ -1,7 +1,7 @@
 """Outputs of measured scenes: the pooled CEL fit of topographies, its table, figures and report table.
 
 Test data follow the layout of a measured scene (cases named by strings along ``topography``):
-the contact aggregate is roughcontact.fit.simulate_cel_cases' synthetic CEL data for one
+the contact aggregate is cel_synthetic.simulate_cel_cases' synthetic CEL data for one
 (k_l, k_s, H), its seeds renamed into named topographies; the surfaces are small generated maps
 written as ``surfaces/{name}.nc`` with the measured statistics.
 """
@@ -13,13 +13,15 @@ import pytest
 import xarray as xr
 from docutils.core import publish_parts
 
-from roughcontact import fit, report
-from roughcontact.aggregate import aggregate_contact
-from roughcontact.figures import FIGURES, scene_figures
-from roughcontact.io import read_dataset, write_dataset
-from roughcontact.plots import save_figure
-from roughcontact.plots_measured import fig_measured_area_load, fig_measured_kappa, fig_topographies
-from roughcontact.surface import generate_surface, spectral_moments
+from cel_synthetic import simulate_cel_cases
+from roughcontact.analysis import fit
+from roughcontact.analysis.aggregate.derived import aggregate_contact
+from roughcontact.figures.measured import fig_measured_area_load, fig_measured_kappa, fig_topographies
+from roughcontact.figures.registry import FIGURES, scene_figures
+from roughcontact.figures.style import save_figure
+from roughcontact.pipeline.io import read_dataset, write_dataset
+from roughcontact.studies import report
+from roughcontact.surfaces.synthetic import generate_surface, spectral_moments
 
 TRUTH = np.array([fit.PAPER_CEL[c][0] for c in fit.CONSTANTS])
 NAMES = ["ground-a", "ground-b", "ground-c", "ground-d", "ground-e", "ground-f"]
@@ -29,7 +31,7 @@ MEASURED_FIGURES = ["topographies", "measured_area_load", "measured_kappa"]
 def _cases(n=6, **kw):
     args = dict(seeds=range(n), point_noise=1e-3, seed_scatter=0.0, area_max=0.13, rng_seed=3)
     args.update(kw)
-    return aggregate_contact(*fit.simulate_cel_cases(**args))
+    return aggregate_contact(*simulate_cel_cases(**args))
 
 
 def _measured(cases: xr.Dataset) -> xr.Dataset:
@@ -172,7 +174,7 @@ def _surface(name: str, seed: int) -> xr.Dataset:
 
 
 def _scene(names, contact=True) -> dict:
-    """A validated measured scene, as roughcontact.config leaves it."""
+    """A validated measured scene, as roughcontact.pipeline.config leaves it."""
     scene = {"description": "measured", "topography": {"files": {n: {"path": f"data/{n}.x3p"} for n in names},
                                                        "unit": "um", "undefined": "reject"},
              "representativity": {"n_bins": 100}, "fit": {"window": [0.01, 0.11], "n_boot": 40}}
@@ -247,7 +249,7 @@ def test_loads_beyond_an_asperity_model_leave_it_cut_not_the_figure_failed(agg, 
     # BGT and Greenwood reach full contact (their tables end there): the figure once failed with
     # "p0 (= E* h' pbar; ...) must be finite and lie in [0, 1.79]"; the models are now drawn up to
     # their full contact, with a note in the legend.
-    from roughcontact.theory import asperity_max_load
+    from roughcontact.theory.asperity import asperity_max_load
 
     alpha = float(np.median(agg["alpha"].values))
     limit = min(asperity_max_load(alpha=alpha, rms_slope=1.0, e_star=1.0, model=m) for m in ("bgt", "greenwood"))
@@ -326,9 +328,9 @@ def test_report_lists_every_topography_with_its_loads(scene_dir):
 def test_rectangular_maps_are_drawn_to_scale_with_both_sides():
     # A map kept whole (nx != ny, dx != dy): drawn over Lx x Ly, its title giving both sides and
     # counts, and the area-load title the range of grids.
-    from roughcontact.datasets import measured_surface_dataset
-    from roughcontact.plots_measured import _grid_text
-    from roughcontact.topography import MeasuredSurface
+    from roughcontact.figures.measured import _grid_text
+    from roughcontact.pipeline.datasets import measured_surface_dataset
+    from roughcontact.surfaces.topography import MeasuredSurface
 
     h = generate_surface(64, 4, 32, 0.8, 0, rms_height=1.5)[:64, :40].copy()
     ds = measured_surface_dataset(MeasuredSurface(h, (30000.0, 7500.0), "um", {}), name="frt-2")

@@ -5,9 +5,10 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from roughcontact import params, provenance
-from roughcontact.config import load_schema, validate_config
-from roughcontact.io import canonical_json
+from roughcontact.pipeline import params, provenance
+from roughcontact.pipeline.config.scenes import validate_config
+from roughcontact.pipeline.config.schema import load_schema
+from roughcontact.pipeline.io import canonical_json
 
 SCHEMA = load_schema()
 

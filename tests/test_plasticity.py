@@ -14,7 +14,7 @@ import pytest
 
 from roughcontact import solver as solver_mod
 from roughcontact.solver import MEAN_RTOL, check, contact, projection, solve_contact, solve_step, validation
-from roughcontact.surface import generate_surface
+from roughcontact.surfaces.synthetic import generate_surface
 from solver_invariants import check_solution
 
 TOL = 1e-10

@@ -11,25 +11,17 @@ import pytest
 import xarray as xr
 from matplotlib.figure import Figure
 
-from roughcontact.aggregate import (
-    CASE_DIMS,
-    aggregate_contact,
-    combine_cases,
-    representativity_statistics,
-    seed_statistics,
-)
-from roughcontact.fit import fit_cel, simulate_cel_cases
-from roughcontact.plots import (
-    DOUBLE_COLUMN_IN,
-    OKABE_ITO,
-    fig_area_load,
-    fig_dpbar,
-    fig_kappa,
-    fig_representativity,
-    fig_surface_examples,
-    save_figure,
-)
-from roughcontact.surface import generate_surface
+from cel_synthetic import simulate_cel_cases
+from roughcontact.analysis.aggregate.combine import CASE_DIMS, combine_cases
+from roughcontact.analysis.aggregate.derived import aggregate_contact
+from roughcontact.analysis.aggregate.seeds import representativity_statistics, seed_statistics
+from roughcontact.analysis.fit.grid import fit_cel
+from roughcontact.figures.area_load import fig_area_load
+from roughcontact.figures.dpbar import fig_dpbar
+from roughcontact.figures.kappa import fig_kappa
+from roughcontact.figures.representativity import fig_representativity, fig_surface_examples
+from roughcontact.figures.style import DOUBLE_COLUMN_IN, OKABE_ITO, save_figure
+from roughcontact.surfaces.synthetic import generate_surface
 
 
 @pytest.fixture(scope="module")
@@ -129,9 +121,11 @@ def test_data_colours_are_okabe_ito(contact):
 def test_save_is_reproducible_across_processes(tmp_path):
     script = textwrap.dedent("""
         import sys
-        from roughcontact.aggregate import aggregate_contact, seed_statistics
-        from roughcontact.fit import fit_cel, simulate_cel_cases
-        from roughcontact.plots import fig_area_load, save_figure
+        from cel_synthetic import simulate_cel_cases  # tests/ is the working directory
+        from roughcontact.analysis.aggregate import aggregate_contact, seed_statistics
+        from roughcontact.analysis.fit import fit_cel
+        from roughcontact.figures.area_load import fig_area_load
+        from roughcontact.figures.style import save_figure
         dss, names = simulate_cel_cases(hurst=(0.36, 0.84), seeds=range(3), point_noise=1e-4)
         agg = aggregate_contact(dss, names)
         save_figure(fig_area_load(agg, seed_statistics(agg), fit_cel(agg, n_boot=10)), sys.argv[1])
@@ -140,7 +134,8 @@ def test_save_is_reproducible_across_processes(tmp_path):
     for salt in ("1", "12345"):
         env = dict(os.environ, PYTHONHASHSEED=salt)
         base = tmp_path / salt / "fig"
-        subprocess.run([sys.executable, "-c", script, str(base)], check=True, env=env, timeout=300)
+        subprocess.run([sys.executable, "-c", script, str(base)], check=True, env=env, timeout=300,
+                       cwd=os.path.dirname(os.path.abspath(__file__)))
         outs.append([base.with_suffix(".png").read_bytes(), base.with_suffix(".pdf").read_bytes()])
     assert outs[0] == outs[1]
 
@@ -169,7 +164,7 @@ def test_bad_inputs_are_rejected(contact, rep_stats, examples, tmp_path):
 
 def test_finite_load_asperity_curves_are_drawn_and_labelled(contact):
     """BGT and Greenwood (2006) at the paper's alpha = 2 and, for one bandwidth, at the surfaces' own alpha."""
-    from roughcontact.theory import asperity_kappa
+    from roughcontact.theory.asperity import asperity_kappa
 
     agg, stats, fit = contact
     one = {"k_l": [16.0], "k_s": [32.0]}  # one family: its surfaces share one alpha
@@ -191,8 +186,8 @@ def test_finite_load_asperity_curves_are_drawn_and_labelled(contact):
 
 def test_kappa_figure_names_paper_and_run_curves(contact):
     """The paper's own CEL and this run's fit are both drawn and told apart; the window has an entry."""
-    from roughcontact.plots import PAPER_CONSTANTS
-    from roughcontact.theory import cel_kappa
+    from roughcontact.figures.load_curves import PAPER_CONSTANTS
+    from roughcontact.theory.laws import cel_kappa
 
     agg, stats, fit = contact
     fig = fig_kappa(agg, stats, fit)
@@ -247,7 +242,7 @@ def test_dpbar_legend_labels_each_constant_for_what_it_is(contact):
 def test_a_constant_on_a_bound_of_the_joint_fit_is_not_constrained(contact):
     """A joint-fit constant sitting on its bound has a bootstrap interval of nothing (every draw on the
     bound): flagged constrained by the interval rule, yet the data do not constrain it."""
-    from roughcontact.fit import JOINT_LOWER
+    from roughcontact.analysis.fit.estimators import JOINT_LOWER
 
     agg, stats, fit = contact
     sel = {"k_l": 16.0, "k_s": 32.0, "H_group": "pooled", "estimator": "joint", "constant": "mu"}
@@ -266,7 +261,7 @@ def test_a_constant_on_a_bound_of_the_joint_fit_is_not_constrained(contact):
 
 def test_representativity_units_are_mathtext(rep_stats):
     """epsilon's unit appears as mathtext: its number's unit (units "1" for lengths in a reference unit, as the
-    pipeline writes it, roughcontact.representativity.epsilon_attrs), or the "um^(-1/2)" of older files."""
+    pipeline writes it, roughcontact.statistics.representativity.epsilon_attrs), or the "um^(-1/2)" of older files."""
     rep = rep_stats.copy()
     rep["epsilon_mean"].attrs.update(units="1", reference_length_units="um", reference_length_power="-1/2")
     label = fig_representativity(rep).axes[0].get_ylabel()
@@ -354,8 +349,8 @@ def test_dpbar_draws_windowed_slopes_over_faint_finite_differences(contact):
 
 def test_dpbar_paper_and_fit_lines_are_told_apart(contact):
     """The paper's power law and the fit differ in colour, dash and width; the legend gives both constants."""
-    from roughcontact.plots import PAPER_CONSTANTS, _fit_constants
-    from roughcontact.theory import cel_dpbar_dp0
+    from roughcontact.figures.load_curves import PAPER_CONSTANTS, _fit_constants
+    from roughcontact.theory.laws import cel_dpbar_dp0
 
     agg, stats, fit = contact
     fig = fig_dpbar(agg, stats, fit, k_s=[32.0])
@@ -382,8 +377,8 @@ def test_dpbar_paper_and_fit_lines_are_told_apart(contact):
 
 
 def test_area_load_persson_lines_differ_and_bands_show(contact):
-    from roughcontact.plots import PERSSON_COLOUR
-    from roughcontact.theory import KAPPA_PERSSON, linear_area, persson_area
+    from roughcontact.figures.area_load import PERSSON_COLOUR
+    from roughcontact.theory.laws import KAPPA_PERSSON, linear_area, persson_area
 
     agg, stats, fit = contact
     fig = fig_area_load(agg, stats, fit)
@@ -472,7 +467,7 @@ def _with_unconverged(agg, unconverged=None):
     family -> (seeds, steps)) unconverged, as a solve
     stopped by ``max_iter`` leaves them: ``pbar`` 20 times too small (kappa ~ 50), ``A/A0`` 3 times too
     large; kappa, d pbar/d p0 and n_unconverged derived again. Returns ``(agg, stats, mask)``."""
-    from roughcontact.aggregate import add_derived
+    from roughcontact.analysis.aggregate.derived import add_derived
 
     mask = xr.zeros_like(agg["converged"], dtype=bool)
     for (kl, ks, h), (seeds, steps) in (unconverged or _UNCONVERGED).items():
@@ -549,7 +544,7 @@ def test_area_load_and_dpbar_leave_unconverged_steps_out(contact):
 
 
 def test_measured_figures_count_the_unconverged_steps_they_leave_out():
-    from roughcontact.plots_measured import fig_measured_area_load, fig_measured_kappa
+    from roughcontact.figures.measured import fig_measured_area_load, fig_measured_kappa
 
     dss, names = simulate_cel_cases(seeds=range(3), point_noise=1e-3, seed_scatter=0.0, area_max=0.13, rng_seed=3)
     cases, _, _ = _with_unconverged(aggregate_contact(dss, names), {(16.0, 32.0, 0.5): ([1, 2], list(range(20, 26)))})

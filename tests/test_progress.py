@@ -3,7 +3,7 @@ import json
 
 import pytest
 
-from roughcontact.progress import Progress, main, planned_solves, read_log_steps, scene_progress, write_plan
+from roughcontact.pipeline.progress import Progress, main, planned_solves, read_log_steps, scene_progress, write_plan
 
 LINE = "2026-11-25 10:00:00,000 INFO step {k}/{n}: p0 = 0.001, A/A0 = 0.01, 12 iterations, {s:.2f} s; about 3 s left"
 

@@ -1,4 +1,5 @@
-"""The Snakemake report: its landing page (roughcontact.report) and captions, and the demo's report in a browser."""
+"""The Snakemake report: its landing page (roughcontact.studies.report) and captions, and the demo's report
+in a browser."""
 import os
 import re
 import shutil
@@ -13,8 +14,10 @@ import xarray as xr
 from docutils.core import publish_parts
 
 from conftest import REPO, run_snakemake
-from roughcontact import __version__, fit, report
-from roughcontact.figures import FIGURES
+from roughcontact import __version__
+from roughcontact.analysis import fit
+from roughcontact.figures.registry import FIGURES
+from roughcontact.studies import report
 
 REPORT_DIR = REPO / "workflow" / "report"
 DOCUTILS_CONF = REPORT_DIR / "docutils.conf"
@@ -120,7 +123,7 @@ def test_parameters_table_lists_every_dotted_key_sorted(mathml):
 
 
 def _fit_result(n_seeds=3, ci=True):
-    """A small dataset shaped like roughcontact.fit.fit_cel's result, for fit.to_csv_table."""
+    """A small dataset shaped like roughcontact.analysis.fit.fit_cel's result, for fit.to_csv_table."""
     coords = {"k_l": [4.0, 16.0], "k_s": [32.0], "H_group": ["0.36", "pooled"], "estimator": ["paper", "joint"],
               "constant": list(fit.CONSTANTS)}
     dims = tuple(coords)

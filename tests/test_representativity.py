@@ -5,12 +5,12 @@ from scipy import integrate
 from scipy.stats import norm
 
 from roughcontact import generate_surface
-from roughcontact.representativity import (
+from roughcontact.analysis.aggregate.seeds import scale_free_statistics
+from roughcontact.statistics.representativity import (
     binning_noise_floor,
     gaussian_l2_error,
     scale_free_epsilon,
     scale_free_l2_error,
-    scale_free_statistics,
 )
 
 
@@ -93,8 +93,8 @@ def test_scale_free_statistics_from_per_case_values():
 
 def test_a_batch_holds_every_k_s_and_seed_each_as_computed_alone():
     """One representativity job's file: each (k_s, seed) equals that surface's eps computed on its own."""
-    from roughcontact import aggregate
-    from roughcontact.datasets import representativity_batch, split_cases
+    from roughcontact.analysis import aggregate
+    from roughcontact.pipeline.datasets import representativity_batch, split_cases
 
     surface = {"N": 32, "L": 1.0, "plateau": False, "rms_height": 0.1}
     batch = representativity_batch(surface, k_l="2", k_s=["8", "12"], hurst="0.8", seeds=3, n_bins=20)

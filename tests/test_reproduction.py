@@ -4,7 +4,7 @@ import pytest
 import xarray as xr
 
 from compare_outputs import assert_images_close, assert_text_close
-from roughcontact import reproduction
+from roughcontact.studies import reproduction
 
 
 def _contact(kappa_of_area):
@@ -143,7 +143,7 @@ def test_the_claim_table_says_when_the_grid_is_incomplete():
 
 def _lambda_l_equal_l(area_of_p0, scatter):
     """Contact cases at k_l = 1, H = 0.68, 12 seeds: A/A0 = area_of_p0(p0) x (1 + scatter x seed offset)."""
-    from roughcontact.asperity import asperity_area  # noqa: F401  (the model the row compares with)
+    from roughcontact.theory.asperity import asperity_area  # noqa: F401  (the model the row compares with)
 
     p0 = np.linspace(0.005 / 30, 0.005, 30)
     offsets = np.linspace(-1, 1, 12)
@@ -159,7 +159,7 @@ def _lambda_l_equal_l(area_of_p0, scatter):
 
 
 def test_asperity_row_inside_and_outside_the_seed_scatter():
-    from roughcontact.asperity import asperity_area
+    from roughcontact.theory.asperity import asperity_area
 
     def bgt(p):
         return asperity_area(p, alpha=2.0, rms_slope=0.1, e_star=1.0, model="bgt")
@@ -176,7 +176,7 @@ def test_asperity_row_inside_and_outside_the_seed_scatter():
 
 def test_asperity_row_skips_a_family_without_cases():
     # a grid hole (k_s = 64, no case present) has no loads: it drops out, nothing raises
-    from roughcontact.asperity import asperity_area
+    from roughcontact.theory.asperity import asperity_area
 
     def bgt(p):
         return asperity_area(p, alpha=2.0, rms_slope=0.1, e_star=1.0, model="bgt")
@@ -298,13 +298,13 @@ def test_the_readme_shows_the_generated_claim_table(published):
 def test_every_published_verdict_follows_its_printed_rule_and_numbers(published):
     # Read from the published text alone: each row's printed test is its claim's rule, and that
     # rule applied to the row's printed numbers gives the printed verdict.
-    from roughcontact.verdicts import check_table
+    from roughcontact.studies.verdicts import check_table
 
     assert check_table((published / "claims.md").read_text()) == []
 
 
 def test_a_verdict_looser_than_its_rule_is_caught():
-    from roughcontact.verdicts import RULES, check_table
+    from roughcontact.studies.verdicts import RULES, check_table
 
     claim = "kappa = paper value (λ_l = L/16, λ_s = L/32, pooled H)"
     row = (f"| {claim} | (1.145 ± 0.002)·√(2π) | 1.066·√(2π), 95 % bootstrap interval [1.037, 1.089] | "

@@ -1,8 +1,8 @@
-"""roughcontact.runcost: a run's cost summed from Snakemake's benchmark files and the jobs' logs."""
+"""roughcontact.pipeline.runcost: a run's cost summed from Snakemake's benchmark files and the jobs' logs."""
 
 import pytest
 
-from roughcontact import runcost
+from roughcontact.pipeline import runcost
 
 HEADER = "s\th:m:s\tmax_rss\tmax_vms\tmax_uss\tmax_pss\tio_in\tio_out\tmean_load\tcpu_time\n"
 
@@ -50,7 +50,7 @@ def _log(run, rel, *lines):
 
 def test_a_jobs_exact_cost_comes_from_the_last_line_of_its_log(run, capsys):
     # Snakemake samples CPU every 30 s; run_logged's last log line is the exact figure
-    from roughcontact.io import JOB_COST_FORMAT
+    from roughcontact.pipeline.io import JOB_COST_FORMAT
 
     exact = JOB_COST_FORMAT.format(cpu=62.5, rss=333.0)
     _log(run, "contact/kl16_ks32_H0.8_s0.log", "step 1/30", exact)
@@ -129,7 +129,7 @@ def test_adopted_cases_count_with_their_cost_in_the_source_run(run, capsys):
     assert "| contact (adopted) | 2 | ≥ 0.02 | 40.0 / 40.0 / 45.0 | 0.04 | 80.0 | 310 |" in out
     assert out[-3] == "| all | 8 | ≥ 0.09 | | 0.12 | | 310 |"
     # the source run's log of an adopted case gives its exact cost
-    from roughcontact.io import JOB_COST_FORMAT
+    from roughcontact.pipeline.io import JOB_COST_FORMAT
 
     _log(src, "contact/kl2_ks32_H0.8_s0.log", JOB_COST_FORMAT.format(cpu=70.0, rss=320.0))
     adopted = {c.rule: c for c in runcost.run_cost(run)}["contact (adopted)"]

@@ -37,7 +37,6 @@ import numpy as np
 import pytest
 
 import roughcontact.solver as solver_mod
-from roughcontact.clusters import cluster_statistics
 from roughcontact.solver import (
     ELASTIC_METHODS,
     FreeHalfSpace,
@@ -47,7 +46,8 @@ from roughcontact.solver import (
     solve_contact,
     solve_step,
 )
-from roughcontact.surface import generate_surface
+from roughcontact.statistics.clusters import cluster_statistics
+from roughcontact.surfaces.synthetic import generate_surface
 from solver_invariants import check_solution, direct_free_displacement, quadrature_influence
 
 TOL = 1e-10

@@ -24,7 +24,7 @@ from roughcontact.solver import (
     solve_step,
     step_notes,
 )
-from roughcontact.surface import generate_surface
+from roughcontact.surfaces.synthetic import generate_surface
 from solver_invariants import check_solution
 
 TOL = 1e-10
@@ -414,7 +414,7 @@ def test_a_stalled_step_on_a_measured_surface_converges_on_a_fallback():
     # at residuals near 1.5e-5 on steps 27 and 30 (2026-11-25, AVX-512, before the fallback: 2 of 30
     # steps unconverged); float64 products converge them. Every step must satisfy the invariants, and the
     # last equals ContactMechanics' free-boundary CG (A/A0 to 1e-4 relative, the issue's bound).
-    from roughcontact.topography import read_topography
+    from roughcontact.surfaces.topography import read_topography
 
     surface = read_topography(MEASURED / "mi-1.mi", unit="um", undefined="harmonic", detrend="height")
     h, length = surface.heights, surface.length
@@ -455,7 +455,7 @@ def test_spikes_on_a_plateau_converge_on_the_gradient_projection():
     # convex QP, so a pressure meeting every KKT condition to tol (check_solution, with the gap
     # summed directly) is its solution; where ContactMechanics converges (the last step) A/A0 agrees
     # to 1e-4 relative (the issue's bound).
-    from roughcontact.topography import read_topography
+    from roughcontact.surfaces.topography import read_topography
 
     surface = read_topography(MEASURED / "frt-2.frt", unit="um", undefined="harmonic", detrend="height",
                               non_square="crop")

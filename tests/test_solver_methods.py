@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from roughcontact import solver as solver_mod
-from roughcontact.fft import get_fft
+from roughcontact.core.fft import get_fft
 from roughcontact.solver import ELASTIC_METHODS, solve_contact
-from roughcontact.surface import generate_surface
+from roughcontact.surfaces.synthetic import generate_surface
 from solver_invariants import check_solution
 
 

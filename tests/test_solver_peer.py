@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from roughcontact.solver import elastic_kernel, gap_scale, solve_contact
-from roughcontact.surface import generate_surface
+from roughcontact.surfaces.synthetic import generate_surface
 from solver_invariants import check_solution
 
 pytestmark = pytest.mark.peer

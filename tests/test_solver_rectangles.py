@@ -30,8 +30,7 @@ import numpy as np
 import pytest
 
 import roughcontact.solver as solver_mod
-from roughcontact.clusters import cluster_dataset, cluster_statistics, label_clusters
-from roughcontact.fft import wavenumbers
+from roughcontact.core.fft import wavenumbers
 from roughcontact.solver import (
     ELASTIC_METHODS,
     FreeHalfSpace,
@@ -42,7 +41,8 @@ from roughcontact.solver import (
     solve_step,
 )
 from roughcontact.solver.halfspace import _pixel_influence, _pixel_influence_rect
-from roughcontact.surface import generate_surface
+from roughcontact.statistics.clusters import cluster_dataset, cluster_statistics, label_clusters
+from roughcontact.surfaces.synthetic import generate_surface
 from solver_invariants import check_solution, direct_free_displacement, pixel_integral
 
 TOL = 1e-10

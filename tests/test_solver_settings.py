@@ -6,7 +6,7 @@ import pytest
 
 from roughcontact import solver as solver_mod
 from roughcontact.solver import EFFECTS, Effect, PlasticityCap, SolverSettings, effects_from_config, solve_contact
-from roughcontact.surface import generate_surface
+from roughcontact.surfaces.synthetic import generate_surface
 
 LOADS = [0.001, 0.003]
 

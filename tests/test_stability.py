@@ -26,7 +26,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 
 from roughcontact import generate_surface
 from roughcontact.solver import elastic_kernel, solve_contact
-from roughcontact.surface import spectral_moments
+from roughcontact.surfaces.synthetic import spectral_moments
 from solver_invariants import check_solution
 
 settings.register_profile("ci", max_examples=20, deadline=None, derandomize=True,

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from roughcontact import generate_surface
-from roughcontact.fft import wavenumbers
+from roughcontact.core.fft import wavenumbers
 from roughcontact.solver import solve_step
 from roughcontact.solver.stanley_kato import StanleyKato, solve_stanley_kato
 

@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 from roughcontact import generate_surface
-from roughcontact.fft import wavenumbers
-from roughcontact.surface import finite_difference_rms_slope, spectral_moments
+from roughcontact.core.fft import wavenumbers
+from roughcontact.surfaces.synthetic import finite_difference_rms_slope, spectral_moments
 
 
 def radial_psd(h):
@@ -165,7 +165,7 @@ def test_extreme_lengths_scale_exactly(length):
 
 
 def test_nonperiodic_moments_agree_with_the_spectrum_and_ignore_the_edge_jump():
-    from roughcontact.surface import nonperiodic_moments, spectral_moments
+    from roughcontact.surfaces.synthetic import nonperiodic_moments, spectral_moments
 
     # k_s = N/16: finite differences are biased O((q dx)^2 / 12) ~ 1 % at the shortest wavelength
     h = generate_surface(256, 2.0, 16.0, 0.7, 3, length=2.0, rms_slope=0.1)

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from roughcontact.datasets import surface_dataset, surface_heights
+from roughcontact.pipeline.datasets import surface_dataset, surface_heights
 
 
 def _surface(n=8):

@@ -7,33 +7,39 @@ import numpy as np
 import pytest
 from scipy.special import ellipe, ellipk, erf, roots_legendre
 
-from roughcontact.fft import rfft_weights, wavenumbers
-from roughcontact.surface import generate_surface, psd_filter, spectral_moments
-from roughcontact.theory import (
-    KAPPA_BGT,
-    KAPPA_PERSSON,
+from roughcontact.core.fft import rfft_weights, wavenumbers
+from roughcontact.surfaces.synthetic import generate_surface, psd_filter, spectral_moments
+from roughcontact.theory.asperity import (
     XI_D_RANGE,
-    areal_moments,
     asperity_area,
     asperity_kappa,
     asperity_model,
     asperity_reduced_area,
     asperity_reduced_pressure,
+)
+from roughcontact.theory.laws import (
+    KAPPA_BGT,
+    KAPPA_PERSSON,
     cel_area,
     cel_area_limit,
     cel_dpbar_dp0,
     cel_kappa,
     cel_pressure,
-    discrete_power_law_moments,
-    hertz_elliptic_factors,
     linear_area,
+    persson_area,
+)
+from roughcontact.theory.spectra import (
+    areal_moments,
+    discrete_power_law_moments,
     nayak_alpha,
+    power_law_alpha,
+    power_law_moments,
+)
+from roughcontact.theory.summits import (
+    hertz_elliptic_factors,
     nayak_summit_density,
     nayak_summit_pdf,
     nayak_summit_pdf_xi_t,
-    persson_area,
-    power_law_alpha,
-    power_law_moments,
 )
 
 PAPER = dict(kappa=1.145 * math.sqrt(2 * math.pi), mu=0.55, beta=0.21)
@@ -264,7 +270,7 @@ def test_discrete_moments_validate_the_grid():
 # ===================================================== finite-load asperity theories
 # Reference values: shared/reference/bgt-greenwood.md ("the note"), computed there by two
 # deterministic quadratures that agree to 1e-9 and confirmed by Monte Carlo. The code here
-# integrates in another order (t | xi conditional, then xi; see roughcontact.asperity).
+# integrates in another order (t | xi conditional, then xi; see roughcontact.theory.asperity).
 MODELS = ("bgt", "greenwood")
 SQRT_2PI = math.sqrt(2 * math.pi)
 

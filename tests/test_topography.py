@@ -11,7 +11,7 @@ import pytest
 from SurfaceTopography import Topography
 
 from compare_outputs import assert_heights_close
-from roughcontact.topography import LENGTH_UNITS, MeasuredSurface, TopographyError, read_topography
+from roughcontact.surfaces.topography import LENGTH_UNITS, MeasuredSurface, TopographyError, read_topography
 
 INFO_KEYS = {"file", "sha256", "reader", "channel", "file_unit", "unit_from", "physical_size_from", "original_shape",
              "original_physical_size", "n_undefined", "undefined", "detrend", "crop", "periodic"}
@@ -234,12 +234,12 @@ def test_bad_arguments_are_named(tmp_path, kwargs, words):
 
 
 def test_shipped_example_files_hold_what_the_examples_module_writes(tmp_path):
-    """data/measured/ (the `measured` scene's inputs) equals a fresh `python -m roughcontact.examples`.
+    """data/measured/ (the `measured` scene's inputs) equals a fresh `python -m roughcontact.pipeline.examples`.
 
     The shipped files were generated on another machine: heights agree to FFT rounding
     (tests/compare_outputs.py), sizes and undefined points exactly.
     """
-    from roughcontact.examples import write_examples
+    from roughcontact.pipeline.examples import write_examples
 
     repo = Path(__file__).resolve().parents[1] / "data" / "measured"
     fresh = write_examples(tmp_path)
@@ -256,7 +256,7 @@ def test_mostly_undefined_maps_are_refused_and_the_fraction_recorded(tmp_path):
     # A map 60 % undefined would be mostly the fill's invention: refused above topography.max_undefined
     # (default 0.5), naming the file, the fraction and the remedy; accepted when the scene allows it,
     # with the fraction in the provenance and in the surface file.
-    from roughcontact.datasets import measured_surface_dataset
+    from roughcontact.pipeline.datasets import measured_surface_dataset
 
     h = _noise((20, 20), seed=4)
     mask = np.zeros(h.shape, dtype=bool)

@@ -3,7 +3,7 @@
 Every ``units`` must parse with UDUNITS-2 (``cf_units``, the CF conventions' reference) and pint
 to the same unit. UDUNITS-2 has integer powers only, so ``cf_unit`` refuses fractional ones and
 ``epsilon`` [length^-1/2] is written as its number for lengths in the study's unit, ``units``
-``"1"`` with its reference length alongside (roughcontact.quantities.per_reference_length).
+``"1"`` with its reference length alongside (roughcontact.core.quantities.per_reference_length).
 """
 import ast
 import math
@@ -14,20 +14,22 @@ import pint
 import pytest
 from cf_units import Unit
 
-from roughcontact import accuracy, aggregate
-from roughcontact.datasets import (
+from roughcontact.analysis import aggregate
+from roughcontact.analysis.aggregate.seeds import scale_free_statistics
+from roughcontact.analysis.fit.grid import fit_cel
+from roughcontact.core.quantities import LENGTH_UNITS, PRESSURE_UNITS, cf_unit, per_reference_length
+from roughcontact.figures.style import _unit_tex
+from roughcontact.pipeline.datasets import (
     contact_dataset,
     representativity_batch,
     representativity_dataset,
     split_cases,
     surface_dataset,
 )
-from roughcontact.fit import fit_cel
-from roughcontact.plots import _unit_tex
-from roughcontact.quantities import LENGTH_UNITS, PRESSURE_UNITS, cf_unit, per_reference_length
-from roughcontact.representativity import gaussian_l2_error, scale_free_statistics
 from roughcontact.solver import solve_contact
-from roughcontact.surface import generate_surface, spectral_moments
+from roughcontact.statistics.representativity import gaussian_l2_error
+from roughcontact.studies import accuracy
+from roughcontact.surfaces.synthetic import generate_surface, spectral_moments
 
 SRC = Path(__file__).resolve().parents[1] / "src" / "roughcontact"
 UREG = pint.UnitRegistry()

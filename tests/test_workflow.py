@@ -220,8 +220,8 @@ def test_malformed_yaml_is_named_with_file_line_and_column(tmp_path):
     config.write_text("\n".join(lines[:at] + ["scene: demo"] + lines[at + 1:]) + "\n")
     res = run_snakemake(wd, "-n", "--configfile", "my_scene.yaml")
     assert res.returncode != 0 and "Config file is not valid JSON or YAML" in res.stdout + res.stderr
-    res = subprocess.run([sys.executable, "-m", "roughcontact.config", "my_scene.yaml"], cwd=wd, capture_output=True,
-                         text=True, timeout=120)
+    res = subprocess.run([sys.executable, "-m", "roughcontact.pipeline.config", "my_scene.yaml"], cwd=wd,
+                         capture_output=True, text=True, timeout=120)
     assert res.returncode == 2 and "my_scene.yaml: not valid YAML at line 3, column 1" in res.stderr, res.stderr
 
 
@@ -368,7 +368,7 @@ def test_contact_jobs_log_one_line_per_load_step(demo_run):
 @pytest.mark.slow  # ~1 min: make test (CI) runs it, make test-fast does not
 def test_measured_scene_runs_end_to_end(tmp_path):
     """The shipped `measured` scene: three files in three formats through every stage, twice (~1 min)."""
-    from roughcontact.io import read_dataset
+    from roughcontact.pipeline.io import read_dataset
     from test_units import assert_all_units_parse
 
     wd = copy_workflow(tmp_path / "wf")

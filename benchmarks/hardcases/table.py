@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from roughcontact.datasets import surface_heights
+from roughcontact.pipeline.datasets import surface_heights
 from roughcontact.solver import SOLVER_PATHS
 
 

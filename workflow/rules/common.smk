@@ -3,9 +3,9 @@
 # target fails at once, naming the wildcard, its value and the scene's allowed values).
 from pathlib import Path
 
-from roughcontact import params
-from roughcontact.accuracy import variants as accuracy_variants
-from roughcontact.config import (
+from roughcontact.figures.registry import FIGURES, scene_figures
+from roughcontact.pipeline import params
+from roughcontact.pipeline.config import (
     BATCH_STEM,
     CASE_STEM,
     ConfigError,
@@ -16,13 +16,13 @@ from roughcontact.config import (
     plan_summary,
     validate_config,
 )
-from roughcontact.figures import FIGURES, scene_figures
-from roughcontact.measured import is_measured, reader_settings, topography_names
-from roughcontact.progress import write_plan
+from roughcontact.pipeline.measured import is_measured, reader_settings, topography_names
+from roughcontact.pipeline.progress import write_plan
+from roughcontact.studies.accuracy import variants as accuracy_variants
 
 try:
     check_config_files(workflow.configfiles)
-    _VALID = validate_config(config, load_schema(workflow.source_path("../schemas/config.schema.yaml")))
+    _VALID = validate_config(config, load_schema())
 except ConfigError as _err:
     raise WorkflowError(f"invalid config: {_err}") from None
 
@@ -32,7 +32,7 @@ ACTIVE_SCENE = _VALID["scene"]
 logger.info(plan_summary(ACTIVE_SCENE, SCENES[ACTIVE_SCENE]))
 
 
-# The plan each contact job's scene ETA is read against (python -m roughcontact.progress).
+# The plan each contact job's scene ETA is read against (python -m roughcontact.pipeline.progress).
 onstart:
     write_plan(Path("results", ACTIVE_SCENE), ACTIVE_SCENE, SCENES[ACTIVE_SCENE], workflow.cores)
 
@@ -57,7 +57,7 @@ def topography_path(folder, ext="nc"):
 # value with the scene's allowed ones. Constraints built from the configured values would leave
 # Snakemake's bare MissingRuleException instead. The shapes keep file names unambiguous: a grid
 # value holds no '_' or '/', a seed only digits, and a topography name never looks like a
-# generated case's or batch's file (roughcontact.measured refuses such names in the config).
+# generated case's or batch's file (roughcontact.pipeline.measured refuses such names in the config).
 GRID_VALUE = r"[^_/]+"
 NOT_GENERATED = r"(?!kl[^_/]*(?:_ks[^_/]*)?_H[^_/]*(?:_s\d+)?\.[^./]+$)"
 
@@ -262,7 +262,7 @@ def figure_spec(w):
     if w.figure not in FIGURES:
         raise WorkflowError(
             f"scene {w.scene!r}: wildcard figure={w.figure} is not a figure of roughcontact "
-            f"(roughcontact.figures.FIGURES); the scene's figures: {', '.join(figures) or 'none'}"
+            f"(roughcontact.figures.registry.FIGURES); the scene's figures: {', '.join(figures) or 'none'}"
         )
     if w.figure not in figures:
         raise WorkflowError(

@@ -1,5 +1,5 @@
 # Stage 3: frictionless normal contact, loaded in steps, one NetCDF per case.
-# params carry exactly the settings a solve depends on (roughcontact.params.contact).
+# params carry exactly the settings a solve depends on (roughcontact.pipeline.params.contact).
 
 
 rule contact:

@@ -1,4 +1,4 @@
-# Figures: one rule for every figure of roughcontact.figures.FIGURES, PNG and PDF,
+# Figures: one rule for every figure of roughcontact.figures.registry.FIGURES, PNG and PDF,
 # byte-identical across reruns. A scene gets the figures its blocks ask for.
 
 

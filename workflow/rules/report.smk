@@ -1,6 +1,6 @@
 # The report's landing page: a reStructuredText fragment (scene parameters, version, git commit,
-# CEL fit table) that workflow/report/workflow.rst includes. Rendered by roughcontact.report.
-# Its params are the scene's study blocks without the description (roughcontact.params.summary),
+# CEL fit table) that workflow/report/workflow.rst includes. Rendered by roughcontact.studies.report.
+# Its params are the scene's study blocks without the description (roughcontact.pipeline.params.summary),
 # so a description edit plans nothing; the commit is read when the job runs.
 
 

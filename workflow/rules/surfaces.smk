@@ -1,7 +1,7 @@
 # Stage 1: surfaces by FFT filtering of white noise, one NetCDF per case.
 # Two rules share one script: the representativity and contact studies may normalise
 # surfaces differently (rms height vs rms slope), so they live in separate folders.
-# params carry exactly what a surface depends on (roughcontact.params.surface). A generated
+# params carry exactly what a surface depends on (roughcontact.pipeline.params.surface). A generated
 # surface reads no file: its input function only checks the case against the scene's grid.
 
 
@@ -45,7 +45,7 @@ rule surface:
         "../scripts/generate_surface.py"
 
 
-# Measured surfaces: one topography file read by SurfaceTopography (roughcontact.topography),
+# Measured surfaces: one topography file read by SurfaceTopography (roughcontact.surfaces.topography),
 # converted to the scene's length unit, with its statistics. The file is the job's input, so an
 # edited file is read again; params carry the reader settings of that file only.
 rule topography:

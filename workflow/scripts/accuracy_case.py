@@ -1,8 +1,8 @@
 """Accuracy study: generate one surface at the setting's N and solve it at its tol and steps."""
-from roughcontact.datasets import contact_dataset
-from roughcontact.io import run_logged, write_dataset
+from roughcontact.pipeline.datasets import contact_dataset
+from roughcontact.pipeline.io import run_logged, write_dataset
 from roughcontact.solver import solve_contact
-from roughcontact.surface import generate_surface, spectral_moments
+from roughcontact.surfaces.synthetic import generate_surface, spectral_moments
 
 
 def main(log):

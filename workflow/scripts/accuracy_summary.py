@@ -3,8 +3,10 @@ import csv
 from collections import defaultdict
 from pathlib import Path
 
-from roughcontact import accuracy, aggregate
-from roughcontact.io import atomic_output, read_dataset, run_logged, write_dataset, write_text_atomic
+from roughcontact.analysis import aggregate
+from roughcontact.core.files import atomic_output, write_text_atomic
+from roughcontact.pipeline.io import read_dataset, run_logged, write_dataset
+from roughcontact.studies import accuracy
 
 
 def main(log):

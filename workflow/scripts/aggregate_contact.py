@@ -1,6 +1,7 @@
 """Aggregate: join every contact case of a scene into one dataset with seed statistics."""
-from roughcontact import aggregate, provenance
-from roughcontact.io import read_dataset, run_logged, write_dataset
+from roughcontact.analysis import aggregate
+from roughcontact.pipeline import provenance
+from roughcontact.pipeline.io import read_dataset, run_logged, write_dataset
 
 REQUIRED = ["pressure", "area_fraction", "mean_contact_pressure", "kappa", "converged", "rms_slope"]
 

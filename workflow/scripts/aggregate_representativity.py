@@ -1,7 +1,8 @@
 """Aggregate: join every representativity case of a scene, with mean and error over seeds."""
-from roughcontact import aggregate, provenance
-from roughcontact.datasets import split_cases
-from roughcontact.io import read_dataset, run_logged, write_dataset
+from roughcontact.analysis import aggregate
+from roughcontact.pipeline import provenance
+from roughcontact.pipeline.datasets import split_cases
+from roughcontact.pipeline.io import read_dataset, run_logged, write_dataset
 
 
 def main(log):

@@ -4,11 +4,11 @@ from pathlib import Path
 
 import numpy as np
 
-from roughcontact.datasets import contact_dataset, surface_heights
-from roughcontact.io import eta, read_dataset, run_logged, write_dataset
-from roughcontact.loading import case_loads
-from roughcontact.params import recorded, require_made_for
-from roughcontact.progress import scene_progress
+from roughcontact.pipeline.datasets import contact_dataset, surface_heights
+from roughcontact.pipeline.io import eta, read_dataset, run_logged, write_dataset
+from roughcontact.pipeline.loading import case_loads
+from roughcontact.pipeline.params import recorded, require_made_for
+from roughcontact.pipeline.progress import scene_progress
 from roughcontact.solver import effects_from_config, solve_contact, step_notes
 
 
@@ -20,7 +20,7 @@ def case_of(w) -> dict:
 
 
 def labels_of(case: dict) -> dict:
-    """The case as roughcontact.datasets' keyword arguments."""
+    """The case as roughcontact.pipeline.datasets' keyword arguments."""
     return {"hurst" if key == "H" else key: value for key, value in case.items()}
 
 

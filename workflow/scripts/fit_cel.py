@@ -4,14 +4,16 @@ A generated scene's aggregate (dims k_l, k_s, H, seed, step) is fitted per (k_l,
 over H by fit.fit_cel; a measured scene's (dims topography, step) by fit.fit_topographies, all its
 topographies pooled as one surface type.
 """
-from roughcontact import fit
-from roughcontact.io import read_dataset, run_logged, write_dataset, write_text_atomic
+from roughcontact.analysis import fit
+from roughcontact.analysis.aggregate import TOPOGRAPHY_DIM
+from roughcontact.core.files import write_text_atomic
+from roughcontact.pipeline.io import read_dataset, run_logged, write_dataset
 
 
 def main(log):
     cfg = snakemake.params.fit
     agg = read_dataset(snakemake.input[0], stage="aggregate", variables=["area_fraction", "pressure"])
-    measured = fit.TOPOGRAPHY_DIM in agg.dims
+    measured = TOPOGRAPHY_DIM in agg.dims
     cases = "topographies" if measured else "(k_l, k_s, H, seed)"
     if not cfg["include_unconverged"]:
         agg, excluded = fit.exclude_unconverged(agg)
@@ -54,7 +56,7 @@ def _log_groups(log, result):
 
 def _log_topographies(log, result):
     n = int(result["n_topographies"])
-    names = [str(t) for t, used in zip(result[fit.TOPOGRAPHY_DIM].values, result["in_fit"].values, strict=True) if used]
+    names = [str(t) for t, used in zip(result[TOPOGRAPHY_DIM].values, result["in_fit"].values, strict=True) if used]
     log.info("topographies pooled in the fit (%d): %s", n, ", ".join(names) or "none")
     if n == 1:
         log.warning("a single topography: no bootstrap interval (one surface says nothing about the scatter "

@@ -1,7 +1,7 @@
-"""Stage 1: generate one surface and write it (thin wrapper over roughcontact.surface)."""
-from roughcontact.datasets import surface_dataset
-from roughcontact.io import run_logged, write_dataset
-from roughcontact.surface import generate_surface
+"""Stage 1: generate one surface and write it (thin wrapper over roughcontact.surfaces.synthetic)."""
+from roughcontact.pipeline.datasets import surface_dataset
+from roughcontact.pipeline.io import run_logged, write_dataset
+from roughcontact.surfaces.synthetic import generate_surface
 
 
 def main(log):

@@ -1,8 +1,8 @@
 """Kappa gap: solve one surface of one variant and record every area definition per load step."""
 import time
 
-from roughcontact.io import run_logged, write_dataset
-from roughcontact.kappa_gap import case_surface, solve_case
+from roughcontact.pipeline.io import run_logged, write_dataset
+from roughcontact.studies.kappa_gap.cases import case_surface, solve_case
 
 
 def main(log):

@@ -3,8 +3,9 @@ import csv
 from collections import defaultdict
 from pathlib import Path
 
-from roughcontact import kappa_gap
-from roughcontact.io import read_dataset, run_logged, write_dataset, write_text_atomic
+from roughcontact.core.files import write_text_atomic
+from roughcontact.pipeline.io import read_dataset, run_logged, write_dataset
+from roughcontact.studies import kappa_gap
 
 
 def main(log):

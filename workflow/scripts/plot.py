@@ -1,13 +1,13 @@
-"""Render one registered figure (roughcontact.figures) to PNG and PDF (deterministic bytes)."""
-from roughcontact import plots
-from roughcontact.figures import FIGURES
-from roughcontact.io import run_logged
+"""Render one registered figure (roughcontact.figures.registry) to PNG and PDF (deterministic bytes)."""
+from roughcontact.figures.registry import FIGURES
+from roughcontact.figures.style import save_figure
+from roughcontact.pipeline.io import run_logged
 
 
 def main(log):
     name = snakemake.wildcards.figure
     fig = FIGURES[name].render(dict(snakemake.input.items()))
-    plots.save_figure(fig, snakemake.output.png)
+    save_figure(fig, snakemake.output.png)
     log.info("figure %s written", name)
 
 

@@ -1,9 +1,9 @@
 """Stage 1 (measured): read one topography file and write it as a surface with its statistics."""
 import json
 
-from roughcontact.datasets import measured_surface_dataset
-from roughcontact.io import run_logged, write_dataset
-from roughcontact.topography import WARN_UNDEFINED, read_topography
+from roughcontact.pipeline.datasets import measured_surface_dataset
+from roughcontact.pipeline.io import run_logged, write_dataset
+from roughcontact.surfaces.topography import WARN_UNDEFINED, read_topography
 
 
 def main(log):

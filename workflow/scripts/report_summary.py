@@ -1,8 +1,10 @@
 """The report's landing-page fragment: scene parameters, version, git commit, CEL fit table."""
 from pathlib import Path
 
-from roughcontact import __version__, report
-from roughcontact.io import read_dataset, run_logged, write_text_atomic
+from roughcontact import __version__
+from roughcontact.core.files import write_text_atomic
+from roughcontact.pipeline.io import read_dataset, run_logged
+from roughcontact.studies import report
 
 
 def topographies():

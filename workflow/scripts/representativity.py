@@ -1,8 +1,8 @@
 """Stage 2: eps of every k_s and seed of one (k_l, H), its surfaces made in memory."""
 import time
 
-from roughcontact.datasets import representativity_batch
-from roughcontact.io import run_logged, write_dataset
+from roughcontact.pipeline.datasets import representativity_batch
+from roughcontact.pipeline.io import run_logged, write_dataset
 
 
 def main(log):

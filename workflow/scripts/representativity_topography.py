@@ -1,8 +1,8 @@
 """Stage 2 (measured): eps of one topography file's heights."""
-from roughcontact.datasets import representativity_dataset, surface_heights
-from roughcontact.io import read_dataset, run_logged, write_dataset
-from roughcontact.params import require_made_for
-from roughcontact.representativity import gaussian_l2_error
+from roughcontact.pipeline.datasets import representativity_dataset, surface_heights
+from roughcontact.pipeline.io import read_dataset, run_logged, write_dataset
+from roughcontact.pipeline.params import require_made_for
+from roughcontact.statistics.representativity import gaussian_l2_error
 
 
 def main(log):

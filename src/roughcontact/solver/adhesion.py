@@ -76,7 +76,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..fft import wavenumbers
+from ..core.fft import wavenumbers
 from .workspace import dot
 
 #: Default iteration cap of :func:`solve_adhesive` (all inner iterations of one call).

@@ -27,7 +27,7 @@ import math
 
 import numpy as np
 
-from ..fft import RealFFT2, get_fft, wavenumbers
+from ..core.fft import RealFFT2, get_fft, wavenumbers
 from .units import cell_aspect, frexp_ratio, side_x
 from .validation import check_positive, validate_boundary, validate_heights, validate_length, validate_threads
 

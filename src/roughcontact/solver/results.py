@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from ..quantities import cf_unit
+from ..core.quantities import cf_unit
 from .workspace import SOLVER_PATHS
 
 #: ``units`` attribute of dimensionless fractions, counts and flags.

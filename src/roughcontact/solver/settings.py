@@ -6,7 +6,7 @@ import dataclasses
 import sys
 from dataclasses import dataclass
 
-from ..quantities import cf_unit
+from ..core.quantities import cf_unit
 from .effects import Effect, PlasticityCap
 from .validation import check_positive, validate_boundary, validate_solver_args, validate_threads
 from .workspace import ELASTIC_METHODS

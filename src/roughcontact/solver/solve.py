@@ -172,7 +172,7 @@ def _dataset(solver: ContactSolver | AdhesiveSolver, p, cols, iters, conv, paths
         for name, (value, units, long_name) in effect.after_steps(solver, s.length_unit, s.pressure_unit).items():
             ds[name] = xr.Variable((), value, {"units": units, "long_name": long_name})
     if masks is not None:
-        from ..clusters import cluster_dataset
+        from ..statistics.clusters import cluster_dataset
 
         stats = cluster_dataset(masks, ds["step"].values, s.length, periodic=solver.periodic,
                                 length_unit=s.length_unit)

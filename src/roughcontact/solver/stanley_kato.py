@@ -44,7 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..fft import get_fft, wavenumbers
+from ..core.fft import get_fft, wavenumbers
 
 #: Default relaxation factor omega (plain projected gradient).
 OMEGA = 1.0

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...quantities import cf_unit
+from ...core.quantities import cf_unit
 from ..adhesion import Exponential, MaugisDugdale
 from ..results import FRACTION_UNITS
 from .base import Effect, register
@@ -43,6 +43,17 @@ class Adhesion(Effect):
             raise ValueError(f"law must be one of {sorted(LAWS)}, got {law!r}")
         self.functional = LAWS[law](work, range)
         self.law, self.unloading = law, bool(unloading)
+
+    @classmethod
+    def check_config(cls, contact: dict, fail) -> None:
+        """The gap iteration runs on the periodic half-space, with no other effect."""
+        others = sorted(set(contact["effects"]) - {cls.name})
+        if others:
+            fail("", f"cannot be combined with effects.{others[0]} (one effect on the gap iteration at a time); "
+                 "remove one of them")
+        boundary = contact["solver"].get("boundary", "periodic")
+        if boundary != "periodic":
+            fail("", f"needs solver.boundary: periodic (the adhesive iteration is periodic), got {boundary!r}")
 
     @classmethod
     def from_config(cls, block: dict, *, e_star: float) -> Adhesion:

@@ -21,7 +21,10 @@ The solver asks every effect it is given for
 * ``after_steps(solver, length_unit, pressure_unit)``: per-solve scalars computed after the
   load steps (name -> (value, CF units, long name)), e.g. a pull-off force;
 * ``from_config(block, e_star=...)``: the effect from its config block (``contact.effects.<name>``,
-  already schema-checked), ``e_star`` the modulus its relative parameters scale with.
+  already schema-checked), ``e_star`` the modulus its relative parameters scale with;
+* ``check_config(contact, fail)``: the cross-field rules a schema cannot express, given the whole
+  schema-checked ``contact`` block; ``fail(field, message)`` reports one (``field`` after the
+  effect's name: ``".hardness"``, or ``""`` for the effect itself).
 """
 
 from __future__ import annotations
@@ -80,6 +83,10 @@ class Effect:
     def after_steps(self, solver, length_unit: str = "1", pressure_unit: str = "1") -> dict:
         """Scalars of the whole solve, after its load steps: name -> (value, units, long name)."""
         return {}
+
+    @classmethod
+    def check_config(cls, contact: dict, fail) -> None:
+        """Refuse a ``contact`` block the effect cannot act on (before any job is planned)."""
 
     @classmethod
     def from_config(cls, block: dict, *, e_star: float) -> Effect:

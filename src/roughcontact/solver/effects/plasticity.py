@@ -36,6 +36,18 @@ class PlasticityCap(Effect):
         """``contact.effects.plasticity``: ``hardness`` relative to ``E*``."""
         return cls(block["hardness"] * e_star)
 
+    @classmethod
+    def check_config(cls, contact: dict, fail) -> None:
+        """The hardness must exceed ``load.p_max`` (when both are relative to E*)."""
+        load, hardness = contact["load"], contact["effects"][cls.name]["hardness"]
+        # relative to the rms slope, or with a target area, p_max is compared with the hardness
+        # when each case's load is known
+        if "target_area" in load or load.get("relative_to", "e_star") != "e_star":
+            return
+        if not hardness > load["p_max"]:
+            fail(".hardness", f"{hardness:g} must exceed load.p_max = {load['p_max']:g}: a pressure capped at "
+                 "the hardness cannot carry a mean load p0 >= hardness")
+
     def check_surface(self, units: Units, periodic: bool) -> None:
         if units.flat and not periodic:
             raise ValueError(

@@ -1,0 +1,1 @@
+"""Analysis of solved cases: aggregation over cases and seeds (:mod:`.aggregate`), CEL fits (:mod:`.fit`)."""

@@ -1,0 +1,51 @@
+"""Fitting the contact evolution law (CEL) to aggregated contact data.
+
+:mod:`.estimators` holds the two estimators (the paper's route and the joint fit, see its docstring),
+:mod:`.bootstrap` one group's fit with its bootstrap over seeds, :mod:`.grid` the fit of a generated
+scene per ``(k_l, k_s, H)``, :mod:`.topographies` that of a measured scene, :mod:`.cases` which cases
+enter, :mod:`.settings` the checked settings and shared output variables, :mod:`.table` the CSV table.
+"""
+
+from .cases import (
+    exclude_unconverged,
+)
+from .estimators import (
+    BOUND_RTOL,
+    CONSTANTS,
+    JOINT_LOWER,
+    JOINT_UPPER,
+    METHODS,
+    PAPER_CEL,
+    POOLED,
+    FitError,
+    at_bound,
+    constrained_flags,
+)
+from .grid import (
+    fit_cel,
+)
+from .table import (
+    TOPOGRAPHY_CSV_COLUMNS,
+    to_csv_table,
+)
+from .topographies import (
+    fit_topographies,
+)
+
+__all__ = [
+    "CONSTANTS",
+    "METHODS",
+    "PAPER_CEL",
+    "POOLED",
+    "FitError",
+    "JOINT_LOWER",
+    "JOINT_UPPER",
+    "BOUND_RTOL",
+    "at_bound",
+    "constrained_flags",
+    "exclude_unconverged",
+    "fit_cel",
+    "fit_topographies",
+    "to_csv_table",
+    "TOPOGRAPHY_CSV_COLUMNS",
+]

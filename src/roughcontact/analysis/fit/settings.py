@@ -1,0 +1,104 @@
+"""The settings of a CEL fit, checked, and the variables and attributes every fit dataset shares.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from .estimators import _KAPPA_EXTRAPOLATIONS, CONSTANTS, METHODS, PAPER_CEL, constrained_flags
+
+
+def _check_window(window) -> tuple[float, float]:
+    try:
+        lo, hi = (float(w) for w in window)
+    except (TypeError, ValueError):
+        raise ValueError(f"window must be a pair (low, high) of area fractions, got {window!r}") from None
+    if not (np.isfinite(lo) and np.isfinite(hi)) or not (0.0 < lo < hi <= 1.0):
+        raise ValueError(f"window must satisfy 0 < low < high <= 1 (area fractions A/A0), got {window!r}")
+    return lo, hi
+
+
+def _h_label(h: float) -> str:
+    return f"{float(h):g}"
+
+
+def _check_settings(window, n_boot, rng_seed, methods, min_points, kappa_extrapolation, confidence,
+                    paper_average, on_insufficient) -> tuple[tuple[float, float], tuple[str, ...]]:
+    """The validated window ``(low, high)`` and methods; ValueError naming the first bad setting."""
+    lo, hi = _check_window(window)
+    if not isinstance(n_boot, (int, np.integer)) or n_boot < 10:
+        raise ValueError(f"n_boot must be an integer >= 10, got {n_boot!r}")
+    if not isinstance(rng_seed, (int, np.integer)) or rng_seed < 0:
+        raise ValueError(f"rng_seed must be an integer >= 0, got {rng_seed!r}")
+    methods = tuple(methods)
+    if not methods or any(m not in METHODS for m in methods) or len(set(methods)) != len(methods):
+        raise ValueError(f"methods must be distinct names from {METHODS}, got {methods!r}")
+    if not isinstance(min_points, (int, np.integer)) or min_points < 3:
+        raise ValueError(f"min_points must be an integer >= 3, got {min_points!r}")
+    if kappa_extrapolation not in _KAPPA_EXTRAPOLATIONS:
+        raise ValueError(f"kappa_extrapolation must be one of {_KAPPA_EXTRAPOLATIONS}, got "
+                         f"{kappa_extrapolation!r}")
+    if not (0.0 < float(confidence) < 1.0):
+        raise ValueError(f"confidence must lie in (0, 1), got {confidence!r}")
+    if paper_average not in ("seeds", "none"):
+        raise ValueError(f"paper_average must be 'seeds' or 'none', got {paper_average!r}")
+    if on_insufficient not in ("raise", "nan"):
+        raise ValueError(f"on_insufficient must be 'raise' or 'nan', got {on_insufficient!r}")
+    return (lo, hi), methods
+
+
+def _estimate_vars(dims: tuple[str, ...], value, stderr, bstd, clo, chi, npts, *, confidence: float,
+                   resampled: str, points: str, methods: Sequence[str]) -> dict:
+    """The per-constant variables of a fit result, over ``dims`` (ending in estimator, constant).
+
+    ``resampled`` names what the bootstrap draws (seeds, topographies); ``points`` says what
+    the paper route's points are; ``methods`` the estimators, in order.
+    """
+    one = {"units": "1"}
+    pct = f"{100 * float(confidence):g}%"
+    return {
+        "value": (dims, value, {**one, "long_name": "fitted CEL constant"}),
+        "stderr": (dims, stderr, {**one, "long_name": "standard error from the fit itself "
+                                  "(OLS / Jacobian covariance; ignores correlation along a load curve)"}),
+        "bootstrap_stderr": (dims, bstd, {**one, "long_name": "bootstrap standard error "
+                             f"({resampled} resampled with replacement; times sqrt(n/(n-1)))"}),
+        "ci_low": (dims, clo, {**one, "long_name": f"lower end of the {pct} bootstrap percentile interval"}),
+        "ci_high": (dims, chi, {**one, "long_name": f"upper end of the {pct} bootstrap percentile interval"}),
+        "constrained": (dims, constrained_flags(value, clo, chi, methods), {**one, "long_name": "1 if the "
+                        "bootstrap interval is narrower than the value itself, 0 if the data do not "
+                        "constrain the constant (interval wider than the value, no interval, or the "
+                        "value on a bound of the joint fit)"}),
+        "n_points": (dims, npts, {**one, "long_name": f"in-window points used by the fit ({points})"}),
+    }
+
+
+def _paper_vars() -> dict:
+    one = {"units": "1"}
+    return {
+        "paper_value": (("constant",), np.array([PAPER_CEL[c][0] for c in CONSTANTS]),
+                        {**one, "long_name": "Yastrebov et al. (2012) value, k_l=16, k_s=32"}),
+        "paper_stderr": (("constant",), np.array([PAPER_CEL[c][1] for c in CONSTANTS]),
+                         {**one, "long_name": "Yastrebov et al. (2012) stated uncertainty"}),
+    }
+
+
+def _estimator_coords(methods: Sequence[str]) -> dict:
+    return {
+        "estimator": ("estimator", np.array(methods, dtype=object),
+                      {"units": "1", "long_name": "estimator: 'paper' (log-log d pbar/d p0 + kappa extrapolation) "
+                                                  "or 'joint' (nonlinear least squares on A/A0(p0))"}),
+        "constant": ("constant", np.array(CONSTANTS, dtype=object), {"units": "1", "long_name": "CEL constant"}),
+    }
+
+
+def _settings_attrs(lo, hi, n_boot, rng_seed, confidence, min_points, kappa_extrapolation, paper_average,
+                    e_star) -> dict:
+    return {
+        "window_low": lo, "window_high": hi, "n_boot": int(n_boot), "rng_seed": int(rng_seed),
+        "confidence": float(confidence), "min_points": int(min_points),
+        "kappa_extrapolation": kappa_extrapolation, "paper_average": paper_average,
+        "e_star": e_star,
+        "description": "Contact evolution law A/A0 = (beta + [kappa p0/(h' E*)]^(mu-1))^(1/(mu-1))",
+    }

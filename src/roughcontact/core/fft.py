@@ -1,0 +1,262 @@
+"""Real 2-D FFT pairs with cached plans: pyFFTW when importable, numpy.fft otherwise.
+
+All transforms use numpy's conventions: the forward transform is unnormalised, the
+backward transform divides by ``n0 * n1``. Arrays are ``float64`` of shape ``(n0, n1)``
+in real space and ``complex128`` of shape ``(n0, n1 // 2 + 1)`` in Fourier space;
+``dtype=numpy.float32`` gives single-precision pairs (``float32`` / ``complex64``, about
+half the time of a double pair; the solver uses them for its inner products only).
+
+Reproducibility: FFTW plans are made with ``FFTW_ESTIMATE`` (:data:`PLANNER_FLAGS`),
+which never times anything, so the same transform gives the same bits in every process
+on a given machine and build. ``FFTW_MEASURE`` would time candidate plans and, on a
+loaded machine, pick different ones in different processes, whose results differ in the
+last bits. ESTIMATE's heuristics are slow for some shapes, though (a float32 pair at
+N = 1024 took 1.8x the measured plan's time), so the package ships *wisdom*: plans
+measured once with ``FFTW_MEASURE`` for square grids of 32 to 2048 points per side, both
+precisions, one thread (:data:`WISDOM_FILE`, made by :func:`write_wisdom`). Every pair
+is planned with the shipped wisdom alone (any other wisdom in the process is set aside
+and restored afterwards), and FFTW uses wisdom of a more patient planner for an
+``FFTW_ESTIMATE`` request: the plan is then a function of the shipped file alone,
+whatever the machine's load. Where the shipped plans cannot be used (another FFTW
+version, a CPU without the SIMD they name), FFTW falls back to its ``FFTW_ESTIMATE``
+heuristics, again the same in every process.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+
+try:  # pragma: no cover - exercised by whichever backend is installed
+    import pyfftw
+
+    _HAVE_PYFFTW = True
+except ImportError:  # pragma: no cover
+    pyfftw = None
+    _HAVE_PYFFTW = False
+
+#: Backends a caller may ask for.
+BACKENDS = ("pyfftw", "numpy")
+
+#: FFTW planner flags. ``FFTW_ESTIMATE`` is deterministic (no timing); do not use
+#: ``FFTW_MEASURE``/``FFTW_PATIENT`` here: they make results vary between processes.
+PLANNER_FLAGS = ("FFTW_ESTIMATE",)
+
+
+#: Plans measured once and shipped with the package (module docstring).
+WISDOM_FILE = Path(__file__).with_name("fftw_wisdom.json")
+#: Square grid sizes whose plans :func:`write_wisdom` measures.
+WISDOM_SIZES = (32, 64, 128, 256, 512, 1024, 2048)
+
+
+@functools.lru_cache(maxsize=1)
+def shipped_wisdom() -> tuple[bytes, bytes, bytes] | None:
+    """The shipped FFTW wisdom (double, single, long double), or None without the file."""
+    try:
+        data = json.loads(WISDOM_FILE.read_text())
+    except FileNotFoundError:
+        return None
+    return tuple(data[k].encode("ascii") for k in ("double", "single", "long_double"))
+
+
+@contextlib.contextmanager
+def _shipped_wisdom_only():
+    """Plan inside this block with the shipped wisdom alone (module docstring).
+
+    FFTW reuses wisdom from a more patient planner: a plan timed with FFTW_MEASURE
+    earlier in this process (by any pyFFTW user) would replace the deterministic
+    choice, so the store is emptied and given the shipped plans for the block. The
+    caller's wisdom is put back afterwards: this package must not erase the plans
+    another pyFFTW user in the same process has measured or imported.
+    """
+    saved = pyfftw.export_wisdom()
+    pyfftw.forget_wisdom()
+    wisdom = shipped_wisdom()
+    if wisdom is not None:
+        pyfftw.import_wisdom(wisdom)
+    try:
+        yield
+    finally:
+        pyfftw.forget_wisdom()
+        pyfftw.import_wisdom(saved)
+
+
+def write_wisdom(path: str | os.PathLike = WISDOM_FILE, sizes=WISDOM_SIZES, flags=("FFTW_MEASURE",)) -> Path:
+    """Measure single-threaded plans for ``n x n`` pairs of both precisions; write them to ``path``.
+
+    Run once per FFTW build (``python -c "from roughcontact.core.fft import write_wisdom;
+    write_wisdom()"``), on a machine of the kind the pipeline runs on; the file's
+    plans are then used by every process (module docstring). Takes about a minute.
+    """
+    from .files import write_text_atomic
+
+    pyfftw.forget_wisdom()
+    for n in sizes:
+        for real, cplx in ((np.float64, np.complex128), (np.float32, np.complex64)):
+            # the same arrays (shapes, alignment, out of place) as RealFFT2 plans
+            a, a_out = (pyfftw.empty_aligned((n, n), dtype=real) for _ in range(2))
+            b, b_in = (pyfftw.empty_aligned((n, n // 2 + 1), dtype=cplx) for _ in range(2))
+            pyfftw.FFTW(a, b, axes=(0, 1), direction="FFTW_FORWARD", flags=flags, threads=1)
+            pyfftw.FFTW(b_in, a_out, axes=(0, 1), direction="FFTW_BACKWARD", flags=flags, threads=1)
+    double, single, long_double = (w.decode("ascii") for w in pyfftw.export_wisdom())
+    text = json.dumps({"sizes": list(sizes), "flags": list(flags), "fftw": pyfftw.__version__,
+                       "double": double, "single": single, "long_double": long_double}, indent=1)
+    out = Path(path)
+    write_text_atomic(out, text + "\n")
+    shipped_wisdom.cache_clear()
+    return out
+
+
+def default_backend() -> str:
+    """Name of the backend used when none is asked for.
+
+    ``ROUGHCONTACT_FFT=numpy`` in the environment forces the numpy.fft fallback.
+    """
+    forced = os.environ.get("ROUGHCONTACT_FFT", "").strip().lower()
+    if forced:
+        if forced not in BACKENDS:
+            raise ValueError(
+                f"ROUGHCONTACT_FFT={forced!r} is not a known FFT backend; allowed: {', '.join(BACKENDS)}"
+            )
+        if forced == "pyfftw" and not _HAVE_PYFFTW:
+            raise ValueError("ROUGHCONTACT_FFT=pyfftw but pyfftw cannot be imported")
+        return forced
+    return "pyfftw" if _HAVE_PYFFTW else "numpy"
+
+
+class RealFFT2:
+    """A planned real-to-complex / complex-to-real 2-D transform pair for one shape.
+
+    Parameters
+    ----------
+    shape : (int, int)
+        Real-space shape ``(n0, n1)``.
+    threads : int
+        Threads FFTW may use (numpy's pocketfft is single-threaded here).
+    backend : {"pyfftw", "numpy"} or None
+        ``None`` picks :func:`default_backend`.
+    dtype : numpy.float64 or numpy.float32
+        Precision of the transforms (real ``dtype``, complex of the same precision).
+
+    Notes
+    -----
+    ``forward`` and ``backward`` return views of internal buffers that the next call
+    overwrites: copy the result if it must outlive the next transform. This is what
+    makes the solver's inner loop allocation-free.
+    """
+
+    def __init__(self, shape: tuple[int, int], threads: int = 1, backend: str | None = None,
+                 dtype=np.float64):
+        n0, n1 = (int(s) for s in shape)
+        if n0 < 2 or n1 < 2:
+            raise ValueError(f"FFT shape must be at least 2x2, got {shape}")
+        self.shape = (n0, n1)
+        self.spectral_shape = (n0, n1 // 2 + 1)
+        self.backend = backend or default_backend()
+        if self.backend not in BACKENDS:
+            raise ValueError(f"FFT backend {self.backend!r} unknown; allowed: {', '.join(BACKENDS)}")
+        self.threads = max(1, int(threads))
+        self.dtype = np.dtype(dtype)
+        if self.dtype not in (np.dtype(np.float64), np.dtype(np.float32)):
+            raise ValueError(f"FFT dtype must be float64 or float32, got {self.dtype}")
+        cdtype = np.result_type(self.dtype, np.complex64)
+        if self.backend == "pyfftw":
+            if not _HAVE_PYFFTW:
+                raise ValueError("pyfftw backend requested but pyfftw cannot be imported")
+            self._real = pyfftw.empty_aligned(self.shape, dtype=self.dtype)
+            self._spec = pyfftw.empty_aligned(self.spectral_shape, dtype=cdtype)
+            self._spec_in = pyfftw.empty_aligned(self.spectral_shape, dtype=cdtype)
+            self._real_out = pyfftw.empty_aligned(self.shape, dtype=self.dtype)
+            flags = tuple(PLANNER_FLAGS)
+            with _shipped_wisdom_only():
+                self._fwd = pyfftw.FFTW(
+                    self._real, self._spec, axes=(0, 1), direction="FFTW_FORWARD",
+                    flags=flags, threads=self.threads,
+                )
+                self._bwd = pyfftw.FFTW(
+                    self._spec_in, self._real_out, axes=(0, 1), direction="FFTW_BACKWARD",
+                    flags=flags, threads=self.threads,
+                )
+
+    def forward(self, a: np.ndarray) -> np.ndarray:
+        """rfft2 of real ``a`` (n0, n1) -> complex (n0, n1//2+1), unnormalised."""
+        if self.backend == "numpy":
+            return np.fft.rfft2(np.asarray(a, dtype=self.dtype))
+        self._real[...] = a
+        self._fwd.execute()
+        return self._spec
+
+    def backward(self, a_hat: np.ndarray) -> np.ndarray:
+        """irfft2 of complex ``a_hat`` (n0, n1//2+1) -> real (n0, n1), divided by n0*n1."""
+        if self.backend == "numpy":
+            return np.fft.irfft2(a_hat, s=self.shape).astype(self.dtype, copy=False)
+        # c2r transforms destroy their input, so FFTW always works on our copy.
+        self._spec_in[...] = a_hat
+        self._bwd.execute()
+        self._real_out *= self.dtype.type(1.0 / (self.shape[0] * self.shape[1]))
+        return self._real_out
+
+
+@functools.lru_cache(maxsize=32)
+def _cached_fft(shape: tuple[int, int], threads: int, backend: str, dtype: str = "float64") -> RealFFT2:
+    return RealFFT2(shape, threads=threads, backend=backend, dtype=np.dtype(dtype))
+
+
+def get_fft(shape: tuple[int, int], threads: int = 1, backend: str | None = None,
+            dtype=np.float64) -> RealFFT2:
+    """Cached :class:`RealFFT2` for ``shape``: plans are made once per shape and reused.
+
+    The cache key is normalised (shape as ints, threads >= 1, the resolved backend name,
+    the dtype's name), so every caller asking for the same transform shares one set of
+    plans and buffers. A ``float64`` pair is keyed exactly as before single-precision
+    pairs existed.
+    """
+    key = (tuple(int(s) for s in shape), max(1, int(threads)), backend or default_backend())
+    name = np.dtype(dtype).name
+    if name == "float64":
+        return _cached_fft(*key)
+    return _cached_fft(*key, name)
+
+
+def wavenumbers(shape, length=1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Wavenumbers of the rfft2 grid of a periodic ``nx x ny`` domain of sides ``Lx x Ly``.
+
+    Parameters
+    ----------
+    shape : int or (int, int)
+        Grid points ``(nx, ny)`` along axis 0 (x) and axis 1 (y); an int ``n`` means ``(n, n)``.
+    length : float or (float, float)
+        Sides ``(Lx, Ly)`` of the domain [length]; a float ``L`` means ``(L, L)``.
+
+    Returns
+    -------
+    (kx, ky) : numpy.ndarray, float64, shapes (nx, 1) and (1, ny//2+1)
+        Broadcastable to ``(nx, ny//2+1)``: ``kx = mx / Lx`` along axis 0 (``fftfreq``
+        mode numbers ``mx``), ``ky = my / Ly`` along axis 1 (``rfftfreq``), in cycles per
+        unit length (the integer mode numbers for unit sides). Multiply by ``2*pi`` for
+        angular wavenumbers in rad per unit length: ``|q| = 2 pi sqrt(kx^2 + ky^2)``.
+    """
+    nx, ny = (shape, shape) if np.ndim(shape) == 0 else shape
+    lx, ly = (length, length) if np.ndim(length) == 0 else length
+    kx = np.fft.fftfreq(nx, d=1.0 / nx)[:, None] / lx
+    ky = np.fft.rfftfreq(ny, d=1.0 / ny)[None, :] / ly
+    return kx, ky
+
+
+def rfft_weights(n: int) -> np.ndarray:
+    """Multiplicity of each rfft2 column in the full spectrum, shape ``(1, n//2+1)``.
+
+    Columns 1..ceil(n/2)-1 stand for themselves and their Hermitian mirror (weight 2);
+    column 0 and, for even ``n``, the Nyquist column have weight 1. Sums over the full
+    spectrum are ``(w * x).sum()`` over the half spectrum.
+    """
+    w = np.full((1, n // 2 + 1), 2.0)
+    w[0, 0] = 1.0
+    if n % 2 == 0:
+        w[0, -1] = 1.0
+    return w

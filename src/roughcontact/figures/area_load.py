@@ -1,0 +1,209 @@
+"""The area-load figure (Fig. 2): A/A0 over p0/(E* h') with the CEL, Persson and the asperity theories.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Mapping, Sequence
+
+import matplotlib
+import matplotlib.colors as mcolors
+import numpy as np
+import xarray as xr
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+
+from ..theory.asperity import asperity_area, asperity_max_load
+from ..theory.laws import KAPPA_BGT, KAPPA_PERSSON, cel_area, linear_area, persson_area
+from .load_curves import (
+    _BAND_ALPHA,
+    _BAND_EDGE_ALPHA,
+    _BAND_EDGE_LW,
+    ASPERITY_STYLES,
+    BGT_LIMIT_LABEL,
+    _asperity_alphas,
+    _asperity_handles,
+    _converged_family,
+    _draw_unconverged,
+    _e_star,
+    _family_panels,
+    _family_unconverged,
+    _fit_constants,
+    _mean_slope,
+    _n_outside,
+    _present,
+    _run_summary,
+    _unconverged,
+    _unconverged_handles,
+)
+from .style import _STYLE, OKABE_ITO, _family_handles, _lambda_label, _legend_below, _require
+
+
+def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None, *,
+                  k_l: Sequence[float] | None = None, k_s: Sequence[float] | None = None,
+                  hurst: Sequence[float] | None = None, fit_k_l: float | None = None,
+                  estimator: str = "joint") -> Figure:
+    """Contact-area fraction versus ``p0/E*`` (the paper's Fig. 2), one panel per ``k_s``.
+
+    Each ``(lambda_l, lambda_s, H)`` family is its seed-mean curve with a +-1 standard
+    deviation band (translucent, edged in the family's colour so that a thin band still
+    shows; the largest s.d. is in the legend), over the converged steps: a step whose solve
+    did not converge (``agg.converged`` False) is left out of the mean and band and drawn as
+    a grey cross, and the legend counts those steps. Black solid: the BGT asymptote
+    ``A/A0 = sqrt(2 pi) p0 / (h' E*)``. Persson's two curves share one colour
+    (:data:`PERSSON_COLOUR`): his small-load asymptote (``kappa = sqrt(8/pi)``) thin
+    dashed, on top of his full ``erf`` curve, thick and translucent (the two coincide at
+    small load). With ``fit``, the H-pooled CEL of ``fit_k_l`` (default: the largest
+    ``k_l`` shown, the most representative surfaces) as a thick grey line. Theory lines
+    use the mean rms slope of the shown cases.
+
+    Parameters
+    ----------
+    agg : xarray.Dataset
+        Combined contact dataset: the attr ``e_star``, optionally ``converged``,
+        ``case_present`` and ``alpha``; where some ``converged(k_l, k_s, H, seed, step)`` is
+        False, also ``pressure`` [unit of e_star] and ``area_fraction`` [1] over those dims.
+    stats : xarray.Dataset
+        :func:`roughcontact.analysis.aggregate.seed_statistics` output (the workflow passes the
+        aggregate, which holds both).
+    fit : xarray.Dataset, optional
+        :func:`roughcontact.analysis.fit.fit_cel` output.
+    k_l, k_s, hurst : sequences of float, optional
+        Subsets to show (default: all with data).
+    fit_k_l : float, optional
+        Whose fitted CEL to draw.
+    estimator : str
+        Which estimator of ``fit`` to draw.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    _require(stats, "stats", ("area_fraction_mean", "area_fraction_std", "pressure_mean",
+                              "rms_slope_mean", "n_seeds"))
+    e_star = _e_star(agg)
+    hp = _mean_slope(stats)
+    alphas, bad = _asperity_alphas(agg), _unconverged(agg)
+    kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes = _family_panels(
+        stats, k_l, k_s, hurst, fit_k_l)
+    with matplotlib.rc_context(_STYLE):
+        extent, crosses = np.zeros(3), []  # largest p0/E*, A/A0 + s.d., s.d.
+        for idx, ks in enumerate(ks_list):
+            families = [(kl, ks, h) for kl in kl_list for h in h_list if _present(stats, kl, ks, h)]
+            panel_extent, panel_crosses = _area_load_panel(axes.flat[idx], agg, stats, bad, families, e_star,
+                                                           colour, marker, style)
+            extent = np.fmax(extent, panel_extent)
+            crosses.append(panel_crosses)
+            axes.flat[idx].set_title(_lambda_label(ks, "s"))
+        xmax, ymax, sdmax = (float(v) for v in extent)
+        drew_fit = False
+        for idx, ks in enumerate(ks_list):
+            # Second pass: theory over the common load range of all panels.
+            consts = _fit_constants(fit, cel_kl, ks, estimator)
+            _area_load_axes(axes.flat[idx], consts, xmax, ymax, e_star, hp, alphas)
+            drew_fit = drew_fit or consts is not None
+        for ax in list(axes.flat)[len(ks_list):]:
+            ax.set_visible(False)
+        handles = _family_handles(kl_list, h_list, colour, marker, style) + _area_load_theory_handles(sdmax)
+        n_off = sum(_n_outside(ax, *c) for ax, c in zip(axes.flat, crosses, strict=False))  # hidden axes last
+        handles += _asperity_handles(alphas) + _unconverged_handles(sum(x.size for x, _ in crosses), n_off)
+        if drew_fit:
+            handles.append(Line2D([], [], color="0.45", lw=2.2, alpha=0.8,
+                                  label=f"CEL fit ({estimator}), " + _lambda_label(cel_kl, "l")))
+        fig.suptitle(_run_summary(agg, stats))
+        _legend_below(fig, handles, f"$h' = {hp:.3g}$")
+    return fig
+
+
+#: Persson's (2001) two curves: one colour, told apart by style (they coincide at small load).
+PERSSON_COLOUR = OKABE_ITO[6]
+
+
+_PERSSON_LIMIT_STYLE = {"color": PERSSON_COLOUR, "lw": 1.0, "ls": (0, (4, 2))}
+
+
+_PERSSON_ERF_STYLE = {"color": PERSSON_COLOUR, "lw": 2.6, "ls": "-", "alpha": 0.45}
+
+
+def _area_load_family(ax, s: Mapping[str, np.ndarray], e_star: float, colour, marker, style) -> np.ndarray:
+    """Seed-mean ``A/A0(p0/E*)`` of one family with its ``+-1`` s.d. band (edged, so it shows
+    when thin). ``s``: ``pressure_mean`` [unit of e_star], ``area_fraction_mean`` and ``_std``
+    [1], shape ``(n_steps,)`` each. Returns ``[max p0/E*, max A/A0 + s.d., max s.d.]`` [1]
+    (NaN where no step has a value)."""
+    x = s["pressure_mean"] / e_star
+    y, sd = s["area_fraction_mean"], s["area_fraction_std"]
+    face, edge = mcolors.to_rgba(colour, _BAND_ALPHA), mcolors.to_rgba(colour, _BAND_EDGE_ALPHA)
+    ax.fill_between(x, y - sd, y + sd, facecolor=face, edgecolor=edge, lw=_BAND_EDGE_LW, zorder=2)
+    ax.plot(x, y, color=colour, marker=marker, ls=style, markevery=3, zorder=2.5)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # a family none of whose steps converged
+        return np.array([np.nanmax(x), np.nanmax(y + sd), np.nanmax(sd)])
+
+
+def _area_load_panel(ax, agg, stats, bad, families, e_star: float, colour, marker, style):
+    """The families ``(kl, ks, h)`` of one area-load panel over their converged steps
+    (:func:`_converged_family`), and their unconverged steps as crosses.
+
+    Returns ``(extent, (x, y))``: ``[max p0/E*, max A/A0 + s.d., max s.d.]`` [1] (NaN ignored)
+    and ``p0/E*``, ``A/A0`` [1] of the unconverged steps, shape ``(n,)`` each.
+    """
+    extent, crosses = np.zeros(3), [(np.array([]), np.array([]))]
+    for kl, ks, h in families:
+        family = {"k_l": kl, "k_s": ks, "H": h}
+        v = _converged_family(agg, stats, bad, family, ("pressure_mean", "area_fraction_mean", "area_fraction_std"))
+        extent = np.fmax(extent, _area_load_family(ax, v, e_star, colour[h], marker[kl], style[kl]))
+        p, a = _family_unconverged(agg, bad, family, "pressure", "area_fraction")
+        crosses.append((p / e_star, a))
+    x, y = (np.concatenate(v) for v in zip(*crosses, strict=True))
+    _draw_unconverged(ax, x, y)
+    return extent, (x, y)
+
+
+def _area_load_axes(ax, consts, xmax: float, ymax: float, e_star: float, hp: float, alphas) -> None:
+    """The fitted CEL (``consts``: ``(kappa, mu, beta)``, or None) and the theory of one area-load
+    panel over ``p0/E*`` in ``[0, xmax]``; limits (``A/A0`` up to ``1.05 ymax``) and labels."""
+    p = np.linspace(0, xmax * e_star, 200)
+    if consts is not None:
+        ax.plot(p / e_star, cel_area(p, kappa=consts[0], mu=consts[1], beta=consts[2], rms_slope=hp, e_star=e_star),
+                color="0.45", lw=2.2, alpha=0.8, zorder=1)
+    _area_load_theory(ax, p, e_star, hp, alphas)
+    ax.set_xlim(0, xmax)
+    ax.set_ylim(0, ymax * 1.05)
+    ax.set_xlabel(r"$p_0/E^*$ [1]")
+    ax.set_ylabel(r"$A/A_0$ [1]")
+
+
+def _area_load_theory(ax, p: np.ndarray, e_star: float, hp: float, alphas) -> bool:
+    """BGT and Persson small-load limits, Persson's erf curve and the asperity models at loads ``p``.
+
+    An asperity model is drawn only up to the largest load it covers (its A/A0 = 1,
+    :func:`~roughcontact.theory.asperity.asperity_max_load`); returns whether one was cut there, for a note.
+    """
+    x = p / e_star
+    ax.plot(x, linear_area(p, kappa=KAPPA_BGT, rms_slope=hp, e_star=e_star),
+            color=OKABE_ITO[0], lw=0.9, ls="-", zorder=3)
+    ax.plot(x, persson_area(p, rms_slope=hp, e_star=e_star), **_PERSSON_ERF_STYLE, zorder=3)
+    ax.plot(x, linear_area(p, kappa=KAPPA_PERSSON, rms_slope=hp, e_star=e_star), **_PERSSON_LIMIT_STYLE,
+            zorder=4)
+    cut = False
+    for alpha, shade, _ in alphas:
+        for model, (ls, _name) in ASPERITY_STYLES.items():
+            inside = p <= asperity_max_load(alpha=alpha, rms_slope=hp, e_star=e_star, model=model)
+            cut |= not inside.all()
+            ax.plot(x[inside], asperity_area(p[inside], alpha=alpha, rms_slope=hp, e_star=e_star, model=model),
+                    color=shade, lw=1.1, ls=ls, zorder=3)
+    return cut
+
+
+def _area_load_theory_handles(sdmax: float) -> list:
+    """Legend entries of the s.d. band (``sdmax``: its largest half-width [1]) and of the
+    BGT and Persson curves."""
+    grey = np.array([0.5, 0.5, 0.5])
+    return [Patch(facecolor=(*grey, _BAND_ALPHA), edgecolor=(*grey, _BAND_EDGE_ALPHA), lw=_BAND_EDGE_LW,
+                  label=f"$\\pm 1$ s.d. over seeds (largest: {sdmax:.2g})"),
+            Line2D([], [], color=OKABE_ITO[0], lw=0.9, label=BGT_LIMIT_LABEL),
+            Line2D([], [], **_PERSSON_LIMIT_STYLE,
+                   label=r"Persson, small-load limit $A/A_0 = \sqrt{8/\pi}\,p_0/(h'E^*)$"),
+            Line2D([], [], **_PERSSON_ERF_STYLE,
+                   label=r"Persson, full: $A/A_0 = \mathrm{erf}(\sqrt{2}\,p_0/(h'E^*))$")]

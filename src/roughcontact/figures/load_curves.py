@@ -1,0 +1,293 @@
+"""What the load-curve figures share (Yastrebov, Anciaux & Molinari 2012, Figs. 2-4; the measured scene's too).
+
+Each ``fig_*`` function takes datasets and returns a :class:`matplotlib.figure.Figure`
+built without pyplot (no global figure registry, no GUI backend); :func:`save_figure`
+writes it as PNG and PDF with byte-identical output on every rerun.
+
+Conventions: single-column figures are 3.4 in wide, multi-panel ones 7 in; legends sit
+outside the axes; colours are the Okabe-Ito palette (distinguishable with the common
+colour-vision deficiencies), one colour per Hurst exponent; the long cutoff
+``lambda_l = L / k_l`` is told apart by marker and line style. Theory curves are black
+or grey, except Persson's, in reddish purple (:data:`PERSSON_COLOUR`). Load steps whose solve
+did not converge are left out of every line and seed mean, drawn as grey crosses
+(:data:`UNCONVERGED_STYLE`) and counted in the legend. Symbols: ``p0``
+applied mean pressure, ``E*`` contact modulus, ``h'`` rms slope, ``A/A0`` contact-area
+fraction, ``pbar`` mean contact pressure, ``kappa = E* h' / pbar``.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+
+import matplotlib
+import numpy as np
+import xarray as xr
+from matplotlib.lines import Line2D
+
+from ..analysis.aggregate.seeds import seed_reduce
+from ..analysis.fit.estimators import at_bound
+from ..theory.laws import KAPPA_BGT
+from ..theory.summits import NAYAK_ALPHA_MIN
+from .style import _STYLE, _family_styles, _lambda_label, _new_figure, _panel_grid, _pick, _require
+
+
+def _run_summary(agg: xr.Dataset, stats: xr.Dataset) -> str:
+    """What a contact figure shows, for its title: grid N, seeds per family, load range."""
+    parts = []
+    try:
+        recorded = json.loads(agg.attrs.get("scene_parameters", "{}"))
+    except ValueError:
+        recorded = {}
+    n = recorded.get("surface", {}).get("N") if isinstance(recorded, dict) else None
+    if n is not None:
+        parts.append(f"$N = {int(n)}$")
+    seeds = stats["n_seeds"].values[stats["n_seeds"].values > 0] if "n_seeds" in stats else np.array([])
+    if seeds.size:
+        lo, hi = int(seeds.min()), int(seeds.max())
+        parts.append(f"{lo} seeds" if lo == hi else f"{lo}-{hi} seeds")
+    if "pressure" in agg and "e_star" in agg.attrs:
+        p = agg["pressure"].values / float(agg.attrs["e_star"])
+        if np.isfinite(p).any():
+            parts.append(f"$p_0/E^*$ = {np.nanmin(p):.3g}-{np.nanmax(p):.3g}")
+    return ", ".join(parts)
+
+
+def _fit_constants(fit: xr.Dataset | None, k_l: float, k_s: float, estimator: str):
+    """(kappa, mu, beta) of the H-pooled fit, or None where absent/NaN."""
+    if fit is None:
+        return None
+    _require(fit, "fit", ("value",))
+    if estimator not in list(fit["estimator"].values):
+        raise ValueError(f"estimator={estimator!r} is not in fit (has {list(fit['estimator'].values)})")
+    try:
+        v = fit["value"].sel({"k_l": k_l, "k_s": k_s, "H_group": "pooled", "estimator": estimator})
+    except KeyError:
+        return None
+    vals = [float(v.sel(constant=c)) for c in ("kappa", "mu", "beta")]
+    return tuple(vals) if np.all(np.isfinite(vals)) else None
+
+
+def _present(stats: xr.Dataset, k_l: float, k_s: float, h: float) -> bool:
+    return int(stats["n_seeds"].sel(k_l=k_l, k_s=k_s, H=h)) > 0
+
+
+def _e_star(agg: xr.Dataset) -> float:
+    if "e_star" not in agg.attrs:
+        raise ValueError("agg lacks the global attribute 'e_star'")
+    e = float(agg.attrs["e_star"])
+    if not (np.isfinite(e) and e > 0):
+        raise ValueError(f"agg.attrs['e_star'] must be finite and > 0, got {agg.attrs['e_star']!r}")
+    return e
+
+
+# -------------------------------------------------------------- unconverged steps
+#: Load steps whose solve did not converge: small grey crosses under the data, out of the means.
+UNCONVERGED_STYLE = {"color": "0.5", "marker": "x", "ls": "none", "ms": 3.0, "mew": 0.7}
+
+
+def _unconverged(ds: xr.Dataset, present: xr.DataArray | bool | None = None) -> xr.DataArray | None:
+    """The load steps that did not converge: boolean, dims of ``ds.converged`` (``(k_l, k_s, H,
+    seed, step)`` or ``(topography, step)``); None where ``ds`` has no ``converged`` (files of
+    older versions: every step is taken as converged).
+
+    Only the steps of cases in ``present`` count (default ``ds.case_present``: a grid hole, whose
+    ``converged`` is False, has no steps); ``True`` counts every case.
+    """
+    if "converged" not in ds:
+        return None
+    if present is None:
+        present = ds["case_present"].astype(bool) if "case_present" in ds else True
+    return ~ds["converged"].astype(bool) & present
+
+
+def _converged_family(agg: xr.Dataset, stats: xr.Dataset, bad: xr.DataArray | None, family: Mapping,
+                      names: Sequence[str]) -> dict[str, np.ndarray]:
+    """Seed statistics of one family over its converged steps, by name, shape ``(n_steps,)`` each.
+
+    ``family``: ``{"k_l": .., "k_s": .., "H": ..}``; ``names``: statistics of
+    :func:`roughcontact.analysis.aggregate.seed_statistics` (``"kappa_mean"``, ``"area_fraction_std"``,
+    ``"pressure_mean"`` ...), in the units of their variable; ``bad``: :func:`_unconverged` of
+    ``agg``. Taken from ``stats`` where every step of the family converged (or ``bad`` is None),
+    else recomputed from ``agg`` by :func:`roughcontact.analysis.aggregate.seed_statistics`' reduction
+    with the unconverged ``(seed, step)`` left out (a step none of whose seeds converged is NaN,
+    and so is the s.d. of a step with one converged seed).
+    """
+    fam_bad = None if bad is None else bad.sel(family)
+    if fam_bad is None or not bool(fam_bad.any()):
+        return {name: stats[name].sel(family).values for name in names}
+    case = agg.sel(family)
+    ok = ~fam_bad & (case["case_present"].astype(bool) if "case_present" in case else True)
+    n_ok = ok.sum("seed")
+    out = {}
+    for name in names:
+        var, stat = name.rsplit("_", 1)
+        out[name] = seed_reduce(case[var], ok, n_ok, var, "1")[stat].transpose("step").values
+    return out
+
+
+def _masked_points(x: xr.DataArray, y: xr.DataArray, mask: xr.DataArray) -> tuple[np.ndarray, np.ndarray]:
+    """``x`` and ``y`` where ``mask`` is True, broadcast against each other, flattened: shape ``(n,)`` each."""
+    x, y, mask = (v.transpose(*mask.dims) for v in xr.broadcast(x, y, mask))
+    m = mask.values.astype(bool)
+    return x.values[m].astype(float), y.values[m].astype(float)
+
+
+def _family_unconverged(agg: xr.Dataset, bad: xr.DataArray | None, family: Mapping, x: str,
+                        y: str) -> tuple[np.ndarray, np.ndarray]:
+    """Values of the variables ``x`` and ``y`` at the unconverged steps (``bad``, :func:`_unconverged`)
+    of one family, shape ``(n,)`` each."""
+    mask = None if bad is None else bad.sel(family)
+    if mask is None or not bool(mask.any()):
+        return np.array([]), np.array([])
+    case = agg.sel(family)
+    return _masked_points(case[x], case[y], mask)
+
+
+def _draw_unconverged(ax, x: np.ndarray, y: np.ndarray) -> None:
+    """The unconverged steps ``(x, y)``, shape ``(n,)`` each, as crosses (nothing for ``n = 0``)."""
+    if x.size:
+        ax.plot(x, y, zorder=1.5, **UNCONVERGED_STYLE)
+
+
+def _n_outside(ax, x: np.ndarray, y: np.ndarray) -> int:
+    """How many points ``(x, y)`` the axes do not show at their current limits (non-finite ones,
+    and non-positive ones on a log axis, included)."""
+    inside = np.isfinite(x) & np.isfinite(y)
+    with np.errstate(invalid="ignore"):
+        for v, (lo, hi), scale in ((x, ax.get_xlim(), ax.get_xscale()), (y, ax.get_ylim(), ax.get_yscale())):
+            inside &= (v >= min(lo, hi)) & (v <= max(lo, hi)) & ((v > 0) if scale == "log" else True)
+    return int(x.size - inside.sum())
+
+
+def _unconverged_handles(n: int, n_off: int, left_out_of: str = "lines and means") -> list[Line2D]:
+    """Legend entry of ``n`` unconverged steps, ``n_off`` of them outside the axes; none for ``n = 0``."""
+    if not n:
+        return []
+    off = f"; {n_off} outside the axes" if n_off else ""
+    return [Line2D([], [], **UNCONVERGED_STYLE,
+                   label=f"{n} unconverged load step{'s' if n != 1 else ''}, left out of the {left_out_of}{off}")]
+
+
+#: Finite-load asperity models drawn in the area-load and kappa figures: line style per model.
+ASPERITY_STYLES = {"bgt": ("-", "BGT"), "greenwood": ("-.", "Greenwood (2006)")}
+
+
+#: The paper's contact evolution law (Yastrebov et al. 2012): kappa, mu, beta.
+PAPER_CONSTANTS = {"kappa": 1.145 * KAPPA_BGT, "mu": 0.55, "beta": 0.21}
+
+
+PAPER_CEL_LABEL = r"CEL, paper: $\kappa/\sqrt{2\pi}$ = 1.145, $\mu$ = 0.55, $\beta$ = 0.21"
+
+
+BGT_LIMIT_LABEL = r"BGT small-load limit, $\kappa=\sqrt{2\pi}$"
+
+
+#: Nayak's bandwidth of the paper's Fig. 5 comparison (Carbone & Bottiglione 2008).
+PAPER_ALPHA = 2.0
+
+
+#: Largest relative spread of the cases' Nayak alpha for which one "these surfaces" curve is drawn.
+ALPHA_SPREAD_MAX = 0.1
+
+
+def _asperity_alphas(agg: xr.Dataset) -> list[tuple[float, str, str]]:
+    """``(alpha, colour, label)`` of the asperity curves: the paper's alpha = 2 and, when the
+    surfaces carry it, it differs and the cases share it (relative spread of the means per
+    (k_l, k_s) family at most :data:`ALPHA_SPREAD_MAX`), their own mean Nayak bandwidth
+    (profile moments).
+
+    Families of different bandwidth (k_s / k_l from 2 to 128 gives alpha from ~1.5 to ~30)
+    have no common alpha: their mean would be a curve that describes none of them.
+    """
+    out = [(PAPER_ALPHA, "0.15", r"$\alpha = 2$ (paper)")]
+    if "alpha" in agg:
+        present = agg["case_present"] if "case_present" in agg else True
+        alphas = agg["alpha"].where(present)
+        family = alphas.mean([d for d in alphas.dims if d not in ("k_l", "k_s")], skipna=True)
+        alpha = float(alphas.mean(skipna=True))
+        spread = (float(family.max(skipna=True)) - float(family.min(skipna=True))) / alpha if family.size else 0.0
+        if (np.isfinite(alpha) and alpha >= NAYAK_ALPHA_MIN and abs(alpha - PAPER_ALPHA) > 0.005
+                and spread <= ALPHA_SPREAD_MAX):
+            out.append((alpha, "0.6", rf"$\alpha = {alpha:.2f}$ (these surfaces)"))
+    return out
+
+
+def _asperity_handles(alphas) -> list[Line2D]:
+    return [Line2D([], [], color=colour, lw=1.1, ls=ls, label=f"{name}, {label}")
+            for alpha, colour, label in alphas for ls, name in ASPERITY_STYLES.values()]
+
+
+def _mean_slope(stats: xr.Dataset) -> float:
+    # All cases of a study share the target rms slope; its mean sets the theory lines.
+    hp = stats["rms_slope_mean"].where(stats["n_seeds"] > 0)
+    v = float(hp.mean(skipna=True))
+    if not (np.isfinite(v) and v > 0):
+        raise ValueError("stats has no finite positive rms_slope_mean")
+    return v
+
+
+def _selection(stats, k_l, k_s, hurst):
+    ks_list = _pick(stats["k_s"].values, k_s, "k_s")
+    kl_list = _pick(stats["k_l"].values, k_l, "k_l")
+    h_list = _pick(stats["H"].values, hurst, "hurst")
+    ks_list = [ks for ks in ks_list
+               if any(_present(stats, kl, ks, h) for kl in kl_list for h in h_list)]
+    if not ks_list:
+        raise ValueError("no (k_l, k_s, H) family with data in the selection")
+    return kl_list, ks_list, h_list
+
+
+# ---------------------------------------------------------------------- figures
+def _family_panels(stats, k_l, k_s, hurst, fit_k_l):
+    """Selection, styles, the k_l of the drawn CEL, and one panel per k_s (Figs. 2-4)."""
+    kl_list, ks_list, h_list = _selection(stats, k_l, k_s, hurst)
+    colour, marker, style = _family_styles(kl_list, h_list)
+    cel_kl = kl_list[-1] if fit_k_l is None else _pick(stats["k_l"].values, fit_k_l, "fit_k_l")[0]
+    nrows, ncols, width, height = _panel_grid(len(ks_list))
+    with matplotlib.rc_context(_STYLE):
+        fig = _new_figure(width, height)
+        axes = fig.subplots(nrows, ncols, squeeze=False)
+    return kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes
+
+
+#: The +-1 s.d. bands of the area-load figure: face and edge opacity, edge width [pt].
+_BAND_ALPHA, _BAND_EDGE_ALPHA, _BAND_EDGE_LW = 0.3, 0.8, 0.6
+
+
+def _constrained_constants(fit: xr.Dataset, where: Mapping, estimator: str,
+                           constants: Sequence[str]) -> dict[str, bool]:
+    """Per constant, whether the data constrain it: the fit's ``constrained`` flag (95 % interval
+    narrower than the value, :func:`roughcontact.analysis.fit.constrained_flags`; True for files without
+    the flag) and not sitting on a bound of the fit (:func:`roughcontact.analysis.fit.at_bound`; the flag
+    of fits made before that check was part of it does not say so).
+
+    ``where``: the fit's group, e.g. ``{"k_l": 16.0, "k_s": 32.0, "H_group": "pooled"}`` (empty
+    for a fit of measured topographies).
+    """
+    sub = fit.sel({**where, "estimator": estimator})
+    out = {}
+    for c in constants:
+        flag = bool(sub["constrained"].sel(constant=c)) if "constrained" in sub else True
+        out[c] = flag and not at_bound(estimator, c, float(sub["value"].sel(constant=c)))
+    return out
+
+
+def _fit_constrained(fit: xr.Dataset, k_l: float, k_s: float, estimator: str,
+                     constants: Sequence[str] = ("kappa", "mu", "beta")) -> bool:
+    """Whether ``constants`` of the H-pooled fit are all constrained by the data (:func:`_constrained_constants`)."""
+    where = {"k_l": k_l, "k_s": k_s, "H_group": "pooled"}
+    return all(_constrained_constants(fit, where, estimator, constants).values())
+
+
+def _fit_label(who: str, estimator: str, k_l: float, consts, constrained: bool = True, where: str = "") -> str:
+    """Legend text of a fitted CEL curve, with its constants when one curve is drawn and the
+    data constrain them (else "not constrained": an interval wider than the value is no number;
+    ``where`` names the panels where they are not, when there are several)."""
+    text = f"CEL, {who} ({estimator}), " + _lambda_label(k_l, "l")
+    if not constrained:
+        return text + ": not constrained by the data" + (f" at {where}" if where else "")
+    if consts is not None:
+        text += rf": $\kappa/\sqrt{{2\pi}}$ = {consts[0] / KAPPA_BGT:.3f}, $\mu$ = {consts[1]:.2f}, " \
+                rf"$\beta$ = {consts[2]:.2f}"
+    return text

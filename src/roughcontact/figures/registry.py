@@ -1,0 +1,183 @@
+"""The figure registry: every figure the workflow can draw, by name.
+
+One generic Snakemake rule (``workflow/rules/figures.smk``) makes
+``results/{scene}/figures/{figure}.{png,pdf}`` for any name registered here, as
+rna-seq-star-deseq2 makes ``pca.{variable}.svg`` from one rule. A :class:`FigureSpec` says
+which scene block the figure needs, which files it reads, how it is drawn and where its
+report caption lives. A new figure is one entry here and one caption file in
+``workflow/report/``.
+
+A measured scene (one with a ``topography`` block: its cases are topography files named by
+strings) gets only the figures marked ``measured`` (:mod:`roughcontact.figures.measured`), and a
+generated scene only the others: the generator's figures index cases by ``(k_l, k_s, H, seed)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+
+import xarray as xr
+from matplotlib.figure import Figure
+
+from ..pipeline.config.scenes import CASE_STEM
+from ..pipeline.io import read_dataset
+from ..pipeline.measured import is_measured, topography_names
+from . import measured as plots_measured
+from .accuracy import fig_accuracy
+from .area_load import fig_area_load
+from .dpbar import fig_dpbar
+from .kappa import fig_kappa
+from .representativity import fig_representativity, fig_surface_examples
+
+#: Paths an input role may name: one file or a list of files.
+Paths = str | list[str]
+
+
+@dataclass(frozen=True)
+class FigureSpec:
+    """One figure of the workflow.
+
+    Attributes
+    ----------
+    study : str
+        The scene block the figure needs (``representativity``, ``contact``, ``accuracy``); for a
+        ``measured`` figure the study it belongs to, while ``wanted`` decides.
+    inputs : callable
+        ``inputs(block) -> {role: path or [paths]}`` from the validated study block (the whole
+        validated scene if ``measured``), paths relative to ``results/{scene}/``.
+    render : callable
+        ``render({role: path or [paths]}) -> Figure``: reads the files, draws the figure.
+    category : str
+        Section of the Snakemake report.
+    caption : str
+        Caption file (reStructuredText) in ``workflow/report/``.
+    wanted : callable
+        ``wanted(block) -> bool``: whether a scene with this study block asks for the figure;
+        ``wanted(scene)`` if ``measured``.
+    measured : bool
+        A figure of measured scenes (those with a ``topography`` block), and only of them. Its
+        ``inputs`` and ``wanted`` take the whole scene: the topographies' names live outside
+        the study blocks, and the topography maps are made for whichever study the scene has.
+    """
+
+    study: str
+    inputs: Callable[[Mapping], dict[str, Paths]]
+    render: Callable[[Mapping[str, Paths]], Figure]
+    category: str
+    caption: str
+    wanted: Callable[[Mapping], bool] = lambda block: True
+    measured: bool = False
+
+    def input_paths(self, scene: Mapping) -> dict[str, Paths]:
+        """Input files by role for the validated ``scene``, relative to ``results/{scene}/``."""
+        return self.inputs(scene if self.measured else scene[self.study])
+
+    def asked_by(self, scene: Mapping) -> bool:
+        """Whether the validated ``scene`` asks for this figure."""
+        if self.measured != is_measured(scene):
+            return False
+        if self.measured:
+            return bool(self.wanted(scene))
+        return self.study in scene and bool(self.wanted(scene[self.study]))
+
+
+def _contact_inputs(block: Mapping) -> dict[str, Paths]:
+    return {"agg": "aggregate/contact.nc", "fit": "fit/cel.nc"}
+
+
+def _contact_figure(draw: Callable) -> Callable[[Mapping[str, Paths]], Figure]:
+    def render(paths: Mapping[str, Paths]) -> Figure:
+        agg = read_dataset(paths["agg"], stage="aggregate", variables=["area_fraction"])
+        return draw(agg, agg, read_dataset(paths["fit"], stage="fit"))
+
+    return render
+
+
+def _render_representativity(paths: Mapping[str, Paths]) -> Figure:
+    return fig_representativity(read_dataset(paths["rep"], stage="aggregate", variables=["epsilon"]))
+
+
+def _example_inputs(block: Mapping) -> dict[str, Paths]:
+    """Seed 0 and the first H of each example pair (the paper's Fig. 1 b-d)."""
+    h = block["grid"]["H"][0]
+    stems = [CASE_STEM.format(k_l=e["k_l"], k_s=e["k_s"], H=h, seed=0) for e in block["examples"]]
+    return {"surfaces": [f"surfaces_rep/{stem}.nc" for stem in stems]}
+
+
+def _render_surface_examples(paths: Mapping[str, Paths]) -> Figure:
+    surfaces = [read_dataset(p, stage="surface", variables=["heights"]) for p in paths["surfaces"]]
+    return fig_surface_examples([
+        (s.heights.values.squeeze(), f"$k_l$ = {float(s.k_l[0]):g}, $k_s$ = {float(s.k_s[0]):g}")
+        for s in surfaces
+    ])
+
+
+def _render_accuracy(paths: Mapping[str, Paths]) -> Figure:
+    return fig_accuracy(read_dataset(paths["summary"], stage="accuracy", variables=["err_kappa"]))
+
+
+# ------------------------------------------------------------------ measured scenes
+def _surface_files(scene: Mapping) -> list[str]:
+    """``surfaces/{name}.nc`` of every topography of a measured scene, by name."""
+    return [f"surfaces/{name}.nc" for name in sorted(topography_names(scene))]
+
+
+def _measured_contact_inputs(scene: Mapping) -> dict[str, Paths]:
+    # The surfaces give each topography's grid size N for the title.
+    return {"agg": "aggregate/contact.nc", "fit": "fit/cel.nc", "surfaces": _surface_files(scene)}
+
+
+def _grid_sizes(paths: Sequence[str]) -> dict[str, tuple[int, int]]:
+    """Grid ``(nx, ny)`` of each surface file by topography name, from its dimensions alone (a
+    measured height map can be large, and only its size is needed)."""
+    sizes = {}
+    for path in paths:
+        with xr.open_dataset(path, engine="netcdf4") as ds:
+            name = str(ds["topography"].values.ravel()[0]) if "topography" in ds.coords else path
+            sizes[name] = (int(ds.sizes["x"]), int(ds.sizes["y"]))
+    return sizes
+
+
+def _measured_contact_figure(draw: Callable) -> Callable[[Mapping[str, Paths]], Figure]:
+    def render(paths: Mapping[str, Paths]) -> Figure:
+        agg = read_dataset(paths["agg"], stage="aggregate", variables=["area_fraction"])
+        return draw(agg, read_dataset(paths["fit"], stage="fit"), sizes=_grid_sizes(paths["surfaces"]))
+
+    return render
+
+
+def _render_topographies(paths: Mapping[str, Paths]) -> Figure:
+    return plots_measured.fig_topographies(
+        [read_dataset(p, stage="surface", variables=["heights"]) for p in paths["surfaces"]])
+
+
+FIGURES: dict[str, FigureSpec] = {
+    "representativity": FigureSpec(
+        "representativity", lambda block: {"rep": "aggregate/representativity.nc"}, _render_representativity,
+        "Representativity", "representativity.rst"),
+    "surface_examples": FigureSpec(
+        "representativity", _example_inputs, _render_surface_examples, "Representativity",
+        "surface_examples.rst", wanted=lambda block: bool(block["examples"])),
+    "area_load": FigureSpec(
+        "contact", _contact_inputs, _contact_figure(fig_area_load), "Contact", "area_load.rst"),
+    "kappa": FigureSpec("contact", _contact_inputs, _contact_figure(fig_kappa), "Contact", "kappa.rst"),
+    "dpbar": FigureSpec("contact", _contact_inputs, _contact_figure(fig_dpbar), "Contact", "dpbar.rst"),
+    "accuracy": FigureSpec(
+        "accuracy", lambda block: {"summary": "accuracy/summary.nc"}, _render_accuracy, "Accuracy", "accuracy.rst"),
+    # Measured scenes: every scene has the topography maps; the contact figures need a contact study.
+    "topographies": FigureSpec(
+        "representativity", lambda scene: {"surfaces": _surface_files(scene)}, _render_topographies,
+        "Topographies", "topographies.rst", wanted=lambda scene: True, measured=True),
+    "measured_area_load": FigureSpec(
+        "contact", _measured_contact_inputs, _measured_contact_figure(plots_measured.fig_measured_area_load),
+        "Contact", "measured_area_load.rst", wanted=lambda scene: "contact" in scene, measured=True),
+    "measured_kappa": FigureSpec(
+        "contact", _measured_contact_inputs, _measured_contact_figure(plots_measured.fig_measured_kappa),
+        "Contact", "measured_kappa.rst", wanted=lambda scene: "contact" in scene, measured=True),
+}
+
+
+def scene_figures(scene: Mapping) -> list[str]:
+    """Names of the registered figures a validated scene asks for, in registry order."""
+    return [name for name, spec in FIGURES.items() if spec.asked_by(scene)]

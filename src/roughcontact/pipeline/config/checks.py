@@ -1,0 +1,184 @@
+"""The cross-field rules of a scene that a schema cannot express, one check per study block.
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+from collections.abc import Mapping
+
+from ...solver.effects import EFFECTS
+from .files import ConfigError
+
+
+def _duplicates_by_value(texts) -> list[str]:
+    """Strings of ``texts`` that equal an earlier one as numbers ("2" and "2.0")."""
+    seen, dups = {}, []
+    for text in texts:
+        value = float(text)
+        if value in seen:
+            dups.append(f"{seen[value]!r} and {text!r}")
+        seen.setdefault(value, text)
+    return dups
+
+
+def _check_grid(scene: str, study: str, block: dict) -> None:
+    """Cross-field rules of a generated study's grid (k_l < k_s <= N/2, 0 < H < 1, examples, seeds)."""
+    def fail(field, msg):
+        raise ConfigError(f"scene {scene!r}, field '{study}.{field}': {msg}")
+
+    n = block["surface"]["N"]
+    grid = block["grid"]
+    for key in ("k_l", "k_s", "H"):
+        for text in grid[key]:
+            if float(text) <= 0:
+                fail(f"grid.{key}", f"{text!r} must be > 0")
+        dups = _duplicates_by_value(grid[key])
+        if dups:
+            fail(f"grid.{key}", f"{dups[0]} are the same number: each case would be computed twice")
+    for text in grid["H"]:
+        if not 0.0 < float(text) < 1.0:
+            fail("grid.H", f"{text!r} is outside the allowed range 0 < H < 1")
+    for text in grid["k_s"]:
+        if float(text) > n / 2:
+            fail("grid.k_s", f"{text!r} exceeds N/2 = {n / 2:g} (the Nyquist mode of N = {n})")
+    # Every pair is run, so a pair with k_l >= k_s is an error rather than a silent skip.
+    for kl, ks in itertools.product(grid["k_l"], grid["k_s"]):
+        if float(kl) >= float(ks):
+            fail("grid.k_l", f"k_l={kl} must be < k_s={ks} for every pair of the grid")
+    for i, ex in enumerate(block.get("examples", [])):
+        if ex["k_l"] not in grid["k_l"] or ex["k_s"] not in grid["k_s"]:
+            fail(f"examples[{i}]", f"({ex['k_l']}, {ex['k_s']}) is not in the grid's k_l x k_s")
+        if float(ex["k_l"]) >= float(ex["k_s"]):
+            fail(f"examples[{i}]", f"k_l={ex['k_l']} must be < k_s={ex['k_s']}")
+    if study == "contact" and block["seeds"] < 2:
+        fail("seeds", f"{block['seeds']} is too few: the contact study's CEL fit resamples seeds and needs "
+                      "at least 2")
+
+
+def _check_contact(scene: str, block: dict) -> None:
+    """Cross-field rules of a contact block: output steps, load schedule, effects."""
+    def fail(field, msg):
+        raise ConfigError(f"scene {scene!r}, field 'contact.{field}': {msg}")
+
+    steps = block["load"]["n_steps"]
+    bad = [s for s in block["outputs"]["fields"] if s > steps]
+    if bad:
+        fail("outputs.fields", f"steps {bad} exceed load.n_steps = {steps} (allowed 1..{steps})")
+    for name in block["effects"]:  # each effect's own cross-field rules (schema-checked names)
+        EFFECTS[name].check_config(block, functools.partial(_fail_effect, fail, name))
+    load = block["load"]
+    if "p_min" in load and load["schedule"] != "geometric":
+        fail("load.p_min", f"only used by load.schedule: geometric (here {load['schedule']!r}); remove it")
+    if "target_area" in load:
+        _check_target_area(fail, load)
+        return
+    if "p_min" in load and not load["p_min"] < load["p_max"]:
+        fail("load.p_min", f"{load['p_min']:g} must be < load.p_max = {load['p_max']:g}")
+    relative = load.get("relative_to", "e_star")
+    if relative == "e_star" and load["p_max"] > 1:
+        fail("load.p_max", f"{load['p_max']:g} is p0/E* (load.relative_to: e_star) and must be <= 1")
+
+
+def _fail_effect(fail, name: str, field: str, msg: str) -> None:
+    fail(f"effects.{name}{field}", msg)
+
+
+def _check_target_area(fail, load: dict) -> None:
+    """A ``load.target_area`` block: the final load is found per case (:func:`_resolve_load` dropped p_max)."""
+    if "p_min" in load:
+        fail("load.p_min", "not used with load.target_area: the geometric schedule then starts at "
+                           "(final load) / n_steps; remove it")
+
+
+#: A measured scene's final load when it says nothing: p0 / (E* h') = 0.05, the paper's regime
+#: (about 10 % contact on its surfaces; p0/E* = 0.005 at their h' = 0.1).
+MEASURED_P_MAX = 0.05
+
+
+def _resolve_load(scene: str, load: dict, given: Mapping, measured: bool) -> None:
+    """Fill ``load.relative_to`` in place from what the scene wrote (``given``: its own ``contact.load``).
+
+    With ``target_area`` the final load is found per case, and ``p_max`` (inherited) is dropped. A
+    measured scene that writes neither ``relative_to`` nor a load gets ``p_max: 0.05`` relative to
+    each file's rms slope; one that writes ``p_max`` or ``p_min`` without ``relative_to`` is asked
+    which it means, since the same number means a load ten times larger or smaller on a typical file.
+    """
+    def fail(field, msg):
+        raise ConfigError(f"scene {scene!r}, field 'contact.{field}': {msg}")
+
+    if "target_area" in load:
+        for key in ("p_max", "relative_to"):
+            if key in given:
+                fail(f"load.{key}", f"not used with load.target_area (the final load is the one that gives "
+                                    f"A/A0 = {load['target_area']:g} on each case); remove one of them")
+            load.pop(key, None)
+        return
+    if measured and "relative_to" not in given:
+        for key in ("p_max", "p_min"):
+            if key in given:
+                fail(f"load.{key}", "a measured scene's load is relative to each file's rms slope unless it says "
+                                    "otherwise: add load.relative_to: rms_slope (the value is p0/(E* h'), the "
+                                    "paper's pbar) or load.relative_to: e_star (p0/E*)")
+        load["relative_to"], load["p_max"] = "rms_slope", MEASURED_P_MAX
+    load.setdefault("relative_to", "e_star")
+
+
+def _study_failure(scene: str, study: str):
+    """A function raising the ConfigError of one field of a study block."""
+    def fail(field, msg):
+        raise ConfigError(f"scene {scene!r}, field '{study}.{field}': {msg}")
+
+    return fail
+
+
+def _check_one_case(block: dict, fail) -> float:
+    """The cutoffs and H list of a one-case study (accuracy, kappa_gap); returns k_s."""
+    k_l, k_s = float(block["k_l"]), float(block["k_s"])
+    if not k_l < k_s:
+        fail("k_l", f"k_l={block['k_l']} must be < k_s={block['k_s']}")
+    for text in block["H"]:
+        if not 0.0 < float(text) < 1.0:
+            fail("H", f"{text!r} is outside the allowed range 0 < H < 1")
+    dups = _duplicates_by_value(block["H"])
+    if dups:
+        fail("H", f"{dups[0]} are the same number: each case would be computed twice")
+    return k_s
+
+
+def _check_accuracy(scene: str, block: dict) -> None:
+    fail = _study_failure(scene, "accuracy")
+    k_s = _check_one_case(block, fail)
+    settings = [("reference", block["reference"]), ("defaults", block["defaults"])]
+    settings += [(f"axes.{axis}", {axis: v}) for axis, vals in block["axes"].items() for v in vals]
+    for where, setting in settings:
+        if "N" in setting and k_s > int(setting["N"]) / 2:
+            fail(where, f"N={setting['N']} is too coarse for k_s={block['k_s']} (needs N >= {2 * k_s:g})")
+        if "tol" in setting and not 0.0 < float(setting["tol"]) < 1.0:
+            fail(where, f"tol={setting['tol']} is outside the allowed range 0 < tol < 1")
+        if "n_steps" in setting and int(setting["n_steps"]) < 1:
+            fail(where, f"n_steps={setting['n_steps']} must be >= 1")
+    if max(int(s) for s in block["seed_axis"]) < 1:
+        fail("seed_axis", "needs at least one entry >= 1")
+
+
+def _check_kappa_gap(scene: str, block: dict) -> None:
+    fail = _study_failure(scene, "kappa_gap")
+    k_s = _check_one_case(block, fail)
+    variants = block["variants"]
+    for label, v in variants.items():
+        if k_s > int(v["N"]) / 2:
+            fail(f"variants.{label}.N", f"N={v['N']} is too coarse for k_s={block['k_s']} (needs N >= {2 * k_s:g})")
+        if not 0.0 < float(v["tol"]) < 1.0:
+            fail(f"variants.{label}.tol", f"tol={v['tol']} is outside the allowed range 0 < tol < 1")
+    roles = [v["role"] for v in variants.values()]
+    if roles.count("baseline") != 1:
+        fail("variants", f"needs exactly one variant with role: baseline, got {roles.count('baseline')}")
+    if 0 < roles.count("resolution") < 3:
+        fail("variants", "a continuum series (role: resolution) needs at least three N")
+    sk = [v for v in variants.values() if v["role"] == "solver" and v["method"] == "stanley-kato"]
+    refs = {v["N"] for v in variants.values() if v["role"] == "solver" and v["method"] == "bem"}
+    for v in sk:
+        if v["N"] not in refs:
+            fail("variants", f"a Stanley & Kato variant at N={v['N']} needs a role: solver variant with method: bem "
+                             "at the same N to be compared with")

@@ -1,0 +1,263 @@
+"""Scenes: validate the pipeline's config and expand it into cases.
+
+A *scene* is a named block under ``scenes:`` that says what to compute. It is a small
+delta over the optional ``defaults:`` block: each study the scene declares
+(``representativity``, ``contact``, ``accuracy``; an empty block or ``null`` declares it
+with the defaults) is the defaults' block of that study deep-merged with the scene's
+(mappings merge key by key, anything else replaces; ``null`` removes a default, e.g.
+``rms_slope: null`` to normalise by ``rms_height`` instead). Validation runs on the merged
+scene, in two passes, both before Snakemake plans any job:
+
+1. the JSON schema ``config.schema.yaml`` (package data, :mod:`roughcontact.pipeline.config.schema`; types,
+   ranges, unknown keys),
+   whose ``default`` values are filled in;
+2. the cross-field rules a schema cannot express (k_l < k_s <= N/2, 0 < H < 1, examples
+   inside the grid, fit window ordered, field steps within the load schedule).
+
+Every error is a :class:`ConfigError` whose message names the scene and the field
+(``scene 'demo', field 'contact.grid.k_s': ...``) and the allowed range, and says when the
+bad value came from ``defaults``.
+
+The validated scene is canonical: schema defaults filled in, numbers typed as the schema
+says (``N: 32.0`` becomes ``32``, ``L: 1`` becomes ``1.0``), so that two configs meaning the
+same thing give the same job parameters (:mod:`roughcontact.pipeline.params`). Snakemake's ``--config``
+passes a nested value as text (``--config 'scenes={demo: {contact: {seeds: 4}}}'`` gives
+``seeds: '4'``): before validation, text where the schema asks for an integer, a number or a
+boolean is read as one when it reads unambiguously as one, and ``null`` where the schema takes
+no text removes a default as in a file (:func:`coerce_strings`).
+
+Config files are read as Snakemake reads them (:func:`load_config_files`: each file merged over
+the ones before, ``config/config.yaml`` first), and a file that is not YAML is named with its
+line and column (:func:`check_config_files`). ``python -m roughcontact.pipeline.config [FILE ...]`` checks
+the shipped config with these files added, as ``snakemake --configfile FILE ...`` would read it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import itertools
+import re
+import sys
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from jsonschema import Draft202012Validator
+
+from ..measured import MeasuredConfigError, check_measured_scene, topography_names
+from .checks import _check_accuracy, _check_contact, _check_grid, _check_kappa_gap, _resolve_load
+from .files import ConfigError, load_config_files
+from .schema import (
+    SCENE_STUDIES,
+    STUDIES,
+    _complete,
+    _field,
+    _has_path,
+    _non_finite,
+    _schema_message,
+    coerce_strings,
+    load_schema,
+    merge_scene,
+)
+
+#: File stem of one case: the config's own strings for k_l, k_s, H and the seed.
+CASE_STEM = "kl{k_l}_ks{k_s}_H{H}_s{seed}"
+
+
+#: File stem of one representativity batch: every k_s and seed of one (k_l, H) in one file.
+BATCH_STEM = "kl{k_l}_H{H}"
+
+
+#: Allowed scene names: they become folder names under results/.
+SCENE_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]*$")
+
+
+@dataclass(frozen=True)
+class Case:
+    """One surface realisation: cutoffs and Hurst exponent as config strings, and a seed."""
+
+    k_l: str
+    k_s: str
+    H: str
+    seed: int
+
+    @property
+    def stem(self) -> str:
+        """File stem ``kl{k_l}_ks{k_s}_H{H}_s{seed}`` built from the config strings."""
+        return CASE_STEM.format(k_l=self.k_l, k_s=self.k_s, H=self.H, seed=self.seed)
+
+
+def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = None, *, active: bool = True) -> dict:
+    """Validate one (merged) scene and return a canonical copy: defaults filled, numbers typed.
+
+    ``delta`` is the scene as written, before :func:`merge_scene`; a bad field that it does
+    not hold came from the ``defaults`` block, and the message says so. ``active``: whether this
+    is the scene that runs (only its topography files must exist now). Raises
+    :class:`ConfigError` naming ``name`` and the offending field.
+    """
+    bad = _non_finite(scene)
+    if bad:
+        raise ConfigError(f"scene {name!r}, field '{_field(bad[0])}': {bad[1]} is not a finite number")
+    for study in ("accuracy", "kappa_gap"):
+        if "topography" in scene and study in scene:
+            raise ConfigError(f"scene {name!r}, field '{study}': the {study} study runs on generated surfaces only; "
+                              "remove it from a scene with a topography block")
+    scene_schema = {**schema["$defs"]["scene"], "$defs": schema["$defs"]}
+    validator = Draft202012Validator(scene_schema)
+    errors = sorted(validator.iter_errors(scene), key=lambda e: (len(e.path), list(e.path)))
+    if errors:
+        err = errors[0]
+        origin = ""
+        if delta is not None and err.path and not _has_path(delta, err.path) and _has_path(scene, err.path):
+            origin = " (value from the 'defaults' block)"
+        raise ConfigError(f"scene {name!r}, field '{_field(err.path)}'{origin}: {_schema_message(err)}")
+    out = _complete(copy.deepcopy(scene), scene_schema, scene_schema)
+    if "topography" in out:
+        try:
+            out = check_measured_scene(name, out, delta, check_files=active)
+        except MeasuredConfigError as err:
+            raise ConfigError(str(err)) from None
+    else:
+        for study in STUDIES:
+            if study in out:
+                _check_grid(name, study, out[study])
+        if "contact" in out:
+            out["contact"]["solver"].setdefault("boundary", "periodic")
+    if "contact" in out:
+        given = ((delta or {}).get("contact") or {}).get("load") or {}
+        _resolve_load(name, out["contact"]["load"], given, "topography" in out)
+        _check_contact(name, out["contact"])
+    if "accuracy" in out:
+        _check_accuracy(name, out["accuracy"])
+    if "kappa_gap" in out:
+        _check_kappa_gap(name, out["kappa_gap"])
+    lo, hi = out["fit"]["window"]
+    if not lo < hi:
+        raise ConfigError(f"scene {name!r}, field 'fit.window': needs low < high, got [{lo}, {hi}]")
+    return out
+
+
+def validate_config(config: dict, schema: dict | None = None) -> dict:
+    """Validate the whole config (every scene) and return it with defaults filled in.
+
+    Each scene is merged over ``config['defaults']`` first (:func:`merge_scene`);
+    ``config['scene']`` must name one of ``config['scenes']``.
+    """
+    schema = schema or load_schema()
+    if not isinstance(config, dict):
+        raise ConfigError("config must be a mapping with keys 'scene' and 'scenes'")
+    unknown = sorted(set(config) - {"scene", "scenes", "defaults"})
+    if unknown:
+        raise ConfigError(f"unknown top-level config key(s) {unknown}; allowed: defaults, scene, scenes")
+    scenes = config.get("scenes")
+    if not isinstance(scenes, dict) or not scenes:
+        raise ConfigError("config field 'scenes' must be a non-empty mapping of scene blocks")
+    defaults = config.get("defaults") or {}
+    if not isinstance(defaults, dict):
+        raise ConfigError("config field 'defaults' must be a mapping of study blocks")
+    allowed = (*SCENE_STUDIES, "fit")
+    for key in defaults:
+        if key not in allowed:
+            raise ConfigError(f"config field 'defaults': unknown block {key!r}; allowed: {', '.join(allowed)}")
+    scene_schema = {**schema["$defs"]["scene"], "$defs": schema["$defs"]}
+    defaults = coerce_strings(defaults, scene_schema)
+    validated = {}
+    for name, block in scenes.items():
+        if not isinstance(name, str) or not SCENE_NAME.match(name):
+            raise ConfigError(f"config field 'scenes': scene name {name!r} is not allowed; names start with "
+                              "a letter and hold only letters, digits, '_' and '-' (they become folder names)")
+        if not isinstance(block or {}, dict):
+            raise ConfigError(f"scene {name!r}: must be a mapping of blocks, got {type(block).__name__}")
+        block = coerce_strings(block, scene_schema)
+        validated[name] = validate_scene(name, merge_scene(defaults, block or {}), schema, delta=block or {},
+                                         active=name == config.get("scene"))
+    default = config.get("scene")
+    if not isinstance(default, str) or default not in validated:
+        raise ConfigError(
+            f"config field 'scene': unknown scene {default!r}; defined scenes: {', '.join(sorted(validated))}"
+        )
+    return {"scene": default, "scenes": validated}
+
+
+def batches(block: dict) -> list[tuple[str, str]]:
+    """The ``(k_l, H)`` batches of a study block's grid: one representativity job each."""
+    grid = block["grid"]
+    return list(itertools.product(grid["k_l"], grid["H"]))
+
+
+def cases(block: dict) -> list[Case]:
+    """All cases of a study block: k_l x k_s x H x seeds (seeds 0..seeds-1)."""
+    grid = block["grid"]
+    return [
+        Case(kl, ks, h, seed)
+        for kl, ks, h in itertools.product(grid["k_l"], grid["k_s"], grid["H"])
+        for seed in range(block["seeds"])
+    ]
+
+
+def _load_summary(load: Mapping) -> str:
+    """The final load in words: what a case receives (:mod:`roughcontact.pipeline.loading`)."""
+    if "target_area" in load:
+        return (f"final load: the p0 giving A/A0 = {load['target_area']:g} on each case, found first "
+                f"(a few extra solves a case)")
+    if load["relative_to"] == "rms_slope":
+        return f"final load p0/(E* h') = {load['p_max']:g}, h' each surface's rms slope"
+    return f"final load p0/E* = {load['p_max']:g}"
+
+
+def plan_summary(scene_name: str, scene: dict) -> str:
+    """One line saying how much a validated scene computes (shown by ``snakemake -n``)."""
+    parts = []
+    if "topography" in scene:
+        n_files = len(topography_names(scene))
+        for study in ("representativity", "contact"):
+            if study in scene:
+                steps = scene[study]["load"]["n_steps"] if study == "contact" else 0
+                parts.append(f"{study} of {n_files} topography file(s)" +
+                             (f" x {steps} load steps = {n_files * steps} solves" if steps else ""))
+        if "contact" in scene:
+            parts.append(_load_summary(scene["contact"]["load"]))
+        return f"roughcontact: scene {scene_name!r} plans " + "; ".join(parts) + "."
+    if "representativity" in scene:
+        rep = scene["representativity"]
+        n_surfaces = len(cases(rep))
+        parts.append(f"{n_surfaces} representativity surfaces at N={rep['surface']['N']} "
+                     f"in {len(batches(rep))} jobs")
+    if "contact" in scene:
+        con = scene["contact"]
+        n_cases, n_steps = len(cases(con)), con["load"]["n_steps"]
+        parts.append(f"{n_cases} contact cases x {n_steps} load steps = {n_cases * n_steps} solves at "
+                     f"N={con['surface']['N']}")
+        parts.append(_load_summary(con["load"]))
+    if "accuracy" in scene:
+        parts.append("the accuracy study")
+    if "kappa_gap" in scene:
+        kg = scene["kappa_gap"]
+        n_jobs = sum(v["seeds"] for v in kg["variants"].values()) * len(kg["H"])
+        parts.append(f"the kappa-gap study ({n_jobs} solves in {len(kg['variants'])} variants)")
+    return f"roughcontact: scene {scene_name!r} plans " + ("; ".join(parts) or "nothing") + "."
+
+
+def main(argv=None) -> None:
+    """``python -m roughcontact.pipeline.config [FILE ...]``: check config files as ``snakemake --configfile``
+    reads them."""
+    ap = argparse.ArgumentParser(prog="python -m roughcontact.pipeline.config",
+                                 description="Check config/config.yaml with FILEs added (as snakemake --configfile "
+                                             "FILE ... reads them): YAML syntax with file, line and column, repeated "
+                                             "keys, and every scene. Run from the workflow's folder.")
+    ap.add_argument("files", nargs="*", type=Path, help="config files added to config/config.yaml, in order")
+    ap.add_argument("--scene", help="the scene to run (as --config scene=NAME); default: the config's `scene`")
+    args = ap.parse_args(argv)
+    try:
+        config = load_config_files(args.files)
+        if args.scene is not None:
+            config["scene"] = args.scene
+        valid = validate_config(config)
+    except ConfigError as exc:
+        ap.exit(2, f"error: {exc}\n")
+    sys.stdout.write(plan_summary(valid["scene"], valid["scenes"][valid["scene"]]) + "\n")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,302 @@
+"""Labelled per-case datasets: arrays in, xarray out, no file I/O.
+
+Every per-case dataset carries length-1 dimensions ``k_l, k_s, H, seed`` so that the
+aggregate stage can join the cases with ``xarray.combine_by_coords``. The coordinate
+values are the floats of the config strings (``float("0.36")``, identical on every
+parse); file names use the strings themselves. A measured surface's case is its name
+instead: one length-1 dimension ``topography`` with a string coordinate.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+
+import numpy as np
+import xarray as xr
+
+from ..analysis.aggregate.combine import CASE_DIMS, TOPOGRAPHY_DIM
+from ..core.quantities import cf_unit
+from ..solver.results import cell_attrs as solver_cell_attrs
+from ..statistics.representativity import epsilon_attrs
+from ..surfaces.synthetic import finite_difference_rms_slope, nonperiodic_moments, spectral_moments
+from ..theory.perimeter import PERIMETER_C, perimeter_corrected_area
+
+_CASE_COORD_ATTRS = {
+    "k_l": {"units": "1", "long_name": "long-wavelength cutoff L/lambda_l"},
+    "k_s": {"units": "1", "long_name": "short-wavelength cutoff L/lambda_s"},
+    "H": {"units": "1", "long_name": "Hurst roughness exponent"},
+    "seed": {"units": "1", "long_name": "white-noise seed"},
+}
+
+
+def case_coords(k_l: str, k_s: str, hurst: str, seed: int) -> dict:
+    """Length-1 case coordinates with units and long_name, from config strings."""
+    values = {"k_l": float(k_l), "k_s": float(k_s), "H": float(hurst), "seed": int(seed)}
+    return {
+        name: xr.Variable((name,), np.array([value]), attrs=_CASE_COORD_ATTRS[name])
+        for name, value in values.items()
+    }
+
+
+def expand_case(ds: xr.Dataset, k_l: str | None = None, k_s: str | None = None, hurst: str | None = None,
+                seed: int | None = None, *, topography: str | None = None) -> xr.Dataset:
+    """Add the length-1 case dimensions to every data variable of ``ds``.
+
+    A generated case's ``k_l, k_s, H, seed``, or a measured one's ``topography`` name.
+    """
+    if topography is not None:
+        dims = (TOPOGRAPHY_DIM,)
+        coords = {TOPOGRAPHY_DIM: xr.Variable(dims, np.array([str(topography)], dtype=object),
+                                              {"units": "1", "long_name": "name of the measured topography"})}
+    else:
+        dims, coords = CASE_DIMS, case_coords(k_l, k_s, hurst, seed)
+    out = ds.expand_dims({name: 1 for name in dims}).assign_coords(coords)
+    for name in out.data_vars:
+        out[name] = out[name].transpose(*dims, *[d for d in out[name].dims if d not in dims])
+        out[name].attrs = ds[name].attrs
+    return out
+
+
+def surface_dataset(heights: np.ndarray, *, k_l: str, k_s: str, hurst: str, seed: int,
+                    length: float, normalisation: dict, length_unit: str = "1") -> xr.Dataset:
+    """Dataset of one generated surface.
+
+    ``heights`` is (n, n) [``length_unit``, the unit of ``length`` too, one of
+    :data:`roughcontact.core.quantities.LENGTH_UNITS`; ``"1"``: nondimensional]; ``normalisation``
+    is ``{"rms_slope": v}`` or ``{"rms_height": v}``, recorded as an attribute. Adds scalar
+    statistics: rms height, spectral and finite-difference rms slope, profile moments
+    (``m0`` [length^2], ``m2`` [1], ``m4`` [length^-2]) and Nayak's alpha. The global
+    attribute ``length_units`` is the unit of the attribute ``length``.
+    """
+    n = heights.shape[0]
+    stats = spectral_moments(heights, length)
+    x = np.arange(n) * (length / n)
+    u_len = cf_unit(length_unit, length_power=1)
+    ds = xr.Dataset(
+        {
+            "heights": (("x", "y"), heights, {"units": u_len, "long_name": "surface height h(x, y)"}),
+            "rms_height": ((), stats["rms_height"],
+                           {"units": u_len, "long_name": "rms height (spectral)"}),
+            "rms_slope": ((), stats["rms_slope"],
+                          {"units": "1", "long_name": "rms slope sqrt(<|grad h|^2>) from the spectrum"}),
+            "rms_slope_fd": ((), finite_difference_rms_slope(heights, length),
+                             {"units": "1", "long_name": "rms slope from periodic central differences"}),
+            "m0": ((), stats["m0"], {"units": cf_unit(length_unit, length_power=2),
+                                     "long_name": "profile spectral moment m0"}),
+            "m2": ((), stats["m2"], {"units": "1", "long_name": "profile spectral moment m2"}),
+            "m4": ((), stats["m4"], {"units": cf_unit(length_unit, length_power=-2),
+                                     "long_name": "profile spectral moment m4"}),
+            "alpha": ((), stats["alpha"],
+                      {"units": "1", "long_name": "Nayak bandwidth alpha = m0 m4 / m2^2 (profile moments)"}),
+        },
+        coords={
+            "x": ("x", x, {"units": u_len, "long_name": "position along x"}),
+            "y": ("y", x.copy(), {"units": u_len, "long_name": "position along y"}),
+        },
+        attrs={"length": float(length), "length_units": u_len, "n": int(n),
+               "normalisation": str(normalisation)},
+    )
+    return expand_case(ds, k_l, k_s, hurst, seed)
+
+
+def representativity_dataset(epsilon: float, heights: np.ndarray, *, n_bins: int, k_l: str | None = None,
+                             k_s: str | None = None, hurst: str | None = None, seed: int | None = None,
+                             topography: str | None = None, length_unit: str = "1") -> xr.Dataset:
+    """Dataset of one surface's representativity: eps and the heights' mean and std.
+
+    The case is a generated one's ``k_l, k_s, hurst, seed`` or a measured one's ``topography``.
+
+    ``length_unit`` is the unit of the heights (:data:`roughcontact.core.quantities.LENGTH_UNITS`).
+    eps, of unit length^-1/2, which no CF ``units`` string can write, is written as its number
+    for heights in ``length_unit`` (``units`` ``"1"``, :func:`roughcontact.statistics.representativity.epsilon_attrs`).
+    """
+    u_len = cf_unit(length_unit, length_power=1)
+    ds = xr.Dataset(
+        {
+            "epsilon": ((), float(epsilon), epsilon_attrs(length_unit)),
+            "mean_height": ((), float(np.mean(heights)), {"units": u_len, "long_name": "mean height"}),
+            "std_height": ((), float(np.std(heights)), {"units": u_len,
+                                                        "long_name": "standard deviation of heights"}),
+        },
+        attrs={"n_bins": int(n_bins)},
+    )
+    return expand_case(ds, k_l, k_s, hurst, seed, topography=topography)
+
+
+def contact_dataset(result: xr.Dataset, *, rms_slope: float, alpha: float, e_star: float,
+                    k_l: str | None = None, k_s: str | None = None, hurst: str | None = None,
+                    seed: int | None = None, topography: str | None = None) -> xr.Dataset:
+    """Per-case contact dataset: the solver's result over ``step`` plus kappa and surface stats.
+
+    The case is a generated one's ``k_l, k_s, hurst, seed`` or a measured one's ``topography``.
+    kappa = E* h' / pbar [1] with h' the surface's rms slope (spectral for a generated
+    surface, finite differences inside the patch for a measured one), the paper's
+    normalised inverse mean contact pressure (its Fig. 3). The solver's ``wall_time``
+    is dropped: result files must be byte-identical across reruns, so timings go to the
+    job's log and Snakemake benchmark file instead. Units: those of ``result`` (the
+    ``length_unit``/``pressure_unit`` given to :func:`roughcontact.solver.solve_contact`;
+    ``e_star`` in its ``pressure_units``); what this adds is dimensionless.
+    """
+    ds = result.drop_vars("wall_time", errors="ignore")
+    dx = pixel_scale(result.attrs)
+    ds["area_fraction_corrected"] = xr.DataArray(
+        perimeter_corrected_area(ds["area_fraction"].values, ds["contact_perimeter"].values, dx),
+        dims=("step",),
+        attrs={"units": "1",
+               # one text for every cell, so that square and rectangular cases aggregate
+               "long_name": f"perimeter-corrected contact area fraction A_pix/A0 - c P dx, c = {PERIMETER_C:.4f}, "
+                            "dx = sqrt(dx dy) the pixel side"},
+    )
+    ds["kappa"] = (e_star * rms_slope / ds["mean_contact_pressure"]).assign_attrs(
+        units="1", long_name="kappa = E* h' / mean contact pressure")
+    ds["rms_slope"] = xr.DataArray(float(rms_slope), attrs={
+        "units": "1", "long_name": "rms slope h' of the surface (its surface file's rms_slope)"})
+    ds["alpha"] = xr.DataArray(float(alpha), attrs={
+        "units": "1", "long_name": "Nayak bandwidth alpha of the surface (profile moments)"})
+    ds.attrs["e_star"] = float(e_star)
+    return expand_case(ds, k_l, k_s, hurst, seed, topography=topography)
+
+
+def measured_surface_dataset(measured, *, name: str) -> xr.Dataset:
+    """Dataset of one measured surface (a :class:`roughcontact.surfaces.topography.MeasuredSurface`).
+
+    ``heights`` (nx, ny) and ``x``, ``y`` in the study's length unit ``measured.unit``; the
+    statistics come from differences inside the patch (:func:`roughcontact.surfaces.synthetic.nonperiodic_moments`:
+    a measured patch is not periodic, and its spectrum would count the jump between opposite
+    edges as roughness). Global attributes (:func:`cell_attrs`): ``length`` and ``n`` for a square
+    cell with square pixels, else ``length_x``, ``length_y``, ``nx`` and ``ny``; ``length_units``
+    and ``source`` (the reader's provenance as JSON: file, sha256, reader, units and sizes before
+    conversion, undefined points, detrending, cropping).
+    """
+    h, unit = measured.heights, measured.unit
+    stats = nonperiodic_moments(h, measured.lengths)
+    u_len = cf_unit(unit, length_power=1)
+    (nx, ny), (lx, ly) = h.shape, measured.lengths
+    ds = xr.Dataset(
+        {
+            "heights": (("x", "y"), h, {"units": u_len, "long_name": "surface height h(x, y)"}),
+            "rms_height": ((), stats["rms_height"], {"units": u_len, "long_name": "rms height about the mean"}),
+            "rms_slope": ((), stats["rms_slope"], {"units": "1", "long_name": (
+                "rms slope sqrt(<|grad h|^2>) from forward differences inside the patch")}),
+            "m0": ((), stats["m0"], {"units": cf_unit(unit, length_power=2), "long_name": "profile moment m0"}),
+            "m2": ((), stats["m2"], {"units": "1", "long_name": "profile moment m2 = <(dh/dx)^2>, differences"}),
+            "m4": ((), stats["m4"], {"units": cf_unit(unit, length_power=-2),
+                                     "long_name": "profile moment m4 = <(d2h/dx2)^2>, differences"}),
+            "alpha": ((), stats["alpha"], {"units": "1", "long_name": "Nayak bandwidth alpha = m0 m4 / m2^2"}),
+            "undefined_fraction": ((), float(measured.info.get("undefined_fraction", 0.0)), {
+                "units": "1", "long_name": "fraction of the file's points not measured (filled before contact)"}),
+        },
+        coords={
+            "x": ("x", np.arange(nx) * (lx / nx), {"units": u_len, "long_name": "position along x"}),
+            "y": ("y", np.arange(ny) * (ly / ny), {"units": u_len, "long_name": "position along y"}),
+        },
+        attrs={**cell_attrs(h.shape, measured.length), "length_units": u_len,
+               "source": json.dumps(measured.info, sort_keys=True)},
+    )
+    return expand_case(ds, topography=name)
+
+
+def cell_attrs(shape: tuple[int, int], length) -> dict:
+    """Global attributes of a surface file's cell: ``length`` (L) and ``n`` when square, else its sides and counts.
+
+    ``length`` is the solver's argument: a float for a square cell, the pair (Lx, Ly) otherwise.
+    As the solver's (:func:`roughcontact.solver.results.cell_attrs`): a square cell keeps the
+    attributes of a generated surface; a rectangular one (nx != ny or dx != dy) gets ``length_x``,
+    ``length_y``, ``nx`` and ``ny`` instead, so that no reader can take one side for both.
+    """
+    sides, grid = solver_cell_attrs(shape, length)
+    return {**sides, "n": grid["n"]} if "n" in grid else {**sides, **grid}
+
+
+def pixel_scale(attrs) -> float:
+    """The pixel size of a cell from its attributes (:func:`cell_attrs`).
+
+    ``dx = L / n`` for a square cell; for a rectangular one the geometric mean ``sqrt(dx dy)`` of
+    ``dx = Lx / nx`` and ``dy = Ly / ny`` (the perimeter correction's length scale, exact for
+    square pixels and a first-order estimate otherwise).
+    """
+    if "length_x" not in attrs:
+        return float(attrs["length"]) / int(attrs["n"])
+    dx, dy = float(attrs["length_x"]) / int(attrs["nx"]), float(attrs["length_y"]) / int(attrs["ny"])
+    return dx if dx == dy else float(np.sqrt(dx * dy))
+
+
+def cell_length(attrs, shape: tuple[int, int], source):
+    """The solver's ``length`` from :func:`cell_attrs`' attributes: L, or (Lx, Ly); checked.
+
+    ``source`` names the file in messages. Raises ``ValueError`` when the attributes are missing or
+    not finite numbers > 0.
+    """
+    keys = ("length_x", "length_y") if "length_x" in attrs else ("length",)
+    values = []
+    for key in keys:
+        value = attrs.get(key)
+        try:
+            value = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"{source}: the global attribute {key!r} (side of the cell) is missing or not a "
+                             f"number: {value!r}") from None
+        if not (np.isfinite(value) and value > 0):
+            raise ValueError(f"{source}: the global attribute {key!r} must be a finite number > 0, got {value!r}")
+        values.append(value)
+    if len(values) == 1 and shape[0] != shape[1]:
+        raise ValueError(f"{source}: 'heights' is {shape[0]} x {shape[1]} but the file gives one side 'length'; a "
+                         "rectangular cell needs the attributes 'length_x' and 'length_y'")
+    return values[0] if len(values) == 1 else tuple(values)
+
+
+def surface_heights(ds: xr.Dataset, source):
+    """The ``(nx, ny)`` heights and the solver's ``length`` (L, or (Lx, Ly)) of a surface dataset, checked.
+
+    ``source`` names the file in messages. Raises ``ValueError`` when the heights are
+    missing, not a 2-D field of at least 4 x 4 points over ``x, y``, or not all
+    finite, or when the cell's sides (:func:`cell_attrs`) are missing or not positive numbers.
+    """
+    if "heights" not in ds:
+        raise ValueError(f"{source}: lacks the variable 'heights'")
+    da = ds["heights"].squeeze([d for d in (*CASE_DIMS, TOPOGRAPHY_DIM) if d in ds["heights"].dims])
+    if da.dims != ("x", "y") or min(da.shape) < 4:
+        raise ValueError(f"{source}: 'heights' must be a 2-D field over (x, y) of at least 4 x 4 points, "
+                         f"got dims {da.dims} and shape {da.shape}")
+    heights = np.asarray(da.values, dtype=float)
+    if not np.all(np.isfinite(heights)):
+        raise ValueError(f"{source}: 'heights' holds {int(np.sum(~np.isfinite(heights)))} NaN or infinite "
+                         "value(s); every height must be finite")
+    return heights, cell_length(ds.attrs, heights.shape, source)
+
+
+def representativity_batch(surface: dict, *, k_l: str, k_s: Sequence[str], hurst: str, seeds: int,
+                           n_bins: int, length_unit: str | None = None) -> xr.Dataset:
+    """eps of every ``k_s`` and seeds ``0 .. seeds-1`` of one ``(k_l, H)``, surfaces made in memory.
+
+    One job of the representativity study. At N = 1024 a surface and its eps take
+    ~0.1 s of CPU and a job's Python start-up ~1.1 s, so one job computes a whole k_l
+    (the paper's: 6 k_s x 30 seeds, ~20 s) to keep the start-up under 10 % of the work.
+    ``surface`` is the study's surface block (``N``, ``L``, ``plateau`` and
+    ``rms_height`` or ``rms_slope``, optionally ``unit``). ``length_unit`` is the unit of
+    the heights; ``None`` (default): ``surface["unit"]``, ``"1"`` without one. Returns the
+    per-case datasets of :func:`representativity_dataset` combined (dims ``k_l, H`` of
+    length 1, ``k_s`` in the given order, ``seed`` of length ``seeds``); one case is
+    ``ds.isel(k_s=[i], seed=[s])``, see :func:`split_cases`.
+    """
+    from ..statistics.representativity import gaussian_l2_error
+    from ..surfaces.synthetic import generate_surface
+
+    norm = {k: surface[k] for k in ("rms_slope", "rms_height") if k in surface}
+    unit = surface.get("unit", "1") if length_unit is None else length_unit
+    rows = []
+    for ks in k_s:
+        parts = []
+        for seed in range(seeds):
+            h = generate_surface(surface["N"], float(k_l), float(ks), float(hurst), seed,
+                                 length=surface["L"], plateau=surface["plateau"], **norm)
+            parts.append(representativity_dataset(gaussian_l2_error(h, n_bins), h, n_bins=n_bins, k_l=k_l,
+                                                  k_s=ks, hurst=hurst, seed=seed, length_unit=unit))
+        rows.append(xr.concat(parts, dim="seed", combine_attrs="override"))
+    return xr.concat(rows, dim="k_s", combine_attrs="override")
+
+
+def split_cases(ds: xr.Dataset) -> list[xr.Dataset]:
+    """The per-case datasets of a batch (each with length-1 ``k_s`` and ``seed`` dimensions), k_s-major."""
+    return [ds.isel(k_s=[i], seed=[j]) for i in range(ds.sizes["k_s"]) for j in range(ds.sizes["seed"])]

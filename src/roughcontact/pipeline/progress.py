@@ -1,0 +1,110 @@
+"""How far a scene's contact study has got, and about how long the rest will take.
+
+Each contact job logs one line per load step (``step k/n: ..., 12 iterations, 0.41 s; ...``).
+When a run starts, the workflow writes the scene's plan, ``results/{scene}/logs/plan.json``
+(:func:`write_plan`: the number of planned solves and the cores Snakemake was given). From the
+plan and the step lines so far, :func:`scene_progress` tells what is done and estimates what is
+left: the solves still to do, at the mean pace of the solves done, spread over the cores. Each
+contact job logs it when it ends, and ``python -m roughcontact.pipeline.progress results/SCENE`` prints it
+at any time (from another terminal while a run goes on).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..core.files import write_text_atomic
+from .config.scenes import cases
+from .io import duration_text
+from .measured import topography_names
+
+#: The per-step line of a contact job's log (workflow/scripts/contact.py).
+STEP_LINE = re.compile(r"step (\d+)/(\d+): .*?, \d+ iterations, ([0-9.]+) s")
+PLAN_FILE = "plan.json"
+
+
+def planned_solves(scene: Mapping) -> int:
+    """Load steps the contact study of a validated scene solves: cases (or files) x ``n_steps``; 0 without one."""
+    if "contact" not in scene:
+        return 0
+    n_cases = len(topography_names(scene)) if "topography" in scene else len(cases(scene["contact"]))
+    return n_cases * scene["contact"]["load"]["n_steps"]
+
+
+def write_plan(scene_dir: str | Path, scene_name: str, scene: Mapping, cores: int) -> Path:
+    """Write ``{scene_dir}/logs/plan.json``: the scene, its planned solves and the cores of this run."""
+    plan = {"scene": scene_name, "solves": planned_solves(scene), "cores": max(1, int(cores or 1))}
+    return write_text_atomic(Path(scene_dir) / "logs" / PLAN_FILE, json.dumps(plan, sort_keys=True) + "\n")
+
+
+@dataclass(frozen=True)
+class Progress:
+    """A scene's contact study so far: solves planned and done, seconds spent on them, cores."""
+
+    planned: int
+    done: int
+    seconds: float
+    cores: int
+
+    def left_seconds(self) -> float | None:
+        """Estimated wall time left [s]: the solves to do at the mean pace so far over the cores; None before any."""
+        if self.done == 0:
+            return None
+        return max(self.planned - self.done, 0) * (self.seconds / self.done) / self.cores
+
+    def text(self, scene: str) -> str:
+        """One line for a log or a terminal."""
+        head = f"scene {scene!r}: {self.done} of {self.planned} contact solves done"
+        left = self.left_seconds()
+        if left is None:
+            return head + "; no pace yet"
+        if self.done >= self.planned:
+            return head + " (all)"
+        return (f"{head} ({100 * self.done / self.planned:.0f} %), {self.seconds / self.done:.3g} s a solve: "
+                f"about {duration_text(left)} left on {self.cores} core(s)")
+
+
+def read_log_steps(text: str) -> list[float]:
+    """Seconds of each load step a contact log reports, in order (the last run's, if it ran twice)."""
+    steps: dict[int, float] = {}
+    for match in STEP_LINE.finditer(text):
+        k, seconds = int(match.group(1)), float(match.group(3))
+        if k == 1:
+            steps = {}  # a log that ran again starts over
+        steps[k] = seconds
+    return [steps[k] for k in sorted(steps)]
+
+
+def scene_progress(scene_dir: str | Path) -> tuple[str, Progress] | None:
+    """The scene's name and :class:`Progress` from its plan and contact logs; None without a plan."""
+    scene_dir = Path(scene_dir)
+    plan_path = scene_dir / "logs" / PLAN_FILE
+    if not plan_path.is_file():
+        return None
+    plan = json.loads(plan_path.read_text())
+    done, seconds = 0, 0.0
+    for log in sorted((scene_dir / "logs" / "contact").rglob("*.log")):
+        steps = read_log_steps(log.read_text(errors="replace"))
+        done, seconds = done + len(steps), seconds + sum(steps)
+    return plan["scene"], Progress(plan["solves"], min(done, plan["solves"]), seconds, plan["cores"])
+
+
+def main(argv=None) -> None:
+    """``python -m roughcontact.pipeline.progress results/SCENE``: print how far the scene's contact study has got."""
+    ap = argparse.ArgumentParser(prog="python -m roughcontact.pipeline.progress", description=__doc__.split("\n\n")[0])
+    ap.add_argument("scene_dir", type=Path, help="the scene's results folder, e.g. results/demo")
+    args = ap.parse_args(argv)
+    got = scene_progress(args.scene_dir)
+    if got is None:
+        raise SystemExit(f"error: {args.scene_dir / 'logs' / PLAN_FILE} not found: no run of this scene has "
+                         "started here (the workflow writes it when a run starts)")
+    print(got[1].text(got[0]))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,1 @@
+"""Statistics of surfaces and contact fields: geometric representativity, contact clusters."""

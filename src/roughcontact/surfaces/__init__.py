@@ -1,0 +1,1 @@
+"""Surfaces: the self-affine surface generator and the reader of measured topographies."""

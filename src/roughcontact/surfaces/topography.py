@@ -1,0 +1,458 @@
+"""Measured topography files, read with SurfaceTopography into the contact solver's height array.
+
+Every file format is read by SurfaceTopography (``open_topography`` picks the reader from the
+file's contents); this module only checks that the data suits the solver (one 2-D uniform map;
+any number of points along each axis, pixels of any aspect ratio), converts it to the study's
+length unit and prepares it:
+
+1. **read** the channel, in the file's own unit and size where it carries them (the scene's
+   ``file_unit`` / ``physical_size`` are only used where it does not), then convert heights and
+   sizes to ``unit`` with SurfaceTopography's ``to_unit``;
+2. **detrend** on the full measured area, with the trend fitted to the measured (defined) points
+   only. Detrending before filling keeps imputed values out of the fit, and places the filled
+   points on the trend surface: filling a tilted scan with its global mean first would put
+   spurious pits and peaks in the holes, which would then bias the fitted plane and become
+   contact spots. Fitting before cropping uses every measured point for the instrument's tilt or
+   form (a property of the whole scan), rather than re-levelling the cropped patch by itself;
+3. **fill** the undefined (not measured) points of the detrended heights ("mean" or "harmonic");
+4. **crop** to the centred largest square block when the map is not square and the scene asks for
+   it (``non_square: crop``); by default (``keep``) the whole rectangular map is used.
+
+Every failure raises :class:`TopographyError`, whose message starts with the file path, says
+what is wrong and what is allowed, and names the config field (``topography.<key>``) to change.
+"""
+
+from __future__ import annotations
+
+import numbers
+import os
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+from SurfaceTopography import Topography
+from SurfaceTopography.Exceptions import CannotDetectFileFormat, CorruptFile
+from SurfaceTopography.IO import open_topography, readers
+from SurfaceTopography.Support.UnitConversion import get_unit_conversion_factor, mangle_length_unit_ascii
+
+from ..core.files import file_sha256
+
+#: The study's allowed length units (CF/UDUNITS spellings: micrometres are "um", not "µm").
+LENGTH_UNITS = ("m", "mm", "um", "nm")
+#: What to do with points the instrument did not measure (config ``topography.undefined``).
+UNDEFINED_MODES = ("reject", "mean", "harmonic")
+#: SurfaceTopography detrend modes offered (config ``topography.detrend``); "none" keeps the heights.
+DETREND_MODES = ("none", "center", "height", "curvature")
+#: What to do with a map that is not square (config ``topography.non_square``): use it whole
+#: (``keep``, the default), the centred largest square block (``crop``) or refuse it (``reject``).
+NON_SQUARE_MODES = ("keep", "crop", "reject")
+#: SurfaceTopography formats whose reader accepts a file by its size alone: random bytes of 7 sizes
+#: (5000 to 131072) named .bin, .x3p and .txt were all read as HGT elevation maps when their size
+#: was a square number of 16-bit values, and by no other reader (SurfaceTopography 1.27, 2026-11-25).
+CONTENT_BLIND = ("hgt",)
+#: Default largest fraction of undefined (not measured) points a file may have (config
+#: ``topography.max_undefined``): above it the filled map would be mostly invented.
+MAX_UNDEFINED = 0.5
+#: Fraction of undefined points above which the scene's log warns (the filled points are recorded).
+WARN_UNDEFINED = 0.1
+#: Largest relative difference |dx/dy - 1| of the pixel sizes still taken as square (the cell's
+#: sides are then recorded as one length, as for a generated surface).
+PIXEL_RTOL = 1e-6
+
+
+class TopographyError(ValueError):
+    """A topography file that cannot be used; the message names the file and what is allowed."""
+
+
+@dataclass(frozen=True)
+class MeasuredSurface:
+    """A measured surface on the contact solver's grid.
+
+    Attributes
+    ----------
+    heights : np.ndarray
+        Heights, float64, shape (nx, ny), C-contiguous, finite everywhere, in ``unit``; axis 0 is
+        the file's x axis, axis 1 its y axis.
+    lengths : (float, float)
+        Sides (Lx, Ly) of the patch, in ``unit``; pixels ``dx = Lx / nx``, ``dy = Ly / ny``.
+    unit : str
+        The study's length unit, one of :data:`LENGTH_UNITS`.
+    info : dict
+        JSON-serialisable provenance (file, sha256, reader, channel, units, sizes, steps applied).
+    """
+
+    heights: np.ndarray
+    lengths: tuple[float, float]
+    unit: str
+    info: dict
+
+    @property
+    def square(self) -> bool:
+        """Whether the cell is square with square pixels (nx == ny and |dx/dy - 1| <= PIXEL_RTOL)."""
+        (nx, ny), (lx, ly) = self.heights.shape, self.lengths
+        return nx == ny and abs(lx / ly - 1.0) <= PIXEL_RTOL
+
+    @property
+    def length(self) -> float | tuple[float, float]:
+        """The solver's ``length`` argument: the side L of a square cell, else the pair (Lx, Ly)."""
+        return self.lengths[0] if self.square else self.lengths
+
+
+def read_topography(path, *, unit: str, file_unit: str | None = None,
+                    physical_size: tuple[float, float] | None = None, undefined: str = "reject",
+                    detrend: str = "none", non_square: str = "keep", channel: int = 0,
+                    max_undefined: float = MAX_UNDEFINED, format: str | None = None) -> MeasuredSurface:
+    """Read a measured topography file into a height array in the study's unit.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Topography file in any format SurfaceTopography reads (detected from its contents).
+    unit : str
+        The study's length unit (one of :data:`LENGTH_UNITS`); heights and length are converted to it.
+    file_unit : str, optional
+        Length unit of the heights and sizes of a file that carries none (one of :data:`LENGTH_UNITS`).
+        Ignored (and recorded so in ``info["ignored"]``) when the file has a unit.
+    physical_size : (float, float), optional
+        Size (Lx, Ly) of the measured area along the array's axes 0 and 1, in the file's unit, for a
+        file that carries none. Ignored (and recorded so) when the file has a size.
+    undefined : str
+        Undefined (not measured) points: "reject", "mean" (the mean of the defined detrended
+        heights) or "harmonic" (SurfaceTopography's harmonic interpolation).
+    detrend : str
+        "none", "center" (mean), "height" (best plane) or "curvature" (best quadric), fitted to the
+        defined points of the full measured area, before filling and cropping.
+    non_square : str
+        "keep" a map with nx != ny whole, "crop" it to the centred n x n block, n = min(nx, ny),
+        or "reject" it.
+    channel : int
+        Index of the data channel in a multi-channel file (0: the first).
+    max_undefined : float
+        Largest accepted fraction of undefined points, in [0, 1] (default :data:`MAX_UNDEFINED`); the
+        fraction is recorded in ``info["undefined_fraction"]``.
+    format : str, optional
+        SurfaceTopography's name of the file's format (e.g. "x3p"). Without it the format is
+        detected from the contents and must be one that uses the file's extension.
+
+    Returns
+    -------
+    MeasuredSurface
+        Heights of shape (nx, ny) and the sides (Lx, Ly) in ``unit``, and provenance ``info``.
+
+    Raises
+    ------
+    TopographyError
+        On bad arguments and on any file that is missing, unreadable or unsuitable.
+    """
+    name = os.fspath(path)
+    physical_size = _check_arguments(name, unit, file_unit, physical_size, undefined, detrend, non_square, channel)
+    _check_fraction(name, max_undefined)
+    info = {"file": name, "sha256": _sha256(name)}
+    topo = _load(name, info, unit=unit, file_unit=file_unit, physical_size=physical_size, channel=channel,
+                 fmt=_check_format(name, format))
+    dx, dy = _check_grid(name, topo, non_square)
+    heights = _detrend_and_fill(name, topo, info, undefined=undefined, detrend=detrend, max_undefined=max_undefined)
+    heights, info["crop"] = _crop(heights) if non_square == "crop" else (heights, None)
+    nx, ny = heights.shape
+    lx = nx * dx
+    ly = lx if nx == ny and abs(dx / dy - 1.0) <= PIXEL_RTOL else ny * dy  # square: one side, exactly
+    return MeasuredSurface(heights=heights, lengths=(lx, ly), unit=unit, info=info)
+
+
+def check_header(path, *, unit: str, file_unit: str | None = None,
+                 physical_size: tuple[float, float] | None = None, undefined: str = "reject",
+                 detrend: str = "none", non_square: str = "keep", channel: int = 0,
+                 max_undefined: float = MAX_UNDEFINED, format: str | None = None) -> None:
+    """The checks of :func:`read_topography` that need only the file's header, without its heights.
+
+    Readable by SurfaceTopography, the channel present and holding a 2-D uniform height map, a unit
+    and a size (the file's or the scene's), the unit convertible to ``unit``, the sizes positive,
+    and a square map when ``non_square`` is ``reject``. Run when a scene is checked, before any job
+    is planned (a few tens of ms a file); raises :class:`TopographyError` as the reader would.
+    """
+    name = os.fspath(path)
+    physical_size = _check_arguments(name, unit, file_unit, physical_size, undefined, detrend, non_square, channel)
+    _check_fraction(name, max_undefined)
+    fmt = _check_format(name, format)
+    if not os.path.isfile(name):
+        raise TopographyError(f"{name}: the topography file does not exist (or is not a regular file)")
+    with warnings.catch_warnings():
+        # as in _load: the NetCDF reader's close warns about its memory map, harmlessly
+        warnings.filterwarnings("ignore", message="Cannot close a netcdf_file", category=RuntimeWarning)
+        _check_header(name, _open(name, fmt), unit, file_unit, physical_size, non_square, channel)
+
+
+def _check_header(name, reader, unit, file_unit, physical_size, non_square, channel) -> None:
+    """:func:`check_header` on an open ``reader``, which it closes."""
+    try:
+        chan = _channel(name, reader, channel)
+        kwargs = _metadata(name, chan, {}, file_unit=file_unit, physical_size=physical_size)
+        file_unit = mangle_length_unit_ascii(kwargs.get("unit", chan.unit))
+        try:
+            factor = get_unit_conversion_factor(file_unit, unit)
+        except ValueError as err:
+            raise TopographyError(f"{name}: the file's unit {file_unit!r} cannot be converted to {unit!r} "
+                                  f"({err})") from err
+        (nx, ny), sizes = chan.nb_grid_pts, kwargs.get("physical_sizes", chan.physical_sizes)
+        _check_grid(name, _Header((nx, ny), tuple(float(v) * factor for v in sizes), unit), non_square)
+    finally:
+        _close(reader)
+
+
+@dataclass(frozen=True)
+class _Header:
+    """What :func:`_check_grid` reads of a topography: grid, sizes and unit."""
+
+    nb_grid_pts: tuple[int, int]
+    physical_sizes: tuple[float, float]
+    unit: str
+
+
+def _check_arguments(name, unit, file_unit, physical_size, undefined, detrend, non_square, channel):
+    """Validate the reader settings; returns ``physical_size`` as a (Lx, Ly) float tuple or None."""
+    choices = {"unit": (unit, LENGTH_UNITS), "undefined": (undefined, UNDEFINED_MODES),
+               "detrend": (detrend, DETREND_MODES), "non_square": (non_square, NON_SQUARE_MODES)}
+    if file_unit is not None:
+        choices["file_unit"] = (file_unit, LENGTH_UNITS)
+    for key, (value, allowed) in choices.items():
+        if value not in allowed:
+            raise TopographyError(f"{name}: topography.{key} {value!r} is not allowed; use one of {', '.join(allowed)}")
+    if isinstance(channel, bool) or not isinstance(channel, int | np.integer) or channel < 0:
+        raise TopographyError(f"{name}: topography.channel {channel!r} is not allowed; use an integer >= 0")
+    if physical_size is None:
+        return None
+    try:
+        size = tuple(float(s) for s in physical_size)
+    except (TypeError, ValueError):
+        size = ()
+    if len(size) != 2 or not all(np.isfinite(s) and s > 0 for s in size):
+        raise TopographyError(f"{name}: topography.physical_size {physical_size!r} is not allowed; "
+                              "use two finite numbers > 0, (Lx, Ly) in the file's unit")
+    return size
+
+
+def _check_fraction(name, max_undefined) -> None:
+    if isinstance(max_undefined, bool) or not isinstance(max_undefined, numbers.Real) \
+            or not 0.0 <= float(max_undefined) <= 1.0:
+        raise TopographyError(f"{name}: topography.max_undefined {max_undefined!r} is not allowed; use a number "
+                              "in [0, 1] (the largest accepted fraction of undefined points)")
+
+
+def _sha256(name: str) -> str:
+    """Hex SHA-256 of the file's bytes; a missing or unreadable file is a TopographyError."""
+    if not os.path.isfile(name):
+        raise TopographyError(f"{name}: the topography file does not exist (or is not a regular file)")
+    try:
+        return file_sha256(name)
+    except OSError as err:
+        raise TopographyError(f"{name}: the topography file cannot be read ({err})") from err
+
+
+def _load(name, info, *, unit, file_unit, physical_size, channel, fmt=None) -> Topography:
+    """Read one channel with SurfaceTopography; returns a plain Topography in ``unit``.
+
+    Undefined points (masked by the reader, or non-finite) are masked in the result. ``info`` gets
+    the reader's provenance. The reader is closed before returning.
+    """
+    with warnings.catch_warnings():
+        # SurfaceTopography's NetCDF reader closes scipy's memory-mapped file while its variables
+        # still exist, which only warns; the heights have been copied by then.
+        warnings.filterwarnings("ignore", message="Cannot close a netcdf_file", category=RuntimeWarning)
+        reader = _open(name, fmt)
+        try:
+            chan = _channel(name, reader, channel)
+            kwargs = _metadata(name, chan, info, file_unit=file_unit, physical_size=physical_size)
+            raw = chan.topography(**kwargs)
+            if raw.dim != 2 or not raw.is_uniform:
+                raise TopographyError(f"{name}: channel {chan.name!r} is not a 2-D uniform map")
+            scaled = _to_unit(name, raw, unit)
+            heights = scaled.heights()
+            # A copy, as the reader may hand out views of a file it is about to close.
+            data = np.array(np.ma.getdata(heights), dtype=np.float64, order="C")
+        except TopographyError:
+            raise
+        except Exception as err:  # readers of ~40 formats raise anything from deep inside
+            raise TopographyError(f"{name}: SurfaceTopography's {type(reader).__name__} could not read channel "
+                                  f"{channel} ({type(err).__name__}: {err})") from err
+        finally:
+            _close(reader)
+    mask = np.ma.getmaskarray(heights) | ~np.isfinite(data)
+    info.update(reader=type(reader).__name__, format=reader.format(), channel=chan.name,
+                file_unit=mangle_length_unit_ascii(raw.unit), original_shape=[int(n) for n in data.shape],
+                original_physical_size=[float(s) for s in scaled.physical_sizes], periodic=bool(raw.is_periodic))
+    return Topography(np.ma.masked_array(data, mask=mask) if mask.any() else data, scaled.physical_sizes,
+                      periodic=bool(raw.is_periodic), unit=unit)
+
+
+def _open(name: str, fmt: str | None = None):
+    """SurfaceTopography's reader for the file: of format ``fmt``, else detected from the contents.
+
+    A format detected without looking at the contents (:data:`CONTENT_BLIND`) must be one whose
+    reader uses the file's extension: random bytes named ``a.x3p`` would otherwise be read as a
+    height map. (Other readers' extension lists are incomplete, e.g. .di files and .txt columns.)
+    """
+    if os.path.getsize(name) == 0:
+        raise TopographyError(f"{name}: the file is empty (0 bytes)")
+    reader = _open_reader(name, fmt)
+    ext = os.path.splitext(name)[1].lower().lstrip(".")
+    own = _extensions(type(reader))
+    if fmt is None and reader.format() in CONTENT_BLIND and ext not in own:
+        detected = reader.format()
+        _close(reader)
+        claimed = sorted({r.format() for r in readers if ext in _extensions(r)})
+        what = f"that of {', '.join(repr(c) for c in claimed)}" if claimed else "not one of them"
+        raise TopographyError(f"{name}: SurfaceTopography reads it only as {detected!r} data (extensions "
+                              f"{', '.join('.' + e for e in own)}), but its extension .{ext} is {what}: the file is "
+                              "damaged or misnamed; give it its format's extension, or name the format in "
+                              "topography.format")
+    return reader
+
+
+def _check_format(name: str, fmt) -> str | None:
+    """``fmt`` if it is None or one of SurfaceTopography's formats, else a TopographyError."""
+    formats = sorted(r.format() for r in readers)
+    if fmt is not None and fmt not in formats:
+        raise TopographyError(f"{name}: topography.format {fmt!r} is not allowed; use one of {', '.join(formats)}")
+    return fmt
+
+
+def _extensions(reader) -> list[str]:
+    """The file extensions a SurfaceTopography reader class claims (lower case, no dot)."""
+    return [e.lower() for e in (getattr(reader, "_file_extensions", None) or [])]
+
+
+def _open_reader(name: str, fmt: str | None):
+    """``open_topography``, its failures as :class:`TopographyError`."""
+    try:
+        return open_topography(name, format=fmt)
+    except CannotDetectFileFormat as err:
+        # Its message lists every reader's complaint; the chained exception keeps them.
+        formats = ", ".join(sorted(r.format() for r in readers))
+        raise TopographyError(f"{name}: not a topography file SurfaceTopography can read (unknown or unsupported "
+                              f"format, or a damaged file); formats read: {formats}") from err
+    except CorruptFile as err:
+        raise TopographyError(f"{name}: the file is damaged ({err})") from err
+    except Exception as err:
+        raise TopographyError(f"{name}: SurfaceTopography cannot open the file ({type(err).__name__}: {err})") from err
+
+
+def _close(reader) -> None:
+    """Close SurfaceTopography's reader and the file it holds."""
+    reader.close()
+    # NPYReader.close() (SurfaceTopography 1.27.1) leaves its NuMPI file open, which warns when collected.
+    mpi_file = getattr(reader, "mpi_file", None)
+    if mpi_file is not None:
+        mpi_file.close()
+
+
+def _channel(name, reader, index):
+    """The ``index``-th data channel; it must hold 2-D uniform heights."""
+    channels = reader.channels
+    names = ", ".join(f"{i}: {c.name!r}" for i, c in enumerate(channels))
+    if index >= len(channels):
+        raise TopographyError(f"{name}: topography.channel {index} is out of range; the file's channels are {names}")
+    chan = channels[index]
+    if not chan.is_height_channel:
+        raise TopographyError(f"{name}: channel {index} ({chan.name!r}) holds {chan.data_kind.value} data in "
+                              f"{chan.data_unit!r}, not heights; the file's channels are {names}")
+    if chan.dim == 1 or chan.is_uniform is False:
+        kind = "a line scan (1-D)" if chan.dim == 1 else "non-uniformly sampled"
+        raise TopographyError(f"{name}: channel {index} ({chan.name!r}) is {kind}; only 2-D maps on a uniform grid "
+                              "can be used")
+    return chan
+
+
+def _metadata(name, chan, info, *, file_unit, physical_size) -> dict:
+    """Keyword arguments for ``chan.topography``: the scene's unit and size where the file has none.
+
+    SurfaceTopography refuses to override metadata the file carries (MetadataAlreadyFixedByFile), and
+    the file's own values are the measurement's, so they win; a scene value they replace is recorded
+    in ``info["ignored"]``.
+    """
+    kwargs, ignored = {}, []
+    if chan.unit is None:
+        if file_unit is None:
+            raise TopographyError(f"{name}: the file carries no length unit; give topography.file_unit "
+                                  f"(one of {', '.join(LENGTH_UNITS)}), the unit of its heights and sizes")
+        kwargs["unit"] = file_unit
+    elif file_unit is not None:
+        ignored.append("file_unit")
+    if chan.physical_sizes is None:
+        if physical_size is None:
+            raise TopographyError(f"{name}: the file has no physical size; give topography.physical_size "
+                                  "[Lx, Ly], the size of the measured area in the file's unit")
+        kwargs["physical_sizes"] = physical_size
+    elif physical_size is not None:
+        ignored.append("physical_size")
+    info.update(unit_from="scene" if "unit" in kwargs else "file", ignored=ignored,
+                physical_size_from="scene" if "physical_sizes" in kwargs else "file")
+    return kwargs
+
+
+def _to_unit(name, topo, unit):
+    """``topo`` converted to the study's ``unit`` by SurfaceTopography (heights and sizes)."""
+    try:
+        get_unit_conversion_factor(topo.unit, unit)
+    except ValueError as err:
+        raise TopographyError(f"{name}: the file's unit {topo.unit!r} cannot be converted to {unit!r} ({err})") from err
+    return topo.to_unit(unit)
+
+
+def _check_grid(name, topo, non_square) -> tuple[float, float]:
+    """Check the sizes and (with ``non_square: reject``) a square map; the pixel sizes (dx, dy) in ``unit``."""
+    (nx, ny), (lx, ly) = topo.nb_grid_pts, topo.physical_sizes
+    if min(nx, ny) < 4:
+        raise TopographyError(f"{name}: the map is {nx} x {ny} points; the contact solver needs at least 4 x 4")
+    if not all(np.isfinite(s) and s > 0 for s in (lx, ly)):
+        raise TopographyError(f"{name}: the physical size ({lx}, {ly}) {topo.unit} is not positive and finite")
+    if nx != ny and non_square == "reject":
+        raise TopographyError(f"{name}: the map is {nx} x {ny} points, not square, and topography.non_square is "
+                              f"reject: set it to keep to use the whole map, or to crop to use the centred "
+                              f"{min(nx, ny)} x {min(nx, ny)} block")
+    return lx / nx, ly / ny
+
+
+def _detrend_and_fill(name, topo, info, *, undefined, detrend, max_undefined=MAX_UNDEFINED) -> np.ndarray:
+    """Detrend (fit on the defined points), then fill the undefined points; returns finite heights (nx, ny)."""
+    n_undefined = int(np.ma.getmaskarray(topo.heights()).sum())
+    size = topo.heights().size
+    info.update(n_undefined=n_undefined, undefined_fraction=n_undefined / size, undefined=undefined, detrend=detrend)
+    if n_undefined > max_undefined * size and undefined != "reject":
+        raise TopographyError(f"{name}: {n_undefined} of {size} points ({n_undefined / size:.1%}) are undefined (not "
+                              f"measured), more than topography.max_undefined = {max_undefined:g}: the filled map "
+                              "would be mostly invented; raise max_undefined if this is the map you want")
+    if n_undefined and undefined == "reject":
+        raise TopographyError(f"{name}: {n_undefined} of {size} points ({n_undefined / size:.3%}) are undefined "
+                              "(not measured); set topography.undefined to mean or harmonic to fill them")
+    if n_undefined == size:
+        raise TopographyError(f"{name}: all {size} points are undefined (not measured)")
+    try:
+        if detrend != "none":
+            topo = topo.detrend(detrend_mode=detrend)
+        if n_undefined and undefined == "mean":
+            topo = topo.fill_undefined_data(fill_value=float(topo.mean()))
+        elif n_undefined:
+            topo = topo.interpolate_undefined_data(method="harmonic")
+        # The harmonic filter returns a masked array with nothing masked; anything still masked is NaN here.
+        heights = np.ma.filled(topo.heights(), np.nan).astype(np.float64, order="C")
+    except Exception as err:
+        raise TopographyError(f"{name}: detrend {detrend!r} / filling {undefined!r} failed "
+                              f"({type(err).__name__}: {err})") from err
+    n_bad = int(np.count_nonzero(~np.isfinite(heights)))
+    if n_bad:
+        raise TopographyError(f"{name}: {n_bad} heights are not finite after detrend {detrend!r} and filling "
+                              f"{undefined!r}; the contact solver needs finite heights everywhere")
+    if not heights.max() > heights.min():
+        raise TopographyError(f"{name}: the map is flat (every height equal after detrend {detrend!r}): it has no "
+                              "roughness to study")
+    return heights
+
+
+def _crop(heights: np.ndarray) -> tuple[np.ndarray, list[int] | None]:
+    """The centred largest square block of ``heights`` (nx, ny) and its [i0, j0, n], or None if already square."""
+    nx, ny = heights.shape
+    if nx == ny:
+        return heights, None
+    n = min(nx, ny)
+    i0, j0 = (nx - n) // 2, (ny - n) // 2
+    return np.ascontiguousarray(heights[i0:i0 + n, j0:j0 + n]), [i0, j0, n]

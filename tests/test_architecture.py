@@ -1,0 +1,213 @@
+"""The package's architecture, checked from its source: layers, no import cycles, small modules and functions.
+
+The import graph is read with :mod:`ast` over ``src/roughcontact`` (every ``import`` and ``from ... import``,
+those inside functions too); nothing is imported. Layers, bottom to top (:data:`LAYERS`): the foundation
+``core``; physics (``surfaces``, ``solver``, ``theory``, ``statistics``); ``analysis``; ``pipeline`` and
+``figures``; ``studies``; the package's face ``roughcontact/__init__.py`` on top. A module may import its
+own layer and the layers below, never one above.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+PACKAGE = "roughcontact"
+
+#: Rank of each top-level subpackage: imports flow from a higher rank to a lower or equal one.
+LAYERS = {
+    "core": 0,
+    "surfaces": 1,
+    "solver": 1,
+    "theory": 1,
+    "statistics": 1,
+    "analysis": 2,
+    "pipeline": 3,
+    "figures": 3,
+    "studies": 4,
+}
+#: The package's face (``roughcontact/__init__.py``: the public API) sits above every layer.
+FACE_RANK = max(LAYERS.values()) + 1
+
+MAX_MODULE_LINES = 500
+MAX_FUNCTION_LINES = 60
+#: Modules allowed over MAX_MODULE_LINES, each with its reason.
+LONG_MODULES = {
+    "roughcontact.solver.contact": "solver/ is being rewritten in its own branch; its layout is left to that work",
+}
+
+
+# ------------------------------------------------------------------------------ the checker
+def module_name(path: Path, root: Path) -> str:
+    parts = list(path.relative_to(root).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def _resolve(module: str, is_package: bool, node: ast.ImportFrom) -> str:
+    if not node.level:
+        return node.module or ""
+    base = module.split(".") if is_package else module.split(".")[:-1]
+    base = base[: len(base) - (node.level - 1)]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
+def imports_of(source: str, module: str, is_package: bool, known: set[str]) -> set[str]:
+    """The modules of ``known`` that ``source`` (module ``module``) imports, anywhere in its body."""
+    out = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            out.update(alias.name for alias in node.names if alias.name in known)
+        elif isinstance(node, ast.ImportFrom):
+            target = _resolve(module, is_package, node)
+            for alias in node.names:
+                sub = f"{target}.{alias.name}"
+                if sub in known:  # ``from pkg import submodule``
+                    out.add(sub)
+                elif target in known:
+                    out.add(target)
+    out.discard(module)
+    return out
+
+
+def import_graph(sources: dict[str, tuple[str, bool]]) -> dict[str, set[str]]:
+    """``{module: (source, is_package)}`` -> ``{module: modules of the set it imports}``."""
+    known = set(sources)
+    return {m: imports_of(src, m, pkg, known) for m, (src, pkg) in sources.items()}
+
+
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan), each sorted."""
+    index, low, stack, on_stack, found = {}, {}, [], set(), []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in sorted(graph.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                found.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def rank(module: str, layers: dict[str, int] = LAYERS) -> int:
+    parts = module.split(".")
+    if len(parts) == 1:
+        return max(layers.values()) + 1
+    if parts[1] not in layers:
+        raise KeyError(f"{module}: its folder {parts[1]!r} has no layer; add it to LAYERS")
+    return layers[parts[1]]
+
+
+def upward_imports(graph: dict[str, set[str]], layers: dict[str, int] = LAYERS) -> list[tuple[str, str]]:
+    """Every import ``(a, b)`` from a lower layer to a higher one."""
+    return sorted((a, b) for a, targets in graph.items() for b in targets if rank(b, layers) > rank(a, layers))
+
+
+def long_functions(source: str, limit: int = MAX_FUNCTION_LINES) -> list[tuple[str, int]]:
+    """Functions whose code, from the first statement after the docstring to the end, spans over ``limit`` lines."""
+    out = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            body = node.body
+            if (len(body) > 1 and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant)
+                    and isinstance(body[0].value.value, str)):
+                body = body[1:]
+            n = node.end_lineno - body[0].lineno + 1
+            if n > limit:
+                out.append((node.name, n))
+    return out
+
+
+def package_sources(root: Path = SRC) -> dict[str, tuple[str, bool]]:
+    return {module_name(p, root): (p.read_text(encoding="utf-8"), p.name == "__init__.py")
+            for p in sorted((root / PACKAGE).rglob("*.py"))}
+
+
+# ------------------------------------------------------------------------------ the package
+@pytest.fixture(scope="module")
+def sources():
+    return package_sources()
+
+
+@pytest.fixture(scope="module")
+def graph(sources):
+    return import_graph(sources)
+
+
+def test_the_graph_is_read(graph):
+    # a sanity check of the reader: the face imports the solver, the solver the foundation
+    assert "roughcontact.solver" in graph["roughcontact"]
+    assert "roughcontact.core.quantities" in graph["roughcontact.solver.settings"]
+
+
+def test_no_import_cycles(graph):
+    assert cycles(graph) == []
+
+
+def test_imports_flow_downward(graph):
+    assert upward_imports(graph) == []
+
+
+def test_every_folder_has_a_layer(graph):
+    for module in graph:
+        rank(module)  # raises for a folder not in LAYERS
+
+
+def test_modules_are_small(sources):
+    long = {m: src.count("\n") for m, (src, _) in sources.items()
+            if src.count("\n") > MAX_MODULE_LINES and m not in LONG_MODULES}
+    assert long == {}
+
+
+def test_functions_are_short(sources):
+    long = {m: found for m, (src, _) in sources.items() if (found := long_functions(src))}
+    assert long == {}
+
+
+# ------------------------------------------------------------------------------ the checker can fail
+def test_checker_finds_a_cycle_and_an_upward_import():
+    sources = {
+        "roughcontact": ("from .studies import page\n", True),
+        "roughcontact.core.units": ("from ..analysis.fit import grid\n", False),  # upward, and a cycle
+        "roughcontact.analysis.fit": ("", True),
+        "roughcontact.analysis.fit.grid": ("def f():\n    from ...core import units\n", False),  # lazy: still read
+        "roughcontact.studies.page": ("import roughcontact.core.units\n", False),
+        "roughcontact.core": ("", True),
+    }
+    g = import_graph(sources)
+    assert g["roughcontact.core.units"] == {"roughcontact.analysis.fit.grid"}
+    assert g["roughcontact.analysis.fit.grid"] == {"roughcontact.core.units"}
+    assert cycles(g) == [["roughcontact.analysis.fit.grid", "roughcontact.core.units"]]
+    assert upward_imports(g) == [("roughcontact.core.units", "roughcontact.analysis.fit.grid")]
+    with pytest.raises(KeyError, match="no layer"):
+        rank("roughcontact.attic.old")
+
+
+def test_checker_counts_code_lines_after_the_docstring():
+    body = "".join(f"    x{i} = {i}\n" for i in range(60))
+    assert long_functions(f'def f():\n    """Doc\n\n    more.\n    """\n{body}') == []
+    assert long_functions(f"def g():\n    y = 0\n{body}") == [("g", 61)]
+    assert long_functions(f"def outer():\n    def inner():\n{body.replace('    ', '        ')}        pass\n"
+                          "    return inner\n") == [("outer", 63), ("inner", 61)]
