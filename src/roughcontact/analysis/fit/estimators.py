@@ -1,4 +1,4 @@
-"""Fitting the contact evolution law (CEL) to aggregated contact data.
+"""The two estimators of the contact evolution law (CEL) constants, their bounds and constrained flags.
 
 The CEL (Yastrebov, Anciaux & Molinari 2012, Eq. 2) is
 ``a = A/A0 = (beta + [kappa p0 / (h' E*)]^(mu-1))^(1/(mu-1))``; it integrates

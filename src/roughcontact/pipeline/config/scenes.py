@@ -1,4 +1,4 @@
-"""Scenes: validate the pipeline's config and expand it into cases.
+"""Whole scenes: the pipeline's config validated (schema, then cross-field rules) and expanded into cases.
 
 A *scene* is a named block under ``scenes:`` that says what to compute. It is a small
 delta over the optional ``defaults:`` block: each study the scene declares

@@ -1,4 +1,4 @@
-"""The κ gap: how far each candidate cause moves κ(A/A0) at the paper's representative point.
+"""The κ gap's analysis: how far each candidate cause moves κ(A/A0) at the paper's representative point.
 
 At λ_l = L/16, λ_s = L/32 (k_l = 16, k_s = 32) our κ is below Yastrebov et al.'s (2012).
 This module measures, on those surfaces, what four differences between the two studies do
