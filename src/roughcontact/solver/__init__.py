@@ -92,7 +92,7 @@ projected, the mean restored by rescaling, and the CG continues on the reduced
 set. Implementation details:
 
 * the Fourier kernel and the pyFFTW plans are made once per grid
-  (:func:`roughcontact.fft.get_fft`), all buffers are preallocated and the
+  (:func:`roughcontact.core.fft.get_fft`), all buffers are preallocated and the
   inner loop calls no BLAS routine (OpenBLAS' thread wake-up interleaved with
   FFTW costs more than the transform at these sizes);
 * the search direction ``t`` is kept zero-mean on ``F``, so a step

@@ -49,7 +49,7 @@ def plans(shape, threads: int):
     """The cached FFT pair for an ``nx x ny`` grid (``shape`` an int ``n`` or ``(nx, ny)``).
 
     ``get_fft`` is an ``lru_cache`` keyed on the literal arguments; for one
-    thread this is the same call as :func:`roughcontact.surface.generate_surface`
+    thread this is the same call as :func:`roughcontact.surfaces.synthetic.generate_surface`
     makes, so both share one set of plans and buffers (33 MB at n = 1024).
     """
     if threads == 1:
@@ -74,7 +74,7 @@ def elastic_kernel(shape, e_star: float = 1.0, length=1.0) -> np.ndarray:
     numpy.ndarray, float64, shape (nx, ny//2+1)
         ``2 / (E* |q|)`` [length / pressure] with
         ``|q| = 2 pi sqrt((mx / Lx)^2 + (my / Ly)^2)`` for integer mode numbers ``mx``,
-        ``my`` (:func:`roughcontact.fft.wavenumbers`); the ``q = 0`` entry is 0 (the
+        ``my`` (:func:`roughcontact.core.fft.wavenumbers`); the ``q = 0`` entry is 0 (the
         mean displacement is absorbed by the rigid-body approach).
     """
     kx, ky = wavenumbers(shape, length)

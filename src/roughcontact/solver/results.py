@@ -4,7 +4,7 @@ The solver's iterations work in internal units on flat arrays; this module is
 the only place that knows the output's variable names, units and long names.
 Units are per call: pressures carry the caller's ``pressure_unit`` (that of
 ``e_star``), lengths its ``length_unit`` (that of ``heights`` and ``length``), as CF
-strings from :func:`roughcontact.quantities.cf_unit` (``"1"``: nondimensional).
+strings from :func:`roughcontact.core.quantities.cf_unit` (``"1"``: nondimensional).
 """
 
 from __future__ import annotations
@@ -209,7 +209,7 @@ def to_dataset(p, cols, iters, conv, fields, store_fields, shape, attrs: dict, e
     their variables and attributes; ``paths`` the per-step codes into
     :data:`~.workspace.SOLVER_PATHS` (int8, shape (n_steps,)) of the iteration that ended each step
     (:func:`solver_path_variable`). ``length_unit`` and ``pressure_unit`` (one of
-    :data:`roughcontact.quantities.LENGTH_UNITS` / ``PRESSURE_UNITS``) give the
+    :data:`roughcontact.core.quantities.LENGTH_UNITS` / ``PRESSURE_UNITS``) give the
     ``units`` of lengths, pressures and ``contact_perimeter`` [length^-1], and the
     global attributes ``length_units`` and ``pressure_units``. ``path_names`` are the
     iterations ``paths`` index; ``long_names`` replace the default long names of the per-step

@@ -44,7 +44,7 @@ class SolverSettings:
         What acts on the iteration besides elasticity (:mod:`.effects`), e.g.
         ``(PlasticityCap(hardness),)``.
     length_unit, pressure_unit : str
-        Labels of the output's units (:data:`roughcontact.quantities.LENGTH_UNITS` and
+        Labels of the output's units (:data:`roughcontact.core.quantities.LENGTH_UNITS` and
         ``PRESSURE_UNITS``); the numbers do not depend on them.
     """
 

@@ -115,7 +115,7 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
         ``step, x, y``); an iterable of 1-based step numbers stores only those
         (dims ``field_step, x, y``, coordinate ``field_step`` = step numbers).
     clusters : bool
-        Add contact-cluster statistics per step (:mod:`roughcontact.clusters`):
+        Add contact-cluster statistics per step (:mod:`roughcontact.statistics.clusters`):
         ``cluster_count``, ``cluster_mean_area``, ``cluster_max_area`` and
         ``cluster_area_histogram``. Off: no labelling work.
     progress : callable, optional
