@@ -376,6 +376,22 @@ def solve_adhesive(heights, *, law, e_star=1.0, length=1.0, mean_gap=None, p0=No
         ``converged`` only when the final check (fresh FFT) passes.
     """
     h, length = _heights(heights, length)
+    e_star, tol = _check_args(e_star, tol, law, max_iter, mean_gap, p0)
+    start = _start_gap(h, initial_gap)
+    it = AdhesiveIteration(h, law, e_star, length)
+    if mean_gap is not None:
+        mean_gap = _positive("mean_gap", mean_gap)
+        it.start(start, mean_gap)
+        it.solve(mean_gap, tol, int(max_iter))
+        res, out = _finish(it, mean_gap, "gap", it.iterations)
+    else:
+        res, out = _pressure_control(it, _finite("p0", p0), start, tol, int(max_iter))
+    out.converged = bool(res <= tol)
+    return out
+
+
+def _check_args(e_star, tol, law, max_iter, mean_gap, p0) -> tuple[float, float]:
+    """``(e_star, tol)`` checked, with the law, ``max_iter`` and the control; ``ValueError`` naming each."""
     e_star, tol = _positive("e_star", e_star), _positive("tol", tol)
     if tol >= 1:
         raise ValueError(f"tol must be in (0, 1), got {tol!r}")
@@ -385,28 +401,28 @@ def solve_adhesive(heights, *, law, e_star=1.0, length=1.0, mean_gap=None, p0=No
         raise ValueError(f"max_iter must be an integer >= 1, got {max_iter!r}")
     if (mean_gap is None) == (p0 is None):
         raise ValueError("give exactly one of mean_gap (displacement control) and p0 (pressure control)")
+    return e_star, tol
+
+
+def _start_gap(h: np.ndarray, initial_gap) -> np.ndarray:
+    """The starting gap: ``initial_gap`` checked, else ``max(h) - h`` (touching at the highest node)."""
     if initial_gap is None:
-        start = h.max() - h
-    else:
-        start = np.asarray(initial_gap, dtype=np.float64)
-        if start.shape != h.shape or not np.all(np.isfinite(start)) or start.max() <= 0:
-            raise ValueError(f"initial_gap must be finite, of shape {h.shape}, with a positive value somewhere")
-    it = AdhesiveIteration(h, law, e_star, length)
-    if mean_gap is not None:
-        mean_gap = _positive("mean_gap", mean_gap)
-        it.start(start, mean_gap)
-        it.solve(mean_gap, tol, int(max_iter))
-        res, out = _finish(it, mean_gap, "gap", it.iterations)
-    else:
-        try:
-            p0 = float(p0)
-        except (TypeError, ValueError):
-            raise ValueError(f"p0 must be a finite number, got {p0!r}") from None
-        if not math.isfinite(p0):
-            raise ValueError(f"p0 must be a finite number, got {p0!r}")
-        res, out = _pressure_control(it, p0, start, tol, int(max_iter))
-    out.converged = bool(res <= tol)
-    return out
+        return h.max() - h
+    start = np.asarray(initial_gap, dtype=np.float64)
+    if start.shape != h.shape or not np.all(np.isfinite(start)) or start.max() <= 0:
+        raise ValueError(f"initial_gap must be finite, of shape {h.shape}, with a positive value somewhere")
+    return start
+
+
+def _finite(name: str, value) -> float:
+    """``float(value)``, finite; else a ``ValueError`` naming ``name``."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a finite number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise ValueError(f"{name} must be a finite number, got {value!r}")
+    return v
 
 
 #: Cap on the mean-gap evaluations of the pressure control.

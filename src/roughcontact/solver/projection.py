@@ -50,16 +50,26 @@ def project(y: np.ndarray, total: float, cap: float) -> np.ndarray:
         if not lo < new < hi:
             new = 0.5 * (lo + hi)
             if not lo < new < hi:
-                # bracket collapsed onto a jump of phi: interpolate across it
-                zl = np.clip(y - lo, 0.0, cap)
-                zh = np.clip(y - hi, 0.0, cap)
-                sl, sh = float(zl.sum()), float(zh.sum())
-                theta = (total - sh) / (sl - sh) if sl > sh else 0.0
-                zl -= zh
-                zl *= min(max(theta, 0.0), 1.0)
-                zh += zl
-                return zh
+                return _across_jump(y, lo, hi, total, cap)
         lam = new
+    _spread_rounding(z, total, cap, inside)
+    return z
+
+
+def _across_jump(y: np.ndarray, lo: float, hi: float, total: float, cap: float) -> np.ndarray:
+    """The bracket ``(lo, hi)`` collapsed onto a jump of ``phi``: interpolate across it."""
+    zl = np.clip(y - lo, 0.0, cap)
+    zh = np.clip(y - hi, 0.0, cap)
+    sl, sh = float(zl.sum()), float(zh.sum())
+    theta = (total - sh) / (sl - sh) if sl > sh else 0.0
+    zl -= zh
+    zl *= min(max(theta, 0.0), 1.0)
+    zh += zl
+    return zh
+
+
+def _spread_rounding(z: np.ndarray, total: float, cap: float, inside: np.ndarray) -> None:
+    """Spread the last rounding error of ``sum(z)`` over the nodes strictly inside the box (in place)."""
     err = total - float(z.sum())
     if err:
         np.greater(z, 0.0, out=inside)
@@ -68,7 +78,6 @@ def project(y: np.ndarray, total: float, cap: float) -> np.ndarray:
         if m:
             z[inside] += err / m
             np.clip(z, 0.0, cap, out=z)
-    return z
 
 
 def enforce_mean(P: np.ndarray, target: float, hardness: float | None) -> None:

@@ -215,12 +215,32 @@ def to_dataset(p, cols, iters, conv, fields, store_fields, shape, attrs: dict, e
     iterations ``paths`` index; ``long_names`` replace the default long names of the per-step
     variables where the solver defines them otherwise (the adhesive solver's contact area).
     """
-    fields_p, fields_g, field_steps = fields
-    steps = np.arange(1, p.size + 1)
     pressure_units = cf_unit(pressure=pressure_unit, pressure_power=1)
     length_units = cf_unit(length_unit, length_power=1)
-    inverse_length_units = cf_unit(length_unit, length_power=-1)
-    meta = {
+    meta = _step_meta(p, cols, iters, conv, pressure_units, length_units, cf_unit(length_unit, length_power=-1))
+    for name, long_name in (long_names or {}).items():
+        meta[name] = (*meta[name][:2], long_name)
+    for effect in effects:
+        for name, (units, long_name) in effect.variables(length_unit=length_unit,
+                                                         pressure_unit=pressure_unit).items():
+            meta[name] = (cols[name], units, long_name)
+    data_vars = {name: xr.Variable(("step",), val, {"units": u, "long_name": ln})
+                 for name, (val, u, ln) in meta.items()}
+    if paths is not None:
+        data_vars["solver_path"] = solver_path_variable(paths, path_names)
+    coords = {"step": xr.Variable(("step",), np.arange(1, p.size + 1),
+                                  {"units": FRACTION_UNITS, "long_name": "load step number (1-based)"})}
+    if fields[2]:
+        _add_fields(data_vars, coords, fields, store_fields, shape, attrs, pressure_units, length_units)
+    attrs = {**attrs, "length_units": length_units, "pressure_units": pressure_units}
+    for effect in effects:
+        attrs.update(effect.attrs())
+    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+
+
+def _step_meta(p, cols, iters, conv, pressure_units, length_units, inverse_length_units) -> dict:
+    """The solver's per-step variables: name -> (values (n_steps,), CF units, long name)."""
+    return {
         "pressure": (p, pressure_units, "applied mean pressure p0 = F / A0"),
         "area_fraction": (cols["area_fraction"], FRACTION_UNITS,
                           "real contact area fraction A / A0 (fraction of nodes with p > 0)"),
@@ -241,37 +261,26 @@ def to_dataset(p, cols, iters, conv, fields, store_fields, shape, attrs: dict, e
                       "recomputed displacement"),
         "wall_time": (cols["wall_time"], "s", "wall-clock time of the load step"),
     }
-    for name, long_name in (long_names or {}).items():
-        meta[name] = (*meta[name][:2], long_name)
-    for effect in effects:
-        for name, (units, long_name) in effect.variables(length_unit=length_unit,
-                                                         pressure_unit=pressure_unit).items():
-            meta[name] = (cols[name], units, long_name)
-    data_vars = {name: xr.Variable(("step",), val, {"units": u, "long_name": ln})
-                 for name, (val, u, ln) in meta.items()}
-    if paths is not None:
-        data_vars["solver_path"] = solver_path_variable(paths, path_names)
-    coords = {"step": xr.Variable(("step",), steps, {"units": FRACTION_UNITS,
-                                                      "long_name": "load step number (1-based)"})}
-    if field_steps:
-        dim = "step" if (isinstance(store_fields, (bool, np.bool_)) and store_fields) else "field_step"
-        dims = (dim, "x", "y")
-        xs, ys = _node_positions(shape, attrs)
-        coords["x"] = xr.Variable(("x",), xs, {"units": length_units, "long_name": "node position along axis 0"})
-        coords["y"] = xr.Variable(("y",), ys, {"units": length_units, "long_name": "node position along axis 1"})
-        if dim == "field_step":
-            coords["field_step"] = xr.Variable(("field_step",), np.array(field_steps),
-                                               {"units": FRACTION_UNITS,
-                                                "long_name": "load step number of the stored fields"})
-        data_vars["contact_pressure"] = xr.Variable(
-            dims, np.stack(fields_p), {"units": pressure_units, "long_name": "nodal contact pressure"})
-        data_vars["gap"] = xr.Variable(
-            dims, np.stack(fields_g), {"units": length_units,
-                                       "long_name": "gap between the rigid surface and the half-space"})
-    attrs = {**attrs, "length_units": length_units, "pressure_units": pressure_units}
-    for effect in effects:
-        attrs.update(effect.attrs())
-    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+
+
+def _add_fields(data_vars: dict, coords: dict, fields, store_fields, shape, attrs: dict, pressure_units: str,
+                length_units: str) -> None:
+    """Add the stored pressure and gap fields (dims ``step`` or ``field_step``, ``x``, ``y``) in place."""
+    fields_p, fields_g, field_steps = fields
+    dim = "step" if (isinstance(store_fields, (bool, np.bool_)) and store_fields) else "field_step"
+    dims = (dim, "x", "y")
+    xs, ys = _node_positions(shape, attrs)
+    coords["x"] = xr.Variable(("x",), xs, {"units": length_units, "long_name": "node position along axis 0"})
+    coords["y"] = xr.Variable(("y",), ys, {"units": length_units, "long_name": "node position along axis 1"})
+    if dim == "field_step":
+        coords["field_step"] = xr.Variable(("field_step",), np.array(field_steps),
+                                           {"units": FRACTION_UNITS,
+                                            "long_name": "load step number of the stored fields"})
+    data_vars["contact_pressure"] = xr.Variable(
+        dims, np.stack(fields_p), {"units": pressure_units, "long_name": "nodal contact pressure"})
+    data_vars["gap"] = xr.Variable(
+        dims, np.stack(fields_g), {"units": length_units,
+                                   "long_name": "gap between the rigid surface and the half-space"})
 
 
 def _node_positions(shape, attrs: dict) -> tuple[np.ndarray, np.ndarray]:

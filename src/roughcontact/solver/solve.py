@@ -96,20 +96,16 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
     Parameters
     ----------
     heights : array_like, shape (n, n) or (nx, ny)
-        Rigid surface heights [length] on the cell (periodic, or the whole
-        patch for ``boundary="free"``), axis 0 = x, axis 1 = y; the highest
-        points touch first. Any ``n >= 4`` (``nx, ny >= 4``), odd or not;
-        ``(nx, ny)`` with ``nx != ny`` needs ``length=(Lx, Ly)``.
+        Rigid surface heights [length] on the cell (periodic, or the whole patch for
+        ``boundary="free"``), axis 0 = x; the highest points touch first. Any ``nx, ny >= 4``;
+        ``nx != ny`` needs ``length=(Lx, Ly)``.
     pressures : sequence of float, shape (n_steps,)
-        Applied mean pressures ``p0 > 0``, one load step each [pressure, same unit
-        as ``e_star``], each with ``p0 * L / (e_star * s)`` in :data:`LOAD_RANGE`
-        (``s`` the rms height of ``heights``, ``L`` the float ``length`` or ``Lx``) and,
-        with a hardness, ``p0 < hardness``. Any order; each step warm-starts from the
-        previous one, which pays off most for increasing loads.
+        Applied mean pressures ``p0 > 0`` [pressure, the unit of ``e_star``], each with
+        ``p0 * L / (e_star * s)`` in :data:`LOAD_RANGE` (``s`` the rms height, ``L`` the
+        float ``length`` or ``Lx``) and below any pressure cap. Each step warm-starts from
+        the previous one (best for increasing loads).
     settings : SolverSettings, optional
-        The half-space (``e_star``, ``length``, ``boundary``), the iteration (``tol``,
-        ``max_iter``, ``threads``, ``method``), the effects and the unit labels; defaults
-        when omitted.
+        The half-space, the iteration, the effects and the unit labels; defaults when omitted.
     store_fields : bool or iterable of int
         ``True`` stores ``contact_pressure`` and ``gap`` for every step (dims
         ``step, x, y``); an iterable of 1-based step numbers stores only those
