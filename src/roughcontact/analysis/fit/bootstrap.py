@@ -80,9 +80,8 @@ def _fit_group(curves: _Curves, *, methods: Sequence[str], e_star: float, min_po
                rng: np.random.Generator, on_insufficient: str, caller: str, where: str, window) -> _GroupFit:
     """Every estimator on one group's curves, then the bootstrap over its rows (seeds, topographies).
 
-    The machinery shared by :func:`fit_cel` (one call per group) and :func:`fit_topographies`
-    (one call for all topographies). ``rng`` draws the resamples; ``caller``, ``where`` and
-    ``window`` (as the user passed it) name the group in errors.
+    Shared by :func:`fit_cel` (a call per group) and :func:`fit_topographies` (one call); ``rng``
+    draws the resamples; ``caller``, ``where`` and ``window`` (as passed) name the group in errors.
     """
     out = _GroupFit(len(methods))
     q = 100.0 * (1.0 - float(confidence)) / 2.0
@@ -127,6 +126,12 @@ def _fit_group(curves: _Curves, *, methods: Sequence[str], e_star: float, min_po
                 boot[method][b] = run(method, sample, full[method][0])[0]
             except (FitError, np.linalg.LinAlgError):
                 pass  # counted through n_boot_ok
+    _summarise_bootstrap(out, boot, methods, inflate, q)
+    return out
+
+
+def _summarise_bootstrap(out: _GroupFit, boot: dict, methods: Sequence[str], inflate: float, q: float) -> None:
+    """Each method's finite draws into ``out``: their count, inflated std and ``q``-percentile interval."""
     for m, method in enumerate(methods):
         if method not in boot:
             continue
@@ -136,4 +141,3 @@ def _fit_group(curves: _Curves, *, methods: Sequence[str], e_star: float, min_po
             out.bstd[m] = inflate * draws.std(axis=0, ddof=1)
             out.clo[m] = np.percentile(draws, q, axis=0)
             out.chi[m] = np.percentile(draws, 100.0 - q, axis=0)
-    return out

@@ -56,31 +56,8 @@ def fit_cel(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.11), n_bo
         Combined contact dataset (:func:`roughcontact.analysis.aggregate.combine_cases`), dims
         ``(k_l, k_s, H, seed, step)``, global attr ``e_star``; ``kappa`` and
         ``dpbar_dp0`` are derived if absent.
-    window : (float, float)
-        Contact-fraction window ``low <= A/A0 <= high``, ``0 < low < high <= 1``. Only
-        converged steps inside it enter any fit.
-    n_boot : int
-        Bootstrap resamples over seeds (>= 10; the paper-level analysis uses >= 200).
-    rng_seed : int
-        Seed (>= 0) of the bootstrap; each group's stream also depends on the group.
-    methods : sequence of {"paper", "joint"}
-        Estimators to run (see the module docstring).
-    min_points : int
-        Fewest in-window points a fit accepts (>= 3; the joint fit needs >= 4).
-    kappa_extrapolation : {"cel", "poly2"}
-        How the paper route extrapolates ``kappa_eff(a)`` to ``a = 0``.
-    paper_average : {"seeds", "none"}
-        ``"seeds"`` (default): the paper route fits the seed-mean curve of each H (mean
-        ``A/A0``, ``kappa``, ``d pbar/d p0`` per load step, steps converged in every
-        seed; the window applies to the mean ``A/A0``), which needs one load schedule
-        per H. Averaging before taking logs matters: the log of a noisy finite
-        difference is biased low by about half its relative variance, and that variance
-        grows with ``A/A0``, which tilts ``mu``. ``"none"``: every (seed, step) point.
-    confidence : float
-        Coverage of the percentile interval, in (0, 1).
-    on_insufficient : {"raise", "nan"}
-        A group with cases but too few in-window points: raise ValueError (default)
-        naming the group and the window, or leave its values NaN.
+    window, n_boot, rng_seed, methods, min_points, kappa_extrapolation, paper_average, confidence, on_insufficient
+        The fit settings, each described in :mod:`.settings` (default ``on_insufficient="raise"``).
 
     Returns
     -------

@@ -1,4 +1,31 @@
 """The settings of a CEL fit, checked, and the variables and attributes every fit dataset shares.
+
+Fit settings (keyword arguments of :func:`~.grid.fit_cel` and :func:`~.topographies.fit_topographies`)
+-----------------------------------------------------------------------------------------------------
+window : (float, float)
+    Contact-fraction window ``low <= A/A0 <= high``, ``0 < low < high <= 1``. Only converged
+    steps inside it enter any fit.
+n_boot : int
+    Bootstrap resamples over seeds (or topographies), >= 10 (the paper-level analysis uses >= 200).
+rng_seed : int
+    Seed (>= 0) of the bootstrap; each group's stream also depends on the group.
+methods : sequence of {"paper", "joint"}
+    Estimators to run (:mod:`.estimators`).
+min_points : int
+    Fewest in-window points a fit accepts (>= 3; the joint fit needs >= 4).
+kappa_extrapolation : {"cel", "poly2"}
+    How the paper route extrapolates ``kappa_eff(a)`` to ``a = 0``.
+paper_average : {"seeds", "none"}
+    ``"seeds"``: the paper route fits the seed-mean curve of each H (mean ``A/A0``, ``kappa``,
+    ``d pbar/d p0`` per load step, steps converged in every seed; the window applies to the mean
+    ``A/A0``), which needs one load schedule per H. Averaging before taking logs matters: the log
+    of a noisy finite difference is biased low by about half its relative variance, and that
+    variance grows with ``A/A0``, which tilts ``mu``. ``"none"``: every (seed, step) point.
+confidence : float
+    Coverage of the percentile interval, in (0, 1).
+on_insufficient : {"raise", "nan"}
+    A group with cases but too few in-window points: raise ValueError naming the group and the
+    window, or leave its values NaN.
 """
 
 from __future__ import annotations

@@ -59,11 +59,9 @@ def fit_topographies(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.
                      confidence: float = 0.95, on_insufficient: str = "nan") -> xr.Dataset:
     """Fit the CEL constants to all topographies of a measured scene, pooled as one surface type.
 
-    The topographies play the part of :func:`fit_cel`'s seeds in a single group: the same
-    estimators, and a bootstrap that resamples whole topographies (one stratum). With a
-    single topography there is no surface-to-surface scatter to resample: the bootstrap
-    columns are NaN and ``n_boot_ok`` is 0. Topographies with ``case_present == False``
-    (e.g. set by :func:`exclude_unconverged`) are left out.
+    The topographies play the part of :func:`fit_cel`'s seeds in one group (same estimators; the
+    bootstrap resamples whole topographies). With one topography the bootstrap columns are NaN
+    and ``n_boot_ok`` is 0. Topographies with ``case_present == False`` are left out.
 
     Parameters
     ----------
@@ -75,15 +73,13 @@ def fit_topographies(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.
         and ``case_present(topography)``; global attr ``e_star``. ``kappa`` and
         ``dpbar_dp0`` are derived if absent.
     window, n_boot, rng_seed, methods, min_points, kappa_extrapolation, confidence
-        As in :func:`fit_cel`. The bootstrap stream is keyed by ``rng_seed`` alone.
+        The fit settings of :mod:`.settings`; the bootstrap stream is keyed by ``rng_seed`` alone.
     paper_average : {"seeds", "none", "auto"}
         ``"seeds"``: the paper route fits the topography-mean curve (needs one normalised load
-        schedule ``p0 / (E* h')`` for all topographies); ``"none"``: every (topography, step)
-        point; ``"auto"``: ``"seeds"`` where the schedules agree, else ``"none"`` (the choice is
-        the result's ``paper_average`` attribute).
+        schedule ``p0 / (E* h')`` for all); ``"none"``: every (topography, step) point; ``"auto"``:
+        ``"seeds"`` where the schedules agree, else ``"none"`` (the result's ``paper_average``).
     on_insufficient : {"nan", "raise"}
-        Too few in-window points: NaN values (default; a measured surface may simply not
-        reach the window) or a ValueError naming the window.
+        Default ``"nan"``: a measured surface may simply not reach the window.
 
     Returns
     -------
@@ -93,8 +89,8 @@ def fit_topographies(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.
         ``n_points(estimator, constant)``, ``n_boot_ok(estimator)``, ``n_topographies`` (scalar,
         topographies fitted), ``in_fit(topography)`` (1 if it entered the fit),
         ``alpha_surfaces`` (scalar, mean Nayak alpha of the fitted topographies, NaN if
-        ``agg`` has no ``alpha``), ``paper_value(constant)``, ``paper_stderr(constant)``.
-        Attrs record the settings, as :func:`fit_cel`'s, and ``layout = "topographies"``.
+        ``agg`` has no ``alpha``), ``paper_value(constant)``, ``paper_stderr(constant)``; attrs
+        the settings, as :func:`fit_cel`'s, and ``layout = "topographies"``.
     """
     _check_topography_aggregate(agg)
     if "dpbar_dp0" not in agg or "kappa" not in agg:
