@@ -88,32 +88,56 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
     kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes = _family_panels(
         stats, k_l, k_s, hurst, fit_k_l)
     with matplotlib.rc_context(_STYLE):
-        extent, crosses = np.zeros(3), []  # largest p0/E*, A/A0 + s.d., s.d.
-        for idx, ks in enumerate(ks_list):
-            families = [(kl, ks, h) for kl in kl_list for h in h_list if _present(stats, kl, ks, h)]
-            panel_extent, panel_crosses = _area_load_panel(axes.flat[idx], agg, stats, bad, families, e_star,
-                                                           colour, marker, style)
-            extent = np.fmax(extent, panel_extent)
-            crosses.append(panel_crosses)
-            axes.flat[idx].set_title(_lambda_label(ks, "s"))
+        extent, crosses = _area_load_curves(axes, agg, stats, bad, e_star, kl_list, ks_list, h_list,
+                                            colour, marker, style)
         xmax, ymax, sdmax = (float(v) for v in extent)
-        drew_fit = False
-        for idx, ks in enumerate(ks_list):
-            # Second pass: theory over the common load range of all panels.
-            consts = _fit_constants(fit, cel_kl, ks, estimator)
-            _area_load_axes(axes.flat[idx], consts, xmax, ymax, e_star, hp, alphas)
-            drew_fit = drew_fit or consts is not None
-        for ax in list(axes.flat)[len(ks_list):]:
-            ax.set_visible(False)
+        drew_fit = _area_load_theory_panels(axes, ks_list, fit, cel_kl, estimator, xmax, ymax, e_star, hp, alphas)
         handles = _family_handles(kl_list, h_list, colour, marker, style) + _area_load_theory_handles(sdmax)
-        n_off = sum(_n_outside(ax, *c) for ax, c in zip(axes.flat, crosses, strict=False))  # hidden axes last
-        handles += _asperity_handles(alphas) + _unconverged_handles(sum(x.size for x, _ in crosses), n_off)
+        handles += _asperity_handles(alphas) + _area_load_cross_handles(axes, crosses)
         if drew_fit:
             handles.append(Line2D([], [], color="0.45", lw=2.2, alpha=0.8,
                                   label=f"CEL fit ({estimator}), " + _lambda_label(cel_kl, "l")))
         fig.suptitle(_run_summary(agg, stats))
         _legend_below(fig, handles, f"$h' = {hp:.3g}$")
     return fig
+
+
+def _area_load_curves(axes, agg, stats, bad, e_star: float, kl_list, ks_list, h_list, colour, marker, style):
+    """First pass: the families of each ``k_s`` panel (:func:`_area_load_panel`) and the panel titles.
+
+    Returns ``(extent, crosses)``: ``[max p0/E*, max A/A0 + s.d., max s.d.]`` [1] over all
+    panels (NaN ignored) and, per panel, ``(p0/E*, A/A0)`` [1] of its unconverged steps.
+    """
+    extent, crosses = np.zeros(3), []  # largest p0/E*, A/A0 + s.d., s.d.
+    for idx, ks in enumerate(ks_list):
+        families = [(kl, ks, h) for kl in kl_list for h in h_list if _present(stats, kl, ks, h)]
+        panel_extent, panel_crosses = _area_load_panel(axes.flat[idx], agg, stats, bad, families, e_star,
+                                                       colour, marker, style)
+        extent = np.fmax(extent, panel_extent)
+        crosses.append(panel_crosses)
+        axes.flat[idx].set_title(_lambda_label(ks, "s"))
+    return extent, crosses
+
+
+def _area_load_theory_panels(axes, ks_list, fit, cel_kl: float, estimator: str, xmax: float, ymax: float,
+                             e_star: float, hp: float, alphas) -> bool:
+    """Second pass: fitted CEL and theory of each panel over the common load range of all panels
+    (:func:`_area_load_axes`); the axes beyond ``ks_list`` are hidden. Returns whether a fit was drawn."""
+    drew_fit = False
+    for idx, ks in enumerate(ks_list):
+        consts = _fit_constants(fit, cel_kl, ks, estimator)
+        _area_load_axes(axes.flat[idx], consts, xmax, ymax, e_star, hp, alphas)
+        drew_fit = drew_fit or consts is not None
+    for ax in list(axes.flat)[len(ks_list):]:
+        ax.set_visible(False)
+    return drew_fit
+
+
+def _area_load_cross_handles(axes, crosses) -> list:
+    """Legend entries of the unconverged steps ``crosses`` (one ``(x, y)`` per shown panel), counting
+    those outside their panel's limits."""
+    n_off = sum(_n_outside(ax, *c) for ax, c in zip(axes.flat, crosses, strict=False))  # hidden axes last
+    return _unconverged_handles(sum(x.size for x, _ in crosses), n_off)
 
 
 #: Persson's (2001) two curves: one colour, told apart by style (they coincide at small load).

@@ -172,23 +172,16 @@ def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
     bad = _unconverged(agg)
     kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes = _family_panels(
         stats, k_l, k_s, hurst, fit_k_l)
-    fit_handles, n_off, n_bad, n_bad_off = [], 0, 0, 0
+    fit_handles, counts = [], (0, 0, 0)  # faint points off the axis, unconverged steps, those off the axes
     with matplotlib.rc_context(_STYLE):
         for idx, ks in enumerate(ks_list):
-            ax = axes.flat[idx]
-            drawn = [_dpbar_family(ax, agg, stats, bad, {"k_l": kl, "k_s": ks, "H": h}, colour[h], marker[kl],
-                                   style[kl], per_decade)
-                     for kl in kl_list for h in h_list if _present(stats, kl, ks, h)]
-            x_raw, y_raw, lo, hi, x_bad, y_bad = (np.concatenate(v) for v in zip(*drawn, strict=True))
-            n_bad += x_bad.size
-            if x_raw.size == 0 or lo.size == 0:
-                n_bad_off += x_bad.size
-                continue  # nothing drawable on log axes in this panel
-            label = _dpbar_panel(ax, fit, cel_kl, ks, estimator, len(ks_list) > 1, x_raw, lo, hi)
+            families = [{"k_l": kl, "k_s": ks, "H": h} for kl in kl_list for h in h_list if _present(stats, kl, ks, h)]
+            label, *panel_counts = _dpbar_ks_panel(axes.flat[idx], agg, stats, fit, bad, families, colour, marker,
+                                                   style, cel_kl, ks, estimator, len(ks_list) > 1, per_decade)
             fit_handles += [Line2D([], [], **{k: v for k, v in _FIT_LAW_STYLE.items() if k != "zorder"},
                                    label=label)] if label else []
-            n_off += int(np.sum((y_raw < ax.get_ylim()[0]) | (y_raw > ax.get_ylim()[1])))
-            n_bad_off += _n_outside(ax, x_bad, y_bad)
+            counts = tuple(c + d for c, d in zip(counts, panel_counts, strict=True))
+        n_off, n_bad, n_bad_off = counts
         for ax in list(axes.flat)[len(ks_list):]:
             ax.set_visible(False)
         handles = _family_handles(kl_list, h_list, colour, marker, style)
@@ -196,6 +189,25 @@ def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
         fig.suptitle(_run_summary(agg, stats))
         _legend_below(fig, handles, r"bars: $\pm 1$ s.e.m. over seeds, in log space ($y\,e^{\pm s/y}$)")
     return fig
+
+
+def _dpbar_ks_panel(ax, agg, stats, fit, bad, families, colour, marker, style, cel_kl: float, ks: float,
+                    estimator: str, many: bool, per_decade: int) -> tuple[str, int, int, int]:
+    """Draw the panel of one ``k_s``: its ``families`` (:func:`_dpbar_family`) and, where any point
+    can be drawn on log axes, the power laws, limits and labels (:func:`_dpbar_panel`).
+
+    Returns ``(label, n_off, n_bad, n_bad_off)``: the fitted law's legend text ("" without one),
+    the faint finite differences outside the axis range, the unconverged steps and those of them
+    outside the axes (all of them in a panel with nothing drawable).
+    """
+    drawn = [_dpbar_family(ax, agg, stats, bad, family, colour[family["H"]], marker[family["k_l"]],
+                           style[family["k_l"]], per_decade) for family in families]
+    x_raw, y_raw, lo, hi, x_bad, y_bad = (np.concatenate(v) for v in zip(*drawn, strict=True))
+    if x_raw.size == 0 or lo.size == 0:
+        return "", 0, x_bad.size, x_bad.size  # nothing drawable on log axes in this panel
+    label = _dpbar_panel(ax, fit, cel_kl, ks, estimator, many, x_raw, lo, hi)
+    n_off = int(np.sum((y_raw < ax.get_ylim()[0]) | (y_raw > ax.get_ylim()[1])))
+    return label, n_off, x_bad.size, _n_outside(ax, x_bad, y_bad)
 
 
 def _dpbar_panel(ax, fit, cel_kl: float, ks: float, estimator: str, many: bool, x_raw, lo, hi) -> str:

@@ -308,13 +308,7 @@ def fig_measured_area_load(agg: xr.Dataset, fit: xr.Dataset | None = None, *, es
         fig = _new_figure(SINGLE_COLUMN_IN + 1.3, 3.0)
         ax = fig.subplots()
         bad = _unconverged(agg)
-        curves = [_curve(agg, name, bad) for name in names]
-        for i, ((x, y), u) in enumerate(zip(curves, used, strict=True)):
-            ax.plot(x, y, ls="-", lw=0.7, mfc=None if u else "none", zorder=4, **_style(i))
-        xs = np.concatenate([x for x, _ in curves])
-        ys = np.concatenate([y for _, y in curves])
-        if xs.size == 0:
-            raise ValueError("agg has no converged step with a positive load and contact area")
+        xs, ys = _draw_area_curves(ax, agg, names, used, bad)
         crosses = _draw_unconverged(ax, _load(agg), agg["area_fraction"], bad)
         grid = np.geomspace(xs.min() / 1.2, xs.max() * 1.2, 200)
         # Loads normalised by E* h': the theory takes p0 = x with E* = h' = 1.
@@ -324,25 +318,54 @@ def fig_measured_area_load(agg: xr.Dataset, fit: xr.Dataset | None = None, *, es
         if cut:
             handles.append(Line2D([], [], ls="none", label="BGT, Greenwood: drawn up to their full contact"))
         if consts is not None:
-            ax.plot(grid, cel_area(grid, kappa=consts[0], mu=consts[1], beta=consts[2], rms_slope=1.0, e_star=1.0),
-                    zorder=1, **_FIT_STYLE)
-            ax.axhspan(float(fit.attrs.get("window_low", np.nan)), float(fit.attrs.get("window_high", np.nan)),
-                       color="0.9", lw=0, zorder=0)
-            handles += [Line2D([], [], **_FIT_STYLE, label=_fit_label(estimator, consts, constrained,
-                                                                      int(fit.get("n_topographies", used.sum())))),
-                        _window_patch(fit)]
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        for axis in (ax.xaxis, ax.yaxis):
-            _plain_log_labels(axis)
-        ax.set_xlim(grid[0], grid[-1])
-        ax.set_ylim(ys.min() / 1.5, min(1.0, ys.max() * 1.5))
+            handles += _draw_area_fit(ax, grid, fit, estimator, consts, constrained, used)
+        _area_load_log_axes(ax, grid, ys)
         handles += _unconverged_handles(crosses[0].size, _n_outside(ax, *crosses), "lines")
-        ax.set_xlabel(r"$p_0/(E^* h')$ [1]")
-        ax.set_ylabel(r"$A/A_0$ [1]")
         fig.suptitle(_summary(agg, sizes))
         _legend_below(fig, handles, r"each topography's load over its own $E^* h'$")
     return fig
+
+
+def _draw_area_curves(ax, agg: xr.Dataset, names: Sequence[str], used: np.ndarray,
+                      bad: xr.DataArray) -> tuple[np.ndarray, np.ndarray]:
+    """Each topography's converged ``A/A0(p0/(E* h'))`` (:func:`_curve`) as markers and a thin line,
+    open markers for those not in the fit (``used`` False); returns all drawn ``(x, y)`` [1], 1-D each.
+
+    Raises ``ValueError`` when no step has a positive load and contact area.
+    """
+    curves = [_curve(agg, name, bad) for name in names]
+    for i, ((x, y), u) in enumerate(zip(curves, used, strict=True)):
+        ax.plot(x, y, ls="-", lw=0.7, mfc=None if u else "none", zorder=4, **_style(i))
+    xs = np.concatenate([x for x, _ in curves])
+    ys = np.concatenate([y for _, y in curves])
+    if xs.size == 0:
+        raise ValueError("agg has no converged step with a positive load and contact area")
+    return xs, ys
+
+
+def _draw_area_fit(ax, grid: np.ndarray, fit: xr.Dataset, estimator: str, consts, constrained: bool,
+                   used: np.ndarray) -> list:
+    """The pooled CEL ``A/A0`` over the loads ``grid`` (``p0/(E* h')`` [1]; ``consts``:
+    ``(kappa, mu, beta)``) and its ``A/A0`` window as a shaded band; returns their legend entries."""
+    ax.plot(grid, cel_area(grid, kappa=consts[0], mu=consts[1], beta=consts[2], rms_slope=1.0, e_star=1.0),
+            zorder=1, **_FIT_STYLE)
+    ax.axhspan(float(fit.attrs.get("window_low", np.nan)), float(fit.attrs.get("window_high", np.nan)),
+               color="0.9", lw=0, zorder=0)
+    return [Line2D([], [], **_FIT_STYLE, label=_fit_label(estimator, consts, constrained,
+                                                          int(fit.get("n_topographies", used.sum())))),
+            _window_patch(fit)]
+
+
+def _area_load_log_axes(ax, grid: np.ndarray, ys: np.ndarray) -> None:
+    """Log-log axes with plain labels over the loads ``grid`` and the drawn ``A/A0`` ``ys`` (capped at 1)."""
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    for axis in (ax.xaxis, ax.yaxis):
+        _plain_log_labels(axis)
+    ax.set_xlim(grid[0], grid[-1])
+    ax.set_ylim(ys.min() / 1.5, min(1.0, ys.max() * 1.5))
+    ax.set_xlabel(r"$p_0/(E^* h')$ [1]")
+    ax.set_ylabel(r"$A/A_0$ [1]")
 
 
 def fig_measured_kappa(agg: xr.Dataset, fit: xr.Dataset | None = None, *, estimator: str = "paper",

@@ -212,6 +212,29 @@ def fig_surface_examples(examples: Sequence[tuple[np.ndarray, str]], *, length: 
     matplotlib.figure.Figure
         7 in wide (3.4 in for a single example), two rows.
     """
+    fields = _example_fields(examples, length, bins)
+    n = len(fields)
+    lo = min(float(h.min()) for h, _ in fields) / length
+    hi = max(float(h.max()) for h, _ in fields) / length
+    width = SINGLE_COLUMN_IN if n == 1 else DOUBLE_COLUMN_IN
+    col_w = width / n
+    with matplotlib.rc_context(_STYLE):
+        fig = _new_figure(width, col_w * 0.95 + 1.7)
+        axes = fig.subplots(2, n, squeeze=False, gridspec_kw={"height_ratios": [col_w * 0.95, 1.5]})
+        for j, (h, label) in enumerate(fields):
+            h = h / length
+            vmin, vmax = (lo, hi) if shared_scale else (float(h.min()), float(h.max()))
+            _example_map(fig, axes[0, j], h, label, vmin, vmax, first=j == 0)
+            _example_pdf(axes[1, j], h, vmin, vmax, bins, first=j == 0)
+        handles, labels = axes[1, 0].get_legend_handles_labels()
+        fig.legend(handles, labels, loc="outside lower center", ncols=2)
+    return fig
+
+
+def _example_fields(examples: Sequence[tuple[np.ndarray, str]], length: float,
+                    bins: int) -> list[tuple[np.ndarray, str]]:
+    """The checked arguments of :func:`fig_surface_examples`: ``(heights, label)`` pairs, heights as
+    finite square float arrays [u], labels as str; ``ValueError`` for a bad example, ``length`` or ``bins``."""
     examples = list(examples)
     if not 1 <= len(examples) <= 6:
         raise ValueError(f"examples must hold 1 to 6 (heights, label) pairs, got {len(examples)}")
@@ -227,37 +250,32 @@ def fig_surface_examples(examples: Sequence[tuple[np.ndarray, str]], *, length: 
         if h.ndim != 2 or h.shape[0] != h.shape[1] or not np.all(np.isfinite(h)):
             raise ValueError(f"examples[{i}] heights must be a finite square 2-D array, got shape {h.shape}")
         fields.append((h, str(item[1])))
-    n = len(fields)
-    lo = min(float(h.min()) for h, _ in fields) / length
-    hi = max(float(h.max()) for h, _ in fields) / length
-    width = SINGLE_COLUMN_IN if n == 1 else DOUBLE_COLUMN_IN
-    col_w = width / n
-    with matplotlib.rc_context(_STYLE):
-        fig = _new_figure(width, col_w * 0.95 + 1.7)
-        axes = fig.subplots(2, n, squeeze=False, gridspec_kw={"height_ratios": [col_w * 0.95, 1.5]})
-        for j, (h, label) in enumerate(fields):
-            h = h / length
-            vmin, vmax = (lo, hi) if shared_scale else (float(h.min()), float(h.max()))
-            ax = axes[0, j]
-            im = ax.imshow(h.T, origin="lower", extent=(0, 1, 0, 1), interpolation="nearest", vmin=vmin, vmax=vmax)
-            ax.set_title(label)
-            ax.set_xlabel(r"$x/L$")
-            if j == 0:
-                ax.set_ylabel(r"$y/L$")
-            cb = fig.colorbar(im, ax=ax, shrink=0.8, pad=0.02)
-            cb.ax.set_title(r"$h/L$", fontsize=7)
-            mean, std = float(h.mean()), float(h.std())
-            axh = axes[1, j]
-            axh.hist(h.ravel(), bins=bins, range=(vmin, vmax), density=True, color=DATA_COLOURS[1], alpha=0.6,
-                     label="surface")
-            axh.set_xlim(vmin, vmax)
-            grid = np.linspace(vmin, vmax, 200)
-            if std > 0:
-                axh.plot(grid, np.exp(-0.5 * ((grid - mean) / std) ** 2) / (np.sqrt(2 * np.pi) * std),
-                         color=OKABE_ITO[0], label=r"Gaussian $G(h,\bar h,\sigma)$")
-            axh.set_xlabel(r"height $h/L$")
-            if j == 0:
-                axh.set_ylabel(r"PDF of $h/L$")
-        handles, labels = axes[1, 0].get_legend_handles_labels()
-        fig.legend(handles, labels, loc="outside lower center", ncols=2)
-    return fig
+    return fields
+
+
+def _example_map(fig: Figure, ax, h: np.ndarray, label: str, vmin: float, vmax: float, first: bool) -> None:
+    """Height map ``h/L`` (``h``: (n, n), axis 0 = x) on ``[0, 1]^2`` with colour scale ``[vmin, vmax]``
+    and its colour bar; the y label only on the ``first`` panel."""
+    im = ax.imshow(h.T, origin="lower", extent=(0, 1, 0, 1), interpolation="nearest", vmin=vmin, vmax=vmax)
+    ax.set_title(label)
+    ax.set_xlabel(r"$x/L$")
+    if first:
+        ax.set_ylabel(r"$y/L$")
+    cb = fig.colorbar(im, ax=ax, shrink=0.8, pad=0.02)
+    cb.ax.set_title(r"$h/L$", fontsize=7)
+
+
+def _example_pdf(axh, h: np.ndarray, vmin: float, vmax: float, bins: int, first: bool) -> None:
+    """Density histogram of ``h/L`` (``bins`` equal bins over ``[vmin, vmax]``) against the Gaussian of
+    its own mean and standard deviation (none for a flat surface); the y label only on the ``first`` panel."""
+    mean, std = float(h.mean()), float(h.std())
+    axh.hist(h.ravel(), bins=bins, range=(vmin, vmax), density=True, color=DATA_COLOURS[1], alpha=0.6,
+             label="surface")
+    axh.set_xlim(vmin, vmax)
+    grid = np.linspace(vmin, vmax, 200)
+    if std > 0:
+        axh.plot(grid, np.exp(-0.5 * ((grid - mean) / std) ** 2) / (np.sqrt(2 * np.pi) * std),
+                 color=OKABE_ITO[0], label=r"Gaussian $G(h,\bar h,\sigma)$")
+    axh.set_xlabel(r"height $h/L$")
+    if first:
+        axh.set_ylabel(r"PDF of $h/L$")

@@ -182,24 +182,31 @@ def label_clusters(mask: np.ndarray, periodic: bool = True, *, square: bool = Tr
     """
     mask = _check_mask(mask, square)
     raw, n_raw = ndimage.label(mask, structure=_CROSS)
-    out = np.zeros(mask.shape, dtype=np.int32)
     if n_raw == 0:
-        return out, 0
+        return np.zeros(mask.shape, dtype=np.int32), 0
+    n_comp, comp = _merge_across_edges(raw, n_raw, periodic)
+    return _number_by_first_node(raw, n_raw, n_comp, comp)
 
-    # Nodes on opposite edges are neighbours on the torus: pair their labels.
+
+def _merge_across_edges(raw: np.ndarray, n_raw: int, periodic: bool) -> tuple[int, np.ndarray]:
+    """``(n_comp, comp)``: components of the raw labels ``0..n_raw`` (``comp``, shape ``(n_raw + 1,)``)
+    once labels facing each other across the x (axis 0) and y (axis 1) edges, neighbours on the torus,
+    are joined (none with ``periodic=False``); vertex 0 (background) stays isolated."""
     a = np.concatenate([raw[0, :], raw[:, 0]])
     b = np.concatenate([raw[-1, :], raw[:, -1]])
     both = (a > 0) & (b > 0)
     if not periodic:
         both[:] = False
     a, b = a[both], b[both]
-    # Vertex 0 (background) stays isolated; the graph is tiny (<= nx + ny edges) but
-    # csgraph keeps the merge O(n_raw) without a Python loop over all labels.
+    # The graph is tiny (<= nx + ny edges) but csgraph keeps the merge O(n_raw)
+    # without a Python loop over all labels.
     graph = coo_matrix((np.ones(a.size, dtype=np.int8), (a, b)), shape=(n_raw + 1, n_raw + 1))
-    n_comp, comp = connected_components(graph, directed=False)
+    return connected_components(graph, directed=False)
 
-    # Order clusters by their first node in C order, independent of how
-    # ndimage or csgraph happen to number things.
+
+def _number_by_first_node(raw: np.ndarray, n_raw: int, n_comp: int, comp: np.ndarray) -> tuple[np.ndarray, int]:
+    """``(labels, count)``: int32 labels ``1..count`` (0 off contact, shape of ``raw``) of the components
+    ``comp`` of ``raw``, ordered by their first node in C order, whatever ndimage's or csgraph's numbering."""
     flat = raw.ravel()
     nz = np.flatnonzero(flat)
     first_of_raw = np.full(n_raw + 1, flat.size, dtype=np.int64)
@@ -210,7 +217,7 @@ def label_clusters(mask: np.ndarray, periodic: bool = True, *, square: bool = Tr
     ordered = present[np.argsort(first_of_comp[present], kind="stable")]
     new_id = np.zeros(n_comp, dtype=np.int32)
     new_id[ordered] = np.arange(1, ordered.size + 1, dtype=np.int32)
-
+    out = np.zeros(raw.shape, dtype=np.int32)
     out.ravel()[nz] = new_id[comp[flat[nz]]]
     return out, int(ordered.size)
 
@@ -313,20 +320,24 @@ def cluster_statistics(mask: np.ndarray, length=1.0, periodic: bool = True) -> d
     px = np.bincount(labels.ravel(), minlength=count + 1)[1:].astype(np.int64)
     px = np.sort(px)[::-1]
     areas = px / n_total
-    if square:
-        physical = areas * length**2
-    else:
-        (lx, ly), (nx, ny) = length, labels.shape
-        physical = px * ((lx / nx) * (ly / ny))  # pixel area dx * dy
     return {
         "count": int(count),
         "areas": areas,
         "areas_pixels": px,
-        "areas_physical": physical,
+        "areas_physical": _physical_areas(areas, px, length, labels.shape),
         "mean_area": float(areas.mean()) if count else 0.0,
         "max_area": float(areas[0]) if count else 0.0,
         "n_total_pixels": int(n_total),
     }
+
+
+def _physical_areas(areas: np.ndarray, px: np.ndarray, length, shape: tuple[int, int]) -> np.ndarray:
+    """Cluster areas in [length**2] from ``areas`` (fractions of A0) or ``px`` (node counts): ``areas * L**2``
+    for a float ``length``, else ``px * dx * dy`` on the grid ``shape = (nx, ny)`` of sides ``(Lx, Ly)``."""
+    if np.ndim(length) == 0:
+        return areas * length**2
+    (lx, ly), (nx, ny) = length, shape
+    return px * ((lx / nx) * (ly / ny))  # pixel area dx * dy
 
 
 def _to_mask(field, index: int, square: bool = True) -> np.ndarray:
@@ -402,15 +413,20 @@ def cluster_dataset(masks_or_pressures: Iterable, steps, length, bins=None,
     length = _cell_length(length, masks[0].shape)
     n_total = masks[0].size
     edges = default_area_bins(n_total) if bins is None else _check_edges(bins)
+    return xr.Dataset(_cluster_variables(masks, length, periodic, edges),
+                      coords=_cluster_coords(steps, edges),
+                      attrs=_cluster_attrs(length, length_units, masks[0].shape, periodic))
+
+
+def _cluster_attrs(length, length_units: str, shape: tuple[int, int], periodic: bool) -> dict:
+    """Global attributes of :func:`cluster_dataset`: the cell (sides, grid) and how clusters were labelled."""
     boundary = "periodic" if periodic else "free"
-    nx, ny = masks[0].shape
+    nx, ny = shape
     if np.ndim(length) == 0:
         cell = {"length": length, "length_units": length_units, "n": int(nx)}
     else:
         cell = {"length_x": length[0], "length_y": length[1], "length_units": length_units}
-    attrs = {**cell, "nx": int(nx), "ny": int(ny), "cluster_connectivity": 4, "cluster_boundary": boundary}
-    return xr.Dataset(_cluster_variables(masks, length, periodic, edges),
-                      coords=_cluster_coords(steps, edges), attrs=attrs)
+    return {**cell, "nx": int(nx), "ny": int(ny), "cluster_connectivity": 4, "cluster_boundary": boundary}
 
 
 def _fields_and_steps(masks_or_pressures: Iterable, steps, square: bool = True) -> tuple[list[np.ndarray], np.ndarray]:

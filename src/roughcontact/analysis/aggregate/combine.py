@@ -272,6 +272,25 @@ def combine_cases(datasets: Sequence[xr.Dataset], names: Sequence[str], *,
         expected. Naming the case: an expected case has no dataset. Never fills a missing
         expected case with NaN.
     """
+    datasets, names = _checked_inputs(datasets, names, kind)
+    keys = _case_keys(datasets, names, kind)
+    expected_set = _expected_cases(keys, names, expected)
+    axes, positions, present_mask = _grid_layout(keys, expected_set)
+    ref = datasets[0]
+    coords = _grid_coords(axes, ref)
+    has_holes = not present_mask.all()
+    data_vars = {var: _stack_variable(var, datasets, names, positions, present_mask.shape, has_holes)
+                 for var in sorted(set(ref.data_vars))}
+    data_vars["case_present"] = xr.Variable(CASE_DIMS, present_mask, attrs={
+        "units": "1", "long_name": "a dataset exists for this case (False: grid hole, not expected)"})
+    attrs = _shared_attrs(datasets)
+    attrs["n_cases"] = len(datasets)
+    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+
+
+def _checked_inputs(datasets: Sequence[xr.Dataset], names: Sequence[str],
+                    kind: str) -> tuple[list[xr.Dataset], list[str]]:
+    """``datasets`` and ``names`` (as str) as lists, after checking ``kind`` and that they pair up, non-empty."""
     if kind not in _KINDS:
         raise ValueError(f"kind must be one of {sorted(_KINDS)}, got {kind!r}")
     datasets = list(datasets)
@@ -281,32 +300,23 @@ def combine_cases(datasets: Sequence[xr.Dataset], names: Sequence[str], *,
                          f"and {len(names)}")
     if not datasets:
         raise ValueError("datasets is empty: nothing to combine")
+    return datasets, names
 
-    keys = _case_keys(datasets, names, kind)
-    present = set(keys)
-    expected_set = _expected_cases(keys, names, expected)
 
-    # The grid spans the expected cases too, so that a hole stays visible as one.
-    axes = [sorted({k[i] for k in present | expected_set}) for i in range(4)]
+def _grid_layout(keys: Sequence[tuple], expected_set: set[tuple]) -> tuple[list[list], list[tuple], np.ndarray]:
+    """The case grid: its ``axes``, each key's grid index and the bool mask of the cases present.
+
+    The grid spans the expected cases too, so that a hole stays visible as one: ``axes`` holds
+    the sorted values of ``k_l, k_s, H, seed`` over ``keys`` and ``expected_set``;
+    ``positions[i]`` is the index of ``keys[i]``; the mask has shape ``(len(ax) for ax in axes)``.
+    """
+    axes = [sorted({k[i] for k in set(keys) | expected_set}) for i in range(4)]
     index = [{v: j for j, v in enumerate(ax)} for ax in axes]
-    grid_shape = tuple(len(ax) for ax in axes)
     positions = [tuple(index[i][key[i]] for i in range(4)) for key in keys]
-    has_holes = len(present) < int(np.prod(grid_shape))
-
-    present_mask = np.zeros(grid_shape, dtype=bool)
+    present_mask = np.zeros(tuple(len(ax) for ax in axes), dtype=bool)
     for pos in positions:
         present_mask[pos] = True
-
-    ref = datasets[0]
-    coords = _grid_coords(axes, ref)
-    data_vars = {var: _stack_variable(var, datasets, names, positions, grid_shape, has_holes)
-                 for var in sorted(set(ref.data_vars))}
-    data_vars["case_present"] = xr.Variable(CASE_DIMS, present_mask, attrs={
-        "units": "1", "long_name": "a dataset exists for this case (False: grid hole, not expected)"})
-
-    attrs = _shared_attrs(datasets)
-    attrs["n_cases"] = len(datasets)
-    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+    return axes, positions, present_mask
 
 
 def combine_topographies(datasets: Sequence[xr.Dataset], names: Sequence[str], *, expected: Sequence[str],

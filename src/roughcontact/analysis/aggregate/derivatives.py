@@ -91,42 +91,59 @@ def load_derivative(values: np.ndarray, p0: np.ndarray, *, order: int = 2,
     numpy.ndarray, shape of ``values``
         Derivative [unit of values / unit of p0].
     """
-    if order not in (2, 4):
-        raise ValueError(f"order must be 2 or 4, got {order!r}")
-    if variable not in DERIVATIVE_VARIABLES:
-        raise ValueError(f"variable must be one of {DERIVATIVE_VARIABLES}, got {variable!r}")
+    _check_stencil(order, variable)
     v = np.asarray(values, dtype=float)
     p = np.broadcast_to(np.asarray(p0, dtype=float), v.shape)
     n = v.shape[-1]
-    width = order + 1
-    if n < width:
-        raise ValueError(f"need >= {width} load steps for order-{order} differences, got {n}")
-    flat_v = v.reshape(-1, n)
-    flat_p = p.reshape(-1, n)
+    if n < order + 1:
+        raise ValueError(f"need >= {order + 1} load steps for order-{order} differences, got {n}")
+    flat_v, flat_p = v.reshape(-1, n), p.reshape(-1, n)
     out = np.full_like(flat_v, np.nan)
-    cache: dict[bytes, np.ndarray] = {}
+    cache: dict[bytes, np.ndarray] = {}  # one weight matrix per load schedule: cases usually share theirs
     for i in range(flat_v.shape[0]):
         pi = flat_p[i]
         if np.all(np.isnan(pi)):
             continue
-        if not (np.all(np.isfinite(pi)) and np.all(np.diff(pi) > 0)):
-            raise ValueError(f"p0 must be finite and strictly increasing along the load steps, got {pi!r}")
-        if variable == "log_p0" and pi[0] <= 0:
-            raise ValueError(f"p0 must be > 0 to difference in ln p0, got {pi!r}")
+        _check_load_steps(pi, variable)
         key = pi.tobytes()
         if key not in cache:
-            # One weight matrix per load schedule: cases usually share theirs.
-            x = np.log(pi) if variable == "log_p0" else pi
-            W = np.zeros((n, n))
-            half = order // 2
-            for j in range(n):
-                lo = min(max(j - half, 0), n - width)
-                W[j, lo:lo + width] = fd_weights(x[j], x[lo:lo + width])
-            if variable == "log_p0":
-                W /= pi[:, None]
-            cache[key] = W
+            cache[key] = _derivative_matrix(pi, order, variable)
         out[i] = cache[key] @ flat_v[i]
     return out.reshape(v.shape)
+
+
+def _check_stencil(order: int, variable: str) -> None:
+    """Raise ``ValueError`` unless ``order`` is 2 or 4 and ``variable`` one of :data:`DERIVATIVE_VARIABLES`."""
+    if order not in (2, 4):
+        raise ValueError(f"order must be 2 or 4, got {order!r}")
+    if variable not in DERIVATIVE_VARIABLES:
+        raise ValueError(f"variable must be one of {DERIVATIVE_VARIABLES}, got {variable!r}")
+
+
+def _check_load_steps(p0_row: np.ndarray, variable: str) -> None:
+    """Raise ``ValueError`` unless the loads ``p0_row`` (n_steps,) rise strictly, finite (> 0 for ``log_p0``)."""
+    if not (np.all(np.isfinite(p0_row)) and np.all(np.diff(p0_row) > 0)):
+        raise ValueError(f"p0 must be finite and strictly increasing along the load steps, got {p0_row!r}")
+    if variable == "log_p0" and p0_row[0] <= 0:
+        raise ValueError(f"p0 must be > 0 to difference in ln p0, got {p0_row!r}")
+
+
+def _derivative_matrix(p0_row: np.ndarray, order: int, variable: str) -> np.ndarray:
+    """Matrix ``W``, shape (n_steps, n_steps), with ``W @ values = d values / d p0`` on the loads ``p0_row``.
+
+    Row ``j`` holds the ``order + 1`` Fornberg weights (:func:`fd_weights`) of the stencil
+    centred on step ``j``, shifted to one side at the two ends; with ``variable="log_p0"`` the
+    weights are taken in ``ln p0`` and divided by ``p0`` (chain rule) [1 / unit of p0].
+    """
+    n, width, half = p0_row.size, order + 1, order // 2
+    x = np.log(p0_row) if variable == "log_p0" else p0_row
+    W = np.zeros((n, n))
+    for j in range(n):
+        lo = min(max(j - half, 0), n - width)
+        W[j, lo:lo + width] = fd_weights(x[j], x[lo:lo + width])
+    if variable == "log_p0":
+        W /= p0_row[:, None]
+    return W
 
 
 def log_window_edges(area: np.ndarray, per_decade: int = 6, min_points: int = 2) -> np.ndarray:
