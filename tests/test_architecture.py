@@ -124,15 +124,11 @@ def upward_imports(graph: dict[str, set[str]], layers: dict[str, int] = LAYERS) 
 
 
 def long_functions(source: str, limit: int = MAX_FUNCTION_LINES) -> list[tuple[str, int]]:
-    """Functions whose code, from the first statement after the docstring to the end, spans over ``limit`` lines."""
+    """Functions spanning over ``limit`` lines, from the ``def`` line to the last, docstring included."""
     out = []
     for node in ast.walk(ast.parse(source)):
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
-            body = node.body
-            if (len(body) > 1 and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant)
-                    and isinstance(body[0].value.value, str)):
-                body = body[1:]
-            n = node.end_lineno - body[0].lineno + 1
+            n = node.end_lineno - node.lineno + 1
             if n > limit:
                 out.append((node.name, n))
     return out
@@ -203,9 +199,9 @@ def test_checker_finds_a_cycle_and_an_upward_import():
         rank("roughcontact.attic.old")
 
 
-def test_checker_counts_code_lines_after_the_docstring():
-    body = "".join(f"    x{i} = {i}\n" for i in range(60))
-    assert long_functions(f'def f():\n    """Doc\n\n    more.\n    """\n{body}') == []
-    assert long_functions(f"def g():\n    y = 0\n{body}") == [("g", 61)]
+def test_checker_counts_whole_functions():
+    body = "".join(f"    x{i} = {i}\n" for i in range(59))
+    assert long_functions(f"def f():\n{body}") == []
+    assert long_functions(f'def f():\n    """Doc."""\n{body}') == [("f", 61)]
     assert long_functions(f"def outer():\n    def inner():\n{body.replace('    ', '        ')}        pass\n"
                           "    return inner\n") == [("outer", 63), ("inner", 61)]
