@@ -11,7 +11,8 @@ from roughcontact.pipeline.progress import planned_solves
 from roughcontact.pipeline.sources import SOURCES, PatchSource, Source, for_case, for_dims, register, source_of
 from roughcontact.surfaces.synthetic import generate_surface
 
-GENERATED_CONTACT = {"surface": {"N": 32, "rms_slope": 0.1}, "grid": {"k_l": ["2"], "k_s": ["8"], "H": ["0.5"]}, "seeds": 2}
+GENERATED_CONTACT = {"surface": {"N": 32, "rms_slope": 0.1}, "grid": {"k_l": ["2"], "k_s": ["8"], "H": ["0.5"]},
+                     "seeds": 2}
 
 
 def _heights(n=32, seed=0):
