@@ -119,6 +119,7 @@ BAD_FILES = [
     ("cube.npy", np.zeros((4, 4, 4)), 0.5, "shape (4, 4, 4)", "2-D height map"),
     ("nan.npy", np.where(np.eye(8) > 0, np.nan, 0.0), 0.5, "8 of 64 heights are NaN or infinite", "fill or crop"),
     ("inf.npy", np.full((8, 8), np.inf), 0.5, "64 of 64 heights are NaN or infinite", "fill or crop"),
+    ("flat.npy", np.ones((8, 8)), 0.5, "every height is 1.0: a flat map has no roughness", "save the surface"),
     ("complex.npy", np.zeros((8, 8), complex), 0.5, "complex128 values", "astype(float)"),
     ("zero-pixel.npy", np.zeros((8, 8)), [0.5, 0.0], "pixel_size [0.5, 0.0] must be positive", "[dx, dy]"),
     ("negative-pixel.npy", np.zeros((8, 8)), -1.0, "pixel_size -1.0 must be positive", "[dx, dy]"),

@@ -17,8 +17,8 @@ is: a non-periodic patch (:mod:`.patches`), solved with the scene's ``contact.so
 surface), its load relative to its rms slope, and fitted and drawn as measured files are.
 
 Every file is checked when the scene is validated, before any job: it must exist, be a ``.npy``
-file NumPy reads without pickles, hold a 2-D real array of at least 4 x 4 finite values, and have
-a positive pixel size; each error names the scene, the field, the file and the remedy.
+file NumPy reads without pickles, hold a 2-D real array of at least 4 x 4 finite values that are
+not all equal, and have a positive pixel size; each error names the scene, the field, the file and the remedy.
 """
 
 from __future__ import annotations
@@ -77,6 +77,9 @@ def load_heights(path: str, pixel_size, *, mmap: bool = False) -> np.ndarray:
         raise ArrayError(f"{path!r}: {bad} of {h.size} heights are NaN or infinite: fill or crop them before "
                          "saving (a plain array has no undefined-point handling; a measured file with undefined "
                          "points can go in a topography block instead)")
+    if not np.ptp(h) > 0:
+        raise ArrayError(f"{path!r}: every height is {h.flat[0]}: a flat map has no roughness to study; "
+                         "save the surface's heights")
     return h
 
 
