@@ -11,7 +11,9 @@ load relative to each surface's rms slope. The generator's study keys (``surface
 it inherits from ``defaults`` are dropped.
 
 A source here subclasses :class:`PatchSource` and supplies ``name``/``key``, ``check_files``
-(its block checked and expanded), ``reader_settings`` and ``read``.
+(its block checked and expanded), ``reader_settings`` and ``read``. Its reader settings name it
+(``"source": name``): the ``topography`` rule's script finds the builder by that key, and a
+measured file's settings, which omit it (files made before the registry record them so), by default.
 """
 
 from __future__ import annotations
