@@ -1,6 +1,8 @@
 # Shared set-up: validate the config (every scene) before any job is planned, expose
-# the scenes, and check every requested file's wildcards against its scene (a mistyped
-# target fails at once, naming the wildcard, its value and the scene's allowed values).
+# the scenes and their surface sources (roughcontact.pipeline.sources: the rules ask a scene's
+# source for its cases, file names and readers), and check every requested file's wildcards
+# against its scene (a mistyped target fails at once, naming the wildcard, its value and the
+# scene's allowed values).
 from pathlib import Path
 
 from roughcontact.figures.registry import FIGURES, scene_figures
@@ -9,14 +11,12 @@ from roughcontact.pipeline.config import (
     BATCH_STEM,
     CASE_STEM,
     ConfigError,
-    batches,
-    cases,
     check_config_files,
     load_schema,
     plan_summary,
     validate_config,
 )
-from roughcontact.pipeline.measured import is_measured, reader_settings, topography_names
+from roughcontact.pipeline.sources import SOURCES, PatchSource, source_of
 from roughcontact.pipeline.progress import write_plan
 from roughcontact.studies.accuracy import variants as accuracy_variants
 
@@ -48,7 +48,7 @@ def batch_path(folder, ext="nc"):
 
 
 def topography_path(folder, ext="nc"):
-    """Pattern of one measured case's file: ``results/{scene}/<folder>/{topography}.<ext>``."""
+    """Pattern of one named case's file (a patch source's: measured, array, ...): ``results/{scene}/<folder>/{topography}.<ext>``."""
     return f"results/{{scene}}/{folder}/{{topography}}.{ext}"
 
 
@@ -56,8 +56,8 @@ def topography_path(folder, ext="nc"):
 # target of the right shape reaches its rule, whose input function (below) then names a wrong
 # value with the scene's allowed ones. Constraints built from the configured values would leave
 # Snakemake's bare MissingRuleException instead. The shapes keep file names unambiguous: a grid
-# value holds no '_' or '/', a seed only digits, and a topography name never looks like a
-# generated case's or batch's file (roughcontact.pipeline.measured refuses such names in the config).
+# value holds no '_' or '/', a seed only digits, and a named case (wildcard topography) never looks
+# like a generated case's or batch's file (roughcontact.pipeline.measured refuses such names in the config).
 GRID_VALUE = r"[^_/]+"
 NOT_GENERATED = r"(?!kl[^_/]*(?:_ks[^_/]*)?_H[^_/]*(?:_s\d+)?\.[^./]+$)"
 
@@ -82,10 +82,14 @@ def scene_of(name):
     return SCENES[name]
 
 
-def measured_names(name):
-    """The topography names of scene ``name``, sorted; [] for a generated scene."""
-    scene = scene_of(name)
-    return topography_names(scene) if is_measured(scene) else []
+def scene_source(name):
+    """The surface source of scene ``name`` (roughcontact.pipeline.sources)."""
+    return source_of(scene_of(name))
+
+
+def patch_names(name):
+    """The named cases of scene ``name`` (a patch source's files), sorted; [] for a generated scene."""
+    return scene_source(name).names(SCENES[name])
 
 
 def study_block(scene, study):
@@ -109,13 +113,14 @@ def _not_allowed(scene, where, key, value, allowed):
 
 
 def _generated_block(scene, study):
-    """The study block of a generated scene; a measured scene's cases are its topography files."""
+    """The study block of a scene whose cases are the generator's; a patch source's cases are its files."""
     block = study_block(scene, study)
-    if is_measured(SCENES[scene]):
+    src = scene_source(scene)
+    if src.stem != CASE_STEM:
         raise WorkflowError(
-            f"scene {scene!r} runs on measured surfaces: its {study} cases are named by topography file "
+            f"scene {scene!r} runs on {src.name} surfaces: its {study} cases are named by {src.key} file "
             f"(results/{scene}/<stage>/<name>.nc), not kl.._ks.._H.._s..; allowed names: "
-            f"{', '.join(topography_names(SCENES[scene]))}"
+            f"{', '.join(src.names(SCENES[scene]))}"
         )
     return block
 
@@ -178,20 +183,15 @@ def batch_params(study, provider):
 
 
 def batch_files(scene, study, folder):
-    """Paths of the ``folder`` files of every batch of ``study`` in ``scene`` (measured: every file)."""
-    if is_measured(SCENES[scene]):
-        return case_files(scene, study, folder)
-    return [
-        f"results/{scene}/{folder}/{BATCH_STEM.format(k_l=kl, H=h)}.nc" for kl, h in batches(study_block(scene, study))
-    ]
+    """Paths of the ``folder`` files of every batch of ``study`` in ``scene`` (a patch source: every file)."""
+    study_block(scene, study)
+    return [f"results/{scene}/{folder}/{stem}.nc" for stem in scene_source(scene).batch_stems(SCENES[scene], study)]
 
 
 def case_files(scene, study, folder):
-    """Paths of the ``folder`` files of every case of ``study`` in ``scene`` (generated or measured)."""
-    block = study_block(scene, study)
-    if is_measured(SCENES[scene]):
-        return [f"results/{scene}/{folder}/{name}.nc" for name in topography_names(SCENES[scene])]
-    return [f"results/{scene}/{folder}/{c.stem}.nc" for c in cases(block)]
+    """Paths of the ``folder`` files of every case of ``study`` in ``scene``, as its source names them."""
+    study_block(scene, study)
+    return [f"results/{scene}/{folder}/{stem}.nc" for stem in scene_source(scene).stems(SCENES[scene], study)]
 
 
 def case_params(study, provider):
@@ -205,29 +205,29 @@ def study_params(study, provider):
 
 
 def case_list(study):
-    """A params function: the scene's cases of ``study``: ``[k_l, k_s, H, seed]`` each, or topography names."""
+    """A params function: the scene's cases of ``study``: ``[k_l, k_s, H, seed]`` each, or a patch source's names."""
 
     def cases_of(w):
-        block = study_block(w.scene, study)
-        if is_measured(SCENES[w.scene]):
-            return topography_names(SCENES[w.scene])
-        return [[c.k_l, c.k_s, c.H, c.seed] for c in cases(block)]
+        study_block(w.scene, study)
+        return scene_source(w.scene).case_list(SCENES[w.scene], study)
 
     return cases_of
 
 
 def check_topography(w, study=None):
-    """The measured scene of the job, once its ``topography`` wildcard is checked (and its study exists)."""
-    scene = scene_of(w.scene)
-    if not is_measured(scene):
+    """The scene of a job on a named case (a patch source's), once its ``topography`` wildcard is checked
+    (and its study exists)."""
+    scene, src = scene_of(w.scene), scene_source(w.scene)
+    if not issubclass(src, PatchSource):
+        blocks = " nor ".join(f"{s.key} block" for s in SOURCES.values() if issubclass(s, PatchSource))
         raise WorkflowError(
-            f"scene {w.scene!r} has no topography block, so it has no measured case {w.topography!r}; "
+            f"scene {w.scene!r} has no {blocks}, so it has no named case {w.topography!r}; "
             "its cases' files are named kl{k_l}_ks{k_s}_H{H}_s{seed}.nc (representativity: kl{k_l}_H{H}.nc)"
         )
-    if w.topography not in scene["topography"]["files"]:
+    if w.topography not in src.names(scene):
         raise WorkflowError(
-            f"scene {w.scene!r}: wildcard topography={w.topography} is not one of its topography files; "
-            f"allowed: {', '.join(topography_names(scene))}"
+            f"scene {w.scene!r}: wildcard topography={w.topography} is not one of its {src.key} files; "
+            f"allowed: {', '.join(src.names(scene))}"
         )
     if study is not None:
         study_block(w.scene, study)
@@ -235,8 +235,8 @@ def check_topography(w, study=None):
 
 
 def topography_file(w):
-    """The measured file a topography job reads (its input, so a changed file is read again)."""
-    return check_topography(w)["topography"]["files"][w.topography]["path"]
+    """The file a named case's surface job reads (its input, so a changed file is read again)."""
+    return scene_source(w.scene).input_file(check_topography(w), w.topography)
 
 
 def topography_input(folder, study):
@@ -250,9 +250,9 @@ def topography_input(folder, study):
 
 
 def topography_params(study=None, provider=None):
-    """A params function: the reader settings of the job's file, or ``provider`` of its study block."""
+    """A params function: the reader settings of the job's file (its source's), or ``provider`` of its study block."""
     if provider is None:
-        return lambda w: reader_settings(check_topography(w), w.topography)
+        return lambda w: scene_source(w.scene).reader_settings(check_topography(w), w.topography)
     return lambda w: provider(check_topography(w, study)[study])
 
 
@@ -331,7 +331,7 @@ def contact_runtime_min(n, n_steps):
 
 
 def measured_mem_mb(w):
-    """Peak memory of a job on one measured file [MB]: interpreter + ~160 doubles per stored value.
+    """Peak memory of a job on one named case's file [MB]: interpreter + ~160 doubles per stored value.
 
     The grid size is only known once the file is read; a file stores at least 2 bytes a point,
     and the free-boundary solver works on the 2n x 2n padded grid (4x the periodic ~40 doubles).

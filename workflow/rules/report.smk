@@ -11,11 +11,11 @@ localrules:
 rule report_summary:
     input:
         fit=lambda w: [f"results/{w.scene}/fit/cel.csv"] if "contact" in scene_of(w.scene) else [],
-        # a measured scene's table of its files: each surface, and the loads they received
-        surfaces=lambda w: [f"results/{w.scene}/surfaces/{name}.nc" for name in measured_names(w.scene)],
+        # a patch source's table of its files (measured, array, ...): each surface, and the loads they received
+        surfaces=lambda w: [f"results/{w.scene}/surfaces/{name}.nc" for name in patch_names(w.scene)],
         contact=lambda w: (
             [f"results/{w.scene}/aggregate/contact.nc"]
-            if measured_names(w.scene) and "contact" in scene_of(w.scene)
+            if patch_names(w.scene) and "contact" in scene_of(w.scene)
             else []
         ),
     output:

@@ -1,7 +1,7 @@
 """Aggregate: join every contact case of a scene into one dataset with seed statistics."""
-from roughcontact.analysis import aggregate
 from roughcontact.pipeline import provenance
 from roughcontact.pipeline.io import read_dataset, run_logged, write_dataset
+from roughcontact.pipeline.sources import for_dims
 
 REQUIRED = ["pressure", "area_fraction", "mean_contact_pressure", "kappa", "converged", "rms_slope"]
 
@@ -9,13 +9,8 @@ REQUIRED = ["pressure", "area_fraction", "mean_contact_pressure", "kappa", "conv
 def main(log):
     paths = list(snakemake.input)
     datasets = [read_dataset(p, stage="contact", variables=REQUIRED) for p in paths]
-    cases = snakemake.params.cases
-    if cases and isinstance(cases[0], str):  # measured surfaces: cases are named by their files
-        ds = aggregate.add_derived(aggregate.combine_topographies(datasets, paths, expected=cases))
-    else:
-        expected = [(float(kl), float(ks), float(h), int(s)) for kl, ks, h, s in cases]
-        ds = aggregate.add_derived(aggregate.combine_cases(datasets, paths, expected=expected))
-        ds = ds.merge(aggregate.seed_statistics(ds))
+    # the surface source whose case dimensions the files have stacks them (with its statistics)
+    ds = for_dims(datasets[0].dims).aggregate(datasets, paths, snakemake.params.cases)
     ds, common, varying = provenance.attach_settings(ds, datasets)
     if varying:
         log.warning("cases were solved with different settings: %s; each case's value is in the "

@@ -1,26 +1,20 @@
 """Aggregate: join every representativity case of a scene, with mean and error over seeds."""
-from roughcontact.analysis import aggregate
 from roughcontact.pipeline import provenance
-from roughcontact.pipeline.datasets import split_cases
 from roughcontact.pipeline.io import read_dataset, run_logged, write_dataset
+from roughcontact.pipeline.sources import for_dims
 
 
 def main(log):
-    cases = snakemake.params.cases
-    if cases and isinstance(cases[0], str):  # measured surfaces: one file per topography
-        paths = list(snakemake.input)
-        datasets = [read_dataset(p, stage="representativity", variables=["epsilon"]) for p in paths]
-        ds = aggregate.combine_topographies(datasets, paths, expected=cases, kind="representativity")
-    else:
-        datasets, paths = [], []
-        for path in snakemake.input:
-            batch = read_dataset(path, stage="representativity", variables=["epsilon"])
-            for one in split_cases(batch):
-                datasets.append(one)
-                paths.append(f"{path} (k_s {one.k_s.values[0]:g}, seed {int(one.seed.values[0])})")
-        expected = [(float(kl), float(ks), float(h), int(s)) for kl, ks, h, s in cases]
-        ds = aggregate.combine_cases(datasets, paths, expected=expected, kind="representativity")
-        ds = ds.merge(aggregate.representativity_statistics(ds))
+    # the surface source whose case dimensions the files have splits them into cases (a generated
+    # scene's files are (k_l, H) batches) and stacks them, with its statistics
+    datasets, paths, source = [], [], None
+    for path in snakemake.input:
+        batch = read_dataset(path, stage="representativity", variables=["epsilon"])
+        source = source or for_dims(batch.dims)
+        for one, label in source.unbatch(path, batch):
+            datasets.append(one)
+            paths.append(label)
+    ds = source.aggregate(datasets, paths, snakemake.params.cases, kind="representativity")
     ds, common, varying = provenance.attach_settings(ds, datasets)
     if varying:
         log.warning("cases were computed with different settings: %s; each case's value is in the "

@@ -9,14 +9,13 @@ from roughcontact.pipeline.io import eta, read_dataset, run_logged, write_datase
 from roughcontact.pipeline.loading import case_loads
 from roughcontact.pipeline.params import recorded, require_made_for
 from roughcontact.pipeline.progress import scene_progress
+from roughcontact.pipeline.sources import for_case
 from roughcontact.solver import effects_from_config, solve_contact, step_notes
 
 
 def case_of(w) -> dict:
-    """The job's case: a measured file's name, or a generated case's (k_l, k_s, H, seed)."""
-    if "topography" in w.keys():
-        return {"topography": w.topography}
-    return {"k_l": w.k_l, "k_s": w.k_s, "H": w.H, "seed": w.seed}
+    """The job's case: its wildcards but the scene (a generated case's k_l, k_s, H, seed; a named case's topography)."""
+    return {key: getattr(w, key) for key in w.keys() if key != "scene"}
 
 
 def labels_of(case: dict) -> dict:
@@ -28,9 +27,8 @@ def main(log):
     w, settings = snakemake.wildcards, snakemake.params.settings
     case = case_of(w)
     surf = read_dataset(snakemake.input[0], stage="surface", variables=["heights", "rms_slope", "alpha"])
-    # a generated surface records its generator block, a measured one its reader settings
-    source = "topography" if "topography" in case else "surface"
-    require_made_for(surf, snakemake.input[0], case, **{source: snakemake.params.surface})
+    # a surface records what it was made with under its source's key (generator block, reader settings)
+    require_made_for(surf, snakemake.input[0], case, **{for_case(case).record_key: snakemake.params.surface})
     heights, length = surface_heights(surf, snakemake.input[0])
     solver = settings["solver"]
     solve = partial(

@@ -1,19 +1,22 @@
 """Fit the contact evolution law (kappa, mu, beta) with bootstrap uncertainty.
 
-A generated scene's aggregate (dims k_l, k_s, H, seed, step) is fitted per (k_l, k_s, H) and pooled
-over H by fit.fit_cel; a measured scene's (dims topography, step) by fit.fit_topographies, all its
-topographies pooled as one surface type.
+The surface source whose case dimensions the aggregate has says which fit
+(roughcontact.pipeline.sources): a generated scene's aggregate (dims k_l, k_s, H, seed, step) is fitted
+per (k_l, k_s, H) and pooled over H by fit.fit_cel ("grid"); a patch source's (measured, array, ...:
+dims topography, step) by fit.fit_topographies ("topographies"), all its patches pooled as one
+surface type.
 """
 from roughcontact.analysis import fit
 from roughcontact.analysis.aggregate import TOPOGRAPHY_DIM
 from roughcontact.core.files import write_text_atomic
 from roughcontact.pipeline.io import read_dataset, run_logged, write_dataset
+from roughcontact.pipeline.sources import for_dims
 
 
 def main(log):
     cfg = snakemake.params.fit
     agg = read_dataset(snakemake.input[0], stage="aggregate", variables=["area_fraction", "pressure"])
-    measured = TOPOGRAPHY_DIM in agg.dims
+    measured = for_dims(agg.dims).fit == "topographies"
     cases = "topographies" if measured else "(k_l, k_s, H, seed)"
     if not cfg["include_unconverged"]:
         agg, excluded = fit.exclude_unconverged(agg)

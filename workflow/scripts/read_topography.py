@@ -1,19 +1,19 @@
-"""Stage 1 (measured): read one topography file and write it as a surface with its statistics."""
+"""Stage 1 (a patch source: measured, array, ...): read one named case's file and write it as a surface
+with its statistics. The source's ``read`` builder reads it (roughcontact.pipeline.sources); its reader
+settings name the source (``source``), a measured file's settings by omission (files made before the
+registry record them so)."""
 import json
 
 from roughcontact.pipeline.datasets import measured_surface_dataset
 from roughcontact.pipeline.io import run_logged, write_dataset
-from roughcontact.surfaces.topography import WARN_UNDEFINED, read_topography
+from roughcontact.pipeline.sources import SOURCES
+from roughcontact.surfaces.topography import WARN_UNDEFINED
 
 
 def main(log):
     w, s = snakemake.wildcards, snakemake.params.settings
-    measured = read_topography(
-        s["path"], unit=s["unit"], file_unit=s.get("file_unit"), physical_size=s.get("physical_size"),
-        undefined=s["undefined"], detrend=s["detrend"], non_square=s["non_square"], channel=s["channel"],
-        max_undefined=s["max_undefined"], format=s.get("format"),
-    )
-    if measured.info["undefined_fraction"] > WARN_UNDEFINED:
+    measured = SOURCES[s.get("source", "measured")].read(s)
+    if measured.info.get("undefined_fraction", 0.0) > WARN_UNDEFINED:
         log.warning("%s: %.1f%% of the points are undefined (not measured) and were filled (%s); the map's "
                     "statistics and contact there are the fill's", w.topography,
                     100 * measured.info["undefined_fraction"], s["undefined"])

@@ -7,9 +7,10 @@ which scene block the figure needs, which files it reads, how it is drawn and wh
 report caption lives. A new figure is one entry here and one caption file in
 ``workflow/report/``.
 
-A measured scene (one with a ``topography`` block: its cases are topography files named by
-strings) gets only the figures marked ``measured`` (:mod:`roughcontact.figures.measured`), and a
-generated scene only the others: the generator's figures index cases by ``(k_l, k_s, H, seed)``.
+A scene gets the figures of the kind its surface source draws (:mod:`roughcontact.pipeline.sources`,
+``Source.figures``): a patch source's scene (measured, array, ...: its cases are files named by
+strings) the figures with ``cases="patches"`` (:mod:`roughcontact.figures.measured`), a generated
+scene those with ``cases="grid"``: the generator's figures index cases by ``(k_l, k_s, H, seed)``.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from matplotlib.figure import Figure
 
 from ..pipeline.config.scenes import CASE_STEM
 from ..pipeline.io import read_dataset
-from ..pipeline.measured import is_measured, topography_names
+from ..pipeline.sources import source_of
 from . import measured as plots_measured
 from .accuracy import fig_accuracy
 from .area_load import fig_area_load
@@ -45,7 +46,7 @@ class FigureSpec:
         ``measured`` figure the study it belongs to, while ``wanted`` decides.
     inputs : callable
         ``inputs(block) -> {role: path or [paths]}`` from the validated study block (the whole
-        validated scene if ``measured``), paths relative to ``results/{scene}/``.
+        validated scene for ``cases="patches"``), paths relative to ``results/{scene}/``.
     render : callable
         ``render({role: path or [paths]}) -> Figure``: reads the files, draws the figure.
     category : str
@@ -54,11 +55,12 @@ class FigureSpec:
         Caption file (reStructuredText) in ``workflow/report/``.
     wanted : callable
         ``wanted(block) -> bool``: whether a scene with this study block asks for the figure;
-        ``wanted(scene)`` if ``measured``.
-    measured : bool
-        A figure of measured scenes (those with a ``topography`` block), and only of them. Its
-        ``inputs`` and ``wanted`` take the whole scene: the topographies' names live outside
-        the study blocks, and the topography maps are made for whichever study the scene has.
+        ``wanted(scene)`` for ``cases="patches"``.
+    cases : str
+        The kind of scene it draws: ``"grid"`` (generated cases) or ``"patches"`` (a patch
+        source's named files), matched against the scene source's ``figures``. A patches figure's
+        ``inputs`` and ``wanted`` take the whole scene: the patches' names live outside the study
+        blocks, and the topography maps are made for whichever study the scene has.
     """
 
     study: str
@@ -67,17 +69,22 @@ class FigureSpec:
     category: str
     caption: str
     wanted: Callable[[Mapping], bool] = lambda block: True
-    measured: bool = False
+    cases: str = "grid"
+
+    @property
+    def whole_scene(self) -> bool:
+        """Whether ``inputs`` and ``wanted`` take the whole scene (a patches figure) or a study block."""
+        return self.cases == "patches"
 
     def input_paths(self, scene: Mapping) -> dict[str, Paths]:
         """Input files by role for the validated ``scene``, relative to ``results/{scene}/``."""
-        return self.inputs(scene if self.measured else scene[self.study])
+        return self.inputs(scene if self.whole_scene else scene[self.study])
 
     def asked_by(self, scene: Mapping) -> bool:
         """Whether the validated ``scene`` asks for this figure."""
-        if self.measured != is_measured(scene):
+        if self.cases != source_of(scene).figures:
             return False
-        if self.measured:
+        if self.whole_scene:
             return bool(self.wanted(scene))
         return self.study in scene and bool(self.wanted(scene[self.study]))
 
@@ -117,10 +124,10 @@ def _render_accuracy(paths: Mapping[str, Paths]) -> Figure:
     return fig_accuracy(read_dataset(paths["summary"], stage="accuracy", variables=["err_kappa"]))
 
 
-# ------------------------------------------------------------------ measured scenes
+# ------------------------------------------------------------------ patch sources' scenes (measured, array, ...)
 def _surface_files(scene: Mapping) -> list[str]:
-    """``surfaces/{name}.nc`` of every topography of a measured scene, by name."""
-    return [f"surfaces/{name}.nc" for name in sorted(topography_names(scene))]
+    """``surfaces/{name}.nc`` of every named case of a patch source's scene, by name."""
+    return [f"surfaces/{name}.nc" for name in sorted(source_of(scene).names(scene))]
 
 
 def _measured_contact_inputs(scene: Mapping) -> dict[str, Paths]:
@@ -165,16 +172,16 @@ FIGURES: dict[str, FigureSpec] = {
     "dpbar": FigureSpec("contact", _contact_inputs, _contact_figure(fig_dpbar), "Contact", "dpbar.rst"),
     "accuracy": FigureSpec(
         "accuracy", lambda block: {"summary": "accuracy/summary.nc"}, _render_accuracy, "Accuracy", "accuracy.rst"),
-    # Measured scenes: every scene has the topography maps; the contact figures need a contact study.
+    # Patch sources' scenes: every scene has the topography maps; the contact figures need a contact study.
     "topographies": FigureSpec(
         "representativity", lambda scene: {"surfaces": _surface_files(scene)}, _render_topographies,
-        "Topographies", "topographies.rst", wanted=lambda scene: True, measured=True),
+        "Topographies", "topographies.rst", wanted=lambda scene: True, cases="patches"),
     "measured_area_load": FigureSpec(
         "contact", _measured_contact_inputs, _measured_contact_figure(plots_measured.fig_measured_area_load),
-        "Contact", "measured_area_load.rst", wanted=lambda scene: "contact" in scene, measured=True),
+        "Contact", "measured_area_load.rst", wanted=lambda scene: "contact" in scene, cases="patches"),
     "measured_kappa": FigureSpec(
         "contact", _measured_contact_inputs, _measured_contact_figure(plots_measured.fig_measured_kappa),
-        "Contact", "measured_kappa.rst", wanted=lambda scene: "contact" in scene, measured=True),
+        "Contact", "measured_kappa.rst", wanted=lambda scene: "contact" in scene, cases="patches"),
 }
 
 

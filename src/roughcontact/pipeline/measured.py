@@ -5,10 +5,11 @@ A scene with a ``topography`` block takes its surfaces from files (read by
 is a case named by its key under ``files`` (or by its file stem when ``glob`` lists them),
 and every study of the scene runs on each: representativity (eps of the heights' PDF) and
 contact (the load steps), then the aggregate, the fit (all files pooled as one surface
-type) and the figures. The studies' generator keys (``surface``, ``grid``, ``seeds``,
-``examples``) do not apply; a scene that sets them itself is told so, and the values it
-inherits from ``defaults`` are dropped. Mixing generated and measured cases in one scene
-is not supported.
+type) and the figures. The scene's source (:mod:`roughcontact.pipeline.sources.measured`) calls
+these checks; the rest of the pipeline asks the source. The studies' generator keys
+(``surface``, ``grid``, ``seeds``, ``examples``) do not apply; a scene that sets them itself
+is told so, and the values it inherits from ``defaults`` are dropped. Mixing generated and
+measured cases in one scene is not supported.
 
 Everything here runs when the config is validated, before Snakemake plans a job: a file
 that does not exist, a glob that matches nothing, or a name that could be mistaken for a
@@ -146,11 +147,6 @@ def check_headers(name: str, scene: Mapping) -> None:
             check_header(path, **settings)
         except TopographyError as err:
             _fail(name, f"topography.files.{file}", str(err))
-
-
-def is_measured(scene: Mapping) -> bool:
-    """Whether a validated scene takes its surfaces from topography files."""
-    return "topography" in scene
 
 
 def topography_names(scene: Mapping) -> list[str]:

@@ -19,9 +19,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..core.files import write_text_atomic
-from .config.scenes import cases
 from .io import duration_text
-from .measured import topography_names
+from .sources import source_of
 
 #: The per-step line of a contact job's log (workflow/scripts/contact.py).
 STEP_LINE = re.compile(r"step (\d+)/(\d+): .*?, \d+ iterations, ([0-9.]+) s")
@@ -29,11 +28,10 @@ PLAN_FILE = "plan.json"
 
 
 def planned_solves(scene: Mapping) -> int:
-    """Load steps the contact study of a validated scene solves: cases (or files) x ``n_steps``; 0 without one."""
+    """Load steps the contact study of a validated scene solves: its source's cases x ``n_steps``; 0 without one."""
     if "contact" not in scene:
         return 0
-    n_cases = len(topography_names(scene)) if "topography" in scene else len(cases(scene["contact"]))
-    return n_cases * scene["contact"]["load"]["n_steps"]
+    return len(source_of(scene).cases(scene, "contact")) * scene["contact"]["load"]["n_steps"]
 
 
 def write_plan(scene_dir: str | Path, scene_name: str, scene: Mapping, cores: int) -> Path:

@@ -36,21 +36,18 @@ from __future__ import annotations
 
 import argparse
 import copy
-import itertools
 import re
 import sys
 from collections.abc import Mapping
-from dataclasses import dataclass
 from pathlib import Path
 
 from jsonschema import Draft202012Validator
 
-from ..measured import MeasuredConfigError, check_measured_scene, topography_names
-from .checks import _check_accuracy, _check_contact, _check_grid, _check_kappa_gap, _resolve_load
+from ..cases import BATCH_STEM, CASE_STEM, Case, batches, cases
+from .checks import _check_accuracy, _check_contact, _check_kappa_gap, _resolve_load
 from .files import ConfigError, load_config_files
 from .schema import (
     SCENE_STUDIES,
-    STUDIES,
     _complete,
     _field,
     _has_path,
@@ -61,31 +58,12 @@ from .schema import (
     merge_scene,
 )
 
-#: File stem of one case: the config's own strings for k_l, k_s, H and the seed.
-CASE_STEM = "kl{k_l}_ks{k_s}_H{H}_s{seed}"
-
-
-#: File stem of one representativity batch: every k_s and seed of one (k_l, H) in one file.
-BATCH_STEM = "kl{k_l}_H{H}"
-
-
 #: Allowed scene names: they become folder names under results/.
 SCENE_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]*$")
 
-
-@dataclass(frozen=True)
-class Case:
-    """One surface realisation: cutoffs and Hurst exponent as config strings, and a seed."""
-
-    k_l: str
-    k_s: str
-    H: str
-    seed: int
-
-    @property
-    def stem(self) -> str:
-        """File stem ``kl{k_l}_ks{k_s}_H{H}_s{seed}`` built from the config strings."""
-        return CASE_STEM.format(k_l=self.k_l, k_s=self.k_s, H=self.H, seed=self.seed)
+#: Re-exported: the generated study's grid of cases (:mod:`roughcontact.pipeline.cases`).
+__all__ = ["BATCH_STEM", "CASE_STEM", "SCENE_NAME", "Case", "batches", "cases", "plan_summary", "validate_config",
+           "validate_scene"]
 
 
 def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = None, *, active: bool = True) -> dict:
@@ -99,10 +77,14 @@ def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = No
     bad = _non_finite(scene)
     if bad:
         raise ConfigError(f"scene {name!r}, field '{_field(bad[0])}': {bad[1]} is not a finite number")
+    from ..sources import source_of  # the sources use the config's checks: imported when it runs
+
+    source = source_of(scene, name)
     for study in ("accuracy", "kappa_gap"):
-        if "topography" in scene and study in scene:
+        if study in scene and study not in source.studies:
             raise ConfigError(f"scene {name!r}, field '{study}': the {study} study runs on generated surfaces only; "
-                              "remove it from a scene with a topography block")
+                              f"remove it from a scene with a{'n' if source.key[0] in 'aeiou' else ''} {source.key} "
+                              "block")
     scene_schema = {**schema["$defs"]["scene"], "$defs": schema["$defs"]}
     validator = Draft202012Validator(scene_schema)
     errors = sorted(validator.iter_errors(scene), key=lambda e: (len(e.path), list(e.path)))
@@ -113,20 +95,10 @@ def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = No
             origin = " (value from the 'defaults' block)"
         raise ConfigError(f"scene {name!r}, field '{_field(err.path)}'{origin}: {_schema_message(err)}")
     out = _complete(copy.deepcopy(scene), scene_schema, scene_schema)
-    if "topography" in out:
-        try:
-            out = check_measured_scene(name, out, delta, check_files=active)
-        except MeasuredConfigError as err:
-            raise ConfigError(str(err)) from None
-    else:
-        for study in STUDIES:
-            if study in out:
-                _check_grid(name, study, out[study])
-        if "contact" in out:
-            out["contact"]["solver"].setdefault("boundary", "periodic")
+    out = source.check_scene(name, out, delta, check_files=active)
     if "contact" in out:
         given = ((delta or {}).get("contact") or {}).get("load") or {}
-        _resolve_load(name, out["contact"]["load"], given, "topography" in out)
+        _resolve_load(name, out["contact"]["load"], given, source.relative_load)
         _check_contact(name, out["contact"])
     if "accuracy" in out:
         _check_accuracy(name, out["accuracy"])
@@ -180,22 +152,6 @@ def validate_config(config: dict, schema: dict | None = None) -> dict:
     return {"scene": default, "scenes": validated}
 
 
-def batches(block: dict) -> list[tuple[str, str]]:
-    """The ``(k_l, H)`` batches of a study block's grid: one representativity job each."""
-    grid = block["grid"]
-    return list(itertools.product(grid["k_l"], grid["H"]))
-
-
-def cases(block: dict) -> list[Case]:
-    """All cases of a study block: k_l x k_s x H x seeds (seeds 0..seeds-1)."""
-    grid = block["grid"]
-    return [
-        Case(kl, ks, h, seed)
-        for kl, ks, h in itertools.product(grid["k_l"], grid["k_s"], grid["H"])
-        for seed in range(block["seeds"])
-    ]
-
-
 def _load_summary(load: Mapping) -> str:
     """The final load in words: what a case receives (:mod:`roughcontact.pipeline.loading`)."""
     if "target_area" in load:
@@ -208,28 +164,11 @@ def _load_summary(load: Mapping) -> str:
 
 def plan_summary(scene_name: str, scene: dict) -> str:
     """One line saying how much a validated scene computes (shown by ``snakemake -n``)."""
-    parts = []
-    if "topography" in scene:
-        n_files = len(topography_names(scene))
-        for study in ("representativity", "contact"):
-            if study in scene:
-                steps = scene[study]["load"]["n_steps"] if study == "contact" else 0
-                parts.append(f"{study} of {n_files} topography file(s)" +
-                             (f" x {steps} load steps = {n_files * steps} solves" if steps else ""))
-        if "contact" in scene:
-            parts.append(_load_summary(scene["contact"]["load"]))
-        return f"roughcontact: scene {scene_name!r} plans " + "; ".join(parts) + "."
-    if "representativity" in scene:
-        rep = scene["representativity"]
-        n_surfaces = len(cases(rep))
-        parts.append(f"{n_surfaces} representativity surfaces at N={rep['surface']['N']} "
-                     f"in {len(batches(rep))} jobs")
+    from ..sources import source_of
+
+    parts = source_of(scene, scene_name).plan(scene)
     if "contact" in scene:
-        con = scene["contact"]
-        n_cases, n_steps = len(cases(con)), con["load"]["n_steps"]
-        parts.append(f"{n_cases} contact cases x {n_steps} load steps = {n_cases * n_steps} solves at "
-                     f"N={con['surface']['N']}")
-        parts.append(_load_summary(con["load"]))
+        parts.append(_load_summary(scene["contact"]["load"]))
     if "accuracy" in scene:
         parts.append("the accuracy study")
     if "kappa_gap" in scene:

@@ -1,0 +1,123 @@
+"""Patch sources: surfaces given as named, non-periodic patches (files), one case each.
+
+A patch source's scene block (``topography``, ``array``, ...) lists files under ``files``, each a
+case named by its key. Every patch source shares the rest of the pipeline: the case wildcard
+``topography`` (file stem ``{topography}``, dataset dimension ``topography``), one ``topography``
+rule whose script calls the source's :meth:`PatchSource.read` builder, the per-topography fit
+(all patches pooled as one surface type), the patch figures, the free boundary by default (a
+patch is not periodic: the periodic half-space would glue its opposite edges together) and a
+load relative to each surface's rms slope. The generator's study keys (``surface``, ``grid``,
+``seeds``, ``examples``) do not apply: a scene that sets them itself is told so, and the values
+it inherits from ``defaults`` are dropped.
+
+A source here subclasses :class:`PatchSource` and supplies ``name``/``key``, ``check_files``
+(its block checked and expanded), ``reader_settings`` and ``read``. Its reader settings name it
+(``"source": name``): the ``topography`` rule's script finds the builder by that key, and a
+measured file's settings, which omit it (files made before the registry record them so), by default.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Mapping
+
+from ...analysis.aggregate import TOPOGRAPHY_DIM, add_derived, combine_topographies
+from ..config.files import ConfigError
+from .base import Source
+
+#: Keys of a study block that only the generator uses.
+GENERATOR_KEYS = ("surface", "grid", "seeds", "examples")
+
+
+class PatchSource(Source):
+    """Named patches: cases named by the keys of the source block's ``files``."""
+
+    case_keys = (TOPOGRAPHY_DIM,)
+    stem = "{" + TOPOGRAPHY_DIM + "}"
+    case_dims = (TOPOGRAPHY_DIM,)
+    record_key = "topography"
+    fit = "topographies"
+    figures = "patches"
+    surface_rules = ("topography",)
+    default_boundary = "free"
+    relative_load = True
+
+    @classmethod
+    def check_scene(cls, name: str, scene: dict, delta: Mapping | None = None, *, check_files: bool = True) -> dict:
+        out = drop_generator_keys(name, scene, delta, cls.key)
+        if "contact" in out:
+            out["contact"]["solver"].setdefault("boundary", cls.default_boundary)
+        out[cls.key] = cls.check_files(name, out[cls.key], check_files)
+        return out
+
+    @classmethod
+    def check_files(cls, scene: str, block: dict, check: bool) -> dict:
+        """The source block with its ``files`` resolved and (with ``check``) each file checked now."""
+        raise NotImplementedError
+
+    @classmethod
+    def names(cls, scene: Mapping) -> list[str]:
+        return list(scene[cls.key]["files"])
+
+    @classmethod
+    def cases(cls, scene: Mapping, study: str) -> list[dict]:
+        return [{TOPOGRAPHY_DIM: name} for name in cls.names(scene)]
+
+    @classmethod
+    def case_list(cls, scene: Mapping, study: str) -> list:
+        return cls.names(scene)
+
+    @classmethod
+    def input_file(cls, scene: Mapping, name: str) -> str:
+        """The file the ``topography`` job of case ``name`` reads (its input: an edited file is read again)."""
+        return scene[cls.key]["files"][name]["path"]
+
+    @classmethod
+    def reader_settings(cls, scene: Mapping, name: str) -> dict:
+        """Everything reading case ``name`` depends on (the job's params, recorded in its file), canonical."""
+        raise NotImplementedError
+
+    @classmethod
+    def read(cls, settings: Mapping):
+        """The surface of one case (a :class:`roughcontact.surfaces.topography.MeasuredSurface`) from its settings."""
+        raise NotImplementedError
+
+    @classmethod
+    def plan(cls, scene: Mapping) -> list[str]:
+        n_files = len(cls.names(scene))
+        parts = []
+        for study in ("representativity", "contact"):
+            if study in scene:
+                steps = scene[study]["load"]["n_steps"] if study == "contact" else 0
+                parts.append(f"{study} of {n_files} {cls.what}(s)" +
+                             (f" x {steps} load steps = {n_files * steps} solves" if steps else ""))
+        return parts
+
+    #: What one case is, in the plan's words.
+    what = "file"
+
+    @staticmethod
+    def aggregate(datasets, paths, cases, kind="contact"):
+        """The per-case datasets of a study stacked along ``topography`` (``cases``: the names)."""
+        ds = combine_topographies(datasets, paths, expected=cases, kind=kind)
+        return add_derived(ds) if kind == "contact" else ds
+
+    @staticmethod
+    def unbatch(path: str, ds) -> list[tuple]:
+        """A representativity file's cases with their labels: one a file."""
+        return [(ds, path)]
+
+
+def drop_generator_keys(name: str, scene: dict, delta: Mapping | None, key: str) -> dict:
+    """A copy of ``scene`` without the generator's study keys; one the scene sets itself is an error."""
+    out = copy.deepcopy(scene)
+    delta = delta or {}
+    for study in ("representativity", "contact"):
+        if study not in out:
+            continue
+        for field in GENERATOR_KEYS:
+            if field in (delta.get(study) or {}):
+                raise ConfigError(f"scene {name!r}, field '{study}.{field}': not used with a {key} block "
+                                  "(the cases are its files); remove it")
+            out[study].pop(field, None)
+    return out
