@@ -64,7 +64,7 @@ def _jobs(stdout):
 
 
 @pytest.mark.parametrize("scene", ["demo", pytest.param("paper", marks=pytest.mark.slow), "representative",
-                                   "kappa-gap"])
+                                   "kappa-gap", "adhesion", "array"])
 def test_dry_run_every_shipped_scene(repo, scene):
     # --forceall: the full job list, whatever a local results/ already holds
     res = run_snakemake(repo, "-n", "--forceall", "--config", f"scene={scene}", timeout=600)
@@ -79,11 +79,16 @@ def test_dry_run_every_shipped_scene(repo, scene):
     if scene == "kappa-gap":
         # every variant's seeds x 3 H, one summary, and nothing of the other studies
         assert jobs["kappa_gap_case"] == 63 and jobs["kappa_gap_summary"] == 1 and "contact" not in jobs
+    if scene == "array":
+        # two .npy patches: their own surface rule, no generated surfaces
+        assert jobs["contact_topography"] == 2 and "surface" not in jobs and "contact" not in jobs
     # the dry run says what the scene computes before anything runs
     solves = {"demo": "12 contact cases x 30 load steps = 360 solves at N=256",
               "paper": "1200 contact cases x 30 load steps = 36000 solves at N=1024",
               "representative": "60 contact cases x 30 load steps = 1800 solves at N=1024",
-              "kappa-gap": "the kappa-gap study (63 solves in 9 variants)"}[scene]
+              "kappa-gap": "the kappa-gap study (63 solves in 9 variants)",
+              "adhesion": "4 contact cases x 10 load steps = 40 solves at N=128",
+              "array": "contact of 2 array file(s) x 30 load steps = 60 solves"}[scene]
     assert f"roughcontact: scene '{scene}' plans" in res.stderr + res.stdout and solves in res.stderr + res.stdout
 
 
