@@ -1,4 +1,4 @@
-"""Pressure-controlled FFT-BEM normal contact solver (Polonsky & Keer 1999).
+"""Pressure-controlled FFT-BEM normal contact solver (Polonsky & Keer 1999), with effects (plasticity, adhesion).
 
 Problem
 -------
@@ -223,7 +223,9 @@ Parts
 :mod:`.halfspace` the elastic operators (periodic, free), :mod:`.workspace` the fields
 of one surface, :mod:`.elastic` and :mod:`.box` the two iterations,
 :mod:`.effects` what acts on them (one module per effect, found by name: the plasticity
-cap), :mod:`.check` the final check, :mod:`.results` the assembly of the output,
+cap; adhesion, whose interaction energy makes :func:`solve_contact` use the gap iteration of
+:mod:`.adhesion` through :class:`~.adhesive.AdhesiveSolver`, Rey, Anciaux & Molinari 2017;
+docs/solver.md), :mod:`.check` the final check, :mod:`.results` the assembly of the output,
 :mod:`.units` and :mod:`.validation` the checks of the input, :mod:`.settings` what a solve
 is asked to do (:class:`SolverSettings`), :mod:`.contact` one surface's solver (warm starts,
 the step), :mod:`.solve` the entry points and the step loop;
