@@ -52,10 +52,11 @@ browser:
 		echo "no chromium, and installing it needs root and apt-get: the report's browser test will skip"; \
 	fi
 
-# The inner loop (under 3 min on 2 cores): every test not marked slow. Slow tests (real runs of
-# small scenes, dry runs of the paper scene's full DAG, concurrency and bootstrap studies) run in `make test`.
+# The inner loop (under 3 min on 2 cores: 2 min 37 s quiet on 2026-11-26, one pytest worker per
+# core): every test not marked slow. Slow tests (real runs of small scenes, dry runs of the
+# paper scene's full DAG, concurrency and bootstrap studies) run in `make test`.
 test-fast: install-test
-	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest -m "not slow"
+	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest -m "not slow" -n $(JOBS)
 
 # Checks only, never rewrites: ruff over the Python, snakefmt over the rules (settings in
 # pyproject.toml). Both always run; it fails if either finds something.
