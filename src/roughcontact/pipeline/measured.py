@@ -103,6 +103,24 @@ def topography_files(scene: str, block: Mapping, check: bool = True) -> dict[str
     return dict(sorted(files.items()))
 
 
+def drop_generator_keys(name: str, scene: dict, delta: Mapping | None, key: str = "topography") -> dict:
+    """A copy of ``scene`` without the generator's study keys; one the scene sets itself is an error.
+
+    ``delta`` is the scene as written; ``key`` the block whose files are the cases (``topography``,
+    ``array``), named in the error.
+    """
+    out = copy.deepcopy(scene)
+    delta = delta or {}
+    for study in ("representativity", "contact"):
+        if study not in out:
+            continue
+        for field in GENERATOR_KEYS:
+            if field in (delta.get(study) or {}):
+                _fail(name, f"{study}.{field}", f"not used with a {key} block (the cases are its files); remove it")
+            out[study].pop(field, None)
+    return out
+
+
 def check_measured_scene(name: str, scene: dict, delta: Mapping | None = None, *, check_files: bool = True) -> dict:
     """A validated scene with a ``topography`` block, expanded: files resolved, generator keys dropped.
 
@@ -111,16 +129,7 @@ def check_measured_scene(name: str, scene: dict, delta: Mapping | None = None, *
     The contact solver's ``boundary`` defaults to ``free``: a measured patch is not periodic,
     and the periodic half-space would glue its opposite edges together.
     """
-    out = copy.deepcopy(scene)
-    delta = delta or {}
-    for study in ("representativity", "contact"):
-        if study not in out:
-            continue
-        for key in GENERATOR_KEYS:
-            if key in (delta.get(study) or {}):
-                _fail(name, f"{study}.{key}", "not used with a topography block (the cases are its files); "
-                                              "remove it")
-            out[study].pop(key, None)
+    out = drop_generator_keys(name, scene, delta)
     if "contact" in out:
         out["contact"]["solver"].setdefault("boundary", "free")
     out["topography"]["files"] = topography_files(name, out["topography"], check_files)

@@ -35,16 +35,14 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
+from ...core.registry import registrar
+
 #: The surface sources a scene can use, by name (filled by :func:`register`, in module order).
 SOURCES: dict[str, type[Source]] = {}
 
 
-def register(cls: type[Source]) -> type[Source]:
-    """Class decorator: make ``cls`` available to scenes under ``cls.name``."""
-    if not cls.name or cls.name in SOURCES:
-        raise ValueError(f"surface source name {cls.name!r} is empty or already registered")
-    SOURCES[cls.name] = cls
-    return cls
+#: Class decorator: make a class available to scenes under its ``name``.
+register = registrar(SOURCES, "surface source")
 
 
 class Source:

@@ -18,15 +18,12 @@ measured file's settings, which omit it (files made before the registry record t
 
 from __future__ import annotations
 
-import copy
 from collections.abc import Mapping
 
 from ...analysis.aggregate import TOPOGRAPHY_DIM, add_derived, combine_topographies
 from ..config.files import ConfigError
+from ..measured import MeasuredConfigError, drop_generator_keys
 from .base import Source
-
-#: Keys of a study block that only the generator uses.
-GENERATOR_KEYS = ("surface", "grid", "seeds", "examples")
 
 
 class PatchSource(Source):
@@ -44,7 +41,10 @@ class PatchSource(Source):
 
     @classmethod
     def check_scene(cls, name: str, scene: dict, delta: Mapping | None = None, *, check_files: bool = True) -> dict:
-        out = drop_generator_keys(name, scene, delta, cls.key)
+        try:
+            out = drop_generator_keys(name, scene, delta, cls.key)
+        except MeasuredConfigError as err:
+            raise ConfigError(str(err)) from None
         if "contact" in out:
             out["contact"]["solver"].setdefault("boundary", cls.default_boundary)
         out[cls.key] = cls.check_files(name, out[cls.key], check_files)
@@ -106,18 +106,3 @@ class PatchSource(Source):
     def unbatch(path: str, ds) -> list[tuple]:
         """A representativity file's cases with their labels: one a file."""
         return [(ds, path)]
-
-
-def drop_generator_keys(name: str, scene: dict, delta: Mapping | None, key: str) -> dict:
-    """A copy of ``scene`` without the generator's study keys; one the scene sets itself is an error."""
-    out = copy.deepcopy(scene)
-    delta = delta or {}
-    for study in ("representativity", "contact"):
-        if study not in out:
-            continue
-        for field in GENERATOR_KEYS:
-            if field in (delta.get(study) or {}):
-                raise ConfigError(f"scene {name!r}, field '{study}.{field}': not used with a {key} block "
-                                  "(the cases are its files); remove it")
-            out[study].pop(field, None)
-    return out

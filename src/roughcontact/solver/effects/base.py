@@ -31,18 +31,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...core.registry import registrar
 from ..units import Units
 
 #: The effects a scene can name, by name (filled by :func:`register`).
 EFFECTS: dict[str, type[Effect]] = {}
 
 
-def register(cls: type[Effect]) -> type[Effect]:
-    """Class decorator: make ``cls`` available to scenes under ``cls.name``."""
-    if not cls.name or cls.name in EFFECTS:
-        raise ValueError(f"effect name {cls.name!r} is empty or already registered")
-    EFFECTS[cls.name] = cls
-    return cls
+#: Class decorator: make a class available to scenes under its ``name``.
+register = registrar(EFFECTS, "effect")
 
 
 class Effect:
