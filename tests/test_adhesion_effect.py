@@ -40,7 +40,7 @@ def test_adhesive_steps_meet_their_invariants(surface, law):
     effect = Adhesion(law, 2e-6, 1e-3)
     ds = solve_contact(surface, LOADS, effects=(effect,), store_fields=True, tol=1e-8)
     assert ds["converged"].all() and ds.attrs["elastic_method"] == "adhesive"
-    from roughcontact.solver.adhesion import inverse_kernel
+    from roughcontact.solver.halfspace import inverse_kernel
 
     mult = inverse_kernel(surface.shape, 1.0, 1.0)
     p_ref = float(np.sqrt(np.mean(np.fft.irfft2(np.fft.rfft2(surface) * mult, s=surface.shape) ** 2)))

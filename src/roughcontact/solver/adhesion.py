@@ -76,7 +76,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.fft import wavenumbers
+from .halfspace import inverse_kernel
 from .workspace import dot
 
 #: Default iteration cap of :func:`solve_adhesive` (all inner iterations of one call).
@@ -196,12 +196,6 @@ class AdhesiveResult:
     residual: float
     converged: bool
     control: str
-
-
-def inverse_kernel(shape, e_star: float, length) -> np.ndarray:
-    """``M = E* |q| / 2`` on the rfft2 grid of ``shape`` [pressure / length], 0 at ``q = 0``."""
-    kx, ky = wavenumbers(shape, length)
-    return 0.5 * e_star * 2.0 * np.pi * np.hypot(kx, ky)
 
 
 def adhesive_state(heights, gap, law, mult):

@@ -84,6 +84,12 @@ def elastic_kernel(shape, e_star: float = 1.0, length=1.0) -> np.ndarray:
     return out
 
 
+def inverse_kernel(shape, e_star: float, length) -> np.ndarray:
+    """``M = E* |q| / 2`` on the rfft2 grid of ``shape`` [pressure / length], 0 at ``q = 0``."""
+    kx, ky = wavenumbers(shape, length)
+    return 0.5 * e_star * 2.0 * np.pi * np.hypot(kx, ky)
+
+
 def displacement(pressure: np.ndarray, *, e_star: float = 1.0, length=1.0,
                  threads: int = 1, boundary: str = "periodic") -> np.ndarray:
     """Surface displacement of the elastic half-space under a pressure field.

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 from ..core.quantities import cf_unit
 from .effects import Effect, PlasticityCap
-from .validation import check_positive, validate_boundary, validate_solver_args, validate_threads
+from .validation import check_positive, validate_boundary, validate_solver_args
 from .workspace import ELASTIC_METHODS
 
 #: Default iteration cap per load step.
@@ -84,8 +84,8 @@ class SolverSettings:
 
         Raises ``ValueError`` naming the field and its allowed range.
         """
-        e_star, length, tol, max_iter, _, threads = validate_solver_args(
-            self.e_star, self.length, self.tol, self.max_iter, None, self.threads, shape=shape)
+        e_star, length, tol, max_iter, threads = validate_solver_args(
+            self.e_star, self.length, self.tol, self.max_iter, self.threads, shape=shape)
         method = sys.modules[__package__].ELASTIC_METHOD if self.method is None else self.method
         if method not in ELASTIC_METHODS:
             source = "method" if self.method is not None else "roughcontact.solver.ELASTIC_METHOD"
@@ -97,7 +97,7 @@ class SolverSettings:
                                  f"{type(effect).__name__} {effect!r}")
         cf_unit(self.length_unit, self.pressure_unit)  # ValueError for a unit outside the declared sets
         return dataclasses.replace(self, e_star=e_star, length=length, tol=tol, max_iter=max_iter,
-                                   threads=validate_threads(threads), boundary=validate_boundary(self.boundary),
+                                   threads=threads, boundary=validate_boundary(self.boundary),
                                    method=method, effects=effects)
 
     @property

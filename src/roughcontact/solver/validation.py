@@ -137,7 +137,7 @@ def validate_threads(threads) -> int:
     return int(threads)
 
 
-def validate_solver_args(e_star, length, tol, max_iter, hardness, threads, shape=None):
+def validate_solver_args(e_star, length, tol, max_iter, threads, shape=None):
     """The solver's scalar arguments, checked; ``length`` against the heights' ``shape``
     (:func:`validate_length`; a float ``> 0`` when ``shape`` is None)."""
     e_star = check_positive("e_star", e_star)
@@ -147,9 +147,7 @@ def validate_solver_args(e_star, length, tol, max_iter, hardness, threads, shape
         raise ValueError(f"tol must be a number in the open interval (0, 1), got {tol!r}")
     if isinstance(max_iter, (bool, np.bool_)) or not isinstance(max_iter, (int, np.integer)) or max_iter < 1:
         raise ValueError(f"max_iter must be an integer >= 1, got {max_iter!r}")
-    if hardness is not None:
-        hardness = check_positive("hardness", hardness)
-    return e_star, length, tol_f, int(max_iter), hardness, validate_threads(threads)
+    return e_star, length, tol_f, int(max_iter), validate_threads(threads)
 
 
 def validate_store(store_fields, n_steps: int) -> set[int]:
