@@ -377,7 +377,7 @@ def test_dpbar_paper_and_fit_lines_are_told_apart(contact):
 
 
 def test_area_load_persson_lines_differ_and_bands_show(contact):
-    from roughcontact.figures.area_load import PERSSON_COLOUR
+    from roughcontact.figures.load_curves import PERSSON_COLOUR
     from roughcontact.theory.laws import KAPPA_PERSSON, linear_area, persson_area
 
     agg, stats, fit = contact

@@ -20,6 +20,8 @@ from .load_curves import (
     _BAND_ALPHA,
     _BAND_EDGE_ALPHA,
     _BAND_EDGE_LW,
+    _PERSSON_ERF_STYLE,
+    _PERSSON_LIMIT_STYLE,
     ASPERITY_STYLES,
     BGT_LIMIT_LABEL,
     _asperity_alphas,
@@ -138,16 +140,6 @@ def _area_load_cross_handles(axes, crosses) -> list:
     those outside their panel's limits."""
     n_off = sum(_n_outside(ax, *c) for ax, c in zip(axes.flat, crosses, strict=False))  # hidden axes last
     return _unconverged_handles(sum(x.size for x, _ in crosses), n_off)
-
-
-#: Persson's (2001) two curves: one colour, told apart by style (they coincide at small load).
-PERSSON_COLOUR = OKABE_ITO[6]
-
-
-_PERSSON_LIMIT_STYLE = {"color": PERSSON_COLOUR, "lw": 1.0, "ls": (0, (4, 2))}
-
-
-_PERSSON_ERF_STYLE = {"color": PERSSON_COLOUR, "lw": 2.6, "ls": "-", "alpha": 0.45}
 
 
 def _area_load_family(ax, s: Mapping[str, np.ndarray], e_star: float, colour, marker, style) -> np.ndarray:

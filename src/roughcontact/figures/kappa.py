@@ -14,8 +14,8 @@ from matplotlib.patches import Patch
 
 from ..theory.asperity import asperity_kappa
 from ..theory.laws import KAPPA_BGT, KAPPA_PERSSON, cel_kappa
-from .area_load import _PERSSON_LIMIT_STYLE
 from .load_curves import (
+    _PERSSON_LIMIT_STYLE,
     ASPERITY_STYLES,
     BGT_LIMIT_LABEL,
     PAPER_CEL_LABEL,

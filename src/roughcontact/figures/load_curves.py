@@ -29,7 +29,12 @@ from ..analysis.aggregate.seeds import seed_reduce
 from ..analysis.fit.estimators import at_bound
 from ..theory.laws import KAPPA_BGT
 from ..theory.summits import NAYAK_ALPHA_MIN
-from .style import _STYLE, _family_styles, _lambda_label, _new_figure, _panel_grid, _pick, _require
+from .style import _STYLE, OKABE_ITO, _family_styles, _lambda_label, _new_figure, _panel_grid, _pick, _require
+
+#: Persson's (2001) two curves: one colour, told apart by style (they coincide at small load).
+PERSSON_COLOUR = OKABE_ITO[6]
+_PERSSON_LIMIT_STYLE = {"color": PERSSON_COLOUR, "lw": 1.0, "ls": (0, (4, 2))}
+_PERSSON_ERF_STYLE = {"color": PERSSON_COLOUR, "lw": 2.6, "ls": "-", "alpha": 0.45}
 
 
 def _run_summary(agg: xr.Dataset, stats: xr.Dataset) -> str:
