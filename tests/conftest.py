@@ -13,6 +13,14 @@ REPO = Path(__file__).resolve().parents[1]
 SNAKEMAKE = str(Path(sys.executable).parent / "snakemake")
 
 
+# ROUGHCONTACT_ARRAY_BACKEND=cupy runs every solve that names no backend on the GPU (the hard-case
+# suite on a lent GPU, benchmarks/gpu/run.sh); CI leaves it unset: numpy.
+if os.environ.get("ROUGHCONTACT_ARRAY_BACKEND"):
+    import roughcontact.solver as _solver
+
+    _solver.ARRAY_BACKEND = os.environ["ROUGHCONTACT_ARRAY_BACKEND"]
+
+
 @pytest.fixture(scope="session")
 def repo():
     return REPO

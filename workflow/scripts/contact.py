@@ -41,6 +41,7 @@ def main(log):
         threads=snakemake.threads,
         effects=effects_from_config(settings["effects"], e_star=solver["e_star"]),
         boundary=solver["boundary"],
+        array_backend=solver.get("array_backend", "numpy"),
         # both a generator block and a reader's settings name the study's length unit
         length_unit=snakemake.params.surface["unit"],
         pressure_unit=solver["pressure_unit"],

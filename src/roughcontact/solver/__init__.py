@@ -237,6 +237,7 @@ solves of the same size must not run concurrently in threads of one process
 (separate processes, as under Snakemake, are fine).
 """
 
+from ..core.backend import ARRAY_BACKENDS
 from .check import MEAN_RTOL
 from .contact import ContactSolver
 from .effects import EFFECTS, Adhesion, Effect, PlasticityCap, effects_from_config
@@ -259,7 +260,14 @@ from .workspace import ELASTIC_METHODS, FALLBACKS, SOLVER_PATHS, STALL_WINDOW
 #: :data:`ELASTIC_METHODS` (read at each call: set it here to switch).
 ELASTIC_METHOD = "pk-fourier-f32"
 
+#: Array backend of a solve whose settings name none (:data:`ARRAY_BACKENDS`, read at each call):
+#: ``"numpy"``, or ``"cupy"`` to run a whole test suite on a GPU (tests/conftest.py reads
+#: ``ROUGHCONTACT_ARRAY_BACKEND``).
+ARRAY_BACKEND = "numpy"
+
 __all__ = [
+    "ARRAY_BACKEND",
+    "ARRAY_BACKENDS",
     "BOUNDARIES",
     "Adhesion",
     "DEFAULT_MAX_ITER",

@@ -81,14 +81,15 @@ class BoxIteration:
         if not fresh:
             ws.refresh()
         self.fresh = True
-        self.zero_m = np.empty(n2, dtype=bool)
-        self.cap_m = np.empty(n2, dtype=bool)
-        self.b1 = np.empty(n2, dtype=bool)
-        self.t = np.zeros(n2)  # CG direction, zero off the free set
+        xp = ws.xp
+        self.zero_m = xp.empty(n2, dtype=bool)
+        self.cap_m = xp.empty(n2, dtype=bool)
+        self.b1 = xp.empty(n2, dtype=bool)
+        self.t = xp.zeros(n2)  # CG direction, zero off the free set
         self.precond = ws.method != "pk"
         if self.precond:
             ws.setup_method()
-        self.kt = np.empty(n2)
+        self.kt = xp.empty(n2)
         self.idx = self._active_sets()
         self.g_old = 0.0
         self.restart = True
@@ -187,7 +188,7 @@ class BoxIteration:
 
     def _first_alpha(self) -> float:
         """Cauchy step length ``r.r / r.Kr`` of the projected gradient ``r`` (one FFT pair)."""
-        r = np.zeros(self.ws.size)  # projected gradient: free part and violations
+        r = self.ws.xp.zeros(self.ws.size)  # projected gradient: free part and violations
         r[self.idx] = self.g_f
         r[self.vz] = self.g_z
         r[self.vc] = self.g_c
@@ -252,7 +253,7 @@ class BoxIteration:
         idx, p_f, cap, P = self.idx, self.p_f, self.cap, self.P
         x_f = project(y_f, float(p_f.sum()), cap)
         s_f = x_f - p_f
-        step = np.zeros(self.ws.size)
+        step = self.ws.xp.zeros(self.ws.size)
         step[idx] = s_f
         ks = self.ws.apply_k(step.reshape(self.shape)).ravel()
         sks, gs = dot(s_f, ks[idx]), dot(self.g_f, s_f)

@@ -50,8 +50,10 @@ class ContactSolver:
         for effect in self.effects:
             effect.check_surface(self.units, self.periodic)
         self._punch = None  # flat surface on the free half-space: solution at unit load
+        self.array_backend = settings.array_backend
         self.ws = None if self.units.flat else Workspace(self.units.heights, self.length, self.threads,
-                                                         self.method, self.boundary)
+                                                         self.method, self.boundary,
+                                                         backend=self.array_backend)
         for effect in self.effects:
             effect.bind(self.units)
         caps = [e.upper_bound for e in self.effects if e.upper_bound is not None]
@@ -72,7 +74,9 @@ class ContactSolver:
 
     @property
     def backend(self) -> str:
-        return self.ws.backend if self.ws is not None else plans(self.shape, self.threads).backend
+        if self.ws is not None:
+            return self.ws.backend
+        return self.array_backend if self.array_backend != "numpy" else plans(self.shape, self.threads).backend
 
     def _extrapolation(self, p_int: float) -> float:
         """Factor ``c`` of the linear extrapolation in the load, 0 when not used."""
@@ -89,7 +93,7 @@ class ContactSolver:
         p_int = self.units.to_internal(p0)
         target = p_int * ws.size
         if initial is not None:
-            np.maximum(initial, 0.0, out=ws.P)
+            np.maximum(ws.be.asarray(initial), 0.0, out=ws.P)
             if cap is None:
                 top = float(ws.P.max())
                 if top > 0:
@@ -153,11 +157,12 @@ class ContactSolver:
         its = 0
         if self._punch is None:
             ws = Workspace(np.zeros(self.shape), self.length, self.threads, self.method, self.boundary,
-                           scale=1.0)
+                           scale=1.0, backend=self.array_backend)
             ws.P.fill(1.0)
             its = pk_solve(ws, 1.0, self.tol, self.max_iter, False)[0]
             ok, residual, gbar, w_sum = final_check(ws, 1.0, self.tol, None)
-            self._punch = (ws.P.copy(), ws.w - gbar, w_sum / n2 - gbar, float(residual), bool(ok))
+            self._punch = (ws.be.to_host(ws.P), ws.be.to_host(ws.w - gbar), w_sum / n2 - gbar, float(residual),
+                           bool(ok))
         x, g1, mg1, residual, ok = self._punch
         p = x * p0
         mean_ok = ok and abs(float(p.sum()) - p0 * n2) <= MEAN_RTOL * p0 * n2
@@ -237,7 +242,7 @@ class ContactSolver:
             self._older = None if self.prev is None else (self.prev, self._last)
             self._last = ws.P.copy()
         self.prev = p_int
-        p = units.pressure(ws.P, out=self._pbuf)
+        p = units.pressure(ws.be.to_host(ws.P), out=self._pbuf)
         cols = {}
         for effect in self.effects:
             cols.update(effect.finish(p, ws.P, p0))
@@ -246,7 +251,7 @@ class ContactSolver:
         if area <= 0:
             raise RuntimeError(f"no contact node at p0={p0!r}: the solver lost the load (bug)")
         mean_gap = math.ldexp(w_sum / n2 - gbar, units.e_len)
-        gap = units.length_field(ws.w - gbar) if keep_gap else None
+        gap = units.length_field(ws.be.to_host(ws.w - gbar)) if keep_gap else None
         if not (math.isfinite(mean_gap) and (gap is None or np.all(np.isfinite(gap)))):
             raise ValueError(
                 f"pressures: the gap at p0={p0!r} overflows float64 in the units of heights; reduce "

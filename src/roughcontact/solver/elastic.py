@@ -109,7 +109,7 @@ class PKIteration:
         # sign violations: out-of-contact nodes with g < 0
         np.less(ws.w, self.gbar, out=ws.bbuf)
         np.greater(ws.bbuf, ws.mask, out=ws.bbuf)  # (w < gbar) & ~mask, for booleans
-        self.ncand = np.count_nonzero(ws.bbuf)
+        self.ncand = int(np.count_nonzero(ws.bbuf))
         pen = 0.0
         if self.ncand:
             self.cand = np.flatnonzero(ws.bbuf)
@@ -129,7 +129,7 @@ class PKIteration:
         """
         self.joined_after = self.idx.size
         self.idx = np.concatenate([self.idx, self.cand])
-        self.p_c = np.concatenate([self.p_c, np.zeros(self.ncand)])
+        self.p_c = np.concatenate([self.p_c, self.ws.xp.zeros(self.ncand)])
         self.g_c = np.concatenate([self.g_c, self.g_cand])
         self.a_c = np.empty_like(self.p_c)
         self.t_c = np.empty_like(self.p_c)
@@ -149,11 +149,13 @@ class PKIteration:
                 g_c -= g_c.sum() / nf
                 self.joined_after = 0
             # z = P_F M P_F g, zero mean on F; beta = g.z / g_old.z_old
-            self.Zf[self.idx] = g_c
-            _take(self.apply_m(self.ws.Z).ravel(), self.idx, a_c)
             if self.single:
+                _take(self.ws.apply_m32_on(self.idx, g_c).ravel(), self.idx, a_c)
                 a_c *= self.ksig  # the float32 product is M g / sigma
-            self.Zf[self.idx] = 0.0
+            else:
+                self.Zf[self.idx] = g_c
+                _take(self.apply_m(self.ws.Z).ravel(), self.idx, a_c)
+                self.Zf[self.idx] = 0.0
             a_c -= a_c.sum() / nf
             G = dot(g_c, a_c)
             if not (G > 0.0 and math.isfinite(G)):
@@ -187,49 +189,111 @@ class PKIteration:
 
         False for a null direction (nothing can move: reported as not converged).
         """
+        if self.single:
+            return self._step_single()
         ws, idx, t_c, a_c = self.ws, self.idx, self.t_c, self.a_c
         ws.Tf[idx] = t_c
         Rf = self.apply_k(ws.T).ravel()
         _take(Rf, idx, a_c)
-        if self.single:
-            a_c *= ws.sigma  # the float32 product is K t / sigma
-        rt = dot(a_c, t_c)
-        tau = dot(self.g_c, t_c) / rt if rt > 0.0 else math.nan
-        if not (math.isfinite(tau) and tau > 0.0):
+        tau = self._trial(dot(a_c, t_c))
+        if tau is None:
             return False
-        np.multiply(t_c, -tau, out=a_c)  # trial pressure in a_c
-        a_c += self.p_c
-        if np.count_nonzero(a_c <= 0.0) == 0:
+        if not bool((a_c <= 0.0).any()):
             self.p_c, self.a_c = a_c, self.p_c
-            np.multiply(Rf, Rf.dtype.type(tau * self.ksig), out=Rf)
+            np.multiply(Rf, tau, out=Rf)
             ws.wf -= Rf  # u <- u - tau K t: exact, no FFT pair for p
             self.fresh = False
         else:
             self._project(a_c)
         return True
 
+    def _trial(self, rt: float) -> float | None:
+        """The exact step length ``tau = g.t / t.Kt`` (``rt = t.Kt``) and the trial ``p - tau t`` in ``a_c``.
+
+        None for a null direction (``tau`` not positive and finite).
+        """
+        tau = dot(self.g_c, self.t_c) / rt if rt > 0.0 else math.nan
+        if not (math.isfinite(tau) and tau > 0.0):
+            return None
+        np.multiply(self.t_c, -tau, out=self.a_c)
+        self.a_c += self.p_c
+        return tau
+
+    def _step_single(self) -> bool:
+        """:meth:`_step` with single-precision transforms: one forward and one inverse per step.
+
+        ``t . K t`` comes from the spectrum of ``t`` (Parseval), so the step length is known
+        before the inverse transform, and a step that leaves ``p >= 0`` folds the clipped part
+        into that same inverse (:meth:`_project_single`): ``K p`` is never transformed afresh.
+        """
+        ws, idx, t_c, a_c = self.ws, self.idx, self.t_c, self.a_c
+        spec = ws.spectrum32_on(idx, t_c)
+        tau = self._trial(ws.quadratic32(spec) * ws.sigma ** 2)  # from t . K t
+        if tau is None:
+            return False
+        if not bool((a_c <= 0.0).any()):
+            self.p_c, self.a_c = a_c, self.p_c
+            Rf = ws.displacement32(spec).ravel()  # K t / sigma
+            np.multiply(Rf, Rf.dtype.type(tau * self.ksig), out=Rf)
+            ws.wf -= Rf  # u <- u - tau K t: exact, no FFT pair for p
+        elif not self._project_single(a_c, spec, tau):
+            self._project(a_c)
+            return True
+        self.fresh = False
+        return True
+
+    def _project_single(self, trial: np.ndarray, spec, tau: float) -> bool:
+        """Projection of ``trial = p - tau t`` onto ``p >= 0`` with the exact mean, ``w`` updated.
+
+        The new pressure is ``s max(trial, 0)`` (``s`` restores the mean), so
+        ``p_new - p = x - tau t`` with ``x = max(-trial, 0) + (s - 1) s^-1 p_new`` on ``F``: one
+        forward transform of ``x`` (slot 1), one inverse of ``F[x] - tau F[t]`` (``spec`` holds
+        ``F[t]``), and ``w`` moves by ``K (p_new - p)`` like an ordinary step; ``K p`` is never
+        transformed afresh. False (nothing done) when no pressure is left, for :meth:`_project`'s
+        uniform restart.
+        """
+        ws, idx = self.ws, self.idx
+        x = np.maximum(-trial, 0.0)  # the clipped part
+        np.maximum(trial, 0.0, out=trial)
+        total = float(trial.sum())
+        if not total > 0.0:
+            return False
+        scale = self.target / total
+        x += (scale - 1.0) * trial
+        trial *= scale
+        spec_x = ws.spectrum32_on(idx, x, slot=1)
+        np.multiply(spec, -tau, out=spec)
+        spec += spec_x
+        Rf = ws.displacement32(spec).ravel()  # K (p_new - p) / sigma
+        np.multiply(Rf, Rf.dtype.type(self.ksig), out=Rf)
+        ws.wf += Rf
+        keep = trial > 0.0
+        gone = idx[~keep]
+        self.maskf[gone] = False
+        ws.Pf[gone] = 0.0
+        self.idx, self.p_c = idx[keep], trial[keep]
+        t_c = self.t_c = self.t_c[keep]
+        if t_c.size:
+            t_c -= t_c.mean()
+        self.g_c, self.a_c = np.empty_like(self.p_c), np.empty_like(self.p_c)
+        return True
+
     def _project(self, trial: np.ndarray) -> None:
         """Polonsky-Keer projection of ``trial`` onto ``p >= 0``, exact mean, fresh ``K p``."""
-        ws = self.ws
+        ws, old = self.ws, self.idx
         np.maximum(trial, 0.0, out=trial)
-        ws.Pf[self.idx] = trial
+        ws.Pf[old] = trial
+        ws.Tf[old] = self.t_c  # T is zero off F (the single-precision steps do not write it)
         enforce_mean(ws.P, self.target, None)
         self.idx = ws.active_set()
         t_c = self.t_c = ws.Tf[self.idx]
         if t_c.size:
             t_c -= t_c.mean()
-        ws.T.fill(0.0)
+        ws.Tf[old] = 0.0  # the new F is within the old one
         self.p_c = ws.Pf[self.idx]
         self.g_c, self.a_c = np.empty_like(self.p_c), np.empty_like(self.p_c)
-        if self.single and self.next_sync == 1e-5 and self.residual > self.next_sync:
-            # far from convergence u = K p in float32 is accurate enough (~1e-7
-            # of u); the float64 recomputations below 1e-5 take over from there
-            np.multiply(ws.apply_k32(ws.P), self.ksig, out=ws.w)
-            ws.w -= ws.h
-            self.fresh = False
-        else:
-            ws.refresh()
-            self.fresh = True
+        ws.refresh()
+        self.fresh = True
 
     def _resync(self) -> None:
         """Pressure of ``F`` back into the field with the exact mean; ``w`` from a fresh ``K p``."""
@@ -253,7 +317,7 @@ def _take(src: np.ndarray, idx: np.ndarray, out: np.ndarray) -> None:
     if src.dtype == out.dtype:
         np.take(src, idx, out=out)
     else:
-        out[...] = src[idx]
+        out[...] = np.take(src, idx)
 
 
 def _sync_pressure(ws, idx, p_c, target):

@@ -22,27 +22,23 @@ that pressure, with no periodic images. Its preconditioner is the periodic
 
 from __future__ import annotations
 
-import functools
 import math
 
 import numpy as np
 
-from ..core.fft import RealFFT2, get_fft, wavenumbers
-from .units import cell_aspect, frexp_ratio, side_x
+from ..core.backend import ArrayBackend, SpectralProduct, get_backend
+from ..core.fft import get_fft, wavenumbers
+from .love import (  # noqa: F401 (re-exported: the free operator's influence lives in love)
+    _free_multiplier,
+    _padded_fft,
+    _pixel_influence,
+    _pixel_influence_rect,
+    free_influence,
+    padded_shape,
+    pixel_influence,
+)
+from .units import cell_aspect, frexp_ratio, grid, internal_length, side_x
 from .validation import check_positive, validate_boundary, validate_heights, validate_length, validate_threads
-
-
-def grid(shape) -> tuple[int, int]:
-    """``(nx, ny)`` of a grid given as an int ``n`` (square, ``(n, n)``) or a pair."""
-    if np.ndim(shape) == 0:
-        return int(shape), int(shape)
-    nx, ny = shape
-    return int(nx), int(ny)
-
-
-def internal_length(aspect: float):
-    """The cell's ``length`` in internal units ``Lx = 1``: ``1.0`` when square, else ``(1.0, aspect)``."""
-    return 1.0 if aspect == 1.0 else (1.0, aspect)
 
 
 def plans(shape, threads: int):
@@ -142,182 +138,6 @@ def displacement(pressure: np.ndarray, *, e_star: float = 1.0, length=1.0,
     return u
 
 
-def _asinh_diff(a: np.ndarray, b: np.ndarray, a_minus_b: np.ndarray) -> np.ndarray:
-    """``asinh(a) - asinh(b)`` without cancellation, given ``a - b`` exactly.
-
-    ``sinh(asinh a - asinh b) = a sqrt(1 + b^2) - b sqrt(1 + a^2)``; for ``a`` and
-    ``b`` of one sign that difference is rewritten as
-    ``(a - b)(a + b) / (a sqrt(1 + b^2) + b sqrt(1 + a^2))``.
-    """
-    sa, sb = np.sqrt(1.0 + a * a), np.sqrt(1.0 + b * b)
-    same = a * b > 0.0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        arg = np.where(same, a_minus_b * (a + b) / (a * sb + b * sa), a * sb - b * sa)
-    return np.arcsinh(arg)
-
-
-@functools.lru_cache(maxsize=4)
-def _pixel_influence(n: int) -> np.ndarray:
-    """Love's pixel influence ``pi * u`` at node offsets ``0..n`` (both axes), ``dx = E* = 1``.
-
-    The displacement at offset ``(x, y)`` (in pixels) from the centre of a pixel
-    of side 1 under unit pressure is ``1 / pi`` times the integral of ``1 / r``
-    over the pixel, i.e. the mixed difference of
-    ``F(X, Y) = X ln(Y + r) + Y ln(X + r)`` over the corners ``X = x +- 1/2``,
-    ``Y = y +- 1/2`` (Love 1929, uniform pressure on a rectangle; Johnson 1985, ch. 3). With
-    ``ln(Y + r) = asinh(Y / |X|) + ln|X|`` the ``X ln|X|`` terms cancel, and
-    the remaining differences of ``asinh`` are formed without cancellation
-    (:func:`_asinh_diff`): relative error ~1e-16 times the offset in pixels.
-    """
-    i = np.arange(n + 1, dtype=np.float64)
-    x, y = i[:, None], i[None, :]
-    xp, xm, yp, ym = x + 0.5, x - 0.5, y + 0.5, y - 0.5  # xm = ym = -1/2 at offset 0
-    axm, aym = np.abs(xm), np.abs(ym)
-    # pi u = [X (asinh(Y+/|X|) - asinh(Y-/|X|))] over X = x+1/2 minus X = x-1/2, plus the
-    # same with X and Y swapped; Y+ - Y- = 1, so the asinh arguments differ by 1/|X|
-    part_x = xp * _asinh_diff(yp / xp, ym / xp, 1.0 / xp) - xm * _asinh_diff(yp / axm, ym / axm, 1.0 / axm)
-    part_y = yp * _asinh_diff(xp / yp, xm / yp, 1.0 / yp) - ym * _asinh_diff(xp / aym, xm / aym, 1.0 / aym)
-    out = part_x + part_y
-    out.setflags(write=False)
-    return out
-
-
-@functools.lru_cache(maxsize=4)
-def _pixel_influence_rect(nx: int, ny: int, rho: float) -> np.ndarray:
-    """Love's influence ``pi * u / dx`` at node offsets ``(i dx, j dy)``, ``i = 0..nx``, ``j = 0..ny``.
-
-    The pixel is ``dx x dy`` with ``rho = dy / dx``; everything is in units of ``dx``
-    (``E* = 1``, unit pressure): offsets ``x = i``, ``y = j rho`` from the pixel's centre,
-    half-sides ``1/2`` and ``rho/2``. As :func:`_pixel_influence` (the case ``rho = 1``,
-    ``nx = ny``, which it reproduces bit for bit): ``pi u`` is the integral of ``1 / r`` over
-    the pixel, the mixed difference of ``F(X, Y) = X ln(Y + r) + Y ln(X + r)`` over
-    ``X = x +- 1/2``, ``Y = y +- rho/2``, written as differences of ``asinh`` with the
-    ``X ln|X|`` and ``Y ln|Y|`` terms cancelled exactly, each difference formed without
-    cancellation (:func:`_asinh_diff`, the arguments differing by ``rho / |X|`` and
-    ``1 / |Y|``). Relative error <= 4e-13 against 60-digit values at offsets up to ~900
-    pixels for ``rho`` from 1e-9 to 1e9 (~1e-16 times the offset in pixels, as the square
-    case). No corner coordinate is 0 (``x``, ``y / rho`` are integers), so nothing divides by 0.
-    """
-    x = np.arange(nx + 1, dtype=np.float64)[:, None]
-    y = np.arange(ny + 1, dtype=np.float64)[None, :] * rho
-    half = 0.5 * rho
-    xp, xm, yp, ym = x + 0.5, x - 0.5, y + half, y - half
-    axm, aym = np.abs(xm), np.abs(ym)
-    part_x = xp * _asinh_diff(yp / xp, ym / xp, rho / xp) - xm * _asinh_diff(yp / axm, ym / axm, rho / axm)
-    part_y = yp * _asinh_diff(xp / yp, xm / yp, 1.0 / yp) - ym * _asinh_diff(xp / aym, xm / aym, 1.0 / aym)
-    out = part_x + part_y
-    out.setflags(write=False)
-    return out
-
-
-def pixel_influence(shape, aspect: float = 1.0) -> np.ndarray:
-    """``pi E* u / dx`` at node offsets ``(i dx, j dy)``, ``0 <= i <= nx``, ``0 <= j <= ny``, shape (nx+1, ny+1).
-
-    Unit pressure on one ``dx x dy`` pixel of a cell with ``Ly / Lx = aspect`` on the grid
-    ``shape`` (``dy / dx = aspect * nx / ny``); the square case (``nx == ny``, ``aspect == 1``)
-    is :func:`_pixel_influence`, any other :func:`_pixel_influence_rect`. Read-only (cached).
-    """
-    nx, ny = grid(shape)
-    if nx == ny and aspect == 1.0:
-        return _pixel_influence(nx)
-    return _pixel_influence_rect(nx, ny, aspect * nx / ny)
-
-
-def padded_shape(shape) -> tuple[int, int]:
-    """The FFT grid of :class:`FreeHalfSpace` for an ``nx x ny`` patch: ``(fast(2 nx), fast(2 ny))``.
-
-    Hockney's construction needs at least ``2n - 1`` points along each axis; ``2n`` is the
-    textbook choice, but for a measured map of ``n = 563`` (a prime) FFTW then transforms a
-    length with a large prime factor, ~3x slower than the next even 2-3-5 length (1152,
-    measured). Any length >= 2n gives the same corner (the kernel is laid out by wrap-around
-    offsets), so each axis takes the smallest even 5-smooth length >= 2n: ``2n`` itself for
-    every ``n`` whose ``2n`` is already 5-smooth (powers of two, 150, 480, 640: bit for bit
-    as before).
-    """
-    return tuple(_even_5_smooth(2 * n) for n in grid(shape))
-
-
-def _even_5_smooth(n: int) -> int:
-    """The smallest even integer >= ``n`` with no prime factor above 5."""
-    m = n + (n % 2)
-    while True:
-        rest = m
-        for f in (2, 3, 5):
-            while rest % f == 0:
-                rest //= f
-        if rest == 1:
-            return m
-        m += 2
-
-
-def free_influence(shape, e_star: float = 1.0, length=1.0, padded=None) -> np.ndarray:
-    """Influence coefficients of the free half-space on the padded grid (default ``2nx x 2ny``).
-
-    Parameters
-    ----------
-    shape : int or (int, int)
-        Grid points ``(nx, ny)`` of the patch; an int ``n`` means ``(n, n)``.
-    e_star : float
-        Plane-strain modulus E* [pressure].
-    length : float or (float, float)
-        Sides ``(Lx, Ly)`` of the patch [length] (a float ``L``: ``(L, L)``); pixels of sides
-        ``dx = Lx / nx`` and ``dy = Ly / ny``.
-
-    padded : (int, int), optional
-        The padded grid ``(Mx, My)``, each ``M >= 2n`` (default ``(2nx, 2ny)``;
-        :class:`FreeHalfSpace` uses :func:`padded_shape`).
-
-    Returns
-    -------
-    numpy.ndarray, float64, shape (Mx, My)
-        Entry ``[i, j]``: displacement [length / pressure] at a node offset by
-        ``(i' dx, j' dy)`` from the centre of a pixel under unit uniform pressure,
-        ``i' = min(i, Mx - i, nx)`` (``j'`` likewise with ``My`` and ``ny``: wrap-around
-        distances, the influence being even in both offsets; offsets beyond ``n`` never
-        reach the corner and repeat the value at ``n``): Love's solution
-        ``u = 1 / (pi E*) sum_{+-} F(x +- dx/2, y +- dy/2)`` (signs of the mixed
-        difference) with ``F(X, Y) = X ln(Y + r) + Y ln(X + r)``, ``r = sqrt(X^2 + Y^2)``
-        (~ ``dx dy / (pi E* r)`` far away). Its cyclic convolution with a pressure
-        zero-padded to ``2nx x 2ny`` is, on the ``nx x ny`` corner, the linear convolution
-        (Hockney 1970).
-    """
-    nx, ny = grid(shape)
-    mx, my = (2 * nx, 2 * ny) if padded is None else (int(v) for v in padded)
-    if mx < 2 * nx or my < 2 * ny:
-        raise ValueError(f"padded grid {(mx, my)} is smaller than twice the patch {(nx, ny)}")
-    c = pixel_influence((nx, ny), cell_aspect(length))
-    i, j = np.arange(mx), np.arange(my)
-    di, dj = np.minimum(np.minimum(i, mx - i), nx), np.minimum(np.minimum(j, my - j), ny)
-    return c[di[:, None], dj[None, :]] * (side_x(length) / (math.pi * nx * e_star))
-
-
-@functools.lru_cache(maxsize=4)
-def _free_multiplier(shape: tuple[int, int], aspect: float) -> np.ndarray:
-    """rfft2 of :func:`free_influence` on :func:`padded_shape` for ``E* = Lx = 1``, interleaved (re, im) real copy.
-
-    The influence is real and even, so its transform is real (the imaginary
-    round-off is dropped); the backward normalisation ``1 / (Mx My)`` is applied
-    by the caller.
-    """
-    mult = np.fft.rfft2(free_influence(shape, 1.0, internal_length(aspect), padded_shape(shape))).real
-    out = np.repeat(mult[..., None], 2, axis=-1)
-    out.setflags(write=False)
-    return out
-
-
-@functools.lru_cache(maxsize=8)
-def _padded_fft(shape: tuple[int, int], threads: int, backend: str, dtype: str) -> RealFFT2:
-    """A :func:`padded_shape` FFT pair owned by :class:`FreeHalfSpace` (never shared with ``get_fft``).
-
-    Only the ``nx x ny`` corner of its input buffer is ever written, so the
-    padding stays zero from here on.
-    """
-    fft = RealFFT2(padded_shape(shape), threads=threads, backend=backend, dtype=np.dtype(dtype))
-    if fft.backend == "pyfftw":
-        fft._real.fill(0.0)
-    return fft
-
-
 def _multiply_spectrum(spec: np.ndarray, mult: np.ndarray) -> np.ndarray:
     """``spec * mult`` in place, ``mult`` an interleaved (re, im) real multiplier."""
     if spec.dtype.itemsize != 2 * mult.dtype.itemsize:  # numpy.fft < 2 computes in double
@@ -325,6 +145,38 @@ def _multiply_spectrum(spec: np.ndarray, mult: np.ndarray) -> np.ndarray:
     view = spec.view(mult.dtype).reshape(mult.shape)
     np.multiply(view, mult, out=view)
     return spec
+
+
+class SparseLoad:
+    """Writes of a few nodes into a product's real input, the other nodes kept at zero.
+
+    ``flat`` is the flat view of the input; ``index`` maps the flat indices of the ``nx x ny``
+    grid to positions in it (None: the same). A load at the same index array as the last one
+    overwrites those nodes only; a new index array first zeroes the nodes of the old one; a dense
+    load (:meth:`dense`) marks the whole input as written.
+    """
+
+    def __init__(self, flat, index=None):
+        self.flat, self.index = flat, index
+        self.idx, self.pos, self.full = None, None, False
+
+    def load(self, idx, values, scale: float) -> None:
+        """``input[idx] = values * scale`` (rounded to the input's precision), zero elsewhere."""
+        if self.idx is not idx:
+            if self.full:
+                self.flat.fill(0.0)
+            elif self.pos is not None:
+                self.flat[self.pos] = 0.0
+            self.idx, self.full = idx, False
+            self.pos = idx if self.index is None else self.index(idx)
+        # the product in float64, then one rounding: as a scale-and-cast of the whole field
+        buf = np.multiply(values, scale, out=np.empty_like(values, dtype=self.flat.dtype), casting="unsafe")
+        self.flat[self.pos] = buf
+
+    def dense(self, field, scale: float, real) -> None:
+        """The whole ``nx x ny`` field times ``scale`` into ``real`` (the input's grid view)."""
+        np.multiply(field, scale, out=real, casting="unsafe")
+        self.idx, self.pos, self.full = None, None, True
 
 
 class PeriodicHalfSpace:
@@ -338,20 +190,24 @@ class PeriodicHalfSpace:
         FFTW threads.
     aspect : float
         ``Ly / Lx`` of the cell (1 for a square cell): its y side in internal units.
+    backend : ArrayBackend, optional
+        Where the fields live (:mod:`roughcontact.core.backend`; default numpy + pyFFTW).
 
     Every product returns a view of an FFT buffer that the next transform of
     the same precision overwrites (copy it to keep it).
     """
 
-    def __init__(self, shape, threads: int = 1, aspect: float = 1.0):
+    def __init__(self, shape, threads: int = 1, aspect: float = 1.0, backend: ArrayBackend | None = None):
         self.shape = grid(shape)
-        self.fft = plans(self.shape, threads)
-        kern = elastic_kernel(self.shape, 1.0, internal_length(aspect))
+        self.be = backend or get_backend()
+        self.threads = threads
+        self.fft = plans(self.shape, threads) if self.be.name == "numpy" else self.be.real_fft(self.shape)
+        self.kern = elastic_kernel(self.shape, 1.0, internal_length(aspect))
         # Interleaved (re, im) copy so that the kernel product is a float64 ufunc
         # call on the complex buffer, with no complex temporary.
-        self.kern2 = np.repeat(kern[..., None], 2, axis=-1)
+        self.kern2 = self.be.asarray(np.repeat(self.kern[..., None], 2, axis=-1))
         self._minv2 = None
-        self.fft32 = None
+        self.prod32 = None
 
     @property
     def backend(self) -> str:
@@ -364,50 +220,74 @@ class PeriodicHalfSpace:
         np.multiply(view, self.kern2, out=view)
         return self.fft.backward(spec)
 
+    def _inverse_host(self) -> np.ndarray:
+        """``M = 1 / K`` off ``q = 0`` (0 there), float64 on the host, shape (nx, ny//2+1)."""
+        minv = np.zeros_like(self.kern)
+        np.divide(1.0, self.kern, out=minv, where=self.kern > 0)
+        return minv
+
     def apply_inverse(self, field: np.ndarray) -> np.ndarray:
         """``M field`` with ``M = |q| E* / 2`` (0 at ``q = 0``), float64."""
         if self._minv2 is None:
-            kern = self.kern2[..., 0]
-            minv = np.zeros_like(kern)
-            np.divide(1.0, kern, out=minv, where=kern > 0)
-            self._minv2 = np.repeat(minv[..., None], 2, axis=-1)
+            self._minv2 = self.be.asarray(np.repeat(self._inverse_host()[..., None], 2, axis=-1))
         return self.fft.backward(_multiply_spectrum(self.fft.forward(field), self._minv2))
 
     def single(self, sigma: float) -> None:
-        """Make the float32 plans and multipliers; inputs are divided by ``sigma``.
+        """Make the float32 product and multipliers; inputs are divided by ``sigma``.
 
         Dividing by a scale of the problem (the internal rms height) before the
         cast makes the float32 values independent of the problem's units, up to
         values within round-off of a float32 rounding boundary.
         """
-        if self.fft32 is not None:
+        if self.prod32 is not None:
             return
-        self.apply_inverse(np.zeros(self.shape))  # makes the multiplier
-        self.fft32 = get_fft(self.shape, threads=self.fft.threads, backend=self.fft.backend,
-                             dtype=np.float32)
-        self.kern2_32 = self.kern2.astype(np.float32)
-        self.minv2_32 = self._minv2.astype(np.float32)
+        self.prod32 = prod = SpectralProduct(self.be, self.shape, np.float32, self.threads)
+        self.kmult32 = prod.multiplier(self.kern)
+        self.kquad32 = prod.quadratic_weights(self.kern)
+        self.mmult32 = prod.multiplier(self._inverse_host())
+        self.loader = SparseLoad(prod.input.reshape(-1))
         self.sigma = sigma
         self.inv_sigma = 1.0 / sigma
 
-    def _product32(self, field: np.ndarray, mult: np.ndarray) -> np.ndarray:
-        fft = self.fft32
-        if fft.backend == "pyfftw":
-            # scale and cast in one pass into the plan's input buffer
-            np.multiply(field, self.inv_sigma, out=fft._real, casting="unsafe")
-            fft._fwd.execute()
-            spec = fft._spec
-        else:
-            spec = fft.forward(field * self.inv_sigma)
-        return fft.backward(_multiply_spectrum(spec, mult))
+    def spectrum32_on(self, idx, values, slot: int = 0):
+        """The float32 spectrum of ``x / sigma``, ``x`` = ``values`` at flat ``idx`` and 0 elsewhere.
+
+        Slot 0 or 1 (:class:`~roughcontact.core.backend.SpectralProduct`); one forward transform.
+        """
+        self.loader.load(idx, values, self.inv_sigma)
+        return self.prod32.forward(slot)
+
+    def quadratic32(self, spec) -> float:
+        """``x . (K x) / sigma^2`` from :meth:`spectrum32_on`'s spectrum of ``x`` (Parseval)."""
+        return self.prod32.quadratic(spec, self.kquad32)
+
+    def displacement32(self, spec) -> np.ndarray:
+        """``K x / sigma`` from the slot-0 spectrum of ``x / sigma`` (destroyed); float32 buffer."""
+        return self.prod32.backward(spec, self.kmult32)
+
+    def apply32_on(self, idx, values) -> np.ndarray:
+        """``K x / sigma`` in single precision for ``x`` = ``values`` at flat ``idx``, 0 elsewhere.
+
+        Only the nodes of ``idx`` are written into the transform's input (two transforms and one
+        pass over the half spectrum in all); float32 buffer, shape (nx, ny).
+        """
+        self.loader.load(idx, values, self.inv_sigma)
+        return self.prod32(self.kmult32)
+
+    def apply_inverse32_on(self, idx, values) -> np.ndarray:
+        """``M x / sigma`` in single precision for ``x`` = ``values`` at flat ``idx``, 0 elsewhere."""
+        self.loader.load(idx, values, self.inv_sigma)
+        return self.prod32(self.mmult32)
 
     def apply32(self, field: np.ndarray) -> np.ndarray:
         """``K field / sigma`` with single-precision transforms (float32 buffer)."""
-        return self._product32(field, self.kern2_32)
+        self.loader.dense(field, self.inv_sigma, self.prod32.input)
+        return self.prod32(self.kmult32)
 
     def apply_inverse32(self, field: np.ndarray) -> np.ndarray:
         """``M field / sigma`` with single-precision transforms (float32 buffer)."""
-        return self._product32(field, self.minv2_32)
+        self.loader.dense(field, self.inv_sigma, self.prod32.input)
+        return self.prod32(self.mmult32)
 
 
 class FreeHalfSpace:
@@ -424,77 +304,109 @@ class FreeHalfSpace:
     precision overwrites (copy it to keep it).
     """
 
-    def __init__(self, shape, threads: int = 1, aspect: float = 1.0):
+    def __init__(self, shape, threads: int = 1, aspect: float = 1.0, backend: ArrayBackend | None = None):
         self.shape = grid(shape)
-        backend = plans(self.shape, threads).backend
-        self.fft = _padded_fft(self.shape, threads, backend, "float64")
-        self.kern2 = _free_multiplier(self.shape, aspect)
-        mx, my = padded_shape(self.shape)
+        self.be = be = backend or get_backend()
+        self.threads, self.aspect = threads, aspect
+        self.padded = padded_shape(self.shape)
+        if be.name == "numpy":
+            self.fft = _padded_fft(self.shape, threads, plans(self.shape, threads).backend, "float64")
+        else:
+            self.fft = be.real_fft(self.padded)
+        self.kern2 = be.asarray(_free_multiplier(self.shape, aspect))
+        mx, my = self.padded
         self.norm = 1.0 / (mx * my)
-        self.out = np.empty(self.shape)
-        self.pad = None if backend == "pyfftw" else np.zeros((mx, my))
-        self.precond = PeriodicHalfSpace(self.shape, threads, aspect)
-        self.fft32 = None
+        self.out = be.xp.empty(self.shape)
+        self.pad = None if self.fft.backend == "pyfftw" else be.xp.zeros((mx, my))
+        self.precond = PeriodicHalfSpace(self.shape, threads, aspect, be)
+        self.prod32 = None
 
     @property
     def backend(self) -> str:
         return self.fft.backend
 
-    def _product(self, fft, pad, field, mult, out, inv_sigma=None):
-        """The ``nx x ny`` corner of ``fft^-1(mult * fft(pad(field)))`` in ``out``."""
-        nx, ny = self.shape
-        if fft.backend == "pyfftw":
-            corner = fft._real[:nx, :ny]
-            if inv_sigma is None:
-                np.copyto(corner, field)
-            else:
-                np.multiply(field, inv_sigma, out=corner, casting="unsafe")
-            fft._fwd.execute()
-            view = fft._spec.view(mult.dtype).reshape(mult.shape)
-            np.multiply(view, mult, out=fft._spec_in.view(mult.dtype).reshape(mult.shape))
-            fft._bwd.execute()  # c2r: unnormalised, the normalisation goes with the copy
-            return np.multiply(fft._real_out[:nx, :ny], out.dtype.type(self.norm), out=out)
-        if inv_sigma is None:
-            pad[:nx, :ny] = field
-        else:
-            np.multiply(field, inv_sigma, out=pad[:nx, :ny], casting="unsafe")
-        spec = _multiply_spectrum(fft.forward(pad), mult)
-        out[...] = fft.backward(spec)[:nx, :ny]
-        return out
-
     def apply(self, field: np.ndarray) -> np.ndarray:
         """``K field`` [length per pressure x field], float64, shape (nx, ny)."""
-        return self._product(self.fft, self.pad, field, self.kern2, self.out)
+        nx, ny = self.shape
+        fft = self.fft
+        if fft.backend == "pyfftw":
+            np.copyto(fft._real[:nx, :ny], field)
+            fft._fwd.execute()
+            view = fft._spec.view(self.kern2.dtype).reshape(self.kern2.shape)
+            np.multiply(view, self.kern2, out=fft._spec_in.view(self.kern2.dtype).reshape(self.kern2.shape))
+            fft._bwd.execute()  # c2r: unnormalised, the normalisation goes with the copy
+            return np.multiply(fft._real_out[:nx, :ny], self.norm, out=self.out)
+        self.pad[:nx, :ny] = field
+        spec = _multiply_spectrum(fft.forward(self.pad), self.kern2)
+        self.out[...] = fft.backward(spec)[:nx, :ny]
+        return self.out
 
     def apply_inverse(self, field: np.ndarray) -> np.ndarray:
         """``M field`` with the periodic ``M = |q| E* / 2`` (0 at ``q = 0``), float64."""
         return self.precond.apply_inverse(field)
 
     def single(self, sigma: float) -> None:
-        """Make the float32 plans and multipliers; inputs are divided by ``sigma``."""
-        if self.fft32 is not None:
+        """Make the float32 product and multiplier; inputs are divided by ``sigma``."""
+        if self.prod32 is not None:
             return
         self.precond.single(sigma)
-        self.fft32 = _padded_fft(self.shape, self.fft.threads, self.fft.backend, "float32")
-        self.kern2_32 = self.kern2.astype(np.float32)
-        self.out32 = np.empty(self.shape, dtype=np.float32)
-        self.pad32 = None if self.pad is None else np.zeros(self.pad.shape, dtype=np.float32)
+        self.prod32 = prod = SpectralProduct(self.be, self.padded, np.float32, self.threads)
+        mult = _free_multiplier(self.shape, self.aspect)[..., 0]
+        self.kmult32 = prod.multiplier(mult)
+        self.kquad32 = prod.quadratic_weights(mult)  # Parseval on the padded grid: x is 0 off the patch
+        self.loader = SparseLoad(prod.input.reshape(-1), self._padded_index)
+        self.out32 = self.be.xp.empty(self.shape, dtype=np.float32)
         self.sigma = sigma
         self.inv_sigma = 1.0 / sigma
 
+    def spectrum32_on(self, idx, values, slot: int = 0):
+        """The float32 spectrum of the padded ``x / sigma`` (as :meth:`PeriodicHalfSpace.spectrum32_on`)."""
+        self.loader.load(idx, values, self.inv_sigma)
+        return self.prod32.forward(slot)
+
+    def quadratic32(self, spec) -> float:
+        """``x . (K x) / sigma^2`` from :meth:`spectrum32_on`'s spectrum of ``x`` (Parseval)."""
+        return self.prod32.quadratic(spec, self.kquad32)
+
+    def displacement32(self, spec) -> np.ndarray:
+        """``K x / sigma`` on the patch from the slot-0 spectrum (destroyed); float32 buffer."""
+        nx, ny = self.shape
+        self.out32[...] = self.prod32.backward(spec, self.kmult32)[:nx, :ny]
+        return self.out32
+
+    def _padded_index(self, idx):
+        """Flat indices of the ``nx x ny`` grid as flat indices of the padded grid."""
+        ny, my = self.shape[1], self.padded[1]
+        return (idx // ny) * my + idx % ny
+
+    def _corner32(self) -> np.ndarray:
+        return self.displacement32(self.prod32.forward(0))
+
+    def apply32_on(self, idx, values) -> np.ndarray:
+        """``K x / sigma`` in single precision for ``x`` = ``values`` at flat ``idx``, 0 elsewhere."""
+        self.loader.load(idx, values, self.inv_sigma)
+        return self._corner32()
+
+    def apply_inverse32_on(self, idx, values) -> np.ndarray:
+        """``M x / sigma`` in single precision (the periodic preconditioner's)."""
+        return self.precond.apply_inverse32_on(idx, values)
+
     def apply32(self, field: np.ndarray) -> np.ndarray:
         """``K field / sigma`` with single-precision transforms (float32 buffer)."""
-        return self._product(self.fft32, self.pad32, field, self.kern2_32, self.out32, self.inv_sigma)
+        nx, ny = self.shape
+        self.loader.dense(field, self.inv_sigma, self.prod32.input[:nx, :ny])
+        return self._corner32()
 
     def apply_inverse32(self, field: np.ndarray) -> np.ndarray:
         """``M field / sigma`` with single-precision transforms (float32 buffer)."""
         return self.precond.apply_inverse32(field)
 
 
-def half_space(boundary: str, shape, threads: int = 1, aspect: float = 1.0):
+def half_space(boundary: str, shape, threads: int = 1, aspect: float = 1.0, backend: ArrayBackend | None = None):
     """The operator for ``boundary`` (one of :data:`BOUNDARIES`) on an ``nx x ny`` grid.
 
-    ``shape`` an int ``n`` or ``(nx, ny)``; ``aspect`` the cell's ``Ly / Lx`` (internal units ``Lx = 1``).
+    ``shape`` an int ``n`` or ``(nx, ny)``; ``aspect`` the cell's ``Ly / Lx`` (internal units ``Lx = 1``);
+    ``backend`` where its fields live (default numpy + pyFFTW).
     """
     cls = FreeHalfSpace if boundary == "free" else PeriodicHalfSpace
-    return cls(shape, threads, aspect)
+    return cls(shape, threads, aspect, backend)

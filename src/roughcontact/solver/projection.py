@@ -32,7 +32,7 @@ def project(y: np.ndarray, total: float, cap: float) -> np.ndarray:
     if not lo < lam < hi:
         lam = 0.5 * (lo + hi)
     z = np.empty_like(y)
-    inside = np.empty(size, dtype=bool)
+    inside = np.empty_like(y, dtype=bool)
     for k in range(400):
         np.subtract(y, lam, out=z)
         np.greater(z, 0.0, out=inside)

@@ -6,6 +6,7 @@ import dataclasses
 import sys
 from dataclasses import dataclass
 
+from ..core.backend import ARRAY_BACKENDS, get_backend
 from ..core.quantities import cf_unit
 from .effects import Effect, PlasticityCap
 from .validation import check_positive, validate_boundary, validate_solver_args
@@ -46,6 +47,12 @@ class SolverSettings:
     length_unit, pressure_unit : str
         Labels of the output's units (:data:`roughcontact.core.quantities.LENGTH_UNITS` and
         ``PRESSURE_UNITS``); the numbers do not depend on them.
+    array_backend : {"numpy", "cupy"} or None
+        Where the iteration's fields live (:mod:`roughcontact.core.backend`): ``"numpy"`` on the
+        host with pyFFTW; ``"cupy"`` on a CUDA GPU (``roughcontact[gpu]``), for the elastic
+        solver without effects (periodic or free). Results agree within the solver's tolerance,
+        not bit for bit (another FFT library). None: the package's switch
+        ``roughcontact.solver.ARRAY_BACKEND`` when the solve starts.
     """
 
     e_star: float = 1.0
@@ -58,6 +65,7 @@ class SolverSettings:
     effects: tuple[Effect, ...] = ()
     length_unit: str = "1"
     pressure_unit: str = "1"
+    array_backend: str | None = None
 
     @classmethod
     def from_options(cls, settings: SolverSettings | None = None, **options) -> SolverSettings:
@@ -96,11 +104,24 @@ class SolverSettings:
                 raise ValueError(f"effects must be Effect objects (roughcontact.solver.effects), got "
                                  f"{type(effect).__name__} {effect!r}")
         cf_unit(self.length_unit, self.pressure_unit)  # ValueError for a unit outside the declared sets
+        backend = sys.modules[__package__].ARRAY_BACKEND if self.array_backend is None else self.array_backend
+        _check_backend(backend, effects)
         return dataclasses.replace(self, e_star=e_star, length=length, tol=tol, max_iter=max_iter,
                                    threads=threads, boundary=validate_boundary(self.boundary),
-                                   method=method, effects=effects)
+                                   method=method, effects=effects, array_backend=backend)
 
     @property
     def hardness(self) -> float | None:
         """The lowest pressure cap of the effects [pressure], or None."""
         return min((e.pressure_cap for e in self.effects if e.pressure_cap is not None), default=None)
+
+
+def _check_backend(backend: str, effects) -> None:
+    """``backend`` is a known array backend, usable here, and runs what the settings ask for."""
+    if backend not in ARRAY_BACKENDS:
+        raise ValueError(f"array_backend must be one of {ARRAY_BACKENDS}, got {backend!r}")
+    if backend != "numpy" and effects:
+        names = ", ".join(type(e).__name__ for e in effects)
+        raise ValueError(f"array_backend {backend!r} runs the elastic solver only, not the effects ({names}); "
+                         "set array_backend to 'numpy' for a scene with effects")
+    get_backend(backend)  # ValueError naming the remedy when CuPy or a GPU is missing

@@ -19,6 +19,19 @@ LOAD_RANGE = (1e-100, 1e100)
 _FLOAT_CEILING = 1e300
 
 
+def grid(shape) -> tuple[int, int]:
+    """``(nx, ny)`` of a grid given as an int ``n`` (square, ``(n, n)``) or a pair."""
+    if np.ndim(shape) == 0:
+        return int(shape), int(shape)
+    nx, ny = shape
+    return int(nx), int(ny)
+
+
+def internal_length(aspect: float):
+    """The cell's ``length`` in internal units ``Lx = 1``: ``1.0`` when square, else ``(1.0, aspect)``."""
+    return 1.0 if aspect == 1.0 else (1.0, aspect)
+
+
 def side_x(length) -> float:
     """``Lx``: the side along x (axis 0) of a cell's ``length``, a float ``L`` or a pair ``(Lx, Ly)``."""
     return float(length) if np.ndim(length) == 0 else float(length[0])

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from ..core.backend import get_backend
 from .halfspace import half_space
 from .units import cell_aspect, rms_about_mean
 
@@ -74,11 +75,13 @@ class Workspace:
     :data:`ELASTIC_METHODS`. The ``apply_*`` methods are the operator's
     products (one FFT pair each; the benchmark counts them here). ``scale``
     replaces the rms height of ``heights`` as the gap scale (a flat punch,
-    whose heights have none).
+    whose heights have none). ``backend`` names the array backend the fields live on
+    (:mod:`roughcontact.core.backend`; ``xp`` is its array module): ``heights`` are host
+    numpy, everything here is the backend's.
     """
 
     def __init__(self, heights: np.ndarray, length: float, threads: int, method: str,
-                 boundary: str = "periodic", scale: float | None = None):
+                 boundary: str = "periodic", scale: float | None = None, backend: str = "numpy"):
         if method not in ELASTIC_METHODS:
             raise ValueError(f"ELASTIC_METHOD must be one of {ELASTIC_METHODS}, got {method!r}")
         shape = self.shape = heights.shape
@@ -86,18 +89,20 @@ class Workspace:
         self.length = length
         self.method = method
         self.boundary = boundary
-        self.op = half_space(boundary, shape, threads, cell_aspect(length))
-        self.h = heights
-        self.hf = heights.ravel()
+        self.be = get_backend(backend)
+        xp = self.xp = self.be.xp
+        self.op = half_space(boundary, shape, threads, cell_aspect(length), self.be)
         self.h_rms = rms_about_mean(heights)[1] if scale is None else scale
-        self.w = np.empty(shape)
+        self.h = self.be.asarray(heights)
+        self.hf = self.h.ravel()
+        self.w = xp.empty(shape)
         self.wf = self.w.ravel()
-        self.P = np.zeros(shape)
+        self.P = xp.zeros(shape)
         self.Pf = self.P.ravel()
-        self.T = np.zeros(shape)
+        self.T = xp.zeros(shape)
         self.Tf = self.T.ravel()
-        self.mask = np.zeros(shape, dtype=bool)
-        self.bbuf = np.empty(shape, dtype=bool)
+        self.mask = xp.zeros(shape, dtype=bool)
+        self.bbuf = xp.empty(shape, dtype=bool)
         self.Z = None  # preconditioner input, zero off the free set
 
     @property
@@ -112,7 +117,7 @@ class Workspace:
     def setup_method(self) -> None:
         """Preconditioner buffer and, for ``-f32``, the single-precision products."""
         if self.method != "pk" and self.Z is None:
-            self.Z = np.zeros(self.shape)
+            self.Z = self.xp.zeros(self.shape)
         if self.method == "pk-fourier-f32":
             self.op.single(self.h_rms)
 
@@ -131,6 +136,29 @@ class Workspace:
     def apply_m32(self, field: np.ndarray) -> np.ndarray:
         """``M field / sigma`` with single-precision transforms (``float32`` buffer)."""
         return self.op.apply_inverse32(field)
+
+    def apply_k32_on(self, idx: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """``K x / sigma`` in single precision, ``x`` = ``values`` at flat ``idx`` and 0 elsewhere.
+
+        Writes only those nodes into the transform's input (``float32`` buffer, shape of the grid).
+        """
+        return self.op.apply32_on(idx, values)
+
+    def apply_m32_on(self, idx: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """``M x / sigma`` in single precision, ``x`` = ``values`` at flat ``idx`` and 0 elsewhere."""
+        return self.op.apply_inverse32_on(idx, values)
+
+    def spectrum32_on(self, idx: np.ndarray, values: np.ndarray, slot: int = 0):
+        """Single-precision spectrum of ``x / sigma`` (``x`` as in :meth:`apply_k32_on`): one forward transform."""
+        return self.op.spectrum32_on(idx, values, slot)
+
+    def quadratic32(self, spec) -> float:
+        """``x . (K x) / sigma^2`` from :meth:`spectrum32_on`'s spectrum (no transform)."""
+        return self.op.quadratic32(spec)
+
+    def displacement32(self, spec) -> np.ndarray:
+        """``K x / sigma`` from a slot-0 spectrum of ``x / sigma`` (destroyed): one inverse transform."""
+        return self.op.displacement32(spec)
 
     def refresh(self) -> None:
         """Recompute ``w = K P - h`` from the full pressure field (one FFT pair)."""

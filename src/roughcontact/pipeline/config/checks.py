@@ -67,6 +67,10 @@ def _check_contact(scene: str, block: dict) -> None:
         fail("outputs.fields", f"steps {bad} exceed load.n_steps = {steps} (allowed 1..{steps})")
     for name in block["effects"]:  # each effect's own cross-field rules (schema-checked names)
         EFFECTS[name].check_config(block, functools.partial(_fail_effect, fail, name))
+    backend = block["solver"].get("array_backend", "numpy")
+    if backend != "numpy" and block["effects"]:
+        fail("solver.array_backend", f"{backend!r} runs the elastic solver only, not the effects "
+                                     f"({', '.join(block['effects'])}); remove it (numpy) or the effects")
     load = block["load"]
     if "p_min" in load and load["schedule"] != "geometric":
         fail("load.p_min", f"only used by load.schedule: geometric (here {load['schedule']!r}); remove it")

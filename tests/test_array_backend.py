@@ -1,0 +1,109 @@
+"""The array backend seam (roughcontact.core.backend): the CuPy backend's code, run here with numpy.
+
+CI has no GPU, so the CuPy backend's own code (cuFFT-style transforms through the array module,
+transfers, the solver's fields created by ``xp``) runs with a stand-in module that is numpy under
+CuPy's names (``asnumpy``, ``cuda``). The solve must agree with the default backend within the
+solver's tolerance (another FFT library: the same problem, not the same bits) and meet every
+invariant. On a lent GPU, ``ROUGHCONTACT_ARRAY_BACKEND=cupy`` runs the suites with CuPy itself
+(benchmarks/gpu/run.sh; results in benchmarks/README.md).
+"""
+from __future__ import annotations
+
+import sys
+import types
+
+import numpy as np
+import pytest
+
+from roughcontact.core import backend as backend_mod
+from roughcontact.core.backend import SpectralProduct, get_backend
+from roughcontact.solver import SolverSettings, solve_contact
+from roughcontact.surfaces.synthetic import generate_surface
+from solver_invariants import check_solution
+
+
+def _numpy_as_cupy() -> types.ModuleType:
+    """A module that is numpy with CuPy's extra names: arrays stay numpy arrays."""
+    fake = types.ModuleType("cupy")
+    fake.__getattr__ = lambda name: getattr(np, name)
+    fake.asnumpy = np.asarray
+    fake.ndarray = type("ndarray", (), {})  # no numpy array is a CuPy array (xarray asks)
+    fake.cuda = types.SimpleNamespace(runtime=types.SimpleNamespace(getDeviceCount=lambda: 1),
+                                      Device=lambda: types.SimpleNamespace(synchronize=lambda: None))
+    return fake
+
+
+@pytest.fixture
+def stand_in_cupy(monkeypatch):
+    monkeypatch.setitem(sys.modules, "cupy", _numpy_as_cupy())
+    get_backend.cache_clear()
+    yield get_backend("cupy")
+    get_backend.cache_clear()
+
+
+def test_cupy_missing_is_a_clear_error(monkeypatch):
+    monkeypatch.setitem(sys.modules, "cupy", None)  # import fails
+    get_backend.cache_clear()
+    try:
+        with pytest.raises(ValueError, match=r"array_backend 'cupy' needs CuPy.*roughcontact\[gpu\].*'numpy'"):
+            solve_contact(np.random.default_rng(0).random((16, 16)), [0.001], array_backend="cupy")
+    finally:
+        get_backend.cache_clear()
+
+
+def test_unknown_backend_and_effects_are_refused():
+    h = np.random.default_rng(0).random((16, 16))
+    with pytest.raises(ValueError, match="array_backend must be one of"):
+        solve_contact(h, [0.001], array_backend="jax")
+
+
+def test_effects_refused_on_cupy(stand_in_cupy):
+    h = np.random.default_rng(0).random((16, 16))
+    with pytest.raises(ValueError, match="runs the elastic solver only.*PlasticityCap"):
+        solve_contact(h, [0.001], array_backend="cupy", hardness=0.5)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+@pytest.mark.parametrize("shape", [(32, 32), (24, 40)])
+def test_spectral_product_matches_numpy_fft(stand_in_cupy, dtype, shape):
+    """Split or whole, the product and Parseval's quadratic form equal numpy.fft's in float64."""
+    rng = np.random.default_rng(3)
+    x = rng.standard_normal(shape)
+    mult = rng.random((shape[0], shape[1] // 2 + 1))
+    ref = np.fft.irfft2(np.fft.rfft2(x) * mult, s=shape)
+    tol = 2e-6 if dtype == np.float32 else 1e-13
+    for be in (get_backend("numpy"), stand_in_cupy):
+        prod = SpectralProduct(be, shape, dtype)
+        prod.input[...] = x
+        m = prod.multiplier(mult)
+        quad = prod.quadratic(prod.forward(0), prod.quadratic_weights(mult))
+        assert quad == pytest.approx(float(np.sum(x * ref)), rel=tol)
+        out = np.asarray(prod(m), dtype=np.float64)
+        assert np.max(np.abs(out - ref)) <= tol * np.max(np.abs(ref))
+        assert np.array_equal(prod.input, x.astype(dtype))  # the transforms keep the input
+
+
+@pytest.mark.parametrize("boundary", ["periodic", "free"])
+def test_stand_in_cupy_solves_as_numpy(stand_in_cupy, boundary):
+    """The backend-neutral solver on the stand-in: same A/A0 within tol, invariants hold, host outputs."""
+    h = generate_surface(64, 2, 16, 0.8, 1, rms_slope=0.1)
+    loads = np.linspace(0.0005, 0.005, 4)
+    ref = solve_contact(h, loads, boundary=boundary, store_fields=True)
+    got = solve_contact(h, loads, settings=SolverSettings(boundary=boundary, array_backend="cupy"),
+                        store_fields=True)
+    assert got.attrs["fft_backend"] == "cupy"
+    assert bool(got.converged.all())
+    assert isinstance(got.pressure.values, np.ndarray)
+    # A/A0 within a node or two of each other's; the fields within the solution's bound (check_solution)
+    assert np.max(np.abs(got.area_fraction.values - ref.area_fraction.values)) <= 2.0 / h.size
+    check_solution(got, h, tol=1e-8, boundary=boundary)
+
+
+def test_array_backend_switch(stand_in_cupy, monkeypatch):
+    """``roughcontact.solver.ARRAY_BACKEND`` is the default of settings that name none."""
+    import roughcontact.solver as solver_mod
+
+    monkeypatch.setattr(solver_mod, "ARRAY_BACKEND", "cupy")
+    assert SolverSettings().checked((8, 8)).array_backend == "cupy"
+    assert SolverSettings(array_backend="numpy").checked((8, 8)).array_backend == "numpy"
+    assert backend_mod.ARRAY_BACKENDS == ("numpy", "cupy")
