@@ -180,3 +180,32 @@ def test_write_wisdom_round_trip(tmp_path, monkeypatch):
     finally:
         monkeypatch.undo()
         fft.shipped_wisdom.cache_clear()
+
+
+def test_wisdom_is_chosen_by_processor_model(tmp_path, monkeypatch):
+    """Plans are filed per processor model; another model gets the file's default set."""
+    pytest.importorskip("pyfftw")
+    from roughcontact.core import fft
+
+    shipped_file = fft.WISDOM_FILE
+    path = tmp_path / "w.json"
+    monkeypatch.setattr(fft, "machine_key", lambda: "CPU A")
+    fft.write_wisdom(path, sizes=(8,))
+    monkeypatch.setattr(fft, "machine_key", lambda: "CPU B")
+    fft.write_wisdom(path, sizes=(8,))
+    data = json.loads(path.read_text())
+    assert set(data["machines"]) == {"CPU A", "CPU B"} and data["default"] == "CPU A"
+    data["machines"]["CPU A"]["single"] = "(fftw-3.3.5 fftwf_wisdom #x0\n)"  # tell the sets apart
+    path.write_text(json.dumps(data))
+    monkeypatch.setattr(fft, "WISDOM_FILE", path)
+    try:
+        for model, expect_a in (("CPU A", True), ("CPU B", False), ("CPU C", True)):
+            monkeypatch.setattr(fft, "machine_key", lambda m=model: m)
+            fft.shipped_wisdom.cache_clear()
+            assert (fft.shipped_wisdom()[1] == b"(fftw-3.3.5 fftwf_wisdom #x0\n)") == expect_a, model
+    finally:
+        fft.shipped_wisdom.cache_clear()
+    # the shipped file names this machine's model or falls back to its default, and has plans up to 8192
+    shipped = json.loads(shipped_file.read_text()) if shipped_file.exists() else None
+    if shipped is not None:
+        assert shipped["default"] in shipped["machines"] and max(shipped["sizes"]) == 8192

@@ -12,7 +12,7 @@ on a given machine and build. ``FFTW_MEASURE`` would time candidate plans and, o
 loaded machine, pick different ones in different processes, whose results differ in the
 last bits. ESTIMATE's heuristics are slow for some shapes, though (a float32 pair at
 N = 1024 took 1.8x the measured plan's time), so the package ships *wisdom*: plans
-measured once with ``FFTW_MEASURE`` for square grids of 32 to 2048 points per side, both
+measured once with ``FFTW_MEASURE`` for square grids of 32 to 8192 points per side, both
 precisions, one thread (:data:`WISDOM_FILE`, made by :func:`write_wisdom`). Every pair
 is planned with the shipped wisdom alone (any other wisdom in the process is set aside
 and restored afterwards), and FFTW uses wisdom of a more patient planner for an
@@ -20,6 +20,11 @@ and restored afterwards), and FFTW uses wisdom of a more patient planner for an
 whatever the machine's load. Where the shipped plans cannot be used (another FFTW
 version, a CPU without the SIMD they name), FFTW falls back to its ``FFTW_ESTIMATE``
 heuristics, again the same in every process.
+
+The best plan depends on the processor (plans measured on a Xeon cost 1.4x the measured
+plans' time for a float32 pair at N = 1024 on an AMD EPYC, 2026-11-26), so the file holds one
+set of plans per processor model (:func:`machine_key`, the CPU's model name) and a default
+for any other model: the plan is a function of the file and the processor model.
 """
 
 from __future__ import annotations
@@ -51,17 +56,45 @@ PLANNER_FLAGS = ("FFTW_ESTIMATE",)
 #: Plans measured once and shipped with the package (module docstring).
 WISDOM_FILE = Path(__file__).with_name("fftw_wisdom.json")
 #: Square grid sizes whose plans :func:`write_wisdom` measures.
-WISDOM_SIZES = (32, 64, 128, 256, 512, 1024, 2048)
+WISDOM_SIZES = (32, 64, 128, 256, 512, 1024, 2048, 4096, 8192)
+
+
+#: Precisions of an FFTW wisdom export, in pyFFTW's order.
+_PRECISIONS = ("double", "single", "long_double")
+
+
+def machine_key() -> str:
+    """The processor model this process runs on (``model name`` of /proc/cpuinfo), "" if unknown."""
+    try:
+        with open("/proc/cpuinfo") as fh:
+            for line in fh:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return ""
+
+
+def _machines(data: dict) -> dict:
+    """``{model: {precision: wisdom}}`` of a wisdom file (one unnamed set in the first format)."""
+    if "machines" in data:
+        return data["machines"]
+    return {data.get("machine", ""): {k: data[k] for k in _PRECISIONS}}
 
 
 @functools.lru_cache(maxsize=1)
 def shipped_wisdom() -> tuple[bytes, bytes, bytes] | None:
-    """The shipped FFTW wisdom (double, single, long double), or None without the file."""
+    """The shipped FFTW wisdom for this processor model (double, single, long double), or None.
+
+    The plans measured on this model when the file has them, else the file's default set.
+    """
     try:
         data = json.loads(WISDOM_FILE.read_text())
     except FileNotFoundError:
         return None
-    return tuple(data[k].encode("ascii") for k in ("double", "single", "long_double"))
+    machines = _machines(data)
+    chosen = machines.get(machine_key()) or machines[data.get("default", next(iter(machines)))]
+    return tuple(chosen[k].encode("ascii") for k in _PRECISIONS)
 
 
 @contextlib.contextmanager
@@ -87,11 +120,13 @@ def _shipped_wisdom_only():
 
 
 def write_wisdom(path: str | os.PathLike = WISDOM_FILE, sizes=WISDOM_SIZES, flags=("FFTW_MEASURE",)) -> Path:
-    """Measure single-threaded plans for ``n x n`` pairs of both precisions; write them to ``path``.
+    """Measure single-threaded plans for ``n x n`` pairs of both precisions; add them to ``path``.
 
-    Run once per FFTW build (``python -c "from roughcontact.core.fft import write_wisdom;
-    write_wisdom()"``), on a machine of the kind the pipeline runs on; the file's
-    plans are then used by every process (module docstring). Takes about a minute.
+    Run once per FFTW build and processor model (``python -c "from roughcontact.core.fft import
+    write_wisdom; write_wisdom()"``), on a quiet machine; the plans are filed under this
+    processor's :func:`machine_key`, beside those of other models already in the file (a file
+    of another FFTW version or sizes is started afresh; its default set stays the first model's).
+    Takes about a minute.
     """
     from .files import write_text_atomic
 
@@ -103,10 +138,19 @@ def write_wisdom(path: str | os.PathLike = WISDOM_FILE, sizes=WISDOM_SIZES, flag
             b, b_in = (pyfftw.empty_aligned((n, n // 2 + 1), dtype=cplx) for _ in range(2))
             pyfftw.FFTW(a, b, axes=(0, 1), direction="FFTW_FORWARD", flags=flags, threads=1)
             pyfftw.FFTW(b_in, a_out, axes=(0, 1), direction="FFTW_BACKWARD", flags=flags, threads=1)
-    double, single, long_double = (w.decode("ascii") for w in pyfftw.export_wisdom())
-    text = json.dumps({"sizes": list(sizes), "flags": list(flags), "fftw": pyfftw.__version__,
-                       "double": double, "single": single, "long_double": long_double}, indent=1)
+    measured = dict(zip(_PRECISIONS, (w.decode("ascii") for w in pyfftw.export_wisdom()), strict=True))
     out = Path(path)
+    head = {"sizes": list(sizes), "flags": list(flags), "fftw": pyfftw.__version__}
+    try:
+        old = json.loads(out.read_text())
+    except FileNotFoundError:
+        old = {}
+    same = old and all(old.get(k) == v for k, v in head.items())
+    machines = dict(_machines(old)) if same else {}
+    key = machine_key()
+    machines[key] = measured
+    default = old.get("default", next(iter(machines))) if same else key
+    text = json.dumps({**head, "default": default, "machines": machines}, indent=1)
     write_text_atomic(out, text + "\n")
     shipped_wisdom.cache_clear()
     return out

@@ -127,17 +127,24 @@ check, and changes two things; the default, ``"pk-fourier-f32"``, a third:
   extrapolation in ``p0`` of the last two solutions, clipped at 0 and rescaled
   to the mean (one FFT pair to get ``u``), instead of the scaled last one;
 * *single-precision transforms* (``float32`` pyFFTW plans, ``FFTW_ESTIMATE``
-  as the double ones): the products ``K t`` and ``M P_F g`` of the loop, and
-  ``u = K p`` after a projection while the residual is above 1e-5, are
-  computed in ``float32`` (inputs divided by the internal rms height before
-  the cast, so that the float32 values do not depend on the problem's units),
-  while ``p``, the gap, every reduction and the mean removal of the direction
-  stay in ``float64``. The gap then drifts from ``K p - h`` by ~1e-7 of the
-  steps taken, so ``u = K p`` is recomputed in ``float64`` when the residual
-  first falls below 1e-5 and after each further four decades, after every
-  later projection, and before the final check (which always uses a fresh
-  ``float64`` product). Same iterations and answers to the tolerance,
-  tolerances down to 1e-13 reachable, deterministic. Float32 rounding of the
+  as the double ones; :class:`roughcontact.core.backend.SpectralProduct`): the
+  products of the loop are computed in ``float32`` (inputs divided by the
+  internal rms height before the cast, so that the float32 values do not depend
+  on the problem's units), while ``p``, the gap, every reduction and the mean
+  removal of the direction stay in ``float64``. Only the nodes of ``F`` are
+  written into the transforms' input (the rest stays zero), the ``1 / n^2`` of
+  the inverse transform sits in the multipliers, and a step costs one forward
+  and one inverse transform whether or not it is projected: ``t . K t`` comes
+  from the spectrum of ``t`` (Parseval) before the inverse, and a projected
+  step's change ``p_new - p = x - tau t`` (``x`` the clipped part plus the
+  rescale to the mean, on ``F``) is transformed forward and combined with
+  ``-tau F[t]`` into the step's one inverse, so ``K p`` is never transformed
+  afresh (2.35 transform pairs an iteration on the paper case, against 2.7
+  before; ``docs/solver.md``). The gap then drifts from ``K p - h`` by ~1e-7
+  of the steps taken, so ``u = K p`` is recomputed in ``float64`` when the
+  residual first falls below 1e-5 and after each further four decades, and
+  before the final check (which always uses a fresh ``float64`` product). Same answers to the
+  tolerance, tolerances down to 1e-13 reachable, deterministic. Float32 rounding of the
   small late directions is not a smooth function of the input, though: two
   problems that differ only by round-off (an exact rescaling of heights and
   ``E*``) end at solutions that differ by what ``tol`` allows instead of by

@@ -8,7 +8,12 @@ operator is ``Lx / E*`` times the internal one.
 :class:`PeriodicHalfSpace` is the periodic FFT-BEM operator
 ``u(q) = 2 p(q) / (E* |q|)``, ``|q| = 2 pi sqrt((mx / Lx)^2 + (my / Ly)^2)`` with integer
 mode numbers ``mx``, ``my``, with its Fourier preconditioner ``M = |q| E* / 2`` (``K``'s
-inverse off ``q = 0``) and single-precision variants of both products.
+inverse off ``q = 0``) and single-precision variants of both products: whole fields
+(``apply32``), fields given on a set of nodes and zero elsewhere (``apply32_on``: only those
+nodes are written into the transform's input), or split into a forward transform
+(``spectrum32_on``), Parseval's ``x . K x`` (``quadratic32``) and the inverse
+(``displacement32``), so that the iteration can combine spectra before one inverse.
+The fields live on an array backend (:mod:`roughcontact.core.backend`: numpy, or CuPy on a GPU).
 
 :class:`FreeHalfSpace` is the free-boundary (non-periodic) operator with the same
 methods: the ``nx x ny`` pressure, uniform on each ``dx x dy`` pixel, is
