@@ -35,7 +35,8 @@ memory and FFT plans of one size do not leak into the next) it:
    ``--n`` the output ends with the exponent ``a`` of ``iterations ~ N**a`` per method;
 7. runs Tamaas' ``PolonskyKeerRey`` (pressure primal and constraint, one thread, the same
    array and tolerance) on the first ``--tamaas-steps`` loads (default "auto": all for
-   N <= 1024, the first 3 above) and compares A/A0 over those steps.
+   N <= 1024, the first one above: its cold start from a uniform pressure costs Tamaas 290 s
+   CPU at N = 4096, 2026-11-26) and compares A/A0 over those steps.
 
 An explicit ``--plan-repeats``, ``--methods`` or ``--tamaas-steps`` applies to every N.
 ``--backend cupy`` solves on the GPU (the solver's array backend option): Tamaas, the
@@ -105,7 +106,7 @@ AUTO_MAX_N = 1024
 #: Largest N at which the solve is repeated under tracemalloc.
 TRACEMALLOC_MAX_N = 2048
 #: Tamaas steps above AUTO_MAX_N under "auto".
-TAMAAS_AUTO_STEPS = 3
+TAMAAS_AUTO_STEPS = 1
 DEFAULT_PLAN_REPEATS = 2
 DEFAULT_METHODS = "pk,pk-fourier,pk-fourier-f32"
 RESULT_TAG = "@@RESULT@@"

@@ -27,7 +27,7 @@ def test_auto_runs_the_extras_up_to_1024_only(bench):
     small, large = bench.resolve_extras(1024, 30), bench.resolve_extras(4096, 30)
     assert small == {"plan_repeats": 2, "methods": ["pk", "pk-fourier", "pk-fourier-f32"], "tamaas_steps": 30,
                      "tracemalloc": True, "measure_pair": True}
-    assert large == {"plan_repeats": 0, "methods": [], "tamaas_steps": 3, "tracemalloc": False,
+    assert large == {"plan_repeats": 0, "methods": [], "tamaas_steps": 1, "tracemalloc": False,
                      "measure_pair": False}
     assert bench.resolve_extras(2048, 30)["tracemalloc"]
     assert bench.resolve_extras(2, 2)["tamaas_steps"] == 2  # never more steps than there are
