@@ -547,14 +547,9 @@ def worker(n: int, steps: int, p_max: float, tol: float, tamaas: bool = True, pl
 
 # --------------------------------------------------------------------------- driver: header
 def _cpu_model() -> str:
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return "unknown CPU"
+    from roughcontact.core.fft import machine_key
+
+    return machine_key() or "unknown CPU"
 
 
 def _version(dist: str) -> str:

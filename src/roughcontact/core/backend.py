@@ -101,8 +101,11 @@ class SpectralProduct:
         return self._plan.backward(self._plan.forward(0), mult)
 
 
-def _times(spec, mult):
-    """``spec *= mult`` in place, ``mult`` an interleaved real multiplier of the same precision."""
+def multiply_spectrum(spec, mult):
+    """``spec * mult``, in place when ``mult`` (an interleaved ``(re, im)`` real multiplier) has
+    the spectrum's precision; a new array when numpy.fft < 2 has transformed in double."""
+    if spec.dtype.itemsize != 2 * mult.dtype.itemsize:
+        return spec * mult[..., 0]
     view = spec.view(mult.dtype).reshape(mult.shape)
     np.multiply(view, mult, out=view)
     return spec
@@ -133,7 +136,7 @@ class _FFTWProduct:
     def backward(self, spec, mult):
         if spec is not self.specs[0]:
             raise ValueError("SpectralProduct.backward takes the spectrum of slot 0")
-        _times(spec, mult)
+        multiply_spectrum(spec, mult)
         self.bwd.execute()  # unnormalised: 1 / (n0 n1) is in mult
         return self.out
 
@@ -150,7 +153,7 @@ class _ArrayModuleProduct:
         return spec if spec.dtype == self.cdtype else spec.astype(self.cdtype)  # numpy.fft < 2: double
 
     def backward(self, spec, mult):
-        out = self.fft.irfft2(_times(spec, mult), s=self.prod.shape, norm="forward")
+        out = self.fft.irfft2(multiply_spectrum(spec, mult), s=self.prod.shape, norm="forward")
         return out.astype(self.prod.dtype, copy=False)
 
 
@@ -171,7 +174,7 @@ class ArrayBackend:
     def zeros(self, shape, dtype=np.float64):
         return self.xp.zeros(shape, dtype=dtype)
 
-    def fft_name(self, threads: int = 1) -> str:
+    def fft_name(self) -> str:
         """The FFT library's name, for the outputs' ``fft_backend`` attribute."""
         return _fft.default_backend()
 
@@ -185,9 +188,6 @@ class ArrayBackend:
         if _fft.default_backend() == "pyfftw":
             return _FFTWProduct(prod, threads)
         return _ArrayModuleProduct(prod, np)
-
-    def synchronize(self) -> None:
-        """Wait for queued device work (nothing to wait for on the host)."""
 
 
 class _CupyFFT:
@@ -217,7 +217,7 @@ class CupyBackend(ArrayBackend):
     def to_host(self, a) -> np.ndarray:
         return self.xp.asnumpy(a)
 
-    def fft_name(self, threads: int = 1) -> str:
+    def fft_name(self) -> str:
         return "cupy"
 
     def real_fft(self, shape, threads: int = 1, dtype=np.float64):
@@ -225,9 +225,6 @@ class CupyBackend(ArrayBackend):
 
     def product_plan(self, prod: SpectralProduct, threads: int):
         return _ArrayModuleProduct(prod, self.xp)
-
-    def synchronize(self) -> None:
-        self.xp.cuda.Device().synchronize()
 
 
 @functools.cache
@@ -250,7 +247,3 @@ def get_backend(name: str = "numpy") -> ArrayBackend:
             "to 'numpy'") from exc
     return CupyBackend(cp)
 
-
-def array_module(a):
-    """``numpy`` or ``cupy``: the module of array ``a`` (for code handed arrays of either)."""
-    return np if isinstance(a, np.ndarray) or np.isscalar(a) else importlib.import_module("cupy")

@@ -11,10 +11,10 @@ import math
 
 import numpy as np
 
+from ..core.backend import get_backend
 from .box import box_solve
 from .check import MEAN_RTOL, final_check
 from .elastic import pk_solve
-from .halfspace import plans
 from .projection import enforce_mean
 from .results import StepRecord, contact_perimeter
 from .settings import SolverSettings
@@ -74,9 +74,7 @@ class ContactSolver:
 
     @property
     def backend(self) -> str:
-        if self.ws is not None:
-            return self.ws.backend
-        return self.array_backend if self.array_backend != "numpy" else plans(self.shape, self.threads).backend
+        return self.ws.backend if self.ws is not None else get_backend(self.array_backend).fft_name()
 
     def _extrapolation(self, p_int: float) -> float:
         """Factor ``c`` of the linear extrapolation in the load, 0 when not used."""

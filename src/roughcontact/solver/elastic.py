@@ -48,8 +48,6 @@ class PKIteration:
         self.single = ws.method == "pk-fourier-f32"
         ws.setup_method()
         self.Zf = ws.Z.ravel() if self.precond else None
-        self.apply_m = ws.apply_m32 if self.single else ws.apply_m
-        self.apply_k = ws.apply_k32 if self.single else ws.apply_k
         # single precision: w drifts from K p - h by ~1e-7 of the steps taken; it is
         # recomputed in float64 when the residual falls below each of these levels
         self.next_sync = 1e-5
@@ -154,7 +152,7 @@ class PKIteration:
                 a_c *= self.ksig  # the float32 product is M g / sigma
             else:
                 self.Zf[self.idx] = g_c
-                _take(self.apply_m(self.ws.Z).ravel(), self.idx, a_c)
+                _take(self.ws.apply_m(self.ws.Z).ravel(), self.idx, a_c)
                 self.Zf[self.idx] = 0.0
             a_c -= a_c.sum() / nf
             G = dot(g_c, a_c)
@@ -193,7 +191,7 @@ class PKIteration:
             return self._step_single()
         ws, idx, t_c, a_c = self.ws, self.idx, self.t_c, self.a_c
         ws.Tf[idx] = t_c
-        Rf = self.apply_k(ws.T).ravel()
+        Rf = ws.apply_k(ws.T).ravel()
         _take(Rf, idx, a_c)
         tau = self._trial(dot(a_c, t_c))
         if tau is None:

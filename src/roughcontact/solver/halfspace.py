@@ -9,8 +9,8 @@ operator is ``Lx / E*`` times the internal one.
 ``u(q) = 2 p(q) / (E* |q|)``, ``|q| = 2 pi sqrt((mx / Lx)^2 + (my / Ly)^2)`` with integer
 mode numbers ``mx``, ``my``, with its Fourier preconditioner ``M = |q| E* / 2`` (``K``'s
 inverse off ``q = 0``) and single-precision variants of both products: whole fields
-(``apply32``), fields given on a set of nodes and zero elsewhere (``apply32_on``: only those
-nodes are written into the transform's input), or split into a forward transform
+(``apply32``), fields given on a set of nodes and zero elsewhere (``apply_inverse32_on``: only
+those nodes are written into the transform's input), or split into a forward transform
 (``spectrum32_on``), Parseval's ``x . K x`` (``quadratic32``) and the inverse
 (``displacement32``), so that the iteration can combine spectra before one inverse.
 The fields live on an array backend (:mod:`roughcontact.core.backend`: numpy, or CuPy on a GPU).
@@ -31,7 +31,7 @@ import math
 
 import numpy as np
 
-from ..core.backend import ArrayBackend, SpectralProduct, get_backend
+from ..core.backend import ArrayBackend, SpectralProduct, get_backend, multiply_spectrum
 from ..core.fft import get_fft, wavenumbers
 from .love import (  # noqa: F401 (re-exported: the free operator's influence lives in love)
     _free_multiplier,
@@ -143,15 +143,6 @@ def displacement(pressure: np.ndarray, *, e_star: float = 1.0, length=1.0,
     return u
 
 
-def _multiply_spectrum(spec: np.ndarray, mult: np.ndarray) -> np.ndarray:
-    """``spec * mult`` in place, ``mult`` an interleaved (re, im) real multiplier."""
-    if spec.dtype.itemsize != 2 * mult.dtype.itemsize:  # numpy.fft < 2 computes in double
-        return spec * mult[..., 0]
-    view = spec.view(mult.dtype).reshape(mult.shape)
-    np.multiply(view, mult, out=view)
-    return spec
-
-
 class SparseLoad:
     """Writes of a few nodes into a product's real input, the other nodes kept at zero.
 
@@ -235,7 +226,7 @@ class PeriodicHalfSpace:
         """``M field`` with ``M = |q| E* / 2`` (0 at ``q = 0``), float64."""
         if self._minv2 is None:
             self._minv2 = self.be.asarray(np.repeat(self._inverse_host()[..., None], 2, axis=-1))
-        return self.fft.backward(_multiply_spectrum(self.fft.forward(field), self._minv2))
+        return self.fft.backward(multiply_spectrum(self.fft.forward(field), self._minv2))
 
     def single(self, sigma: float) -> None:
         """Make the float32 product and multipliers; inputs are divided by ``sigma``.
@@ -270,17 +261,12 @@ class PeriodicHalfSpace:
         """``K x / sigma`` from the slot-0 spectrum of ``x / sigma`` (destroyed); float32 buffer."""
         return self.prod32.backward(spec, self.kmult32)
 
-    def apply32_on(self, idx, values) -> np.ndarray:
-        """``K x / sigma`` in single precision for ``x`` = ``values`` at flat ``idx``, 0 elsewhere.
+    def apply_inverse32_on(self, idx, values) -> np.ndarray:
+        """``M x / sigma`` in single precision for ``x`` = ``values`` at flat ``idx``, 0 elsewhere.
 
         Only the nodes of ``idx`` are written into the transform's input (two transforms and one
         pass over the half spectrum in all); float32 buffer, shape (nx, ny).
         """
-        self.loader.load(idx, values, self.inv_sigma)
-        return self.prod32(self.kmult32)
-
-    def apply_inverse32_on(self, idx, values) -> np.ndarray:
-        """``M x / sigma`` in single precision for ``x`` = ``values`` at flat ``idx``, 0 elsewhere."""
         self.loader.load(idx, values, self.inv_sigma)
         return self.prod32(self.mmult32)
 
@@ -342,7 +328,7 @@ class FreeHalfSpace:
             fft._bwd.execute()  # c2r: unnormalised, the normalisation goes with the copy
             return np.multiply(fft._real_out[:nx, :ny], self.norm, out=self.out)
         self.pad[:nx, :ny] = field
-        spec = _multiply_spectrum(fft.forward(self.pad), self.kern2)
+        spec = multiply_spectrum(fft.forward(self.pad), self.kern2)
         self.out[...] = fft.backward(spec)[:nx, :ny]
         return self.out
 
@@ -384,14 +370,6 @@ class FreeHalfSpace:
         ny, my = self.shape[1], self.padded[1]
         return (idx // ny) * my + idx % ny
 
-    def _corner32(self) -> np.ndarray:
-        return self.displacement32(self.prod32.forward(0))
-
-    def apply32_on(self, idx, values) -> np.ndarray:
-        """``K x / sigma`` in single precision for ``x`` = ``values`` at flat ``idx``, 0 elsewhere."""
-        self.loader.load(idx, values, self.inv_sigma)
-        return self._corner32()
-
     def apply_inverse32_on(self, idx, values) -> np.ndarray:
         """``M x / sigma`` in single precision (the periodic preconditioner's)."""
         return self.precond.apply_inverse32_on(idx, values)
@@ -400,7 +378,7 @@ class FreeHalfSpace:
         """``K field / sigma`` with single-precision transforms (float32 buffer)."""
         nx, ny = self.shape
         self.loader.dense(field, self.inv_sigma, self.prod32.input[:nx, :ny])
-        return self._corner32()
+        return self.displacement32(self.prod32.forward(0))
 
     def apply_inverse32(self, field: np.ndarray) -> np.ndarray:
         """``M field / sigma`` with single-precision transforms (float32 buffer)."""

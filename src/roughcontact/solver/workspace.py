@@ -137,19 +137,15 @@ class Workspace:
         """``M field / sigma`` with single-precision transforms (``float32`` buffer)."""
         return self.op.apply_inverse32(field)
 
-    def apply_k32_on(self, idx: np.ndarray, values: np.ndarray) -> np.ndarray:
-        """``K x / sigma`` in single precision, ``x`` = ``values`` at flat ``idx`` and 0 elsewhere.
+    def apply_m32_on(self, idx: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """``M x / sigma`` in single precision, ``x`` = ``values`` at flat ``idx`` and 0 elsewhere.
 
         Writes only those nodes into the transform's input (``float32`` buffer, shape of the grid).
         """
-        return self.op.apply32_on(idx, values)
-
-    def apply_m32_on(self, idx: np.ndarray, values: np.ndarray) -> np.ndarray:
-        """``M x / sigma`` in single precision, ``x`` = ``values`` at flat ``idx`` and 0 elsewhere."""
         return self.op.apply_inverse32_on(idx, values)
 
     def spectrum32_on(self, idx: np.ndarray, values: np.ndarray, slot: int = 0):
-        """Single-precision spectrum of ``x / sigma`` (``x`` as in :meth:`apply_k32_on`): one forward transform."""
+        """Single-precision spectrum of ``x / sigma`` (``x`` as in :meth:`apply_m32_on`): one forward transform."""
         return self.op.spectrum32_on(idx, values, slot)
 
     def quadratic32(self, spec) -> float:
