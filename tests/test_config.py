@@ -68,10 +68,15 @@ def _edit(cfg, path, value):
          "not in the grid"),
         (("fit", "window"), [0.2, 0.1], "fit.window", "low < high"),
         (("contact", "surface", "rms_height"), 0.1, "contact.surface", "exactly one"),
+        (("contact", "solver", "array_backend"), "jax", "contact.solver.array_backend", "cupy"),
+        (("contact", "effects"), {"plasticity": {"hardness": 0.5}}, "contact.solver.array_backend",
+         "runs the elastic solver only, not the effects (plasticity)"),
     ],
 )
 def test_invalid_field_is_named(shipped_config, path, value, field, words):
     cfg = _edit(_demo(shipped_config), path, value)
+    if "array_backend" in field and path[-1] != "array_backend":  # effects on the GPU backend
+        cfg = _edit(cfg, ("contact", "solver", "array_backend"), "cupy")
     with pytest.raises(ConfigError) as info:
         validate_config(cfg, SCHEMA)
     msg = str(info.value)
