@@ -8,7 +8,7 @@ solver change must pass them all. Every step must converge on the scene's own it
 (``roughcontact.solver.ELASTIC_METHOD``, no fallback) within the entry's iteration guard, satisfy
 every invariant of :func:`solver_invariants.check_solution`, and agree with the reference.
 Whatever the reference, a periodic step at full contact (A/A0 = 1) is also compared with the exact
-full-contact field :func:`full_contact_pressure` within :func:`full_contact_bound`.
+full-contact field :func:`roughcontact.theory.full_contact.full_contact_pressure` within :func:`full_contact_bound`.
 
 References (``HardCase.reference``, implemented in tests/test_hard_case_suite.py):
 
@@ -41,7 +41,7 @@ References (``HardCase.reference``, implemented in tests/test_hard_case_suite.py
     recomputes independently.
 
 Grids, lengths: a base's ``shape`` is an int (square) or ``(nx, ny)``, a case's ``length`` a
-float or ``(Lx, Ly)``; :func:`full_contact_pressure` handles both. Non-square grids and pixels
+float or ``(Lx, Ly)``; the exact full-contact solution handles both. Non-square grids and pixels
 (``solve_contact(..., length=(Lx, Ly))``) will be added as entries once the solver takes them;
 :class:`Rough` then needs a non-square generator.
 """
@@ -56,6 +56,7 @@ import numpy as np
 
 from roughcontact.solver import STALL_WINDOW
 from roughcontact.surfaces.synthetic import generate_surface, nonperiodic_moments, spectral_moments
+from roughcontact.theory.full_contact import full_contact_load, wavenumbers
 
 Shape = int | tuple[int, int]
 Length = float | tuple[float, float]
@@ -93,30 +94,6 @@ def lengths(length: Length) -> tuple[float, float]:
     return (float(length), float(length)) if np.isscalar(length) else (float(length[0]), float(length[1]))
 
 
-def wavenumbers_q(shape: tuple[int, int], length: Length) -> np.ndarray:
-    """``|q|`` [rad / length] on the full FFT grid of ``shape`` (fftfreq order)."""
-    (nx, ny), (lx, ly) = shape, lengths(length)
-    qx = 2 * np.pi * np.fft.fftfreq(nx, 1.0 / nx) / lx
-    qy = 2 * np.pi * np.fft.fftfreq(ny, 1.0 / ny) / ly
-    return np.hypot(qx[:, None], qy[None, :])
-
-
-def full_contact_pressure(h: np.ndarray, p0: float, e_star: float = 1.0, length: Length = 1.0) -> np.ndarray:
-    """The exact pressure at full contact: ``p0 + (E*/2) F^-1[|q| h_hat]`` (periodic).
-
-    With every node in contact the gap vanishes everywhere, ``u = h - d``, and ``u(q) =
-    2 p(q) / (E* |q|)`` inverts to ``p(q) = (E* |q| / 2) h(q)`` for ``q != 0``; the mean is ``p0``.
-    Valid while the result is positive everywhere, i.e. ``p0 >`` :func:`full_contact_load`.
-    """
-    q = wavenumbers_q(h.shape, length)
-    return p0 + np.real(np.fft.ifft2(np.fft.fft2(h) * (0.5 * e_star * q)))
-
-
-def full_contact_load(h: np.ndarray, e_star: float = 1.0, length: Length = 1.0) -> float:
-    """The mean pressure at which the last node touches: ``-min (E*/2) F^-1[|q| h_hat]``."""
-    return -float(full_contact_pressure(h, 0.0, e_star, length).min())
-
-
 def full_contact_bound(p: np.ndarray, p0: float, s: float, tol: float, e_star: float = 1.0,
                        length: Length = 1.0, mean_rtol: float = 1e-10) -> float:
     """Bound on ``max |p - p_exact|`` that a converged step at full contact guarantees.
@@ -130,7 +107,7 @@ def full_contact_bound(p: np.ndarray, p0: float, s: float, tol: float, e_star: f
     are 1e-9 to 1e-4 of it, at round-off (~1e-13 p0). ``p`` is the solver's pressure (its minimum
     enters), ``s`` the gap scale (rms height).
     """
-    q_sum = float(wavenumbers_q(p.shape, length).sum())
+    q_sum = float(wavenumbers(p.shape, length).sum())
     return 0.5 * e_star * q_sum * tol * s * p0 / float(p.min()) + mean_rtol * p0
 
 

@@ -32,13 +32,12 @@ from hard_cases import (
     MAX_FULL_CONTACT_ITERATIONS,
     Measured,
     full_contact_bound,
-    full_contact_load,
-    full_contact_pressure,
     lengths,
     sneddon_load_and_approach,
 )
 from roughcontact.solver import SOLVER_PATHS, displacement, gap_scale, solve_contact, step_notes
 from roughcontact.surfaces.synthetic import generate_surface
+from roughcontact.theory.full_contact import full_contact_load, full_contact_pressure
 from solver_invariants import check_solution
 
 PEERS = {"tamaas", "contactmechanics"}

@@ -4,7 +4,8 @@ from pathlib import Path
 
 import numpy as np
 
-from roughcontact.pipeline.datasets import contact_dataset, surface_heights
+from roughcontact.analysis.stiffness import stiffness_variable
+from roughcontact.pipeline.datasets import contact_dataset, contact_observers, full_contact_variable, surface_heights
 from roughcontact.pipeline.io import eta, read_dataset, run_logged, write_dataset
 from roughcontact.pipeline.loading import case_loads
 from roughcontact.pipeline.params import recorded, require_made_for
@@ -62,7 +63,14 @@ def main(log):
         store_fields=settings["outputs"]["fields"] or False,
         clusters=settings["outputs"]["clusters"],
         progress=progress,
+        observers=contact_observers(settings["outputs"], solver["e_star"] * rms_slope),
     )
+    if settings["outputs"].get("stiffness"):
+        result["contact_stiffness"] = stiffness_variable(result, snakemake.params.surface["unit"],
+                                                         solver["pressure_unit"])
+    if settings["outputs"].get("full_contact_load"):
+        result["full_contact_pressure"] = full_contact_variable(heights, length, solver["e_star"],
+                                                                result["pressure"].attrs["units"])
     ds = contact_dataset(result, rms_slope=rms_slope, alpha=float(surf.alpha.squeeze()),
                          e_star=solver["e_star"], **labels_of(case))
     ds.attrs.update(load_info)

@@ -18,8 +18,10 @@ import xarray as xr
 from ..analysis.aggregate.combine import CASE_DIMS, TOPOGRAPHY_DIM
 from ..core.quantities import cf_unit
 from ..solver.results import cell_attrs as solver_cell_attrs
+from ..statistics.pressure import PressureDistribution, pressure_bins
 from ..statistics.representativity import epsilon_attrs
 from ..surfaces.synthetic import finite_difference_rms_slope, nonperiodic_moments, spectral_moments
+from ..theory.full_contact import full_contact_load
 from ..theory.perimeter import PERIMETER_C, perimeter_corrected_area
 
 _CASE_COORD_ATTRS = {
@@ -156,6 +158,22 @@ def contact_dataset(result: xr.Dataset, *, rms_slope: float, alpha: float, e_sta
         "units": "1", "long_name": "Nayak bandwidth alpha of the surface (profile moments)"})
     ds.attrs["e_star"] = float(e_star)
     return expand_case(ds, k_l, k_s, hurst, seed, topography=topography)
+
+
+def contact_observers(outputs: dict, scale: float) -> list:
+    """The solve's observers a contact block's ``outputs`` asks for (``scale`` = E* h' [pressure])."""
+    spec = outputs.get("pressure_distribution")
+    if not spec:
+        return []
+    return [PressureDistribution(pressure_bins(spec["bins"], spec["max"]), scale)]
+
+
+def full_contact_variable(heights, length, e_star: float, pressure_units: str) -> xr.DataArray:
+    """``full_contact_pressure``: the exact mean pressure of full contact of the periodic ``heights``."""
+    return xr.DataArray(full_contact_load(heights, e_star, length), attrs={
+        "units": pressure_units,
+        "long_name": "mean pressure at which the periodic surface is in full contact (exact: "
+                     "-min (E*/2) F^-1[|q| h_hat])"})
 
 
 def measured_surface_dataset(measured, *, name: str) -> xr.Dataset:

@@ -90,7 +90,7 @@ def solve_step(heights, p0: float, settings: SolverSettings | None = None, *, in
 
 
 def solve_contact(heights, pressures, settings: SolverSettings | None = None, *, store_fields=False,
-                  clusters: bool = False, progress=None, **options) -> xr.Dataset:
+                  clusters: bool = False, progress=None, observers=(), **options) -> xr.Dataset:
     """Solve the normal contact of a rigid rough surface on an elastic half-space.
 
     Parameters
@@ -111,12 +111,13 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
         ``step, x, y``); an iterable of 1-based step numbers stores only those
         (dims ``field_step, x, y``, coordinate ``field_step`` = step numbers).
     clusters : bool
-        Add contact-cluster statistics per step (:mod:`roughcontact.statistics.clusters`):
-        ``cluster_count``, ``cluster_mean_area``, ``cluster_max_area`` and
-        ``cluster_area_histogram``. Off: no labelling work.
+        Add the per-step ``cluster_*`` statistics (:mod:`roughcontact.statistics.clusters`); off: no labelling.
+    observers : sequence
+        Each with ``observe(pressure)`` (after every step, host numpy) and ``dataset(steps)`` (merged
+        into the result), e.g. :class:`roughcontact.statistics.pressure.PressureDistribution`.
     progress : callable, optional
-        Called after each load step as ``progress(step, p0, area_fraction,
-        iterations, converged, seconds)`` (``step`` 1-based, ``seconds`` the step's wall time).
+        Called after each load step as ``progress(step, p0, area_fraction, iterations, converged,
+        seconds)`` (``step`` 1-based, ``seconds`` the step's wall time).
     **options
         Fields of :class:`SolverSettings` replacing those of ``settings``, and ``hardness``
         [pressure] (adds :class:`~.effects.PlasticityCap`: the pressure capped, > every p0).
@@ -124,14 +125,12 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
     Returns
     -------
     xarray.Dataset
-        Dimension ``step`` (coordinate 1..n_steps) with ``pressure``, ``area_fraction``,
-        ``mean_contact_pressure``, ``mean_gap``, ``contact_perimeter``, ``iterations``,
-        ``residual``, ``converged``, ``wall_time``, ``solver_path`` (the iteration that
-        ended the step, a CF flag) and each effect's variables (with a hardness:
-        ``plastic_area_fraction``, ``plastic_load_fraction``); fields and ``x``/``y``
-        coordinates only when stored. Every variable carries CF ``units`` and
-        ``long_name``; the global attributes record the settings, the cell
-        (:func:`~.results.cell_attrs`: ``length`` and ``n`` for a square cell, ``length_x``,
+        Dimension ``step`` (coordinate 1..n_steps) with ``pressure``, ``area_fraction``, ``mean_contact_pressure``,
+        ``mean_gap``, ``contact_perimeter``, ``iterations``, ``residual``, ``converged``, ``wall_time``,
+        ``solver_path`` (the iteration that ended the step, a CF flag) and each effect's variables (with a
+        hardness: ``plastic_area_fraction``, ``plastic_load_fraction``); fields and ``x``/``y`` coordinates only
+        when stored. Every variable carries CF ``units`` and ``long_name``; the global attributes record the
+        settings, the cell (:func:`~.results.cell_attrs`: ``length`` and ``n`` for a square cell, ``length_x``,
         ``length_y`` otherwise, ``nx`` and ``ny`` always), ``boundary`` and
         ``elastic_method``. ``converged`` is True only when the final check of the package
         docstring passed on a freshly recomputed displacement.
@@ -147,8 +146,28 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
     if progress is not None and not callable(progress):
         raise ValueError(f"progress must be a callable or None, got {type(progress).__name__} {progress!r}")
     solver = prepare(heights, p, "pressures", settings, options)
-    cols, iters, conv, paths, fields, masks = _run_steps(solver, p, store, clusters, progress)
-    return _dataset(solver, p, cols, iters, conv, paths, fields, masks, store_fields)
+    observers = _check_observers(observers)
+    cols, iters, conv, paths, fields, masks = _run_steps(solver, p, store, clusters, progress, observers)
+    return _observed(_dataset(solver, p, cols, iters, conv, paths, fields, masks, store_fields), observers)
+
+
+def _observed(ds: xr.Dataset, observers) -> xr.Dataset:
+    """``ds`` with each observer's per-step variables."""
+    for observer in observers:
+        ds = ds.merge(observer.dataset(ds["step"].values).drop_vars("step"), combine_attrs="override")
+    return ds
+
+
+def _check_observers(observers) -> tuple:
+    """``observers`` as a tuple, each with ``observe`` and ``dataset`` (else a ValueError naming it)."""
+    try:
+        observers = tuple(observers)
+    except TypeError:
+        raise ValueError(f"observers must be a sequence of observers, got {type(observers).__name__}") from None
+    for ob in observers:
+        if not (callable(getattr(ob, "observe", None)) and callable(getattr(ob, "dataset", None))):
+            raise ValueError(f"observers: {type(ob).__name__} has no observe(pressure) and dataset(steps) methods")
+    return observers
 
 
 def _dataset(solver: ContactSolver | AdhesiveSolver, p, cols, iters, conv, paths, fields, masks,
@@ -176,7 +195,8 @@ def _dataset(solver: ContactSolver | AdhesiveSolver, p, cols, iters, conv, paths
     return ds
 
 
-def _run_steps(solver: ContactSolver | AdhesiveSolver, p: np.ndarray, store: set, clusters: bool, progress=None):
+def _run_steps(solver: ContactSolver | AdhesiveSolver, p: np.ndarray, store: set, clusters: bool, progress=None,
+               observers=()):
     """Solve every load step; per-step columns, iterations, flags, path codes, stored fields, masks."""
     n_steps = p.size
     names = ["area_fraction", "mean_contact_pressure", "mean_gap", "contact_perimeter", "residual",
@@ -208,6 +228,8 @@ def _run_steps(solver: ContactSolver | AdhesiveSolver, p: np.ndarray, store: set
             field_steps.append(k + 1)
         if masks is not None:
             masks.append(st.mask.copy())
+        for observer in observers:
+            observer.observe(st.pressure)
         if progress is not None:
             progress(k + 1, p0, st.area, st.iterations, st.converged, cols["wall_time"][k])
     return cols, iters, conv, paths, (fields_p, fields_g, field_steps), masks

@@ -19,6 +19,10 @@ Contents
   ``k_l <= |k| <= k_s``: in closed form (continuous integrals) and as the discrete sum
   over the integer modes of an ``n x n`` grid (what :func:`~roughcontact.surfaces.synthetic.generate_surface`
   actually draws), and Nayak's bandwidth ``alpha = m0 m4 / m2^2``.
+- The exact periodic full-contact pressure ``p0 + (E*/2) F^-1[|q| h_hat]`` and the load at which the
+  last node touches.
+- Persson's theory beyond the area for a discrete spectrum: the pressure distribution ``P(p)``, the
+  mean interfacial separation ``u(p0)`` (Yang & Persson 2008) and the contact stiffness ``-dp0/du``.
 
 Finite-load BGT and Greenwood curves
 ------------------------------------
@@ -36,7 +40,8 @@ slowly (``1 - kappa/sqrt(2 pi) ~ c alpha / xi_d^2``).
 
 Modules: :mod:`.laws` (asymptotes, Persson, CEL), :mod:`.spectra` (spectral moments, Nayak's alpha),
 :mod:`.summits` and :mod:`.asperity` (finite-load asperity theories), :mod:`.perimeter` (the perimeter
-correction of a pixel-counted area).
+correction of a pixel-counted area), :mod:`.full_contact` (the exact periodic full-contact solution),
+:mod:`.persson` (Persson's pressure distribution, mean gap and stiffness).
 """
 
 from .asperity import (
@@ -47,6 +52,11 @@ from .asperity import (
     asperity_model,
     asperity_reduced_area,
     asperity_reduced_pressure,
+)
+from .full_contact import (
+    full_contact_load,
+    full_contact_pressure,
+    wavenumbers,
 )
 from .laws import (
     KAPPA_BGT,
@@ -62,6 +72,13 @@ from .laws import (
 from .perimeter import (
     PERIMETER_C,
     perimeter_corrected_area,
+)
+from .persson import (
+    mode_spectrum,
+    persson_j,
+    persson_mean_gap,
+    persson_pressure_distribution,
+    persson_stiffness,
 )
 from .spectra import (
     areal_moments,
@@ -109,4 +126,12 @@ __all__ = [
     "asperity_kappa",
     "PERIMETER_C",
     "perimeter_corrected_area",
+    "wavenumbers",
+    "full_contact_pressure",
+    "full_contact_load",
+    "mode_spectrum",
+    "persson_pressure_distribution",
+    "persson_j",
+    "persson_mean_gap",
+    "persson_stiffness",
 ]

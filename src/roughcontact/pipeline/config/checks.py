@@ -67,6 +67,7 @@ def _check_contact(scene: str, block: dict) -> None:
         fail("outputs.fields", f"steps {bad} exceed load.n_steps = {steps} (allowed 1..{steps})")
     for name in block["effects"]:  # each effect's own cross-field rules (schema-checked names)
         EFFECTS[name].check_config(block, functools.partial(_fail_effect, fail, name))
+    _check_outputs(fail, block)
     backend = block["solver"].get("array_backend", "numpy")
     if backend != "numpy" and block["effects"]:
         fail("solver.array_backend", f"{backend!r} runs the elastic solver only, not the effects "
@@ -82,6 +83,21 @@ def _check_contact(scene: str, block: dict) -> None:
     relative = load.get("relative_to", "e_star")
     if relative == "e_star" and load["p_max"] > 1:
         fail("load.p_max", f"{load['p_max']:g} is p0/E* (load.relative_to: e_star) and must be <= 1")
+
+
+def _check_outputs(fail, block: dict) -> None:
+    """The observables that hold only for some problems: P(p) for compressive contact, the exact full contact."""
+    outputs, effects = block["outputs"], block["effects"]
+    if "pressure_distribution" in outputs and "adhesion" in effects:
+        fail("outputs.pressure_distribution", "bins compressive pressures only, and adhesion adds tension; "
+                                              "remove it or effects.adhesion")
+    if outputs.get("full_contact_load"):
+        if block["solver"]["boundary"] != "periodic":
+            fail("outputs.full_contact_load", "the exact full-contact load is that of a periodic cell; "
+                                              "remove it or set solver.boundary: periodic")
+        if effects:
+            fail("outputs.full_contact_load", f"is the elastic solution's, not with effects "
+                                              f"({', '.join(effects)}); remove it or the effects")
 
 
 def _fail_effect(fail, name: str, field: str, msg: str) -> None:
