@@ -83,6 +83,30 @@ def test_invalid_field_is_named(shipped_config, path, value, field, words):
     assert "scene 'demo'" in msg and field in msg and words in msg, msg
 
 
+ADHESION = {"adhesion": {"law": "exponential", "work": 1e-5, "range": 1e-3}}
+
+
+@pytest.mark.parametrize("outputs, edits, field, words", [
+    ({"pressure_distribution": {"bins": 10, "max": 5}}, {("contact", "effects"): ADHESION},
+     "contact.outputs.pressure_distribution", "compressive pressures only"),
+    ({"full_contact_load": True}, {("contact", "solver", "boundary"): "free"}, "contact.outputs.full_contact_load",
+     "periodic cell"),
+    ({"full_contact_load": True}, {("contact", "effects"): {"plasticity": {"hardness": 0.5}}},
+     "contact.outputs.full_contact_load", "not with effects (plasticity)"),
+    ({"pressure_distribution": {"bins": 2.5, "max": 5}}, {}, "contact.outputs.pressure_distribution.bins", "integer"),
+    ({"pressure_distribution": {"bins": 10}}, {}, "contact.outputs.pressure_distribution", "max"),
+    ({"stiffness": 3}, {}, "contact.outputs.stiffness", "boolean"),
+])
+def test_observables_refused_where_they_do_not_hold(shipped_config, outputs, edits, field, words):
+    cfg = _edit(_demo(shipped_config), ("contact", "outputs"), outputs)
+    for path, value in edits.items():
+        cfg = _edit(cfg, path, value)
+    with pytest.raises(ConfigError) as info:
+        validate_config(cfg, SCHEMA)
+    msg = str(info.value)
+    assert "scene 'demo'" in msg and field in msg and words in msg, msg
+
+
 def test_unknown_scene_is_named(shipped_config):
     cfg = _demo(shipped_config)
     cfg["scene"] = "nope"

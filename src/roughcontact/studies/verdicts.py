@@ -199,18 +199,20 @@ RULES: dict[str, Rule] = {
 }
 
 
-def judge(claim: str, paper: str, ours: str) -> str:
-    """The verdict of ``claim`` by its rule, from the printed ``paper`` and ``ours`` texts."""
-    if claim not in RULES:
-        raise KeyError(f"no verdict rule for claim {claim!r}: add one to roughcontact.studies.verdicts.RULES")
-    return RULES[claim].verdict(paper, ours)
+def judge(claim: str, paper: str, ours: str, rules: dict[str, Rule] | None = None) -> str:
+    """The verdict of ``claim`` by its rule (in ``rules``, default :data:`RULES`), from the printed texts."""
+    rules = RULES if rules is None else rules
+    if claim not in rules:
+        raise KeyError(f"no verdict rule for claim {claim!r}: add one to the page's RULES")
+    return rules[claim].verdict(paper, ours)
 
 
-def check_table(markdown: str) -> list[str]:
+def check_table(markdown: str, rules: dict[str, Rule] | None = None) -> list[str]:
     """Rows of a published claim table whose verdict or printed rule disagrees with :data:`RULES`.
 
     ``pending`` rows (nothing measured yet) are skipped. Returns one line per disagreement.
     """
+    rules = RULES if rules is None else rules
     problems = []
     for line in markdown.splitlines()[2:]:
         cells = [c.strip() for c in line.strip().strip("|").split(" | ")]
@@ -221,12 +223,12 @@ def check_table(markdown: str) -> list[str]:
         verdict = verdict.strip("*")
         if verdict == "pending":
             continue
-        if claim not in RULES:
+        if claim not in rules:
             problems.append(f"{claim!r}: no rule")
             continue
-        if test != RULES[claim].test:
+        if test != rules[claim].test:
             problems.append(f"{claim!r}: the printed test is not the rule's")
-        if (got := judge(claim, paper, ours)) != verdict:
+        if (got := judge(claim, paper, ours, rules)) != verdict:
             problems.append(f"{claim!r}: printed verdict {verdict!r}, its rule on its numbers gives {got!r}")
     return problems
 
@@ -236,6 +238,7 @@ def row(claim: str, paper: str, ours: str, verdict: str, test: str) -> dict:
     return {"claim": claim, "paper": paper, "ours": ours, "verdict": verdict, "test": test}
 
 
-def judged_row(claim: str, paper: str, ours: str) -> dict:
+def judged_row(claim: str, paper: str, ours: str, rules: dict[str, Rule] | None = None) -> dict:
     """A claim row whose verdict is its printed rule applied to its printed numbers (:func:`judge`)."""
-    return row(claim, paper, ours, judge(claim, paper, ours), RULES[claim].test)
+    rules = RULES if rules is None else rules
+    return row(claim, paper, ours, judge(claim, paper, ours, rules), rules[claim].test)

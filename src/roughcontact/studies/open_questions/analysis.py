@@ -1,0 +1,222 @@
+"""Numbers behind the open-questions page: pure functions over a published contact aggregate.
+
+The aggregate is a contact scene's ``aggregate/contact.nc`` (dims ``k_l, k_s, H, seed, step``, one
+``(k_l, k_s)`` pair here). Loads are reduced to ``pbar = p0 / (E* h')`` with each surface's own rms
+slope ``h'``; lengths are in the scene's unit (``L = 1``). Means and standard errors are over seeds
+(``sem = s.d. / sqrt(n)``), per ``H`` or pooled over ``H`` and seeds.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+from scipy.special import erfc
+
+from ...theory import cel_area, mode_spectrum, persson_area, persson_mean_gap, persson_pressure_distribution
+from ...theory import persson_stiffness
+
+#: Area fractions at which the curves are compared with the theories (interpolated in ln pbar).
+AREAS = (0.01, 0.1, 0.5, 0.9)
+
+#: Persson's gamma in the mean-separation integral (Yang & Persson 2008).
+GAMMA = 0.45
+
+
+def one_pair(ds: xr.Dataset) -> xr.Dataset:
+    """``ds`` without its length-1 ``k_l``, ``k_s`` dimensions (a scene of one spectrum pair)."""
+    if ds.sizes.get("k_l", 1) != 1 or ds.sizes.get("k_s", 1) != 1:
+        raise ValueError(f"expected one (k_l, k_s) pair, got k_l={ds['k_l'].values}, k_s={ds['k_s'].values}")
+    return ds.squeeze(("k_l", "k_s"))
+
+
+def reduced_load(ds: xr.Dataset) -> xr.DataArray:
+    """``pbar = p0 / (E* h')`` per case and step [-]."""
+    return ds["pressure"] / (float(ds.attrs["e_star"]) * ds["rms_slope"])
+
+
+def seed_mean(da: xr.DataArray, dims=("seed",)) -> tuple[xr.DataArray, xr.DataArray]:
+    """Mean and standard error of ``da`` over ``dims`` (NaN-aware; a single value has no error)."""
+    n = da.notnull().sum(dims)
+    mean = da.mean(dims)
+    sem = da.std(dims, ddof=1) / np.sqrt(n)
+    return mean, sem
+
+
+def at_areas(area: np.ndarray, values: np.ndarray, pbar: np.ndarray, areas=AREAS) -> dict[float, tuple]:
+    """``(pbar, value)`` interpolated in ``ln pbar`` where the increasing ``area`` curve crosses each of ``areas``."""
+    out = {}
+    lp = np.log(pbar)
+    for a in areas:
+        k = int(np.searchsorted(area, a))
+        if k == 0 or k >= area.size:
+            continue
+        t = (a - area[k - 1]) / (area[k] - area[k - 1])
+        out[a] = (float(np.exp(lp[k - 1] + t * (lp[k] - lp[k - 1]))),
+                  float(values[k - 1] + t * (values[k] - values[k - 1])))
+    return out
+
+
+# ----------------------------------------------------------------------------- toward full contact
+def pooled_curve(ds: xr.Dataset) -> dict[str, np.ndarray]:
+    """Pooled (all H and seeds) ``pbar`` and ``A/A0`` (mean, sem) per step."""
+    pbar = reduced_load(ds)
+    area, sem = seed_mean(ds["area_fraction"], ("H", "seed"))
+    return {"pbar": pbar.mean(("H", "seed")).values, "area": area.values, "area_sem": sem.values}
+
+
+def cel_constants(cel: xr.Dataset) -> dict[str, float]:
+    """The pooled-H CEL constants (the paper's estimator) of a fit file."""
+    sel = cel["value"].squeeze(("k_l", "k_s"), drop=True).sel(H_group="pooled", estimator="paper")
+    return {c: float(sel.sel(constant=c)) for c in ("kappa", "mu", "beta")}
+
+
+def cel_validity(curve: dict, constants: dict, rtol: float = 0.05) -> dict:
+    """Where the CEL holds: ``A_CEL / A - 1`` per step, the largest ``A/A0`` up to which it stays within ``rtol``.
+
+    Returns ``deviation`` (per step), ``holds_up_to`` (the measured A/A0 of the last step of the
+    run of steps from the first one within ``rtol``; 0 if the first is not), ``fails_at`` (the next step's A/A0, or NaN)
+    and ``cel_full`` (the ``pbar`` at which the CEL reaches A/A0 = 1, NaN if never).
+    """
+    pbar, area = curve["pbar"], curve["area"]
+    pred = cel_area(pbar, rms_slope=1.0, e_star=1.0, **constants)
+    dev = pred / area - 1.0
+    ok = np.abs(dev) <= rtol
+    run = int(np.argmin(ok)) if not ok.all() else ok.size
+    above = np.flatnonzero(pred >= 1.0)
+    return {"deviation": dev, "holds_up_to": float(area[run - 1]) if run else 0.0,
+            "fails_at": float(area[run]) if run < area.size else np.nan,
+            "cel_full": float(pbar[above[0]]) if above.size else np.nan, "prediction": pred}
+
+
+def persson_deviation(curve: dict) -> np.ndarray:
+    """``A_Persson / A - 1`` per step (Persson's erf curve on the pooled mean)."""
+    return persson_area(curve["pbar"], rms_slope=1.0, e_star=1.0) / curve["area"] - 1.0
+
+
+def full_contact_onset(ds: xr.Dataset) -> dict:
+    """Cases whose steps are in full contact exactly when ``p0`` exceeds the exact full-contact load.
+
+    ``consistent``: number of cases where ``A/A0 == 1`` at every step with ``p0 > p_fc`` and
+    ``A/A0 < 1`` at every step with ``p0 < p_fc``; ``n``: cases; ``pbar_fc`` mean and sem of
+    ``p_fc / (E* h')`` per H and pooled.
+    """
+    p_fc = ds["full_contact_pressure"]
+    full = ds["area_fraction"] >= 1.0
+    above = ds["pressure"] > p_fc
+    consistent = (full == above).all("step")
+    pbar_fc = p_fc / (float(ds.attrs["e_star"]) * ds["rms_slope"])
+    mean_h, sem_h = seed_mean(pbar_fc)
+    mean, sem = seed_mean(pbar_fc, ("H", "seed"))
+    return {"consistent": int(consistent.sum()), "n": int(consistent.size), "pbar_fc": pbar_fc,
+            "pbar_fc_H": (mean_h, sem_h), "pbar_fc_pooled": (float(mean), float(sem))}
+
+
+def approach_h_spread(ds: xr.Dataset, low: float = 0.9) -> dict:
+    """Does ``1 - A/A0`` near full contact depend on H? Pairwise z-scores of the H means per step.
+
+    Steps whose pooled mean A/A0 lies in ``[low, 1)``; ``z`` is the largest ``|m_i - m_j| / sqrt(s_i^2
+    + s_j^2)`` over H pairs at each, ``rel`` the largest relative difference of ``1 - A/A0``.
+    """
+    mean, sem = seed_mean(1.0 - ds["area_fraction"])
+    pooled = 1.0 - ds["area_fraction"].mean(("H", "seed"))
+    steps = np.flatnonzero((1.0 - pooled.values >= low) & (pooled.values > 0))
+    zs, rels = [], []
+    for k in steps:
+        m, s = mean.isel(step=k).values, sem.isel(step=k).values
+        dm = np.abs(m[:, None] - m[None, :])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z = dm / np.sqrt(s[:, None] ** 2 + s[None, :] ** 2)
+        zs.append(float(np.nanmax(z)))
+        rels.append(float(dm.max() / m.mean()))
+    return {"steps": steps, "z": np.array(zs), "rel": np.array(rels)}
+
+
+def approach_tails(curve: dict) -> dict:
+    """Measured ``1 - A/A0`` against Persson's ``erfc(sqrt 2 pbar)`` near full contact (A/A0 in [0.9, 1))."""
+    gap = 1.0 - curve["area"]
+    sel = (curve["area"] >= 0.9) & (gap > 0)
+    persson = erfc(np.sqrt(2.0) * curve["pbar"])
+    return {"pbar": curve["pbar"][sel], "measured": gap[sel], "persson": persson[sel],
+            "ratio": gap[sel] / persson[sel]}
+
+
+# ----------------------------------------------------------------------------- what users measure
+def spectrum_of(ds: xr.Dataset, hurst: float) -> tuple[np.ndarray, np.ndarray]:
+    """Persson's input for the scene's surfaces of Hurst exponent ``hurst``: ``(q, c)`` of the grid."""
+    params = scene_surface(ds)
+    return mode_spectrum(params["N"], float(ds["k_l"]), float(ds["k_s"]), hurst,
+                         rms_slope=params["rms_slope"], length=params["L"])
+
+
+def scene_surface(ds: xr.Dataset) -> dict:
+    """``N``, ``L`` and ``rms_slope`` of the generated surfaces (the aggregate's attributes)."""
+    n = int(ds.attrs["n"])
+    return {"N": n, "L": float(ds.attrs["length"]), "rms_slope": float(ds["rms_slope"].mean())}
+
+
+def gap_and_stiffness(ds: xr.Dataset, hurst: float) -> dict:
+    """Seed means of the mean gap and stiffness at one H, and Persson's at the same loads."""
+    sub = ds.sel(H=hurst)
+    e_star = float(ds.attrs["e_star"])
+    q, c = spectrum_of(ds, hurst)
+    p0 = sub["pressure"].mean("seed").values
+    gap, gap_sem = seed_mean(sub["mean_gap"])
+    k, k_sem = seed_mean(sub["contact_stiffness"])
+    return {"pbar": reduced_load(sub).mean("seed").values, "area": sub["area_fraction"].mean("seed").values,
+            "gap": gap.values, "gap_sem": gap_sem.values, "h_rms": float(np.sqrt(c.sum())),
+            "gap_persson": persson_mean_gap(p0, q, c, e_star=e_star, gamma=GAMMA),
+            "stiffness": k.values, "stiffness_sem": k_sem.values,
+            "stiffness_persson": persson_stiffness(p0, q, c, e_star=e_star, gamma=GAMMA)}
+
+
+def stiffness_exponent(curve: dict, window=(0.01, 0.1)) -> tuple[float, float]:
+    """Slopes ``d ln K / d ln p0`` over the steps with A/A0 in ``window``: measured and Persson's."""
+    sel = (curve["area"] >= window[0]) & (curve["area"] <= window[1]) & np.isfinite(curve["stiffness"])
+    x = np.log(curve["pbar"][sel])
+    return (float(np.polyfit(x, np.log(curve["stiffness"][sel]), 1)[0]),
+            float(np.polyfit(x, np.log(curve["stiffness_persson"][sel]), 1)[0]))
+
+
+def pressure_distributions(ds: xr.Dataset, areas=AREAS) -> list[dict]:
+    """Pooled ``P(p)`` at the steps nearest each of ``areas`` with Persson's, and their L1 distance.
+
+    The distance is ``sum |P - P_Persson| dp / sum P dp`` over the bins (0: identical).
+    """
+    pooled = ds["pressure_distribution"].mean(("H", "seed"))
+    pbar = reduced_load(ds).mean(("H", "seed")).values
+    area = ds["area_fraction"].mean(("H", "seed")).values
+    x = ds["pressure_bin"].values
+    width = ds["pressure_bin_high"].values - ds["pressure_bin_low"].values
+    out = []
+    for a in areas:
+        k = int(np.argmin(np.abs(np.log(area / a))))
+        measured = pooled.isel(step=k).values
+        theory = persson_pressure_distribution(x, float(pbar[k]), rms_slope=1.0, e_star=1.0)
+        distance = float(np.sum(np.abs(measured - theory) * width) / np.sum(measured * width))
+        out.append({"target": a, "step": k, "area": float(area[k]), "pbar": float(pbar[k]), "x": x,
+                    "measured": measured, "persson": theory, "distance": distance})
+    return out
+
+
+def cluster_percolation(ds: xr.Dataset, share: float = 0.5) -> dict:
+    """Per case, the A/A0 at which the largest cluster last crosses ``share`` of the contact area (upwards).
+
+    Interpolated linearly in A/A0 between the two steps around the crossing; mean and sem over all
+    cases; also the pooled cluster count per step and the A/A0 of its maximum.
+    """
+    frac = ds["cluster_max_area"] / ds["area_fraction"]
+    area = ds["area_fraction"]
+    cross = []
+    for h in ds["H"].values:
+        for s in ds["seed"].values:
+            f, a = frac.sel(H=h, seed=s).values, area.sel(H=h, seed=s).values
+            below = np.flatnonzero(f < share)  # at small loads one spot may hold half: take the last crossing
+            k = int(below[-1]) + 1 if below.size else 0
+            if 0 < k < f.size:
+                cross.append(a[k - 1] + (share - f[k - 1]) / (f[k] - f[k - 1]) * (a[k] - a[k - 1]))
+    count = ds["cluster_count"].mean(("H", "seed")).values
+    pooled_area = area.mean(("H", "seed")).values
+    cross = np.array(cross)
+    return {"crossing": (float(cross.mean()), float(cross.std(ddof=1) / np.sqrt(cross.size))), "n": cross.size,
+            "count": count, "area": pooled_area, "share": frac.mean(("H", "seed")).values,
+            "count_peak_area": float(pooled_area[int(np.argmax(count))])}

@@ -1,0 +1,94 @@
+"""The open-questions answers as claim rows: question, comparison, measured, verdict, rule.
+
+As in :mod:`roughcontact.studies.verdicts`, each verdict is its printed rule applied to the printed
+``measured`` text (:data:`RULES`; ``verdicts.check_table(markdown, RULES)`` re-derives every verdict
+of a published table from its text).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..verdicts import NUMBER, Rule, _floats, judged_row
+
+
+def _share(fraction: float) -> str:
+    return "yes" if fraction == 1 else "partly" if fraction >= 0.5 else "no"
+
+
+def _cel(comparison: str, measured: str) -> str:
+    [(upto,)] = _floats(rf"within 5 % up to A/A0 = ({NUMBER})", measured)
+    return "yes" if upto >= 0.5 else "partly" if upto >= 0.11 else "no"
+
+
+def _persson_area(comparison: str, measured: str) -> str:
+    devs = [abs(d) for _, d in _floats(rf"at A/A0 = ({NUMBER}): ({NUMBER}) %", measured)]
+    return "yes" if all(d <= 5 for d in devs) else "partly" if all(d <= 5 for d in devs[-2:]) else "no"
+
+
+def _onset(comparison: str, measured: str) -> str:
+    [(k, n)] = _floats(rf"consistent in ({NUMBER}) of ({NUMBER}) cases", measured)
+    return "yes" if k == n else "no"
+
+
+def _h_independent(comparison: str, measured: str) -> str:
+    [(k, n)] = _floats(rf"z ≤ 3 at ({NUMBER}) of ({NUMBER}) steps", measured)
+    return _share(k / n) if n else "no"
+
+
+def _tail(comparison: str, measured: str) -> str:
+    [(lo, hi)] = _floats(rf"ratio from ({NUMBER}) to ({NUMBER})", measured)
+    return "yes" if 0.5 <= lo and hi <= 2.0 else "no"
+
+
+def _ratios(comparison: str, measured: str) -> str:
+    ratios = [r for r, _ in _floats(rf"({NUMBER}) \(H=({NUMBER})\)", measured)]
+    return _share(float(np.mean([0.9 <= r <= 1.1 for r in ratios])))
+
+
+def _distance(comparison: str, measured: str) -> str:
+    d = [v for _, v in _floats(rf"A/A0 = ({NUMBER}): ({NUMBER})", measured)]
+    return _share(float(np.mean([v <= 0.1 for v in d])))
+
+
+def _percolation(comparison: str, measured: str) -> str:
+    [(m, _)] = _floats(rf"at A/A0 = ({NUMBER}) ± ({NUMBER})", measured)
+    return "yes" if abs(m - 0.42) <= 0.05 else "no"
+
+
+RULES: dict[str, Rule] = {
+    "Q1a: the CEL holds toward full contact": Rule(
+        "pooled mean A/A0 over all surfaces against the CEL with the scene's own pooled-H fit; yes when within 5 % "
+        "at every step up to A/A0 ≥ 0.5, partly when up to at least 0.11 (the fit window), no otherwise", _cel),
+    "Q1b: Persson's erf curve holds toward full contact": Rule(
+        "A_Persson/A − 1 at the steps where the pooled mean crosses A/A0 = 0.01, 0.1, 0.5, 0.9 (interpolated in "
+        "ln p̄); yes when within 5 % at all four, partly when at the two largest, no otherwise", _persson_area),
+    "Q1c: full contact begins at the exact full-contact load": Rule(
+        "per surface, A/A0 = 1 exactly at the steps with p0 > p_fc and < 1 at those below; yes when so for every "
+        "surface, no otherwise", _onset),
+    "Q1d: the approach to full contact is H-independent": Rule(
+        "at each step with pooled mean A/A0 in [0.9, 1), the largest z = |m_i − m_j| / √(s_i² + s_j²) of the "
+        "H means of 1 − A/A0 (s: their standard errors over seeds); yes when z ≤ 3 at every such step, partly at "
+        "at least half, no otherwise", _h_independent),
+    "Q1e: Persson's erfc(√2 p̄) gives 1 − A/A0 near full contact": Rule(
+        "(1 − A/A0) / erfc(√2 p̄) of the pooled mean at the steps with A/A0 in [0.9, 1); yes when it stays "
+        "within [0.5, 2] at every such step, no otherwise", _tail),
+    "Q4a: Persson's mean gap": Rule(
+        "seed-mean gap / Persson's (γ = 0.45, the surfaces' own spectrum) at A/A0 = 0.01 and 0.1 per H; yes "
+        "when every ratio is within [0.9, 1.1], partly when at least half are, no otherwise", _ratios),
+    "Q4b: Persson's contact stiffness": Rule(
+        "seed-mean K = −dp0/dū over Persson's −dp0/dū at A/A0 = 0.01 and 0.1 per H; yes when every ratio is "
+        "within [0.9, 1.1], partly when at least half are, no otherwise", _ratios),
+    "Q4c: Persson's P(p)": Rule(
+        "L1 distance Σ|P − P_Persson| Δp / Σ P Δp of the pooled distribution at the steps nearest A/A0 = 0.01, "
+        "0.1, 0.5, 0.9; yes when ≤ 0.1 at every load, partly at at least half, no otherwise", _distance),
+    "Q4d: the contact area percolates at A/A0 ≈ 0.42": Rule(
+        "per surface, the A/A0 at which the largest contact cluster last crosses half the contact area "
+        "(a proxy of the spanning cluster), mean ± standard error; yes when within 0.05 of 0.42, no otherwise",
+        _percolation),
+}
+
+
+def row(question: str, comparison: str, measured: str) -> dict:
+    """One judged row (``paper`` is the comparison column, ``ours`` the measured one)."""
+    return judged_row(question, comparison, measured, RULES)
