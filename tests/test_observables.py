@@ -14,7 +14,7 @@ from roughcontact.pipeline.datasets import contact_dataset, contact_observers, f
 from roughcontact.pipeline.io import write_dataset
 from roughcontact.pipeline.sources.generated import Generated
 from roughcontact.solver import solve_contact
-from roughcontact.statistics.pressure import PressureDistribution, pressure_bins, pressure_density
+from roughcontact.statistics.pressure import pressure_bins, pressure_density
 from roughcontact.surfaces.synthetic import generate_surface
 from roughcontact.theory.full_contact import full_contact_load
 
@@ -49,7 +49,8 @@ def test_the_observer_accounts_for_every_node_in_contact_at_every_step():
     width = res["pressure_bin_high"] - res["pressure_bin_low"]
     total = (res["pressure_distribution"] * width).sum("pressure_bin") + res["pressure_distribution_overflow"]
     np.testing.assert_allclose(total, res["area_fraction"], rtol=0, atol=1e-12)
-    assert res["pressure_distribution"].attrs["units"] == "1" and "P(p)" in res["pressure_distribution"].attrs["long_name"]
+    attrs = res["pressure_distribution"].attrs
+    assert attrs["units"] == "1" and "P(p)" in attrs["long_name"]
     assert res["pressure_bin"].values[0] == pytest.approx(0.05)
 
 

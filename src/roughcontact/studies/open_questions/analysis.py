@@ -12,8 +12,14 @@ import numpy as np
 import xarray as xr
 from scipy.special import erfc
 
-from ...theory import cel_area, mode_spectrum, persson_area, persson_mean_gap, persson_pressure_distribution
-from ...theory import persson_stiffness
+from ...theory import (
+    cel_area,
+    mode_spectrum,
+    persson_area,
+    persson_mean_gap,
+    persson_pressure_distribution,
+    persson_stiffness,
+)
 
 #: Area fractions at which the curves are compared with the theories (interpolated in ln pbar).
 AREAS = (0.01, 0.1, 0.5, 0.9)

@@ -56,6 +56,33 @@ def _percolation(comparison: str, measured: str) -> str:
     return "yes" if abs(m - 0.42) <= 0.05 else "no"
 
 
+def _slope(comparison: str, measured: str) -> str:
+    [(m, e)] = _floats(rf"slope = ({NUMBER}) ± ({NUMBER})", measured)
+    return "yes" if abs(m) > 3 * e else "no"
+
+
+def _models(comparison: str, measured: str) -> str:
+    counts = _floats(rf"within 5 % of (?:BGT|Greenwood) at ({NUMBER}) of ({NUMBER}) points", measured)
+    best = max(k / n for k, n in counts)
+    return _share(best)
+
+
+def _same_kappa(comparison: str, measured: str) -> str:
+    [(k, n)] = _floats(rf"abs\(z\) ≤ 2 at ({NUMBER}) of ({NUMBER}) points", measured)
+    return _share(k / n)
+
+
+def _halves(comparison: str, measured: str) -> str:
+    ci = _floats(rf"({NUMBER}) \[({NUMBER}), ({NUMBER})\]", measured)
+    contains = all(lo <= 0.5 <= hi for _, lo, hi in ci)
+    excludes = all(hi < 1.0 for _, _, hi in ci)
+    return "yes" if contains and excludes else "partly" if contains else "no"
+
+
+_SLOPE_RULE = ("weighted least-squares slope of the seed-mean κ(0.05)/√2π against ln α over the (k_l, H) points "
+               "at k_s = 32, N = 1024 (λ_s = 32 Δx), its standard error scaled by the root of the reduced χ² when "
+               "that exceeds 1; yes when abs(slope) > 3 standard errors, no otherwise")
+
 RULES: dict[str, Rule] = {
     "Q1a: the CEL holds toward full contact": Rule(
         "pooled mean A/A0 over all surfaces against the CEL with the scene's own pooled-H fit; yes when within 5 % "
@@ -67,7 +94,7 @@ RULES: dict[str, Rule] = {
         "per surface, A/A0 = 1 exactly at the steps with p0 > p_fc and < 1 at those below; yes when so for every "
         "surface, no otherwise", _onset),
     "Q1d: the approach to full contact is H-independent": Rule(
-        "at each step with pooled mean A/A0 in [0.9, 1), the largest z = |m_i − m_j| / √(s_i² + s_j²) of the "
+        "at each step with pooled mean A/A0 in [0.9, 1), the largest z = abs(m_i − m_j) / √(s_i² + s_j²) of the "
         "H means of 1 − A/A0 (s: their standard errors over seeds); yes when z ≤ 3 at every such step, partly at "
         "at least half, no otherwise", _h_independent),
     "Q1e: Persson's erfc(√2 p̄) gives 1 − A/A0 near full contact": Rule(
@@ -80,12 +107,24 @@ RULES: dict[str, Rule] = {
         "seed-mean K = −dp0/dū over Persson's −dp0/dū at A/A0 = 0.01 and 0.1 per H; yes when every ratio is "
         "within [0.9, 1.1], partly when at least half are, no otherwise", _ratios),
     "Q4c: Persson's P(p)": Rule(
-        "L1 distance Σ|P − P_Persson| Δp / Σ P Δp of the pooled distribution at the steps nearest A/A0 = 0.01, "
+        "L1 distance Σ abs(P − P_Persson) Δp / Σ P Δp of the pooled distribution at the steps nearest A/A0 = 0.01, "
         "0.1, 0.5, 0.9; yes when ≤ 0.1 at every load, partly at at least half, no otherwise", _distance),
     "Q4d: the contact area percolates at A/A0 ≈ 0.42": Rule(
         "per surface, the A/A0 at which the largest contact cluster last crosses half the contact area "
         "(a proxy of the spanning cluster), mean ± standard error; yes when within 0.05 of 0.42, no otherwise",
         _percolation),
+    "Q2a: κ depends on α at fixed resolution (pixel-counted area)": Rule(_SLOPE_RULE, _slope),
+    "Q2b: κ depends on α at fixed resolution (perimeter-corrected area)": Rule(_SLOPE_RULE, _slope),
+    "Q2c: BGT and Greenwood give κ at the surfaces' own α": Rule(
+        "each model's κ(0.05) at each (k_l, H) point's seed-mean α against the seed-mean pixel-counted κ(0.05); "
+        "yes when one model is within 5 % at every point, partly at at least half of them, no otherwise", _models),
+    "Q3a: κ is the same on L and 2L cells": Rule(
+        "z = (κ_2L − κ_L) / √(s_L² + s_2L²) of the seed means (s: standard errors) at A/A0 = 0.01, 0.05, 0.1 per "
+        "H; yes when abs(z) ≤ 2 at every point, partly at at least half, no otherwise", _same_kappa),
+    "Q3b: κ's seed scatter halves on a 2L cell": Rule(
+        "ratio of the seed standard deviations of κ(0.05), 2L over L, with its 95 % interval (F distribution); "
+        "yes when the interval contains 0.5 and lies below 1 for every H, partly when it contains 0.5 for every "
+        "H, no otherwise", _halves),
 }
 
 

@@ -8,10 +8,12 @@ from __future__ import annotations
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter, ScalarFormatter
 from scipy.special import erfc
 
 from ...figures.style import DATA_COLOURS, DOUBLE_COLUMN_IN
 from ...theory import persson_area
+
 
 def shown(keys) -> list:
     """At most three of ``keys`` (first, middle, last): five curves and their theories would crowd a panel."""
@@ -90,4 +92,46 @@ def cluster_figure(clusters: dict) -> Figure:
     b.axvline(0.42, color=DATA_COLOURS[1], ls="--", label="Dapp et al. (2012): 0.42")
     b.set(xlabel=r"$A/A_0$", ylabel="largest cluster / contact area", ylim=(0, 1.02))
     b.legend(fontsize=7)
+    return fig
+
+
+def alpha_figure(pixel: dict, corrected: dict) -> Figure:
+    """κ(0.05)/√2π against α at λ_s = 32 Δx, (a) pixel-counted, (b) perimeter-corrected, with BGT and Greenwood."""
+    fig, axes = _figure(1, 2, 3.0)
+    line = np.geomspace(pixel["alpha"].min(), pixel["alpha"].max(), 60)
+    for ax, pts, title in zip(axes, (pixel, corrected), ("pixel-counted area", "perimeter-corrected area"),
+                              strict=True):
+        for colour, kl in zip(DATA_COLOURS, np.unique(pts["k_l"]), strict=False):
+            sel = pts["k_l"] == kl
+            ax.errorbar(pts["alpha"][sel], pts["kappa"][sel], yerr=pts["sem"][sel], fmt="o", ms=3, color=colour,
+                        label=rf"$\lambda_l = L/{kl:g}$")
+        order = np.argsort(pts["alpha"])
+        for model, style in (("bgt", ":"), ("greenwood", "--")):
+            ax.semilogx(pts["alpha"][order], pts[model][order], style, color="k", label=model.upper()
+                        if model == "bgt" else "Greenwood")
+        ax.set(xscale="log", xlabel=r"Nayak's $\alpha$", ylabel=r"$\kappa(A/A_0 = 0.05)/\sqrt{2\pi}$", title=title,
+               xlim=(line[0] / 1.2, line[-1] * 1.2), ylim=(0.45, 1.05))
+        ax.xaxis.set_major_formatter(ScalarFormatter())
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.title.set_fontsize(8)
+    axes[0].legend(fontsize=6, ncol=2, loc="lower left")
+    return fig
+
+
+def cell_figure(small, large) -> Figure:
+    """κ(A)/√2π on the L and the 2L cell (seed means ± standard error), one panel per H."""
+    hs = list(large["H"].values)
+    fig, axes = _figure(1, len(hs), 3.0)
+    for ax, h in zip(axes, hs, strict=True):
+        for colour, (label, ds) in zip(DATA_COLOURS, (("L, N = 1024", small), ("2L, N = 2048", large)), strict=False):
+            sub = ds.sel(H=h)
+            k = sub["kappa"] / np.sqrt(2 * np.pi)
+            n = np.sqrt(sub.sizes["seed"])
+            area = sub["area_fraction"].mean("seed").values
+            mean, sem = k.mean("seed").values, k.std("seed", ddof=1).values / n
+            ax.semilogx(area, mean, "-", color=colour, label=label)
+            ax.fill_between(area, mean - sem, mean + sem, color=colour, alpha=0.3, lw=0)
+        ax.set(xlabel=r"$A/A_0$", ylabel=r"$\kappa/\sqrt{2\pi}$", title=f"H = {h:g}")
+        ax.title.set_fontsize(8)
+    axes[0].legend(fontsize=7)
     return fig

@@ -2,8 +2,9 @@
 
 ``python -m roughcontact.studies.open_questions regenerate docs/open-questions`` redraws the
 figures into ``figures/`` and writes ``claims.md`` from ``data/`` (seconds, no solve);
-``publish RESULTS docs/open-questions`` first copies the ``full-contact`` scene's aggregate and fit
-from ``RESULTS`` (``results/full-contact``) into ``data/``.
+``publish results/full-contact results/representative-2L docs/open-questions`` first copies the
+two scenes' aggregates and the full-contact fit into ``data/``. Q2 and Q3 also read two aggregates the
+reproduction publishes (:data:`REPRODUCTION`).
 """
 
 from __future__ import annotations
@@ -17,12 +18,17 @@ import numpy as np
 from ...core.files import write_text_atomic
 from ...figures.style import save_figure
 from ...pipeline.io import read_dataset
-from . import analysis as an
-from . import figures as fg
+from . import analysis as an, figures as fg, kappa as kp
 from .claims import row
 
-#: Published files, relative to the page's ``data/`` folder, and where ``publish`` takes them.
-DATA_FILES = {"full-contact.nc": "aggregate/contact.nc", "full-contact-cel.nc": "fit/cel.nc"}
+#: Published files, relative to the page's ``data/`` folder, and where ``publish`` takes them in a run
+#: (``results/full-contact``, and ``results/representative-2L`` for the last).
+DATA_FILES = {"full-contact.nc": "aggregate/contact.nc", "full-contact-cel.nc": "fit/cel.nc",
+              "representative-2L.nc": "aggregate/contact.nc"}
+
+#: Aggregates published by the reproduction that Q2 and Q3 read, relative to ``docs/``: the paper
+#: grid (its λ_s = 32 Δx column) and the reproduction's L = 1 representative cells.
+REPRODUCTION = {"grid": "reproduction/paper-grid/data/contact.nc", "small": "reproduction/data/contact.nc"}
 
 
 def _pct(x: float) -> str:
@@ -51,7 +57,7 @@ def full_contact_rows(ds, cel) -> list[dict]:
     per_h = ", ".join(f"{float(mh):.3f} ± {float(sh):.3f} (H={h:g})" for h, mh, sh in
                       zip(ds["H"].values, *onset["pbar_fc_H"], strict=True))
     rows.append(row("Q1c: full contact begins at the exact full-contact load",
-                    "p_fc = −min (E*/2) F⁻¹[|q| ĥ] of each surface",
+                    "p_fc = −min (E*/2) F⁻¹[‖q‖ ĥ] of each surface",
                     f"consistent in {onset['consistent']} of {onset['n']} cases; p̄_fc = {m:.3f} ± {s:.3f} "
                     f"pooled; per H: {per_h}"))
     spread = an.approach_h_spread(ds)
@@ -95,6 +101,47 @@ def users_rows(ds, curves: dict) -> list[dict]:
     ]
 
 
+def alpha_rows(grid) -> list[dict]:
+    """Q2's rows from the paper grid's k_s = 32 column (N = 1024: λ_s = 32 Δx)."""
+    rows = []
+    for label, con in (("pixel-counted area", grid), ("perimeter-corrected area", kp.corrected(grid))):
+        pts = kp.alpha_points(con, 32.0)
+        m, e = kp.log_slope(pts["alpha"], pts["kappa"], pts["sem"])
+        models = ", ".join(f"{name} {kp.log_slope(pts['alpha'], pts[key])[0]:.3f}"
+                           for name, key in (("BGT", "bgt"), ("Greenwood", "greenwood")))
+        rows.append(row(f"Q2a: κ depends on α at fixed resolution ({label})" if label.startswith("pixel") else
+                        f"Q2b: κ depends on α at fixed resolution ({label})", f"asperity models: {models}",
+                        f"slope = {m:.4f} ± {e:.4f} (√2π per e-fold of α) over {pts['alpha'].size} points, α = "
+                        f"{pts['alpha'].min():.3g} to {pts['alpha'].max():.3g}"))
+    pts = kp.alpha_points(grid, 32.0)
+    near = {name: int(np.sum(np.abs(pts[key] / pts["kappa"] - 1) <= 0.05)) for name, key in
+            (("BGT", "bgt"), ("Greenwood", "greenwood"))}
+    n = pts["alpha"].size
+    rows.append(row("Q2c: BGT and Greenwood give κ at the surfaces' own α", "Nayak statistics at each surface's α",
+                    f"within 5 % of BGT at {near['BGT']} of {n} points, within 5 % of Greenwood at "
+                    f"{near['Greenwood']} of {n} points; at the largest α ({pts['alpha'].max():.3g}) κ/√2π = "
+                    f"{pts['kappa'][np.argmax(pts['alpha'])]:.3f}, BGT {pts['bgt'][np.argmax(pts['alpha'])]:.3f}"))
+    return rows
+
+
+def cell_rows(small, large) -> list[dict]:
+    """Q3's rows: the representative spectrum on L and 2L cells (same pixel)."""
+    comp = kp.cell_size_comparison(small, large)
+    ok = sum(abs(r["z"]) <= 2 for r in comp)
+    diffs = [r["large"][0] - r["small"][0] for r in comp]
+    at05 = [r for r in comp if r["area"] == 0.05]
+    return [
+        row("Q3a: κ is the same on L and 2L cells", "a representative cell: no change with its size",
+            f"abs(z) ≤ 2 at {ok} of {len(comp)} points; Δκ/√2π from {min(diffs):+.4f} to {max(diffs):+.4f}; "
+            + "; ".join(f"κ(0.05)/√2π {r['small'][0]:.4f} ± {r['small'][1]:.4f} (L) and {r['large'][0]:.4f} ± "
+                        f"{r['large'][1]:.4f} (2L) at H = {r['H']:g}" for r in at05)),
+        row("Q3b: κ's seed scatter halves on a 2L cell", "1/√4 = 0.5 for a self-averaging κ",
+            "s.d. ratio 2L/L of κ(0.05): " + ", ".join(
+                f"{r['sd_ratio'][0]:.3f} [{r['sd_ratio'][1]:.3f}, {r['sd_ratio'][2]:.3f}] at H = {r['H']:g}"
+                for r in at05)),
+    ]
+
+
 def markdown_table(rows: list[dict]) -> str:
     """The rows as the page's Markdown table."""
     out = ["| question | comparison | measured | verdict | rule |", "|---|---|---|---|---|"]
@@ -102,10 +149,22 @@ def markdown_table(rows: list[dict]) -> str:
     return "\n".join(out) + "\n"
 
 
-def regenerate(out: Path) -> None:
-    """Figures and ``claims.md`` of ``out`` from ``out/data`` (no solve)."""
+def _reproduction(docs: Path) -> dict:
+    """The reproduction's aggregates Q2 and Q3 read (:data:`REPRODUCTION`) under ``docs``."""
+    grid = read_dataset(docs / REPRODUCTION["grid"], stage="aggregate")
+    small = read_dataset(docs / REPRODUCTION["small"], stage="aggregate").sel(k_l=[16.0], k_s=[32.0])
+    return {"grid": grid, "small": an.one_pair(small)}
+
+
+def regenerate(out: Path, docs: Path | None = None) -> None:
+    """Figures and ``claims.md`` of ``out`` from ``out/data`` and the reproduction's aggregates (no solve).
+
+    ``docs`` is the folder holding ``reproduction/`` (default: ``out``'s parent).
+    """
     data, figs = out / "data", out / "figures"
     figs.mkdir(parents=True, exist_ok=True)
+    rep = _reproduction(out.parent if docs is None else docs)
+    large = an.one_pair(read_dataset(data / "representative-2L.nc", stage="aggregate"))
     ds = an.one_pair(read_dataset(data / "full-contact.nc", stage="aggregate"))
     cel = read_dataset(data / "full-contact-cel.nc", stage="fit")
     curve = an.pooled_curve(ds)
@@ -115,27 +174,39 @@ def regenerate(out: Path) -> None:
     save_figure(fg.gap_stiffness_figure(curves), figs / "gap_stiffness.png")
     save_figure(fg.pressure_figure(an.pressure_distributions(ds)), figs / "pressure_distribution.png")
     save_figure(fg.cluster_figure(an.cluster_percolation(ds)), figs / "clusters.png")
-    write_text_atomic(out / "claims.md", markdown_table(full_contact_rows(ds, cel) + users_rows(ds, curves)))
+    save_figure(fg.alpha_figure(kp.alpha_points(rep["grid"], 32.0),
+                                kp.alpha_points(kp.corrected(rep["grid"]), 32.0)), figs / "kappa_alpha.png")
+    save_figure(fg.cell_figure(rep["small"], large), figs / "cell_size.png")
+    rows = (full_contact_rows(ds, cel) + alpha_rows(rep["grid"]) + cell_rows(rep["small"], large)
+            + users_rows(ds, curves))
+    write_text_atomic(out / "claims.md", markdown_table(rows))
 
 
-def publish(results: Path, out: Path) -> None:
-    """Copy the run's aggregate and fit (:data:`DATA_FILES`) into ``out/data``, then :func:`regenerate`."""
+def publish(results: Path, cells: Path, out: Path) -> None:
+    """Copy the runs' files (:data:`DATA_FILES`) into ``out/data``, then :func:`regenerate`.
+
+    ``results`` is the full-contact run (``results/full-contact``), ``cells`` the 2L one
+    (``results/representative-2L``).
+    """
     data = out / "data"
     data.mkdir(parents=True, exist_ok=True)
     for name, source in DATA_FILES.items():
-        shutil.copyfile(results / source, data / name)
+        shutil.copyfile((cells if name.startswith("representative") else results) / source, data / name)
     regenerate(out)
 
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(prog="python -m roughcontact.studies.open_questions", description=__doc__)
     sub = ap.add_subparsers(dest="command", required=True)
-    sub.add_parser("regenerate", help="figures and claims.md from OUT/data").add_argument("out", type=Path)
-    pub = sub.add_parser("publish", help="copy a full-contact run's aggregate and fit, then regenerate")
-    pub.add_argument("results", type=Path)
+    reg = sub.add_parser("regenerate", help="figures and claims.md from OUT/data")
+    reg.add_argument("out", type=Path)
+    reg.add_argument("--docs", type=Path, help="the folder holding reproduction/ (default: OUT's parent)")
+    pub = sub.add_parser("publish", help="copy the full-contact and 2L runs' files, then regenerate")
+    pub.add_argument("results", type=Path, help="results/full-contact")
+    pub.add_argument("cells", type=Path, help="results/representative-2L")
     pub.add_argument("out", type=Path)
     args = ap.parse_args(argv)
     if args.command == "publish":
-        publish(args.results, args.out)
+        publish(args.results, args.cells, args.out)
     else:
-        regenerate(args.out)
+        regenerate(args.out, args.docs)

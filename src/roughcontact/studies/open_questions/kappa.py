@@ -1,0 +1,84 @@
+"""κ against the bandwidth α at fixed resolution (Q2) and on cells of two sizes (Q3): pure functions.
+
+κ is read at ``A/A0 = 0.05`` (and 0.01, 0.1) from each case's load curve (log-linear in A between
+steps, :func:`roughcontact.studies.reproduction.kappa_at`), from the pixel-counted area or the
+perimeter-corrected one (``kappa * A_corr / A``). κ is quoted in units of ``sqrt(2 pi)``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+from scipy.stats import f as f_dist
+
+from ...theory import KAPPA_BGT, asperity_kappa
+from ..reproduction import kappa_at
+
+#: Areas at which κ is compared.
+KAPPA_AREAS = (0.01, 0.05, 0.1)
+
+
+def corrected(con: xr.Dataset) -> xr.Dataset:
+    """``con`` with ``area_fraction`` and ``kappa`` of the perimeter-corrected area (κ scales with A at fixed p0)."""
+    out = con.copy()
+    out["kappa"] = con["kappa"] * con["area_fraction_corrected"] / con["area_fraction"]
+    out["area_fraction"] = con["area_fraction_corrected"]
+    return out
+
+
+def alpha_points(con: xr.Dataset, k_s: float, area: float = 0.05) -> dict[str, np.ndarray]:
+    """One point per ``(k_l, H)`` at the given ``k_s``: α (seed mean), κ/√2π seed mean and sem, BGT, Greenwood."""
+    sub = con.sel(k_s=k_s)
+    kap = kappa_at(sub, area) / KAPPA_BGT
+    n = kap.notnull().sum("seed")
+    mean, sem = kap.mean("seed"), kap.std("seed", ddof=1) / np.sqrt(n)
+    alpha = sub["alpha"].mean("seed")
+    flat = {"alpha": alpha.values.ravel(), "kappa": mean.values.ravel(), "sem": sem.values.ravel(),
+            "k_l": np.repeat(sub["k_l"].values, sub.sizes["H"]), "H": np.tile(sub["H"].values, sub.sizes["k_l"])}
+    ok = np.isfinite(flat["kappa"]) & np.isfinite(flat["sem"])
+    flat = {k: v[ok] for k, v in flat.items()}
+    for model in ("bgt", "greenwood"):
+        flat[model] = np.array([float(asperity_kappa(area, alpha=a, model=model)) for a in flat["alpha"]]) / KAPPA_BGT
+    return flat
+
+
+def log_slope(alpha: np.ndarray, kappa: np.ndarray, sem: np.ndarray | None = None) -> tuple[float, float]:
+    """Slope of κ against ln α by (weighted) least squares and its standard error.
+
+    With ``sem`` the weights are ``1 / sem^2`` and the error is scaled by the root of the reduced
+    chi-square when that exceeds 1 (scatter beyond the seed errors widens it, never narrows it).
+    Without, the points are exact (a theory's curve): the error is 0.
+    """
+    x = np.log(alpha)
+    design = np.stack([np.ones_like(x), x], axis=1)
+    w = np.ones_like(x) if sem is None else 1.0 / sem**2
+    cov = np.linalg.inv(design.T @ (design * w[:, None]))
+    coef = cov @ (design.T @ (w * kappa))
+    if sem is None:
+        return float(coef[1]), 0.0
+    chi2 = float(np.sum(w * (kappa - design @ coef) ** 2)) / max(x.size - 2, 1)
+    return float(coef[1]), float(np.sqrt(cov[1, 1] * max(chi2, 1.0)))
+
+
+def cell_size_comparison(small: xr.Dataset, large: xr.Dataset, areas=KAPPA_AREAS) -> list[dict]:
+    """κ on the L cell (``small``) against the 2L cell (``large``) per H and area.
+
+    Each row: ``H``, ``area``, means and standard errors (units of √2π), the z-score of the
+    difference, and the ratio of the seed standard deviations with its 95 % interval
+    (F distribution with ``n_L - 1`` and ``n_2L - 1`` degrees of freedom).
+    """
+    rows = []
+    for h in large["H"].values:
+        for area in areas:
+            a = kappa_at(small.sel(H=h), area).values.ravel() / KAPPA_BGT
+            b = kappa_at(large.sel(H=h), area).values.ravel() / KAPPA_BGT
+            a, b = a[np.isfinite(a)], b[np.isfinite(b)]
+            sa, sb = a.std(ddof=1), b.std(ddof=1)
+            se = np.hypot(sa / np.sqrt(a.size), sb / np.sqrt(b.size))
+            ratio = sb / sa
+            lo = ratio / np.sqrt(f_dist.ppf(0.975, b.size - 1, a.size - 1))
+            hi = ratio / np.sqrt(f_dist.ppf(0.025, b.size - 1, a.size - 1))
+            rows.append({"H": float(h), "area": area, "small": (a.mean(), sa / np.sqrt(a.size)),
+                         "large": (b.mean(), sb / np.sqrt(b.size)), "z": (b.mean() - a.mean()) / se,
+                         "sd_ratio": (ratio, lo, hi)})
+    return rows
