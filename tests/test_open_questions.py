@@ -28,6 +28,9 @@ PUBLISHED = DOCS / "open-questions"
     ("Q2a: κ depends on α at fixed resolution (pixel-counted area)", "slope = -0.03 ± 0.011 (√2π", "no"),
     ("Q2c: BGT and Greenwood give κ at the surfaces' own α",
      "within 5 % of BGT at 3 of 20 points, within 5 % of Greenwood at 12 of 20 points", "partly"),
+    ("Q2d: at equal α, λ_l = L/8 and L/4 cells (N = 2048) follow the N = 1024 trend",
+     "z = +0.50 (λ_l = L/8, H = 0.36, α = 4.2, κ/√2π = 0.950), z = -2.50 (λ_l = L/4, H = 0.84, α = 12.7, "
+     "κ/√2π = 0.880); scatter s = 0.0100", "partly"),
     ("Q3a: κ is the same on L and 2L cells", "abs(z) ≤ 2 at 6 of 6 points", "yes"),
     ("Q3b: κ's seed scatter halves on a 2L cell",
      "s.d. ratio 2L/L of κ(0.05): 0.55 [0.32, 0.95] at H = 0.36, 0.6 [0.35, 1.04] at H = 0.84", "partly"),
@@ -64,6 +67,17 @@ def test_log_slope_of_a_straight_line_and_its_error():
     assert kappa.log_slope(alpha, kap) == pytest.approx((-0.05, 0.0))
     m, e = kappa.log_slope(alpha, kap + 0.01 * (-1) ** np.arange(8), np.full(8, 0.001))
     assert m == pytest.approx(-0.05, abs=0.01) and e > 0.001 / 3  # scatter beyond the errors widens them
+
+
+def test_a_point_on_the_trend_line_has_no_z():
+    alpha = np.geomspace(1.5, 50, 10)
+    base = {"alpha": alpha, "kappa": 1.0 - 0.04 * np.log(alpha) + 0.005 * (-1) ** np.arange(10),
+            "sem": np.full(10, 0.005)}
+    new = {"alpha": np.array([5.0, 5.0]), "kappa": 1.0 - 0.04 * np.log([5.0, 5.0]) + np.array([0.0, 0.05]),
+           "sem": np.full(2, 0.005)}
+    test = kappa.trend_test(base, new)
+    assert test["scatter"] == pytest.approx(0.005 * np.sqrt(10 / 8), rel=0.05)  # the line absorbs a little
+    assert abs(test["z"][0]) < 0.1 and test["z"][1] > 5
 
 
 def _cells(seed_scale):

@@ -67,6 +67,11 @@ def _models(comparison: str, measured: str) -> str:
     return _share(best)
 
 
+def _on_trend(comparison: str, measured: str) -> str:
+    zs = [z for z, in _floats(rf"z = ({NUMBER})", measured)]
+    return _share(float(np.mean([abs(z) <= 2 for z in zs])))
+
+
 def _same_kappa(comparison: str, measured: str) -> str:
     [(k, n)] = _floats(rf"abs\(z\) ≤ 2 at ({NUMBER}) of ({NUMBER}) points", measured)
     return _share(k / n)
@@ -118,6 +123,12 @@ RULES: dict[str, Rule] = {
     "Q2c: BGT and Greenwood give κ at the surfaces' own α": Rule(
         "each model's κ(0.05) at each (k_l, H) point's seed-mean α against the seed-mean pixel-counted κ(0.05); "
         "yes when one model is within 5 % at every point, partly at at least half of them, no otherwise", _models),
+    "Q2d: at equal α, λ_l = L/8 and L/4 cells (N = 2048) follow the N = 1024 trend": Rule(
+        "seed-mean κ(0.05)/√2π of each (k_l, H) point of the kappa-alpha scene (k_s = 64, N = 2048: 32 pixels "
+        "per λ_s) against the weighted line κ = a + b ln α through the paper grid's λ_s = 32 Δx points, z = "
+        "(κ − line) / √(sem² + s²) with s those points' scatter about the line; yes when abs(z) ≤ 2 for every "
+        "point (the trend is α, not the cells' representativity), partly for at least half, no otherwise",
+        _on_trend),
     "Q3a: κ is the same on L and 2L cells": Rule(
         "z = (κ_2L − κ_L) / √(s_L² + s_2L²) of the seed means (s: standard errors) at A/A0 = 0.01, 0.05, 0.1 per "
         "H; yes when abs(z) ≤ 2 at every point, partly at at least half, no otherwise", _same_kappa),

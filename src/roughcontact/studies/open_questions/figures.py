@@ -95,12 +95,20 @@ def cluster_figure(clusters: dict) -> Figure:
     return fig
 
 
-def alpha_figure(pixel: dict, corrected: dict) -> Figure:
-    """κ(0.05)/√2π against α at λ_s = 32 Δx, (a) pixel-counted, (b) perimeter-corrected, with BGT and Greenwood."""
+def alpha_figure(pixel: dict, corrected: dict, pixel_2048: dict | None = None,
+                 corrected_2048: dict | None = None) -> Figure:
+    """κ(0.05)/√2π against α at λ_s = 32 Δx, (a) pixel-counted, (b) perimeter-corrected, with BGT and Greenwood.
+
+    The paper grid's points (N = 1024) are dots by λ_l; the kappa-alpha scene's (N = 2048), when
+    given, open squares.
+    """
     fig, axes = _figure(1, 2, 3.0)
     line = np.geomspace(pixel["alpha"].min(), pixel["alpha"].max(), 60)
-    for ax, pts, title in zip(axes, (pixel, corrected), ("pixel-counted area", "perimeter-corrected area"),
-                              strict=True):
+    for ax, pts, more, title in zip(axes, (pixel, corrected), (pixel_2048, corrected_2048),
+                                    ("pixel-counted area", "perimeter-corrected area"), strict=True):
+        if more is not None:
+            ax.errorbar(more["alpha"], more["kappa"], yerr=more["sem"], fmt="s", ms=5, mfc="none", color="k",
+                        label=r"N = 2048, $\lambda_l = L/4, L/8$")
         for colour, kl in zip(DATA_COLOURS, np.unique(pts["k_l"]), strict=False):
             sel = pts["k_l"] == kl
             ax.errorbar(pts["alpha"][sel], pts["kappa"][sel], yerr=pts["sem"][sel], fmt="o", ms=3, color=colour,

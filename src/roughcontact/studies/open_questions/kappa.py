@@ -82,3 +82,18 @@ def cell_size_comparison(small: xr.Dataset, large: xr.Dataset, areas=KAPPA_AREAS
                          "large": (b.mean(), sb / np.sqrt(b.size)), "z": (b.mean() - a.mean()) / se,
                          "sd_ratio": (ratio, lo, hi)})
     return rows
+
+
+def trend_test(base: dict, new: dict) -> dict:
+    """The ``new`` points against the line ``κ = a + b ln α`` fitted (weighted) to ``base``.
+
+    ``z = (κ_new - line(α_new)) / sqrt(sem_new² + s²)``, ``s`` the weighted residual standard deviation
+    of ``base`` about its line (the scatter a point of the same kind shows beyond its own error).
+    """
+    x = np.log(base["alpha"])
+    w = 1.0 / base["sem"] ** 2
+    b, a = np.polyfit(x, base["kappa"], 1, w=np.sqrt(w))
+    resid = base["kappa"] - (a + b * x)
+    s = float(np.sqrt(np.sum(w * resid**2) / np.sum(w) * x.size / max(x.size - 2, 1)))
+    line = a + b * np.log(new["alpha"])
+    return {"line": line, "z": (new["kappa"] - line) / np.sqrt(new["sem"] ** 2 + s**2), "scatter": s}

@@ -2,9 +2,9 @@
 
 ``python -m roughcontact.studies.open_questions regenerate docs/open-questions`` redraws the
 figures into ``figures/`` and writes ``claims.md`` from ``data/`` (seconds, no solve);
-``publish results/full-contact results/representative-2L docs/open-questions`` first copies the
-two scenes' aggregates and the full-contact fit into ``data/``. Q2 and Q3 also read two aggregates the
-reproduction publishes (:data:`REPRODUCTION`).
+``publish results/full-contact results/representative-2L results/kappa-alpha docs/open-questions``
+(the last folder is the page) first copies the three scenes' aggregates and the full-contact fit
+into ``data/``. Q2 and Q3 also read two aggregates the reproduction publishes (:data:`REPRODUCTION`).
 """
 
 from __future__ import annotations
@@ -24,7 +24,10 @@ from .claims import row
 #: Published files, relative to the page's ``data/`` folder, and where ``publish`` takes them in a run
 #: (``results/full-contact``, and ``results/representative-2L`` for the last).
 DATA_FILES = {"full-contact.nc": "aggregate/contact.nc", "full-contact-cel.nc": "fit/cel.nc",
-              "representative-2L.nc": "aggregate/contact.nc"}
+              "representative-2L.nc": "aggregate/contact.nc", "kappa-alpha.nc": "aggregate/contact.nc"}
+
+#: The runs that may still be going when a page is published: their rows then read "pending".
+OPTIONAL = ("representative-2L.nc", "kappa-alpha.nc")
 
 #: Aggregates published by the reproduction that Q2 and Q3 read, relative to ``docs/``: the paper
 #: grid (its λ_s = 32 Δx column) and the reproduction's L = 1 representative cells.
@@ -101,6 +104,24 @@ def users_rows(ds, curves: dict) -> list[dict]:
     ]
 
 
+def _pending(question: str, scene: str) -> dict:
+    return {"claim": question, "paper": "—", "ours": f"not yet run: needs the {scene} scene", "verdict": "pending",
+            "test": "—"}
+
+
+def trend_row(grid, extra) -> dict:
+    """Q2d: the N = 2048 points (k_s = 64) against the paper grid's λ_s = 32 Δx trend in ln α."""
+    question = "Q2d: at equal α, λ_l = L/8 and L/4 cells (N = 2048) follow the N = 1024 trend"
+    if extra is None:
+        return _pending(question, "kappa-alpha")
+    new = kp.alpha_points(extra, 64.0)
+    test = kp.trend_test(kp.alpha_points(grid, 32.0), new)
+    points = ", ".join(f"z = {z:+.2f} (λ_l = L/{kl:g}, H = {h:g}, α = {a:.3g}, κ/√2π = {k:.3f})"
+                       for z, kl, h, a, k in zip(test["z"], new["k_l"], new["H"], new["alpha"], new["kappa"],
+                                                 strict=True))
+    return row(question, "the line through the 20 points at N = 1024", f"{points}; scatter s = {test['scatter']:.4f}")
+
+
 def alpha_rows(grid) -> list[dict]:
     """Q2's rows from the paper grid's k_s = 32 column (N = 1024: λ_s = 32 Δx)."""
     rows = []
@@ -127,9 +148,8 @@ def alpha_rows(grid) -> list[dict]:
 def cell_rows(small, large) -> list[dict]:
     """Q3's rows: the representative spectrum on L and 2L cells (same pixel); pending without the 2L run."""
     if large is None:
-        return [{"claim": q, "paper": "—", "ours": "not yet run: needs the representative-2L scene",
-                 "verdict": "pending", "test": "—"} for q in ("Q3a: κ is the same on L and 2L cells",
-                                                             "Q3b: κ's seed scatter halves on a 2L cell")]
+        return [_pending(q, "representative-2L") for q in ("Q3a: κ is the same on L and 2L cells",
+                                                           "Q3b: κ's seed scatter halves on a 2L cell")]
     comp = kp.cell_size_comparison(small, large)
     ok = sum(abs(r["z"]) <= 2 for r in comp)
     diffs = [r["large"][0] - r["small"][0] for r in comp]
@@ -168,8 +188,9 @@ def regenerate(out: Path, docs: Path | None = None) -> None:
     data, figs = out / "data", out / "figures"
     figs.mkdir(parents=True, exist_ok=True)
     rep = _reproduction(out.parent if docs is None else docs)
-    cells = data / "representative-2L.nc"
-    large = an.one_pair(read_dataset(cells, stage="aggregate")) if cells.exists() else None
+    large, extra = (read_dataset(data / name, stage="aggregate") if (data / name).exists() else None
+                    for name in OPTIONAL)
+    large = an.one_pair(large) if large is not None else None
     ds = an.one_pair(read_dataset(data / "full-contact.nc", stage="aggregate"))
     cel = read_dataset(data / "full-contact-cel.nc", stage="fit")
     curve = an.pooled_curve(ds)
@@ -179,26 +200,28 @@ def regenerate(out: Path, docs: Path | None = None) -> None:
     save_figure(fg.gap_stiffness_figure(curves), figs / "gap_stiffness.png")
     save_figure(fg.pressure_figure(an.pressure_distributions(ds)), figs / "pressure_distribution.png")
     save_figure(fg.cluster_figure(an.cluster_percolation(ds)), figs / "clusters.png")
-    save_figure(fg.alpha_figure(kp.alpha_points(rep["grid"], 32.0),
-                                kp.alpha_points(kp.corrected(rep["grid"]), 32.0)), figs / "kappa_alpha.png")
+    save_figure(fg.alpha_figure(kp.alpha_points(rep["grid"], 32.0), kp.alpha_points(kp.corrected(rep["grid"]), 32.0),
+                                *((kp.alpha_points(extra, 64.0), kp.alpha_points(kp.corrected(extra), 64.0))
+                                  if extra is not None else ())), figs / "kappa_alpha.png")
     if large is not None:
         save_figure(fg.cell_figure(rep["small"], large), figs / "cell_size.png")
-    rows = (full_contact_rows(ds, cel) + alpha_rows(rep["grid"]) + cell_rows(rep["small"], large)
-            + users_rows(ds, curves))
+    rows = (full_contact_rows(ds, cel) + alpha_rows(rep["grid"]) + [trend_row(rep["grid"], extra)]
+            + cell_rows(rep["small"], large) + users_rows(ds, curves))
     write_text_atomic(out / "claims.md", markdown_table(rows))
 
 
-def publish(results: Path, cells: Path, out: Path) -> None:
+def publish(results: Path, cells: Path, alpha: Path, out: Path) -> None:
     """Copy the runs' files (:data:`DATA_FILES`) into ``out/data``, then :func:`regenerate`.
 
     ``results`` is the full-contact run (``results/full-contact``), ``cells`` the 2L one
-    (``results/representative-2L``).
+    (``results/representative-2L``), ``alpha`` the kappa-alpha one (``results/kappa-alpha``).
     """
     data = out / "data"
     data.mkdir(parents=True, exist_ok=True)
+    runs = {"representative-2L.nc": cells, "kappa-alpha.nc": alpha}
     for name, source in DATA_FILES.items():
-        origin = (cells if name.startswith("representative") else results) / source
-        if origin.exists() or name != "representative-2L.nc":  # the 2L run may still be going: Q3 pending
+        origin = runs.get(name, results) / source
+        if origin.exists() or name not in OPTIONAL:  # a run still going: its rows read "pending"
             shutil.copyfile(origin, data / name)
     regenerate(out)
 
@@ -212,9 +235,10 @@ def main(argv=None) -> None:
     pub = sub.add_parser("publish", help="copy the full-contact and 2L runs' files, then regenerate")
     pub.add_argument("results", type=Path, help="results/full-contact")
     pub.add_argument("cells", type=Path, help="results/representative-2L")
+    pub.add_argument("alpha", type=Path, help="results/kappa-alpha")
     pub.add_argument("out", type=Path)
     args = ap.parse_args(argv)
     if args.command == "publish":
-        publish(args.results, args.cells, args.out)
+        publish(args.results, args.cells, args.alpha, args.out)
     else:
         regenerate(args.out, args.docs)
