@@ -54,6 +54,12 @@ def test_the_observer_accounts_for_every_node_in_contact_at_every_step():
     assert res["pressure_bin"].values[0] == pytest.approx(0.05)
 
 
+def test_nothing_is_observed_unless_asked():
+    _, _, res = _solve(outputs={})
+    assert contact_observers({"clusters": False, "fields": []}, 0.1) == []
+    assert not {"pressure_distribution", "pressure_distribution_overflow", "pressure_bin"} & set(res.variables)
+
+
 def test_observers_must_observe():
     with pytest.raises(ValueError, match="observers: int has no observe"):
         solve_contact(np.random.default_rng(0).standard_normal((16, 16)), [0.01], observers=[3])
