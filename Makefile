@@ -35,9 +35,11 @@ run: install
 dryrun: install
 	$(BIN)/snakemake -n $(if $(SCENE),--config scene=$(SCENE))
 
-# Lint runs first (seconds) and stops `make test` when it fails.
+# Lint runs first (seconds) and stops `make test` when it fails. One pytest worker per core
+# (pytest-xdist): most tests use one core, so a serial run left the second idle (28 min serial
+# on 2 quiet cores on 2026-11-26, over the 30-min CI budget under load).
 test: install-test lint browser
-	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest
+	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest -n $(JOBS)
 
 # tests/test_report.py opens the report in a real browser: Debian's chromium, installed here when
 # missing and possible (root and apt-get). Never fails: without chromium that test skips, saying why.

@@ -54,7 +54,6 @@ from pathlib import Path
 
 import numpy as np
 
-from roughcontact.solver import STALL_WINDOW
 from roughcontact.surfaces.synthetic import generate_surface, nonperiodic_moments, spectral_moments
 from roughcontact.theory.full_contact import full_contact_load, wavenumbers
 
@@ -444,11 +443,11 @@ CASES: tuple[HardCase, ...] = (
              "invariants", None, "no peer converges at the first steps (ContactMechanics fails there, "
              "test_solver_hard_cases.py); the unique solution is the one meeting the contact conditions",
              boundary="free", e_star=1e5, length=30000.0,
-             # step 1: pk-fourier-f32 stalls (A/A0 0.34 where the answer is 15 nodes); pk-fourier converges
-             # from there in ~20 iterations since its Polak-Ribiere direction survives the joins (issue 29;
-             # before, it stalled too and the gradient projection `box` converged), and steps 2-5 start on
-             # it (STICKY). pk stalls there still and `box` converges: test_solver_hard_cases.py
-             paths=("pk-fourier",), max_iterations=STALL_WINDOW + MAX_ITERATIONS),
+             # step 1: before issue 29's change of beta every preconditioned iteration cycled here (A/A0 0.34
+             # where the answer is 15 nodes) and the gradient projection `box` converged after two stall
+             # windows; now pk-fourier-f32 converges it in ~16 iterations (FR_AFTER_LOSS). pk still cycles
+             # and `box` converges: test_solver_hard_cases.py
+             ),
     HardCase("rect-periodic-aniso", Recipe(_rough((96, 64))), PARTIAL, "tamaas", 1e-4,
              TAMAAS_WHY + "; nx != ny and dx != dy (1.5 / 96 along x, 0.6 / 64 along y)", length=(1.5, 0.6)),
     HardCase("rect-plateau-periodic-aniso", Recipe(_rough((64, 128)), (Plateau(0.25, "mean"),)),

@@ -341,7 +341,7 @@ def test_default_is_periodic_and_unchanged(method, monkeypatch):
                                 0.004194101236159068, 0.0037693662709169487], rtol=1e-9)
     # iterations: pk's since d00dd01; the preconditioned ones' since Polak-Ribiere's beta kept across
     # joins (issue 29; [19, 14, 15, 18, 16] before)
-    expected_its = {"pk": [29, 29, 33, 38, 40], "pk-fourier": [19, 14, 16, 19, 16]}.get(method, [19, 13, 16, 18, 16])
+    expected_its = {"pk": [29, 29, 33, 38, 40], "pk-fourier": [19, 14, 16, 19, 16]}.get(method, [19, 13, 15, 18, 16])
     assert default["iterations"].values.tolist() == expected_its
     res_d, res_p = solve_step(h, 0.002, tol=TOL), solve_step(h, 0.002, tol=TOL, boundary="periodic")
     np.testing.assert_array_equal(res_d.pressure, res_p.pressure)

@@ -87,7 +87,8 @@ Algorithm
 *Elastic* (no hardness): constrained conjugate gradient on the contact set
 ``F = {p > 0}`` with the mean-pressure constraint, projection onto ``p >= 0``
 and Polonsky-Keer's active-set rules: nodes out of contact with a negative gap
-join ``F`` and the CG restarts; a step that would take nodes below 0 is
+join ``F`` and the CG restarts (with the Fourier preconditioner below, the
+direction is kept instead); a step that would take nodes below 0 is
 projected, the mean restored by rescaling, and the CG continues on the reduced
 set. Implementation details:
 
@@ -118,9 +119,14 @@ check, and changes two things; the default, ``"pk-fourier-f32"``, a third:
   ``boundary="free"`` the same periodic ``M`` on the ``n x n`` grid, an
   approximate inverse that still cuts the iterations 1.6-2.5x), ``P_F`` the
   restriction to ``F``, and ``z``'s mean over ``F`` removed; ``t = z + beta t``
-  with ``beta = (g.z) / (g_old.z_old)``. At iterations where nodes join ``F``
-  the gradient is re-centred on the enlarged ``F`` (a shift of ``d``) and the
-  CG restarts from the preconditioned direction. One more FFT pair per
+  with Polak-Ribiere's ``beta = max(0, z.(g - g_prev)) / (g_old.z_old)``. At
+  iterations where nodes join ``F`` the gradient is re-centred on the enlarged
+  ``F`` (a shift of ``d``) and the direction is kept (zero on the joining nodes)
+  instead of restarting: on fine-scale surfaces a few nodes join at most
+  iterations of a step, and a restart at each made the iteration a
+  preconditioned steepest descent there (issue 29: 2261 -> ~1100 iterations
+  at k_s = 512, N = 1024); the max with 0, and ``t = z`` where ``t`` is no
+  descent direction, restart it when the old directions stop helping. One more FFT pair per
   iteration; on the paper case the iterations drop 2-3x and grow more slowly
   with ``n`` (``benchmarks/README.md``);
 * *extrapolated warm start*: from the third step on, the start is the linear
