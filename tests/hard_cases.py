@@ -442,12 +442,11 @@ CASES: tuple[HardCase, ...] = (
              Loads(values=tuple(500.0 * k / 30 for k in range(1, 6))),  # the measured scene's first 5 of 30 steps
              "invariants", None, "no peer converges at the first steps (ContactMechanics fails there, "
              "test_solver_hard_cases.py); the unique solution is the one meeting the contact conditions",
-             boundary="free", e_star=1e5, length=30000.0,
              # step 1: before issue 29's change of beta every preconditioned iteration cycled here (A/A0 0.34
              # where the answer is 15 nodes) and the gradient projection `box` converged after two stall
              # windows; now pk-fourier-f32 converges it in ~16 iterations (FR_AFTER_LOSS). pk still cycles
              # and `box` converges: test_solver_hard_cases.py
-             ),
+             boundary="free", e_star=1e5, length=30000.0),
     HardCase("rect-periodic-aniso", Recipe(_rough((96, 64))), PARTIAL, "tamaas", 1e-4,
              TAMAAS_WHY + "; nx != ny and dx != dy (1.5 / 96 along x, 0.6 / 64 along y)", length=(1.5, 0.6)),
     HardCase("rect-plateau-periodic-aniso", Recipe(_rough((64, 128)), (Plateau(0.25, "mean"),)),
