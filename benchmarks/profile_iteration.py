@@ -3,11 +3,11 @@
 
 Wraps the methods of :class:`roughcontact.solver.elastic.PKIteration`, the float32 transforms of
 :class:`roughcontact.core.backend.SpectralProduct` (forward, spectrum product, backward), its
-Parseval sum, the sparse loads and the float64 products, solves the benchmark's paper case (k_l 16,
-k_s 32, H 0.8, rms slope 0.1, 30 steps to p0/E* = 0.005, tol 1e-8) on one thread and prints each
-part's CPU seconds, share of the solve, calls and ms per iteration. Method rows include the
-transform rows indented below them. The timers add a few microseconds a call; compare shares, not
-the solve's total with the benchmark's.
+Parseval sum, the sparse loads and read-backs and the float64 products, solves the benchmark's
+paper case (k_l 16, k_s 32, H 0.8, rms slope 0.1, 30 steps to p0/E* = 0.005, tol 1e-8) on one
+thread and prints each part's CPU seconds, share of the solve, calls and ms per iteration.
+Method rows include the transform rows indented below them. The timers add a few microseconds a
+call; compare shares, not the solve's total with the benchmark's.
 
     python benchmarks/profile_iteration.py [--n 1024]
 """
@@ -63,11 +63,12 @@ def instrument(acc: collections.Counter, calls: collections.Counter) -> None:
         acc["  f32 backward"] += CPU() - t1
         calls["  spectrum product"] += 1
         calls["  f32 backward"] += 1
-        return self.out
+        return self.reals[0]
 
     be._FFTWProduct.forward, be._FFTWProduct.backward = forward, backward
     wrap(be.SpectralProduct, "quadratic", "  Parseval sum")
     wrap(hs.SparseLoad, "load", "  sparse load")
+    wrap(hs.SparseLoad, "take", "  sparse read-back")
     wrap(hs.PeriodicHalfSpace, "apply", "  float64 product")
 
 

@@ -182,18 +182,22 @@ def test_write_wisdom_round_trip(tmp_path, monkeypatch):
         fft.shipped_wisdom.cache_clear()
 
 
+def _wisdom_of_two_models(fft, tmp_path, monkeypatch):
+    """A wisdom file of 8 x 8 plans written as "CPU A" (the default), then "CPU B"; ``(path, data)``."""
+    path = tmp_path / "w.json"
+    for model in ("CPU A", "CPU B"):
+        monkeypatch.setattr(fft, "machine_key", lambda m=model: m)
+        fft.write_wisdom(path, sizes=(8,))
+    return path, json.loads(path.read_text())
+
+
 def test_wisdom_is_chosen_by_processor_model(tmp_path, monkeypatch):
     """Plans are filed per processor model; another model gets the file's default set."""
     pytest.importorskip("pyfftw")
     from roughcontact.core import fft
 
     shipped_file = fft.WISDOM_FILE
-    path = tmp_path / "w.json"
-    monkeypatch.setattr(fft, "machine_key", lambda: "CPU A")
-    fft.write_wisdom(path, sizes=(8,))
-    monkeypatch.setattr(fft, "machine_key", lambda: "CPU B")
-    fft.write_wisdom(path, sizes=(8,))
-    data = json.loads(path.read_text())
+    path, data = _wisdom_of_two_models(fft, tmp_path, monkeypatch)
     assert set(data["machines"]) == {"CPU A", "CPU B"} and data["default"] == "CPU A"
     data["machines"]["CPU A"]["single"] = "(fftw-3.3.5 fftwf_wisdom #x0\n)"  # tell the sets apart
     path.write_text(json.dumps(data))
@@ -209,3 +213,59 @@ def test_wisdom_is_chosen_by_processor_model(tmp_path, monkeypatch):
     shipped = json.loads(shipped_file.read_text()) if shipped_file.exists() else None
     if shipped is not None:
         assert shipped["default"] in shipped["machines"] and max(shipped["sizes"]) == 8192
+
+
+def test_write_wisdom_keep_measures_only_what_is_missing(tmp_path, monkeypatch):
+    """``keep=True`` keeps this model's plans entry for entry and fills the default set's gaps."""
+    pytest.importorskip("pyfftw")
+    from roughcontact.core import fft
+
+    path, data = _wisdom_of_two_models(fft, tmp_path, monkeypatch)  # now "CPU B"
+
+    def entries(text):
+        return {line.strip() for line in text.splitlines()[1:] if line.strip().startswith("(")}
+
+    # take CPU A's (the default's) in-place plans away, as in a file from before they existed
+    single_b = entries(data["machines"]["CPU B"]["single"])
+    a_text = data["machines"]["CPU A"]["single"]
+    kept = [line for line in a_text.splitlines() if "rdft2" not in line or line.strip() == ")"]
+    data["machines"]["CPU A"]["single"] = "\n".join(kept) + "\n"
+    path.write_text(json.dumps(data))
+    fft.write_wisdom(path, sizes=(8,), keep=True)  # as CPU B
+    after = json.loads(path.read_text())
+    assert entries(after["machines"]["CPU B"]["single"]) == single_b  # B's plans kept, none re-measured
+    default = entries(after["machines"]["CPU A"]["single"])
+    assert entries("\n".join(kept)) <= default  # A's own plans kept
+    assert any("rdft2" in e for e in default)  # the gaps filled from B's
+    assert after["machines"]["CPU A"]["single"].rstrip().endswith(")")
+    pyfftw = pytest.importorskip("pyfftw")
+    pyfftw.forget_wisdom()
+    assert pyfftw.import_wisdom(tuple(after["machines"]["CPU A"][k].encode() for k in fft._PRECISIONS))[1]
+
+
+def test_shipped_plans_cover_the_in_place_product():
+    """The float32 product of the solver's loop (in place) is planned from the shipped wisdom at N = 1024.
+
+    Planned with no wisdom (FFTW_ESTIMATE's own heuristics) it cost 1.3-1.5x the measured plan's
+    time on the AMD EPYC (2026-11-26); planning it with the shipped wisdom must add no entry.
+    """
+    pyfftw = pytest.importorskip("pyfftw")
+    from roughcontact.core import fft
+    from roughcontact.core.backend import SpectralProduct, get_backend
+
+    shipped = fft.shipped_wisdom()
+    created = []
+    real_fftw = pyfftw.FFTW
+
+    def spy(*args, **kwargs):
+        plan = real_fftw(*args, **kwargs)
+        created.append(pyfftw.export_wisdom()[1])
+        return plan
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(fft.pyfftw, "FFTW", spy)
+        SpectralProduct(get_backend("numpy"), (1024, 1024), np.float32)
+    assert len(created) == 3  # two forwards (slots) and the inverse
+    mine = {line.strip() for line in shipped[1].decode().splitlines()[1:-1]}
+    for store in created:
+        assert {line.strip() for line in store.decode().splitlines()[1:-1]} == mine

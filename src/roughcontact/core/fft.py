@@ -119,18 +119,28 @@ def _shipped_wisdom_only():
         pyfftw.import_wisdom(saved)
 
 
-def write_wisdom(path: str | os.PathLike = WISDOM_FILE, sizes=WISDOM_SIZES, flags=("FFTW_MEASURE",)) -> Path:
+def write_wisdom(path: str | os.PathLike = WISDOM_FILE, sizes=WISDOM_SIZES, flags=("FFTW_MEASURE",),
+                 keep: bool = False) -> Path:
     """Measure single-threaded plans for ``n x n`` pairs of both precisions; add them to ``path``.
 
     Run once per FFTW build and processor model (``python -c "from roughcontact.core.fft import
     write_wisdom; write_wisdom()"``), on a quiet machine; the plans are filed under this
     processor's :func:`machine_key`, beside those of other models already in the file (a file
     of another FFTW version or sizes is started afresh; its default set stays the first model's).
-    Takes about a minute.
+    Takes about a minute. ``keep=True`` starts from this model's plans in the file, so that only
+    the problems they lack are measured (the others keep their plans, bit for bit); the default
+    set then gains this model's plans for the problems it lacks (:func:`_fill_missing`).
     """
     from .files import write_text_atomic
 
+    try:
+        old = json.loads(Path(path).read_text())
+    except FileNotFoundError:
+        old = {}
     pyfftw.forget_wisdom()
+    mine = _machines(old).get(machine_key()) if keep and old else None
+    if mine:
+        pyfftw.import_wisdom(tuple(mine[k].encode("ascii") for k in _PRECISIONS))
     for n in sizes:
         for real, cplx in ((np.float64, np.complex128), (np.float32, np.complex64)):
             # the same arrays (shapes, alignment, out of place) as RealFFT2 plans
@@ -138,22 +148,45 @@ def write_wisdom(path: str | os.PathLike = WISDOM_FILE, sizes=WISDOM_SIZES, flag
             b, b_in = (pyfftw.empty_aligned((n, n // 2 + 1), dtype=cplx) for _ in range(2))
             pyfftw.FFTW(a, b, axes=(0, 1), direction="FFTW_FORWARD", flags=flags, threads=1)
             pyfftw.FFTW(b_in, a_out, axes=(0, 1), direction="FFTW_BACKWARD", flags=flags, threads=1)
+        # the single-precision SpectralProduct's pair, in place (core.backend._FFTWProduct)
+        c = pyfftw.empty_aligned((n, n // 2 + 1), dtype=np.complex64)
+        r = c.view(np.float32)[:, :n]
+        pyfftw.FFTW(r, c, axes=(0, 1), direction="FFTW_FORWARD", flags=flags, threads=1)
+        pyfftw.FFTW(c, r, axes=(0, 1), direction="FFTW_BACKWARD", flags=flags, threads=1)
     measured = dict(zip(_PRECISIONS, (w.decode("ascii") for w in pyfftw.export_wisdom()), strict=True))
     out = Path(path)
     head = {"sizes": list(sizes), "flags": list(flags), "fftw": pyfftw.__version__}
-    try:
-        old = json.loads(out.read_text())
-    except FileNotFoundError:
-        old = {}
     same = old and all(old.get(k) == v for k, v in head.items())
     machines = dict(_machines(old)) if same else {}
     key = machine_key()
     machines[key] = measured
     default = old.get("default", next(iter(machines))) if same else key
+    if keep and default != key:
+        machines[default] = {k: _fill_missing(machines[default][k], measured[k]) for k in _PRECISIONS}
     text = json.dumps({**head, "default": default, "machines": machines}, indent=1)
     write_text_atomic(out, text + "\n")
     shipped_wisdom.cache_clear()
     return out
+
+
+def _fill_missing(wisdom: str, extra: str) -> str:
+    """``wisdom`` (FFTW's text export) with the entries of ``extra`` for problems it has no plan for.
+
+    An entry is one line ``(solver reg flags flags slvndx md5 md5 md5 md5)``; its problem is the
+    last four words with the flags.
+    """
+    def key(line: str) -> tuple[str, ...]:
+        words = line.strip().rstrip(")").split()
+        return (*words[2:4], *words[-4:])
+
+    lines = wisdom.rstrip().splitlines()
+    have = {key(line) for line in lines[1:] if line.strip().startswith("(")}
+    new = [line for line in extra.rstrip().splitlines()[1:]
+           if line.strip().startswith("(") and key(line) not in have]
+    if not new:
+        return wisdom
+    body = wisdom.rstrip()[:-1].rstrip()  # the export's closing parenthesis comes back last
+    return "\n".join([body, *new, ")"]) + "\n"
 
 
 def default_backend() -> str:

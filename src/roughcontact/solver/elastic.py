@@ -23,12 +23,14 @@ from .workspace import StallGuard, Workspace, dot
 FR_AFTER_LOSS = 0.1
 
 
-def pk_solve(ws: Workspace, p0: float, tol: float, max_iter: int, fresh: bool):
+def pk_solve(ws: Workspace, p0: float, tol: float, max_iter: int, fresh: bool | None):
     """Solve one elastic load step in place on ``ws`` from the pressure in ``ws.P``.
 
     ``ws.P`` must be >= 0 with mean ``p0``; ``fresh`` says whether ``ws.w``
-    already equals ``K P - h``. Returns ``(iterations, converged)`` with ``ws.P``
-    and ``ws.w`` consistent (``ws.w`` freshly recomputed) on exit.
+    already equals ``K P - h`` (True), must be computed (False), or equals it up to
+    single-precision round-off (None: not recomputed, but not taken as fresh either).
+    Returns ``(iterations, converged)`` with ``ws.P`` and ``ws.w`` consistent
+    (``ws.w`` freshly recomputed) on exit.
     """
     return PKIteration(ws, p0, tol, max_iter, fresh).run()
 
@@ -46,7 +48,7 @@ class PKIteration:
     ``next_sync`` of the residual.
     """
 
-    def __init__(self, ws: Workspace, p0: float, tol: float, max_iter: int, fresh: bool):
+    def __init__(self, ws: Workspace, p0: float, tol: float, max_iter: int, fresh: bool | None):
         self.ws, self.tol = ws, tol
         self.target = p0 * ws.size
         self.scale = ws.scale(p0)
@@ -60,14 +62,14 @@ class PKIteration:
         # recomputed in float64 when the residual falls below each of these levels
         self.next_sync = 1e-5
         self.ksig = ws.sigma if self.single else 1.0
-        if not fresh:
+        if fresh is False:
             ws.refresh()
         self.idx = ws.active_set()
         self.p_c = ws.Pf[self.idx]
         self.t_c = np.zeros_like(self.p_c)
         self.g_c, self.a_c = np.empty_like(self.p_c), np.empty_like(self.p_c)
         ws.T.fill(0.0)
-        self.fresh = True
+        self.fresh = fresh is not None
         self.delta, self.g_old = 0.0, 1.0
         self.it = 0
         self.guard = StallGuard(max_iter)
@@ -169,7 +171,7 @@ class PKIteration:
                 self.joined_after = 0
             # z = P_F M P_F g, zero mean on F
             if self.single:
-                _take(self.ws.apply_m32_on(self.idx, g_c).ravel(), self.idx, a_c)
+                self.ws.apply_m32_on(self.idx, g_c, a_c)
                 a_c *= self.ksig  # the float32 product is M g / sigma
             else:
                 self.Zf[self.idx] = g_c
@@ -268,9 +270,9 @@ class PKIteration:
             return False
         if not bool((a_c <= 0.0).any()):
             self.p_c, self.a_c = a_c, self.p_c
-            Rf = ws.displacement32(spec).ravel()  # K t / sigma
-            np.multiply(Rf, Rf.dtype.type(tau * self.ksig), out=Rf)
-            ws.wf -= Rf  # u <- u - tau K t: exact, no FFT pair for p
+            R = ws.displacement32(spec)  # K t / sigma
+            np.multiply(R, R.dtype.type(tau * self.ksig), out=R)
+            np.subtract(ws.w, R, out=ws.w)  # u <- u - tau K t: exact, no FFT pair for p
         elif not self._project_single(a_c, spec, tau):
             self._project(a_c)
             return True
@@ -299,9 +301,9 @@ class PKIteration:
         spec_x = ws.spectrum32_on(idx, x, slot=1)
         np.multiply(spec, -tau, out=spec)
         spec += spec_x
-        Rf = ws.displacement32(spec).ravel()  # K (p_new - p) / sigma
-        np.multiply(Rf, Rf.dtype.type(self.ksig), out=Rf)
-        ws.wf += Rf
+        R = ws.displacement32(spec)  # K (p_new - p) / sigma
+        np.multiply(R, R.dtype.type(self.ksig), out=R)
+        np.add(ws.w, R, out=ws.w)
         keep = trial > 0.0
         gone = idx[~keep]
         self.maskf[gone] = False

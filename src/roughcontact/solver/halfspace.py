@@ -144,35 +144,32 @@ def displacement(pressure: np.ndarray, *, e_star: float = 1.0, length=1.0,
 
 
 class SparseLoad:
-    """Writes of a few nodes into a product's real input, the other nodes kept at zero.
+    """Loads of values on a set of grid nodes into a :class:`SpectralProduct`, zero elsewhere.
 
-    ``flat`` is the flat view of the input; ``index`` maps the flat indices of the ``nx x ny``
-    grid to positions in it (None: the same). A load at the same index array as the last one
-    overwrites those nodes only; a new index array first zeroes the nodes of the old one; a dense
-    load (:meth:`dense`) marks the whole input as written.
+    ``index`` maps the flat indices of the ``nx x ny`` grid to flat indices of the product's grid
+    (None: the same; the free operator's is padded). The nodes' positions in the product's buffers
+    are computed once per index array (the solver passes the same array while its set does not
+    change) and serve both the load and the read-back (:meth:`take`).
     """
 
-    def __init__(self, flat, index=None):
-        self.flat, self.index = flat, index
-        self.idx, self.pos, self.full = None, None, False
+    def __init__(self, prod, index=None):
+        self.prod, self.index = prod, index
+        self.idx, self.pos = None, None
 
-    def load(self, idx, values, scale: float) -> None:
-        """``input[idx] = values * scale`` (rounded to the input's precision), zero elsewhere."""
+    def positions(self, idx):
+        """The buffers' positions of the grid nodes ``idx``, cached for the same array."""
         if self.idx is not idx:
-            if self.full:
-                self.flat.fill(0.0)
-            elif self.pos is not None:
-                self.flat[self.pos] = 0.0
-            self.idx, self.full = idx, False
-            self.pos = idx if self.index is None else self.index(idx)
-        # the product in float64, then one rounding: as a scale-and-cast of the whole field
-        buf = np.multiply(values, scale, out=np.empty_like(values, dtype=self.flat.dtype), casting="unsafe")
-        self.flat[self.pos] = buf
+            self.idx = idx
+            self.pos = self.prod.positions(idx if self.index is None else self.index(idx))
+        return self.pos
 
-    def dense(self, field, scale: float, real) -> None:
-        """The whole ``nx x ny`` field times ``scale`` into ``real`` (the input's grid view)."""
-        np.multiply(field, scale, out=real, casting="unsafe")
-        self.idx, self.pos, self.full = None, None, True
+    def load(self, idx, values, scale: float, slot: int = 0) -> None:
+        """``input[idx] = values * scale`` (rounded to the input's precision), zero elsewhere."""
+        self.prod.load(self.positions(idx), values, scale, slot)
+
+    def take(self, real, idx, out) -> None:
+        """``out[:] = real[idx]`` for a product's result ``real`` (grid nodes ``idx``, cast to ``out``)."""
+        self.prod.take(real, self.positions(idx), out)
 
 
 class PeriodicHalfSpace:
@@ -241,7 +238,7 @@ class PeriodicHalfSpace:
         self.kmult32 = prod.multiplier(self.kern)
         self.kquad32 = prod.quadratic_weights(self.kern)
         self.mmult32 = prod.multiplier(self._inverse_host())
-        self.loader = SparseLoad(prod.input.reshape(-1))
+        self.loader = SparseLoad(prod)
         self.sigma = sigma
         self.inv_sigma = 1.0 / sigma
 
@@ -250,7 +247,7 @@ class PeriodicHalfSpace:
 
         Slot 0 or 1 (:class:`~roughcontact.core.backend.SpectralProduct`); one forward transform.
         """
-        self.loader.load(idx, values, self.inv_sigma)
+        self.loader.load(idx, values, self.inv_sigma, slot)
         return self.prod32.forward(slot)
 
     def quadratic32(self, spec) -> float:
@@ -258,26 +255,31 @@ class PeriodicHalfSpace:
         return self.prod32.quadratic(spec, self.kquad32)
 
     def displacement32(self, spec) -> np.ndarray:
-        """``K x / sigma`` from the slot-0 spectrum of ``x / sigma`` (destroyed); float32 buffer."""
+        """``K x / sigma`` from the slot-0 spectrum of ``x / sigma`` (destroyed).
+
+        A float32 ``(nx, ny)`` array, maybe a strided view of a buffer that the next product overwrites.
+        """
         return self.prod32.backward(spec, self.kmult32)
 
-    def apply_inverse32_on(self, idx, values) -> np.ndarray:
-        """``M x / sigma`` in single precision for ``x`` = ``values`` at flat ``idx``, 0 elsewhere.
+    def apply_inverse32_on(self, idx, values, out) -> np.ndarray:
+        """``M x / sigma`` at the nodes ``idx`` in single precision, ``x`` = ``values`` there and 0 elsewhere.
 
-        Only the nodes of ``idx`` are written into the transform's input (two transforms and one
-        pass over the half spectrum in all); float32 buffer, shape (nx, ny).
+        Only the nodes of ``idx`` are written into the transform's input and read from its output
+        (two transforms and one pass over the half spectrum in all); the result goes into ``out``
+        (shape of ``values``, any float dtype), which is returned.
         """
         self.loader.load(idx, values, self.inv_sigma)
-        return self.prod32(self.mmult32)
+        self.loader.take(self.prod32(self.mmult32), idx, out)
+        return out
 
     def apply32(self, field: np.ndarray) -> np.ndarray:
-        """``K field / sigma`` with single-precision transforms (float32 buffer)."""
-        self.loader.dense(field, self.inv_sigma, self.prod32.input)
+        """``K field / sigma`` with single-precision transforms (float32 ``(nx, ny)``, maybe a view of a buffer)."""
+        self.prod32.load_dense(field, self.inv_sigma)
         return self.prod32(self.kmult32)
 
     def apply_inverse32(self, field: np.ndarray) -> np.ndarray:
-        """``M field / sigma`` with single-precision transforms (float32 buffer)."""
-        self.loader.dense(field, self.inv_sigma, self.prod32.input)
+        """``M field / sigma`` with single-precision transforms (float32 ``(nx, ny)``, maybe a view of a buffer)."""
+        self.prod32.load_dense(field, self.inv_sigma)
         return self.prod32(self.mmult32)
 
 
@@ -345,14 +347,14 @@ class FreeHalfSpace:
         mult = _free_multiplier(self.shape, self.aspect)[..., 0]
         self.kmult32 = prod.multiplier(mult)
         self.kquad32 = prod.quadratic_weights(mult)  # Parseval on the padded grid: x is 0 off the patch
-        self.loader = SparseLoad(prod.input.reshape(-1), self._padded_index)
+        self.loader = SparseLoad(prod, self._padded_index)
         self.out32 = self.be.xp.empty(self.shape, dtype=np.float32)
         self.sigma = sigma
         self.inv_sigma = 1.0 / sigma
 
     def spectrum32_on(self, idx, values, slot: int = 0):
         """The float32 spectrum of the padded ``x / sigma`` (as :meth:`PeriodicHalfSpace.spectrum32_on`)."""
-        self.loader.load(idx, values, self.inv_sigma)
+        self.loader.load(idx, values, self.inv_sigma, slot)
         return self.prod32.forward(slot)
 
     def quadratic32(self, spec) -> float:
@@ -360,7 +362,7 @@ class FreeHalfSpace:
         return self.prod32.quadratic(spec, self.kquad32)
 
     def displacement32(self, spec) -> np.ndarray:
-        """``K x / sigma`` on the patch from the slot-0 spectrum (destroyed); float32 buffer."""
+        """``K x / sigma`` on the patch from the slot-0 spectrum (destroyed); float32 ``(nx, ny)`` buffer."""
         nx, ny = self.shape
         self.out32[...] = self.prod32.backward(spec, self.kmult32)[:nx, :ny]
         return self.out32
@@ -370,14 +372,13 @@ class FreeHalfSpace:
         ny, my = self.shape[1], self.padded[1]
         return (idx // ny) * my + idx % ny
 
-    def apply_inverse32_on(self, idx, values) -> np.ndarray:
-        """``M x / sigma`` in single precision (the periodic preconditioner's)."""
-        return self.precond.apply_inverse32_on(idx, values)
+    def apply_inverse32_on(self, idx, values, out) -> np.ndarray:
+        """``M x / sigma`` at the nodes ``idx`` in single precision (the periodic preconditioner's), into ``out``."""
+        return self.precond.apply_inverse32_on(idx, values, out)
 
     def apply32(self, field: np.ndarray) -> np.ndarray:
         """``K field / sigma`` with single-precision transforms (float32 buffer)."""
-        nx, ny = self.shape
-        self.loader.dense(field, self.inv_sigma, self.prod32.input[:nx, :ny])
+        self.prod32.load_dense(field, self.inv_sigma)
         return self.displacement32(self.prod32.forward(0))
 
     def apply_inverse32(self, field: np.ndarray) -> np.ndarray:

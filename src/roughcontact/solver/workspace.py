@@ -137,12 +137,13 @@ class Workspace:
         """``M field / sigma`` with single-precision transforms (``float32`` buffer)."""
         return self.op.apply_inverse32(field)
 
-    def apply_m32_on(self, idx: np.ndarray, values: np.ndarray) -> np.ndarray:
-        """``M x / sigma`` in single precision, ``x`` = ``values`` at flat ``idx`` and 0 elsewhere.
+    def apply_m32_on(self, idx: np.ndarray, values: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """``M x / sigma`` at the nodes ``idx`` in single precision, ``x`` = ``values`` there and 0 elsewhere.
 
-        Writes only those nodes into the transform's input (``float32`` buffer, shape of the grid).
+        Writes and reads only those nodes of the transforms' buffers; the result goes into ``out``
+        (shape of ``values``), which is returned.
         """
-        return self.op.apply_inverse32_on(idx, values)
+        return self.op.apply_inverse32_on(idx, values, out)
 
     def spectrum32_on(self, idx: np.ndarray, values: np.ndarray, slot: int = 0):
         """Single-precision spectrum of ``x / sigma`` (``x`` as in :meth:`apply_m32_on`): one forward transform."""
@@ -153,7 +154,10 @@ class Workspace:
         return self.op.quadratic32(spec)
 
     def displacement32(self, spec) -> np.ndarray:
-        """``K x / sigma`` from a slot-0 spectrum of ``x / sigma`` (destroyed): one inverse transform."""
+        """``K x / sigma`` from a slot-0 spectrum of ``x / sigma`` (destroyed): one inverse transform.
+
+        float32, the grid's shape; maybe a strided view of a buffer the next product overwrites.
+        """
         return self.op.displacement32(spec)
 
     def refresh(self) -> None:
