@@ -32,7 +32,7 @@ class SpectralProduct:
     """``y = F^-1[m F[x]]`` on an ``nx x ny`` grid with one plan pair and fixed buffers.
 
     The caller writes ``x`` with :meth:`load` (values on a set of nodes, zero elsewhere) or
-    :meth:`load_dense` (a whole field), runs :meth:`forward` into one of two spectrum slots and
+    :meth:`load_dense` (a whole field), runs :meth:`forward` into one of ``slots`` spectrum slots and
     :meth:`backward` of slot 0, and reads the result with :meth:`take` (at a set of nodes) or as
     the returned ``(nx, ny)`` array. A multiplier ``m`` (real, shape ``(nx, ny // 2 + 1)``, from
     :meth:`multiplier`) carries the ``1 / (nx ny)`` of the inverse transform, so the backward
@@ -48,14 +48,15 @@ class SpectralProduct:
     a caller can combine spectra before the one inverse transform.
     """
 
-    def __init__(self, backend: ArrayBackend, shape, dtype, threads: int = 1):
+    def __init__(self, backend: ArrayBackend, shape, dtype, threads: int = 1, slots: int = 2):
         self.backend = backend
         self.shape = tuple(int(s) for s in shape)
         self.dtype = np.dtype(dtype)
+        self.slots = slots
         self.norm = 1.0 / (self.shape[0] * self.shape[1])
         self._plan = backend.product_plan(self, threads)
         self._square = None
-        self._loaded = [False, False]  # per slot: an input waits for its forward transform
+        self._loaded = [False] * slots  # per slot: an input waits for its forward transform
 
     def multiplier(self, mult: np.ndarray):
         """The device copy of the real multiplier ``mult`` (host, float64) with the ``1 / (nx ny)``.
@@ -160,7 +161,7 @@ class _FFTWProduct:
         n0, n1 = prod.shape
         self.n1, self.row = n1, 2 * (n1 // 2 + 1)
         cdtype = np.result_type(prod.dtype, np.complex64)
-        self.specs = [pyfftw.empty_aligned((n0, n1 // 2 + 1), dtype=cdtype) for _ in range(2)]
+        self.specs = [pyfftw.empty_aligned((n0, n1 // 2 + 1), dtype=cdtype) for _ in range(prod.slots)]
         self.flats = [spec.view(prod.dtype).reshape(-1) for spec in self.specs]
         self.reals = [spec.view(prod.dtype)[:, :n1] for spec in self.specs]
         for spec in self.specs:

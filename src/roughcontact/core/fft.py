@@ -148,11 +148,11 @@ def write_wisdom(path: str | os.PathLike = WISDOM_FILE, sizes=WISDOM_SIZES, flag
             b, b_in = (pyfftw.empty_aligned((n, n // 2 + 1), dtype=cplx) for _ in range(2))
             pyfftw.FFTW(a, b, axes=(0, 1), direction="FFTW_FORWARD", flags=flags, threads=1)
             pyfftw.FFTW(b_in, a_out, axes=(0, 1), direction="FFTW_BACKWARD", flags=flags, threads=1)
-        # the single-precision SpectralProduct's pair, in place (core.backend._FFTWProduct)
-        c = pyfftw.empty_aligned((n, n // 2 + 1), dtype=np.complex64)
-        r = c.view(np.float32)[:, :n]
-        pyfftw.FFTW(r, c, axes=(0, 1), direction="FFTW_FORWARD", flags=flags, threads=1)
-        pyfftw.FFTW(c, r, axes=(0, 1), direction="FFTW_BACKWARD", flags=flags, threads=1)
+            # the solver's SpectralProduct pair of this precision, in place (core.backend._FFTWProduct)
+            c = pyfftw.empty_aligned((n, n // 2 + 1), dtype=cplx)
+            r = c.view(real)[:, :n]
+            pyfftw.FFTW(r, c, axes=(0, 1), direction="FFTW_FORWARD", flags=flags, threads=1)
+            pyfftw.FFTW(c, r, axes=(0, 1), direction="FFTW_BACKWARD", flags=flags, threads=1)
     measured = dict(zip(_PRECISIONS, (w.decode("ascii") for w in pyfftw.export_wisdom()), strict=True))
     out = Path(path)
     head = {"sizes": list(sizes), "flags": list(flags), "fftw": pyfftw.__version__}

@@ -194,24 +194,22 @@ class PeriodicHalfSpace:
         self.shape = grid(shape)
         self.be = backend or get_backend()
         self.threads = threads
-        self.fft = plans(self.shape, threads) if self.be.name == "numpy" else self.be.real_fft(self.shape)
         self.kern = elastic_kernel(self.shape, 1.0, internal_length(aspect))
-        # Interleaved (re, im) copy so that the kernel product is a float64 ufunc
-        # call on the complex buffer, with no complex temporary.
-        self.kern2 = self.be.asarray(np.repeat(self.kern[..., None], 2, axis=-1))
-        self._minv2 = None
+        # the float64 products, in place like the float32 ones (one slot: no spectra are combined)
+        self.prod64 = SpectralProduct(self.be, self.shape, np.float64, threads, slots=1)
+        self.kmult64 = self.prod64.multiplier(self.kern)
+        self._mmult64 = None
         self.prod32 = None
 
     @property
     def backend(self) -> str:
-        return self.fft.backend
+        return self.be.fft_name()
 
     def apply(self, field: np.ndarray) -> np.ndarray:
-        """``K field`` [length per pressure x field], float64, shape (nx, ny)."""
-        spec = self.fft.forward(field)
-        view = spec.view(np.float64).reshape(self.kern2.shape)
-        np.multiply(view, self.kern2, out=view)
-        return self.fft.backward(spec)
+        """``K field`` [length per pressure x field], float64, shape (nx, ny), maybe a strided view of
+        a buffer that the next float64 product overwrites."""
+        self.prod64.load_dense(field, 1.0)
+        return self.prod64(self.kmult64)
 
     def _inverse_host(self) -> np.ndarray:
         """``M = 1 / K`` off ``q = 0`` (0 there), float64 on the host, shape (nx, ny//2+1)."""
@@ -220,10 +218,11 @@ class PeriodicHalfSpace:
         return minv
 
     def apply_inverse(self, field: np.ndarray) -> np.ndarray:
-        """``M field`` with ``M = |q| E* / 2`` (0 at ``q = 0``), float64."""
-        if self._minv2 is None:
-            self._minv2 = self.be.asarray(np.repeat(self._inverse_host()[..., None], 2, axis=-1))
-        return self.fft.backward(multiply_spectrum(self.fft.forward(field), self._minv2))
+        """``M field`` with ``M = |q| E* / 2`` (0 at ``q = 0``), float64 (as :meth:`apply`'s result)."""
+        if self._mmult64 is None:
+            self._mmult64 = self.prod64.multiplier(self._inverse_host())
+        self.prod64.load_dense(field, 1.0)
+        return self.prod64(self._mmult64)
 
     def single(self, sigma: float) -> None:
         """Make the float32 product and multipliers; inputs are divided by ``sigma``.
