@@ -131,14 +131,17 @@ check, and changes two things; the default, ``"pk-fourier-f32"``, a third:
   with ``n`` (``benchmarks/README.md``);
 * *extrapolated warm start*: from the third step on, the start is the linear
   extrapolation in ``p0`` of the last two solutions, clipped at 0 and rescaled
-  to the mean (one FFT pair to get ``u``), instead of the scaled last one;
+  to the mean, instead of the scaled last one; ``u`` follows from the last two
+  steps' fresh gaps by the same linear combination, plus one float32 product of
+  the clipped part (the single-precision iteration; a float64 pair otherwise);
 * *single-precision transforms* (``float32`` pyFFTW plans, ``FFTW_ESTIMATE``
   as the double ones; :class:`roughcontact.core.backend.SpectralProduct`): the
   products of the loop are computed in ``float32`` (inputs divided by the
   internal rms height before the cast, so that the float32 values do not depend
   on the problem's units), while ``p``, the gap, every reduction and the mean
-  removal of the direction stay in ``float64``. Only the nodes of ``F`` are
-  written into the transforms' input (the rest stays zero), the ``1 / n^2`` of
+  removal of the direction stay in ``float64``. The transforms work in place in
+  their spectrum buffers; only the nodes of ``F`` are written into a zeroed
+  buffer and read back from the preconditioner's result, the ``1 / n^2`` of
   the inverse transform sits in the multipliers, and a step costs one forward
   and one inverse transform whether or not it is projected: ``t . K t`` comes
   from the spectrum of ``t`` (Parseval) before the inverse, and a projected
