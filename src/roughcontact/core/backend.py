@@ -42,8 +42,9 @@ class SpectralProduct:
 
     With pyFFTW both transforms work *in place* in the slot's buffer (FFTW's r2c and c2r on the
     padded layout, rows of ``2 (ny // 2 + 1)`` reals): measured at N = 1024 on one core, a
-    forward in place costs ~0.75 of one that preserves a separate input, and the whole product
-    with its sparse load and read-back ~0.88. Node positions in that layout come from
+    forward in place costs ~0.75-0.85 of one that preserves a separate input; the whole product
+    with its sparse load and read-back 0.88 of the former with another process loading memory,
+    1.03 on a quiet machine (docs/solver.md). Node positions in that layout come from
     :meth:`positions`. :meth:`quadratic` gives ``x . (K x)`` (Parseval) from a spectrum alone, so
     a caller can combine spectra before the one inverse transform.
     """
@@ -174,9 +175,7 @@ class _FFTWProduct:
                                    flags=_fft.PLANNER_FLAGS, threads=threads)
 
     def positions(self, idx):
-        if self.row == self.n1:
-            return idx
-        return (idx // self.n1) * self.row + idx % self.n1
+        return remap_rows(idx, self.n1, self.row)
 
     def load(self, pos, values, slot):
         flat = self.flats[slot]
@@ -202,7 +201,7 @@ class _FFTWProduct:
         return self.reals[0]
 
     def take(self, real, pos, out):
-        _take_cast(self.flats[0], pos, out)
+        take_into(self.flats[0], pos, out)  # ``real`` is slot 0's view of this buffer
 
 
 class _ArrayModuleProduct:
@@ -214,7 +213,7 @@ class _ArrayModuleProduct:
     """
 
     def __init__(self, prod: SpectralProduct, xp):
-        self.prod, self.xp, self.fft = prod, xp, xp.fft
+        self.prod, self.fft = prod, xp.fft
         self.cdtype = np.result_type(prod.dtype, np.complex64)
         self.input = xp.zeros(prod.shape, dtype=prod.dtype)
         self.flat = self.input.reshape(-1)
@@ -245,15 +244,21 @@ class _ArrayModuleProduct:
 
     def backward(self, spec, mult):
         out = self.fft.irfft2(multiply_spectrum(spec, mult), s=self.prod.shape, norm="forward")
-        self.out = out.astype(self.prod.dtype, copy=False)
-        return self.out
+        return out.astype(self.prod.dtype, copy=False)
 
     def take(self, real, pos, out):
-        _take_cast(real.reshape(-1), pos, out)
+        take_into(real.reshape(-1), pos, out)
 
 
-def _take_cast(flat, pos, out) -> None:
-    """``out[:] = flat[pos]``, converting to ``out``'s dtype."""
+def remap_rows(idx, n1: int, row: int):
+    """Flat indices ``idx`` of a grid with rows of ``n1`` as flat indices with rows of ``row >= n1``."""
+    if row == n1:
+        return idx
+    return (idx // n1) * row + idx % n1
+
+
+def take_into(flat, pos, out) -> None:
+    """``out[:] = flat[pos]``, converting to ``out``'s dtype (float32 into float64, say)."""
     if flat.dtype == out.dtype:
         np.take(flat, pos, out=out)
     else:

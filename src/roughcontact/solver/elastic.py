@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from ..core.backend import take_into
 from .projection import enforce_mean
 from .workspace import StallGuard, Workspace, dot
 
@@ -175,7 +176,7 @@ class PKIteration:
                 a_c *= self.ksig  # the float32 product is M g / sigma
             else:
                 self.Zf[self.idx] = g_c
-                _take(self.ws.apply_m(self.ws.Z).ravel(), self.idx, a_c)
+                take_into(self.ws.apply_m(self.ws.Z).ravel(), self.idx, a_c)
                 self.Zf[self.idx] = 0.0
             a_c -= a_c.sum() / nf
             G = dot(g_c, a_c)
@@ -231,7 +232,7 @@ class PKIteration:
         ws, idx, t_c, a_c = self.ws, self.idx, self.t_c, self.a_c
         ws.Tf[idx] = t_c
         Rf = ws.apply_k(ws.T).ravel()
-        _take(Rf, idx, a_c)
+        take_into(Rf, idx, a_c)
         tau = self._trial(dot(a_c, t_c))
         if tau is None:
             return False
@@ -350,14 +351,6 @@ class PKIteration:
         # An early exit right after nodes joined leaves them flagged with p = 0.
         np.greater(ws.P, 0.0, out=ws.mask)
         return self.it, self.converged
-
-
-def _take(src: np.ndarray, idx: np.ndarray, out: np.ndarray) -> None:
-    """``out[:] = src[idx]``, converting a float32 ``src`` to float64."""
-    if src.dtype == out.dtype:
-        np.take(src, idx, out=out)
-    else:
-        out[...] = np.take(src, idx)
 
 
 def _sync_pressure(ws, idx, p_c, target):

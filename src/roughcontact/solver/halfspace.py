@@ -31,7 +31,7 @@ import math
 
 import numpy as np
 
-from ..core.backend import ArrayBackend, SpectralProduct, get_backend, multiply_spectrum
+from ..core.backend import ArrayBackend, SpectralProduct, get_backend, multiply_spectrum, remap_rows
 from ..core.fft import get_fft, wavenumbers
 from .love import (  # noqa: F401 (re-exported: the free operator's influence lives in love)
     _free_multiplier,
@@ -368,8 +368,7 @@ class FreeHalfSpace:
 
     def _padded_index(self, idx):
         """Flat indices of the ``nx x ny`` grid as flat indices of the padded grid."""
-        ny, my = self.shape[1], self.padded[1]
-        return (idx // ny) * my + idx % ny
+        return remap_rows(idx, self.shape[1], self.padded[1])
 
     def apply_inverse32_on(self, idx, values, out) -> np.ndarray:
         """``M x / sigma`` at the nodes ``idx`` in single precision (the periodic preconditioner's), into ``out``."""
