@@ -274,7 +274,7 @@ def _in_place_pairs(n: int, a: np.ndarray):
 
     def run(k: int) -> None:
         while k > 0:
-            plan.reals[0][...] = scaled
+            plan.inputs[0][...] = scaled
             for _ in range(min(8, k)):
                 plan.fwd[0].execute()
                 plan.bwd.execute()

@@ -63,21 +63,28 @@ def test_effects_refused_on_cupy(stand_in_cupy):
         solve_contact(h, [0.001], array_backend="cupy", hardness=0.5)
 
 
+def _sparse_reference(x, mult, nodes):
+    """``irfft2(mult rfft2(xs))`` for ``xs`` = ``x`` at the flat ``nodes``, 0 elsewhere."""
+    xs = np.zeros(x.shape)
+    xs.flat[nodes] = x.flat[nodes]
+    return np.fft.irfft2(np.fft.rfft2(xs) * mult, s=x.shape)
+
+
+@pytest.mark.parametrize("in_place", [True, False])
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
 @pytest.mark.parametrize("shape", [(32, 32), (24, 40)])
-def test_spectral_product_matches_numpy_fft(stand_in_cupy, dtype, shape):
-    """Split or whole, the product and Parseval's quadratic form equal numpy.fft's in float64."""
+def test_spectral_product_matches_numpy_fft(stand_in_cupy, dtype, shape, in_place):
+    """Split or whole, the product and Parseval's quadratic form equal numpy.fft's in float64,
+    with transforms in place or out of place (a kept input: a new node set must clear the old one)."""
     rng = np.random.default_rng(3)
     x = rng.standard_normal(shape)
     mult = rng.random((shape[0], shape[1] // 2 + 1))
     ref = np.fft.irfft2(np.fft.rfft2(x) * mult, s=shape)
     tol = 2e-6 if dtype == np.float32 else 1e-13
-    nodes = np.flatnonzero(rng.random(shape) < 0.3)  # a sparse load: these nodes, zero elsewhere
-    xs = np.zeros(shape)
-    xs.flat[nodes] = x.flat[nodes]
-    ref_s = np.fft.irfft2(np.fft.rfft2(xs) * mult, s=shape)
+    node_sets = [np.flatnonzero(rng.random(shape) < 0.3) for _ in range(2)]  # sparse loads
+    refs = [_sparse_reference(x, mult, nodes) for nodes in node_sets]
     for be in (get_backend("numpy"), stand_in_cupy):
-        prod = SpectralProduct(be, shape, dtype)
+        prod = SpectralProduct(be, shape, dtype, in_place=in_place)
         m = prod.multiplier(mult)
         for _ in range(2):  # a second round: the first's transforms must not leak into the loads
             prod.load_dense(x, 1.0)
@@ -89,11 +96,12 @@ def test_spectral_product_matches_numpy_fft(stand_in_cupy, dtype, shape):
             out = np.asarray(prod(m), dtype=np.float64)
             assert out.shape == shape
             assert np.max(np.abs(out - ref)) <= tol * np.max(np.abs(ref))
-            pos = prod.positions(nodes)
-            prod.load(pos, x.flat[nodes], 1.0)
-            got = np.empty(nodes.size)
-            prod.take(prod(m), pos, got)
-            assert np.max(np.abs(got - ref_s.flat[nodes])) <= tol * np.max(np.abs(ref_s))
+            for nodes, ref_s in [*zip(node_sets, refs, strict=True), (node_sets[0], refs[0])]:
+                pos = prod.positions(nodes)
+                prod.load(pos, x.flat[nodes], 1.0)
+                got = np.empty(nodes.size)
+                prod.take(prod(m), pos, got)
+                assert np.max(np.abs(got - ref_s.flat[nodes])) <= tol * np.max(np.abs(ref_s))
 
 
 @pytest.mark.parametrize("boundary", ["periodic", "free"])

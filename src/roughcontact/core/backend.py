@@ -40,20 +40,26 @@ class SpectralProduct:
     For grids whose ``nx ny`` is a power of two the result equals ``irfft2(m' rfft2(x))`` with
     ``m' = nx ny m`` up to the transforms' rounding (the scalings are exact).
 
-    With pyFFTW both transforms work *in place* in the slot's buffer (FFTW's r2c and c2r on the
-    padded layout, rows of ``2 (ny // 2 + 1)`` reals): measured at N = 1024 on one core, a
+    With pyFFTW and ``in_place`` both transforms work in the slot's buffer (FFTW's r2c and c2r on
+    the padded layout, rows of ``2 (ny // 2 + 1)`` reals): measured at N = 1024 on one core, a
     forward in place costs ~0.75-0.85 of one that preserves a separate input; the whole product
     with its sparse load and read-back 0.88 of the former with another process loading memory,
-    1.03 on a quiet machine (docs/solver.md). Node positions in that layout come from
+    1.03 on a quiet machine (docs/solver.md). Out of place, each slot keeps a separate input that
+    the transform preserves, so a load writes only the nodes that change: the choice for an input
+    that is mostly zero (the free operator's padded grid, 3/4 zero), and the default (``in_place``
+    None) for grids without shipped plans, where FFTW_ESTIMATE's in-place pair cost ~1.1x its
+    out-of-place one (960², measured). Node positions in the buffers' layout come from
     :meth:`positions`. :meth:`quadratic` gives ``x . (K x)`` (Parseval) from a spectrum alone, so
     a caller can combine spectra before the one inverse transform.
     """
 
-    def __init__(self, backend: ArrayBackend, shape, dtype, threads: int = 1, slots: int = 2):
+    def __init__(self, backend: ArrayBackend, shape, dtype, threads: int = 1, slots: int = 2,
+                 in_place: bool | None = None):
         self.backend = backend
         self.shape = tuple(int(s) for s in shape)
         self.dtype = np.dtype(dtype)
         self.slots = slots
+        self.in_place = _fft.has_shipped_plans(self.shape) if in_place is None else in_place
         self.norm = 1.0 / (self.shape[0] * self.shape[1])
         self._plan = backend.product_plan(self, threads)
         self._square = None
@@ -150,44 +156,65 @@ def multiply_spectrum(spec, mult):
 
 
 class _FFTWProduct:
-    """The pyFFTW plans of a :class:`SpectralProduct`: r2c and c2r in place in two slot buffers.
+    """The pyFFTW plans of a :class:`SpectralProduct`, r2c into two slots, c2r out of slot 0.
 
-    Slot ``k``'s buffer is complex ``(n0, n1 // 2 + 1)``; its real view ``(n0, n1)`` (rows padded
-    to ``2 (n1 // 2 + 1)`` reals) holds the input before the forward transform and the output
-    after the inverse. A transform destroys the input, so every load zeroes the slot first.
+    In place (``prod.in_place``): slot ``k``'s buffer is complex ``(n0, n1 // 2 + 1)`` and its
+    real view ``(n0, n1)`` (rows padded to ``2 (n1 // 2 + 1)`` reals) holds the input before the
+    forward transform and the output after the inverse; a transform destroys the input, so every
+    load zeroes the slot first. Out of place: each slot has its own real input, which the r2c
+    keeps, so a load at the same positions as the slot's last one writes only those nodes (a new
+    set first zeroes the old one's nodes): the cheaper choice where the input is mostly zero, as on
+    the free operator's padded grid.
     """
 
     def __init__(self, prod: SpectralProduct, threads: int):
         pyfftw = _fft.pyfftw
         n0, n1 = prod.shape
-        self.n1, self.row = n1, 2 * (n1 // 2 + 1)
         cdtype = np.result_type(prod.dtype, np.complex64)
         self.specs = [pyfftw.empty_aligned((n0, n1 // 2 + 1), dtype=cdtype) for _ in range(prod.slots)]
-        self.flats = [spec.view(prod.dtype).reshape(-1) for spec in self.specs]
-        self.reals = [spec.view(prod.dtype)[:, :n1] for spec in self.specs]
-        for spec in self.specs:
-            spec.fill(0.0)
+        if prod.in_place:
+            self.n1, self.row = n1, 2 * (n1 // 2 + 1)
+            self.inputs = [spec.view(prod.dtype)[:, :n1] for spec in self.specs]
+            self.flats = [spec.view(prod.dtype).reshape(-1) for spec in self.specs]
+            for spec in self.specs:
+                spec.fill(0.0)
+        else:
+            self.n1 = self.row = n1
+            self.inputs = [pyfftw.zeros_aligned(prod.shape, dtype=prod.dtype) for _ in range(prod.slots)]
+            self.flats = [real.reshape(-1) for real in self.inputs]
+        if prod.in_place:
+            self.out, self.out_flat = self.inputs[0], self.flats[0]
+        else:
+            self.out = pyfftw.empty_aligned(prod.shape, dtype=prod.dtype)
+            self.out_flat = self.out.reshape(-1)
+        self.in_place = prod.in_place
+        self.last = [None] * prod.slots  # out of place: per slot, the last load's positions (True: dense)
         with _fft._shipped_wisdom_only():
             self.fwd = [pyfftw.FFTW(real, spec, axes=(0, 1), direction="FFTW_FORWARD",
                                     flags=_fft.PLANNER_FLAGS, threads=threads)
-                        for real, spec in zip(self.reals, self.specs, strict=True)]
-            self.bwd = pyfftw.FFTW(self.specs[0], self.reals[0], axes=(0, 1), direction="FFTW_BACKWARD",
+                        for real, spec in zip(self.inputs, self.specs, strict=True)]
+            self.bwd = pyfftw.FFTW(self.specs[0], self.out, axes=(0, 1), direction="FFTW_BACKWARD",
                                    flags=_fft.PLANNER_FLAGS, threads=threads)
 
     def positions(self, idx):
         return remap_rows(idx, self.n1, self.row)
 
     def load(self, pos, values, slot):
-        flat = self.flats[slot]
-        flat.fill(0.0)
+        flat, last = self.flats[slot], self.last[slot]
+        if self.in_place or last is True:
+            flat.fill(0.0)
+        elif last is not None and last is not pos:
+            flat[last] = 0.0
+        self.last[slot] = pos
         flat[pos] = values
 
     def load_dense(self, field, scale, slot):
-        real = self.reals[slot]
+        real = self.inputs[slot]
         fx, fy = field.shape
         if (fx, fy) != real.shape:
             real.fill(0.0)
         np.multiply(field, scale, out=real[:fx, :fy], casting="unsafe")
+        self.last[slot] = True
 
     def forward(self, slot):
         self.fwd[slot].execute()
@@ -198,10 +225,10 @@ class _FFTWProduct:
             raise ValueError("SpectralProduct.backward takes the spectrum of slot 0")
         multiply_spectrum(spec, mult)
         self.bwd.execute()  # unnormalised: 1 / (n0 n1) is in mult
-        return self.reals[0]
+        return self.out
 
     def take(self, real, pos, out):
-        take_into(self.flats[0], pos, out)  # ``real`` is slot 0's view of this buffer
+        take_into(self.out_flat, pos, out)  # ``real`` is this plan's output
 
 
 class _ArrayModuleProduct:

@@ -97,6 +97,12 @@ def shipped_wisdom() -> tuple[bytes, bytes, bytes] | None:
     return tuple(chosen[k].encode("ascii") for k in _PRECISIONS)
 
 
+def has_shipped_plans(shape) -> bool:
+    """Whether the shipped wisdom holds measured plans for ``shape`` (square, :data:`WISDOM_SIZES`)."""
+    n0, n1 = (int(n) for n in shape)
+    return n0 == n1 and n0 in WISDOM_SIZES and shipped_wisdom() is not None
+
+
 @contextlib.contextmanager
 def _shipped_wisdom_only():
     """Plan inside this block with the shipped wisdom alone (module docstring).

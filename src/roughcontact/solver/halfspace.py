@@ -342,7 +342,9 @@ class FreeHalfSpace:
         if self.prod32 is not None:
             return
         self.precond.single(sigma)
-        self.prod32 = prod = SpectralProduct(self.be, self.padded, np.float32, self.threads)
+        # out of place: the padded input is 3/4 zero and kept between loads (an in-place transform
+        # would need the whole padded slot zeroed before each load)
+        self.prod32 = prod = SpectralProduct(self.be, self.padded, np.float32, self.threads, in_place=False)
         mult = _free_multiplier(self.shape, self.aspect)[..., 0]
         self.kmult32 = prod.multiplier(mult)
         self.kquad32 = prod.quadratic_weights(mult)  # Parseval on the padded grid: x is 0 off the patch
