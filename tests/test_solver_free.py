@@ -37,6 +37,7 @@ import numpy as np
 import pytest
 
 import roughcontact.solver as solver_mod
+from roughcontact.core.fft import wavenumbers
 from roughcontact.solver import (
     ELASTIC_METHODS,
     FreeHalfSpace,
@@ -46,6 +47,7 @@ from roughcontact.solver import (
     solve_contact,
     solve_step,
 )
+from roughcontact.solver.halfspace import preconditioner_shape
 from roughcontact.statistics.clusters import cluster_statistics
 from roughcontact.surfaces.synthetic import generate_surface
 from solver_invariants import check_solution, direct_free_displacement, quadrature_influence
@@ -87,6 +89,14 @@ def test_padding_takes_fast_even_lengths_and_keeps_2n_where_it_is_fast():
         free_influence(8, padded=(15, 16))
 
 
+def test_preconditioner_grid_is_the_patch_unless_a_side_is_slow_for_fftw():
+    # sides with no prime factor above 13 stay (the paper's grids, SurfaceTopography's files)
+    assert preconditioner_shape((1024, 480)) == (1024, 480) and preconditioner_shape((484, 650)) == (484, 650)
+    assert preconditioner_shape(150) == (150, 150) and preconditioner_shape(13) == (13, 13)
+    # a large prime factor: the next even 5-smooth side (563 -> 576, 1009 -> 1024, 2 * 17 -> 36)
+    assert preconditioner_shape((563, 1009)) == (576, 1024) and preconditioner_shape(34) == (36, 36)
+
+
 @pytest.mark.parametrize("n", [21, 32, 37])  # 21 and 37 are padded beyond 2n (48, 80)
 @pytest.mark.parametrize("backend", ["pyfftw", "numpy"])
 def test_free_product_is_the_direct_convolution(n, backend, monkeypatch):
@@ -105,9 +115,18 @@ def test_free_product_is_the_direct_convolution(n, backend, monkeypatch):
     op.single(0.25)
     u32 = op.apply32(p).astype(np.float64) * 0.25
     assert np.abs(u32 - ref).max() <= 1e-5 * np.abs(ref).max()
-    # the periodic preconditioner |q| E*/2 on the n x n grid
-    np.testing.assert_allclose(op.apply_inverse(p), solver_mod.PeriodicHalfSpace(n).apply_inverse(p), rtol=0,
-                               atol=1e-14 * np.abs(p).sum())
+    # the preconditioner |q| E*/2: periodic on the n x n cell, or (n = 37, a prime) on the fast
+    # m x m cell of the same spacing with p in its corner (preconditioner_shape)
+    m = preconditioner_shape(n)[0]
+    assert m == (40 if n == 37 else n)
+    big = np.zeros((m, m))
+    big[:n, :n] = p
+    kx, ky = wavenumbers((m, m), m / n)
+    ref_m = np.fft.irfft2(np.fft.rfft2(big) * (math.pi * np.hypot(kx, ky)), s=(m, m))[:n, :n]
+    np.testing.assert_allclose(op.apply_inverse(p), ref_m, rtol=0, atol=1e-13 * np.abs(p).sum())
+    if m == n:
+        np.testing.assert_allclose(op.apply_inverse(p), solver_mod.PeriodicHalfSpace(n).apply_inverse(p), rtol=0,
+                                   atol=1e-14 * np.abs(p).sum())
     # public displacement(): physical units L / E*, not zero mean
     u_phys = displacement(p, e_star=2.0, length=3.0, boundary="free")
     assert np.abs(u_phys - 1.5 * ref).max() <= 1e-13 * 1.5 * np.abs(ref).max()
@@ -281,6 +300,19 @@ def test_invariants_with_direct_convolution(method, hardness, monkeypatch):
     check_solution(ds, h, tol=TOL, hardness=hardness, boundary="free")
     if hardness is not None:
         assert ds["plastic_area_fraction"].values[-1] > 0  # the cap is really active
+
+
+@pytest.mark.parametrize("method", ELASTIC_METHODS)
+def test_invariants_on_a_patch_with_prime_factors(method, monkeypatch):
+    # 37 x 34 (37 and 17 prime): the preconditioner runs on a 40 x 36 cell of the same spacing
+    # (preconditioner_shape); every invariant on the patch, by direct summation as above
+    monkeypatch.setattr(solver_mod, "ELASTIC_METHOD", method)
+    h = np.ascontiguousarray(generate_surface(40, 2, 8, 0.8, 5, rms_slope=0.1)[:37, :34])
+    length = (37 / 40, 34 / 40)
+    ds = solve_contact(h, [0.001, 0.004], tol=TOL, store_fields=True, boundary="free", length=length)
+    assert FreeHalfSpace(h.shape, aspect=34 / 37).precond.shape == (40, 36)
+    assert bool(ds["converged"].all())
+    check_solution(ds, h, tol=TOL, length=length, boundary="free")
 
 
 def test_odd_grid_and_step_api():

@@ -22,7 +22,8 @@ one pixel sampled at wrap-around distances (:func:`free_influence`; Hockney's
 construction, as ContactMechanics' ``FreeFFTElasticHalfSpace``); the ``nx x ny``
 corner of the result is the exact displacement of the infinite half-space under
 that pressure, with no periodic images. Its preconditioner is the periodic
-``M = |q| E* / 2`` on the ``nx x ny`` cell (an approximate inverse now).
+``M = |q| E* / 2`` on the ``nx x ny`` cell (an approximate inverse now), or on a slightly larger
+cell where a side is slow for FFTW (:func:`preconditioner_shape`).
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ from .love import (  # noqa: F401 (re-exported: the free operator's influence li
     free_influence,
     padded_shape,
     pixel_influence,
+    preconditioner_shape,
 )
 from .units import cell_aspect, frexp_ratio, grid, internal_length, side_x
 from .validation import check_positive, validate_boundary, validate_heights, validate_length, validate_threads
@@ -185,16 +187,26 @@ class PeriodicHalfSpace:
         ``Ly / Lx`` of the cell (1 for a square cell): its y side in internal units.
     backend : ArrayBackend, optional
         Where the fields live (:mod:`roughcontact.core.backend`; default numpy + pyFFTW).
+    patch : int or (int, int), optional
+        The ``(px, py)`` corner of the grid that the fields cover (default the whole grid): inputs
+        are given on the patch (flat indices of a ``px x py`` grid, ``aspect`` its ``Ly / Lx``),
+        zero elsewhere on the periodic ``nx x ny`` cell of the same spacing, and results are the
+        patch's corner. :class:`FreeHalfSpace` runs its preconditioner so on a fast FFT grid.
 
     Every product returns a view of an FFT buffer that the next transform of
     the same precision overwrites (copy it to keep it).
     """
 
-    def __init__(self, shape, threads: int = 1, aspect: float = 1.0, backend: ArrayBackend | None = None):
+    def __init__(self, shape, threads: int = 1, aspect: float = 1.0, backend: ArrayBackend | None = None,
+                 patch=None):
         self.shape = grid(shape)
+        self.patch = px, py = self.shape if patch is None else grid(patch)
         self.be = backend or get_backend()
         self.threads = threads
-        self.kern = elastic_kernel(self.shape, 1.0, internal_length(aspect))
+        # the cell of the grid at the patch's spacing, in units of the patch's Lx
+        same = self.patch == self.shape
+        length = internal_length(aspect) if same else (self.shape[0] / px, aspect * self.shape[1] / py)
+        self.kern = elastic_kernel(self.shape, 1.0, length)
         # the float64 products, in place like the float32 ones (one slot: no spectra are combined)
         self.prod64 = SpectralProduct(self.be, self.shape, np.float64, threads, slots=1)
         self.kmult64 = self.prod64.multiplier(self.kern)
@@ -209,7 +221,12 @@ class PeriodicHalfSpace:
         """``K field`` [length per pressure x field], float64, shape (nx, ny), maybe a strided view of
         a buffer that the next float64 product overwrites."""
         self.prod64.load_dense(field, 1.0)
-        return self.prod64(self.kmult64)
+        return self._on_patch(self.prod64(self.kmult64))
+
+    def _on_patch(self, result):
+        """The patch's corner of a product's ``result`` (the result itself without a patch)."""
+        px, py = self.patch
+        return result[:px, :py]
 
     def _inverse_host(self) -> np.ndarray:
         """``M = 1 / K`` off ``q = 0`` (0 there), float64 on the host, shape (nx, ny//2+1)."""
@@ -222,7 +239,7 @@ class PeriodicHalfSpace:
         if self._mmult64 is None:
             self._mmult64 = self.prod64.multiplier(self._inverse_host())
         self.prod64.load_dense(field, 1.0)
-        return self.prod64(self._mmult64)
+        return self._on_patch(self.prod64(self._mmult64))
 
     def single(self, sigma: float) -> None:
         """Make the float32 product and multipliers; inputs are divided by ``sigma``.
@@ -237,7 +254,7 @@ class PeriodicHalfSpace:
         self.kmult32 = prod.multiplier(self.kern)
         self.kquad32 = prod.quadratic_weights(self.kern)
         self.mmult32 = prod.multiplier(self._inverse_host())
-        self.loader = SparseLoad(prod)
+        self.loader = SparseLoad(prod, None if self.patch == self.shape else self._grid_index)
         self.sigma = sigma
         self.inv_sigma = 1.0 / sigma
 
@@ -258,7 +275,11 @@ class PeriodicHalfSpace:
 
         A float32 ``(nx, ny)`` array, maybe a strided view of a buffer that the next product overwrites.
         """
-        return self.prod32.backward(spec, self.kmult32)
+        return self._on_patch(self.prod32.backward(spec, self.kmult32))
+
+    def _grid_index(self, idx):
+        """Flat indices of the patch as flat indices of the grid."""
+        return remap_rows(idx, self.patch[1], self.shape[1])
 
     def apply_inverse32_on(self, idx, values, out) -> np.ndarray:
         """``M x / sigma`` at the nodes ``idx`` in single precision, ``x`` = ``values`` there and 0 elsewhere.
@@ -279,7 +300,7 @@ class PeriodicHalfSpace:
     def apply_inverse32(self, field: np.ndarray) -> np.ndarray:
         """``M field / sigma`` with single-precision transforms (float32 ``(nx, ny)``, maybe a view of a buffer)."""
         self.prod32.load_dense(field, self.inv_sigma)
-        return self.prod32(self.mmult32)
+        return self._on_patch(self.prod32(self.mmult32))
 
 
 class FreeHalfSpace:
@@ -310,7 +331,7 @@ class FreeHalfSpace:
         self.norm = 1.0 / (mx * my)
         self.out = be.xp.empty(self.shape)
         self.pad = None if self.fft.backend == "pyfftw" else be.xp.zeros((mx, my))
-        self.precond = PeriodicHalfSpace(self.shape, threads, aspect, be)
+        self.precond = PeriodicHalfSpace(preconditioner_shape(self.shape), threads, aspect, be, patch=self.shape)
         self.prod32 = None
 
     @property
