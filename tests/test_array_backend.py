@@ -104,6 +104,21 @@ def test_spectral_product_matches_numpy_fft(stand_in_cupy, dtype, shape, in_plac
                 assert np.max(np.abs(got - ref_s.flat[nodes])) <= tol * np.max(np.abs(ref_s))
 
 
+def test_products_work_in_place_only_with_shipped_plans():
+    """In place by default only where the shipped wisdom has measured plans (FFTW_ESTIMATE's
+    in-place pair is slower at other sizes); the free operator's padded product never (its input
+    is 3/4 zero and kept between loads)."""
+    from roughcontact.solver.halfspace import FreeHalfSpace
+
+    be = get_backend("numpy")
+    assert SpectralProduct(be, (32, 32), np.float32).in_place
+    assert not SpectralProduct(be, (24, 40), np.float32).in_place
+    assert not SpectralProduct(be, (480, 480), np.float64).in_place
+    free = FreeHalfSpace(32)
+    free.single(1.0)
+    assert not free.prod32.in_place and free.precond.prod32.in_place
+
+
 @pytest.mark.parametrize("boundary", ["periodic", "free"])
 def test_stand_in_cupy_solves_as_numpy(stand_in_cupy, boundary):
     """The backend-neutral solver on the stand-in: same A/A0 within tol, invariants hold, host outputs."""

@@ -172,22 +172,20 @@ class _FFTWProduct:
         n0, n1 = prod.shape
         cdtype = np.result_type(prod.dtype, np.complex64)
         self.specs = [pyfftw.empty_aligned((n0, n1 // 2 + 1), dtype=cdtype) for _ in range(prod.slots)]
-        if prod.in_place:
+        self.in_place = prod.in_place
+        if self.in_place:
             self.n1, self.row = n1, 2 * (n1 // 2 + 1)
             self.inputs = [spec.view(prod.dtype)[:, :n1] for spec in self.specs]
             self.flats = [spec.view(prod.dtype).reshape(-1) for spec in self.specs]
             for spec in self.specs:
                 spec.fill(0.0)
+            self.out, self.out_flat = self.inputs[0], self.flats[0]
         else:
             self.n1 = self.row = n1
             self.inputs = [pyfftw.zeros_aligned(prod.shape, dtype=prod.dtype) for _ in range(prod.slots)]
             self.flats = [real.reshape(-1) for real in self.inputs]
-        if prod.in_place:
-            self.out, self.out_flat = self.inputs[0], self.flats[0]
-        else:
             self.out = pyfftw.empty_aligned(prod.shape, dtype=prod.dtype)
             self.out_flat = self.out.reshape(-1)
-        self.in_place = prod.in_place
         self.last = [None] * prod.slots  # out of place: per slot, the last load's positions (True: dense)
         with _fft._shipped_wisdom_only():
             self.fwd = [pyfftw.FFTW(real, spec, axes=(0, 1), direction="FFTW_FORWARD",

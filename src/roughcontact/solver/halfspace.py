@@ -310,8 +310,9 @@ class FreeHalfSpace:
     zero-padded (Hockney) convolution with :func:`free_influence`: one FFT pair on
     :func:`padded_shape` (``2nx x 2ny`` or the next fast even lengths) per product; the
     displacement is that of the infinite half-space (not zero mean). ``M`` is the periodic preconditioner
-    ``|q| E* / 2`` on the ``nx x ny`` cell, an approximate inverse of this ``K``
-    (the CG stays exact with it).
+    ``|q| E* / 2`` on the ``nx x ny`` cell, or on a slightly larger cell of the same spacing
+    where a side is slow for FFTW (:func:`preconditioner_shape`, the patch in its corner): an
+    approximate inverse of this ``K`` (the CG stays exact with it).
 
     Every product returns a buffer that the next product of the same kind and
     precision overwrites (copy it to keep it).
