@@ -140,8 +140,9 @@ check, and changes two things; the default, ``"pk-fourier-f32"``, a third:
   internal rms height before the cast, so that the float32 values do not depend
   on the problem's units), while ``p``, the gap, every reduction and the mean
   removal of the direction stay in ``float64``. The transforms work in place in
-  their spectrum buffers; only the nodes of ``F`` are written into a zeroed
-  buffer and read back from the preconditioner's result, the ``1 / n^2`` of
+  their spectrum buffers where shipped plans exist (elsewhere out of place, with
+  a kept input); only the nodes of ``F`` are written into the transforms' input
+  and read back from the preconditioner's result, the ``1 / n^2`` of
   the inverse transform sits in the multipliers, and a step costs one forward
   and one inverse transform whether or not it is projected: ``t . K t`` comes
   from the spectrum of ``t`` (Parseval) before the inverse, and a projected

@@ -201,11 +201,11 @@ class PeriodicHalfSpace:
                  patch=None):
         self.shape = grid(shape)
         self.patch = px, py = self.shape if patch is None else grid(patch)
+        self.whole = self.patch == self.shape
         self.be = backend or get_backend()
         self.threads = threads
         # the cell of the grid at the patch's spacing, in units of the patch's Lx
-        same = self.patch == self.shape
-        length = internal_length(aspect) if same else (self.shape[0] / px, aspect * self.shape[1] / py)
+        length = internal_length(aspect) if self.whole else (self.shape[0] / px, aspect * self.shape[1] / py)
         self.kern = elastic_kernel(self.shape, 1.0, length)
         # the float64 products, in place like the float32 ones (one slot: no spectra are combined)
         self.prod64 = SpectralProduct(self.be, self.shape, np.float64, threads, slots=1)
@@ -254,7 +254,7 @@ class PeriodicHalfSpace:
         self.kmult32 = prod.multiplier(self.kern)
         self.kquad32 = prod.quadratic_weights(self.kern)
         self.mmult32 = prod.multiplier(self._inverse_host())
-        self.loader = SparseLoad(prod, None if self.patch == self.shape else self._grid_index)
+        self.loader = SparseLoad(prod, None if self.whole else self._grid_index)
         self.sigma = sigma
         self.inv_sigma = 1.0 / sigma
 

@@ -138,14 +138,9 @@ def _largest_prime_factor(n: int) -> int:
 def _even_5_smooth(n: int) -> int:
     """The smallest even integer >= ``n`` with no prime factor above 5."""
     m = n + (n % 2)
-    while True:
-        rest = m
-        for f in (2, 3, 5):
-            while rest % f == 0:
-                rest //= f
-        if rest == 1:
-            return m
+    while _largest_prime_factor(m) > 5:
         m += 2
+    return m
 
 
 def free_influence(shape, e_star: float = 1.0, length=1.0, padded=None) -> np.ndarray:
