@@ -33,7 +33,7 @@ import math
 import numpy as np
 
 from ..core.backend import ArrayBackend, SpectralProduct, get_backend, multiply_spectrum, remap_rows
-from ..core.fft import get_fft, wavenumbers
+from ..core.fft import default_backend, get_fft, wavenumbers
 from .love import (  # noqa: F401 (re-exported: the free operator's influence lives in love)
     _free_multiplier,
     _padded_fft,
@@ -324,7 +324,7 @@ class FreeHalfSpace:
         self.threads, self.aspect = threads, aspect
         self.padded = padded_shape(self.shape)
         if be.name == "numpy":
-            self.fft = _padded_fft(self.shape, threads, plans(self.shape, threads).backend, "float64")
+            self.fft = _padded_fft(self.shape, threads, default_backend(), "float64")  # the name: a cache key
         else:
             self.fft = be.real_fft(self.padded)
         self.kern2 = be.asarray(_free_multiplier(self.shape, aspect))
