@@ -127,6 +127,15 @@ def test_free_product_is_the_direct_convolution(n, backend, monkeypatch):
     if m == n:
         np.testing.assert_allclose(op.apply_inverse(p), solver_mod.PeriodicHalfSpace(n).apply_inverse(p), rtol=0,
                                    atol=1e-14 * np.abs(p).sum())
+    # the preconditioner's cell: every product is cut to the patch, float32 as float64; K scales with
+    # the cell's side, m / n patch lengths (float32: 1e-5 of the largest value, as above)
+    cell = solver_mod.PeriodicHalfSpace(m, patch=n)
+    cell.single(0.25)
+    k64 = cell.apply(p).copy()
+    np.testing.assert_allclose(k64, (m / n) * solver_mod.PeriodicHalfSpace(m).apply(big)[:n, :n], rtol=0,
+                               atol=1e-13 * np.abs(k64).max())
+    k32 = cell.apply32(p).astype(np.float64) * 0.25
+    assert k32.shape == (n, n) and np.abs(k32 - k64).max() <= 1e-5 * np.abs(k64).max()
     # public displacement(): physical units L / E*, not zero mean
     u_phys = displacement(p, e_star=2.0, length=3.0, boundary="free")
     assert np.abs(u_phys - 1.5 * ref).max() <= 1e-13 * 1.5 * np.abs(ref).max()

@@ -295,7 +295,7 @@ class PeriodicHalfSpace:
     def apply32(self, field: np.ndarray) -> np.ndarray:
         """``K field / sigma`` with single-precision transforms (float32 ``(nx, ny)``, maybe a view of a buffer)."""
         self.prod32.load_dense(field, self.inv_sigma)
-        return self.prod32(self.kmult32)
+        return self._on_patch(self.prod32(self.kmult32))
 
     def apply_inverse32(self, field: np.ndarray) -> np.ndarray:
         """``M field / sigma`` with single-precision transforms (float32 ``(nx, ny)``, maybe a view of a buffer)."""
