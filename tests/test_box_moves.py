@@ -75,3 +75,47 @@ def test_cg_step_truncates_at_the_first_bound_when_the_segment_climbs(seed):
     at_bound = (p == 0.0) | (p == CAP)
     assert at_bound.sum() == 1  # exactly the first bound met along -t, set exactly
     _check_invariants(ws, total)
+
+
+def test_preconditioned_cg_keeps_its_direction_across_a_change_of_face(monkeypatch):
+    # After a CG step that leaves the box, the preconditioned iteration keeps its direction on the
+    # new face (zero off it: checked at every change of face) and conjugates against it; every
+    # CG step is a descent (the energy 1/2 p.Kp - h.p falls). Measured on this case (N = 128, 10
+    # steps): 220 iterations against 229 when every change of face restarts the CG.
+    from roughcontact.solver import box, solve_contact
+    from roughcontact.surfaces.synthetic import generate_surface
+
+    h = generate_surface(128, 1, 64, 0.52, 0, rms_slope=0.1)
+    loads = np.linspace(5e-4, 5e-3, 10)
+    seen = {"kept": 0}
+    cg_step, changed = box.BoxIteration._cg_step, box.BoxIteration._sets_changed
+
+    def energy(self):
+        return 0.5 * self.P @ self.ws.apply_k(self.ws.P).ravel() - self.ws.hf @ self.P
+
+    def checked_cg_step(self, G):
+        before = energy(self)
+        kept = not self.restart
+        moved = cg_step(self, G)
+        if moved:  # a descent, to round-off of the energy (its terms are ~1e4 in internal units)
+            assert energy(self) <= before + 1e-13 * abs(before)
+        if kept and moved:
+            seen["kept"] += 1
+        return moved
+
+    def checked_sets_changed(self, keep):
+        changed(self, keep)
+        if not self.restart:
+            off = np.ones(self.P.size, dtype=bool)
+            off[self.idx] = False
+            assert not self.t[off].any() and not self.g_prev[off].any()
+
+    monkeypatch.setattr(box.BoxIteration, "_cg_step", checked_cg_step)
+    monkeypatch.setattr(box.BoxIteration, "_sets_changed", checked_sets_changed)
+    kept = solve_contact(h, loads, tol=1e-8, hardness=0.05)
+    assert kept["converged"].all() and seen["kept"] > 0
+    monkeypatch.setattr(box.BoxIteration, "_sets_changed", lambda self, keep: changed(self, False))
+    restarted = solve_contact(h, loads, tol=1e-8, hardness=0.05)
+    assert restarted["converged"].all()
+    np.testing.assert_array_equal(kept["area_fraction"].values, restarted["area_fraction"].values)
+    assert int(kept["iterations"].sum()) < int(restarted["iterations"].sum())

@@ -179,11 +179,13 @@ Dostál's proportioning test), every step of which lowers the energy and keeps
   part (2-norms), a CG step minimises the energy on the current face
   (direction zero-mean on ``F``); a step that would leave the box is replaced
   by the projection of the CG trial point onto the face (exact line search on
-  the segment, or the full projected point when it lowers the energy), and the
-  CG restarts;
+  the segment, or the full projected point when it lowers the energy); the CG
+  restarts there without a preconditioner, and with one keeps its direction on
+  the new face (zero off it, zero mean on it) and conjugates against it with
+  Polak-Ribiere's ``beta``, restarting where that is no descent;
 * otherwise a gradient-projection step ``P(p - alpha g)`` (Barzilai-Borwein
   ``alpha``, exact line search on the segment) changes the active sets, many
-  nodes at a time.
+  nodes at a time, and the CG restarts.
 
 With any elastic method but ``"pk"``, the CG steps on the face use the same
 Fourier preconditioner (``z = P_F M P_F g`` on ``F = {0 < p < H}``, capped

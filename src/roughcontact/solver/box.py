@@ -90,9 +90,12 @@ class BoxIteration:
         if self.precond:
             ws.setup_method()
         self.kt = xp.empty(n2)
+        # the last CG step's gradient on the face, zero elsewhere (Polak-Ribiere's beta)
+        self.g_prev = xp.zeros(n2) if self.precond else None
         self.idx = self._active_sets()
         self.g_old = 0.0
         self.restart = True
+        self.recentre = False  # the face changed under a kept direction: make it zero-mean again
         self.alpha = 0.0  # gradient-projection step length; 0 = not known yet
         self.it = 0
         self.guard = StallGuard(max_iter)
@@ -183,7 +186,7 @@ class BoxIteration:
         P += step
         np.clip(P, 0.0, cap, out=P)
         self.w += ks
-        self._sets_changed()
+        self._sets_changed(keep=False)
         return True
 
     def _first_alpha(self) -> float:
@@ -198,10 +201,21 @@ class BoxIteration:
         rkr = dot(r, kr)
         return dot(r, r) / rkr if rkr > 0.0 else 1.0
 
-    def _sets_changed(self) -> None:
-        """After a move that may change the bounds: new sets, CG restart, ``w`` updated."""
-        self.idx = self._active_sets()
-        self.restart = True
+    def _sets_changed(self, keep: bool) -> None:
+        """After a move that may change the bounds: new sets, ``w`` updated.
+
+        ``keep`` (a CG step that left the box, preconditioned iteration only): the direction
+        and the last gradient stay, zeroed off the new face, and the next CG step conjugates
+        against them with Polak-Ribiere's ``beta`` (as :class:`~.elastic.PKIteration` does across
+        joins); else the CG restarts. A gradient-projection step always restarts it (keeping the
+        direction there too cost 1.03-1.06x the CPU, measured at N = 512).
+        """
+        self.idx = self._active_sets()  # leaves the face's mask in b1
+        keep = keep and self.precond
+        if keep:
+            np.multiply(self.t, self.b1, out=self.t)
+            np.multiply(self.g_prev, self.b1, out=self.g_prev)
+        self.restart, self.recentre = not keep, keep
         self.fresh = False
 
     def _cg_step(self, G: float) -> bool:
@@ -219,11 +233,17 @@ class BoxIteration:
             t_f = z_f
         else:
             t_f = t[idx]
-            t_f *= Gz / self.g_old
+            if self.recentre:
+                t_f -= t_f.sum() / idx.size  # zero mean on the new face: the step keeps the load
+            t_f *= self._beta(Gz, z_f)
             t_f += z_f
+            if not dot(g_f, t_f) > 0.0:  # conjugated across a change of face: no descent
+                t_f = z_f
         t[idx] = t_f
+        if self.precond:
+            self.g_prev[idx] = g_f
         self.g_old = Gz
-        self.restart = False
+        self.restart = self.recentre = False
         np.copyto(self.kt, self.ws.apply_k(t.reshape(self.shape)).ravel())
         tkt, rt = dot(t_f, self.kt[idx]), dot(g_f, t_f)
         if not (tkt > 0.0 and rt > 0.0 and math.isfinite(tkt)):
@@ -240,8 +260,15 @@ class BoxIteration:
             return True
         if not self._leave_box(y_f, t_f):
             return False
-        self._sets_changed()
+        self._sets_changed(keep=True)
         return True
+
+    def _beta(self, Gz: float, z_f: np.ndarray) -> float:
+        """``t = z + beta t``: Fletcher-Reeves' ``Gz / g_old`` without a preconditioner (a fixed face
+        between restarts), Polak-Ribiere's ``max(0, z.(g - g_prev)) / g_old`` with one."""
+        if not self.precond:
+            return Gz / self.g_old
+        return max(0.0, (Gz - dot(self.g_prev[self.idx], z_f)) / self.g_old)
 
     def _leave_box(self, y_f: np.ndarray, t_f: np.ndarray) -> bool:
         """The CG trial ``y_f`` left the box: move to the face's projection of it.
