@@ -125,8 +125,12 @@ def test_capped_units_e_star_and_length(issue_surface):
     check_solution(b, h * 2.5, tol=TOL, e_star=3.0, length=2.5, hardness=0.03)
     np.testing.assert_array_equal(a["area_fraction"].values, b["area_fraction"].values)
     np.testing.assert_array_equal(a["plastic_area_fraction"].values, b["plastic_area_fraction"].values)
+    # Each solve stops at TOL on its own path: where a round-off-level difference flips one of the
+    # iteration's choices (a projection step or a CG step), the two paths part and the pressures
+    # differ at the solver's tolerance, not at round-off (measured 1.6e-9 H at 8 of 8192 nodes, with
+    # box.PROPORTIONING = 0.03); a units error would show at O(H). 1e-7 H allowed.
     np.testing.assert_allclose(b["contact_pressure"].values, 3.0 * a["contact_pressure"].values,
-                               rtol=0, atol=1e-9 * 0.03)
+                               rtol=0, atol=1e-7 * 0.03)
 
 
 def test_capped_warm_start_any_order(issue_surface):

@@ -175,8 +175,9 @@ Dostál's proportioning test), every step of which lowers the energy and keeps
 * with ``d`` chosen so that ``g`` has zero mean on the free set
   ``F = {0 < p < H}``, the *free gradient* is ``g`` on ``F`` and the
   *chopped gradient* the sign violations at the bounds (``g < 0`` at ``p = 0``,
-  ``g > 0`` at ``p = H``); while the chopped part is not larger than the free
-  part (2-norms), a CG step minimises the energy on the current face
+  ``g > 0`` at ``p = H``); while the chopped part is not larger than 0.17 of
+  the free part (2-norms; ``box.PROPORTIONING`` = 0.17^2), a CG step minimises
+  the energy on the current face
   (direction zero-mean on ``F``); a step that would leave the box is replaced
   by the projection of the CG trial point onto the face (exact line search on
   the segment, or the full projected point when it lowers the energy); the CG

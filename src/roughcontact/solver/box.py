@@ -13,6 +13,12 @@ import numpy as np
 from .projection import project
 from .workspace import StallGuard, Workspace, dot
 
+#: Dostal's proportioning test: a gradient-projection step when the chopped gradient's squared norm
+#: exceeds this fraction of the free gradient's (``Gamma^2``), else a CG step on the face. Measured
+#: against 1 (30 steps, N = 512 and 1024, four capped cases): 0.1 took 7-12 % fewer iterations,
+#: 0.03 9-14 % fewer and 0.88-0.94 of the CPU (two rounds at N = 1024); 0.01 within 1-2 % of 0.03.
+PROPORTIONING = 0.03
+
 
 def offset_no_free(w, zero, capd) -> float:
     """``gbar = -d`` when no node is strictly between the bounds.
@@ -126,7 +132,7 @@ class BoxIteration:
             # proportioning: sign violations at the bounds vs gradient on the face
             chopped = dot(self.g_z, self.g_z) + dot(self.g_c, self.g_c)
             G = dot(self.g_f, self.g_f)
-            if self.idx.size == 0 or chopped > G:
+            if self.idx.size == 0 or chopped > PROPORTIONING * G:
                 moved = self._projection_step()
             else:
                 moved = self._cg_step(G)
