@@ -44,7 +44,7 @@ def _precondition(ws: Workspace, idx: np.ndarray, g_f: np.ndarray) -> tuple[np.n
     """``z = P_F M P_F g`` with its mean over ``F`` removed, and ``g.z`` (one FFT pair)."""
     Z = ws.Z.ravel()
     Z[idx] = g_f
-    z_f = ws.apply_m(ws.Z).ravel()[idx]
+    z_f = ws.apply_m(ws.Z)[np.divmod(idx, ws.shape[1])]  # the product may be a strided view: no flat copy
     Z[idx] = 0.0
     z_f -= z_f.sum() / idx.size
     return z_f, dot(g_f, z_f)
@@ -250,7 +250,7 @@ class BoxIteration:
             self.g_prev[idx] = g_f
         self.g_old = Gz
         self.restart = self.recentre = False
-        np.copyto(self.kt, self.ws.apply_k(t.reshape(self.shape)).ravel())
+        np.copyto(self.kt.reshape(self.shape), self.ws.apply_k(t.reshape(self.shape)))  # one copy, strided or not
         tkt, rt = dot(t_f, self.kt[idx]), dot(g_f, t_f)
         if not (tkt > 0.0 and rt > 0.0 and math.isfinite(tkt)):
             return False

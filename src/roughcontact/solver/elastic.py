@@ -11,7 +11,6 @@ import math
 
 import numpy as np
 
-from ..core.backend import take_into
 from .projection import enforce_mean
 from .workspace import StallGuard, Workspace, dot
 
@@ -176,7 +175,8 @@ class PKIteration:
                 a_c *= self.ksig  # the float32 product is M g / sigma
             else:
                 self.Zf[self.idx] = g_c
-                take_into(self.ws.apply_m(self.ws.Z).ravel(), self.idx, a_c)
+                # the product may be a strided view of its buffer: read F's nodes without a flat copy
+                a_c[...] = self.ws.apply_m(self.ws.Z)[np.divmod(self.idx, self.ws.shape[1])]
                 self.Zf[self.idx] = 0.0
             a_c -= a_c.sum() / nf
             G = dot(g_c, a_c)
@@ -231,15 +231,15 @@ class PKIteration:
             return self._step_single()
         ws, idx, t_c, a_c = self.ws, self.idx, self.t_c, self.a_c
         ws.Tf[idx] = t_c
-        Rf = ws.apply_k(ws.T).ravel()
-        take_into(Rf, idx, a_c)
+        R = ws.apply_k(ws.T)  # maybe a strided view of the product's buffer: used in 2-D, not copied
+        a_c[...] = R[np.divmod(idx, ws.shape[1])]
         tau = self._trial(dot(a_c, t_c))
         if tau is None:
             return False
         if not bool((a_c <= 0.0).any()):
             self.p_c, self.a_c = a_c, self.p_c
-            np.multiply(Rf, tau, out=Rf)
-            ws.wf -= Rf  # u <- u - tau K t: exact, no FFT pair for p
+            np.multiply(R, tau, out=R)
+            ws.w -= R  # u <- u - tau K t: exact, no FFT pair for p
             self.fresh = False
         else:
             self._project(a_c)
