@@ -117,5 +117,7 @@ def test_preconditioned_cg_keeps_its_direction_across_a_change_of_face(monkeypat
     monkeypatch.setattr(box.BoxIteration, "_sets_changed", lambda self, keep: changed(self, False))
     restarted = solve_contact(h, loads, tol=1e-8, hardness=0.05)
     assert restarted["converged"].all()
-    np.testing.assert_array_equal(kept["area_fraction"].values, restarted["area_fraction"].values)
+    # two paths to tol 1e-8: the same answer up to a node whose contact is borderline (equal here)
+    np.testing.assert_allclose(kept["area_fraction"].values, restarted["area_fraction"].values,
+                               rtol=0, atol=1.0 / 128**2)
     assert int(kept["iterations"].sum()) < int(restarted["iterations"].sum())
