@@ -44,7 +44,7 @@ def _precondition(ws: Workspace, idx: np.ndarray, g_f: np.ndarray) -> tuple[np.n
     """``z = P_F M P_F g`` with its mean over ``F`` removed, and ``g.z`` (one FFT pair)."""
     Z = ws.Z.ravel()
     Z[idx] = g_f
-    z_f = ws.apply_m(ws.Z)[np.divmod(idx, ws.shape[1])]  # the product may be a strided view: no flat copy
+    z_f = ws.apply_m(ws.Z)[ws.nodes(idx)]
     Z[idx] = 0.0
     z_f -= z_f.sum() / idx.size
     return z_f, dot(g_f, z_f)

@@ -175,8 +175,7 @@ class PKIteration:
                 a_c *= self.ksig  # the float32 product is M g / sigma
             else:
                 self.Zf[self.idx] = g_c
-                # the product may be a strided view of its buffer: read F's nodes without a flat copy
-                a_c[...] = self.ws.apply_m(self.ws.Z)[np.divmod(self.idx, self.ws.shape[1])]
+                a_c[...] = self.ws.apply_m(self.ws.Z)[self.ws.nodes(self.idx)]
                 self.Zf[self.idx] = 0.0
             a_c -= a_c.sum() / nf
             G = dot(g_c, a_c)
@@ -232,7 +231,7 @@ class PKIteration:
         ws, idx, t_c, a_c = self.ws, self.idx, self.t_c, self.a_c
         ws.Tf[idx] = t_c
         R = ws.apply_k(ws.T)  # maybe a strided view of the product's buffer: used in 2-D, not copied
-        a_c[...] = R[np.divmod(idx, ws.shape[1])]
+        a_c[...] = R[ws.nodes(idx)]
         tau = self._trial(dot(a_c, t_c))
         if tau is None:
             return False

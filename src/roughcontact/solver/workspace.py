@@ -104,6 +104,7 @@ class Workspace:
         self.mask = xp.zeros(shape, dtype=bool)
         self.bbuf = xp.empty(shape, dtype=bool)
         self.Z = None  # preconditioner input, zero off the free set
+        self._nodes = (None, None)  # (flat indices, their (rows, columns)): see nodes()
 
     @property
     def backend(self) -> str:
@@ -167,6 +168,17 @@ class Workspace:
     def scale(self, p0: float) -> float:
         """Gap scale ``s`` of the convergence criterion, internal units."""
         return self.h_rms
+
+    def nodes(self, idx: np.ndarray):
+        """``(rows, columns)`` of the flat indices ``idx``, to read a product's 2-D result at them.
+
+        A float64 product may be a strided view of its buffer (rows padded in place), where a flat
+        read would copy the whole grid first. Cached for the same array: the iterations pass one
+        array while their set does not change.
+        """
+        if self._nodes[0] is not idx:
+            self._nodes = (idx, np.divmod(idx, self.shape[1]))
+        return self._nodes[1]
 
     def active_set(self) -> np.ndarray:
         """Flat indices of ``P > 0`` (and ``mask`` set to them)."""
