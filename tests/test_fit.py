@@ -3,6 +3,7 @@
 import csv
 import io
 import math
+import re
 
 import numpy as np
 import pytest
@@ -118,6 +119,22 @@ def test_too_narrow_window_raises_clearly():
         fit_cel(agg, n_boot=10, window=(0.05, 0.052))
     fit = fit_cel(agg, n_boot=10, window=(0.05, 0.052), on_insufficient="nan")
     assert bool(fit["value"].isnull().all())
+
+
+def test_a_group_without_fit_logs_why_and_the_remedy(caplog):
+    """With ``on_insufficient="nan"`` the NaN comes with a log line: the group, the reason, the remedy."""
+    agg = _agg(seeds=range(3))
+    with caplog.at_level("WARNING", logger="roughcontact"):
+        fit_cel(agg, n_boot=10, window=(0.05, 0.052), on_insufficient="nan")
+    lines = [r.getMessage() for r in caplog.records if r.name.startswith("roughcontact")]
+    for method in ("paper", "joint"):
+        assert any(re.search(rf"no CEL fit \({method}\) at k_l=.*window \(0\.05, 0\.052\): \d+ (finite kappa )?"
+                             r"points.*\(need >= \d+\); widen fit\.window or add load steps", line)
+                   for line in lines), lines
+    caplog.clear()
+    with caplog.at_level("WARNING", logger="roughcontact"):
+        fit_cel(agg, n_boot=10, on_insufficient="nan")
+    assert not [r for r in caplog.records if "no CEL fit" in r.getMessage()]
 
 
 @pytest.mark.parametrize(

@@ -191,6 +191,23 @@ def test_channel_selection(tmp_path):
         read_topography(fn, channel=2, **kw)
 
 
+@pytest.mark.parametrize("content", [{}, {"note": "no heights here"}])
+def test_file_without_channels_rejected(tmp_path, content):
+    """A file some reader accepts but that holds no data channel: named, with the reader and the remedy.
+
+    SurfaceTopography's example nms-2.nms is read as MATLAB data with no channel; once the message
+    ended in an empty list ("the file's channels are ").
+    """
+    import scipy.io
+
+    fn = tmp_path / "empty.mat"
+    scipy.io.savemat(fn, content)
+    with pytest.raises(TopographyError, match=r"reads it as 'mat' data \(MatReader\) but finds no data "
+                                              r"channel in it.*topography\.format$") as err:
+        read_topography(fn, unit="um", file_unit="um", physical_size=(1.0, 1.0))
+    assert str(err.value).startswith(f"{fn}: ")
+
+
 def test_line_scan_rejected(tmp_path):
     fn = tmp_path / "line.npy"
     np.save(fn, _noise(32))

@@ -348,6 +348,11 @@ def _close(reader) -> None:
 def _channel(name, reader, index):
     """The ``index``-th data channel; it must hold 2-D uniform heights."""
     channels = reader.channels
+    if not channels:  # e.g. a misnamed file that another format's reader accepts (nms-2.nms is read as .mat)
+        raise TopographyError(f"{name}: SurfaceTopography reads it as {reader.format()!r} data "
+                              f"({type(reader).__name__}) but finds no data channel in it: the file holds no "
+                              "height map, or is damaged or misnamed; if it is in another format, name that "
+                              "format in topography.format")
     names = ", ".join(f"{i}: {c.name!r}" for i, c in enumerate(channels))
     if index >= len(channels):
         raise TopographyError(f"{name}: topography.channel {index} is out of range; the file's channels are {names}")

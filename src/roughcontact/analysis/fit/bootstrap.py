@@ -9,12 +9,15 @@ single seed per stratum get no bootstrap (NaN, ``n_boot_ok = 0``).
 from __future__ import annotations
 
 import hashlib
+import logging
 import math
 from collections.abc import Sequence
 
 import numpy as np
 
-from .estimators import CONSTANTS, PAPER_CEL, FitError, _Curves, _fit_joint, _fit_paper
+from .estimators import CONSTANTS, PAPER_CEL, FitError, TooFewPoints, _Curves, _fit_joint, _fit_paper
+
+_log = logging.getLogger(__name__)
 
 
 def _resample(c: _Curves, rng: np.random.Generator) -> np.ndarray:
@@ -107,6 +110,10 @@ def _fit_group(curves: _Curves, *, methods: Sequence[str], e_star: float, min_po
                     f"{caller} ({method}) at {where} with window={window!r}: {err}; "
                     "widen `window`, add load steps, or pass on_insufficient='nan'"
                 ) from None
+            # The reason goes to the job's log: a NaN in cel.csv alone does not say why.
+            _log.warning("no CEL fit (%s) at %s, window %s: %s%s", method, where, tuple(window), err,
+                         "; widen fit.window or add load steps (contact.load.n_steps)"
+                         if isinstance(err, TooFewPoints) else "")
             continue
         out.value[m], out.stderr[m], out.npts[m] = full[method]
 

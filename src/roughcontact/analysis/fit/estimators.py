@@ -127,6 +127,10 @@ class FitError(ValueError):
     """A fit could not be carried out on the given points (too few, degenerate)."""
 
 
+class TooFewPoints(FitError):
+    """Fewer usable points in the fit window than the fit needs (``min_points``)."""
+
+
 def _fit_paper(c: _Curves, min_points: int, extrapolation: str, average: bool):
     """Paper route. Returns (values, stderrs, n_points) as arrays over CONSTANTS."""
     if average:
@@ -134,7 +138,7 @@ def _fit_paper(c: _Curves, min_points: int, extrapolation: str, average: bool):
     sel = c.ok & np.isfinite(c.dpbar) & (c.dpbar > 0)
     n_mb = int(sel.sum())
     if n_mb < min_points:
-        raise FitError(f"{n_mb} points with d pbar/d p0 > 0 in the window (need >= {min_points})")
+        raise TooFewPoints(f"{n_mb} points with d pbar/d p0 > 0 in the window (need >= {min_points})")
     x = np.log(c.a[sel])
     y = np.log(c.dpbar[sel])
     X = np.column_stack([np.ones_like(x), -x])
@@ -150,7 +154,7 @@ def _fit_paper(c: _Curves, min_points: int, extrapolation: str, average: bool):
     selk = c.ok & np.isfinite(c.kappa)
     n_k = int(selk.sum())
     if n_k < min_points:
-        raise FitError(f"{n_k} finite kappa points in the window (need >= {min_points})")
+        raise TooFewPoints(f"{n_k} finite kappa points in the window (need >= {min_points})")
     ak, yk = c.a[selk], c.kappa[selk]
     if extrapolation == "cel":
         if not (0.0 < mu < 1.0):
@@ -199,7 +203,7 @@ def _fit_joint(c: _Curves, e_star: float, min_points: int, x0_guess: np.ndarray)
     sel = c.ok & np.isfinite(c.p0) & (c.p0 > 0)
     n = int(sel.sum())
     if n < max(min_points, 4):
-        raise FitError(f"{n} points in the window (need >= {max(min_points, 4)})")
+        raise TooFewPoints(f"{n} points in the window (need >= {max(min_points, 4)})")
     xs = (c.p0 / (c.hp[:, None] * e_star))[sel]
     la = np.log(c.a[sel])
     guess = np.clip(np.asarray(x0_guess, float), JOINT_LOWER * 10, np.where(
