@@ -11,7 +11,13 @@ import pytest
 from SurfaceTopography import Topography
 
 from compare_outputs import assert_heights_close
-from roughcontact.surfaces.topography import LENGTH_UNITS, MeasuredSurface, TopographyError, read_topography
+from roughcontact.surfaces.topography import (
+    LENGTH_UNITS,
+    MeasuredSurface,
+    TopographyError,
+    check_header,
+    read_topography,
+)
 
 INFO_KEYS = {"file", "sha256", "reader", "channel", "file_unit", "unit_from", "physical_size_from", "original_shape",
              "original_physical_size", "n_undefined", "undefined", "detrend", "crop", "periodic"}
@@ -189,6 +195,46 @@ def test_channel_selection(tmp_path):
     assert surface.info["channel"] == "retrace"
     with pytest.raises(TopographyError, match=r"channel 2 is out of range.*0: 'height', 1: 'retrace'"):
         read_topography(fn, channel=2, **kw)
+
+
+def _gzip(tmp_path, inner):
+    import gzip
+
+    fn = tmp_path / (inner.name + ".gz")
+    fn.write_bytes(gzip.compress(inner.read_bytes()))
+    return fn
+
+
+def _zip(tmp_path, inner, container):
+    import zipfile
+
+    fn = tmp_path / ("container.zip" if container else "plain.zip")
+    with zipfile.ZipFile(fn, "w") as archive:
+        archive.write(inner, inner.name)
+        if container:  # SurfaceTopography's container: a meta.yml and the data files
+            archive.writestr("meta.yml", "surfaces: []\n")
+            archive.writestr("LICENSE-ccby-4.0.txt", "licence")
+    return fn
+
+
+@pytest.mark.parametrize("pack, message", [
+    (_gzip, r"the file is gzip-compressed; decompress it \(gunzip\) and name the decompressed file$"),
+    (lambda tmp, inner: _zip(tmp, inner, True), r"a SurfaceTopography container \(meta\.yml\) of several "
+                                                r"measurements, not one topography file; unzip it and name the data "
+                                                r"file you want in topography\.files \(its files: t\.nc\)$"),
+    (lambda tmp, inner: _zip(tmp, inner, False), r"a zip archive, not one topography file; unzip it .*\(its files: "
+                                                 r"t\.nc\)$"),
+])
+def test_compressed_files_and_archives_say_what_to_do(tmp_path, pack, message):
+    """SurfaceTopography's examples matrix-4.txt.gz and container-2.zip: no reader takes them, and the message
+    said only "unknown or unsupported format, or a damaged file"."""
+    inner = _netcdf(tmp_path, _noise((8, 8)), (8.0, 8.0))
+    assert read_topography(inner, unit="um").heights.shape == (8, 8)
+    fn = pack(tmp_path, inner)
+    for read in (read_topography, check_header):
+        with pytest.raises(TopographyError, match=message) as err:
+            read(fn, unit="um")
+        assert str(err.value).startswith(f"{fn}: ")
 
 
 @pytest.mark.parametrize("content", [{}, {"note": "no heights here"}])

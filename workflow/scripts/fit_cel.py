@@ -67,7 +67,8 @@ def _log_topographies(log, result):
     for estimator in result["estimator"].values:
         value = result["value"].sel(estimator=estimator)
         if value.isnull().any():
-            log.warning("no CEL fit (%s) of the %d topographies pooled", estimator, n)
+            if n == 0:  # else the fit has logged why (roughcontact.analysis.fit.bootstrap)
+                log.warning("no CEL fit (%s): no topography to fit", estimator)
         elif n > 1:
             loose = [str(c) for c in result["constant"].values
                      if not int(result["constrained"].sel(estimator=estimator, constant=c))]

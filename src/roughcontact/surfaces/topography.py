@@ -27,6 +27,7 @@ from __future__ import annotations
 import numbers
 import os
 import warnings
+import zipfile
 from dataclasses import dataclass
 
 import numpy as np
@@ -327,6 +328,9 @@ def _open_reader(name: str, fmt: str | None):
         return open_topography(name, format=fmt)
     except CannotDetectFileFormat as err:
         # Its message lists every reader's complaint; the chained exception keeps them.
+        archive = _archive(name)
+        if archive:
+            raise TopographyError(f"{name}: {archive}") from err
         formats = ", ".join(sorted(r.format() for r in readers))
         raise TopographyError(f"{name}: not a topography file SurfaceTopography can read (unknown or unsupported "
                               f"format, or a damaged file); formats read: {formats}") from err
@@ -334,6 +338,27 @@ def _open_reader(name: str, fmt: str | None):
         raise TopographyError(f"{name}: the file is damaged ({err})") from err
     except Exception as err:
         raise TopographyError(f"{name}: SurfaceTopography cannot open the file ({type(err).__name__}: {err})") from err
+
+
+def _archive(name: str) -> str | None:
+    """What to do with a compressed file or an archive that no reader takes; None for other files."""
+    with open(name, "rb") as fh:
+        magic = fh.read(2)
+    if magic == b"\x1f\x8b":
+        return "the file is gzip-compressed; decompress it (gunzip) and name the decompressed file"
+    if not zipfile.is_zipfile(name):
+        return None
+    try:
+        with zipfile.ZipFile(name) as archive:
+            members = [m for m in archive.namelist() if not m.endswith("/")]
+    except (OSError, zipfile.BadZipFile):
+        return None
+    data = [m for m in members if m != "meta.yml" and not os.path.basename(m).upper().startswith("LICENSE")]
+    kind = ("a SurfaceTopography container (meta.yml) of several measurements" if "meta.yml" in members
+            else "a zip archive")
+    shown = ", ".join(data[:6]) + (", ..." if len(data) > 6 else "")
+    return (f"{kind}, not one topography file; unzip it and name the data file you want in topography.files "
+            f"(its files: {shown or 'none'})")
 
 
 def _close(reader) -> None:

@@ -1,0 +1,106 @@
+"""Every example file of SurfaceTopography's test suite through :func:`read_topography`, one line each.
+
+SurfaceTopography's repository keeps example files of every format it reads in
+``test/file_format_examples`` (https://github.com/ContactEngineering/SurfaceTopography, MIT
+licence; some are Git LFS objects that a plain copy may lack). This sweep reads each file of such a
+folder as a measured scene would (heights in um, best plane removed, undefined points filled
+harmonically; ``file_unit`` um and a 10 x 10 um size for files that carry neither) and says what
+happened:
+
+- ``read``: the heights the solver would get (shape, sides, undefined fraction);
+- ``refused``: a :class:`~roughcontact.surfaces.topography.TopographyError`, the clear message a
+  user gets (line scans, maps under 4 x 4, unknown or damaged files, ...);
+- ``CRASH``: any other exception, a traceback from deep inside a library: a bug of ours.
+
+The exit status is 1 when a file crashed. ``--scene FILE`` also writes a scene (YAML, for
+``snakemake --configfile FILE``) with every read file, to take them all through every stage::
+
+    python benchmarks/formats/sweep.py --from DIR [--scene sweep.yaml] [--skip NAME ...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+import traceback
+import warnings
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from roughcontact.surfaces.topography import TopographyError, read_topography
+
+READ_OPTIONS = {"unit": "um", "file_unit": "um", "physical_size": (10.0, 10.0), "undefined": "harmonic",
+                "detrend": "height"}
+
+
+def read_one(path: Path) -> tuple[str, str]:
+    """``(outcome, detail)`` of reading ``path`` with :data:`READ_OPTIONS`: outcome read, refused or CRASH."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            surface = read_topography(path, **READ_OPTIONS)
+    except TopographyError as err:
+        return "refused", str(err).removeprefix(f"{path}: ")
+    except Exception as err:  # what the sweep is for: anything but a TopographyError is a bug
+        frame = traceback.extract_tb(err.__traceback__)[-1]
+        return "CRASH", f"{type(err).__name__}: {err} (at {Path(frame.filename).name}:{frame.lineno})"
+    nx, ny = surface.heights.shape
+    lx, ly = np.broadcast_to(surface.lengths, 2)
+    undefined = surface.info.get("undefined_fraction", 0.0)
+    return "read", f"{nx} x {ny}, {lx:.4g} x {ly:.4g} um, {100 * undefined:.1f} % undefined, {surface.info['format']}"
+
+
+def sweep(folder: Path, skip: tuple[str, ...] = ()) -> list[tuple[str, str, str]]:
+    """``(file name, outcome, detail)`` for every file in ``folder`` (sorted), less the names in ``skip``."""
+    files = sorted(p for p in folder.iterdir() if p.is_file() and p.name not in skip)
+    return [(p.name, *read_one(p)) for p in files]
+
+
+def case_name(file_name: str) -> str:
+    """A case name for a file: its stem in lower case, other characters than [a-z0-9-] as '-'."""
+    return re.sub(r"[^a-z0-9-]", "-", Path(file_name).stem.lower().replace("_", "-"))
+
+
+def scene(folder: Path, rows: list[tuple[str, str, str]]) -> dict:
+    """A measured scene (the test-suite's loads: 4 steps to p0/(E* h') = 0.02) with every read file."""
+    files = {case_name(name): {"path": str(folder.resolve() / name), "file_unit": "um",
+                               "physical_size": [10.0, 10.0]}
+             for name, outcome, _ in rows if outcome == "read"}
+    return {"scene": "formats", "scenes": {"formats": {
+        "description": "Every example file of SurfaceTopography's test suite that reads, through every stage.",
+        "topography": {"files": files, "unit": "um", "undefined": "harmonic", "detrend": "height"},
+        "representativity": {"n_bins": 50},
+        "contact": {"load": {"relative_to": "rms_slope", "p_max": 0.02, "n_steps": 4},
+                    "solver": {"e_star": 1.0e5, "pressure_unit": "MPa"}},
+    }}}
+
+
+def table(rows: list[tuple[str, str, str]]) -> str:
+    """The rows as a markdown table, with a count of each outcome first."""
+    counts = {o: sum(r[1] == o for r in rows) for o in ("read", "refused", "CRASH")}
+    lines = [", ".join(f"{n} {o}" for o, n in counts.items()), "", "| file | outcome | detail |", "|---|---|---|"]
+    lines += [f"| {name} | {outcome} | {detail.replace('|', '/')} |" for name, outcome, detail in rows]
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--from", dest="folder", type=Path, required=True,
+                    help="a copy of SurfaceTopography's test/file_format_examples")
+    ap.add_argument("--scene", type=Path, help="write a scene with every read file to this YAML file")
+    ap.add_argument("--skip", nargs="*", default=(), help="file names to leave out")
+    args = ap.parse_args(argv)
+    if not args.folder.is_dir():
+        ap.error(f"--from {args.folder}: not a folder")
+    rows = sweep(args.folder, tuple(args.skip))
+    print(table(rows))
+    if args.scene:
+        args.scene.write_text(yaml.safe_dump(scene(args.folder, rows), sort_keys=False))
+    return 1 if any(outcome == "CRASH" for _, outcome, _ in rows) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,53 @@
+"""benchmarks/formats/sweep.py: the shipped instrument files read, bad ones refused, a crash reported as one."""
+import importlib.util
+import shutil
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "formats" / "sweep.py"
+DATA = Path(__file__).resolve().parent / "data" / "surfacetopography"
+
+
+def _module():
+    spec = importlib.util.spec_from_file_location("format_sweep", SCRIPT)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_sweep_reads_the_shipped_files_and_refuses_the_bad_ones(tmp_path, capsys):
+    sweep = _module()
+    for file in DATA.iterdir():
+        if file.name != "LICENSE.md":
+            shutil.copy(file, tmp_path / file.name)
+    np.save(tmp_path / "line.npy", np.arange(32.0))  # a line scan
+    (tmp_path / "noise.x3p").write_bytes(bytes(range(256)) * 4)  # not an x3p file
+    rows = {name: (outcome, detail) for name, outcome, detail in sweep.sweep(tmp_path)}
+    read = sorted(n for n, (o, _) in rows.items() if o == "read")
+    assert read == sorted(f.name for f in DATA.iterdir() if f.name != "LICENSE.md")
+    assert rows["sur-2.sur"][1] == "563 x 484, 1961 x 1686 um, 0.0 % undefined, sur"
+    assert rows["line.npy"][0] == "refused" and "line scan" in rows["line.npy"][1]
+    assert rows["noise.x3p"][0] == "refused" and not rows["noise.x3p"][1].startswith(str(tmp_path))
+
+    scene_file = tmp_path / "scene.yaml"
+    assert sweep.main(["--from", str(tmp_path), "--scene", str(scene_file), "--skip", "noise.x3p"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("7 read, 1 refused, 0 CRASH\n")
+    files = yaml.safe_load(scene_file.read_text())["scenes"]["formats"]["topography"]["files"]
+    assert sorted(files) == ["di-3", "frt-2", "mi-1", "opd-1", "spot-1-1000nm", "sur-2", "x3p-2"]
+    assert files["frt-2"]["path"] == str(tmp_path.resolve() / "frt-2.frt")
+
+
+def test_a_crash_is_reported_and_sets_the_exit_status(tmp_path, monkeypatch, capsys):
+    sweep = _module()
+    shutil.copy(DATA / "mi-1.mi", tmp_path / "mi-1.mi")
+
+    def broken(path, **_):
+        raise IndexError("index 3 is out of bounds")
+
+    monkeypatch.setattr(sweep, "read_topography", broken)
+    assert sweep.main(["--from", str(tmp_path)]) == 1
+    out = capsys.readouterr().out
+    assert "| mi-1.mi | CRASH | IndexError: index 3 is out of bounds (at test_format_sweep.py:" in out
