@@ -1,4 +1,5 @@
 """Shared fixtures: paths of the repository and a runner for the snakemake CLI."""
+import importlib.util
 import os
 import shutil
 import signal
@@ -11,6 +12,14 @@ import yaml
 
 REPO = Path(__file__).resolve().parents[1]
 SNAKEMAKE = str(Path(sys.executable).parent / "snakemake")
+
+
+def load_script(path: Path, name: str):
+    """A script that is not part of the package (``benchmarks/...``) imported as module ``name``."""
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 # ROUGHCONTACT_ARRAY_BACKEND=cupy runs every solve that names no backend on the GPU (the hard-case

@@ -1,17 +1,15 @@
 """benchmarks/bench_real_files.py: one file's line from a real solve (frt-2, 150^2, ~2 s)."""
-import importlib.util
 import re
 from pathlib import Path
+
+from conftest import load_script
 
 SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_real_files.py"
 DATA = Path(__file__).resolve().parent / "data" / "surfacetopography"
 
 
 def _module():
-    spec = importlib.util.spec_from_file_location("bench_real_files", SCRIPT)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script(SCRIPT, "bench_real_files")
 
 
 def test_every_listed_file_is_shipped():

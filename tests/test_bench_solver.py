@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
 import pytest
+
+from conftest import load_script
 
 SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_solver.py"
 
@@ -17,10 +18,7 @@ SUMMARY = ["N", "steps", "iterations", "converged", "CPU [s]", "wall [s]", "ms/i
 
 @pytest.fixture(scope="module")
 def bench():
-    spec = importlib.util.spec_from_file_location("bench_solver", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script(SCRIPT, "bench_solver")
 
 
 def test_auto_runs_the_extras_up_to_1024_only(bench):

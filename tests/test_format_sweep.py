@@ -1,20 +1,18 @@
 """benchmarks/formats/sweep.py: the shipped instrument files read, bad ones refused, a crash reported as one."""
-import importlib.util
 import shutil
 from pathlib import Path
 
 import numpy as np
 import yaml
 
+from conftest import load_script
+
 SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "formats" / "sweep.py"
 DATA = Path(__file__).resolve().parent / "data" / "surfacetopography"
 
 
 def _module():
-    spec = importlib.util.spec_from_file_location("format_sweep", SCRIPT)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_script(SCRIPT, "format_sweep")
 
 
 def test_sweep_reads_the_shipped_files_and_refuses_the_bad_ones(tmp_path, capsys):
