@@ -1,4 +1,5 @@
 """benchmarks/formats/sweep.py: the shipped instrument files read, bad ones refused, a crash reported as one."""
+import re
 import shutil
 from pathlib import Path
 
@@ -49,3 +50,10 @@ def test_a_crash_is_reported_and_sets_the_exit_status(tmp_path, monkeypatch, cap
     assert sweep.main(["--from", str(tmp_path)]) == 1
     out = capsys.readouterr().out
     assert "| mi-1.mi | CRASH | IndexError: index 3 is out of bounds (at test_format_sweep.py:" in out
+
+
+def test_solve_line_reports_a_converged_solve():
+    ok, line = _module().solve_one(DATA / "mi-1.mi", 0.05, steps=3)
+    m = re.fullmatch(r"\| mi-1\.mi \| 256 x 256 \| 3/3 \| (\d+) \| ([\w-]+ \d(, )?)+ \| [\d.]+ \| ([\d.]+) \|", line)
+    assert ok and m, line
+    assert int(m[1]) > 3 and 0 < float(m[4]) < 1

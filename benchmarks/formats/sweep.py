@@ -13,19 +13,29 @@ happened:
 - ``CRASH``: any other exception, a traceback from deep inside a library: a bug of ours.
 
 The exit status is 1 when a file crashed. ``--scene FILE`` also writes a scene (YAML, for
-``snakemake --configfile FILE``) with every read file, to take them all through every stage::
+``snakemake --configfile FILE``) with every read file, to take them all through every stage.
+``--solve`` then solves each read file directly, as the measured scene does but at the hard-case
+suite's resolution of the load: 30 steps to ``p0 / (E* h') = --p-max`` (default 0.05, the measured
+scenes' default), free boundary, tol 1e-8, one thread; a line per file with the steps converged,
+iterations, the paths that ended the steps, CPU and the last A/A0 (the exit status is 1 also when
+a step did not converge)::
 
-    python benchmarks/formats/sweep.py --from DIR [--scene sweep.yaml] [--skip NAME ...]
+    python benchmarks/formats/sweep.py --from DIR [--scene sweep.yaml] [--skip NAME ...] [--solve]
 """
 
 from __future__ import annotations
 
 import argparse
+import collections
+import os
 import re
 import sys
+import time
 import traceback
 import warnings
 from pathlib import Path
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np
 import yaml
@@ -78,6 +88,27 @@ def scene(folder: Path, rows: list[tuple[str, str, str]]) -> dict:
     }}}
 
 
+def solve_one(path: Path, p_max: float, steps: int = 30) -> tuple[bool, str]:
+    """``(all converged, line)``: ``path`` solved over ``steps`` loads to ``p0 / (E* h') = p_max`` (E* = 1)."""
+    from roughcontact.solver import SOLVER_PATHS, solve_contact
+    from roughcontact.surfaces.synthetic import nonperiodic_moments
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        surface = read_topography(path, **READ_OPTIONS)
+    slope = nonperiodic_moments(surface.heights, surface.lengths)["rms_slope"]
+    loads = [p_max * slope * (k + 1) / steps for k in range(steps)]
+    cpu = time.process_time()
+    ds = solve_contact(surface.heights, loads, e_star=1.0, length=surface.length, tol=1e-8, boundary="free")
+    cpu = time.process_time() - cpu
+    converged = int(ds["converged"].sum())
+    paths = dict(collections.Counter(SOLVER_PATHS[x] for x in ds["solver_path"].values))
+    return converged == steps, (f"| {path.name} | {surface.heights.shape[0]} x {surface.heights.shape[1]} | "
+                                f"{converged}/{steps} | {int(ds['iterations'].sum())} | "
+                                f"{', '.join(f'{k} {v}' for k, v in sorted(paths.items()))} | {cpu:.1f} | "
+                                f"{float(ds['area_fraction'][-1]):.4f} |")
+
+
 def table(rows: list[tuple[str, str, str]]) -> str:
     """The rows as a markdown table, with a count of each outcome first."""
     counts = {o: sum(r[1] == o for r in rows) for o in ("read", "refused", "CRASH")}
@@ -92,6 +123,8 @@ def main(argv=None) -> int:
                     help="a copy of SurfaceTopography's test/file_format_examples")
     ap.add_argument("--scene", type=Path, help="write a scene with every read file to this YAML file")
     ap.add_argument("--skip", nargs="*", default=(), help="file names to leave out")
+    ap.add_argument("--solve", action="store_true", help="then solve every read file (30 steps, free boundary)")
+    ap.add_argument("--p-max", type=float, default=0.05, help="--solve's last load p0 / (E* h') (default 0.05)")
     args = ap.parse_args(argv)
     if not args.folder.is_dir():
         ap.error(f"--from {args.folder}: not a folder")
@@ -99,7 +132,16 @@ def main(argv=None) -> int:
     print(table(rows))
     if args.scene:
         args.scene.write_text(yaml.safe_dump(scene(args.folder, rows), sort_keys=False))
-    return 1 if any(outcome == "CRASH" for _, outcome, _ in rows) else 0
+    failed = any(outcome == "CRASH" for _, outcome, _ in rows)
+    if args.solve:
+        print(f"\n| file | grid | converged | iterations | paths (steps) | CPU [s] | A/A0 at p0/(E* h') = "
+              f"{args.p_max:g} |\n|---|---|---|---|---|---|---|", flush=True)
+        for name, outcome, _ in rows:
+            if outcome == "read":
+                ok, line = solve_one(args.folder / name, args.p_max)
+                failed |= not ok
+                print(line, flush=True)
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":
