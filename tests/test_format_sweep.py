@@ -57,3 +57,10 @@ def test_solve_line_reports_a_converged_solve():
     m = re.fullmatch(r"\| mi-1\.mi \| 256 x 256 \| 3/3 \| (\d+) \| ([\w-]+ \d(, )?)+ \| [\d.]+ \| ([\d.]+) \|", line)
     assert ok and m, line
     assert int(m[1]) > 3 and 0 < float(m[4]) < 1
+
+
+def test_solve_line_with_a_hardness_ends_with_the_plastic_area():
+    ok, line = _module().solve_one(DATA / "mi-1.mi", 0.05, steps=3, hardness=0.2)
+    m = re.fullmatch(r"\| mi-1\.mi \| 256 x 256 \| 3/3 \| \d+ \| box 3 \| [\d.]+ \| ([\d.]+) \| ([\d.]+) \|", line)
+    assert ok and m, line
+    assert 0 < float(m[2]) < float(m[1]) < 1

@@ -18,9 +18,9 @@ The exit status is 1 when a file crashed. ``--scene FILE`` also writes a scene (
 suite's resolution of the load: 30 steps to ``p0 / (E* h') = --p-max`` (default 0.05, the measured
 scenes' default), free boundary, tol 1e-8, one thread; a line per file with the steps converged,
 iterations, the paths that ended the steps, CPU and the last A/A0 (the exit status is 1 also when
-a step did not converge)::
+a step did not converge). ``--hardness H`` adds a plasticity cap ``H E* h'`` (the capped iteration)::
 
-    python benchmarks/formats/sweep.py --from DIR [--scene sweep.yaml] [--skip NAME ...] [--solve]
+    python benchmarks/formats/sweep.py --from DIR [--scene sweep.yaml] [--skip NAME ...] [--solve [--hardness H]]
 """
 
 from __future__ import annotations
@@ -88,8 +88,9 @@ def scene(folder: Path, rows: list[tuple[str, str, str]]) -> dict:
     }}}
 
 
-def solve_one(path: Path, p_max: float, steps: int = 30) -> tuple[bool, str]:
-    """``(all converged, line)``: ``path`` solved over ``steps`` loads to ``p0 / (E* h') = p_max`` (E* = 1)."""
+def solve_one(path: Path, p_max: float, steps: int = 30, hardness: float | None = None) -> tuple[bool, str]:
+    """``(all converged, line)``: ``path`` solved over ``steps`` loads to ``p0 / (E* h') = p_max`` (E* = 1),
+    with a plasticity cap ``H = hardness E* h'`` where given (the line then ends with the plastic area)."""
     from roughcontact.solver import SOLVER_PATHS, solve_contact
     from roughcontact.surfaces.synthetic import nonperiodic_moments
 
@@ -99,14 +100,16 @@ def solve_one(path: Path, p_max: float, steps: int = 30) -> tuple[bool, str]:
     slope = nonperiodic_moments(surface.heights, surface.lengths)["rms_slope"]
     loads = [p_max * slope * (k + 1) / steps for k in range(steps)]
     cpu = time.process_time()
-    ds = solve_contact(surface.heights, loads, e_star=1.0, length=surface.length, tol=1e-8, boundary="free")
+    cap = {} if hardness is None else {"hardness": hardness * slope}
+    ds = solve_contact(surface.heights, loads, e_star=1.0, length=surface.length, tol=1e-8, boundary="free", **cap)
     cpu = time.process_time() - cpu
     converged = int(ds["converged"].sum())
     paths = dict(collections.Counter(SOLVER_PATHS[x] for x in ds["solver_path"].values))
     return converged == steps, (f"| {path.name} | {surface.heights.shape[0]} x {surface.heights.shape[1]} | "
                                 f"{converged}/{steps} | {int(ds['iterations'].sum())} | "
                                 f"{', '.join(f'{k} {v}' for k, v in sorted(paths.items()))} | {cpu:.1f} | "
-                                f"{float(ds['area_fraction'][-1]):.4f} |")
+                                f"{float(ds['area_fraction'][-1]):.4f} |"
+                                + (f" {float(ds['plastic_area_fraction'][-1]):.4f} |" if cap else ""))
 
 
 def table(rows: list[tuple[str, str, str]]) -> str:
@@ -125,6 +128,7 @@ def main(argv=None) -> int:
     ap.add_argument("--skip", nargs="*", default=(), help="file names to leave out")
     ap.add_argument("--solve", action="store_true", help="then solve every read file (30 steps, free boundary)")
     ap.add_argument("--p-max", type=float, default=0.05, help="--solve's last load p0 / (E* h') (default 0.05)")
+    ap.add_argument("--hardness", type=float, help="--solve with a plasticity cap H / (E* h') (above --p-max)")
     args = ap.parse_args(argv)
     if not args.folder.is_dir():
         ap.error(f"--from {args.folder}: not a folder")
@@ -134,11 +138,12 @@ def main(argv=None) -> int:
         args.scene.write_text(yaml.safe_dump(scene(args.folder, rows), sort_keys=False))
     failed = any(outcome == "CRASH" for _, outcome, _ in rows)
     if args.solve:
+        plastic = "" if args.hardness is None else f" plastic area (H/(E* h') = {args.hardness:g}) |"
         print(f"\n| file | grid | converged | iterations | paths (steps) | CPU [s] | A/A0 at p0/(E* h') = "
-              f"{args.p_max:g} |\n|---|---|---|---|---|---|---|", flush=True)
+              f"{args.p_max:g} |{plastic}\n|---|---|---|---|---|---|---|{'---|' if plastic else ''}", flush=True)
         for name, outcome, _ in rows:
             if outcome == "read":
-                ok, line = solve_one(args.folder / name, args.p_max)
+                ok, line = solve_one(args.folder / name, args.p_max, hardness=args.hardness)
                 failed |= not ok
                 print(line, flush=True)
     return 1 if failed else 0
