@@ -4,6 +4,7 @@ import shutil
 from pathlib import Path
 
 import numpy as np
+import pytest
 import yaml
 
 from conftest import load_script
@@ -64,3 +65,13 @@ def test_solve_line_with_a_hardness_ends_with_the_plastic_area():
     m = re.fullmatch(r"\| mi-1\.mi \| 256 x 256 \| 3/3 \| \d+ \| box 3 \| [\d.]+ \| ([\d.]+) \| ([\d.]+) \|", line)
     assert ok and m, line
     assert 0 < float(m[2]) < float(m[1]) < 1
+
+
+@pytest.mark.peer
+def test_solve_line_with_the_peer_ends_with_its_area():
+    """ContactMechanics' A/A0 at the last load (mi-1: the same node count at tol 1e-8)."""
+    pytest.importorskip("ContactMechanics", reason="ContactMechanics is not installed: peer comparison skipped")
+    ok, line = _module().solve_one(DATA / "mi-1.mi", 0.05, steps=3, peer=True)
+    m = re.fullmatch(r"\| mi-1\.mi .* \| ([\d.]+) \| ([\d.]+) \| ([\d.e+-]+) \| \d+ \|", line)
+    assert ok and m, line
+    assert float(m[2]) > 0 and float(m[3]) <= 1e-3 and abs(float(m[1]) - float(m[2])) <= 1e-3 * float(m[2])

@@ -18,9 +18,12 @@ The exit status is 1 when a file crashed. ``--scene FILE`` also writes a scene (
 suite's resolution of the load: 30 steps to ``p0 / (E* h') = --p-max`` (default 0.05, the measured
 scenes' default), free boundary, tol 1e-8, one thread; a line per file with the steps converged,
 iterations, the paths that ended the steps, CPU and the last A/A0 (the exit status is 1 also when
-a step did not converge). ``--hardness H`` adds a plasticity cap ``H E* h'`` (the capped iteration)::
+a step did not converge). ``--hardness H`` adds a plasticity cap ``H E* h'`` (the capped iteration);
+``--peer NODES`` compares A/A0 at the last load with ContactMechanics' (test-only peer) on maps of
+at most ``NODES`` points::
 
-    python benchmarks/formats/sweep.py --from DIR [--scene sweep.yaml] [--skip NAME ...] [--solve [--hardness H]]
+    python benchmarks/formats/sweep.py --from DIR [--scene sweep.yaml] [--skip NAME ...] \
+        [--solve [--hardness H] [--peer NODES]]
 """
 
 from __future__ import annotations
@@ -88,9 +91,14 @@ def scene(folder: Path, rows: list[tuple[str, str, str]]) -> dict:
     }}}
 
 
-def solve_one(path: Path, p_max: float, steps: int = 30, hardness: float | None = None) -> tuple[bool, str]:
+def solve_one(path: Path, p_max: float, steps: int = 30, hardness: float | None = None,
+              peer: bool = False) -> tuple[bool, str]:
     """``(all converged, line)``: ``path`` solved over ``steps`` loads to ``p0 / (E* h') = p_max`` (E* = 1),
-    with a plasticity cap ``H = hardness E* h'`` where given (the line then ends with the plastic area)."""
+    with a plasticity cap ``H = hardness E* h'`` where given (the line then ends with the plastic area).
+
+    ``peer``: the last load solved again, from scratch, by ContactMechanics' free-boundary CG
+    (:func:`peer_area`); the line ends with its A/A0 and ``|A_ours - A_peer| / A_peer``.
+    """
     from roughcontact.solver import SOLVER_PATHS, solve_contact
     from roughcontact.surfaces.synthetic import nonperiodic_moments
 
@@ -109,7 +117,27 @@ def solve_one(path: Path, p_max: float, steps: int = 30, hardness: float | None 
                                 f"{converged}/{steps} | {int(ds['iterations'].sum())} | "
                                 f"{', '.join(f'{k} {v}' for k, v in sorted(paths.items()))} | {cpu:.1f} | "
                                 f"{float(ds['area_fraction'][-1]):.4f} |"
-                                + (f" {float(ds['plastic_area_fraction'][-1]):.4f} |" if cap else ""))
+                                + (f" {float(ds['plastic_area_fraction'][-1]):.4f} |" if cap else "")
+                                + (_peer_cells(surface, loads[-1], float(ds["area_fraction"][-1])) if peer else ""))
+
+
+def _peer_cells(surface, p0: float, ours: float) -> str:
+    """`` A_peer | rel. difference | peer iterations |`` at mean pressure ``p0`` (E* = 1), or why not."""
+    area, nit, success = peer_area(surface.heights, surface.length, 1.0, p0, 1e-8, 10_000)
+    if not success:
+        return f" not converged in {nit} | - | {nit} |"
+    return f" {area:.4f} | {abs(ours - area) / area:.1e} | {nit} |"
+
+
+def peer_area(h, length, e_star: float, p0: float, tol: float, maxiter: int):
+    """ContactMechanics' A/A0, iterations and success: the hard-case table's peer (``benchmarks/hardcases``)."""
+    import importlib.util
+
+    script = Path(__file__).resolve().parents[1] / "hardcases" / "table.py"
+    spec = importlib.util.spec_from_file_location("hardcases_table", script)
+    table = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(table)
+    return table.peer_area(h, length, e_star, p0, tol, maxiter)
 
 
 def table(rows: list[tuple[str, str, str]]) -> str:
@@ -129,6 +157,8 @@ def main(argv=None) -> int:
     ap.add_argument("--solve", action="store_true", help="then solve every read file (30 steps, free boundary)")
     ap.add_argument("--p-max", type=float, default=0.05, help="--solve's last load p0 / (E* h') (default 0.05)")
     ap.add_argument("--hardness", type=float, help="--solve with a plasticity cap H / (E* h') (above --p-max)")
+    ap.add_argument("--peer", type=int, metavar="NODES", default=0,
+                    help="--solve: ContactMechanics' A/A0 at the last load for maps of at most NODES points")
     args = ap.parse_args(argv)
     if not args.folder.is_dir():
         ap.error(f"--from {args.folder}: not a folder")
@@ -138,12 +168,17 @@ def main(argv=None) -> int:
         args.scene.write_text(yaml.safe_dump(scene(args.folder, rows), sort_keys=False))
     failed = any(outcome == "CRASH" for _, outcome, _ in rows)
     if args.solve:
-        plastic = "" if args.hardness is None else f" plastic area (H/(E* h') = {args.hardness:g}) |"
+        extra = [] if args.hardness is None else [f"plastic area (H/(E* h') = {args.hardness:g})"]
+        extra += ["A/A0 ContactMechanics", "rel. difference", "its. ContactMechanics"] if args.peer else []
         print(f"\n| file | grid | converged | iterations | paths (steps) | CPU [s] | A/A0 at p0/(E* h') = "
-              f"{args.p_max:g} |{plastic}\n|---|---|---|---|---|---|---|{'---|' if plastic else ''}", flush=True)
-        for name, outcome, _ in rows:
+              f"{args.p_max:g} |{''.join(f' {e} |' for e in extra)}\n|{'---|' * (7 + len(extra))}", flush=True)
+        for name, outcome, detail in rows:
             if outcome == "read":
-                ok, line = solve_one(args.folder / name, args.p_max, hardness=args.hardness)
+                nx, ny = map(int, re.match(r"(\d+) x (\d+),", detail).groups())  # read_one's detail
+                nodes = nx * ny
+                ok, line = solve_one(args.folder / name, args.p_max, hardness=args.hardness,
+                                     peer=args.peer > 0 and nodes <= args.peer)
+                line += " - | - | - |" if args.peer > 0 and nodes > args.peer else ""
                 failed |= not ok
                 print(line, flush=True)
     return 1 if failed else 0
