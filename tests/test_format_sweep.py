@@ -34,9 +34,9 @@ def test_sweep_reads_the_shipped_files_and_refuses_the_bad_ones(tmp_path, capsys
     scene_file = tmp_path / "scene.yaml"
     assert sweep.main(["--from", str(tmp_path), "--scene", str(scene_file), "--skip", "noise.x3p"]) == 0
     out = capsys.readouterr().out
-    assert out.startswith("7 read, 1 refused, 0 CRASH\n")
+    assert out.startswith("8 read, 1 refused, 0 CRASH\n")
     files = yaml.safe_load(scene_file.read_text())["scenes"]["formats"]["topography"]["files"]
-    assert sorted(files) == ["di-3", "frt-2", "mi-1", "opd-1", "spot-1-1000nm", "sur-2", "x3p-2"]
+    assert sorted(files) == ["di-3", "frt-2", "mi-1", "nid-1", "opd-1", "spot-1-1000nm", "sur-2", "x3p-2"]
     assert files["frt-2"]["path"] == str(tmp_path.resolve() / "frt-2.frt")
 
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 
-def project(y: np.ndarray, total: float, cap: float) -> np.ndarray:
+def project(y: np.ndarray, total: float, cap: float, out: np.ndarray | None = None,
+            work: np.ndarray | None = None) -> np.ndarray:
     """Euclidean projection of ``y`` onto ``{0 <= x <= cap, sum(x) = total}``.
 
     The projection is ``x = clip(y - lam, 0, cap)`` with the offset ``lam`` such
@@ -16,11 +17,16 @@ def project(y: np.ndarray, total: float, cap: float) -> np.ndarray:
     inside stop changing. The last rounding error of the sum is spread over
     the nodes inside the box; when the cap is below the resolution of ``y``
     (the bracket shrinks to adjacent floats with no node inside), ``x``
-    interpolates between the two sides of the jump.
+    interpolates between the two sides of the jump. ``out`` (float, not ``y``) and ``work``
+    (bool), of ``y``'s shape, spare the two allocations of a call; the result is ``out`` then
+    (except for a cap below the resolution of ``y``, where it is a new array).
     """
     size = y.size
     if total >= cap * size:  # only reachable through round-off of p0 -> hardness
-        return np.full_like(y, cap)
+        if out is None:
+            return np.full_like(y, cap)
+        out.fill(cap)
+        return out
     lo = float(y.min()) - cap  # phi(lo) = size * cap - total > 0
     hi = float(y.max())  # phi(hi) = -total < 0
     lam = float(y.mean()) - total / size  # exact when nothing is clipped
@@ -31,8 +37,8 @@ def project(y: np.ndarray, total: float, cap: float) -> np.ndarray:
         lam = 0.0
     if not lo < lam < hi:
         lam = 0.5 * (lo + hi)
-    z = np.empty_like(y)
-    inside = np.empty_like(y, dtype=bool)
+    z = np.empty_like(y) if out is None else out
+    inside = np.empty_like(y, dtype=bool) if work is None else work
     for k in range(400):
         np.subtract(y, lam, out=z)
         np.greater(z, 0.0, out=inside)
