@@ -96,8 +96,9 @@ class BoxIteration:
         if self.precond:
             ws.setup_method()
         self.kt = xp.empty(n2)
-        # the moves' work arrays, allocated once: fresh grid-sized temporaries at every move made the
-        # solve's speed depend on the allocator's state (up to 1.3x, measured at N = 512)
+        # the moves' work arrays, allocated once: with fresh grid-sized temporaries at every move the
+        # solve took up to 1.3x the CPU after another iteration had run in the process (N = 512; alike
+        # with glibc's mmap threshold fixed), a cost of the allocator's state, not of the iteration
         self.g_all, self.trial, self.step, self.ks = (xp.empty(n2) for _ in range(4))
         self.seg = xp.zeros(n2)  # _leave_box's step: zero but on the free set while it is used
         # the last CG step's gradient on the face, zero elsewhere (Polak-Ribiere's beta)
