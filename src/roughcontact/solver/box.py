@@ -303,7 +303,7 @@ class BoxIteration:
         s_f = x_f - p_f
         step = self.seg
         step[idx] = s_f
-        ks = self.ws.apply_k(step.reshape(self.shape))  # 2-D, maybe strided: read at the nodes, copied whole once
+        ks = self.ws.apply_k(step.reshape(self.shape))  # 2-D, maybe a strided view of the product's buffer
         step[idx] = 0.0
         sks, gs = dot(s_f, ks[self.ws.nodes(idx)]), dot(self.g_f, s_f)
         if sks > 0.0 and gs < 0.0:
@@ -312,12 +312,9 @@ class BoxIteration:
                 P[idx] = x_f
             else:
                 P[idx] = np.clip(p_f + theta * s_f, 0.0, cap)
+                ks *= theta
                 self.expand = True
-            w2 = self.w.reshape(self.shape)
-            if theta >= 1.0:
-                w2 += ks
-            else:
-                w2 += theta * ks
+            self.ws.w += ks
             return True
         # truncated CG step: up to the first bound met along -t
         with np.errstate(divide="ignore", invalid="ignore"):
