@@ -70,3 +70,23 @@ def test_target_area_is_reached_by_the_last_load_step(boundary):
     assert abs(attrs["load_target_area_reached"] - 0.08) <= tol and abs(last - 0.08) <= tol + 1.0 / h.size
     assert attrs["load_probes"] <= 6 and attrs["load_p0_max"] == loads[-1]
     assert attrs["load_pbar_max"] == pytest.approx(loads[-1] / 0.1)
+
+
+def test_a_target_no_load_meets_is_warned_with_the_case_name(caplog):
+    """SurfaceTopography's frt-1 and frt-2 (filled plateaus) jump over A/A0 = 0.1: the warning names the case,
+    as two jobs' lines meet in one console."""
+    import logging
+    import re
+    from types import SimpleNamespace
+
+    block = {"load": {"n_steps": 3, "schedule": "uniform", "target_area": 0.1}, "solver": {"e_star": 1.0}}
+
+    def solve(loads):  # the area jumps over the target at p0 = 0.01: a plateau touching at once
+        return SimpleNamespace(area_fraction=[0.05 if loads[-1] < 0.01 else 0.2])
+
+    with caplog.at_level("WARNING", logger="roughcontact"):
+        loads, attrs = case_loads(block, 0.1, 10_000, solve, logging.getLogger("roughcontact.test"), name="frt-2")
+    messages = [r.getMessage() for r in caplog.records]
+    assert any(re.fullmatch(r"frt-2: target A/A0 = 0\.1: p0 = \S+ gives A/A0 = 0\.(05|2) after \d+ solves "
+                            r"\(not within tolerance: the closest is used\)", m) for m in messages), messages
+    assert attrs["load_target_area_reached"] in (0.05, 0.2) and loads[-1] == attrs["load_p0_max"]

@@ -48,7 +48,8 @@ def main(log):
         pressure_unit=solver["pressure_unit"],
     )
     rms_slope = float(surf.rms_slope.squeeze())
-    loads, load_info = case_loads(settings, rms_slope, heights.size, solve, log)
+    name = Path(snakemake.output[0]).stem  # the case, at the start of its warnings
+    loads, load_info = case_loads(settings, rms_slope, heights.size, solve, log, name=name)
 
     spent = []
 
@@ -75,12 +76,12 @@ def main(log):
                          e_star=solver["e_star"], **labels_of(case))
     ds.attrs.update(load_info)
     for note in step_notes(result):
-        log.warning("%s: %s", Path(snakemake.output[0]).stem, note)
+        log.warning("%s: %s", name, note)
     unconverged = int((~result.converged.values).sum())
     if unconverged:
-        log.warning("%d of %d load steps did not converge to tol=%g (max residual %.3g); "
+        log.warning("%s: %d of %d load steps did not converge to tol=%g (max residual %.3g); "
                     "they are flagged in the output's 'converged' variable",
-                    unconverged, result.sizes["step"], solver["tol"], float(result.residual.max()))
+                    name, unconverged, result.sizes["step"], solver["tol"], float(result.residual.max()))
     write_dataset(ds, snakemake.output[0], stage="contact", scene=w.scene,
                   scene_parameters={**recorded(surf), **settings})
     log.info("contact %s: A/A0 %.4g -> %.4g, %d iterations in %.2f s", snakemake.output[0],

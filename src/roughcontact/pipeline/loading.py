@@ -117,8 +117,12 @@ def _next_pressure(p: float, area: float, target: float, last: tuple[float, floa
     return p * (target / area) ** (1.0 / slope)
 
 
-def case_loads(block: Mapping, rms_slope: float, n_nodes: int, solve: Callable, log=None) -> tuple[list[float], dict]:
+def case_loads(block: Mapping, rms_slope: float, n_nodes: int, solve: Callable, log=None,
+               name: str | None = None) -> tuple[list[float], dict]:
     """The load steps of one case and what to record of them: ``(loads, attrs)``.
+
+    ``name`` (the case's) starts the warning of a target A/A0 that no probe met: jobs run side by
+    side and their lines meet in one console.
 
     ``solve(loads)`` solves the case's surface (the solver's dataset), used only for a
     ``target_area`` block (:func:`pressure_for_area`). ``attrs`` (netCDF global attributes):
@@ -131,8 +135,8 @@ def case_loads(block: Mapping, rms_slope: float, n_nodes: int, solve: Callable, 
         found = pressure_for_area(lambda p: float(solve([p]).area_fraction[-1]), load["target_area"],
                                   e_star=e_star, rms_slope=rms_slope, n_nodes=n_nodes)
         if log is not None:
-            log.log(20 if found["reached"] else 30, "target A/A0 = %g: p0 = %.6g gives A/A0 = %.6g after %d solves%s",
-                    load["target_area"], found["pressure"], found["area"], found["probes"],
+            log.log(20 if found["reached"] else 30, "%starget A/A0 = %g: p0 = %.6g gives A/A0 = %.6g after %d solves%s",
+                    f"{name}: " if name else "", load["target_area"], found["pressure"], found["area"], found["probes"],
                     "" if found["reached"] else " (not within tolerance: the closest is used)")
         loads = load_steps(block, rms_slope, p_final=found["pressure"])
         attrs = {"load_target_area": float(load["target_area"]), "load_target_area_reached": found["area"],
