@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import collections
+import functools
 import os
 import re
 import sys
@@ -131,13 +132,19 @@ def _peer_cells(surface, p0: float, ours: float) -> str:
 
 def peer_area(h, length, e_star: float, p0: float, tol: float, maxiter: int):
     """ContactMechanics' A/A0, iterations and success: the hard-case table's peer (``benchmarks/hardcases``)."""
+    return _hardcases_table().peer_area(h, length, e_star, p0, tol, maxiter)
+
+
+@functools.cache
+def _hardcases_table():
+    """``benchmarks/hardcases/table.py`` as a module (a script, not a package), loaded once."""
     import importlib.util
 
     script = Path(__file__).resolve().parents[1] / "hardcases" / "table.py"
     spec = importlib.util.spec_from_file_location("hardcases_table", script)
     table = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(table)
-    return table.peer_area(h, length, e_star, p0, tol, maxiter)
+    return table
 
 
 def table(rows: list[tuple[str, str, str]]) -> str:

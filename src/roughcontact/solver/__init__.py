@@ -184,9 +184,12 @@ Dostál's proportioning test), every step of which lowers the energy and keeps
   restarts there without a preconditioner, and with one keeps its direction on
   the new face (zero off it, zero mean on it) and conjugates against it with
   Polak-Ribiere's ``beta``, restarting where that is no descent;
-* otherwise a gradient-projection step ``P(p - alpha g)`` (Barzilai-Borwein
-  ``alpha``, exact line search on the segment) changes the active sets, many
-  nodes at a time, and the CG restarts.
+* otherwise, and after any move that stopped short of the projected trial (a
+  segment minimum inside, or a CG step truncated at the first bound), a
+  gradient-projection step ``P(p - alpha g)`` (Barzilai-Borwein ``alpha``, exact
+  line search on the segment) changes the active sets, many nodes at a time,
+  and the CG restarts (without it, a start far from the solution released a node
+  or two per CG step: docs/solver.md).
 
 With any elastic method but ``"pk"``, the CG steps on the face use the same
 Fourier preconditioner (``z = P_F M P_F g`` on ``F = {0 < p < H}``, capped
