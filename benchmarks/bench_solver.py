@@ -274,9 +274,9 @@ def _in_place_pairs(n: int, a: np.ndarray):
 
     def run(k: int) -> None:
         while k > 0:
-            plan.inputs[0][...] = scaled
+            plan.input[...] = scaled
             for _ in range(min(8, k)):
-                plan.fwd[0].execute()
+                plan.fwd.execute()
                 plan.bwd.execute()
             k -= 8
     return run

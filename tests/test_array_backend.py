@@ -88,10 +88,10 @@ def test_spectral_product_matches_numpy_fft(stand_in_cupy, dtype, shape, in_plac
         m = prod.multiplier(mult)
         for _ in range(2):  # a second round: the first's transforms must not leak into the loads
             prod.load_dense(x, 1.0)
-            quad = prod.quadratic(prod.forward(0), prod.quadratic_weights(mult))
+            quad = prod.quadratic(prod.forward(), prod.quadratic_weights(mult))
             assert quad == pytest.approx(float(np.sum(x * ref)), rel=tol)
             with pytest.raises(ValueError, match="load the input first"):
-                prod.forward(0)  # in place: the last forward consumed the input
+                prod.forward()  # in place: the last forward consumed the input
             prod.load_dense(x, 1.0)
             out = np.asarray(prod(m), dtype=np.float64)
             assert out.shape == shape

@@ -32,38 +32,36 @@ class SpectralProduct:
     """``y = F^-1[m F[x]]`` on an ``nx x ny`` grid with one plan pair and fixed buffers.
 
     The caller writes ``x`` with :meth:`load` (values on a set of nodes, zero elsewhere) or
-    :meth:`load_dense` (a whole field), runs :meth:`forward` into one of ``slots`` spectrum slots and
-    :meth:`backward` of slot 0, and reads the result with :meth:`take` (at a set of nodes) or as
+    :meth:`load_dense` (a whole field), runs :meth:`forward` into its spectrum buffer and
+    :meth:`backward` of that spectrum, and reads the result with :meth:`take` (at a set of nodes) or as
     the returned ``(nx, ny)`` array. A multiplier ``m`` (real, shape ``(nx, ny // 2 + 1)``, from
     :meth:`multiplier`) carries the ``1 / (nx ny)`` of the inverse transform, so the backward
     transform is unnormalised: two transforms and one pass over the half spectrum, nothing else.
     For grids whose ``nx ny`` is a power of two the result equals ``irfft2(m' rfft2(x))`` with
     ``m' = nx ny m`` up to the transforms' rounding (the scalings are exact).
 
-    With pyFFTW and ``in_place`` both transforms work in the slot's buffer (FFTW's r2c and c2r on
+    With pyFFTW and ``in_place`` both transforms work in the spectrum buffer (FFTW's r2c and c2r on
     the padded layout, rows of ``2 (ny // 2 + 1)`` reals): measured at N = 1024 on one core, a
     forward in place costs ~0.75-0.85 of one that preserves a separate input; the whole product
     with its sparse load and read-back 0.88 of the former with another process loading memory,
-    1.03 on a quiet machine (docs/solver.md). Out of place, each slot keeps a separate input that
+    1.03 on a quiet machine (docs/solver.md). Out of place, a separate input is kept, which
     the transform preserves, so a load writes only the nodes that change: the choice for an input
     that is mostly zero (the free operator's padded grid, 3/4 zero), and the default (``in_place``
     None) for grids without shipped plans, where FFTW_ESTIMATE's in-place pair cost ~1.1x its
     out-of-place one (960², measured). Node positions in the buffers' layout come from
     :meth:`positions`. :meth:`quadratic` gives ``x . (K x)`` (Parseval) from a spectrum alone, so
-    a caller can combine spectra before the one inverse transform.
+    a caller knows it before the inverse transform.
     """
 
-    def __init__(self, backend: ArrayBackend, shape, dtype, threads: int = 1, slots: int = 2,
-                 in_place: bool | None = None):
+    def __init__(self, backend: ArrayBackend, shape, dtype, threads: int = 1, in_place: bool | None = None):
         self.backend = backend
         self.shape = tuple(int(s) for s in shape)
         self.dtype = np.dtype(dtype)
-        self.slots = slots
         self.in_place = _fft.has_shipped_plans(self.shape) if in_place is None else in_place
         self.norm = 1.0 / (self.shape[0] * self.shape[1])
         self._plan = backend.product_plan(self, threads)
         self._square = None
-        self._loaded = [False] * slots  # per slot: an input waits for its forward transform
+        self._loaded = False  # an input waits for its forward transform
 
     def multiplier(self, mult: np.ndarray):
         """The device copy of the real multiplier ``mult`` (host, float64) with the ``1 / (nx ny)``.
@@ -92,32 +90,32 @@ class SpectralProduct:
         """Where the nodes of flat grid indices ``idx`` (int array) sit in the buffers' layout."""
         return self._plan.positions(idx)
 
-    def load(self, pos, values, scale: float, slot: int = 0) -> None:
-        """Input of :meth:`forward` (``slot``): ``values * scale`` at :meth:`positions` ``pos``, 0 elsewhere.
+    def load(self, pos, values, scale: float) -> None:
+        """Input of :meth:`forward`: ``values * scale`` at :meth:`positions` ``pos``, 0 elsewhere.
 
         The product is taken in float64 and rounded once to the product's precision. Loading the
         same ``pos`` array again writes only those nodes where the plan keeps its input.
         """
         buf = np.multiply(values, scale, out=self.backend.xp.empty(values.shape, dtype=self.dtype),
                           casting="unsafe")
-        self._plan.load(pos, buf, slot)
-        self._loaded[slot] = True
+        self._plan.load(pos, buf)
+        self._loaded = True
 
-    def load_dense(self, field, scale: float, slot: int = 0) -> None:
-        """Input of :meth:`forward` (``slot``): ``field * scale`` in its top-left corner, 0 elsewhere."""
-        self._plan.load_dense(field, scale, slot)
-        self._loaded[slot] = True
+    def load_dense(self, field, scale: float) -> None:
+        """Input of :meth:`forward`: ``field * scale`` in its top-left corner, 0 elsewhere."""
+        self._plan.load_dense(field, scale)
+        self._loaded = True
 
-    def forward(self, slot: int = 0):
-        """``F[x]`` of the loaded input in spectrum slot 0 or 1 (overwritten by the next use of the slot).
+    def forward(self):
+        """``F[x]`` of the loaded input (the spectrum buffer, overwritten by the next product).
 
         Each forward transform needs its own load: the transforms may work in place.
         """
-        if not self._loaded[slot]:
-            raise ValueError(f"SpectralProduct.forward({slot}): load the input first (the transform "
+        if not self._loaded:
+            raise ValueError("SpectralProduct.forward(): load the input first (the transform "
                              "may have overwritten the last one)")
-        self._loaded[slot] = False
-        return self._plan.forward(slot)
+        self._loaded = False
+        return self._plan.forward()
 
     def quadratic(self, spec, weights) -> float:
         """``sum(weights * |spec|^2)``: ``x . (K x)`` for ``spec = F[x]`` and :meth:`quadratic_weights` of K.
@@ -132,8 +130,8 @@ class SpectralProduct:
         return float(self._square.sum())
 
     def backward(self, spec, mult):
-        """``F^-1[mult spec]`` for ``spec`` from slot 0 (destroyed): an ``(nx, ny)`` array (maybe a
-        strided view) that the next load or product overwrites."""
+        """``F^-1[mult spec]`` for ``spec`` from :meth:`forward` (destroyed): an ``(nx, ny)`` array
+        (maybe a strided view) that the next load or product overwrites."""
         return self._plan.backward(spec, mult)
 
     def take(self, real, pos, out) -> None:
@@ -141,8 +139,8 @@ class SpectralProduct:
         self._plan.take(real, pos, out)
 
     def __call__(self, mult):
-        """``F^-1[mult F[x]]`` of the loaded input (slot 0): as :meth:`backward`."""
-        return self._plan.backward(self.forward(0), mult)
+        """``F^-1[mult F[x]]`` of the loaded input: as :meth:`backward`."""
+        return self._plan.backward(self.forward(), mult)
 
 
 def multiply_spectrum(spec, mult):
@@ -156,13 +154,13 @@ def multiply_spectrum(spec, mult):
 
 
 class _FFTWProduct:
-    """The pyFFTW plans of a :class:`SpectralProduct`, r2c into two slots, c2r out of slot 0.
+    """The pyFFTW plans of a :class:`SpectralProduct`: an r2c into the spectrum buffer, a c2r out of it.
 
-    In place (``prod.in_place``): slot ``k``'s buffer is complex ``(n0, n1 // 2 + 1)`` and its
+    In place (``prod.in_place``): the buffer is complex ``(n0, n1 // 2 + 1)`` and its
     real view ``(n0, n1)`` (rows padded to ``2 (n1 // 2 + 1)`` reals) holds the input before the
     forward transform and the output after the inverse; a transform destroys the input, so every
-    load zeroes the slot first. Out of place: each slot has its own real input, which the r2c
-    keeps, so a load at the same positions as the slot's last one writes only those nodes (a new
+    load zeroes the buffer first. Out of place: a real input of its own, which the r2c
+    keeps, so a load at the same positions as the last one writes only those nodes (a new
     set first zeroes the old one's nodes): the cheaper choice where the input is mostly zero, as on
     the free operator's padded grid.
     """
@@ -171,56 +169,54 @@ class _FFTWProduct:
         pyfftw = _fft.pyfftw
         n0, n1 = prod.shape
         cdtype = np.result_type(prod.dtype, np.complex64)
-        self.specs = [pyfftw.empty_aligned((n0, n1 // 2 + 1), dtype=cdtype) for _ in range(prod.slots)]
+        self.spec = pyfftw.empty_aligned((n0, n1 // 2 + 1), dtype=cdtype)
         self.in_place = prod.in_place
         if self.in_place:
             self.n1, self.row = n1, 2 * (n1 // 2 + 1)
-            self.inputs = [spec.view(prod.dtype)[:, :n1] for spec in self.specs]
-            self.flats = [spec.view(prod.dtype).reshape(-1) for spec in self.specs]
-            for spec in self.specs:
-                spec.fill(0.0)
-            self.out, self.out_flat = self.inputs[0], self.flats[0]
+            self.input = self.spec.view(prod.dtype)[:, :n1]
+            self.flat = self.spec.view(prod.dtype).reshape(-1)
+            self.spec.fill(0.0)
+            self.out, self.out_flat = self.input, self.flat
         else:
             self.n1 = self.row = n1
-            self.inputs = [pyfftw.zeros_aligned(prod.shape, dtype=prod.dtype) for _ in range(prod.slots)]
-            self.flats = [real.reshape(-1) for real in self.inputs]
+            self.input = pyfftw.zeros_aligned(prod.shape, dtype=prod.dtype)
+            self.flat = self.input.reshape(-1)
             self.out = pyfftw.empty_aligned(prod.shape, dtype=prod.dtype)
             self.out_flat = self.out.reshape(-1)
-        self.last = [None] * prod.slots  # out of place: per slot, the last load's positions (True: dense)
+        self.last = None  # out of place: the last load's positions (True: dense)
         with _fft._shipped_wisdom_only():
-            self.fwd = [pyfftw.FFTW(real, spec, axes=(0, 1), direction="FFTW_FORWARD",
-                                    flags=_fft.PLANNER_FLAGS, threads=threads)
-                        for real, spec in zip(self.inputs, self.specs, strict=True)]
-            self.bwd = pyfftw.FFTW(self.specs[0], self.out, axes=(0, 1), direction="FFTW_BACKWARD",
+            self.fwd = pyfftw.FFTW(self.input, self.spec, axes=(0, 1), direction="FFTW_FORWARD",
+                                   flags=_fft.PLANNER_FLAGS, threads=threads)
+            self.bwd = pyfftw.FFTW(self.spec, self.out, axes=(0, 1), direction="FFTW_BACKWARD",
                                    flags=_fft.PLANNER_FLAGS, threads=threads)
 
     def positions(self, idx):
         return remap_rows(idx, self.n1, self.row)
 
-    def load(self, pos, values, slot):
-        flat, last = self.flats[slot], self.last[slot]
+    def load(self, pos, values):
+        flat, last = self.flat, self.last
         if self.in_place or last is True:
             flat.fill(0.0)
         elif last is not None and last is not pos:
             flat[last] = 0.0
-        self.last[slot] = pos
+        self.last = pos
         flat[pos] = values
 
-    def load_dense(self, field, scale, slot):
-        real = self.inputs[slot]
+    def load_dense(self, field, scale):
+        real = self.input
         fx, fy = field.shape
         if (fx, fy) != real.shape:
             real.fill(0.0)
         np.multiply(field, scale, out=real[:fx, :fy], casting="unsafe")
-        self.last[slot] = True
+        self.last = True
 
-    def forward(self, slot):
-        self.fwd[slot].execute()
-        return self.specs[slot]
+    def forward(self):
+        self.fwd.execute()
+        return self.spec
 
     def backward(self, spec, mult):
-        if spec is not self.specs[0]:
-            raise ValueError("SpectralProduct.backward takes the spectrum of slot 0")
+        if spec is not self.spec:
+            raise ValueError("SpectralProduct.backward takes the spectrum of its own forward transform")
         multiply_spectrum(spec, mult)
         self.bwd.execute()  # unnormalised: 1 / (n0 n1) is in mult
         return self.out
@@ -247,7 +243,7 @@ class _ArrayModuleProduct:
     def positions(self, idx):
         return idx
 
-    def load(self, pos, values, slot):
+    def load(self, pos, values):
         if self.pos is not pos:
             if self.full:
                 self.flat.fill(0.0)
@@ -256,14 +252,14 @@ class _ArrayModuleProduct:
             self.pos, self.full = pos, False
         self.flat[pos] = values
 
-    def load_dense(self, field, scale, slot):
+    def load_dense(self, field, scale):
         fx, fy = field.shape
         if (fx, fy) != self.input.shape:
             self.input.fill(0.0)
         np.multiply(field, scale, out=self.input[:fx, :fy], casting="unsafe")
         self.pos, self.full = None, True
 
-    def forward(self, slot):
+    def forward(self):
         spec = self.fft.rfft2(self.input)
         return spec if spec.dtype == self.cdtype else spec.astype(self.cdtype)  # numpy.fft < 2: double
 

@@ -144,13 +144,13 @@ check, and changes two things; the default, ``"pk-fourier-f32"``, a third:
   a kept input); only the nodes of ``F`` are written into the transforms' input
   and read back from the preconditioner's result, the ``1 / n^2`` of
   the inverse transform sits in the multipliers, and a step costs one forward
-  and one inverse transform whether or not it is projected: ``t . K t`` comes
+  and one inverse transform, a projected one a second forward: ``t . K t`` comes
   from the spectrum of ``t`` (Parseval) before the inverse, and a projected
   step's change ``p_new - p = x - tau t`` (``x`` the clipped part plus the
-  rescale to the mean, on ``F``) is transformed forward and combined with
-  ``-tau F[t]`` into the step's one inverse, so ``K p`` is never transformed
-  afresh (2.35 transform pairs an iteration on the paper case, against 2.7
-  before; ``docs/solver.md``). The gap then drifts from ``K p - h`` by ~1e-7
+  rescale to the mean, on ``F``) is transformed forward in place of ``t`` and
+  inverse-transformed once, so ``K p`` is never transformed afresh (2.35
+  transform pairs an iteration on the paper case, against 2.7 before;
+  ``docs/solver.md``). The gap then drifts from ``K p - h`` by ~1e-7
   of the steps taken, so ``u = K p`` is recomputed in ``float64`` when the
   residual first falls below 1e-5 and after each further four decades, and
   before the final check (which always uses a fresh ``float64`` product). Same answers to the

@@ -273,21 +273,22 @@ class PKIteration:
             R = ws.displacement32(spec)  # K t / sigma
             np.multiply(R, R.dtype.type(tau * self.ksig), out=R)
             np.subtract(ws.w, R, out=ws.w)  # u <- u - tau K t: exact, no FFT pair for p
-        elif not self._project_single(a_c, spec, tau):
+        elif not self._project_single(a_c, tau):
             self._project(a_c)
             return True
         self.fresh = False
         return True
 
-    def _project_single(self, trial: np.ndarray, spec, tau: float) -> bool:
+    def _project_single(self, trial: np.ndarray, tau: float) -> bool:
         """Projection of ``trial = p - tau t`` onto ``p >= 0`` with the exact mean, ``w`` updated.
 
         The new pressure is ``s max(trial, 0)`` (``s`` restores the mean), so
         ``p_new - p = x - tau t`` with ``x = max(-trial, 0) + (s - 1) s^-1 p_new`` on ``F``: one
-        forward transform of ``x`` (slot 1), one inverse of ``F[x] - tau F[t]`` (``spec`` holds
-        ``F[t]``), and ``w`` moves by ``K (p_new - p)`` like an ordinary step; ``K p`` is never
-        transformed afresh. False (nothing done) when no pressure is left, for :meth:`_project`'s
-        uniform restart.
+        forward transform of that change (``F[t]`` has given the step length and is not needed
+        any more) and one inverse, and ``w`` moves by ``K (p_new - p)`` like an ordinary step;
+        ``K p`` is never transformed afresh. Transforming the change itself, rather than ``x``
+        combined with ``F[t]`` in the spectrum, saves two passes over the half spectrum. False
+        (nothing done) when no pressure is left, for :meth:`_project`'s uniform restart.
         """
         ws, idx = self.ws, self.idx
         x = np.maximum(-trial, 0.0)  # the clipped part
@@ -298,10 +299,8 @@ class PKIteration:
         scale = self.target / total
         x += (scale - 1.0) * trial
         trial *= scale
-        spec_x = ws.spectrum32_on(idx, x, slot=1)
-        np.multiply(spec, -tau, out=spec)
-        spec += spec_x
-        R = ws.displacement32(spec)  # K (p_new - p) / sigma
+        x -= tau * self.t_c  # p_new - p on F
+        R = ws.displacement32(ws.spectrum32_on(idx, x))  # K (p_new - p) / sigma
         np.multiply(R, R.dtype.type(self.ksig), out=R)
         np.add(ws.w, R, out=ws.w)
         keep = trial > 0.0

@@ -165,9 +165,9 @@ class SparseLoad:
             self.pos = self.prod.positions(idx if self.index is None else self.index(idx))
         return self.pos
 
-    def load(self, idx, values, scale: float, slot: int = 0) -> None:
+    def load(self, idx, values, scale: float) -> None:
         """``input[idx] = values * scale`` (rounded to the input's precision), zero elsewhere."""
-        self.prod.load(self.positions(idx), values, scale, slot)
+        self.prod.load(self.positions(idx), values, scale)
 
     def take(self, real, idx, out) -> None:
         """``out[:] = real[idx]`` for a product's result ``real`` (grid nodes ``idx``, cast to ``out``)."""
@@ -207,8 +207,8 @@ class PeriodicHalfSpace:
         # the cell of the grid at the patch's spacing, in units of the patch's Lx
         length = internal_length(aspect) if self.whole else (self.shape[0] / px, aspect * self.shape[1] / py)
         self.kern = elastic_kernel(self.shape, 1.0, length)
-        # the float64 products, in place like the float32 ones (one slot: no spectra are combined)
-        self.prod64 = SpectralProduct(self.be, self.shape, np.float64, threads, slots=1)
+        # the float64 products, in place like the float32 ones
+        self.prod64 = SpectralProduct(self.be, self.shape, np.float64, threads)
         self.kmult64 = self.prod64.multiplier(self.kern)
         self._mmult64 = None
         self.prod32 = None
@@ -258,20 +258,21 @@ class PeriodicHalfSpace:
         self.sigma = sigma
         self.inv_sigma = 1.0 / sigma
 
-    def spectrum32_on(self, idx, values, slot: int = 0):
+    def spectrum32_on(self, idx, values):
         """The float32 spectrum of ``x / sigma``, ``x`` = ``values`` at flat ``idx`` and 0 elsewhere.
 
-        Slot 0 or 1 (:class:`~roughcontact.core.backend.SpectralProduct`); one forward transform.
+        One forward transform into the product's spectrum buffer
+        (:class:`~roughcontact.core.backend.SpectralProduct`), which the next product overwrites.
         """
-        self.loader.load(idx, values, self.inv_sigma, slot)
-        return self.prod32.forward(slot)
+        self.loader.load(idx, values, self.inv_sigma)
+        return self.prod32.forward()
 
     def quadratic32(self, spec) -> float:
         """``x . (K x) / sigma^2`` from :meth:`spectrum32_on`'s spectrum of ``x`` (Parseval)."""
         return self.prod32.quadratic(spec, self.kquad32)
 
     def displacement32(self, spec) -> np.ndarray:
-        """``K x / sigma`` from the slot-0 spectrum of ``x / sigma`` (destroyed).
+        """``K x / sigma`` from :meth:`spectrum32_on`'s spectrum of ``x / sigma`` (destroyed).
 
         A float32 ``(nx, ny)`` array, maybe a strided view of a buffer that the next product overwrites.
         """
@@ -365,7 +366,7 @@ class FreeHalfSpace:
             return
         self.precond.single(sigma)
         # out of place: the padded input is 3/4 zero and kept between loads (an in-place transform
-        # would need the whole padded slot zeroed before each load)
+        # would need the whole padded buffer zeroed before each load)
         self.prod32 = prod = SpectralProduct(self.be, self.padded, np.float32, self.threads, in_place=False)
         mult = _free_multiplier(self.shape, self.aspect)[..., 0]
         self.kmult32 = prod.multiplier(mult)
@@ -375,17 +376,17 @@ class FreeHalfSpace:
         self.sigma = sigma
         self.inv_sigma = 1.0 / sigma
 
-    def spectrum32_on(self, idx, values, slot: int = 0):
+    def spectrum32_on(self, idx, values):
         """The float32 spectrum of the padded ``x / sigma`` (as :meth:`PeriodicHalfSpace.spectrum32_on`)."""
-        self.loader.load(idx, values, self.inv_sigma, slot)
-        return self.prod32.forward(slot)
+        self.loader.load(idx, values, self.inv_sigma)
+        return self.prod32.forward()
 
     def quadratic32(self, spec) -> float:
         """``x . (K x) / sigma^2`` from :meth:`spectrum32_on`'s spectrum of ``x`` (Parseval)."""
         return self.prod32.quadratic(spec, self.kquad32)
 
     def displacement32(self, spec) -> np.ndarray:
-        """``K x / sigma`` on the patch from the slot-0 spectrum (destroyed); float32 ``(nx, ny)`` buffer."""
+        """``K x / sigma`` on the patch from :meth:`spectrum32_on`'s spectrum (destroyed); float32 ``(nx, ny)``."""
         nx, ny = self.shape
         self.out32[...] = self.prod32.backward(spec, self.kmult32)[:nx, :ny]
         return self.out32
@@ -401,7 +402,7 @@ class FreeHalfSpace:
     def apply32(self, field: np.ndarray) -> np.ndarray:
         """``K field / sigma`` with single-precision transforms (float32 buffer)."""
         self.prod32.load_dense(field, self.inv_sigma)
-        return self.displacement32(self.prod32.forward(0))
+        return self.displacement32(self.prod32.forward())
 
     def apply_inverse32(self, field: np.ndarray) -> np.ndarray:
         """``M field / sigma`` with single-precision transforms (float32 buffer)."""

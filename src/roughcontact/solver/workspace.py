@@ -146,16 +146,16 @@ class Workspace:
         """
         return self.op.apply_inverse32_on(idx, values, out)
 
-    def spectrum32_on(self, idx: np.ndarray, values: np.ndarray, slot: int = 0):
+    def spectrum32_on(self, idx: np.ndarray, values: np.ndarray):
         """Single-precision spectrum of ``x / sigma`` (``x`` as in :meth:`apply_m32_on`): one forward transform."""
-        return self.op.spectrum32_on(idx, values, slot)
+        return self.op.spectrum32_on(idx, values)
 
     def quadratic32(self, spec) -> float:
         """``x . (K x) / sigma^2`` from :meth:`spectrum32_on`'s spectrum (no transform)."""
         return self.op.quadratic32(spec)
 
     def displacement32(self, spec) -> np.ndarray:
-        """``K x / sigma`` from a slot-0 spectrum of ``x / sigma`` (destroyed): one inverse transform.
+        """``K x / sigma`` from :meth:`spectrum32_on`'s spectrum of ``x / sigma`` (destroyed): one inverse transform.
 
         float32, the grid's shape; maybe a strided view of a buffer the next product overwrites.
         """
