@@ -130,8 +130,9 @@ check, and changes two things; the default, ``"pk-fourier-f32"``, a third:
   iteration; on the paper case the iterations drop 2-3x and grow more slowly
   with ``n`` (``benchmarks/README.md``);
 * *extrapolated warm start*: from the third step on, the start is the linear
-  extrapolation in ``p0`` of the last two solutions, clipped at 0 and rescaled
-  to the mean, instead of the scaled last one; ``u`` follows from the last two
+  extrapolation in ``p0`` of the last two solutions, clipped at 0 (and at the
+  cap, for the capped iteration) and rescaled to the mean, instead of the scaled
+  last one; ``u`` follows from the last two
   steps' fresh gaps by the same linear combination, plus one float32 product of
   the clipped part (the single-precision iteration; a float64 pair otherwise);
 * *single-precision transforms* (``float32`` pyFFTW plans, ``FFTW_ESTIMATE``

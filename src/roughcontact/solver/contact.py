@@ -79,7 +79,7 @@ class ContactSolver:
 
     def _extrapolation(self, p_int: float) -> float:
         """Factor ``c`` of the linear extrapolation in the load, 0 when not used."""
-        if self.cap is not None or self.method == "pk" or self._older is None:
+        if self.method == "pk" or self._older is None:
             return 0.0
         if self._older[0] == self.prev:
             return 0.0
@@ -119,14 +119,17 @@ class ContactSolver:
         if c:
             # Extrapolated warm start, linear in the load through the last two
             # solutions (loads moving on in the same direction, by at most twice
-            # the last increment); otherwise the scaled last solution below.
+            # the last increment), clipped at 0 and at the cap; otherwise the
+            # scaled last solution below.
             ws.P -= self._older[1]
             ws.P *= c
             ws.P += self._last
-            if self._linear_start(c, target):
+            if cap is None and self._linear_start(c, target):
                 return None
             np.maximum(ws.P, 0.0, out=ws.P)
-            enforce_mean(ws.P, target, None)
+            if cap is not None:
+                np.minimum(ws.P, cap, out=ws.P)
+            enforce_mean(ws.P, target, cap)
             return False
         if cap is None:
             # Warm start: p and u = K p scale together, so w = K p - h follows
@@ -273,7 +276,7 @@ class ContactSolver:
         p_int = units.to_internal(p0)
         its, path = self._iterate(p_int, fresh)
         ok, residual, gbar, w_sum = final_check(ws, p_int, self.tol, self.cap)
-        if self.cap is None and self.method != "pk":
+        if self.method != "pk":
             self._older = None if self.prev is None else (self.prev, self._last, self._last_w)
             self._last = ws.P.copy()
             # fresh after every step (PKIteration._finish, box); kept for the float32 iteration only
