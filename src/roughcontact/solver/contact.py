@@ -124,12 +124,10 @@ class ContactSolver:
             ws.P -= self._older[1]
             ws.P *= c
             ws.P += self._last
-            if cap is None and self._linear_start(c, target):
+            if self._linear_start(c, target):  # not after a capped step: it keeps no gap
                 return None
             np.maximum(ws.P, 0.0, out=ws.P)
-            if cap is not None:
-                np.minimum(ws.P, cap, out=ws.P)
-            enforce_mean(ws.P, target, cap)
+            enforce_mean(ws.P, target, cap)  # with a cap, clips there too
             return False
         if cap is None:
             # Warm start: p and u = K p scale together, so w = K p - h follows
