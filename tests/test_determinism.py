@@ -176,7 +176,8 @@ def test_write_wisdom_round_trip(tmp_path, monkeypatch):
         double, single, _ = fft.shipped_wisdom()
         assert double.startswith(b"(fftw-") and single.startswith(b"(fftw-")
         data = json.loads(path.read_text())
-        assert data["sizes"] == [8, 16] and data["flags"] == ["FFTW_MEASURE"]
+        assert data["sizes"] == [8, 16] and "flags" not in data
+        assert data["machines"][fft.machine_key()]["flags"] == {"8": ["FFTW_PATIENT"], "16": ["FFTW_PATIENT"]}
     finally:
         monkeypatch.undo()
         fft.shipped_wisdom.cache_clear()
@@ -213,6 +214,31 @@ def test_wisdom_is_chosen_by_processor_model(tmp_path, monkeypatch):
     shipped = json.loads(shipped_file.read_text()) if shipped_file.exists() else None
     if shipped is not None:
         assert shipped["default"] in shipped["machines"] and max(shipped["sizes"]) == 8192
+
+
+def test_wisdom_sets_record_their_planner_flags(tmp_path, monkeypatch):
+    """Each processor's set names the flags asked for at each side; a file that named them once keeps them.
+
+    Sides above ``WISDOM_PATIENT_MAX`` are measured with FFTW_MEASURE (PATIENT's planning is too slow there).
+    """
+    pytest.importorskip("pyfftw")
+    from roughcontact.core import fft
+
+    path = tmp_path / "w.json"
+    monkeypatch.setattr(fft, "machine_key", lambda: "CPU A")
+    fft.write_wisdom(path, sizes=(8, 16), flags=("FFTW_MEASURE",))
+    data = json.loads(path.read_text())
+    # the format before flags per set: one list for the file
+    data["flags"] = data["machines"]["CPU A"].pop("flags")["8"]
+    path.write_text(json.dumps(data))
+    monkeypatch.setattr(fft, "machine_key", lambda: "CPU B")
+    monkeypatch.setattr(fft, "WISDOM_PATIENT_MAX", 8)
+    fft.write_wisdom(path, sizes=(8, 16))
+    after = json.loads(path.read_text())
+    assert "flags" not in after and after["default"] == "CPU A"
+    assert after["machines"]["CPU A"]["flags"] == {"8": ["FFTW_MEASURE"], "16": ["FFTW_MEASURE"]}
+    assert after["machines"]["CPU B"]["flags"] == {"8": ["FFTW_PATIENT"], "16": ["FFTW_MEASURE"]}
+    assert after["machines"]["CPU A"]["single"] == data["machines"]["CPU A"]["single"]
 
 
 def test_write_wisdom_keep_measures_only_what_is_missing(tmp_path, monkeypatch):

@@ -12,8 +12,8 @@ on a given machine and build. ``FFTW_MEASURE`` would time candidate plans and, o
 loaded machine, pick different ones in different processes, whose results differ in the
 last bits. ESTIMATE's heuristics are slow for some shapes, though (a float32 pair at
 N = 1024 took 1.8x the measured plan's time), so the package ships *wisdom*: plans
-measured once with ``FFTW_MEASURE`` for square grids of 32 to 8192 points per side, both
-precisions, one thread (:data:`WISDOM_FILE`, made by :func:`write_wisdom`). Every pair
+measured once (with ``FFTW_PATIENT``, :data:`WISDOM_FLAGS`) for square grids of 32 to 8192
+points per side, both precisions, one thread (:data:`WISDOM_FILE`, made by :func:`write_wisdom`). Every pair
 is planned with the shipped wisdom alone (any other wisdom in the process is set aside
 and restored afterwards), and FFTW uses wisdom of a more patient planner for an
 ``FFTW_ESTIMATE`` request: the plan is then a function of the shipped file alone,
@@ -32,7 +32,9 @@ from __future__ import annotations
 import contextlib
 import functools
 import json
+import logging
 import os
+import time
 from pathlib import Path
 
 import numpy as np
@@ -45,6 +47,8 @@ except ImportError:  # pragma: no cover
     pyfftw = None
     _HAVE_PYFFTW = False
 
+_log = logging.getLogger(__name__)
+
 #: Backends a caller may ask for.
 BACKENDS = ("pyfftw", "numpy")
 
@@ -55,6 +59,14 @@ PLANNER_FLAGS = ("FFTW_ESTIMATE",)
 
 #: Plans measured once and shipped with the package (module docstring).
 WISDOM_FILE = Path(__file__).with_name("fftw_wisdom.json")
+#: Planner flags :func:`write_wisdom` measures with. FFTW_PATIENT's plans took 0.80-0.99x the
+#: time of FFTW_MEASURE's for a pair at N = 256-4096, both precisions, in and out of place (AMD
+#: EPYC, 2026-11-27, interleaved; 0.81 for the solver's float32 pair at 1024); FFTW_EXHAUSTIVE's
+#: were no faster at 1024 and took 11x longer to plan.
+WISDOM_FLAGS = ("FFTW_PATIENT",)
+#: Sides above which :func:`write_wisdom` measures with FFTW_MEASURE whatever its flags: FFTW_PATIENT
+#: took 21 min of one core for the 4096 pairs (256 s for 2048), and would take hours for 8192.
+WISDOM_PATIENT_MAX = 4096
 #: Square grid sizes whose plans :func:`write_wisdom` measures.
 WISDOM_SIZES = (32, 64, 128, 256, 512, 1024, 2048, 4096, 8192)
 
@@ -125,7 +137,7 @@ def _shipped_wisdom_only():
         pyfftw.import_wisdom(saved)
 
 
-def write_wisdom(path: str | os.PathLike = WISDOM_FILE, sizes=WISDOM_SIZES, flags=("FFTW_MEASURE",),
+def write_wisdom(path: str | os.PathLike = WISDOM_FILE, sizes=WISDOM_SIZES, flags=WISDOM_FLAGS,
                  keep: bool = False) -> Path:
     """Measure single-threaded plans for ``n x n`` pairs of both precisions; add them to ``path``.
 
@@ -133,9 +145,11 @@ def write_wisdom(path: str | os.PathLike = WISDOM_FILE, sizes=WISDOM_SIZES, flag
     write_wisdom; write_wisdom()"``), on a quiet machine; the plans are filed under this
     processor's :func:`machine_key`, beside those of other models already in the file (a file
     of another FFTW version or sizes is started afresh; its default set stays the first model's).
-    Takes about a minute. ``keep=True`` starts from this model's plans in the file, so that only
-    the problems they lack are measured (the others keep their plans, bit for bit); the default
-    set then gains this model's plans for the problems it lacks (:func:`_fill_missing`).
+    Sides above :data:`WISDOM_PATIENT_MAX` are measured with FFTW_MEASURE; each set records the
+    flags asked for at each side (``"flags": {"1024": ["FFTW_PATIENT"], ...}``).
+    ``keep=True`` starts from this model's plans in the file, so that only the problems they lack
+    are measured (the others keep their plans, bit for bit); the default set then gains this
+    model's plans for the problems it lacks (:func:`_fill_missing`).
     """
     from .files import write_text_atomic
 
@@ -147,28 +161,37 @@ def write_wisdom(path: str | os.PathLike = WISDOM_FILE, sizes=WISDOM_SIZES, flag
     mine = _machines(old).get(machine_key()) if keep and old else None
     if mine:
         pyfftw.import_wisdom(tuple(mine[k].encode("ascii") for k in _PRECISIONS))
+    asked = {}
     for n in sizes:
+        flags_n = asked[str(n)] = tuple(flags) if n <= WISDOM_PATIENT_MAX else ("FFTW_MEASURE",)
+        start = time.process_time()
         for real, cplx in ((np.float64, np.complex128), (np.float32, np.complex64)):
             # the same arrays (shapes, alignment, out of place) as RealFFT2 plans
             a, a_out = (pyfftw.empty_aligned((n, n), dtype=real) for _ in range(2))
             b, b_in = (pyfftw.empty_aligned((n, n // 2 + 1), dtype=cplx) for _ in range(2))
-            pyfftw.FFTW(a, b, axes=(0, 1), direction="FFTW_FORWARD", flags=flags, threads=1)
-            pyfftw.FFTW(b_in, a_out, axes=(0, 1), direction="FFTW_BACKWARD", flags=flags, threads=1)
+            pyfftw.FFTW(a, b, axes=(0, 1), direction="FFTW_FORWARD", flags=flags_n, threads=1)
+            pyfftw.FFTW(b_in, a_out, axes=(0, 1), direction="FFTW_BACKWARD", flags=flags_n, threads=1)
             # the solver's SpectralProduct pair of this precision, in place (core.backend._FFTWProduct)
             c = pyfftw.empty_aligned((n, n // 2 + 1), dtype=cplx)
             r = c.view(real)[:, :n]
-            pyfftw.FFTW(r, c, axes=(0, 1), direction="FFTW_FORWARD", flags=flags, threads=1)
-            pyfftw.FFTW(c, r, axes=(0, 1), direction="FFTW_BACKWARD", flags=flags, threads=1)
+            pyfftw.FFTW(r, c, axes=(0, 1), direction="FFTW_FORWARD", flags=flags_n, threads=1)
+            pyfftw.FFTW(c, r, axes=(0, 1), direction="FFTW_BACKWARD", flags=flags_n, threads=1)
+        _log.info("planned the %d x %d pairs with %s in %.0f s of CPU", n, n, "|".join(flags_n),
+                  time.process_time() - start)
     measured = dict(zip(_PRECISIONS, (w.decode("ascii") for w in pyfftw.export_wisdom()), strict=True))
+    measured["flags"] = {n: list(f) for n, f in asked.items()}
     out = Path(path)
-    head = {"sizes": list(sizes), "flags": list(flags), "fftw": pyfftw.__version__}
+    head = {"sizes": list(sizes), "fftw": pyfftw.__version__}
     same = old and all(old.get(k) == v for k, v in head.items())
-    machines = dict(_machines(old)) if same else {}
+    # a file of the first format names its flags once, for every side of every set it holds
+    once = {str(n): old.get("flags", []) for n in sizes}
+    machines = {m: {"flags": once, **w} for m, w in _machines(old).items()} if same else {}
     key = machine_key()
     machines[key] = measured
     default = old.get("default", next(iter(machines))) if same else key
     if keep and default != key:
-        machines[default] = {k: _fill_missing(machines[default][k], measured[k]) for k in _PRECISIONS}
+        filled = {k: _fill_missing(machines[default][k], measured[k]) for k in _PRECISIONS}
+        machines[default] = {**machines[default], **filled}
     text = json.dumps({**head, "default": default, "machines": machines}, indent=1)
     write_text_atomic(out, text + "\n")
     shipped_wisdom.cache_clear()
