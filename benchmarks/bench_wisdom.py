@@ -47,21 +47,21 @@ def use(path: Path) -> None:
 
 
 def plan_pair(n: int, real, in_place: bool):
-    """``(input, forward, backward)`` of an ``n x n`` pair planned as the package plans it."""
-    import pyfftw
+    """``(input, forward, backward)`` of the package's own ``n x n`` pair, planned from the current file.
 
-    from roughcontact.core import fft
+    In place: the solver's product (:class:`roughcontact.core.backend.SpectralProduct`); out of
+    place: :class:`roughcontact.core.fft.RealFFT2` (the surfaces' and the float64 paths' pair), its
+    backward plan pointed at the forward's output so that one pair's data stay finite.
+    """
+    from roughcontact.core.backend import SpectralProduct, get_backend
+    from roughcontact.core.fft import RealFFT2
 
-    cplx = np.result_type(real, np.complex64)
-    spec = pyfftw.empty_aligned((n, n // 2 + 1), dtype=cplx)
     if in_place:
-        a = out = spec.view(real)[:, :n]
-    else:
-        a, out = (pyfftw.empty_aligned((n, n), dtype=real) for _ in range(2))
-    with fft._shipped_wisdom_only():
-        fwd = pyfftw.FFTW(a, spec, axes=(0, 1), direction="FFTW_FORWARD", flags=fft.PLANNER_FLAGS, threads=1)
-        bwd = pyfftw.FFTW(spec, out, axes=(0, 1), direction="FFTW_BACKWARD", flags=fft.PLANNER_FLAGS, threads=1)
-    return a, fwd, bwd
+        plan = SpectralProduct(get_backend(), (n, n), real, in_place=True)._plan
+        return plan.input, plan.fwd, plan.bwd
+    pair = RealFFT2((n, n), backend="pyfftw", dtype=real)  # a fresh pair, not the cached one
+    pair._bwd.update_arrays(pair._spec, pair._real_out)
+    return pair._real, pair._fwd, pair._bwd
 
 
 def time_pairs(files: dict, n: int, rounds: int) -> list[dict]:
