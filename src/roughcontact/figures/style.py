@@ -121,16 +121,27 @@ def save_figure(fig: Figure, path: str | os.PathLike) -> list[Path]:
 
 
 # ----------------------------------------------------------------------- helpers
-def _new_figure(width: float, height: float) -> Figure:
+#: The package's matplotlib settings (fonts sized for a journal column, Okabe-Ito colours,
+#: reproducible PDF): draw inside ``matplotlib.rc_context(STYLE)``.
+STYLE = _STYLE
+
+
+def new_figure(width: float, height: float) -> Figure:
+    """A constrained-layout figure of ``width`` x ``height`` inches, not tied to pyplot's state."""
     return Figure(figsize=(width, height), layout="constrained")
 
 
-def _require(ds: xr.Dataset, name: str, variables: Sequence[str]) -> None:
+def require(ds: xr.Dataset, name: str, variables: Sequence[str]) -> None:
+    """Raise ``ValueError`` naming ``name`` unless ``ds`` is a Dataset holding every one of ``variables``."""
     if not isinstance(ds, xr.Dataset):
         raise ValueError(f"{name} must be an xarray.Dataset, got {type(ds).__name__}")
     missing = [v for v in variables if v not in ds]
     if missing:
         raise ValueError(f"{name} lacks variable(s) {missing}")
+
+
+# the names the figure modules used before these were public
+_new_figure, _require = new_figure, require
 
 
 def _pick(values: np.ndarray, wanted, name: str) -> list[float]:

@@ -61,6 +61,17 @@ when this residual, recomputed from the returned gap with a fresh FFT, is ``<= t
 value is finite, ``g >= 0`` and the mean gap is the imposed one to 1e-12 relative. The
 contact area fraction is the fraction of nodes with ``g == 0`` exactly.
 
+Resolution of the adhesive zone
+-------------------------------
+Where the surfaces part, the tension acts over a process zone of length of order
+``l_a = E* rho^2 / w`` (:func:`process_zone_length`: the length over which the largest tension
+``w / rho`` opens the gap by ``rho`` elastically; a Dugdale zone is ``pi/8`` of it). A grid whose
+cell ``dx`` is not small against ``l_a`` cannot represent the law: nodes jump in and out of
+contact as a whole and the tension they carry is too large (measured on a sphere, Tabor
+parameter ``mu_T`` 8 at 64 nodes: a pull-off of 7 pi w R, 3.5 times the largest physically
+possible, every step meeting the residual). :func:`zone_cells` is ``l_a / dx``; below
+:data:`MIN_ZONE_CELLS` no step is reported converged, whatever its residual.
+
 The energy is not convex when ``w / rho^2`` exceeds ``pi E* / L`` (the smallest eigenvalue
 of ``M`` on zero-mean fields): equilibria then depend on the start (hysteresis), and a
 converged step is *an* equilibrium, not necessarily the one another solver finds. With
@@ -84,6 +95,10 @@ from .workspace import dot
 DEFAULT_MAX_ITER = 20000
 #: Relative tolerance on the imposed mean gap in the final check.
 MEAN_GAP_RTOL = 1e-12
+#: Fewest grid cells the process zone ``E* rho^2 / w`` must span for a step to count as converged
+#: (:func:`zone_cells`). Sphere pull-off against the grid (docs/solver.md, "Adhesion"): ``l_a / dx``
+#: 0.37 → 48 % above the converged value, 0.74 → 4 %, 1.5 → 0.4 %, 3 → 0.06 %.
+MIN_ZONE_CELLS = 1.5
 
 
 def _positive(name: str, value) -> float:
@@ -176,6 +191,64 @@ class MaugisDugdale:
 
 LAWS = (Exponential, MaugisDugdale)
 
+#: What a pull-off's status code means (index = code); only ``trusted`` carries a number.
+PULL_OFF_STATUS = ("trusted", "adhesive_zone_unresolved", "last_load_step_not_converged", "not_separated",
+                   "unconverged_step_beside_minimum", "refinement_not_converged")
+#: Why each status other than ``trusted`` leaves the pull-off NaN, and what to do.
+PULL_OFF_REASONS = {
+    "adhesive_zone_unresolved": "the grid does not resolve the adhesive process zone (zone_cells): refine the "
+                                "grid, lengthen the range or lower the work",
+    "last_load_step_not_converged": "unloading started from a load step that did not converge",
+    "not_separated": "the surfaces still touched after the last unloading step: allow more steps or a longer step",
+    "unconverged_step_beside_minimum": "a step next to the most tensile one did not converge, so the minimum "
+                                       "is not bracketed: raise max_iter",
+    "refinement_not_converged": "halving the unloading step near the minimum still moved the pull-off by more "
+                                "than its tolerance",
+}
+
+
+def process_zone_length(law, e_star: float) -> float:
+    """The length scale ``E* rho^2 / w`` [length] of the adhesive process zone (module docstring).
+
+    Parameters
+    ----------
+    law : Exponential or MaugisDugdale
+        Its work ``w`` [pressure x length] and range ``rho`` [length].
+    e_star : float
+        Plane-strain modulus ``E*`` [pressure].
+
+    Examples
+    --------
+    >>> process_zone_length(Exponential(1e-5, 1e-3), 1.0)
+    0.1
+    """
+    return float(e_star) * law.rho ** 2 / law.w
+
+
+def zone_cells(law, e_star: float, length, shape) -> float:
+    """How many grid cells the process zone spans: ``E* rho^2 / w / dx`` (module docstring).
+
+    ``dx`` is the larger pixel side, ``Lx / nx`` or ``Ly / ny`` (``Lx / nx`` alone for a 1-D profile,
+    ``ny = 1``); ``length`` a float ``L`` (square cell) or ``(Lx, Ly)`` [length], ``shape``
+    ``(nx, ny)``. A step counts as converged only when this is at least :data:`MIN_ZONE_CELLS`.
+
+    Examples
+    --------
+    >>> zone_cells(Exponential(1e-5, 1e-3), 1.0, 1.0, (128, 128))  # the adhesion scene: 12.8 cells
+    12.8
+    """
+    nx, ny = shape
+    lx, ly = (length, length) if np.ndim(length) == 0 else length
+    dx = float(lx) / nx if ny == 1 else max(float(lx) / nx, float(ly) / ny)
+    return round(process_zone_length(law, e_star) / dx, 12)
+
+
+def unresolved_zone_message(cells: float, law, e_star: float, dx_name: str = "the cell") -> str:
+    """Why a grid cannot resolve ``law``, and the remedies (shared by the solver and the config check)."""
+    return (f"the adhesive process zone E* rho^2 / w spans {cells:.3g} grid cells of {dx_name}, fewer than "
+            f"{MIN_ZONE_CELLS:g} (w = {law.w:.3g}, rho = {law.rho:.3g}, E* = {e_star:.3g}): the grid cannot resolve "
+            "the law and the pull-off comes out too large; refine the grid, lengthen the range or lower the work")
+
 
 @dataclass
 class AdhesiveResult:
@@ -197,6 +270,7 @@ class AdhesiveResult:
     residual: float
     converged: bool
     control: str
+    zone_cells: float = math.inf
 
 
 def elastic_product(field, mult) -> np.ndarray:
@@ -383,7 +457,8 @@ def solve_adhesive(heights, *, law, e_star=1.0, length=1.0, mean_gap=None, p0=No
     Returns
     -------
     AdhesiveResult
-        ``converged`` only when the final check (fresh FFT) passes.
+        ``converged`` only when the final check (fresh FFT) passes and the grid resolves the
+        process zone (:func:`zone_cells` >= :data:`MIN_ZONE_CELLS`).
     """
     h, length = _heights(heights, length)
     e_star, tol = _check_args(e_star, tol, law, max_iter, mean_gap, p0)
@@ -395,8 +470,9 @@ def solve_adhesive(heights, *, law, e_star=1.0, length=1.0, mean_gap=None, p0=No
         it.solve(mean_gap, tol, int(max_iter))
         res, out = _finish(it, mean_gap, "gap", it.iterations)
     else:
-        res, out = _pressure_control(it, _finite("p0", p0), start, tol, int(max_iter))
-    out.converged = bool(res <= tol)
+        res, out = pressure_control(it, _finite("p0", p0), start, tol, int(max_iter))
+    out.zone_cells = zone_cells(law, e_star, length, h.shape)
+    out.converged = bool(res <= tol) and out.zone_cells >= MIN_ZONE_CELLS
     return out
 
 
@@ -450,7 +526,7 @@ def _expand(cur, prev, step):
     return gbar / 2 if new <= 0 else new
 
 
-def _pressure_control(it, p0, start, tol, max_iter):
+def pressure_control(it, p0, start, tol, max_iter):
     """Mean gap with ``mean(p) = p0``: secant search, then Illinois regula falsi once bracketed.
 
     ``f(gbar) = mean_p - p0`` decreases with ``gbar`` on the load-stable branch. Until a sign
