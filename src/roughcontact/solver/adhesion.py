@@ -96,9 +96,14 @@ DEFAULT_MAX_ITER = 20000
 #: Relative tolerance on the imposed mean gap in the final check.
 MEAN_GAP_RTOL = 1e-12
 #: Fewest grid cells the process zone ``E* rho^2 / w`` must span for a step to count as converged
-#: (:func:`zone_cells`). Sphere pull-off against the grid (docs/solver.md, "Adhesion"): ``l_a / dx``
-#: 0.37 → 48 % above the converged value, 0.74 → 4 %, 1.5 → 0.4 %, 3 → 0.06 %.
+#: (:func:`zone_cells`). Measured on a sphere's pull-off (exponential law, L = R / 2; docs/solver.md,
+#: "Adhesion"): at Tabor parameter 4, 0.37 cells read 2.32 pi w R, 0.74 cells 1.62, 1.49 cells 1.541;
+#: at Tabor parameter 2, 1.49 cells read 1.605, 2.97 cells 1.587, 5.94 cells 1.584 (1.3 % and 0.2 % above
+#: the finest). Below this the error grows past a few per cent and, at a tenth of a cell, past any bound.
 MIN_ZONE_CELLS = 1.5
+#: Below this many cells (and at least :data:`MIN_ZONE_CELLS`) a solve warns: the pull-off may still be
+#: about 1 % above its grid-converged value.
+WARN_ZONE_CELLS = 3.0
 
 
 def _positive(name: str, value) -> float:
