@@ -277,7 +277,7 @@ def test_dataset_accepts_a_3d_array_and_custom_bins():
     stack = rng.random((2, 9, 9)) - 0.5
     bins = [1 / 81, 0.1, 1.0]
     ds = cluster_dataset(stack, steps=np.array([4, 7]), length=1.0, bins=bins)
-    assert ds.sizes == {"step": 2, "area_bin": 2}
+    assert ds.sizes == {"step": 2, "area_bin": 2, "connectivity": 2}
     assert ds.step.values.tolist() == [4, 7]
     assert ds.cluster_count.values.tolist() == [bfs_count(s > 0) for s in stack]
 

@@ -37,6 +37,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from ..core.quantities import cf_unit
+from .wrapping import CONNECTIVITIES, wrapping_variable
 
 #: ``units`` attribute of dimensionless quantities (fractions of A0, counts).
 DIMENSIONLESS_UNITS = "1"
@@ -381,9 +382,8 @@ def cluster_dataset(masks_or_pressures: Iterable, steps, length, bins=None,
     periodic : bool
         As for :func:`label_clusters` (``False`` for a free patch).
     length_unit : str
-        Unit of ``length``, one of :data:`roughcontact.core.quantities.LENGTH_UNITS`
-        (default ``"1"``: nondimensional), recorded as the global attribute
-        ``length_units``; every variable is dimensionless whatever it is.
+        Unit of ``length`` (:data:`roughcontact.core.quantities.LENGTH_UNITS`, default ``"1"``),
+        the global attribute ``length_units``; every variable is dimensionless.
 
     Returns
     -------
@@ -394,9 +394,9 @@ def cluster_dataset(masks_or_pressures: Iterable, steps, length, bins=None,
         * ``cluster_mean_area(step)``, ``cluster_max_area(step)`` float64 —
           fractions of A0 (0.0 at a step without contact);
         * ``cluster_area_histogram(step, area_bin)`` int64 — clusters per bin;
-        * coordinates ``step``, ``area_bin`` (bin centre, geometric mean of the
-          edges), ``area_bin_low`` and ``area_bin_high`` (edges, along
-          ``area_bin``), all in units of A0 except ``step``.
+        * periodic: ``cluster_wrapping(step, connectivity)`` int8, :mod:`.wrapping`'s bits;
+        * coordinates ``step``, ``area_bin`` (bin centre, geometric mean of the edges),
+          ``area_bin_low`` and ``area_bin_high`` (edges), in units of A0 except ``step``.
 
         Every variable and coordinate carries ``units`` and ``long_name``.
 
@@ -413,9 +413,17 @@ def cluster_dataset(masks_or_pressures: Iterable, steps, length, bins=None,
     length = _cell_length(length, masks[0].shape)
     n_total = masks[0].size
     edges = default_area_bins(n_total) if bins is None else _check_edges(bins)
-    return xr.Dataset(_cluster_variables(masks, length, periodic, edges),
-                      coords=_cluster_coords(steps, edges),
-                      attrs=_cluster_attrs(length, length_units, masks[0].shape, periodic))
+    variables, coords = _cluster_variables(masks, length, periodic, edges), _cluster_coords(steps, edges)
+    if periodic:  # a free patch has no periodic image to connect to
+        _add_wrapping(variables, coords, masks)
+    return xr.Dataset(variables, coords=coords, attrs=_cluster_attrs(length, length_units, masks[0].shape, periodic))
+
+
+def _add_wrapping(variables: dict, coords: dict, masks: list[np.ndarray]) -> None:
+    """``cluster_wrapping`` over ``(step, connectivity)`` and its ``connectivity`` coordinate (4 and 8)."""
+    variables["cluster_wrapping"] = wrapping_variable(masks, CONNECTIVITIES)
+    coords["connectivity"] = xr.Variable(("connectivity",), np.array(CONNECTIVITIES, dtype=np.int64), {
+        "units": "1", "long_name": "neighbours that connect a cluster's nodes (4: edges, 8: edges and corners)"})
 
 
 def _cluster_attrs(length, length_units: str, shape: tuple[int, int], periodic: bool) -> dict:
