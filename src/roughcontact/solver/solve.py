@@ -95,10 +95,13 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
 
     Parameters
     ----------
-    heights : array_like, shape (n, n) or (nx, ny)
+    heights : array_like, shape (n, n) or (nx, ny), or (B, nx, ny)
         Rigid surface heights [length] on the cell (periodic, or the whole patch for
         ``boundary="free"``), axis 0 = x; the highest points touch first. Any ``nx, ny >= 4``;
-        ``nx != ny`` needs ``length=(Lx, Ly)``.
+        ``nx != ny`` needs ``length=(Lx, Ly)``. A 3-D array is a batch of ``B`` surfaces solved
+        together (:func:`~.batch.solve_contact_batch`: periodic, elastic, default method; the
+        result gains a leading ``case`` dimension; ``store_fields``, ``clusters`` and
+        ``observers`` are refused there).
     pressures : sequence of float, shape (n_steps,)
         Applied mean pressures ``p0 > 0`` [pressure, the unit of ``e_star``], each with
         ``p0 * L / (e_star * s)`` in :data:`LOAD_RANGE` (``s`` the rms height, ``L`` the
@@ -140,6 +143,8 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
     ValueError
         For invalid input, naming the argument and its allowed range.
     """
+    if np.ndim(heights) == 3:
+        return _batch(heights, pressures, settings, store_fields, clusters, progress, observers, options)
     p = validate_pressures(pressures)
     store = validate_store(store_fields, p.size)
     clusters = validate_flag("clusters", clusters)
@@ -149,6 +154,17 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
     observers = _check_observers(observers)
     cols, iters, conv, paths, fields, masks = _run_steps(solver, p, store, clusters, progress, observers)
     return _observed(_dataset(solver, p, cols, iters, conv, paths, fields, masks, store_fields), observers)
+
+
+def _batch(heights, pressures, settings, store_fields, clusters, progress, observers, options) -> xr.Dataset:
+    """:func:`solve_contact` of a ``(B, nx, ny)`` batch: :func:`~.batch.solve_contact_batch`, refusing what
+    it does not produce."""
+    from .batch import solve_contact_batch
+
+    if not (store_fields is False or store_fields is None) or clusters or tuple(observers or ()):
+        raise ValueError("a batch of surfaces (heights of shape (B, nx, ny)) stores no fields, clusters or "
+                         "observers; solve each case with 2-D heights for those")
+    return solve_contact_batch(heights, pressures, settings, progress=progress, **options)
 
 
 def _observed(ds: xr.Dataset, observers) -> xr.Dataset:
