@@ -146,3 +146,26 @@ def test_bad_batches_are_refused():
         solve_contact_batch(h, [0.001])
     with pytest.raises(ValueError, match="check_every must be"):
         solve_contact_batch(np.stack([h, h]), [0.001], check_every=0)
+
+
+def test_cupy_kernel_cache_on_disk_by_default(monkeypatch):
+    """``CUPY_CACHE_DIR`` defaults to a persistent path when CuPy is first asked for; a caller's is kept."""
+    import os
+    import sys
+
+    from roughcontact.core import backend as backend_mod
+    from test_array_backend import _numpy_as_cupy
+
+    monkeypatch.setitem(sys.modules, "cupy", _numpy_as_cupy())
+    monkeypatch.setenv("CUPY_CACHE_DIR", "/somewhere/else")
+    monkeypatch.setenv("XDG_CACHE_HOME", "/cache-home")
+    backend_mod.get_backend.cache_clear()
+    try:
+        backend_mod.get_backend("cupy")
+        assert os.environ["CUPY_CACHE_DIR"] == "/somewhere/else"
+        monkeypatch.delenv("CUPY_CACHE_DIR")
+        backend_mod.get_backend.cache_clear()
+        backend_mod.get_backend("cupy")
+        assert os.environ["CUPY_CACHE_DIR"] == "/cache-home/roughcontact/cupy" == backend_mod.default_cupy_cache()
+    finally:
+        backend_mod.get_backend.cache_clear()

@@ -89,23 +89,26 @@ class _BatchFFT:
 
     def __init__(self, be, shape, threads: int = 1):
         self.shape = tuple(shape)
-        self.kw = {}
-        if be.name == "numpy":
-            import scipy.fft as mod
+        self.kw, self.ikw = {}, {}
+        mod = None
+        try:
+            if be.name == "numpy":
+                import scipy.fft as mod
 
-            self.kw = {"workers": threads}
-        else:
-            try:
+                self.kw = {"workers": threads}
+            else:
                 import cupyx.scipy.fft as mod
-            except ImportError:  # the stand-in CuPy of the tests: numpy's fft under CuPy's name
-                mod = be.xp.fft
+            # the spectrum is not needed after the inverse: cuFFT's c2r may destroy it, no copy first
+            self.ikw = {**self.kw, "overwrite_x": True}
+        except ImportError:  # no SciPy; the tests' stand-in CuPy (numpy's fft under CuPy's name)
+            mod = be.xp.fft
         self.mod = mod
 
     def rfft2(self, x):
         return self.mod.rfft2(x, axes=(-2, -1), **self.kw)
 
     def irfft2(self, spec):
-        return self.mod.irfft2(spec, s=self.shape, axes=(-2, -1), norm="forward", **self.kw)
+        return self.mod.irfft2(spec, s=self.shape, axes=(-2, -1), norm="forward", **self.ikw)
 
 
 class _Kernels:
@@ -124,7 +127,7 @@ class _Kernels:
         return self.xp.sum(x, axis=(-2, -1), keepdims=True, dtype=np.float64)
 
     def rcount(self, m):
-        return self.xp.count_nonzero(m, axis=(-2, -1)).reshape(-1, 1, 1)
+        return self.xp.sum(m, axis=(-2, -1), keepdims=True, dtype=np.int64)
 
     def rmin(self, x):
         return self.xp.min(x, axis=(-2, -1), keepdims=True)
@@ -748,8 +751,8 @@ class BatchSolver:
         """Contact perimeter per unit area of every case (periodic; :func:`~.results.contact_perimeter`), host (B,)."""
         xp = self.xp
         m = self.P > 0.0
-        ex = xp.count_nonzero(m != xp.roll(m, 1, axis=1), axis=(1, 2))
-        ey = xp.count_nonzero(m != xp.roll(m, 1, axis=2), axis=(1, 2))
+        ex = xp.sum(m != xp.roll(m, 1, axis=1), axis=(1, 2), dtype=np.int64)
+        ey = xp.sum(m != xp.roll(m, 1, axis=2), axis=(1, 2), dtype=np.int64)
         ex, ey = (self.be.to_host(v).astype(np.float64) for v in (ex, ey))
         nx, ny = self.shape
         length = self.length
