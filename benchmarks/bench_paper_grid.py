@@ -120,6 +120,7 @@ def run_batched(args, cases) -> int:
     cache = {} if not args.whole else None  # the sample's surfaces are kept for every batch size
     rows_out = []
     summary = []
+    compared = []  # (max |dA/A0|, max iteration difference per step, single converged) per compared case
 
     def surfaces(chunk):
         if cache is None:
@@ -159,6 +160,7 @@ def run_batched(args, cases) -> int:
                 d = np.abs(area[b] - single["area_fraction"].values)
                 di = np.abs(ds["iterations"].values[b] - single["iterations"].values)
                 worst.append(float(d.max()))
+                compared.append((float(d.max()), int(di.max()), bool(single["converged"].values.all())))
                 print(f"  compare case {c}: max |dA/A0| {d.max():.3g} ({d.max() * args.n ** 2:.0f} nodes), "
                       f"iterations batch {int(its[b])} / single {int(single['iterations'].values.sum())} "
                       f"(max per step {int(di.max())}), single converged "
@@ -190,7 +192,13 @@ def run_batched(args, cases) -> int:
             wr = csv.writer(fh)
             wr.writerow(["k_l", "k_s", "H", "seed", "step", "area_fraction", "iterations", "converged"])
             wr.writerows(rows_out)
-    print("\n# summary\n" + "\n".join(summary))
+    if compared:
+        d, di, ok = max(c[0] for c in compared), max(c[1] for c in compared), all(c[2] for c in compared)
+        summary.append(f"batched {args.backend} against single {args.compare_backend} solves of {len(compared)} "
+                       f"cases x {args.steps} steps: max |dA/A0| {d:.3g} ({d * args.n ** 2:.0f} nodes of "
+                       f"{args.n}^2), iterations within {di} per step, single solves converged: {ok}")
+    tag = f"N = {args.n}, {args.backend}, check_every {args.check_every or 'default'}"
+    print("\n# summary\n" + "\n".join(f"SUMMARY {args.label} ({tag}): {line}" for line in summary))
     return 0
 
 
@@ -210,6 +218,7 @@ def main(argv=None) -> int:
     ap.add_argument("--compare", type=int, default=0,
                     help="with --batch: solve the first K cases of each batch singly and compare (default 0)")
     ap.add_argument("--compare-batches", type=int, default=1, help="with --compare: in this many batches (default 1)")
+    ap.add_argument("--label", default="grid", help="names this run's SUMMARY lines (default grid)")
     ap.add_argument("--compare-backend", choices=("numpy", "cupy"), default="numpy",
                     help="with --compare: the single solves' backend (default numpy: the CPU path)")
     args = ap.parse_args(argv)
