@@ -116,8 +116,9 @@ class _Kernels:
 
     Every argument is an array of the backend: fields ``(B, nx, ny)``, per-case numbers
     ``(B, 1, 1)``. Results of reductions are ``(B, 1, 1)`` float64 (or int64 for counts).
-    :class:`_CupyKernels` replaces some of them by fused CUDA kernels with the same results up
-    to the order of summation.
+    :class:`_CupyKernels` replaces them by fused CUDA kernels (one pass over the fields each) with
+    the same results up to the order of summation; the methods named "in place" must update their
+    field arguments in place in both.
     """
 
     def __init__(self, xp):
@@ -131,9 +132,6 @@ class _Kernels:
 
     def rmin(self, x):
         return self.xp.min(x, axis=(-2, -1), keepdims=True)
-
-    def rany(self, m):
-        return self.xp.any(m, axis=(-2, -1), keepdims=True)
 
     def masked_sum(self, x, mask):
         """``sum(x where mask)`` per case."""
@@ -164,24 +162,56 @@ class _Kernels:
         w += R * factor
         return w
 
-    def gap(self, w, gbar, F):
-        """``(w - gbar)`` on ``F``, 0 off it."""
-        return (w - gbar) * F
+    def sub_masked(self, x, c, F):
+        """``x -= c`` on ``F`` in place (``c`` per case)."""
+        x -= c * F
+        return x
 
-    def project(self, P, t, tau, go, proj_scale):
-        """The step's trial ``p - tau t``, clipped and rescaled, and ``w``'s change of pressure.
+    def join_gap(self, w, gbar, F, go):
+        """The free set after the join (``F | w < gbar`` where ``go``) and the gap ``w - gbar`` on it, 0 off it."""
+        Fn = self.xp.where(go, F | (w < gbar), F)
+        return Fn, (w - gbar) * Fn
 
-        ``proj_scale`` is ``target / sum(max(trial, 0))`` for projected cases, 1 for the others and
-        for frozen ones (``tau = 0`` there). Returns ``(p_new, change)`` with
-        ``change = max(-trial, 0) + (scale - 1) max(trial, 0) - tau t`` (the single solve's
-        ``x - tau t`` of :meth:`~.elastic.PKIteration._project_single`, ``-tau t`` unprojected).
+    def descent_dot(self, g, t, beta, a):
+        """``g . (beta t + a)`` per case."""
+        return self.rsum(g * (t * beta + a))
+
+    def new_direction(self, t, a, g, beta, keep, go, g_prev):
+        """In place: ``t = beta t + a`` where ``keep``, else ``a`` where ``go``; ``g_prev = g`` where ``go``."""
+        xp = self.xp
+        t[...] = xp.where(keep, t * beta + a, xp.where(go, a, t))
+        g_prev[...] = xp.where(go, g, g_prev)
+
+    def proj_any(self, P, t, tau, F):
+        """Whether ``p - tau t <= 0`` at a node of ``F``, per case."""
+        return self.xp.any(F & (P - tau * t <= 0.0), axis=(-2, -1), keepdims=True)
+
+    def pos_sum(self, P, t, tau):
+        """``sum(max(p - tau t, 0))`` per case."""
+        return self.rsum(self.xp.maximum(P - tau * t, 0.0))
+
+    def project(self, P, t, tau, go, scale, inv_sigma):
+        """The step where ``go``: ``P`` (in place) becomes ``scale max(p - tau t, 0)``; returns the change, float32.
+
+        ``scale`` is ``target / sum(max(trial, 0))`` for projected cases and 1 for the others. The
+        change is ``max(-trial, 0) + (scale - 1) max(trial, 0) - tau t`` (the single solve's
+        ``x - tau t`` of :meth:`~.elastic.PKIteration._project_single`; ``-tau t`` unprojected), 0
+        where not ``go``, times ``inv_sigma`` and rounded to float32 for the transform.
         """
         xp = self.xp
         trial = P - tau * t
         tp = xp.maximum(trial, 0.0)
-        change = (tp - trial) + (proj_scale - 1.0) * tp - tau * t
+        change = (tp - trial) + (scale - 1.0) * tp - tau * t
         change *= go
-        return tp * proj_scale, change
+        P[...] = xp.where(go, tp * scale, P)
+        return (change * inv_sigma).astype(np.float32)
+
+    def shrink(self, P, F, t, g_prev):
+        """In place: nodes of ``F`` whose pressure is 0 leave it; ``t`` and ``g_prev`` are 0 off ``F``."""
+        keep = P > 0.0
+        F &= keep
+        t *= keep
+        g_prev *= keep
 
 
 def _cupy_kernels(xp):
@@ -199,43 +229,55 @@ def _cupy_kernels(xp):
 
 
 class _CupyKernels(_Kernels):
-    """Fused CUDA kernels for the hottest passes of a round (CuPy only).
+    """Fused CUDA kernels for the passes of a round (CuPy only).
 
-    Each fuses what the plain expressions do in two to five passes (and temporaries) into one
-    pass over the fields; per-case numbers are ``(B, 1, 1)`` arrays broadcast onto them. Built
-    only when CuPy is importable; :meth:`self_check` compares each with :class:`_Kernels` on a
-    small random batch and falls back to the plain expression, with a warning, where they differ.
+    Each fuses what the plain expressions do in two to six passes (and their temporaries) into
+    one pass over the fields; per-case numbers are ``(B, 1, 1)`` arrays broadcast onto them.
+    Built only when CuPy is importable; :meth:`self_check` compares each with :class:`_Kernels` on
+    a small random batch and falls back to the plain expression, with a warning, where they differ.
     """
+
+    #: the methods :meth:`self_check` compares
+    FUSED = ("masked_sum", "orth", "dot", "to32", "quadratic", "scaled_into", "add_scaled", "sub_masked",
+             "join_gap", "descent_dot", "new_direction", "proj_any", "pos_sum", "project", "shrink")
 
     def __init__(self, cp):
         super().__init__(cp)
         self.cp = cp
-        self._orth = cp.ReductionKernel(
-            "float64 p, float64 w, float64 gbar, bool f", "float64 y",
-            "f ? p * fabs(w - gbar) : 0.0", "a + b", "y = a", "0", "rc_batch_orth")
-        self._msum = cp.ReductionKernel(
-            "float64 x, bool f", "float64 y", "f ? x : 0.0", "a + b", "y = a", "0", "rc_batch_msum")
-        self._dot = cp.ReductionKernel(
-            "float64 a, float64 b", "float64 y", "a * b", "a + b", "y = a", "0", "rc_batch_dot")
-        self._quad = cp.ReductionKernel(
-            "float32 re, float32 im, float32 wq", "float64 y", "(double)(wq * (re * re + im * im))",
-            "a + b", "y = a", "0", "rc_batch_quad")
-        self._to32 = cp.ElementwiseKernel(
-            "float64 x, float64 s", "float32 y", "y = (float)(x * s)", "rc_batch_to32")
-        self._scaled = cp.ElementwiseKernel(
-            "float32 r, float64 c, bool f", "float64 y", "y = f ? (double)r * c : 0.0", "rc_batch_scaled")
-        self._add = cp.ElementwiseKernel(
-            "float32 r, float64 c", "float64 w", "w += (double)r * c", "rc_batch_add")
-        self._gap = cp.ElementwiseKernel(
-            "float64 w, float64 gbar, bool f", "float64 g", "g = f ? w - gbar : 0.0", "rc_batch_gap")
-        self._project = cp.ElementwiseKernel(
-            "float64 p, float64 t, float64 tau, bool go, float64 s", "float64 pn, float64 d",
+        R, E = cp.ReductionKernel, cp.ElementwiseKernel
+        self._orth = R("float64 p, float64 w, float64 gbar, bool f", "float64 y",
+                       "f ? p * fabs(w - gbar) : 0.0", "a + b", "y = a", "0", "rc_batch_orth")
+        self._msum = R("float64 x, bool f", "float64 y", "f ? x : 0.0", "a + b", "y = a", "0", "rc_batch_msum")
+        # (inputs are not called a or b: those name the accumulators of the reduction)
+        self._dot = R("float64 u, float64 v", "float64 y", "u * v", "a + b", "y = a", "0", "rc_batch_dot")
+        self._quad = R("float32 re, float32 im, float32 wq", "float64 y", "(double)(wq * (re * re + im * im))",
+                       "a + b", "y = a", "0", "rc_batch_quad")
+        self._ddot = R("float64 g, float64 t, float64 beta, float64 z", "float64 y", "g * (t * beta + z)",
+                       "a + b", "y = a", "0", "rc_batch_ddot")
+        self._pany = R("float64 p, float64 t, float64 tau, bool f", "int32 y",
+                       "(f && p - tau * t <= 0.0) ? 1 : 0", "max(a, b)", "y = a", "0", "rc_batch_pany")
+        self._psum = R("float64 p, float64 t, float64 tau", "float64 y", "fmax(p - tau * t, 0.0)",
+                       "a + b", "y = a", "0", "rc_batch_psum")
+        self._to32 = E("float64 x, float64 s", "float32 y", "y = (float)(x * s)", "rc_batch_to32")
+        self._scaled = E("float32 r, float64 c, bool f", "float64 y", "y = f ? (double)r * c : 0.0",
+                         "rc_batch_scaled")
+        self._add = E("float32 r, float64 c", "float64 w", "w += (double)r * c", "rc_batch_add")
+        self._subm = E("float64 c, bool f", "float64 x", "if (f) x -= c", "rc_batch_subm")
+        self._join = E("float64 w, float64 gbar, bool f, bool go", "bool fn, float64 g",
+                       "fn = go ? (f || w < gbar) : f; g = fn ? w - gbar : 0.0", "rc_batch_join")
+        self._newdir = E("float64 z, float64 g, float64 beta, bool keep, bool go", "float64 t, float64 gp",
+                         "t = keep ? t * beta + z : (go ? z : t); if (go) gp = g", "rc_batch_newdir")
+        self._project = E(
+            "float64 t, float64 tau, bool go, float64 s, float64 isig", "float64 p, float32 d32",
             """
             double trial = p - tau * t;
             double tp = trial > 0.0 ? trial : 0.0;
-            d = go ? (tp - trial) + (s - 1.0) * tp - tau * t : 0.0;
-            pn = tp * s;
+            double d = go ? (tp - trial) + (s - 1.0) * tp - tau * t : 0.0;
+            d32 = (float)(d * isig);
+            if (go) p = tp * s;
             """, "rc_batch_project")
+        self._shrink = E("float64 p", "bool f, float64 t, float64 gp",
+                         "if (!(p > 0.0)) { f = false; t = 0.0; gp = 0.0; }", "rc_batch_shrink")
         self.fused = True
 
     def _reduce(self, kernel, *args):
@@ -263,11 +305,32 @@ class _CupyKernels(_Kernels):
         self._add(R, factor, w)
         return w
 
-    def gap(self, w, gbar, F):
-        return self._gap(w, gbar, F)
+    def sub_masked(self, x, c, F):
+        self._subm(c, F, x)
+        return x
 
-    def project(self, P, t, tau, go, proj_scale):
-        return self._project(P, t, tau, go, proj_scale)
+    def join_gap(self, w, gbar, F, go):
+        return self._join(w, gbar, F, go)
+
+    def descent_dot(self, g, t, beta, a):
+        return self._reduce(self._ddot, g, t, beta, a)
+
+    def new_direction(self, t, a, g, beta, keep, go, g_prev):
+        self._newdir(a, g, beta, keep, go, t, g_prev)
+
+    def proj_any(self, P, t, tau, F):
+        return self._reduce(self._pany, P, t, tau, F) > 0
+
+    def pos_sum(self, P, t, tau):
+        return self._reduce(self._psum, P, t, tau)
+
+    def project(self, P, t, tau, go, scale, inv_sigma):
+        d32 = self.cp.empty(P.shape, dtype=np.float32)
+        self._project(t, tau, go, scale, inv_sigma, P, d32)
+        return d32
+
+    def shrink(self, P, F, t, g_prev):
+        self._shrink(P, F, t, g_prev)
 
     def self_check(self) -> None:
         """Each fused kernel against :class:`_Kernels` on a random batch; the plain one where they differ."""
@@ -275,45 +338,57 @@ class _CupyKernels(_Kernels):
         plain = _Kernels(cp)
         rng = np.random.default_rng(0)
         B, n = 3, 16
-        a, b, c = (cp.asarray(rng.standard_normal((B, n, n))) for _ in range(3))
+
+        def field():
+            return cp.asarray(rng.standard_normal((B, n, n)))
+
+        a, b, c = field(), field(), field()
+        pos = cp.abs(field())
+        pos[0, :2, :3] = 0.0  # nodes at p = 0: the projection and the shrink must see them
         f = cp.asarray(rng.random((B, n, n)) < 0.5)
         s = cp.asarray(rng.random((B, 1, 1)) + 0.5)
         go = cp.asarray(np.array([True, False, True]).reshape(B, 1, 1))
+        keep = cp.asarray(np.array([True, False, False]).reshape(B, 1, 1))
         spec = cp.fft.rfft2(a.astype(np.float32), axes=(-2, -1))
         wq = cp.asarray(rng.random((n, n // 2 + 1)).astype(np.float32))
         r32 = a.astype(np.float32)
-        cases = {
-            "masked_sum": (a, f), "orth": (cp.abs(a), b, s, f), "dot": (a, b), "to32": (a, s),
-            "quadratic": (spec, wq), "scaled_into": (r32, s, f), "gap": (a, s, f),
-            "project": (cp.abs(a), b, s * 0.1, go, s),
+        calls = {
+            "masked_sum": lambda k: k.masked_sum(a, f), "orth": lambda k: k.orth(pos, b, s, f),
+            "dot": lambda k: k.dot(a, b), "to32": lambda k: k.to32(a, s), "quadratic": lambda k: k.quadratic(spec, wq),
+            "scaled_into": lambda k: k.scaled_into(r32, s, f), "add_scaled": lambda k: k.add_scaled(a.copy(), r32, s),
+            "sub_masked": lambda k: k.sub_masked(a.copy(), s, f), "join_gap": lambda k: k.join_gap(a, s * 0.1, f, go),
+            "descent_dot": lambda k: k.descent_dot(a, b, s, c),
+            "new_direction": lambda k: _inplace(lambda t, gp: k.new_direction(t, a, c, s, keep, go, gp), b, c * 2),
+            "proj_any": lambda k: k.proj_any(pos, b, s * 0.1, f), "pos_sum": lambda k: k.pos_sum(pos, b, s * 0.1),
+            "project": lambda k: _inplace(lambda p: (k.project(p, b, s * 0.1, go, s, 1.0 / s),), pos),
+            "shrink": lambda k: _inplace(lambda p, ff, t, gp: k.shrink(p, ff, t, gp), pos - 0.5, f, a, b),
         }
-        for name, args in cases.items():
+        for name in self.FUSED:
             try:
-                got, want = getattr(self, name)(*args), getattr(plain, name)(*args)
-                got, want = (got if isinstance(got, tuple) else (got,)), (want if isinstance(want, tuple) else (want,))
-                ok = all(g.shape == wv.shape and bool(cp.allclose(g.astype(np.float64), wv.astype(np.float64),
-                                                                  rtol=1e-5, atol=1e-6))
-                         for g, wv in zip(got, want, strict=True))
+                got, want = _as_tuple(calls[name](self)), _as_tuple(calls[name](plain))
+                ok = len(got) == len(want) and all(
+                    g.shape == wv.shape and g.dtype == wv.dtype
+                    and bool(cp.allclose(g.astype(np.float64), wv.astype(np.float64), rtol=1e-5, atol=1e-6))
+                    for g, wv in zip(got, want, strict=True))
+                why = "results differ"
             except Exception as exc:  # noqa: BLE001
                 ok, why = False, f"{type(exc).__name__}: {exc}"
-            else:
-                why = "results differ"
             if not ok:
                 warnings.warn(f"batched solve: fused kernel {name!r} failed its check ({why}); using the plain "
                               "expression", RuntimeWarning, stacklevel=2)
                 setattr(self, name, getattr(plain, name))
                 self.fused = False
-        w = a.copy()
-        try:
-            self.add_scaled(w, r32, s)
-            ok = bool(cp.allclose(w, plain.add_scaled(a.copy(), r32, s)))
-        except Exception:  # noqa: BLE001
-            ok = False
-        if not ok:
-            warnings.warn("batched solve: fused kernel 'add_scaled' failed its check; using the plain expression",
-                          RuntimeWarning, stacklevel=2)
-            self.add_scaled = plain.add_scaled
-            self.fused = False
+
+
+def _inplace(fn, *fields):
+    """Copies of ``fields``, ``fn``'s results on them, and the copies after ``fn`` (for in-place kernels)."""
+    copies = [x.copy() for x in fields]
+    out = fn(*copies)
+    return (*_as_tuple(out), *copies)
+
+
+def _as_tuple(x):
+    return () if x is None else (x if isinstance(x, tuple) else (x,))
 
 
 class BatchOperator:
@@ -329,6 +404,14 @@ class BatchOperator:
         self.be, self.xp, self.k = be, be.xp, kernels
         nx, ny = self.shape = tuple(shape)
         self.fft = _BatchFFT(be, shape, threads)
+        if be.name == "cupy":
+            # one plan per shape, precision and direction: the batch's and the float64 refreshes'
+            # power-of-two subsets (<= 2 log2(B) + 6 plans) stay in CuPy's plan cache (default 16)
+            try:
+                cache = be.xp.fft.config.get_plan_cache()
+                cache.set_size(max(cache.get_size(), 64))
+            except AttributeError:  # the tests' stand-in
+                pass
         kern = elastic_kernel(self.shape, 1.0, internal_length(aspect))
         minv = np.zeros_like(kern)
         np.divide(1.0, kern, out=minv, where=kern > 0)
@@ -461,7 +544,7 @@ class BatchIteration:
         nF = self.nF
         has_f = nF > 0
         gbar = xp.where(has_f, k.masked_sum(w, self.F) / xp.where(has_f, nF, 1), 0.0)
-        pen = xp.maximum(gbar - k.rmin(w), 0.0)  # min over F of g and over the candidates
+        pen = xp.maximum(gbar - k.rmin(w), 0.0)  # min over F of g and over the candidates off F
         orth = k.orth(P, w, gbar, self.F) * self.inv_norm
         r = xp.maximum(xp.maximum(orth, pen / self.scale), 0.0)
         r = xp.where(xp.isfinite(orth) & xp.isfinite(pen), r, math.inf)
@@ -473,7 +556,7 @@ class BatchIteration:
         for _ in range(6):  # next_sync below r: every four decades (at most ~4 steps from 1e-5 to tol)
             self.next_sync = xp.where(lower & (self.next_sync > r), self.next_sync * 1e-4, self.next_sync)
         rest = active & ~conv & ~want
-        # stall guard (workspace.StallGuard) on the cases that reach it
+        # the stall guard (workspace.StallGuard) on the cases that reach it
         better = rest & (r < 0.5 * self.best)
         self.best = xp.where(better, r, self.best)
         self.at = xp.where(better, self.it, self.at)
@@ -484,8 +567,7 @@ class BatchIteration:
         self.done |= conv | stop
         self.it += go
         # join: violating nodes (w < gbar off F) enter F; their p, t and g_prev are 0 there already
-        Fj = self.F | (w < gbar)
-        F = xp.where(go, Fj, self.F)
+        F, g = k.join_gap(w, gbar, self.F, go)
         nF_new = k.rcount(F)
         joined = go & (nF_new > nF)
         empty = go & (nF_new == 0)
@@ -493,17 +575,16 @@ class BatchIteration:
         go &= ~empty
         self.F, self.nF = F, nF_new
         nf = xp.where(nF_new > 0, nF_new, 1)
-        g = k.gap(w, gbar, F)
-        g -= xp.where(joined, k.rsum(g) / nf, 0.0) * F  # re-centred on the enlarged F (shifts d only)
+        k.sub_masked(g, xp.where(joined, k.rsum(g) / nf, 0.0), F)  # re-centred on the enlarged F (shifts d)
         go = self._direction(g, go, nf)
-        self._step(g, go, nf)
+        self._step(g, go)
 
     def _direction(self, g, go, nf):
         """``t = z + beta t`` (``t = z`` at a restart or where that is no descent); returns ``go`` less breakdowns."""
         xp, k, op = self.xp, self.k, self.op
         R = op.inverse32(op.spectrum32(g, self.inv_sigma), op.mmult32)  # M g / sigma
         a = k.scaled_into(R, self.sigma, self.F)
-        a -= (k.rsum(a) / nf) * self.F  # zero mean on F
+        k.sub_masked(a, k.rsum(a) / nf, self.F)  # zero mean on F
         G = k.dot(g, a)
         ok = (G > 0.0) & xp.isfinite(G)
         self.done |= go & ~ok
@@ -513,18 +594,15 @@ class BatchIteration:
         beta_pr = xp.maximum(0.0, (G - k.dot(self.g_prev, a)) / g_old)
         beta = xp.where(self.gprev_ok, beta_pr, G / g_old)
         beta = xp.where(restart | ~go, 0.0, beta)
-        t = self.t * beta + a
-        descent = k.dot(g, t) > 0.0
+        descent = k.descent_dot(g, self.t, beta, a) > 0.0
         keep = go & (restart | descent)
-        t = xp.where(keep, t, xp.where(go, a, self.t))
-        self.t = t
-        self.g_prev = xp.where(go, g, self.g_prev)
+        k.new_direction(self.t, a, g, beta, keep, go, self.g_prev)
         self.gprev_ok |= go
         self.g_old = xp.where(go, G, self.g_old)
         self.delta = xp.where(go, 1.0, self.delta)
         return go
 
-    def _step(self, g, go, nf) -> None:
+    def _step(self, g, go) -> None:
         """Exact line search along ``-t``, the projection onto ``p >= 0``, ``w`` moved by ``K`` of the change."""
         xp, k, op, s = self.xp, self.k, self.op, self.s
         t, F = self.t, self.F
@@ -536,30 +614,25 @@ class BatchIteration:
         self.done |= go & ~ok
         go = go & ok
         tau = xp.where(go, tau, 0.0)
-        trial = s.P - tau * t
-        proj = go & k.rany(F & (trial <= 0.0))
-        total = k.rsum(xp.maximum(trial, 0.0))
-        bad = proj & ~(total > 0.0)  # nothing left to carry the load: the single solve's uniform restart
+        proj = go & k.proj_any(s.P, t, tau, F)
+        total = k.pos_sum(s.P, t, tau)
+        bad = proj & ~(total > 0.0)  # nothing left to carry the load (the single solve restarts uniformly)
         self.done |= bad
         go &= ~bad
         proj &= ~bad
         tau = xp.where(go, tau, 0.0)
         pscale = xp.where(proj, self.target / xp.where(total > 0.0, total, 1.0), 1.0)
-        P_new, change = k.project(s.P, t, tau, go, pscale)
+        d32 = k.project(s.P, t, tau, go, pscale, self.inv_sigma)
         # w <- w + K (p_new - p): one forward and one inverse float32 transform (every case)
-        R = op.inverse32(op.spectrum32(change, self.inv_sigma), op.kmult32)
+        R = op.inverse32(op.fft.rfft2(d32), op.kmult32)
         k.add_scaled(s.w, R, self.sigma)
-        s.P[...] = xp.where(go, P_new, s.P)
-        F_new = F & (s.P > 0.0)
-        nF_new = k.rcount(F_new)
+        nF_old = self.nF
+        k.shrink(s.P, F, t, self.g_prev)  # a projected case's F loses the nodes at p = 0
+        nF_new = self.nF = k.rcount(F)
         # Polak-Ribiere's history off after a projection that took a large part of F away
-        self.gprev_ok &= ~(proj & ((self.nF - nF_new) >= FR_AFTER_LOSS * self.nF))
-        self.g_prev *= F_new
+        self.gprev_ok &= ~(proj & ((nF_old - nF_new) >= FR_AFTER_LOSS * nF_old))
         nf_new = xp.where(nF_new > 0, nF_new, 1)
-        t = t * F_new  # a projected case's direction on the reduced F, zero mean there again
-        t -= xp.where(proj, k.rsum(t) / nf_new, 0.0) * F_new
-        self.t = t
-        self.F, self.nF = F_new, nF_new
+        k.sub_masked(t, xp.where(proj, k.rsum(t) / nf_new, 0.0), F)  # zero mean on the reduced F
         self.fresh &= ~go
 
 
