@@ -109,6 +109,27 @@ def _read_reference(path: str) -> dict:
     return {k: np.array([v[s] for s in sorted(v)]) for k, v in ref.items()}
 
 
+def _projection(size: int, wall: float, case_rounds: int, case_its: int, by_ks: dict) -> str:
+    """The grid's wall time in batches of ``size`` cases of one k_s, from a sample's measurements.
+
+    The sample's batches mix k_s (the sample has 12 cases of each), so each steps at the pace of a
+    slower case than the grid's would: in the grid, sorted by k_s, a batch holds cases of one k_s
+    (240 each). Measured: the wall time per case-round (a round of one case of a batch) and the rounds
+    per iteration of a batch's slowest case (waits for host checks); assumed: a grid batch of one k_s
+    takes the rounds of the sample's slowest case of that k_s (each sample case stands for 20).
+    """
+    per_case_round = wall / max(case_rounds, 1)
+    overhead = case_rounds / max(case_its, 1)
+    per_ks = GRID_CASES // len(K_S)
+    total = 0.0
+    for its in by_ks.values():
+        n_batches = -(-per_ks // size)
+        total += n_batches * min(size, per_ks) * its * overhead * per_case_round
+    total *= len(K_S) / max(len(by_ks), 1)  # a sample without some k_s: the others stand for them
+    return (f"in batches of one k_s: {total / 60:.2f} min ({1e6 * per_case_round:.0f} us a case-round, "
+            f"{overhead:.2f} rounds an iteration of the slowest case)")
+
+
 def run_batched(args, cases) -> int:
     """Solve ``cases`` in batches of each ``args.batch``; one table per batch size and a summary."""
     from roughcontact.solver import solve_contact
@@ -146,6 +167,7 @@ def run_batched(args, cases) -> int:
               "unconverged steps | max abs dA/A0 | GPU pool |")
         print("|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|", flush=True)
         t_all, solved, its_all, conv_all, worst_all = 0.0, 0, 0, 0, 0.0
+        case_rounds, case_its, by_ks = 0, 0, {}  # for the projection onto batches of one k_s
         for i, chunk in enumerate(batches):
             h = surfaces(chunk)
             w0 = time.perf_counter()
@@ -176,6 +198,10 @@ def run_batched(args, cases) -> int:
                   f"{int((~ds['converged'].values).sum())} | {dmax} | {_gpu_memory(args.backend)} |", flush=True)
             t_all += wall
             solved += len(chunk)
+            case_rounds += int(ds["rounds"].values.sum()) * len(chunk)
+            case_its += int(its.max()) * len(chunk)
+            for b, c in enumerate(chunk):
+                by_ks[c[1]] = max(by_ks.get(c[1], 0), int(its[b]))
             its_all += int(its.sum())
             conv_all += int(conv.sum())
             if worst:
@@ -185,6 +211,8 @@ def run_batched(args, cases) -> int:
                 f"{its_all} iterations, {conv_all}/{solved} converged at every step"
                 f"{f', max |dA/A0| {worst_all:.2g}' if worst_all else ''}); grid of {GRID_CASES}: "
                 f"{t_all * scale / 60:.2f} min{' (measured)' if solved == GRID_CASES else ' (projected)'}")
+        if solved < GRID_CASES:
+            line += f"; {_projection(size, t_all, case_rounds, case_its, by_ks)}"
         summary.append(line)
         print(f"\n{line}", flush=True)
     if args.csv:

@@ -82,8 +82,10 @@ def test_check_every_changes_rounds_not_iterations():
     np.testing.assert_array_equal(some.iterations.values, one.iterations.values)
     np.testing.assert_array_equal(some.area_fraction.values, one.area_fraction.values)
     np.testing.assert_allclose(some.mean_gap.values, one.mean_gap.values, rtol=1e-12)
-    assert some.rounds.values.sum() >= one.rounds.values.sum()
-    assert one.attrs["check_every"] == 1 and CHECK_EVERY["numpy"] == 1 and CHECK_EVERY["cupy"] > 1
+    assert some.rounds.values.sum() > one.rounds.values.sum()
+    # with a check every round no case waits: the rounds are the slowest case's iterations
+    np.testing.assert_array_equal(one.rounds.values, one.iterations.values.max(axis=0))
+    assert one.attrs["check_every"] == 1 and CHECK_EVERY["numpy"] == 1
 
 
 def test_unconverged_case_stops_at_max_iter_like_the_single_solve():

@@ -13,9 +13,9 @@
 #   grid     the paper grid's 60-case sample batched with B = 16, 64, 128 (bench_paper_grid.py --batch),
 #            the projection to the 1200 cases
 #   check    3 cases at N = 512, 30 steps, batched on the GPU against single numpy solves on the CPU
-#   grid_k1  the sample with B = 64 and a host check every round (check_every 1), if time is left
+#   grid_k8  the sample with B = 64 and a host check every 8th round (check_every 8; default 1), if time is left
 #   tests    tests/test_batch.py with ROUGHCONTACT_ARRAY_BACKEND=cupy (the real CuPy), if time is left
-# Logs go to $OUT (at most 8 files): device.txt, cold1.log, cold2.log, grid.log, check.log, grid_k1.log,
+# Logs go to $OUT (at most 8 files): device.txt, cold1.log, cold2.log, grid.log, check.log, grid_k8.log,
 # tests.log and summary.txt (the SUMMARY lines and each part's status, printed last).
 # Wheels the machine lacks (pint and its needs, pyFFTW) travel in .whl/ (benchmarks/README.md).
 set -u -o pipefail
@@ -36,9 +36,9 @@ export PYTHONUNBUFFERED=1 OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1
 export CUPY_CACHE_DIR=${RC_CUPY_CACHE:-/tmp/rc-cupy-cache}
 rm -rf "$CUPY_CACHE_DIR"
 if [ "$SMOKE" = 1 ]; then
-  BACKEND=numpy; N=128; STEPS=4; LIMIT="--limit 8"; BATCHES="2 4 8"; NCHECK=64; B_K1=4
+  BACKEND=numpy; N=128; STEPS=4; LIMIT="--limit 8"; BATCHES="2 4 8"; NCHECK=64; B_K8=4
 else
-  BACKEND=cupy; N=1024; STEPS=30; LIMIT=""; BATCHES="16 64 128"; NCHECK=512; B_K1=64
+  BACKEND=cupy; N=1024; STEPS=30; LIMIT=""; BATCHES="16 64 128"; NCHECK=512; B_K8=64
 fi
 STATUS=()
 
@@ -74,8 +74,8 @@ part grid 200 $PY benchmarks/bench_paper_grid.py --backend $BACKEND --n $N --ste
 part check 80 $PY benchmarks/bench_paper_grid.py --backend $BACKEND --n $NCHECK --steps $STEPS --limit 3 \
   --batch 3 --compare 3 --compare-backend numpy --label check
 # shellcheck disable=SC2086
-part grid_k1 70 $PY benchmarks/bench_paper_grid.py --backend $BACKEND --n $N --steps $STEPS $LIMIT --batch $B_K1 \
-  --check-every 1 --label grid_k1
+part grid_k8 70 $PY benchmarks/bench_paper_grid.py --backend $BACKEND --n $N --steps $STEPS $LIMIT --batch $B_K8 \
+  --check-every 8 --label grid_k8
 if [ "$SMOKE" = 1 ]; then
   part tests 120 $PY -m pytest -q -p no:cacheprovider -n 0 tests/test_batch.py
 else
@@ -85,7 +85,7 @@ fi
 {
   echo "# issue 48 GPU run: summary ($(date -u '+%H:%M:%S UTC'), $((SECONDS - START)) s in all)"
   head -n 3 "$OUT/device.txt"
-  grep -h '^SUMMARY' "$OUT"/cold1.log "$OUT"/cold2.log "$OUT"/grid.log "$OUT"/check.log "$OUT"/grid_k1.log 2>/dev/null \
+  grep -h '^SUMMARY' "$OUT"/cold1.log "$OUT"/cold2.log "$OUT"/grid.log "$OUT"/check.log "$OUT"/grid_k8.log 2>/dev/null \
     | sed 's/^SUMMARY /- /'
   grep -h -E 'passed|failed|error' "$OUT"/tests.log 2>/dev/null | tail -n 1 | sed 's/^/- tests: /'
   grep -h -i 'warning.*fused\|fused kernel' "$OUT"/*.log 2>/dev/null | sort -u | head -n 5 | sed 's/^/- /'

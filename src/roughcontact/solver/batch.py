@@ -19,9 +19,10 @@ Per case, the iteration is the single solve's: a converged case is frozen (its p
 iteration count stop changing) while the others go on, and a case waiting for a float64
 recomputation is frozen until the next *check*, where the host reads the per-case flags (one
 small transfer: the only host synchronisation of the loop) and recomputes ``w`` for those cases.
-The check comes every ``check_every`` rounds (:data:`CHECK_EVERY`); a waiting case idles until
-then, which costs rounds but never iterations: the iteration counts do not depend on
-``check_every``. The transforms differ from the single solve's (batched scipy.fft or cuFFT
+The check comes every ``check_every`` rounds (:data:`CHECK_EVERY`), between the measure and the
+move of a round; a waiting case idles until then, which costs rounds but never iterations: the
+iteration counts do not depend on ``check_every``, and with ``check_every = 1`` the rounds are
+the iterations of the slowest case. The transforms differ from the single solve's (batched scipy.fft or cuFFT
 against pyFFTW's in-place plans, a projected step's change transformed by itself), so the
 iterates agree to round-off of float32 products, not bit for bit: the same A/A0 to the
 tolerance, iteration counts equal or within one or two per step (tests/test_batch.py).
@@ -63,9 +64,12 @@ from .workspace import FALLBACKS, SOLVER_PATHS, STALL_WINDOW, Workspace
 BATCH_METHOD = "pk-fourier-f32"
 
 #: Rounds between two reads of the per-case flags by the host, per array backend, when the caller
-#: gives none. On the host a read costs nothing, so every round; on a GPU each read drains the
-#: queue of kernels, so every 8th (a case that waits for a float64 recomputation idles until then).
-CHECK_EVERY = {"numpy": 1, "cupy": 8}
+#: gives none. A read drains the GPU's queue of kernels, but a round of a batch of 1024² cases keeps
+#: the GPU busy for milliseconds and the host needs only tens of microseconds to launch the next
+#: kernel, while a case that asks for a float64 recomputation between two reads idles until the
+#: next (15-30 % more rounds at 8): every round on both backends until measured otherwise
+#: (benchmarks/gpu/run.sh measures 1 and 8).
+CHECK_EVERY = {"numpy": 1, "cupy": 1}
 
 #: Per-case variables of the batched dataset (dims ``case, step``).
 PER_CASE = ("area_fraction", "mean_contact_pressure", "mean_gap", "contact_perimeter", "iterations",
@@ -496,26 +500,47 @@ class BatchIteration:
         self.rounds = 0
 
     def run(self, check_every: int) -> tuple[np.ndarray, np.ndarray]:
-        """Iterate every case to convergence or a stop; ``(iterations, converged)`` per case (host)."""
+        """Iterate every case to convergence or a stop; ``(iterations, converged)`` per case (host).
+
+        A round measures every case, then moves those that iterate. Every ``check_every``-th round
+        the host reads the per-case flags between the two (the only host synchronisation of the
+        loop: a few bytes per case), recomputes ``w`` in float64 for the cases waiting for it and
+        lets them measure again, as the single solve's loop does after its recomputations, so that
+        they move in that same round. With ``check_every = 1`` no case ever waits; with more, a case
+        that asks for a recomputation idles until the next check.
+        """
         s = self.s
         while True:
-            for _ in range(check_every):
-                self.round()
-            self.rounds += check_every
-            # the check: the only host synchronisation of the loop (a few bytes per case)
-            flags = s.be.to_host(self.xp.concatenate([self.done.reshape(-1), self.waiting.reshape(-1)]))
-            done, waiting = flags[: s.batch], flags[s.batch:]
-            sync = np.flatnonzero(waiting)
-            if sync.size:
-                self.resync(sync)
-                idx = s.xp.asarray(sync)
-                self.fresh[idx] = True
-                self.waiting[idx] = False
-            elif done.all():
-                break
+            for j in range(check_every):
+                self.measure()
+                if j == check_every - 1 and self.check():
+                    break
+                self.act()
+                self.rounds += 1
+            else:
+                continue
+            break
         self.finish()
         return (s.be.to_host(self.it).reshape(-1).astype(np.int64),
                 s.be.to_host(self.converged).reshape(-1).astype(bool))
+
+    def _flags(self):
+        s = self.s
+        flags = s.be.to_host(self.xp.concatenate([self.done.reshape(-1), self.waiting.reshape(-1)]))
+        return flags[: s.batch], flags[s.batch:]
+
+    def check(self) -> bool:
+        """The host's check after a measure: recomputations for the waiting cases; True when all are done."""
+        done, waiting = self._flags()
+        sync = np.flatnonzero(waiting)
+        if sync.size:
+            self.resync(sync)
+            idx = self.s.xp.asarray(sync)
+            self.fresh[idx] = True
+            self.waiting[idx] = False
+            self.measure()  # the others' decisions stand (measuring an unchanged case again changes nothing)
+            done, _ = self._flags()
+        return bool(done.all())
 
     def resync(self, cases: np.ndarray) -> None:
         """Pressure brought to the exact mean and ``w`` recomputed in float64 for ``cases`` (host ints)."""
@@ -535,12 +560,17 @@ class BatchIteration:
             self.resync(stale)
             self.fresh[self.s.xp.asarray(stale)] = True
 
-    def round(self) -> None:
-        """One pass of :meth:`~.elastic.PKIteration.run`'s loop for every case, masked."""
+    def measure(self) -> None:
+        """The first half of :meth:`~.elastic.PKIteration.run`'s loop for every case: residual and decisions.
+
+        Converged, waiting and stopped cases are flagged; ``self.go`` says which iterate in
+        :meth:`act`. Measuring again a case whose state has not changed decides the same (the stall
+        guard's and ``next_sync``'s updates are idempotent).
+        """
         xp, k, s = self.xp, self.k, self.s
         P, w = s.P, s.w
         active = ~(self.done | self.waiting)
-        # measure: gap on F (zero mean there), sign violations off F, the residual
+        # gap on F (zero mean there), sign violations off F, the residual
         nF = self.nF
         has_f = nF > 0
         gbar = xp.where(has_f, k.masked_sum(w, self.F) / xp.where(has_f, nF, 1), 0.0)
@@ -561,13 +591,19 @@ class BatchIteration:
         self.best = xp.where(better, r, self.best)
         self.at = xp.where(better, self.it, self.at)
         stop = rest & (~xp.isfinite(r) | (self.it >= self.max_iter_d) | (self.it - self.at >= STALL_WINDOW))
-        go = rest & ~stop
+        self.go = rest & ~stop
+        self.gbar = gbar
         self.converged |= conv
         self.waiting |= want
         self.done |= conv | stop
+
+    def act(self) -> None:
+        """The second half of the loop for the cases that iterate: join, direction, step."""
+        xp, k, s = self.xp, self.k, self.s
+        go, nF = self.go, self.nF
         self.it += go
         # join: violating nodes (w < gbar off F) enter F; their p, t and g_prev are 0 there already
-        F, g = k.join_gap(w, gbar, self.F, go)
+        F, g = k.join_gap(s.w, self.gbar, self.F, go)
         nF_new = k.rcount(F)
         joined = go & (nF_new > nF)
         empty = go & (nF_new == 0)
