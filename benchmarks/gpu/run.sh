@@ -15,8 +15,10 @@
 #   check    3 cases at N = 512, 30 steps, batched on the GPU against single numpy solves on the CPU
 #   grid_k8  the sample with B = 64 and a host check every 8th round (check_every 8; default 1), if time is left
 #   tests    tests/test_batch.py with ROUGHCONTACT_ARRAY_BACKEND=cupy (the real CuPy), if time is left
-# Logs go to $OUT (at most 8 files): device.txt, cold1.log, cold2.log, grid.log, check.log, grid_k8.log,
-# tests.log and summary.txt (the SUMMARY lines and each part's status, printed last).
+#   whole    the whole 1200-case grid with B = 128 in the time that is left (batches in turns over k_s, so
+#            that a run cut short by its limit has seen every kind; each batch's row is printed as it ends)
+# Logs go to $OUT (8 files): cold1.log, cold2.log, grid.log, check.log, grid_k8.log, tests.log, whole.log
+# and summary.txt (the device, the SUMMARY lines and each part's status; printed last).
 # Wheels the machine lacks (pint and its needs, pyFFTW) travel in .whl/ (benchmarks/README.md).
 set -u -o pipefail
 OUT=${OUT:-/tmp/gpu-out}; mkdir -p "$OUT"
@@ -57,15 +59,15 @@ part() {
   tail -n 25 "$OUT/$name.log"
 }
 
-{
+DEVICE=$({
   echo "date $(date -u '+%Y-%m-%d %H:%M:%S UTC'), commit $(git rev-parse --short HEAD 2>/dev/null || echo '?'), smoke $SMOKE"
   nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv 2>&1 || echo "no nvidia-smi"
   $PY -c "import sys, numpy; print('python', sys.version.split()[0], 'numpy', numpy.__version__)"
   $PY -c "import cupy; print('cupy', cupy.__version__, 'CUDA runtime', cupy.cuda.runtime.runtimeGetVersion())" 2>&1 | tail -1
   $PY -c "import scipy; print('scipy', scipy.__version__)" 2>&1 | tail -1
   lscpu 2>/dev/null | grep -m1 'Model name' || true
-} > "$OUT/device.txt" 2>&1
-cat "$OUT/device.txt"
+} 2>&1)
+echo "$DEVICE"
 
 part cold1 110 $PY benchmarks/gpu/single_case.py --backend $BACKEND --n $N --steps $STEPS --label cold1
 part cold2 70 $PY benchmarks/gpu/single_case.py --backend $BACKEND --n $N --steps $STEPS --label cold2
@@ -81,12 +83,19 @@ if [ "$SMOKE" = 1 ]; then
 else
   ROUGHCONTACT_ARRAY_BACKEND=cupy part tests 60 $PY -m pytest -q -p no:cacheprovider tests/test_batch.py -x
 fi
+# the rest of the time (less ~10 s for the summary); in the smoke run a few batches of a small grid
+if [ "$SMOKE" = 1 ]; then WHOLE_OPTS="--limit 48 --max-batches 4"; else WHOLE_OPTS=""; fi
+# shellcheck disable=SC2086
+part whole $((BUDGET - (SECONDS - START) - 10)) $PY benchmarks/bench_paper_grid.py --backend $BACKEND --n $N \
+  --steps $STEPS --whole --batch "${RC_WHOLE_BATCH:-128}" $WHOLE_OPTS --label whole
 
 {
   echo "# issue 48 GPU run: summary ($(date -u '+%H:%M:%S UTC'), $((SECONDS - START)) s in all)"
-  head -n 3 "$OUT/device.txt"
-  grep -h '^SUMMARY' "$OUT"/cold1.log "$OUT"/cold2.log "$OUT"/grid.log "$OUT"/check.log "$OUT"/grid_k8.log 2>/dev/null \
-    | sed 's/^SUMMARY /- /'
+  echo "$DEVICE"
+  grep -h '^SUMMARY' "$OUT"/cold1.log "$OUT"/cold2.log "$OUT"/grid.log "$OUT"/check.log "$OUT"/grid_k8.log \
+    "$OUT"/whole.log 2>/dev/null | sed 's/^SUMMARY /- /'
+  grep -h '^| [0-9]' "$OUT"/whole.log 2>/dev/null | tail -n 1 \
+    | awk -F'|' '{print "- whole grid, last batch row: cases so far, wall so far:" $(NF-1)}'
   grep -h -E 'passed|failed|error' "$OUT"/tests.log 2>/dev/null | tail -n 1 | sed 's/^/- tests: /'
   grep -h -i 'warning.*fused\|fused kernel' "$OUT"/*.log 2>/dev/null | sort -u | head -n 5 | sed 's/^/- /'
   echo "| part | status |"
