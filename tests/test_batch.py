@@ -100,9 +100,9 @@ def test_unconverged_case_stops_at_max_iter_like_the_single_solve():
 
 def test_fallback_runs_on_the_stalled_case_alone(monkeypatch):
     """A case whose batched iteration stalls moves on to the single solve's fallbacks, from its pressure."""
-    from roughcontact.solver import batch
+    from roughcontact.solver import batch_iteration
 
-    monkeypatch.setattr(batch, "STALL_WINDOW", 0)  # the batched iteration "stalls" at once, every case
+    monkeypatch.setattr(batch_iteration, "STALL_WINDOW", 0)  # the batched iteration "stalls" at once, every case
     ds = solve_contact_batch(np.stack([_surface(0), _surface(2)]), LOADS[:3])
     assert bool(ds.converged.values.all())
     np.testing.assert_array_equal(ds.solver_path.values, 2)  # pk-fourier (float64 products) ended every step

@@ -95,13 +95,10 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
 
     Parameters
     ----------
-    heights : array_like, shape (n, n) or (nx, ny), or (B, nx, ny)
+    heights : array_like, shape (n, n) or (nx, ny); (B, nx, ny): a batch (:func:`~.batch.solve_contact_batch`)
         Rigid surface heights [length] on the cell (periodic, or the whole patch for
         ``boundary="free"``), axis 0 = x; the highest points touch first. Any ``nx, ny >= 4``;
-        ``nx != ny`` needs ``length=(Lx, Ly)``. A 3-D array is a batch of ``B`` surfaces solved
-        together (:func:`~.batch.solve_contact_batch`: periodic, elastic, default method; the
-        result gains a leading ``case`` dimension; ``store_fields``, ``clusters`` and
-        ``observers`` are refused there).
+        ``nx != ny`` needs ``length=(Lx, Ly)``.
     pressures : sequence of float, shape (n_steps,)
         Applied mean pressures ``p0 > 0`` [pressure, the unit of ``e_star``], each with
         ``p0 * L / (e_star * s)`` in :data:`LOAD_RANGE` (``s`` the rms height, ``L`` the
@@ -134,26 +131,29 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
         hardness: ``plastic_area_fraction``, ``plastic_load_fraction``); fields and ``x``/``y`` coordinates only
         when stored. Every variable carries CF ``units`` and ``long_name``; the global attributes record the
         settings, the cell (:func:`~.results.cell_attrs`: ``length`` and ``n`` for a square cell, ``length_x``,
-        ``length_y`` otherwise, ``nx`` and ``ny`` always), ``boundary`` and
-        ``elastic_method``. ``converged`` is True only when the final check of the package
-        docstring passed on a freshly recomputed displacement.
+        ``length_y`` otherwise, ``nx`` and ``ny`` always), ``boundary`` and ``elastic_method``. ``converged``
+        is True only when the final check of the package docstring passed on a freshly recomputed displacement.
 
     Raises
     ------
     ValueError
         For invalid input, naming the argument and its allowed range.
     """
-    if np.ndim(heights) == 3:
+    if np.ndim(heights) == 3:  # B surfaces of one grid
         return _batch(heights, pressures, settings, store_fields, clusters, progress, observers, options)
     p = validate_pressures(pressures)
     store = validate_store(store_fields, p.size)
     clusters = validate_flag("clusters", clusters)
-    if progress is not None and not callable(progress):
-        raise ValueError(f"progress must be a callable or None, got {type(progress).__name__} {progress!r}")
+    _check_progress(progress)
     solver = prepare(heights, p, "pressures", settings, options)
     observers = _check_observers(observers)
     cols, iters, conv, paths, fields, masks = _run_steps(solver, p, store, clusters, progress, observers)
     return _observed(_dataset(solver, p, cols, iters, conv, paths, fields, masks, store_fields), observers)
+
+
+def _check_progress(progress) -> None:
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be a callable or None, got {type(progress).__name__} {progress!r}")
 
 
 def _batch(heights, pressures, settings, store_fields, clusters, progress, observers, options) -> xr.Dataset:
