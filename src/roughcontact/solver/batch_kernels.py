@@ -170,6 +170,44 @@ def _cupy_kernels(xp):
     return kernels
 
 
+#: The fused reductions of :class:`_CupyKernels`: attribute -> ``cupy.ReductionKernel``'s ``(in_params,
+#: out_params, map_expr, reduce_expr, post_map_expr, identity)``; each reduces over axes (1, 2) of
+#: ``(B, nx, ny)`` inputs (per-case ``(B, 1, 1)`` inputs broadcast). No input is called ``a`` or
+#: ``b``: those name the accumulators of the reduction. Module constants, so that the tests can
+#: run the same C code on the host (tests/test_batch_kernels.py).
+REDUCTIONS = {
+    "_orth": ("float64 p, float64 w, float64 gbar, bool f", "float64 y", "f ? p * fabs(w - gbar) : 0.0",
+              "a + b", "y = a", "0"),
+    "_msum": ("float64 x, bool f", "float64 y", "f ? x : 0.0", "a + b", "y = a", "0"),
+    "_dot": ("float64 u, float64 v", "float64 y", "u * v", "a + b", "y = a", "0"),
+    "_quad": ("float32 re, float32 im, float32 wq", "float64 y", "(double)(wq * (re * re + im * im))",
+              "a + b", "y = a", "0"),
+    "_ddot": ("float64 g, float64 t, float64 beta, float64 z", "float64 y", "g * (t * beta + z)",
+              "a + b", "y = a", "0"),
+    "_pany": ("float64 p, float64 t, float64 tau, bool f", "int32 y", "(f && p - tau * t <= 0.0) ? 1 : 0",
+              "max(a, b)", "y = a", "0"),
+    "_psum": ("float64 p, float64 t, float64 tau", "float64 y", "fmax(p - tau * t, 0.0)", "a + b", "y = a", "0"),
+}
+
+#: The fused element-wise passes of :class:`_CupyKernels`: attribute -> ``cupy.ElementwiseKernel``'s
+#: ``(in_params, out_params, operation)``; outputs that are read too are updated in place.
+ELEMENTWISE = {
+    "_to32": ("float64 x, float64 s", "float32 y", "y = (float)(x * s)"),
+    "_scaled": ("float32 r, float64 c, bool f", "float64 y", "y = f ? (double)r * c : 0.0"),
+    "_add": ("float32 r, float64 c", "float64 w", "w += (double)r * c"),
+    "_subm": ("float64 c, bool f", "float64 x", "if (f) x -= c"),
+    "_join": ("float64 w, float64 gbar, bool f, bool go", "bool fn, float64 g",
+              "fn = go ? (f || w < gbar) : f; g = fn ? w - gbar : 0.0"),
+    "_newdir": ("float64 z, float64 g, float64 beta, bool keep, bool go", "float64 t, float64 gp",
+                "t = keep ? t * beta + z : (go ? z : t); if (go) gp = g"),
+    "_project": ("float64 t, float64 tau, bool go, float64 s, float64 isig", "float64 p, float32 d32",
+                 "double trial = p - tau * t; double tp = trial > 0.0 ? trial : 0.0; "
+                 "double d = go ? (tp - trial) + (s - 1.0) * tp - tau * t : 0.0; "
+                 "d32 = (float)(d * isig); if (go) p = tp * s"),
+    "_shrink": ("float64 p", "bool f, float64 t, float64 gp", "if (!(p > 0.0)) { f = false; t = 0.0; gp = 0.0; }"),
+}
+
+
 class _CupyKernels(_Kernels):
     """Fused CUDA kernels for the passes of a round (CuPy only).
 
@@ -186,40 +224,10 @@ class _CupyKernels(_Kernels):
     def __init__(self, cp):
         super().__init__(cp)
         self.cp = cp
-        R, E = cp.ReductionKernel, cp.ElementwiseKernel
-        self._orth = R("float64 p, float64 w, float64 gbar, bool f", "float64 y",
-                       "f ? p * fabs(w - gbar) : 0.0", "a + b", "y = a", "0", "rc_batch_orth")
-        self._msum = R("float64 x, bool f", "float64 y", "f ? x : 0.0", "a + b", "y = a", "0", "rc_batch_msum")
-        # (inputs are not called a or b: those name the accumulators of the reduction)
-        self._dot = R("float64 u, float64 v", "float64 y", "u * v", "a + b", "y = a", "0", "rc_batch_dot")
-        self._quad = R("float32 re, float32 im, float32 wq", "float64 y", "(double)(wq * (re * re + im * im))",
-                       "a + b", "y = a", "0", "rc_batch_quad")
-        self._ddot = R("float64 g, float64 t, float64 beta, float64 z", "float64 y", "g * (t * beta + z)",
-                       "a + b", "y = a", "0", "rc_batch_ddot")
-        self._pany = R("float64 p, float64 t, float64 tau, bool f", "int32 y",
-                       "(f && p - tau * t <= 0.0) ? 1 : 0", "max(a, b)", "y = a", "0", "rc_batch_pany")
-        self._psum = R("float64 p, float64 t, float64 tau", "float64 y", "fmax(p - tau * t, 0.0)",
-                       "a + b", "y = a", "0", "rc_batch_psum")
-        self._to32 = E("float64 x, float64 s", "float32 y", "y = (float)(x * s)", "rc_batch_to32")
-        self._scaled = E("float32 r, float64 c, bool f", "float64 y", "y = f ? (double)r * c : 0.0",
-                         "rc_batch_scaled")
-        self._add = E("float32 r, float64 c", "float64 w", "w += (double)r * c", "rc_batch_add")
-        self._subm = E("float64 c, bool f", "float64 x", "if (f) x -= c", "rc_batch_subm")
-        self._join = E("float64 w, float64 gbar, bool f, bool go", "bool fn, float64 g",
-                       "fn = go ? (f || w < gbar) : f; g = fn ? w - gbar : 0.0", "rc_batch_join")
-        self._newdir = E("float64 z, float64 g, float64 beta, bool keep, bool go", "float64 t, float64 gp",
-                         "t = keep ? t * beta + z : (go ? z : t); if (go) gp = g", "rc_batch_newdir")
-        self._project = E(
-            "float64 t, float64 tau, bool go, float64 s, float64 isig", "float64 p, float32 d32",
-            """
-            double trial = p - tau * t;
-            double tp = trial > 0.0 ? trial : 0.0;
-            double d = go ? (tp - trial) + (s - 1.0) * tp - tau * t : 0.0;
-            d32 = (float)(d * isig);
-            if (go) p = tp * s;
-            """, "rc_batch_project")
-        self._shrink = E("float64 p", "bool f, float64 t, float64 gp",
-                         "if (!(p > 0.0)) { f = false; t = 0.0; gp = 0.0; }", "rc_batch_shrink")
+        for attr, spec in REDUCTIONS.items():
+            setattr(self, attr, cp.ReductionKernel(*spec, name="rc_batch" + attr))
+        for attr, spec in ELEMENTWISE.items():
+            setattr(self, attr, cp.ElementwiseKernel(*spec, name="rc_batch" + attr))
         self.fused = True
 
     def _reduce(self, kernel, *args):
