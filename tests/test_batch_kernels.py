@@ -1,6 +1,6 @@
 """The fused CUDA kernels of the batched solve, run on the host: their C code compiled by a C++ compiler.
 
-CI has no GPU, and the CuPy kernels of :mod:`roughcontact.solver.batch_kernels` are C code that
+CI has no GPU, and the CuPy kernels of :mod:`roughcontact.solver.batch_cuda` are C code that
 only CuPy compiles. Here a stand-in CuPy builds ``ElementwiseKernel`` and ``ReductionKernel`` as
 CuPy does in spirit (the parameters declared per element, outputs by reference, the reduction's
 ``a``/``b`` accumulators, broadcasting of per-case inputs) around the very same code strings,
@@ -27,16 +27,17 @@ import numpy as np
 import pytest
 
 from roughcontact.core.backend import get_backend
-from roughcontact.solver import batch_kernels
+from roughcontact.solver import batch_cuda, batch_kernels
 from roughcontact.solver.batch import solve_contact_batch
 from roughcontact.surfaces.synthetic import generate_surface
 
 CXX = shutil.which("g++") or shutil.which("c++")
 pytestmark = pytest.mark.skipif(CXX is None, reason="no C++ compiler to run the kernels' C code")
 
-CTYPES = {"float64": "double", "float32": "float", "bool": "bool", "int32": "int"}
-DTYPES = {"float64": np.float64, "float32": np.float32, "bool": np.bool_, "int32": np.int32}
-PRELUDE = "#include <cmath>\n#include <algorithm>\nusing std::fabs; using std::fmax; using std::max; using std::min;\n"
+CTYPES = {"float64": "double", "float32": "float", "bool": "bool", "int32": "int", "int64": "long long"}
+DTYPES = {"float64": np.float64, "float32": np.float32, "bool": np.bool_, "int32": np.int32, "int64": np.int64}
+PRELUDE = ("#include <cmath>\n#include <algorithm>\n"
+           "using std::fabs; using std::fmax; using std::max; using std::min; using std::isfinite;\n")
 
 
 def _params(text: str) -> list[tuple[str, str]]:
@@ -71,6 +72,7 @@ class _Elementwise:
 
     def __call__(self, *args):
         ins, outs = args[:len(self.ins)], list(args[len(self.ins):])
+        assert len(outs) in (0, len(self.outs)), "CuPy takes all outputs or none"
         ins = [np.asarray(a, dtype=DTYPES[t]) for a, (t, _) in zip(ins, self.ins, strict=True)]
         shape = np.broadcast_shapes(*(a.shape for a in ins), *(o.shape for o in outs))
         ins = [np.ascontiguousarray(np.broadcast_to(a, shape)) for a in ins]
@@ -138,17 +140,17 @@ def compiled_cupy(monkeypatch, kernel_dir):
 def test_every_fused_kernel_passes_its_self_check(compiled_cupy):
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # a kernel replaced by its plain form warns
-        kernels = batch_kernels._cupy_kernels(compiled_cupy)
-    assert isinstance(kernels, batch_kernels._CupyKernels) and kernels.fused
+        kernels = batch_cuda._cupy_kernels(compiled_cupy)
+    assert isinstance(kernels, batch_cuda._CupyKernels) and kernels.fused
     assert set(kernels.FUSED) <= {m for m in dir(batch_kernels._Kernels) if not m.startswith("_")}
 
 
 def test_a_wrong_kernel_is_replaced_by_its_plain_form(compiled_cupy, monkeypatch):
     """A kernel whose result differs from the plain expression's is dropped, with a warning."""
-    monkeypatch.setitem(batch_kernels.REDUCTIONS, "_dot", ("float64 u, float64 v", "float64 y", "u + v",
+    monkeypatch.setitem(batch_cuda.REDUCTIONS, "_dot", ("float64 u, float64 v", "float64 y", "u + v",
                                                            "a + b", "y = a", "0"))
     with pytest.warns(RuntimeWarning, match="fused kernel 'dot' failed its check"):
-        kernels = batch_kernels._cupy_kernels(compiled_cupy)
+        kernels = batch_cuda._cupy_kernels(compiled_cupy)
     assert not kernels.fused
     x = np.random.default_rng(1).random((2, 4, 4))
     np.testing.assert_allclose(kernels.dot(x, x), np.sum(x * x, axis=(1, 2), keepdims=True))

@@ -52,6 +52,7 @@ class BatchIteration:
         self.done = xp.zeros((B, 1, 1), dtype=bool)
         self.converged = xp.zeros((B, 1, 1), dtype=bool)
         self.waiting = xp.zeros((B, 1, 1), dtype=bool)
+        self.go = xp.zeros((B, 1, 1), dtype=bool)  # the cases that move in this round (measure)
         self.max_iter_d = xp.asarray(np.asarray(max_iter, dtype=np.int64).reshape(B, 1, 1))
         self.rounds = 0
 
@@ -123,106 +124,55 @@ class BatchIteration:
         :meth:`act`. Measuring again a case whose state has not changed decides the same (the stall
         guard's and ``next_sync``'s updates are idempotent).
         """
-        xp, k, s = self.xp, self.k, self.s
-        P, w = s.P, s.w
-        active = ~(self.done | self.waiting)
-        # gap on F (zero mean there), sign violations off F, the residual
-        nF = self.nF
-        has_f = nF > 0
-        gbar = xp.where(has_f, k.masked_sum(w, self.F) / xp.where(has_f, nF, 1), 0.0)
-        pen = xp.maximum(gbar - k.rmin(w), 0.0)  # min over F of g and over the candidates off F
-        orth = k.orth(P, w, gbar, self.F) * self.inv_norm
-        r = xp.maximum(xp.maximum(orth, pen / self.scale), 0.0)
-        r = xp.where(xp.isfinite(orth) & xp.isfinite(pen), r, math.inf)
-        below = r <= self.tol
-        conv = active & below & self.fresh
-        sync_level = ~below & (r < self.next_sync)
-        want = active & ~self.fresh & (below | sync_level)
-        lower = want & sync_level
-        for _ in range(6):  # next_sync below r: every four decades (at most ~4 steps from 1e-5 to tol)
-            self.next_sync = xp.where(lower & (self.next_sync > r), self.next_sync * 1e-4, self.next_sync)
-        rest = active & ~conv & ~want
-        # the stall guard (workspace.StallGuard) on the cases that reach it
-        better = rest & (r < 0.5 * self.best)
-        self.best = xp.where(better, r, self.best)
-        self.at = xp.where(better, self.it, self.at)
-        stop = rest & (~xp.isfinite(r) | (self.it >= self.max_iter_d) | (self.it - self.at >= STALL_WINDOW))
-        self.go = rest & ~stop
-        self.gbar = gbar
-        self.converged |= conv
-        self.waiting |= want
-        self.done |= conv | stop
+        k, s = self.k, self.s
+        # gap on F (zero mean there: gbar is -d), sign violations off F (min of w), complementarity
+        self.gbar = gbar = k.gbar(k.masked_sum(s.w, self.F), self.nF)
+        k.decide(k.orth(s.P, s.w, gbar, self.F), k.rmin(s.w), gbar, self.inv_norm, self.scale, self.tol,
+                 STALL_WINDOW, math.inf, self.it, self.max_iter_d, self.fresh, self.next_sync, self.best, self.at,
+                 self.done, self.waiting, self.converged, self.go)
 
     def act(self) -> None:
         """The second half of the loop for the cases that iterate: join, direction, step."""
-        xp, k, s = self.xp, self.k, self.s
-        go, nF = self.go, self.nF
+        k, s = self.k, self.s
+        go = self.go
         self.it += go
         # join: violating nodes (w < gbar off F) enter F; their p, t and g_prev are 0 there already
         F, g = k.join_gap(s.w, self.gbar, self.F, go)
         nF_new = k.rcount(F)
-        joined = go & (nF_new > nF)
-        empty = go & (nF_new == 0)
-        self.done |= empty
-        go &= ~empty
+        c, nf = k.join_fix(nF_new, self.nF, k.rsum(g), go, self.done)  # go, done in place
         self.F, self.nF = F, nF_new
-        nf = xp.where(nF_new > 0, nF_new, 1)
-        k.sub_masked(g, xp.where(joined, k.rsum(g) / nf, 0.0), F)  # re-centred on the enlarged F (shifts d)
-        go = self._direction(g, go, nf)
+        k.sub_masked(g, c, F)  # re-centred on the enlarged F where nodes joined (shifts d only)
+        self._direction(g, go, nf)
         self._step(g, go)
 
-    def _direction(self, g, go, nf):
-        """``t = z + beta t`` (``t = z`` at a restart or where that is no descent); returns ``go`` less breakdowns."""
-        xp, k, op = self.xp, self.k, self.op
+    def _direction(self, g, go, nf) -> None:
+        """``t = z + beta t`` (``t = z`` at a restart or where that is no descent); a breakdown stops the case."""
+        k, op = self.k, self.op
         R = op.inverse32(op.spectrum32(g, self.inv_sigma), op.mmult32)  # M g / sigma
         a = k.scaled_into(R, self.sigma, self.F)
         k.sub_masked(a, k.rsum(a) / nf, self.F)  # zero mean on F
         G = k.dot(g, a)
-        ok = (G > 0.0) & xp.isfinite(G)
-        self.done |= go & ~ok
-        go = go & ok
-        restart = ~((self.delta > 0.0) & (self.g_old > 0.0))
-        g_old = xp.where(self.g_old != 0.0, self.g_old, 1.0)
-        beta_pr = xp.maximum(0.0, (G - k.dot(self.g_prev, a)) / g_old)
-        beta = xp.where(self.gprev_ok, beta_pr, G / g_old)
-        beta = xp.where(restart | ~go, 0.0, beta)
-        descent = k.descent_dot(g, self.t, beta, a) > 0.0
-        keep = go & (restart | descent)
+        beta, restart = k.beta(G, k.dot(self.g_prev, a), self.g_old, self.delta, self.gprev_ok, go, self.done)
+        keep = k.direction_done(k.descent_dot(g, self.t, beta, a), restart, G, go, self.gprev_ok, self.g_old,
+                                self.delta)
         k.new_direction(self.t, a, g, beta, keep, go, self.g_prev)
-        self.gprev_ok |= go
-        self.g_old = xp.where(go, G, self.g_old)
-        self.delta = xp.where(go, 1.0, self.delta)
-        return go
 
     def _step(self, g, go) -> None:
         """Exact line search along ``-t``, the projection onto ``p >= 0``, ``w`` moved by ``K`` of the change."""
-        xp, k, op, s = self.xp, self.k, self.op, self.s
+        k, op, s = self.k, self.op, self.s
         t, F = self.t, self.F
         spec = op.spectrum32(t, self.inv_sigma)
-        rt = op.quadratic32(spec) * self.sigma ** 2
-        gt = k.dot(g, t)
-        tau = xp.where(rt > 0.0, gt / xp.where(rt > 0.0, rt, 1.0), math.nan)
-        ok = xp.isfinite(tau) & (tau > 0.0)
-        self.done |= go & ~ok
-        go = go & ok
-        tau = xp.where(go, tau, 0.0)
-        proj = go & k.proj_any(s.P, t, tau, F)
+        tau = k.step_length(op.quadratic32(spec), self.sigma, k.dot(g, t), math.nan, go, self.done)
         total = k.pos_sum(s.P, t, tau)
-        bad = proj & ~(total > 0.0)  # nothing left to carry the load (the single solve restarts uniformly)
-        self.done |= bad
-        go &= ~bad
-        proj &= ~bad
-        tau = xp.where(go, tau, 0.0)
-        pscale = xp.where(proj, self.target / xp.where(total > 0.0, total, 1.0), 1.0)
+        proj, pscale = k.projection_scale(k.proj_any(s.P, t, tau, F), total, self.target, go, self.done, tau)
         d32 = k.project(s.P, t, tau, go, pscale, self.inv_sigma)
         # w <- w + K (p_new - p): one forward and one inverse float32 transform (every case)
         R = op.inverse32(op.fft.rfft2(d32), op.kmult32)
         k.add_scaled(s.w, R, self.sigma)
         nF_old = self.nF
         k.shrink(s.P, F, t, self.g_prev)  # a projected case's F loses the nodes at p = 0
-        nF_new = self.nF = k.rcount(F)
-        # Polak-Ribiere's history off after a projection that took a large part of F away
-        self.gprev_ok &= ~(proj & ((nF_old - nF_new) >= FR_AFTER_LOSS * nF_old))
-        nf_new = xp.where(nF_new > 0, nF_new, 1)
-        k.sub_masked(t, xp.where(proj, k.rsum(t) / nf_new, 0.0), F)  # zero mean on the reduced F
-        self.fresh &= ~go
+        self.nF = k.rcount(F)
+        # Polak-Ribiere's history off after a projection that took a large part of F away; zero mean
+        # of t on the reduced F
+        c = k.shrink_fix(nF_old, self.nF, k.rsum(t), FR_AFTER_LOSS, proj, go, self.gprev_ok, self.fresh)
+        k.sub_masked(t, c, F)

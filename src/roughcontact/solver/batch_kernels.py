@@ -3,14 +3,11 @@
 :class:`BatchOperator` holds the periodic half-space's products on a ``(B, nx, ny)`` batch, batched
 ``rfft2`` / ``irfft2`` over the last two axes (:class:`_BatchFFT`: scipy.fft on the host, cuFFT
 through ``cupyx.scipy.fft`` with CuPy's plan cache on a GPU). :class:`_Kernels` are the element-wise
-passes and per-case reductions of a round as array expressions (any backend); :class:`_CupyKernels`
-fuse each into one ``ElementwiseKernel`` / ``ReductionKernel`` pass, made only when CuPy is
-importable and each checked once against its plain form (:func:`_cupy_kernels`).
+passes and per-case reductions of a round as array expressions (any backend); the fused CUDA
+kernels that replace them on a GPU are in :mod:`.batch_cuda`.
 """
 
 from __future__ import annotations
-
-import warnings
 
 import numpy as np
 
@@ -58,7 +55,7 @@ class _Kernels:
 
     Every argument is an array of the backend: fields ``(B, nx, ny)``, per-case numbers
     ``(B, 1, 1)``. Results of reductions are ``(B, 1, 1)`` float64 (or int64 for counts).
-    :class:`_CupyKernels` replaces them by fused CUDA kernels (one pass over the fields each) with
+    :class:`.batch_cuda._CupyKernels` replaces them by fused CUDA kernels (one pass over the fields each) with
     the same results up to the order of summation; the methods named "in place" must update their
     field arguments in place in both.
     """
@@ -156,189 +153,108 @@ class _Kernels:
         g_prev *= keep
 
 
-def _cupy_kernels(xp):
-    """:class:`_CupyKernels` for the real CuPy, each kernel checked once; plain kernels otherwise."""
-    if not hasattr(xp, "ElementwiseKernel"):  # numpy, or the tests' stand-in
-        return _Kernels(xp)
-    try:
-        kernels = _CupyKernels(xp)
-    except Exception as exc:  # noqa: BLE001 (any failure to build: run the plain expressions)
-        warnings.warn(f"batched solve: fused CuPy kernels unavailable ({type(exc).__name__}: {exc}); "
-                      "using plain array expressions", RuntimeWarning, stacklevel=2)
-        return _Kernels(xp)
-    kernels.self_check()
-    return kernels
+    # -- per-case decisions: (B, 1, 1) arrays; the state arguments are updated in place --------
 
+    def gbar(self, s, n):
+        """``s / n`` where ``n > 0``, else 0 (the gap's mean over ``F``)."""
+        xp = self.xp
+        return xp.where(n > 0, s / xp.where(n > 0, n, 1), 0.0)
 
-#: The fused reductions of :class:`_CupyKernels`: attribute -> ``cupy.ReductionKernel``'s ``(in_params,
-#: out_params, map_expr, reduce_expr, post_map_expr, identity)``; each reduces over axes (1, 2) of
-#: ``(B, nx, ny)`` inputs (per-case ``(B, 1, 1)`` inputs broadcast). No input is called ``a`` or
-#: ``b``: those name the accumulators of the reduction. Module constants, so that the tests can
-#: run the same C code on the host (tests/test_batch_kernels.py).
-REDUCTIONS = {
-    "_orth": ("float64 p, float64 w, float64 gbar, bool f", "float64 y", "f ? p * fabs(w - gbar) : 0.0",
-              "a + b", "y = a", "0"),
-    "_msum": ("float64 x, bool f", "float64 y", "f ? x : 0.0", "a + b", "y = a", "0"),
-    "_dot": ("float64 u, float64 v", "float64 y", "u * v", "a + b", "y = a", "0"),
-    "_quad": ("float32 re, float32 im, float32 wq", "float64 y", "(double)(wq * (re * re + im * im))",
-              "a + b", "y = a", "0"),
-    "_ddot": ("float64 g, float64 t, float64 beta, float64 z", "float64 y", "g * (t * beta + z)",
-              "a + b", "y = a", "0"),
-    "_pany": ("float64 p, float64 t, float64 tau, bool f", "int32 y", "(f && p - tau * t <= 0.0) ? 1 : 0",
-              "max(a, b)", "y = a", "0"),
-    "_psum": ("float64 p, float64 t, float64 tau", "float64 y", "fmax(p - tau * t, 0.0)", "a + b", "y = a", "0"),
-}
+    def decide(self, orth, wmin, gbar, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
+               next_sync, best, at, done, waiting, converged, go):
+        """The measure's decisions (:meth:`.batch_iteration.BatchIteration.measure`), in place.
 
-#: The fused element-wise passes of :class:`_CupyKernels`: attribute -> ``cupy.ElementwiseKernel``'s
-#: ``(in_params, out_params, operation)``; outputs that are read too are updated in place.
-ELEMENTWISE = {
-    "_to32": ("float64 x, float64 s", "float32 y", "y = (float)(x * s)"),
-    "_scaled": ("float32 r, float64 c, bool f", "float64 y", "y = f ? (double)r * c : 0.0"),
-    "_add": ("float32 r, float64 c", "float64 w", "w += (double)r * c"),
-    "_subm": ("float64 c, bool f", "float64 x", "if (f) x -= c"),
-    "_join": ("float64 w, float64 gbar, bool f, bool go", "bool fn, float64 g",
-              "fn = go ? (f || w < gbar) : f; g = fn ? w - gbar : 0.0"),
-    "_newdir": ("float64 z, float64 g, float64 beta, bool keep, bool go", "float64 t, float64 gp",
-                "t = keep ? t * beta + z : (go ? z : t); if (go) gp = g"),
-    "_project": ("float64 t, float64 tau, bool go, float64 s, float64 isig", "float64 p, float32 d32",
-                 "double trial = p - tau * t; double tp = trial > 0.0 ? trial : 0.0; "
-                 "double d = go ? (tp - trial) + (s - 1.0) * tp - tau * t : 0.0; "
-                 "d32 = (float)(d * isig); if (go) p = tp * s"),
-    "_shrink": ("float64 p", "bool f, float64 t, float64 gp", "if (!(p > 0.0)) { f = false; t = 0.0; gp = 0.0; }"),
-}
+        Residual ``r = max(orth inv_norm, max(gbar - wmin, 0) / scale, 0)`` (``big`` where not
+        finite); converged where fresh and ``r <= tol``; waiting for a float64 recomputation where
+        not fresh and ``r <= tol`` or below ``next_sync`` (lowered by four decades under ``r``);
+        the stall guard (``best``, ``at``, ``stall``), ``max_iter``; ``go`` for the others.
+        """
+        xp = self.xp
+        pen = xp.maximum(gbar - wmin, 0.0)
+        o = orth * inv_norm
+        r = xp.where(xp.isfinite(o) & xp.isfinite(pen), xp.maximum(xp.maximum(o, pen / scale), 0.0), big)
+        active = ~(done | waiting)
+        below = r <= tol
+        conv = active & below & fresh
+        sync_level = ~below & (r < next_sync)
+        want = active & ~fresh & (below | sync_level)
+        for _ in range(6):  # at most ~4 steps from 1e-5 to any tol >= 1e-16
+            next_sync[...] = xp.where(want & sync_level & (next_sync > r), next_sync * 1e-4, next_sync)
+        rest = active & ~conv & ~want
+        better = rest & (r < 0.5 * best)
+        best[...] = xp.where(better, r, best)
+        at[...] = xp.where(better, it, at)
+        stop = rest & (~xp.isfinite(r) | (it >= max_iter) | (it - at >= stall))
+        go[...] = rest & ~stop
+        converged |= conv
+        waiting |= want
+        done |= conv | stop
 
+    def join_fix(self, nnew, nold, gsum, go, done):
+        """After the join: cases whose ``F`` is empty stop; ``(c, nf)``: the gradient's shift (its mean
+        on ``F`` where nodes joined, else 0) and ``max(|F|, 1)``, float64."""
+        xp = self.xp
+        joined = go & (nnew > nold)
+        empty = go & (nnew == 0)
+        done |= empty
+        go &= ~empty
+        nf = xp.where(nnew > 0, nnew, 1).astype(np.float64)
+        return xp.where(joined, gsum / nf, 0.0), nf
 
-class _CupyKernels(_Kernels):
-    """Fused CUDA kernels for the passes of a round (CuPy only).
+    def beta(self, G, gpa, g_old, delta, gprev_ok, go, done):
+        """Polak-Ribiere's (or Fletcher-Reeves') ``beta`` and the restarts; ``(beta, restart)``.
 
-    Each fuses what the plain expressions do in two to six passes (and their temporaries) into
-    one pass over the fields; per-case numbers are ``(B, 1, 1)`` arrays broadcast onto them.
-    Built only when CuPy is importable; :meth:`self_check` compares each with :class:`_Kernels` on
-    a small random batch and falls back to the plain expression, with a warning, where they differ.
-    """
+        A breakdown (``G = g.z`` not positive and finite) stops the case.
+        """
+        xp = self.xp
+        ok = (G > 0.0) & xp.isfinite(G)
+        done |= go & ~ok
+        go &= ok
+        restart = ~((delta > 0.0) & (g_old > 0.0))
+        d = xp.where(g_old != 0.0, g_old, 1.0)
+        b = xp.where(gprev_ok, xp.maximum(0.0, (G - gpa) / d), G / d)
+        return xp.where(restart | ~go, 0.0, b), restart
 
-    #: the methods :meth:`self_check` compares
-    FUSED = ("masked_sum", "orth", "dot", "to32", "quadratic", "scaled_into", "add_scaled", "sub_masked",
-             "join_gap", "descent_dot", "new_direction", "proj_any", "pos_sum", "project", "shrink")
+    def direction_done(self, dd, restart, G, go, gprev_ok, g_old, delta):
+        """``keep``: the conjugate direction where it descends (``dd = g.t > 0``) or at a restart; the
+        CG's history updated where ``go``."""
+        xp = self.xp
+        keep = go & (restart | (dd > 0.0))
+        gprev_ok |= go
+        g_old[...] = xp.where(go, G, g_old)
+        delta[...] = xp.where(go, 1.0, delta)
+        return keep
 
-    def __init__(self, cp):
-        super().__init__(cp)
-        self.cp = cp
-        for attr, spec in REDUCTIONS.items():
-            setattr(self, attr, cp.ReductionKernel(*spec, name="rc_batch" + attr))
-        for attr, spec in ELEMENTWISE.items():
-            setattr(self, attr, cp.ElementwiseKernel(*spec, name="rc_batch" + attr))
-        self.fused = True
+    def step_length(self, quad, sigma, gt, nan, go, done):
+        """``tau = g.t / t.Kt`` (``t.Kt = quad sigma^2``) where it is positive and finite, else the case stops; 0
+        where not ``go``."""
+        xp = self.xp
+        rt = quad * sigma ** 2
+        tt = xp.where(rt > 0.0, gt / xp.where(rt > 0.0, rt, 1.0), nan)
+        ok = xp.isfinite(tt) & (tt > 0.0)
+        done |= go & ~ok
+        go &= ok
+        return xp.where(go, tt, 0.0)
 
-    def _reduce(self, kernel, *args):
-        return kernel(*args, axis=(1, 2), keepdims=True)
+    def projection_scale(self, pany, total, target, go, done, tau):
+        """``(proj, scale)``: projected cases and their rescale ``target / total`` (1 elsewhere); a projection
+        that leaves no load stops the case; ``tau`` 0 where not ``go`` (in place)."""
+        xp = self.xp
+        pj = go & pany
+        bad = pj & ~(total > 0.0)
+        done |= bad
+        go &= ~bad
+        proj = pj & ~bad
+        tau[...] = xp.where(go, tau, 0.0)
+        return proj, xp.where(proj, target / xp.where(total > 0.0, total, 1.0), 1.0)
 
-    def masked_sum(self, x, mask):
-        return self._reduce(self._msum, x, mask)
-
-    def orth(self, P, w, gbar, F):
-        return self._reduce(self._orth, P, w, gbar, F)
-
-    def dot(self, a, b):
-        return self._reduce(self._dot, a, b)
-
-    def to32(self, x, scale):
-        return self._to32(x, scale)
-
-    def quadratic(self, spec, weights):
-        return self._reduce(self._quad, spec.real, spec.imag, weights)
-
-    def scaled_into(self, R, factor, F):
-        return self._scaled(R, factor, F)
-
-    def add_scaled(self, w, R, factor):
-        self._add(R, factor, w)
-        return w
-
-    def sub_masked(self, x, c, F):
-        self._subm(c, F, x)
-        return x
-
-    def join_gap(self, w, gbar, F, go):
-        return self._join(w, gbar, F, go)
-
-    def descent_dot(self, g, t, beta, a):
-        return self._reduce(self._ddot, g, t, beta, a)
-
-    def new_direction(self, t, a, g, beta, keep, go, g_prev):
-        self._newdir(a, g, beta, keep, go, t, g_prev)
-
-    def proj_any(self, P, t, tau, F):
-        return self._reduce(self._pany, P, t, tau, F) > 0
-
-    def pos_sum(self, P, t, tau):
-        return self._reduce(self._psum, P, t, tau)
-
-    def project(self, P, t, tau, go, scale, inv_sigma):
-        d32 = self.cp.empty(P.shape, dtype=np.float32)
-        self._project(t, tau, go, scale, inv_sigma, P, d32)
-        return d32
-
-    def shrink(self, P, F, t, g_prev):
-        self._shrink(P, F, t, g_prev)
-
-    def self_check(self) -> None:
-        """Each fused kernel against :class:`_Kernels` on a random batch; the plain one where they differ."""
-        cp = self.cp
-        plain = _Kernels(cp)
-        rng = np.random.default_rng(0)
-        B, n = 3, 16
-
-        def field():
-            return cp.asarray(rng.standard_normal((B, n, n)))
-
-        a, b, c = field(), field(), field()
-        pos = cp.abs(field())
-        pos[0, :2, :3] = 0.0  # nodes at p = 0: the projection and the shrink must see them
-        f = cp.asarray(rng.random((B, n, n)) < 0.5)
-        s = cp.asarray(rng.random((B, 1, 1)) + 0.5)
-        go = cp.asarray(np.array([True, False, True]).reshape(B, 1, 1))
-        keep = cp.asarray(np.array([True, False, False]).reshape(B, 1, 1))
-        spec = cp.fft.rfft2(a.astype(np.float32), axes=(-2, -1))
-        wq = cp.asarray(rng.random((n, n // 2 + 1)).astype(np.float32))
-        r32 = a.astype(np.float32)
-        calls = {
-            "masked_sum": lambda k: k.masked_sum(a, f), "orth": lambda k: k.orth(pos, b, s, f),
-            "dot": lambda k: k.dot(a, b), "to32": lambda k: k.to32(a, s), "quadratic": lambda k: k.quadratic(spec, wq),
-            "scaled_into": lambda k: k.scaled_into(r32, s, f), "add_scaled": lambda k: k.add_scaled(a.copy(), r32, s),
-            "sub_masked": lambda k: k.sub_masked(a.copy(), s, f), "join_gap": lambda k: k.join_gap(a, s * 0.1, f, go),
-            "descent_dot": lambda k: k.descent_dot(a, b, s, c),
-            "new_direction": lambda k: _inplace(lambda t, gp: k.new_direction(t, a, c, s, keep, go, gp), b, c * 2),
-            "proj_any": lambda k: k.proj_any(pos, b, s * 0.1, f), "pos_sum": lambda k: k.pos_sum(pos, b, s * 0.1),
-            "project": lambda k: _inplace(lambda p: (k.project(p, b, s * 0.1, go, s, 1.0 / s),), pos),
-            "shrink": lambda k: _inplace(lambda p, ff, t, gp: k.shrink(p, ff, t, gp), pos - 0.5, f, a, b),
-        }
-        for name in self.FUSED:
-            try:
-                got, want = _as_tuple(calls[name](self)), _as_tuple(calls[name](plain))
-                ok = len(got) == len(want) and all(
-                    g.shape == wv.shape and g.dtype == wv.dtype
-                    and bool(cp.allclose(g.astype(np.float64), wv.astype(np.float64), rtol=1e-5, atol=1e-6))
-                    for g, wv in zip(got, want, strict=True))
-                why = "results differ"
-            except Exception as exc:  # noqa: BLE001
-                ok, why = False, f"{type(exc).__name__}: {exc}"
-            if not ok:
-                warnings.warn(f"batched solve: fused kernel {name!r} failed its check ({why}); using the plain "
-                              "expression", RuntimeWarning, stacklevel=2)
-                setattr(self, name, getattr(plain, name))
-                self.fused = False
-
-
-def _inplace(fn, *fields):
-    """Copies of ``fields``, ``fn``'s results on them, and the copies after ``fn`` (for in-place kernels)."""
-    copies = [x.copy() for x in fields]
-    out = fn(*copies)
-    return (*_as_tuple(out), *copies)
-
-
-def _as_tuple(x):
-    return () if x is None else (x if isinstance(x, tuple) else (x,))
+    def shrink_fix(self, nold, nnew, tsum, frac, proj, go, gprev_ok, fresh):
+        """After the shrink: Polak-Ribiere's history off after a large loss, ``fresh`` off where a step was
+        taken; returns the direction's shift (its mean on the reduced ``F`` where projected)."""
+        xp = self.xp
+        gprev_ok &= ~(proj & ((nold - nnew) >= frac * nold))
+        fresh &= ~go
+        return xp.where(proj, tsum / xp.where(nnew > 0, nnew, 1), 0.0)
 
 
 class BatchOperator:

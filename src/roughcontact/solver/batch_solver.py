@@ -7,8 +7,9 @@ import math
 import numpy as np
 
 from ..core.backend import get_backend
+from .batch_cuda import _cupy_kernels
 from .batch_iteration import BatchIteration
-from .batch_kernels import BatchOperator, _cupy_kernels, _Kernels
+from .batch_kernels import BatchOperator, _Kernels
 from .box import box_solve
 from .check import MEAN_RTOL
 from .elastic import pk_solve
