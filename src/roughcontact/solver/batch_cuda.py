@@ -9,6 +9,7 @@ which replaces any that fails, with a warning.
 
 from __future__ import annotations
 
+import functools
 import warnings
 
 import numpy as np
@@ -16,8 +17,13 @@ import numpy as np
 from .batch_kernels import _Kernels
 
 
+@functools.cache
 def _cupy_kernels(xp):
-    """:class:`_CupyKernels` for the real CuPy, each kernel checked once; plain kernels otherwise."""
+    """:class:`_CupyKernels` for the real CuPy, each kernel checked once; plain kernels otherwise.
+
+    Made once per array module and process: a solve's kernels are the last solve's (the self-check
+    runs ~50 launches, a cost that a warm batch of one case would otherwise pay each time).
+    """
     if not hasattr(xp, "ElementwiseKernel"):  # numpy, or the tests' stand-in
         return _Kernels(xp)
     try:
