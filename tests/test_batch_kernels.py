@@ -5,7 +5,7 @@ only CuPy compiles. Here a stand-in CuPy builds ``ElementwiseKernel`` and ``Redu
 CuPy does in spirit (the parameters declared per element, outputs by reference, the reduction's
 ``a``/``b`` accumulators, broadcasting of per-case inputs) around the very same code strings,
 compiles them with ``g++`` and calls them with ctypes. The tests then check (1) each fused kernel
-against its plain array expression through :class:`_CupyKernels`' own wrappers (argument order,
+against its plain array expression through :class:`CupyKernels`' own wrappers (argument order,
 outputs updated in place) and its self-check, which must keep every kernel, and (2) a whole
 batched solve with the fused kernels against the numpy backend's. What this cannot check is
 CuPy itself (its parsing of the parameters, its launch); benchmarks/gpu/run.sh does, on a GPU.
@@ -140,9 +140,9 @@ def compiled_cupy(monkeypatch, kernel_dir):
 def test_every_fused_kernel_passes_its_self_check(compiled_cupy):
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # a kernel replaced by its plain form warns
-        kernels = batch_cuda._cupy_kernels(compiled_cupy)
-    assert isinstance(kernels, batch_cuda._CupyKernels) and kernels.fused
-    assert set(kernels.FUSED) <= {m for m in dir(batch_kernels._Kernels) if not m.startswith("_")}
+        kernels = batch_cuda.fused_kernels(compiled_cupy)
+    assert isinstance(kernels, batch_cuda.CupyKernels) and kernels.fused
+    assert set(kernels.FUSED) <= {m for m in dir(batch_kernels.ArrayKernels) if not m.startswith("_")}
 
 
 def test_a_wrong_kernel_is_replaced_by_its_plain_form(compiled_cupy, monkeypatch):
@@ -150,7 +150,7 @@ def test_a_wrong_kernel_is_replaced_by_its_plain_form(compiled_cupy, monkeypatch
     monkeypatch.setitem(batch_cuda.REDUCTIONS, "_dot", ("float64 u, float64 v", "float64 y", "u + v",
                                                            "a + b", "y = a", "0"))
     with pytest.warns(RuntimeWarning, match="fused kernel 'dot' failed its check"):
-        kernels = batch_cuda._cupy_kernels(compiled_cupy)
+        kernels = batch_cuda.fused_kernels(compiled_cupy)
     assert not kernels.fused
     x = np.random.default_rng(1).random((2, 4, 4))
     np.testing.assert_allclose(kernels.dot(x, x), np.sum(x * x, axis=(1, 2), keepdims=True))

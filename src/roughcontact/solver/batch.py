@@ -34,7 +34,7 @@ single solve's code), and the following steps start on the batched iteration aga
 clusters and observers are refused with a ``ValueError``.
 
 On CuPy the hot element-wise passes and per-case reductions are fused into a few
-``ElementwiseKernel`` / ``ReductionKernel`` calls (:class:`.batch_cuda._CupyKernels`, made only when CuPy is
+``ElementwiseKernel`` / ``ReductionKernel`` calls (:class:`.batch_cuda.CupyKernels`, made only when CuPy is
 importable; each is checked once against the plain array expressions and replaced by them if it
 disagrees), cuFFT plans come from CuPy's plan cache (one shape, ``(B, nx, ny)``, for a whole solve),
 and compiled kernels are cached on disk (``CUPY_CACHE_DIR``, :func:`roughcontact.core.backend.get_backend`).

@@ -1,9 +1,9 @@
 """The fused CUDA kernels of the batched solve (:mod:`.batch`), made only when CuPy is importable.
 
-:class:`_CupyKernels` replaces each method of :class:`~.batch_kernels._Kernels` by one
+:class:`CupyKernels` replaces each method of :class:`~.batch_kernels.ArrayKernels` by one
 ``cupy.ElementwiseKernel`` or ``cupy.ReductionKernel`` (specs :data:`REDUCTIONS` and
 :data:`ELEMENTWISE`, module constants so that tests/test_batch_kernels.py can run the same C code
-on the host); :func:`_cupy_kernels` builds them and checks each once against the plain expression,
+on the host); :func:`fused_kernels` builds them and checks each once against the plain expression,
 which replaces any that fails, with a warning.
 """
 
@@ -14,29 +14,29 @@ import warnings
 
 import numpy as np
 
-from .batch_kernels import _Kernels
+from .batch_kernels import ArrayKernels
 
 
 @functools.cache
-def _cupy_kernels(xp):
-    """:class:`_CupyKernels` for the real CuPy, each kernel checked once; plain kernels otherwise.
+def fused_kernels(xp):
+    """:class:`CupyKernels` for the real CuPy, each kernel checked once; plain kernels otherwise.
 
     Made once per array module and process: a solve's kernels are the last solve's (the self-check
     runs ~50 launches, a cost that a warm batch of one case would otherwise pay each time).
     """
     if not hasattr(xp, "ElementwiseKernel"):  # numpy, or the tests' stand-in
-        return _Kernels(xp)
+        return ArrayKernels(xp)
     try:
-        kernels = _CupyKernels(xp)
+        kernels = CupyKernels(xp)
     except Exception as exc:  # noqa: BLE001 (any failure to build: run the plain expressions)
         warnings.warn(f"batched solve: fused CuPy kernels unavailable ({type(exc).__name__}: {exc}); "
                       "using plain array expressions", RuntimeWarning, stacklevel=2)
-        return _Kernels(xp)
+        return ArrayKernels(xp)
     kernels.self_check()
     return kernels
 
 
-#: The fused reductions of :class:`_CupyKernels`: attribute -> ``cupy.ReductionKernel``'s ``(in_params,
+#: The fused reductions of :class:`CupyKernels`: attribute -> ``cupy.ReductionKernel``'s ``(in_params,
 #: out_params, map_expr, reduce_expr, post_map_expr, identity)``; each reduces over axes (1, 2) of
 #: ``(B, nx, ny)`` inputs (per-case ``(B, 1, 1)`` inputs broadcast). No input is called ``a`` or
 #: ``b``: those name the accumulators of the reduction. Module constants, so that the tests can
@@ -55,7 +55,7 @@ REDUCTIONS = {
     "_psum": ("float64 p, float64 t, float64 tau", "float64 y", "fmax(p - tau * t, 0.0)", "a + b", "y = a", "0"),
 }
 
-#: The fused element-wise passes of :class:`_CupyKernels`: attribute -> ``cupy.ElementwiseKernel``'s
+#: The fused element-wise passes of :class:`CupyKernels`: attribute -> ``cupy.ElementwiseKernel``'s
 #: ``(in_params, out_params, operation)``; outputs that are read too are updated in place.
 ELEMENTWISE = {
     "_to32": ("float64 x, float64 s", "float32 y", "y = (float)(x * s)"),
@@ -112,12 +112,12 @@ ELEMENTWISE = {
 }
 
 
-class _CupyKernels(_Kernels):
+class CupyKernels(ArrayKernels):
     """Fused CUDA kernels for the passes of a round (CuPy only).
 
     Each fuses what the plain expressions do in two to six passes (and their temporaries) into
     one pass over the fields; per-case numbers are ``(B, 1, 1)`` arrays broadcast onto them.
-    Built only when CuPy is importable; :meth:`self_check` compares each with :class:`_Kernels` on
+    Built only when CuPy is importable; :meth:`self_check` compares each with :class:`ArrayKernels` on
     a small random batch and falls back to the plain expression, with a warning, where they differ.
     """
 
@@ -229,9 +229,9 @@ class _CupyKernels(_Kernels):
         return c
 
     def self_check(self) -> None:
-        """Each fused kernel against :class:`_Kernels` on random inputs; the plain one where they differ."""
+        """Each fused kernel against :class:`ArrayKernels` on random inputs; the plain one where they differ."""
         cp = self.cp
-        plain = _Kernels(cp)
+        plain = ArrayKernels(cp)
         calls = {**_field_checks(cp), **_scalar_checks(cp)}
         for name in self.FUSED:
             try:

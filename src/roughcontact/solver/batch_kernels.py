@@ -2,7 +2,7 @@
 
 :class:`BatchOperator` holds the periodic half-space's products on a ``(B, nx, ny)`` batch, batched
 ``rfft2`` / ``irfft2`` over the last two axes (:class:`_BatchFFT`: scipy.fft on the host, cuFFT
-through ``cupyx.scipy.fft`` with CuPy's plan cache on a GPU). :class:`_Kernels` are the element-wise
+through ``cupyx.scipy.fft`` with CuPy's plan cache on a GPU). :class:`ArrayKernels` are the element-wise
 passes and per-case reductions of a round as array expressions (any backend); the fused CUDA
 kernels that replace them on a GPU are in :mod:`.batch_cuda`.
 """
@@ -50,12 +50,12 @@ class _BatchFFT:
         return self.mod.irfft2(spec, s=self.shape, axes=(-2, -1), norm="forward", **self.ikw)
 
 
-class _Kernels:
+class ArrayKernels:
     """The element-wise passes and per-case reductions of a round, as plain array expressions.
 
     Every argument is an array of the backend: fields ``(B, nx, ny)``, per-case numbers
     ``(B, 1, 1)``. Results of reductions are ``(B, 1, 1)`` float64 (or int64 for counts).
-    :class:`.batch_cuda._CupyKernels` replaces them by fused CUDA kernels (one pass over the fields each) with
+    :class:`.batch_cuda.CupyKernels` replaces them by fused CUDA kernels (one pass over the fields each) with
     the same results up to the order of summation; the methods named "in place" must update their
     field arguments in place in both.
     """
@@ -266,7 +266,7 @@ class BatchOperator:
     height, ``(B, 1, 1)``) before the cast, as the single solve's products.
     """
 
-    def __init__(self, be, shape, aspect: float, threads: int, kernels: _Kernels):
+    def __init__(self, be, shape, aspect: float, threads: int, kernels: ArrayKernels):
         self.be, self.xp, self.k = be, be.xp, kernels
         nx, ny = self.shape = tuple(shape)
         self.fft = _BatchFFT(be, shape, threads)

@@ -7,9 +7,9 @@ import math
 import numpy as np
 
 from ..core.backend import get_backend
-from .batch_cuda import _cupy_kernels
+from .batch_cuda import fused_kernels
 from .batch_iteration import BatchIteration
-from .batch_kernels import BatchOperator, _Kernels
+from .batch_kernels import ArrayKernels, BatchOperator
 from .box import box_solve
 from .check import MEAN_RTOL
 from .elastic import pk_solve
@@ -59,7 +59,7 @@ class BatchSolver:
         rms = np.array([rms_about_mean(u.heights)[1] for u in self.units])
         self.h_rms = xp.asarray(rms.reshape(B, 1, 1))
         self.h_rms_host = rms
-        self.kernels = _cupy_kernels(xp) if self.be.name == "cupy" else _Kernels(xp)
+        self.kernels = fused_kernels(xp) if self.be.name == "cupy" else ArrayKernels(xp)
         self.op = BatchOperator(self.be, self.shape, cell_aspect(self.length), self.threads, self.kernels)
         self.h = self.be.asarray(hin)
         self.h_host = hin
