@@ -276,7 +276,7 @@ class BatchOperator:
             try:
                 cache = be.xp.fft.config.get_plan_cache()
                 cache.set_size(max(cache.get_size(), 64))
-            except AttributeError:  # the tests' stand-in
+            except Exception:  # noqa: BLE001 (the tests' stand-in has no plan cache; a failure here costs speed only)
                 pass
         kern = elastic_kernel(self.shape, 1.0, internal_length(aspect))
         minv = np.zeros_like(kern)
