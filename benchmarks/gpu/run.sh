@@ -81,7 +81,7 @@ part grid_k8 70 $PY benchmarks/bench_paper_grid.py --backend $BACKEND --n $N --s
 if [ "$SMOKE" = 1 ]; then
   part tests 120 $PY -m pytest -q -p no:cacheprovider -n 0 tests/test_batch.py
 else
-  ROUGHCONTACT_ARRAY_BACKEND=cupy part tests 60 $PY -m pytest -q -p no:cacheprovider tests/test_batch.py -x
+  part tests 60 env ROUGHCONTACT_ARRAY_BACKEND=cupy $PY -m pytest -q -p no:cacheprovider tests/test_batch.py -x
 fi
 # the rest of the time (less ~10 s for the summary); in the smoke run a few batches of a small grid
 if [ "$SMOKE" = 1 ]; then WHOLE_OPTS="--limit 48 --max-batches 4"; else WHOLE_OPTS=""; fi
