@@ -13,10 +13,10 @@
 #   grid     the paper grid's 60-case sample batched with B = 16, 64, 128 (bench_paper_grid.py --batch),
 #            the projection to the 1200 cases
 #   check    3 cases at N = 512, 30 steps, batched on the GPU against single numpy solves on the CPU
+#   whole    the whole 1200-case grid with B = 128 in the time that is left but ~80 s (batches in turns over
+#            k_s, so that a run cut short by its limit has seen every kind; each batch's row printed as it ends)
 #   grid_k8  the sample with B = 64 and a host check every 8th round (check_every 8; default 1), if time is left
 #   tests    tests/test_batch.py with ROUGHCONTACT_ARRAY_BACKEND=cupy (the real CuPy), if time is left
-#   whole    the whole 1200-case grid with B = 128 in the time that is left (batches in turns over k_s, so
-#            that a run cut short by its limit has seen every kind; each batch's row is printed as it ends)
 # Logs go to $OUT (8 files): cold1.log, cold2.log, grid.log, check.log, grid_k8.log, tests.log, whole.log
 # and summary.txt (the device, the SUMMARY lines and each part's status; printed last).
 # Wheels the machine lacks (pint and its needs, pyFFTW) travel in .whl/ (benchmarks/README.md).
@@ -75,19 +75,19 @@ part cold2 70 $PY benchmarks/gpu/single_case.py --backend $BACKEND --n $N --step
 part grid 200 $PY benchmarks/bench_paper_grid.py --backend $BACKEND --n $N --steps $STEPS $LIMIT --batch $BATCHES
 part check 80 $PY benchmarks/bench_paper_grid.py --backend $BACKEND --n $NCHECK --steps $STEPS --limit 3 \
   --batch 3 --compare 3 --compare-backend numpy --label check
+# the whole grid: what is left but ~80 s for the two parts after it; in the smoke run a few batches
+if [ "$SMOKE" = 1 ]; then WHOLE_OPTS="--limit 48 --max-batches 4"; else WHOLE_OPTS=""; fi
 # shellcheck disable=SC2086
-part grid_k8 70 $PY benchmarks/bench_paper_grid.py --backend $BACKEND --n $N --steps $STEPS $LIMIT --batch $B_K8 \
+part whole $((BUDGET - (SECONDS - START) - 80)) $PY benchmarks/bench_paper_grid.py --backend $BACKEND --n $N \
+  --steps $STEPS --whole --batch "${RC_WHOLE_BATCH:-128}" $WHOLE_OPTS --label whole
+# shellcheck disable=SC2086
+part grid_k8 60 $PY benchmarks/bench_paper_grid.py --backend $BACKEND --n $N --steps $STEPS $LIMIT --batch $B_K8 \
   --check-every 8 --label grid_k8
 if [ "$SMOKE" = 1 ]; then
   part tests 120 $PY -m pytest -q -p no:cacheprovider -n 0 tests/test_batch.py
 else
   part tests 60 env ROUGHCONTACT_ARRAY_BACKEND=cupy $PY -m pytest -q -p no:cacheprovider tests/test_batch.py -x
 fi
-# the rest of the time (less ~10 s for the summary); in the smoke run a few batches of a small grid
-if [ "$SMOKE" = 1 ]; then WHOLE_OPTS="--limit 48 --max-batches 4"; else WHOLE_OPTS=""; fi
-# shellcheck disable=SC2086
-part whole $((BUDGET - (SECONDS - START) - 10)) $PY benchmarks/bench_paper_grid.py --backend $BACKEND --n $N \
-  --steps $STEPS --whole --batch "${RC_WHOLE_BATCH:-128}" $WHOLE_OPTS --label whole
 
 {
   echo "# issue 48 GPU run: summary ($(date -u '+%H:%M:%S UTC'), $((SECONDS - START)) s in all)"
