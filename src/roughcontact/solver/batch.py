@@ -47,7 +47,7 @@ import time
 import numpy as np
 import xarray as xr
 
-from .batch_solver import BATCH_METHOD, CHECK_EVERY, BatchSolver
+from .batch_solver import BATCH_METHOD, CHECK_EVERY, BatchSolver, per_case
 from .results import SOLVER_NAME, cell_attrs, solver_description, to_dataset
 from .settings import SolverSettings
 from .validation import validate_heights, validate_pressures
@@ -66,7 +66,8 @@ def validate_batch(heights) -> np.ndarray:
     a = np.asarray(heights)
     if a.ndim != 3 or a.shape[0] < 1:
         raise ValueError(f"heights of a batch must have shape (B, nx, ny) with B >= 1, got {a.shape}")
-    return np.stack([validate_heights(a[b], name=f"heights[{b}]", square=False) for b in range(a.shape[0])])
+    cases = per_case(lambda b: validate_heights(a[b], name=f"heights[{b}]", square=False), a.shape[0], a[0].size)
+    return np.stack(cases)
 
 
 def solve_contact_batch(heights, pressures, settings: SolverSettings | None = None, *, check_every: int | None = None,
