@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import functools
 import importlib
+import os
 
 import numpy as np
 
@@ -356,6 +357,13 @@ class CupyBackend(ArrayBackend):
         return _ArrayModuleProduct(prod, self.xp)
 
 
+def default_cupy_cache() -> str:
+    """Where CuPy caches compiled kernels unless ``CUPY_CACHE_DIR`` says otherwise:
+    ``$XDG_CACHE_HOME/roughcontact/cupy`` (``~/.cache/roughcontact/cupy``)."""
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return os.path.join(base, "roughcontact", "cupy")
+
+
 @functools.cache
 def get_backend(name: str = "numpy") -> ArrayBackend:
     """The backend called ``name`` (one of :data:`ARRAY_BACKENDS`).
@@ -366,6 +374,9 @@ def get_backend(name: str = "numpy") -> ArrayBackend:
         return ArrayBackend()
     if name != "cupy":
         raise ValueError(f"array_backend must be one of {ARRAY_BACKENDS}, got {name!r}")
+    # compiled kernels on disk, so that a fresh process loads them instead of compiling (CuPy reads
+    # the variable when it compiles); a path the caller set is kept
+    os.environ.setdefault("CUPY_CACHE_DIR", default_cupy_cache())
     try:
         cp = importlib.import_module("cupy")
         cp.cuda.runtime.getDeviceCount()

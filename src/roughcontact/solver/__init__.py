@@ -252,7 +252,10 @@ cap; adhesion, whose interaction energy makes :func:`solve_contact` use the gap 
 docs/solver.md), :mod:`.check` the final check, :mod:`.results` the assembly of the output,
 :mod:`.units` and :mod:`.validation` the checks of the input, :mod:`.settings` what a solve
 is asked to do (:class:`SolverSettings`), :mod:`.contact` one surface's solver (warm starts,
-the step), :mod:`.solve` the entry points and the step loop;
+the step), :mod:`.solve` the entry points and the step loop; :mod:`.batch` many surfaces of one
+grid in one solve (:func:`solve_contact_batch`, or :func:`solve_contact` with heights of shape
+``(B, nx, ny)``: the default elastic iteration on a leading case axis, every case converging on its
+own; issue 48);
 :mod:`.stanley_kato` a reference iteration of the paper's kind (Stanley & Kato's displacement
 relaxation), used by the κ-gap study only.
 
@@ -262,6 +265,7 @@ solves of the same size must not run concurrently in threads of one process
 """
 
 from ..core.backend import ARRAY_BACKENDS
+from .batch import solve_contact_batch
 from .check import MEAN_RTOL
 from .contact import ContactSolver
 from .effects import EFFECTS, Adhesion, Effect, PlasticityCap, effects_from_config
@@ -320,6 +324,7 @@ __all__ = [
     "free_influence",
     "gap_scale",
     "solve_contact",
+    "solve_contact_batch",
     "solve_step",
     "step_notes",
 ]

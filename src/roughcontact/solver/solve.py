@@ -95,7 +95,7 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
 
     Parameters
     ----------
-    heights : array_like, shape (n, n) or (nx, ny)
+    heights : array_like, shape (n, n) or (nx, ny); (B, nx, ny): a batch (:func:`~.batch.solve_contact_batch`)
         Rigid surface heights [length] on the cell (periodic, or the whole patch for
         ``boundary="free"``), axis 0 = x; the highest points touch first. Any ``nx, ny >= 4``;
         ``nx != ny`` needs ``length=(Lx, Ly)``.
@@ -131,24 +131,40 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
         hardness: ``plastic_area_fraction``, ``plastic_load_fraction``); fields and ``x``/``y`` coordinates only
         when stored. Every variable carries CF ``units`` and ``long_name``; the global attributes record the
         settings, the cell (:func:`~.results.cell_attrs`: ``length`` and ``n`` for a square cell, ``length_x``,
-        ``length_y`` otherwise, ``nx`` and ``ny`` always), ``boundary`` and
-        ``elastic_method``. ``converged`` is True only when the final check of the package
-        docstring passed on a freshly recomputed displacement.
+        ``length_y`` otherwise, ``nx`` and ``ny`` always), ``boundary`` and ``elastic_method``. ``converged``
+        is True only when the final check of the package docstring passed on a freshly recomputed displacement.
 
     Raises
     ------
     ValueError
         For invalid input, naming the argument and its allowed range.
     """
+    if np.ndim(heights) == 3:  # B surfaces of one grid
+        return _batch(heights, pressures, settings, store_fields, clusters, progress, observers, options)
     p = validate_pressures(pressures)
     store = validate_store(store_fields, p.size)
     clusters = validate_flag("clusters", clusters)
-    if progress is not None and not callable(progress):
-        raise ValueError(f"progress must be a callable or None, got {type(progress).__name__} {progress!r}")
+    _check_progress(progress)
     solver = prepare(heights, p, "pressures", settings, options)
     observers = _check_observers(observers)
     cols, iters, conv, paths, fields, masks = _run_steps(solver, p, store, clusters, progress, observers)
     return _observed(_dataset(solver, p, cols, iters, conv, paths, fields, masks, store_fields), observers)
+
+
+def _check_progress(progress) -> None:
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be a callable or None, got {type(progress).__name__} {progress!r}")
+
+
+def _batch(heights, pressures, settings, store_fields, clusters, progress, observers, options) -> xr.Dataset:
+    """:func:`solve_contact` of a ``(B, nx, ny)`` batch: :func:`~.batch.solve_contact_batch`, refusing what
+    it does not produce."""
+    from .batch import solve_contact_batch
+
+    if not (store_fields is False or store_fields is None) or clusters or tuple(observers or ()):
+        raise ValueError("a batch of surfaces (heights of shape (B, nx, ny)) stores no fields, clusters or "
+                         "observers; solve each case with 2-D heights for those")
+    return solve_contact_batch(heights, pressures, settings, progress=progress, **options)
 
 
 def _observed(ds: xr.Dataset, observers) -> xr.Dataset:

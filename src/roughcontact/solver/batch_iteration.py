@@ -1,0 +1,178 @@
+"""The batched elastic iteration of one load step (:mod:`.batch`): :class:`BatchIteration`."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .elastic import FR_AFTER_LOSS
+from .workspace import STALL_WINDOW
+
+
+class BatchIteration:
+    """:class:`~.elastic.PKIteration` (``pk-fourier-f32``) on ``B`` cases at once, with masks.
+
+    State per case (fields ``(B, nx, ny)``, numbers ``(B, 1, 1)``): ``P`` (the solver's, zero off
+    ``F``) and ``w = K P - h`` (the solver's, updated in place), ``F`` the free set, ``t`` the
+    direction and ``g_prev`` the last direction's gradient (zero off ``F``), ``g_old``, ``delta``,
+    whether ``g_prev`` is valid, the iteration count, the stall guard's best residual and its
+    iteration, ``next_sync``, and the round's flags: ``done`` (converged or stopped), ``waiting``
+    (for a float64 recomputation at the next check), ``fresh`` (``w`` recomputed since the last
+    step). ``fresh0`` per case is the single solve's ``fresh`` argument as an int: 1 True, 0 False
+    (recomputed first), -1 None.
+    """
+
+    def __init__(self, solver, p_int, fresh0, max_iter):
+        self.s, xp = solver, solver.xp
+        self.xp, self.k, self.op = xp, solver.kernels, solver.op
+        B = solver.batch
+        self.tol = solver.tol
+        self.p_int = p_int  # (B, 1, 1) float64 on the device
+        self.target = p_int * solver.size
+        self.scale = solver.h_rms  # (B, 1, 1)
+        self.inv_norm = 1.0 / (self.target * self.scale)
+        self.sigma, self.inv_sigma = solver.h_rms, 1.0 / solver.h_rms
+        self.max_iter = max_iter  # (B,) host ints
+        must = np.flatnonzero(fresh0 == 0)
+        if must.size:
+            solver.refresh(must)
+        self.fresh = xp.asarray((fresh0 >= 0).reshape(B, 1, 1))  # refreshed ones are fresh now
+        self.F = solver.P > 0.0
+        self.nF = self.k.rcount(self.F)
+        self.t = xp.zeros_like(solver.P)
+        self.g_prev = xp.zeros_like(solver.P)
+        self.gprev_ok = xp.zeros((B, 1, 1), dtype=bool)
+        self.delta = xp.zeros((B, 1, 1))
+        self.g_old = xp.ones((B, 1, 1))
+        self.it = xp.zeros((B, 1, 1), dtype=np.int64)
+        self.best = xp.full((B, 1, 1), math.inf)
+        self.at = xp.zeros((B, 1, 1), dtype=np.int64)
+        self.next_sync = xp.full((B, 1, 1), 1e-5)
+        self.done = xp.zeros((B, 1, 1), dtype=bool)
+        self.converged = xp.zeros((B, 1, 1), dtype=bool)
+        self.waiting = xp.zeros((B, 1, 1), dtype=bool)
+        self.go = xp.zeros((B, 1, 1), dtype=bool)  # the cases that move in this round (measure)
+        self.max_iter_d = xp.asarray(np.asarray(max_iter, dtype=np.int64).reshape(B, 1, 1))
+        self.rounds = 0
+
+    def run(self, check_every: int) -> tuple[np.ndarray, np.ndarray]:
+        """Iterate every case to convergence or a stop; ``(iterations, converged)`` per case (host).
+
+        A round measures every case, then moves those that iterate. Every ``check_every``-th round
+        the host reads the per-case flags between the two (the only host synchronisation of the
+        loop: a few bytes per case), recomputes ``w`` in float64 for the cases waiting for it and
+        lets them measure again, as the single solve's loop does after its recomputations, so that
+        they move in that same round. With ``check_every = 1`` no case ever waits; with more, a case
+        that asks for a recomputation idles until the next check.
+        """
+        s = self.s
+        while True:
+            for j in range(check_every):
+                self.measure()
+                if j == check_every - 1 and self.check():
+                    break
+                self.act()
+                self.rounds += 1
+            else:
+                continue
+            break
+        self.finish()
+        return (s.be.to_host(self.it).reshape(-1).astype(np.int64),
+                s.be.to_host(self.converged).reshape(-1).astype(bool))
+
+    def _flags(self):
+        s = self.s
+        flags = s.be.to_host(self.xp.concatenate([self.done.reshape(-1), self.waiting.reshape(-1)]))
+        return flags[: s.batch], flags[s.batch:]
+
+    def check(self) -> bool:
+        """The host's check after a measure: recomputations for the waiting cases; True when all are done."""
+        done, waiting = self._flags()
+        sync = np.flatnonzero(waiting)
+        if sync.size:
+            self.resync(sync)
+            idx = self.s.xp.asarray(sync)
+            self.fresh[idx] = True
+            self.waiting[idx] = False
+            self.measure()  # the others' decisions stand (measuring an unchanged case again changes nothing)
+            done, _ = self._flags()
+        return bool(done.all())
+
+    def resync(self, cases: np.ndarray) -> None:
+        """Pressure brought to the exact mean and ``w`` recomputed in float64 for ``cases`` (host ints)."""
+        s = self.s
+        idx = s.xp.asarray(cases)
+        P = s.P[idx]
+        tot = self.k.rsum(P)
+        tgt = self.target[idx]
+        P *= self.xp.where(tot > 0, tgt / self.xp.where(tot > 0, tot, 1.0), 1.0)
+        s.P[idx] = P
+        s.refresh(cases)
+
+    def finish(self) -> None:
+        """``w`` fresh for every case (the final check needs it)."""
+        stale = np.flatnonzero(~self.s.be.to_host(self.fresh).reshape(-1))
+        if stale.size:
+            self.resync(stale)
+            self.fresh[self.s.xp.asarray(stale)] = True
+
+    def measure(self) -> None:
+        """The first half of :meth:`~.elastic.PKIteration.run`'s loop for every case: residual and decisions.
+
+        Converged, waiting and stopped cases are flagged; ``self.go`` says which iterate in
+        :meth:`act`. Measuring again a case whose state has not changed decides the same (the stall
+        guard's and ``next_sync``'s updates are idempotent).
+        """
+        k, s = self.k, self.s
+        # gap on F (zero mean there: gbar is -d), sign violations off F (min of w), complementarity
+        self.gbar = gbar = k.gbar(k.masked_sum(s.w, self.F), self.nF)
+        k.decide(k.orth(s.P, s.w, gbar, self.F), k.rmin(s.w), gbar, self.inv_norm, self.scale, self.tol,
+                 STALL_WINDOW, math.inf, self.it, self.max_iter_d, self.fresh, self.next_sync, self.best, self.at,
+                 self.done, self.waiting, self.converged, self.go)
+
+    def act(self) -> None:
+        """The second half of the loop for the cases that iterate: join, direction, step."""
+        k, s = self.k, self.s
+        go = self.go
+        self.it += go
+        # join: violating nodes (w < gbar off F) enter F; their p, t and g_prev are 0 there already
+        F, g = k.join_gap(s.w, self.gbar, self.F, go)
+        nF_new = k.rcount(F)
+        c, nf = k.join_fix(nF_new, self.nF, k.rsum(g), go, self.done)  # go, done in place
+        self.F, self.nF = F, nF_new
+        k.sub_masked(g, c, F)  # re-centred on the enlarged F where nodes joined (shifts d only)
+        self._direction(g, go, nf)
+        self._step(g, go)
+
+    def _direction(self, g, go, nf) -> None:
+        """``t = z + beta t`` (``t = z`` at a restart or where that is no descent); a breakdown stops the case."""
+        k, op = self.k, self.op
+        R = op.inverse32(op.spectrum32(g, self.inv_sigma), op.mmult32)  # M g / sigma
+        a = k.scaled_into(R, self.sigma, self.F)
+        k.sub_masked(a, k.rsum(a) / nf, self.F)  # zero mean on F
+        G = k.dot(g, a)
+        beta, restart = k.beta(G, k.dot(self.g_prev, a), self.g_old, self.delta, self.gprev_ok, go, self.done)
+        keep = k.direction_done(k.descent_dot(g, self.t, beta, a), restart, G, go, self.gprev_ok, self.g_old,
+                                self.delta)
+        k.new_direction(self.t, a, g, beta, keep, go, self.g_prev)
+
+    def _step(self, g, go) -> None:
+        """Exact line search along ``-t``, the projection onto ``p >= 0``, ``w`` moved by ``K`` of the change."""
+        k, op, s = self.k, self.op, self.s
+        t, F = self.t, self.F
+        spec = op.spectrum32(t, self.inv_sigma)
+        tau = k.step_length(op.quadratic32(spec), self.sigma, k.dot(g, t), math.nan, go, self.done)
+        total = k.pos_sum(s.P, t, tau)
+        proj, pscale = k.projection_scale(k.proj_any(s.P, t, tau, F), total, self.target, go, self.done, tau)
+        d32 = k.project(s.P, t, tau, go, pscale, self.inv_sigma)
+        # w <- w + K (p_new - p): one forward and one inverse float32 transform (every case)
+        R = op.inverse32(op.fft.rfft2(d32), op.kmult32)
+        k.add_scaled(s.w, R, self.sigma)
+        nF_old = self.nF
+        k.shrink(s.P, F, t, self.g_prev)  # a projected case's F loses the nodes at p = 0
+        self.nF = k.rcount(F)
+        # Polak-Ribiere's history off after a projection that took a large part of F away; zero mean
+        # of t on the reduced F
+        c = k.shrink_fix(nF_old, self.nF, k.rsum(t), FR_AFTER_LOSS, proj, go, self.gprev_ok, self.fresh)
+        k.sub_masked(t, c, F)

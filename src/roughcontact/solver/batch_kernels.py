@@ -1,0 +1,311 @@
+"""Transforms and kernels of the batched solve (:mod:`.batch`): plain array expressions and fused CUDA ones.
+
+:class:`BatchOperator` holds the periodic half-space's products on a ``(B, nx, ny)`` batch, batched
+``rfft2`` / ``irfft2`` over the last two axes (:class:`_BatchFFT`: scipy.fft on the host, cuFFT
+through ``cupyx.scipy.fft`` with CuPy's plan cache on a GPU). :class:`ArrayKernels` are the element-wise
+passes and per-case reductions of a round as array expressions (any backend); the fused CUDA
+kernels that replace them on a GPU are in :mod:`.batch_cuda`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .halfspace import elastic_kernel
+from .units import internal_length
+
+
+class _BatchFFT:
+    """Real 2-D transforms over the last two axes of a ``(B, nx, ny)`` batch.
+
+    numpy backend: :mod:`scipy.fft` (``workers`` threads); CuPy: :mod:`cupyx.scipy.fft` (cuFFT,
+    plans from CuPy's plan cache: the batch keeps one shape, so one plan per precision and
+    direction serves the whole solve); a stand-in CuPy without ``cupyx`` (tests): the array
+    module's ``fft``. The inverse is unnormalised (``norm="forward"``): the ``1 / (nx ny)`` sits in
+    the multipliers.
+    """
+
+    def __init__(self, be, shape, threads: int = 1):
+        self.shape = tuple(shape)
+        self.kw, self.ikw = {}, {}
+        mod = be.xp.fft  # no SciPy; the tests' stand-in CuPy (numpy's fft under CuPy's name)
+        try:
+            if be.name == "numpy":
+                import scipy.fft as mod
+
+                self.kw = {"workers": threads}
+            elif hasattr(be.xp, "ElementwiseKernel"):  # the real CuPy
+                import cupyx.scipy.fft as mod
+            # the spectrum is not needed after the inverse: cuFFT's c2r may destroy it, no copy first
+            if mod is not be.xp.fft:
+                self.ikw = {**self.kw, "overwrite_x": True}
+        except ImportError:
+            mod = be.xp.fft
+        self.mod = mod
+
+    def rfft2(self, x):
+        return self.mod.rfft2(x, axes=(-2, -1), **self.kw)
+
+    def irfft2(self, spec):
+        return self.mod.irfft2(spec, s=self.shape, axes=(-2, -1), norm="forward", **self.ikw)
+
+
+class ArrayKernels:
+    """The element-wise passes and per-case reductions of a round, as plain array expressions.
+
+    Every argument is an array of the backend: fields ``(B, nx, ny)``, per-case numbers
+    ``(B, 1, 1)``. Results of reductions are ``(B, 1, 1)`` float64 (or int64 for counts).
+    :class:`.batch_cuda.CupyKernels` replaces them by fused CUDA kernels (one pass over the fields each) with
+    the same results up to the order of summation; the methods named "in place" must update their
+    field arguments in place in both.
+    """
+
+    def __init__(self, xp):
+        self.xp = xp
+
+    def rsum(self, x):
+        return self.xp.sum(x, axis=(-2, -1), keepdims=True, dtype=np.float64)
+
+    def rcount(self, m):
+        return self.xp.sum(m, axis=(-2, -1), keepdims=True, dtype=np.int64)
+
+    def rmin(self, x):
+        return self.xp.min(x, axis=(-2, -1), keepdims=True)
+
+    def masked_sum(self, x, mask):
+        """``sum(x where mask)`` per case."""
+        return self.rsum(x * mask)
+
+    def orth(self, P, w, gbar, F):
+        """``sum_F p |w - gbar|`` per case (complementarity, unnormalised)."""
+        return self.rsum(P * self.xp.abs(w - gbar) * F)
+
+    def dot(self, a, b):
+        return self.rsum(a * b)
+
+    def to32(self, x, scale):
+        """``float32(x * scale)``: the product in float64, rounded once (as ``SpectralProduct.load``)."""
+        return (x * scale).astype(np.float32)
+
+    def quadratic(self, spec, weights):
+        """``sum(weights |spec|^2)`` per case over the half spectrum (float32 terms, float64 sum)."""
+        re, im = spec.real, spec.imag
+        return self.rsum(weights * (re * re + im * im))
+
+    def scaled_into(self, R, factor, F):
+        """``R * factor`` on ``F``, 0 off it, float64 (``R`` a float32 product)."""
+        return R * factor * F
+
+    def add_scaled(self, w, R, factor):
+        """``w += R * factor`` in place (``R`` float32, ``w`` float64)."""
+        w += R * factor
+        return w
+
+    def sub_masked(self, x, c, F):
+        """``x -= c`` on ``F`` in place (``c`` per case)."""
+        x -= c * F
+        return x
+
+    def join_gap(self, w, gbar, F, go):
+        """The free set after the join (``F | w < gbar`` where ``go``) and the gap ``w - gbar`` on it, 0 off it."""
+        Fn = self.xp.where(go, F | (w < gbar), F)
+        return Fn, (w - gbar) * Fn
+
+    def descent_dot(self, g, t, beta, a):
+        """``g . (beta t + a)`` per case."""
+        return self.rsum(g * (t * beta + a))
+
+    def new_direction(self, t, a, g, beta, keep, go, g_prev):
+        """In place: ``t = beta t + a`` where ``keep``, else ``a`` where ``go``; ``g_prev = g`` where ``go``."""
+        xp = self.xp
+        t[...] = xp.where(keep, t * beta + a, xp.where(go, a, t))
+        g_prev[...] = xp.where(go, g, g_prev)
+
+    def proj_any(self, P, t, tau, F):
+        """Whether ``p - tau t <= 0`` at a node of ``F``, per case."""
+        return self.xp.any(F & (P - tau * t <= 0.0), axis=(-2, -1), keepdims=True)
+
+    def pos_sum(self, P, t, tau):
+        """``sum(max(p - tau t, 0))`` per case."""
+        return self.rsum(self.xp.maximum(P - tau * t, 0.0))
+
+    def project(self, P, t, tau, go, scale, inv_sigma):
+        """The step where ``go``: ``P`` (in place) becomes ``scale max(p - tau t, 0)``; returns the change, float32.
+
+        ``scale`` is ``target / sum(max(trial, 0))`` for projected cases and 1 for the others. The
+        change is ``max(-trial, 0) + (scale - 1) max(trial, 0) - tau t`` (the single solve's
+        ``x - tau t`` of :meth:`~.elastic.PKIteration._project_single`; ``-tau t`` unprojected), 0
+        where not ``go``, times ``inv_sigma`` and rounded to float32 for the transform.
+        """
+        xp = self.xp
+        trial = P - tau * t
+        tp = xp.maximum(trial, 0.0)
+        change = (tp - trial) + (scale - 1.0) * tp - tau * t
+        change *= go
+        P[...] = xp.where(go, tp * scale, P)
+        return (change * inv_sigma).astype(np.float32)
+
+    def shrink(self, P, F, t, g_prev):
+        """In place: nodes of ``F`` whose pressure is 0 leave it; ``t`` and ``g_prev`` are 0 off ``F``."""
+        keep = P > 0.0
+        F &= keep
+        t *= keep
+        g_prev *= keep
+
+
+    # -- per-case decisions: (B, 1, 1) arrays; the state arguments are updated in place --------
+
+    def gbar(self, s, n):
+        """``s / n`` where ``n > 0``, else 0 (the gap's mean over ``F``)."""
+        xp = self.xp
+        return xp.where(n > 0, s / xp.where(n > 0, n, 1), 0.0)
+
+    def decide(self, orth, wmin, gbar, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
+               next_sync, best, at, done, waiting, converged, go):
+        """The measure's decisions (:meth:`.batch_iteration.BatchIteration.measure`), in place.
+
+        Residual ``r = max(orth inv_norm, max(gbar - wmin, 0) / scale, 0)`` (``big`` where not
+        finite); converged where fresh and ``r <= tol``; waiting for a float64 recomputation where
+        not fresh and ``r <= tol`` or below ``next_sync`` (lowered by four decades under ``r``);
+        the stall guard (``best``, ``at``, ``stall``), ``max_iter``; ``go`` for the others.
+        """
+        xp = self.xp
+        pen = xp.maximum(gbar - wmin, 0.0)
+        o = orth * inv_norm
+        r = xp.where(xp.isfinite(o) & xp.isfinite(pen), xp.maximum(xp.maximum(o, pen / scale), 0.0), big)
+        active = ~(done | waiting)
+        below = r <= tol
+        conv = active & below & fresh
+        sync_level = ~below & (r < next_sync)
+        want = active & ~fresh & (below | sync_level)
+        for _ in range(6):  # at most ~4 steps from 1e-5 to any tol >= 1e-16
+            next_sync[...] = xp.where(want & sync_level & (next_sync > r), next_sync * 1e-4, next_sync)
+        rest = active & ~conv & ~want
+        better = rest & (r < 0.5 * best)
+        best[...] = xp.where(better, r, best)
+        at[...] = xp.where(better, it, at)
+        stop = rest & (~xp.isfinite(r) | (it >= max_iter) | (it - at >= stall))
+        go[...] = rest & ~stop
+        converged |= conv
+        waiting |= want
+        done |= conv | stop
+
+    def join_fix(self, nnew, nold, gsum, go, done):
+        """After the join: cases whose ``F`` is empty stop; ``(c, nf)``: the gradient's shift (its mean
+        on ``F`` where nodes joined, else 0) and ``max(|F|, 1)``, float64."""
+        xp = self.xp
+        joined = go & (nnew > nold)
+        empty = go & (nnew == 0)
+        done |= empty
+        go &= ~empty
+        nf = xp.where(nnew > 0, nnew, 1).astype(np.float64)
+        return xp.where(joined, gsum / nf, 0.0), nf
+
+    def beta(self, G, gpa, g_old, delta, gprev_ok, go, done):
+        """Polak-Ribiere's (or Fletcher-Reeves') ``beta`` and the restarts; ``(beta, restart)``.
+
+        A breakdown (``G = g.z`` not positive and finite) stops the case.
+        """
+        xp = self.xp
+        ok = (G > 0.0) & xp.isfinite(G)
+        done |= go & ~ok
+        go &= ok
+        restart = ~((delta > 0.0) & (g_old > 0.0))
+        d = xp.where(g_old != 0.0, g_old, 1.0)
+        b = xp.where(gprev_ok, xp.maximum(0.0, (G - gpa) / d), G / d)
+        return xp.where(restart | ~go, 0.0, b), restart
+
+    def direction_done(self, dd, restart, G, go, gprev_ok, g_old, delta):
+        """``keep``: the conjugate direction where it descends (``dd = g.t > 0``) or at a restart; the
+        CG's history updated where ``go``."""
+        xp = self.xp
+        keep = go & (restart | (dd > 0.0))
+        gprev_ok |= go
+        g_old[...] = xp.where(go, G, g_old)
+        delta[...] = xp.where(go, 1.0, delta)
+        return keep
+
+    def step_length(self, quad, sigma, gt, nan, go, done):
+        """``tau = g.t / t.Kt`` (``t.Kt = quad sigma^2``) where it is positive and finite, else the case stops; 0
+        where not ``go``."""
+        xp = self.xp
+        rt = quad * sigma ** 2
+        tt = xp.where(rt > 0.0, gt / xp.where(rt > 0.0, rt, 1.0), nan)
+        ok = xp.isfinite(tt) & (tt > 0.0)
+        done |= go & ~ok
+        go &= ok
+        return xp.where(go, tt, 0.0)
+
+    def projection_scale(self, pany, total, target, go, done, tau):
+        """``(proj, scale)``: projected cases and their rescale ``target / total`` (1 elsewhere); a projection
+        that leaves no load stops the case; ``tau`` 0 where not ``go`` (in place)."""
+        xp = self.xp
+        pj = go & pany
+        bad = pj & ~(total > 0.0)
+        done |= bad
+        go &= ~bad
+        proj = pj & ~bad
+        tau[...] = xp.where(go, tau, 0.0)
+        return proj, xp.where(proj, target / xp.where(total > 0.0, total, 1.0), 1.0)
+
+    def shrink_fix(self, nold, nnew, tsum, frac, proj, go, gprev_ok, fresh):
+        """After the shrink: Polak-Ribiere's history off after a large loss, ``fresh`` off where a step was
+        taken; returns the direction's shift (its mean on the reduced ``F`` where projected)."""
+        xp = self.xp
+        gprev_ok &= ~(proj & ((nold - nnew) >= frac * nold))
+        fresh &= ~go
+        return xp.where(proj, tsum / xp.where(nnew > 0, nnew, 1), 0.0)
+
+
+class BatchOperator:
+    """The periodic half-space's products on a ``(B, nx, ny)`` batch, internal units (``E* = Lx = 1``).
+
+    ``K`` (float64 and float32) and the preconditioner ``M = |q| E* / 2`` (float32), multipliers of
+    shape ``(nx, ny // 2 + 1)`` carrying the inverse transform's ``1 / (nx ny)``, and Parseval's
+    weights for ``x . K x``. float32 inputs are divided by each case's ``sigma`` (its internal rms
+    height, ``(B, 1, 1)``) before the cast, as the single solve's products.
+    """
+
+    def __init__(self, be, shape, aspect: float, threads: int, kernels: ArrayKernels):
+        self.be, self.xp, self.k = be, be.xp, kernels
+        nx, ny = self.shape = tuple(shape)
+        self.fft = _BatchFFT(be, shape, threads)
+        if be.name == "cupy":
+            # one plan per shape, precision and direction: the batch's and the float64 refreshes'
+            # power-of-two subsets (<= 2 log2(B) + 6 plans) stay in CuPy's plan cache (default 16)
+            try:
+                cache = be.xp.fft.config.get_plan_cache()
+                cache.set_size(max(cache.get_size(), 64))
+            except Exception:  # noqa: BLE001 (the tests' stand-in has no plan cache; a failure here costs speed only)
+                pass
+        kern = elastic_kernel(self.shape, 1.0, internal_length(aspect))
+        minv = np.zeros_like(kern)
+        np.divide(1.0, kern, out=minv, where=kern > 0)
+        norm = 1.0 / (nx * ny)
+        herm = np.full(ny // 2 + 1, 2.0)  # columns standing for their Hermitian mirror count twice
+        herm[0] = 1.0
+        if ny % 2 == 0:
+            herm[-1] = 1.0
+        self.kmult64 = be.asarray(kern * norm)
+        self.kmult32 = be.asarray((kern * norm).astype(np.float32))
+        self.mmult32 = be.asarray((minv * norm).astype(np.float32))
+        self.kquad32 = be.asarray((kern * herm[None, :] * norm).astype(np.float32))
+
+    def spectrum32(self, x, inv_sigma):
+        """float32 spectrum of ``x * inv_sigma`` (one batched forward transform)."""
+        return self.fft.rfft2(self.k.to32(x, inv_sigma))
+
+    def quadratic32(self, spec):
+        """``x . (K x) / sigma^2`` per case from :meth:`spectrum32`'s spectrum, ``(B, 1, 1)`` float64."""
+        return self.k.quadratic(spec, self.kquad32)
+
+    def inverse32(self, spec, mult):
+        """``F^-1[mult spec]``: float32 ``(B, nx, ny)`` (the spectrum is overwritten)."""
+        spec *= mult
+        return self.fft.irfft2(spec)
+
+    def apply64(self, P):
+        """``K P`` in float64, ``(B, nx, ny)``."""
+        spec = self.fft.rfft2(P)
+        spec *= self.kmult64
+        return self.fft.irfft2(spec)
