@@ -28,6 +28,10 @@ except ConfigError as _err:
 
 SCENES = _VALID["scenes"]
 ACTIVE_SCENE = _VALID["scene"]
+# An invalid scene stops only a run of it (a target under results/<it>/ names its error); the others plan.
+INVALID_SCENES = _VALID["invalid"]
+for _message in INVALID_SCENES.values():
+    logger.warning(f"roughcontact: {_message} (a run of that scene would stop here)")
 # What the active scene computes, before any job runs (a large scene's cost at a glance).
 logger.info(plan_summary(ACTIVE_SCENE, SCENES[ACTIVE_SCENE]))
 
@@ -75,6 +79,8 @@ wildcard_constraints:
 
 def scene_of(name):
     """The validated scene called ``name`` (a job's ``scene`` wildcard), or a clear error."""
+    if name in INVALID_SCENES:
+        raise WorkflowError(f"invalid config: {INVALID_SCENES[name]}")
     if name not in SCENES:
         raise WorkflowError(
             f"wildcard scene={name}: no scene {name!r} in the config; defined scenes: {', '.join(SCENES)}"
