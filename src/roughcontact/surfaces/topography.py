@@ -37,6 +37,7 @@ from SurfaceTopography.IO import open_topography, readers
 from SurfaceTopography.Support.UnitConversion import get_unit_conversion_factor, mangle_length_unit_ascii
 
 from ..core.files import file_sha256
+from .scales import scale_problem
 
 #: The study's allowed length units (CF/UDUNITS spellings: micrometres are "um", not "µm").
 LENGTH_UNITS = ("m", "mm", "um", "nm")
@@ -155,6 +156,9 @@ def read_topography(path, *, unit: str, file_unit: str | None = None,
     heights = _detrend_and_fill(name, topo, info, undefined=undefined, detrend=detrend, max_undefined=max_undefined)
     heights, info["crop"] = _crop(heights) if non_square == "crop" else (heights, None)
     nx, ny = heights.shape
+    problem = scale_problem(heights, (dx, dy))
+    if problem:
+        raise TopographyError(f"{name}: {problem}")
     lx = nx * dx
     ly = lx if nx == ny and abs(dx / dy - 1.0) <= PIXEL_RTOL else ny * dy  # square: one side, exactly
     return MeasuredSurface(heights=heights, lengths=(lx, ly), unit=unit, info=info)
