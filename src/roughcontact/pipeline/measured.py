@@ -139,8 +139,9 @@ def check_measured_scene(name: str, scene: dict, delta: Mapping | None = None, *
     return out
 
 
-def check_headers(name: str, scene: Mapping) -> None:
-    """Every file's header checked now (:func:`roughcontact.surfaces.topography.check_header`), before any job.
+def check_headers(name: str, scene: Mapping) -> dict[str, tuple[int, int]]:
+    """Every file's header checked now (:func:`roughcontact.surfaces.topography.check_header`), before any job;
+    the shape of each file's map, by case name.
 
     A file SurfaceTopography cannot read, a missing channel, unit or size, or a map the scene
     refuses fails here with the file, what is wrong and the remedy, instead of in its job.
@@ -149,13 +150,15 @@ def check_headers(name: str, scene: Mapping) -> None:
 
     block = scene["topography"]
     defaults = {key: block[key] for key in SCENE_KEYS if key in block}
+    shapes = {}
     for file in block["files"]:
         settings = {**defaults, **reader_settings(scene, file)}
         path = settings.pop("path")
         try:
-            check_header(path, **settings)
+            shapes[file] = check_header(path, **settings)
         except TopographyError as err:
             _fail(name, f"topography.files.{file}", str(err))
+    return shapes
 
 
 def topography_names(scene: Mapping) -> list[str]:

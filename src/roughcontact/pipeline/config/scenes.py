@@ -44,7 +44,14 @@ from pathlib import Path
 from jsonschema import Draft202012Validator
 
 from ..cases import BATCH_STEM, CASE_STEM, Case, batches, cases
-from .checks import _check_accuracy, _check_contact, _check_kappa_gap, _resolve_load
+from .checks import (
+    _check_accuracy,
+    _check_contact,
+    _check_kappa_gap,
+    _resolve_load,
+    check_against_fit,
+    check_backend,
+)
 from .files import ConfigError, load_config_files
 from .schema import (
     SCENE_STUDIES,
@@ -100,6 +107,9 @@ def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = No
         given = ((delta or {}).get("contact") or {}).get("load") or {}
         _resolve_load(name, out["contact"]["load"], given, source.relative_load)
         _check_contact(name, out["contact"])
+        check_against_fit(name, out["contact"], out["fit"])
+        if active:
+            check_backend(name, out["contact"])
     if "accuracy" in out:
         _check_accuracy(name, out["accuracy"])
     if "kappa_gap" in out:

@@ -138,6 +138,11 @@ class Array(PatchSource):
         return out
 
     @classmethod
+    def shapes(cls, name: str, scene: Mapping) -> dict[str, tuple[int, int]]:
+        return {case: tuple(np.load(entry["path"], mmap_mode="r", allow_pickle=False).shape)
+                for case, entry in scene[cls.key]["files"].items()}
+
+    @classmethod
     def reader_settings(cls, scene: Mapping, name: str) -> dict:
         entry = scene[cls.key]["files"][name]
         settings = {"path": entry["path"], "pixel_size": list(entry["pixel_size"]), "source": cls.name,

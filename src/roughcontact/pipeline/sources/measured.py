@@ -26,7 +26,17 @@ class Measured(PatchSource):
     @classmethod
     def check_scene(cls, name: str, scene: dict, delta: Mapping | None = None, *, check_files: bool = True) -> dict:
         try:
-            return measured.check_measured_scene(name, scene, delta, check_files=check_files)
+            out = measured.check_measured_scene(name, scene, delta, check_files=check_files)
+        except measured.MeasuredConfigError as err:
+            raise ConfigError(str(err)) from None
+        if check_files:
+            cls.check_shapes(name, out)
+        return out
+
+    @classmethod
+    def shapes(cls, name: str, scene: Mapping) -> dict[str, tuple[int, int]]:
+        try:
+            return measured.check_headers(name, scene)
         except measured.MeasuredConfigError as err:
             raise ConfigError(str(err)) from None
 

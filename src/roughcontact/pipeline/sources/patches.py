@@ -21,6 +21,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from ...analysis.aggregate import TOPOGRAPHY_DIM, add_derived, combine_topographies
+from ..config.checks import check_target_nodes
 from ..config.files import ConfigError
 from ..measured import MeasuredConfigError, drop_generator_keys
 from .base import Source
@@ -38,6 +39,9 @@ class PatchSource(Source):
     surface_rules = ("topography",)
     default_boundary = "free"
     relative_load = True
+    #: A file's own entry under ``files`` (path, unit, size, format, pixel size) is its own, by design.
+    per_case_settings = tuple(f"{TOPOGRAPHY_DIM}.{key}" for key in ("path", "file_unit", "physical_size", "format",
+                                                                   "pixel_size", "sha256"))
 
     @classmethod
     def check_scene(cls, name: str, scene: dict, delta: Mapping | None = None, *, check_files: bool = True) -> dict:
@@ -48,7 +52,30 @@ class PatchSource(Source):
         if "contact" in out:
             out["contact"]["solver"].setdefault("boundary", cls.default_boundary)
         out[cls.key] = cls.check_files(name, out[cls.key], check_files)
+        if check_files:
+            cls.check_shapes(name, out)
         return out
+
+    @classmethod
+    def check_shapes(cls, name: str, scene: Mapping) -> None:
+        """What the maps' shapes allow, before any job: pressure fields (``outputs.fields``) are stacked on one
+        grid by the aggregate, so every map has one shape; a ``target_area`` spans enough nodes of each map."""
+        contact = scene.get("contact")
+        if not contact or not (contact["outputs"]["fields"] or "target_area" in contact["load"]):
+            return
+        shapes = cls.shapes(name, scene)
+        for case, (nx, ny) in shapes.items():
+            check_target_nodes(name, contact["load"], nx * ny, f"{cls.what} {case!r} ({nx} x {ny})")
+        if contact["outputs"]["fields"] and len(set(shapes.values())) > 1:
+            listed = ", ".join(f"{case} {nx} x {ny}" for case, (nx, ny) in shapes.items())
+            raise ConfigError(f"scene {name!r}, field 'contact.outputs.fields': the {cls.what}s' maps differ in shape "
+                              f"({listed}), and the aggregate stacks every file's pressure and gap fields on one grid: "
+                              f"remove outputs.fields, or give files of one shape (a scene each)")
+
+    @classmethod
+    def shapes(cls, name: str, scene: Mapping) -> dict[str, tuple[int, int]]:
+        """The shape (nx, ny) of each case's map, by name, from the checked files (before any job)."""
+        raise NotImplementedError
 
     @classmethod
     def check_files(cls, scene: str, block: dict, check: bool) -> dict:
