@@ -60,6 +60,14 @@ class Source:
     studies: tuple[str, ...] = ("representativity", "contact")
     default_boundary = "periodic"
     relative_load = False
+    #: Recorded settings that differ between cases by design (a patch file's path, unit, size): the
+    #: aggregate keeps them per case (``setting_<key>``) without warning that cases were solved differently.
+    per_case_settings: tuple[str, ...] = ()
+
+    @classmethod
+    def unexpected_settings(cls, varying) -> list[str]:
+        """The keys of ``varying`` (settings that differ between cases) that do not differ by design."""
+        return [key for key in varying if key not in cls.per_case_settings]
 
     @classmethod
     def applies(cls, scene: Mapping) -> bool:
