@@ -5,6 +5,7 @@
 # scene's allowed values).
 from pathlib import Path
 
+from roughcontact.core.cli import one_line
 from roughcontact.figures.registry import FIGURES, scene_figures
 from roughcontact.pipeline import params
 from roughcontact.pipeline.config import (
@@ -38,7 +39,14 @@ logger.info(plan_summary(ACTIVE_SCENE, SCENES[ACTIVE_SCENE]))
 
 # The plan each contact job's scene ETA is read against (python -m roughcontact.pipeline.progress).
 onstart:
-    write_plan(Path("results", ACTIVE_SCENE), ACTIVE_SCENE, SCENES[ACTIVE_SCENE], workflow.cores)
+    try:
+        write_plan(Path("results", ACTIVE_SCENE), ACTIVE_SCENE, SCENES[ACTIVE_SCENE], workflow.cores)
+    except OSError as _err:  # a read-only or full results/<scene>: one line, before any job runs
+        logger.error(
+            f"roughcontact: {one_line(_err)}; the run writes under results/{ACTIVE_SCENE}/: make it writable "
+            "(or free space), then run again"
+        )
+        raise SystemExit(1)
 
 
 def case_path(folder, ext="nc"):
