@@ -158,7 +158,7 @@ def test_a_file_without_pixel_size_is_refused(arrays):
 def test_generator_keys_and_generated_studies_are_refused_in_an_array_scene(arrays):
     cfg = _config(GOOD)
     cfg["scenes"]["s"]["contact"]["seeds"] = 3
-    with pytest.raises(ConfigError, match=r"field 'contact.seeds': not used with a array block"):
+    with pytest.raises(ConfigError, match=r"field 'contact.seeds': not used with an array block"):
         validate_config(cfg)
     cfg = _config(GOOD, accuracy={})
     with pytest.raises(ConfigError, match=r"field 'accuracy': the accuracy study runs on generated surfaces only; "

@@ -116,7 +116,9 @@ def drop_generator_keys(name: str, scene: dict, delta: Mapping | None, key: str 
             continue
         for field in GENERATOR_KEYS:
             if field in (delta.get(study) or {}):
-                _fail(name, f"{study}.{field}", f"not used with a {key} block (the cases are its files); remove it")
+                article = "an" if key[0] in "aeiou" else "a"
+                _fail(name, f"{study}.{field}", f"not used with {article} {key} block (the cases are its files); "
+                                                "remove it")
             out[study].pop(field, None)
     return out
 

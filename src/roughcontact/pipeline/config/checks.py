@@ -191,9 +191,9 @@ def _resolve_load(scene: str, load: dict, given: Mapping, measured: bool) -> Non
     if measured and "relative_to" not in given:
         for key in ("p_max", "p_min"):
             if key in given:
-                fail(f"load.{key}", "a measured scene's load is relative to each file's rms slope unless it says "
-                                    "otherwise: add load.relative_to: rms_slope (the value is p0/(E* h'), the "
-                                    "paper's pbar) or load.relative_to: e_star (p0/E*)")
+                fail(f"load.{key}", "a measured (topography or array) scene's load is relative to each file's rms "
+                                    "slope unless it says otherwise: add load.relative_to: rms_slope (the value is "
+                                    "p0/(E* h'), the paper's pbar) or load.relative_to: e_star (p0/E*)")
         load["relative_to"], load["p_max"] = "rms_slope", MEASURED_P_MAX
     load.setdefault("relative_to", "e_star")
     if load["relative_to"] == "rms_slope" and "p_max" not in given:
