@@ -32,9 +32,9 @@ def main(log):
     result = fitter(agg, window=tuple(cfg["window"]), n_boot=cfg["n_boot"], rng_seed=cfg["rng_seed"],
                     on_insufficient="nan", paper_average="auto")
     if result.attrs["paper_average"] == "none":
-        log.info("the %s' load schedules p0/(E* h') differ (load.target_area, or loads relative to E* on "
+        log.info("the cases' load schedules p0/(E* h') differ (load.target_area, or loads relative to E* on "
                  "surfaces of different slopes): the paper route fits every (case, step) point on each case's "
-                 "own schedule instead of the mean curve over %s", cases, "topographies" if measured else "seeds")
+                 "own schedule instead of the mean curve over %s", "topographies" if measured else "seeds")
     if measured:
         _log_topographies(log, result)
     else:
