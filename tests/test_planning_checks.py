@@ -103,6 +103,12 @@ def test_array_pixel_size_outside_float_range(shipped_config, pixel):
     refused(shipped_config, {"array": block, "contact": {}}, "array.files.a", "pixel size dx", "[1e-50, 1e+50]")
 
 
+def test_topography_pixel_size_outside_float_range(shipped_config):
+    files = {"c": {"path": "data/measured/ground-c.txt", "file_unit": "nm", "physical_size": [1e-70, 1e-70]}}
+    refused(shipped_config, {"topography": {"files": files, "unit": "um"}, "contact": {}}, "topography.files.c",
+            "pixel size dx = 7.8125e-76 um is outside [1e-50, 1e+50]", "topography.file_unit")
+
+
 @pytest.mark.parametrize("scale, words", [(1e300, "beyond 1e+100"), (1e-310, "below 1e-100")])
 def test_array_heights_outside_float_range(shipped_config, tmp_path, scale, words):
     h = np.load(REPO / "data/array/patch-a.npy").astype(float) * scale

@@ -21,6 +21,17 @@ from .synthetic import LENGTH_RANGE, RMS_HEIGHT_RANGE, nonperiodic_moments
 ROUND_OFF_FACTOR = 100.0
 
 
+def length_problem(shape: tuple[int, int], pixel: tuple[float, float], unit: str = "") -> str | None:
+    """Pixel sizes and sides of a ``shape`` map outside :data:`LENGTH_RANGE`, in words; None if inside."""
+    lo, hi = LENGTH_RANGE
+    (nx, ny), (dx, dy) = shape, pixel
+    for what, value in (("pixel size dx", dx), ("pixel size dy", dy), ("side nx dx", nx * dx), ("side ny dy", ny * dy)):
+        if not lo <= value <= hi:
+            return f"{what} = {value:g}{' ' + unit if unit else ''} is outside [{lo:g}, {hi:g}], the range of " \
+                   "lengths float64 can study"
+    return None
+
+
 def scale_problem(heights: np.ndarray, pixel: tuple[float, float], resolution: float | None = None) -> str | None:
     """What makes ``heights`` (a 2-D map, pixels ``pixel = (dx, dy)``) unusable, in words with the remedy, or None.
 
@@ -31,11 +42,9 @@ def scale_problem(heights: np.ndarray, pixel: tuple[float, float], resolution: f
     """
     h = np.asarray(heights)
     (nx, ny), (dx, dy) = h.shape, pixel
-    lo, hi = LENGTH_RANGE
-    for what, value in (("pixel size dx", dx), ("pixel size dy", dy), ("side nx dx", nx * dx), ("side ny dy", ny * dy)):
-        if not lo <= value <= hi:
-            return (f"{what} = {value:g} is outside [{lo:g}, {hi:g}], the range of lengths float64 can study; "
-                    "give the pixel size in another unit (unit and pixel_size)")
+    problem = length_problem(h.shape, pixel)
+    if problem:
+        return problem + "; give the pixel size in another unit (unit and pixel_size)"
     top = float(np.max(np.abs(h)))
     if not math.isfinite(top) or top > RMS_HEIGHT_RANGE[1]:
         return (f"its largest height {top:g} is beyond {RMS_HEIGHT_RANGE[1]:g}, outside the range float64 can "
@@ -62,3 +71,11 @@ def scale_problem(heights: np.ndarray, pixel: tuple[float, float], resolution: f
                 f"(rms slope {stats['rms_slope']:g}): the heights and the pixel sizes are too far apart in scale; "
                 "give them in units closer to each other")
     return None
+
+
+def checked_scales(label: str, heights: np.ndarray, pixel: tuple[float, float], error=ValueError) -> np.ndarray:
+    """``heights`` if :func:`scale_problem` finds nothing wrong, else ``error("<label>: <problem>")``."""
+    problem = scale_problem(heights, pixel)
+    if problem:
+        raise error(f"{label}: {problem}")
+    return heights

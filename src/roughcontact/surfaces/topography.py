@@ -37,7 +37,7 @@ from SurfaceTopography.IO import open_topography, readers
 from SurfaceTopography.Support.UnitConversion import get_unit_conversion_factor, mangle_length_unit_ascii
 
 from ..core.files import file_sha256
-from .scales import scale_problem
+from .scales import checked_scales, length_problem
 
 #: The study's allowed length units (CF/UDUNITS spellings: micrometres are "um", not "µm").
 LENGTH_UNITS = ("m", "mm", "um", "nm")
@@ -155,10 +155,7 @@ def read_topography(path, *, unit: str, file_unit: str | None = None,
     dx, dy = _check_grid(name, topo, non_square)
     heights = _detrend_and_fill(name, topo, info, undefined=undefined, detrend=detrend, max_undefined=max_undefined)
     heights, info["crop"] = _crop(heights) if non_square == "crop" else (heights, None)
-    nx, ny = heights.shape
-    problem = scale_problem(heights, (dx, dy))
-    if problem:
-        raise TopographyError(f"{name}: {problem}")
+    nx, ny = checked_scales(name, heights, (dx, dy), TopographyError).shape
     lx = nx * dx
     ly = lx if nx == ny and abs(dx / dy - 1.0) <= PIXEL_RTOL else ny * dy  # square: one side, exactly
     return MeasuredSurface(heights=heights, lengths=(lx, ly), unit=unit, info=info)
@@ -442,6 +439,10 @@ def _check_grid(name, topo, non_square) -> tuple[float, float]:
         raise TopographyError(f"{name}: the map is {nx} x {ny} points; the contact solver needs at least 4 x 4")
     if not all(np.isfinite(s) and s > 0 for s in (lx, ly)):
         raise TopographyError(f"{name}: the physical size ({lx}, {ly}) {topo.unit} is not positive and finite")
+    problem = length_problem((nx, ny), (lx / nx, ly / ny), topo.unit)
+    if problem:
+        raise TopographyError(f"{name}: {problem}; check the file's unit and size (topography.file_unit, "
+                              "physical_size) or choose another topography.unit")
     if nx != ny and non_square == "reject":
         raise TopographyError(f"{name}: the map is {nx} x {ny} points, not square, and topography.non_square is "
                               f"reject: set it to keep to use the whole map, or to crop to use the centred "
