@@ -259,3 +259,18 @@ def test_an_invalid_scene_stops_only_its_own_run(shipped_config):
         validate_config({**cfg, "scene": "broken"})
     with pytest.raises(ConfigError, match="scene 'broken'"):
         validate_config(cfg, strict=True)
+
+
+def test_the_config_check_names_an_invalid_other_scene_and_plans_the_run(tmp_path, capsys):
+    from roughcontact.pipeline.config.scenes import main
+
+    extra = tmp_path / "extra.yaml"
+    extra.write_text("scenes:\n  broken:\n    contact: {surface: {N: 32}, grid: {k_l: ['2'], k_s: ['8'], H: ['0.5']}, "
+                     "seeds: 0}\n")
+    main([str(extra)])
+    out, err = capsys.readouterr()
+    assert out.startswith("roughcontact: scene 'demo' plans")
+    assert err.count("\n") == 1 and err.startswith("warning: scene 'broken', field 'contact.seeds'"), err
+    with pytest.raises(SystemExit) as stop:
+        main([str(extra), "--scene", "broken"])
+    assert stop.value.code == 2 and "error: scene 'broken', field 'contact.seeds'" in capsys.readouterr().err
