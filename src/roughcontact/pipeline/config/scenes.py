@@ -16,7 +16,10 @@ scene, in two passes, both before Snakemake plans any job:
 
 Every error is a :class:`ConfigError` whose message names the scene and the field
 (``scene 'demo', field 'contact.grid.k_s': ...``) and the allowed range, and says when the
-bad value came from ``defaults``.
+bad value came from ``defaults``. An invalid scene stops only a run of that scene:
+:func:`validate_config` raises the error of the scene that runs and keeps the others' under
+``invalid`` (the workflow logs them, and stops a target in such a scene with its message).
+The scene that runs also has its files and physical ranges checked (``active``).
 
 The validated scene is canonical: schema defaults filled in, numbers typed as the schema
 says (``N: 32.0`` becomes ``32``, ``L: 1`` becomes ``1.0``), so that two configs meaning the
