@@ -127,8 +127,16 @@ def test_hardness_below_the_final_load_relative_to_the_slope(shipped_config):
     refused(shipped_config, {"contact": contact}, "contact.effects.plasticity.hardness", "0.05 x 0.1 = 0.005")
 
 
-def test_hardness_below_a_files_final_load_names_the_field_before_any_solve():
-    # a file's rms slope is known in its contact job: the loads are checked there, before the solver runs
+@pytest.mark.parametrize("source, block, words", [("array", ARRAY, "array file 'a': 0.05 x 0.09764"),
+                                                   ("topography", MEASURED, "topography file 'ground-a': 0.05 x")])
+def test_hardness_below_a_files_final_load_is_refused_before_any_job(shipped_config, source, block, words):
+    scene = {source: block, "contact": {"effects": {"plasticity": {"hardness": 0.004}}}}
+    refused(shipped_config, scene, "contact.effects.plasticity.hardness", words, "raise it or lower load.p_max")
+    plan(shipped_config, {source: block, "contact": {"effects": {"plasticity": {"hardness": 0.5}}}})
+
+
+def test_hardness_below_a_cases_final_load_names_the_field_before_any_solve():
+    # a surface normalised by rms height has its slope measured in its job: the loads are checked there
     block = {"load": {"relative_to": "rms_slope", "p_max": 0.05, "n_steps": 3},
              "solver": {"e_star": 1.0}, "effects": {"plasticity": {"hardness": 0.004}}}
     with pytest.raises(ValueError, match=r"contact.effects.plasticity.hardness: 0.004 must exceed this case's final"):

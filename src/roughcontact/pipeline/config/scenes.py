@@ -113,6 +113,7 @@ def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = No
         check_against_fit(name, out["contact"], out["fit"])
         if active:
             check_backend(name, out["contact"])
+            source.check_contact_files(name, out)
     if "accuracy" in out:
         _check_accuracy(name, out["accuracy"])
     if "kappa_gap" in out:

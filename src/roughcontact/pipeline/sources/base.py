@@ -80,6 +80,11 @@ class Source:
         raise NotImplementedError
 
     @classmethod
+    def check_contact_files(cls, name: str, scene: Mapping) -> None:
+        """What the source's files allow the validated ``contact`` block (``ConfigError`` naming the field); run
+        before any job for the scene that runs. Nothing for a source without files."""
+
+    @classmethod
     def cases(cls, scene: Mapping, study: str) -> list[dict]:
         """The cases of ``study`` in a validated scene, each ``{wildcard: value}``."""
         raise NotImplementedError

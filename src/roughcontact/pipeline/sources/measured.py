@@ -29,8 +29,6 @@ class Measured(PatchSource):
             out = measured.check_measured_scene(name, scene, delta, check_files=check_files)
         except measured.MeasuredConfigError as err:
             raise ConfigError(str(err)) from None
-        if check_files:
-            cls.check_shapes(name, out)
         return out
 
     @classmethod

@@ -21,6 +21,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from ...analysis.aggregate import TOPOGRAPHY_DIM, add_derived, combine_topographies
+from ...surfaces.synthetic import nonperiodic_moments
 from ..config.checks import check_target_nodes
 from ..config.files import ConfigError
 from ..measured import MeasuredConfigError, drop_generator_keys
@@ -52,16 +53,21 @@ class PatchSource(Source):
         if "contact" in out:
             out["contact"]["solver"].setdefault("boundary", cls.default_boundary)
         out[cls.key] = cls.check_files(name, out[cls.key], check_files)
-        if check_files:
-            cls.check_shapes(name, out)
         return out
 
     @classmethod
-    def check_shapes(cls, name: str, scene: Mapping) -> None:
-        """What the maps' shapes allow, before any job: pressure fields (``outputs.fields``) are stacked on one
-        grid by the aggregate, so every map has one shape; a ``target_area`` spans enough nodes of each map."""
-        contact = scene.get("contact")
-        if not contact or not (contact["outputs"]["fields"] or "target_area" in contact["load"]):
+    def check_contact_files(cls, name: str, scene: Mapping) -> None:
+        """What the files allow the validated contact block, before any job (the scene that runs): see
+        :meth:`_check_shapes` and :meth:`_check_hardness`."""
+        cls._check_shapes(name, scene)
+        cls._check_hardness(name, scene)
+
+    @classmethod
+    def _check_shapes(cls, name: str, scene: Mapping) -> None:
+        """Pressure fields (``outputs.fields``) are stacked on one grid by the aggregate, so every map has one
+        shape; a ``target_area`` spans enough nodes of each map."""
+        contact = scene["contact"]
+        if not (contact["outputs"]["fields"] or "target_area" in contact["load"]):
             return
         shapes = cls.shapes(name, scene)
         for case, (nx, ny) in shapes.items():
@@ -71,6 +77,27 @@ class PatchSource(Source):
             raise ConfigError(f"scene {name!r}, field 'contact.outputs.fields': the {cls.what}s' maps differ in shape "
                               f"({listed}), and the aggregate stacks every file's pressure and gap fields on one grid: "
                               f"remove outputs.fields, or give files of one shape (a scene each)")
+
+    @classmethod
+    def _check_hardness(cls, name: str, scene: Mapping) -> None:
+        """A hardness above every file's final load p0/E* = p_max h' (``relative_to: rms_slope``): each file is
+        read as its surface job reads it, and its rms slope measured as that job measures it."""
+        contact = scene["contact"]
+        load, hardness = contact["load"], contact["effects"].get("plasticity", {}).get("hardness")
+        if hardness is None or "target_area" in load or load["relative_to"] != "rms_slope":
+            return
+        for case in cls.names(scene):
+            try:
+                surface = cls.read(cls.reader_settings(scene, case))
+            except ValueError as err:
+                raise ConfigError(f"scene {name!r}, field '{cls.key}.files.{case}': {err}") from None
+            slope = nonperiodic_moments(surface.heights, surface.lengths)["rms_slope"]
+            if not hardness > load["p_max"] * slope:
+                raise ConfigError(
+                    f"scene {name!r}, field 'contact.effects.plasticity.hardness': {hardness:g} must exceed every "
+                    f"case's final load p0/E* = load.p_max x its rms slope; {cls.what} {case!r}: {load['p_max']:g} x "
+                    f"{slope:.4g} = {load['p_max'] * slope:.4g} (a pressure capped at the hardness cannot carry a "
+                    "mean load p0 >= hardness); raise it or lower load.p_max")
 
     @classmethod
     def shapes(cls, name: str, scene: Mapping) -> dict[str, tuple[int, int]]:
