@@ -166,8 +166,17 @@ def test_cupy_refused_when_it_cannot_be_imported(shipped_config, monkeypatch):
 @pytest.mark.parametrize("source, block", [("topography", MEASURED), ("array", ARRAY)])
 def test_fields_with_maps_of_different_shapes(shipped_config, source, block):
     scene = {source: block, "contact": {"outputs": {"fields": [3]}}}
-    msg = refused(shipped_config, scene, "contact.outputs.fields", "differ in shape", "remove outputs.fields")
-    assert "x 160" in msg or "96 x 80" in msg
+    msg = refused(shipped_config, scene, "contact.outputs.fields", "grids differ", "remove outputs.fields")
+    assert "x 160 points" in msg or "96 x 80 points" in msg
+
+
+def test_fields_with_maps_of_different_pixel_sizes(shipped_config):
+    files = {"a": {"path": "data/array/patch-a.npy", "pixel_size": 0.5},
+             "b": {"path": "data/array/patch-a.npy", "pixel_size": 0.6}}
+    scene = {"array": {"files": files, "unit": "um"}, "contact": {"outputs": {"fields": [3]}}}
+    refused(shipped_config, scene, "contact.outputs.fields", "128 x 128 points of 0.5 x 0.5, b 128 x 128 points of 0.6")
+    files["b"]["pixel_size"] = 0.5 * (1 + 1e-13)  # round-off of a unit conversion: one grid
+    plan(shipped_config, scene)
 
 
 # --- silent results ---------------------------------------------------------------------------------------

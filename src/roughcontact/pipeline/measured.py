@@ -141,9 +141,9 @@ def check_measured_scene(name: str, scene: dict, delta: Mapping | None = None, *
     return out
 
 
-def check_headers(name: str, scene: Mapping) -> dict[str, tuple[int, int]]:
+def check_headers(name: str, scene: Mapping) -> dict[str, tuple]:
     """Every file's header checked now (:func:`roughcontact.surfaces.topography.check_header`), before any job;
-    the shape of each file's map, by case name.
+    the grid ``((nx, ny), (dx, dy))`` of each file's map, by case name.
 
     A file SurfaceTopography cannot read, a missing channel, unit or size, or a map the scene
     refuses fails here with the file, what is wrong and the remedy, instead of in its job.
@@ -152,15 +152,15 @@ def check_headers(name: str, scene: Mapping) -> dict[str, tuple[int, int]]:
 
     block = scene["topography"]
     defaults = {key: block[key] for key in SCENE_KEYS if key in block}
-    shapes = {}
+    grids = {}
     for file in block["files"]:
         settings = {**defaults, **reader_settings(scene, file)}
         path = settings.pop("path")
         try:
-            shapes[file] = check_header(path, **settings)
+            grids[file] = check_header(path, **settings)
         except TopographyError as err:
             _fail(name, f"topography.files.{file}", str(err))
-    return shapes
+    return grids
 
 
 def topography_names(scene: Mapping) -> list[str]:

@@ -164,9 +164,9 @@ def read_topography(path, *, unit: str, file_unit: str | None = None,
 def check_header(path, *, unit: str, file_unit: str | None = None,
                  physical_size: tuple[float, float] | None = None, undefined: str = "reject",
                  detrend: str = "none", non_square: str = "keep", channel: int = 0,
-                 max_undefined: float = MAX_UNDEFINED, format: str | None = None) -> tuple[int, int]:
-    """The checks of :func:`read_topography` that need only the file's header, without its heights; the shape
-    (nx, ny) of the map it would return (after ``non_square: crop``).
+                 max_undefined: float = MAX_UNDEFINED, format: str | None = None) -> tuple:
+    """The checks of :func:`read_topography` that need only the file's header, without its heights; the grid
+    ``((nx, ny), (dx, dy))`` of the map it would return (after ``non_square: crop``), in ``unit``.
 
     Readable by SurfaceTopography, the channel present and holding a 2-D uniform height map, a unit
     and a size (the file's or the scene's), the unit convertible to ``unit``, the sizes positive,
@@ -182,11 +182,11 @@ def check_header(path, *, unit: str, file_unit: str | None = None,
     with warnings.catch_warnings():
         # as in _load: the NetCDF reader's close warns about its memory map, harmlessly
         warnings.filterwarnings("ignore", message="Cannot close a netcdf_file", category=RuntimeWarning)
-        nx, ny = _check_header(name, _open(name, fmt), unit, file_unit, physical_size, non_square, channel)
-    return (min(nx, ny),) * 2 if non_square == "crop" else (nx, ny)
+        (nx, ny), pixel = _check_header(name, _open(name, fmt), unit, file_unit, physical_size, non_square, channel)
+    return ((min(nx, ny),) * 2 if non_square == "crop" else (nx, ny)), pixel
 
 
-def _check_header(name, reader, unit, file_unit, physical_size, non_square, channel) -> tuple[int, int]:
+def _check_header(name, reader, unit, file_unit, physical_size, non_square, channel) -> tuple:
     """:func:`check_header` on an open ``reader``, which it closes."""
     try:
         chan = _channel(name, reader, channel)
@@ -198,8 +198,8 @@ def _check_header(name, reader, unit, file_unit, physical_size, non_square, chan
             raise TopographyError(f"{name}: the file's unit {file_unit!r} cannot be converted to {unit!r} "
                                   f"({err})") from err
         (nx, ny), sizes = chan.nb_grid_pts, kwargs.get("physical_sizes", chan.physical_sizes)
-        _check_grid(name, _Header((nx, ny), tuple(float(v) * factor for v in sizes), unit), non_square)
-        return int(nx), int(ny)
+        pixel = _check_grid(name, _Header((nx, ny), tuple(float(v) * factor for v in sizes), unit), non_square)
+        return (int(nx), int(ny)), pixel
     finally:
         _close(reader)
 

@@ -138,9 +138,9 @@ class Array(PatchSource):
         return out
 
     @classmethod
-    def shapes(cls, name: str, scene: Mapping) -> dict[str, tuple[int, int]]:
-        return {case: tuple(np.load(entry["path"], mmap_mode="r", allow_pickle=False).shape)
-                for case, entry in scene[cls.key]["files"].items()}
+    def grids(cls, name: str, scene: Mapping) -> dict[str, tuple]:
+        return {case: (tuple(np.load(entry["path"], mmap_mode="r", allow_pickle=False).shape),
+                       tuple(pixel_sizes(entry["pixel_size"]))) for case, entry in scene[cls.key]["files"].items()}
 
     @classmethod
     def reader_settings(cls, scene: Mapping, name: str) -> dict:

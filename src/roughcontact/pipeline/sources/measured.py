@@ -32,7 +32,7 @@ class Measured(PatchSource):
         return out
 
     @classmethod
-    def shapes(cls, name: str, scene: Mapping) -> dict[str, tuple[int, int]]:
+    def grids(cls, name: str, scene: Mapping) -> dict[str, tuple]:
         try:
             return measured.check_headers(name, scene)
         except measured.MeasuredConfigError as err:

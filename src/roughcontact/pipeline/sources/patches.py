@@ -20,7 +20,10 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+import numpy as np
+
 from ...analysis.aggregate import TOPOGRAPHY_DIM, add_derived, combine_topographies
+from ...analysis.aggregate.combine import GRID_RTOL
 from ...surfaces.synthetic import nonperiodic_moments
 from ..config.checks import check_target_nodes
 from ..config.files import ConfigError
@@ -65,18 +68,23 @@ class PatchSource(Source):
     @classmethod
     def _check_shapes(cls, name: str, scene: Mapping) -> None:
         """Pressure fields (``outputs.fields``) are stacked on one grid by the aggregate, so every map has one
-        shape; a ``target_area`` spans enough nodes of each map."""
+        shape and pixel size (within :data:`GRID_RTOL`: round-off of unit conversions); a ``target_area`` spans
+        enough nodes of each map."""
         contact = scene["contact"]
         if not (contact["outputs"]["fields"] or "target_area" in contact["load"]):
             return
-        shapes = cls.shapes(name, scene)
-        for case, (nx, ny) in shapes.items():
+        grids = cls.grids(name, scene)
+        for case, ((nx, ny), _) in grids.items():
             check_target_nodes(name, contact["load"], nx * ny, f"{cls.what} {case!r} ({nx} x {ny})")
-        if contact["outputs"]["fields"] and len(set(shapes.values())) > 1:
-            listed = ", ".join(f"{case} {nx} x {ny}" for case, (nx, ny) in shapes.items())
-            raise ConfigError(f"scene {name!r}, field 'contact.outputs.fields': the {cls.what}s' maps differ in shape "
-                              f"({listed}), and the aggregate stacks every file's pressure and gap fields on one grid: "
-                              f"remove outputs.fields, or give files of one shape (a scene each)")
+        shape, pixel = next(iter(grids.values()))
+        for other_shape, other_pixel in grids.values():
+            if contact["outputs"]["fields"] and (other_shape != shape or not np.allclose(
+                    other_pixel, pixel, rtol=GRID_RTOL, atol=0.0)):
+                listed = ", ".join(f"{c} {nx} x {ny} points of {dx:.6g} x {dy:.6g}"
+                                   for c, ((nx, ny), (dx, dy)) in grids.items())
+                raise ConfigError(f"scene {name!r}, field 'contact.outputs.fields': the {cls.what}s' grids differ "
+                                  f"({listed}), and the aggregate stacks every file's pressure and gap fields on one "
+                                  "grid: remove outputs.fields, or give files of one grid (a scene each)")
 
     @classmethod
     def _check_hardness(cls, name: str, scene: Mapping) -> None:
@@ -100,8 +108,8 @@ class PatchSource(Source):
                     "mean load p0 >= hardness); raise it or lower load.p_max")
 
     @classmethod
-    def shapes(cls, name: str, scene: Mapping) -> dict[str, tuple[int, int]]:
-        """The shape (nx, ny) of each case's map, by name, from the checked files (before any job)."""
+    def grids(cls, name: str, scene: Mapping) -> dict[str, tuple]:
+        """The grid ``((nx, ny), (dx, dy))`` of each case's map, by name, from the checked files (before any job)."""
         raise NotImplementedError
 
     @classmethod
