@@ -248,14 +248,46 @@ def test_each_shipped_scene_plans_as_the_one_run(shipped_config, monkeypatch, sc
 
 # --- Snakemake's own planning on a few combinations, and an invalid scene beside them ----------------------
 
+OUTPUTS = {"clusters": True, "pressure_distribution": {"bins": 10, "max": 5.0}, "stiffness": True}
+#: Tiny scenes bundling the documented options each source takes (two seeds, two files each), and one invalid.
 WALK_SCENES = {
     "gen-target": {"contact": {**GRID, "surface": {"N": 32}, "load": {"target_area": 0.3, "n_steps": 8},
                                "effects": {"plasticity": {"hardness": 0.01}}}, "fit": {"window": [0.01, 0.3]}},
+    "gen-all": {"representativity": {**GRID, "surface": {"N": 32, "rms_height": 0.1, "plateau": True}, "n_bins": 20,
+                                     "examples": [{"k_l": "2", "k_s": "8"}]},
+                "contact": {**GRID, "surface": {"N": 32, "L": 2.0, "unit": "um"},
+                            "grid": {"k_l": ["2"], "k_s": ["8"], "H": ["0.5", "0.8"]},
+                            "load": {"n_steps": 4, "schedule": "geometric", "p_min": 0.001},
+                            "solver": {"tol": 1e-6, "e_star": 2.0, "pressure_unit": "MPa"},
+                            "outputs": {**OUTPUTS, "fields": [4], "full_contact_load": True}},
+                "fit": {"n_boot": 20, "window": [0.01, 0.3], "include_unconverged": True}},
+    "gen-plastic": {"contact": {**GRID, "load": {"n_steps": 4, "relative_to": "rms_slope", "p_max": 0.05},
+                                "effects": {"plasticity": {"hardness": 0.5}}, "outputs": {"clusters": True,
+                                                                                          "fields": [2]},
+                                "keep_surfaces": False}},
+    "gen-adhesion": {"contact": {**GRID, "load": {"n_steps": 3}, "outputs": {"clusters": True, "stiffness": True},
+                                 "effects": {"adhesion": {"law": "exponential", "work": 1e-5, "range": 1e-3}}}},
+    # per-file settings, one in metres and one in nanometres cropped square: one grid within round-off
     "files": {"topography": {"files": {"ground-a": {"path": "data/measured/ground-a.x3p", "file_unit": "m"},
                                        "ground-c": {"path": "data/measured/ground-c.txt", "file_unit": "nm",
                                                     "physical_size": [100000.0, 125000.0]}},
-                             "unit": "um"},
-              "contact": {"load": {"n_steps": 4}}},
+                             "unit": "um", "non_square": "crop", "detrend": "curvature"},
+              "representativity": {"n_bins": 20},
+              "contact": {"load": {"n_steps": 4}, "outputs": {**OUTPUTS, "fields": [4]}}},
+    "files-target": {"topography": {"glob": "data/measured/ground-[ab].*", "unit": "um", "undefined": "mean",
+                                    "max_undefined": 0.2},
+                     "contact": {"load": {"n_steps": 3, "target_area": 0.1},
+                                 "effects": {"plasticity": {"hardness": 0.5}}}},
+    "array-all": {"array": {"files": {"a": "data/array/patch-a.npy", "b": "data/array/patch-a.npy"}, "unit": "um",
+                            "pixel_size": 0.5},
+                  "representativity": {"n_bins": 20},
+                  "contact": {"load": {"n_steps": 3, "target_area": 0.1}, "effects": {"plasticity": {"hardness": 0.5}},
+                              "outputs": {**OUTPUTS, "fields": [3]}}},
+    "array-periodic": {"array": {"files": {"b": {"path": "data/array/patch-b.npy", "pixel_size": [0.5, 0.6]}},
+                                 "unit": "um"},
+                       "contact": {"load": {"n_steps": 3, "relative_to": "e_star", "p_max": 0.005},
+                                   "solver": {"boundary": "periodic", "e_star": 1e5, "pressure_unit": "MPa"},
+                                   "outputs": {"full_contact_load": True, "stiffness": True}}},
     "broken": {"contact": {**GRID, "seeds": 0}},
 }
 
@@ -267,32 +299,29 @@ def walk_workflow(tmp_path_factory):
     return wd
 
 
-def _dry_run_plans(wd, scene):
-    res = run_snakemake(wd, "-n", "--configfile", "walk.yaml", "--config", f"scene={scene}")
+def test_dry_runs_plan_beside_an_invalid_scene(walk_workflow):
+    res = run_snakemake(walk_workflow, "-n", "--configfile", "walk.yaml", "--config", "scene=gen-target")
     out = res.stdout + res.stderr
     assert res.returncode == 0, out[-3000:]
     assert "scene 'broken', field 'contact.seeds'" in out and "Traceback" not in out
-
-
-@pytest.mark.slow
-def test_files_with_their_own_settings_dry_run(walk_workflow):
-    _dry_run_plans(walk_workflow, "files")
-
-
-def test_dry_runs_plan_beside_an_invalid_scene(walk_workflow):
-    _dry_run_plans(walk_workflow, "gen-target")
     res = run_snakemake(walk_workflow, "-n", "results/broken/fit/cel.nc", "--configfile", "walk.yaml")
     out = res.stdout + res.stderr  # a target's error comes through Snakemake's input-function report
     assert res.returncode != 0 and "invalid config: scene 'broken', field 'contact.seeds'" in out, out[-3000:]
 
 
 @pytest.mark.slow
-def test_two_combinations_run(walk_workflow):
+def test_the_bundled_options_run_with_each_source(walk_workflow):
+    # every scene of WALK_SCENES but the broken one through its fit (and representativity): about 1 min on 2 cores
+    runs = [name for name in WALK_SCENES if name != "broken"]
+    targets = [f"results/{name}/fit/cel.nc" for name in runs]
+    targets += [f"results/{name}/aggregate/representativity.nc" for name in runs
+                if "representativity" in WALK_SCENES[name]]
+    res = run_snakemake(walk_workflow, "-j2", *targets, "--configfile", "walk.yaml", timeout=900)
+    assert res.returncode == 0, (res.stdout + res.stderr)[-4000:]
+    # the files' pressure fields stacked on one grid (one in metres, one in nanometres: equal within round-off)
+    assert xr.open_dataset(walk_workflow / "results/files/aggregate/contact.nc")["contact_pressure"].sizes["x"] == 128
     # target_area with two seeds and a hardness below the search's first probe: the fit runs on each seed's
     # own schedule; files with per-file settings: no warning that cases were solved differently
-    res = run_snakemake(walk_workflow, "-j2", "results/gen-target/fit/cel.nc", "results/files/aggregate/contact.nc",
-                        "--configfile", "walk.yaml", timeout=600)
-    assert res.returncode == 0, (res.stdout + res.stderr)[-4000:]
     # the search's first probe, target E* h' / 2 = 0.015, is above the hardness 0.01: it stays below it
     contact_log = (walk_workflow / "results/gen-target/logs/contact/kl2_ks8_H0.5_s0.log").read_text()
     assert "target A/A0 = 0.3: p0 = " in contact_log and "not within tolerance" not in contact_log
