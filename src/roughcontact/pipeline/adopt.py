@@ -207,16 +207,18 @@ def adopt(source: Path, target: Path, scene_name: str, scene: dict, *, trust_cod
 def check_adoptable(name: str, scene: dict) -> None:
     """:class:`AdoptError` unless scene ``name`` has contact cases of generated surfaces, which adoption copies.
 
-    A measured or array scene's case is its file, read and solved in one scene: the same file under
-    another scene is the same case only if every reader setting matches, which adoption does not check.
+    A generated case is fixed by its recorded parameters and the code; a measured or array case is also
+    its input file's heights, whose content a contact file does not record (its reader settings name the
+    path only): adoption could not tell a case solved on an older version of the file, so it refuses.
     """
     if "contact" not in scene:
         raise AdoptError(f"scene {name!r} has no contact study, so it has no case to adopt")
     source = source_of(scene, name)
     if source.key is not None:
         raise AdoptError(f"scene {name!r} takes its surfaces from its {source.key} block ({source.name} files), "
-                         "and adoption copies generated cases (kl.._ks.._H.._s..) only; run the scene itself "
-                         "(snakemake --config scene=" + name + "): its few file cases are solved in seconds")
+                         "and adoption copies generated cases (kl.._ks.._H.._s..) only: a file's case depends on "
+                         "the file's content, which a contact file does not record; run the scene itself "
+                         f"(snakemake -j2 --config scene={name})")
 
 
 def _locked(workdir: Path) -> bool:
