@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from roughcontact.solver import elastic_kernel, solve_contact
-from roughcontact.solver.adhesion import Exponential, MaugisDugdale, solve_adhesive
+from roughcontact.solver.adhesion import MIN_ZONE_CELLS, Exponential, MaugisDugdale, solve_adhesive, zone_cells
 from roughcontact.surfaces.synthetic import generate_surface
 from roughcontact.theory import adhesion as th
 
@@ -46,7 +46,10 @@ def check_invariants(res, heights, law, *, e_star=1.0, length=1.0, tol, mean_gap
         assert abs(g.mean() - mean_gap) <= 1e-12 * mean_gap
     if p0 is not None:
         assert abs(res.mean_pressure - p0) <= tol * p_ref
-    assert res.converged and res.residual <= tol
+    assert res.residual <= tol
+    # converged means the invariants hold *and* the grid resolves the process zone
+    assert res.converged == (res.zone_cells >= MIN_ZONE_CELLS)
+    assert res.zone_cells == zone_cells(law, e_star, length, h.shape)
 
 
 def _trace(heights, law, mean_gaps, **kw):
@@ -54,7 +57,7 @@ def _trace(heights, law, mean_gaps, **kw):
     out, gap = [], None
     for gb in mean_gaps:
         res = solve_adhesive(heights, law=law, mean_gap=float(gb), initial_gap=gap, **kw)
-        assert res.converged, (gb, res.residual)
+        assert res.converged, (gb, res.residual, res.zone_cells)
         out.append(res)
         gap = res.gap
     return out

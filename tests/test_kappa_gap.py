@@ -13,7 +13,7 @@ from compare_outputs import assert_text_close
 from conftest import copy_workflow, run_snakemake
 from roughcontact.analysis.fit.estimators import PAPER_CEL
 from roughcontact.studies import kappa_gap
-from roughcontact.studies.kappa_gap.analysis import _closes
+from roughcontact.studies.kappa_gap.analysis import closes
 
 REPO = Path(__file__).resolve().parents[1]
 PUBLISHED = REPO / "docs" / "reproduction"
@@ -68,7 +68,7 @@ def test_richardson_recovers_limit_and_order():
 ])
 def test_closes_follows_its_printed_rule(shift, se, verdict):
     gap = np.array([0.03, 0.03])   # the paper's κ lies 3 % above ours
-    assert _closes(np.array(shift), np.array(se), gap, np.array([0.002, 0.002])) == verdict
+    assert closes(np.array(shift), np.array(se), gap, np.array([0.002, 0.002])) == verdict
 
 
 TINY = {
@@ -161,4 +161,4 @@ def test_published_verdicts_follow_their_printed_rule():
         shifts = np.array([_numbers(c) for c in cells[2:2 + len(kappa_gap.TARGET_AREAS)]])
         printed = cells[-1].strip()
         # an area the row's loads never reach is "—": it can be no part of the gap's closing
-        assert _closes(shifts[:, 0], shifts[:, 1], needed, needed_se) == printed, ln
+        assert closes(shifts[:, 0], shifts[:, 1], needed, needed_se) == printed, ln

@@ -328,7 +328,7 @@ def test_report_lists_every_topography_with_its_loads(scene_dir):
 def test_rectangular_maps_are_drawn_to_scale_with_both_sides():
     # A map kept whole (nx != ny, dx != dy): drawn over Lx x Ly, its title giving both sides and
     # counts, and the area-load title the range of grids.
-    from roughcontact.figures.measured import _grid_text
+    from roughcontact.figures.measured import grid_text
     from roughcontact.pipeline.datasets import measured_surface_dataset
     from roughcontact.surfaces.topography import MeasuredSurface
 
@@ -340,8 +340,8 @@ def test_rectangular_maps_are_drawn_to_scale_with_both_sides():
     assert r"$30000 \times 7500$" in ax.get_title() and r"$64 \times 40$" in ax.get_title()
     assert ax.get_images()[0].get_extent() == [0.0, 30000.0, 0.0, 7500.0]
     grids = {"a": (150, 300), "b": (256, 256), "c": (650, 650)}
-    assert _grid_text(grids) == r"grids $150 \times 300$ to $650 \times 650$"
-    assert _grid_text({"a": (256, 256), "b": (64, 64)}) == "$N$ = 64-256"
+    assert grid_text(grids) == r"grids $150 \times 300$ to $650 \times 650$"
+    assert grid_text({"a": (256, 256), "b": (64, 64)}) == "$N$ = 64-256"
 
 
 def _rescaled(agg, factors):

@@ -349,13 +349,13 @@ def test_dpbar_draws_windowed_slopes_over_faint_finite_differences(contact):
 
 def test_dpbar_paper_and_fit_lines_are_told_apart(contact):
     """The paper's power law and the fit differ in colour, dash and width; the legend gives both constants."""
-    from roughcontact.figures.load_curves import PAPER_CONSTANTS, _fit_constants
+    from roughcontact.figures.load_curves import PAPER_CONSTANTS, fit_constants
     from roughcontact.theory.laws import cel_dpbar_dp0
 
     agg, stats, fit = contact
     fig = fig_dpbar(agg, stats, fit, k_s=[32.0])
     ax = fig.axes[0]
-    consts = _fit_constants(fit, 16.0, 32.0, "paper")
+    consts = fit_constants(fit, 16.0, 32.0, "paper")
     paper = fitted = None
     for ln in ax.get_lines():
         x, y = np.asarray(ln.get_xdata()), np.asarray(ln.get_ydata())

@@ -17,7 +17,7 @@ from roughcontact.theory import (
     persson_pressure_distribution,
     persson_stiffness,
 )
-from roughcontact.theory.persson import _mode_weights
+from roughcontact.theory.persson import mode_weights
 
 #: A small spectrum of three modes [rad / length], [length^2].
 Q3, C3 = np.array([3.0, 10.0, 25.0]), np.array([4e-4, 5e-5, 2e-6])
@@ -96,7 +96,7 @@ def test_j_small_argument_asymptote():
 # --------------------------------------------------------------------- mean gap
 def test_w_at_the_largest_q_gives_persson_area(spectrum):
     q, c = spectrum
-    _, w = _mode_weights(q, c)
+    _, w = mode_weights(q, c)
     h1 = math.sqrt(np.sum(q * q * c))
     assert w[-1] == pytest.approx(math.sqrt(2) / h1, rel=1e-12)
     assert np.all(np.diff(w) < 0)
@@ -123,7 +123,7 @@ def test_mean_gap_against_direct_quadrature():
 
 def test_modes_of_one_wavenumber_count_together():
     """Ties in q share one W (the sum over q_j <= q_k includes them all); splitting a mode changes nothing."""
-    a, w = _mode_weights([1.0, 2.0, 2.0], [1.0, 1.0, 1.0])
+    a, w = mode_weights([1.0, 2.0, 2.0], [1.0, 1.0, 1.0])
     np.testing.assert_allclose(w, [(0.5 * 1.0) ** -0.5, (0.5 * 9.0) ** -0.5], rtol=1e-15)
     np.testing.assert_allclose(a, [w[0], 4.0 * w[1]], rtol=1e-15)
     split_q, split_c = np.r_[Q3, Q3[1]], np.r_[C3[0], 0.3 * C3[1], C3[2], 0.7 * C3[1]]
@@ -145,7 +145,7 @@ def test_mean_gap_decreasing_and_shaped(spectrum):
 def test_mean_gap_logarithmic_at_small_load(spectrum):
     """u ~ -gamma' ln p0 with gamma' = (gamma / (2 sqrt pi)) sum_k q_k c_k W_k."""
     q, c = spectrum
-    a, _ = _mode_weights(q, c)
+    a, _ = mode_weights(q, c)
     slope = -0.45 * np.sum(a) / (2 * math.sqrt(math.pi))
     p0, r = 1e-9, 1.01
     u = persson_mean_gap(np.array([p0 / r, p0 * r]), q, c, e_star=1.0, gamma=0.45)

@@ -18,7 +18,7 @@ from roughcontact.analysis import aggregate
 from roughcontact.analysis.aggregate.seeds import scale_free_statistics
 from roughcontact.analysis.fit.grid import fit_cel
 from roughcontact.core.quantities import LENGTH_UNITS, PRESSURE_UNITS, cf_unit, per_reference_length
-from roughcontact.figures.style import _unit_tex
+from roughcontact.figures.style import unit_tex
 from roughcontact.pipeline.datasets import (
     contact_dataset,
     representativity_batch,
@@ -127,13 +127,13 @@ def test_axis_labels_render_the_unit_strings():
     from matplotlib.mathtext import MathTextParser
 
     parser = MathTextParser("agg")
-    assert _unit_tex("1") == "1"
-    assert _unit_tex("um^(-1/2)") == r"$\mathrm{\mu m}^{-1/2}$"
-    assert _unit_tex("MPa um^-1") == r"$\mathrm{MPa}\,\mathrm{\mu m}^{-1}$"
+    assert unit_tex("1") == "1"
+    assert unit_tex("um^(-1/2)") == r"$\mathrm{\mu m}^{-1/2}$"
+    assert unit_tex("MPa um^-1") == r"$\mathrm{MPa}\,\mathrm{\mu m}^{-1}$"
     for length in LENGTH_UNITS:
         for pressure in PRESSURE_UNITS:
             for lp, pp in POWERS:
-                tex = _unit_tex(cf_unit(length, pressure, length_power=lp, pressure_power=pp))
+                tex = unit_tex(cf_unit(length, pressure, length_power=lp, pressure_power=pp))
                 assert "^(" not in tex and "um" not in tex, tex
                 if tex != "1":
                     parser.parse(tex)

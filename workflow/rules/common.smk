@@ -8,6 +8,7 @@ from pathlib import Path
 from roughcontact.core.cli import one_line
 from roughcontact.figures.registry import FIGURES, scene_figures
 from roughcontact.pipeline import params
+from roughcontact.pipeline.cases import is_adhesive
 from roughcontact.pipeline.config import (
     BATCH_STEM,
     CASE_STEM,
@@ -308,7 +309,9 @@ def scene_targets(scene):
     if "representativity" in s:
         out += [f"results/{scene}/aggregate/representativity.nc"]
     if "contact" in s:
-        out += [f"results/{scene}/aggregate/contact.nc", f"results/{scene}/fit/cel.nc", f"results/{scene}/fit/cel.csv"]
+        out += [f"results/{scene}/aggregate/contact.nc"]
+        if not is_adhesive(s["contact"]):  # the CEL describes contact without adhesion
+            out += [f"results/{scene}/fit/cel.nc", f"results/{scene}/fit/cel.csv"]
     if "accuracy" in s:
         out += [f"results/{scene}/accuracy/summary.{ext}" for ext in ("nc", "csv", "md")]
     if "kappa_gap" in s:

@@ -10,12 +10,17 @@ localrules:
 
 rule report_summary:
     input:
-        fit=lambda w: [f"results/{w.scene}/fit/cel.csv"] if "contact" in scene_of(w.scene) else [],
+        fit=lambda w: (
+            [f"results/{w.scene}/fit/cel.csv"]
+            if "contact" in scene_of(w.scene) and not is_adhesive(scene_of(w.scene)["contact"])
+            else []
+        ),
         # a patch source's table of its files (measured, array, ...): each surface, and the loads they received
         surfaces=lambda w: [f"results/{w.scene}/surfaces/{name}.nc" for name in patch_names(w.scene)],
+        # a patch source's table, and an adhesive scene's pull-off table, read the contact aggregate
         contact=lambda w: (
             [f"results/{w.scene}/aggregate/contact.nc"]
-            if patch_names(w.scene) and "contact" in scene_of(w.scene)
+            if "contact" in scene_of(w.scene) and (patch_names(w.scene) or is_adhesive(scene_of(w.scene)["contact"]))
             else []
         ),
     output:

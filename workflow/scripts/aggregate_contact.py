@@ -3,12 +3,16 @@ from roughcontact.pipeline import provenance
 from roughcontact.pipeline.io import read_dataset, run_logged, write_dataset
 from roughcontact.pipeline.sources import for_dims
 
+UNLOADING_DIMS = ["unload_step"]
 REQUIRED = ["pressure", "area_fraction", "mean_contact_pressure", "kappa", "converged", "rms_slope"]
 
 
 def main(log):
     paths = list(snakemake.input)
-    datasets = [read_dataset(p, stage="contact", variables=REQUIRED) for p in paths]
+    # an adhesive case's unloading branch has as many steps as that case needed: it stays in the case's
+    # file (the hysteresis figure reads it there); its pull-off and status are per-case scalars
+    datasets = [read_dataset(p, stage="contact", variables=REQUIRED).drop_dims(UNLOADING_DIMS, errors="ignore")
+                for p in paths]
     # the surface source whose case dimensions the files have stacks them (with its statistics)
     source = for_dims(datasets[0].dims)
     ds = source.aggregate(datasets, paths, snakemake.params.cases)

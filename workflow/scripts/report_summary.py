@@ -1,4 +1,4 @@
-"""The report's landing-page fragment: scene parameters, version, git commit, CEL fit table."""
+"""The report's landing-page fragment: scene parameters, version, git commit, CEL fit or pull-off table."""
 from pathlib import Path
 
 from roughcontact import __version__
@@ -22,13 +22,23 @@ def topographies():
     return report.topographies_table(rows)
 
 
+def pull_off():
+    """An adhesive scene's pull-off table (report.pull_off_table), or None."""
+    effects = snakemake.params.parameters.get("contact", {}).get("effects", {})
+    if "adhesion" not in effects:
+        return None
+    agg = read_dataset(snakemake.input.contact[0], stage="aggregate", variables=["pull_off_pressure"])
+    return report.pull_off_table(agg)
+
+
 def main(log):
     fit = snakemake.input.fit
     fit_csv = Path(fit[0]).read_text(encoding="utf-8") if fit else None
     # The checkout that holds this workflow; "unknown" when it is not a git work tree.
     commit = report.git_commit(Path(snakemake.scriptdir))
     text = report.summary_rst(snakemake.wildcards.scene, snakemake.params.parameters, version=__version__,
-                              commit=commit, fit_csv=fit_csv, topographies=topographies())
+                              commit=commit, fit_csv=fit_csv, topographies=topographies(),
+                              pull_off=pull_off())
     write_text_atomic(snakemake.output[0], text)
     log.info("report summary written to %s (version %s, commit %s)", snakemake.output[0], __version__, commit)
 

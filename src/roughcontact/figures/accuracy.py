@@ -8,7 +8,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from .style import _STYLE, OKABE_ITO, _new_figure, _require
+from .style import OKABE_ITO, STYLE, new_figure, require
 
 
 def fig_accuracy(summary: xr.Dataset) -> Figure:
@@ -20,13 +20,13 @@ def fig_accuracy(summary: xr.Dataset) -> Figure:
     the shipped defaults are marked with a star. Zero errors (the reference itself)
     are not drawn on log axes.
     """
-    _require(summary, "summary", ["time_per_case", "err_kappa", "err_area", "axis", "value"])
-    with matplotlib.rc_context(_STYLE):
+    require(summary, "summary", ["time_per_case", "err_kappa", "err_area", "axis", "value"])
+    with matplotlib.rc_context(STYLE):
         return _draw_accuracy(summary)
 
 
 def _draw_accuracy(summary: xr.Dataset) -> Figure:
-    fig = _new_figure(7.0, 3.2)
+    fig = new_figure(7.0, 3.2)
     axes = fig.subplots(1, 2)
     colours = dict(zip(("N", "tol", "n_steps", "seeds"), OKABE_ITO[1:5], strict=True))
     names = {"N": "grid N", "tol": "tolerance", "n_steps": "load steps", "seeds": "seeds"}

@@ -17,29 +17,29 @@ from matplotlib.patches import Patch
 from ..theory.asperity import asperity_area, asperity_max_load
 from ..theory.laws import KAPPA_BGT, KAPPA_PERSSON, cel_area, linear_area, persson_area
 from .load_curves import (
-    _BAND_ALPHA,
-    _BAND_EDGE_ALPHA,
-    _BAND_EDGE_LW,
-    _PERSSON_ERF_STYLE,
-    _PERSSON_LIMIT_STYLE,
     ASPERITY_STYLES,
+    BAND_ALPHA,
+    BAND_EDGE_ALPHA,
+    BAND_EDGE_LW,
     BGT_LIMIT_LABEL,
-    _asperity_alphas,
-    _asperity_handles,
-    _converged_family,
-    _draw_unconverged,
-    _e_star,
-    _family_panels,
-    _family_unconverged,
-    _fit_constants,
-    _mean_slope,
-    _n_outside,
-    _present,
-    _run_summary,
-    _unconverged,
-    _unconverged_handles,
+    PERSSON_ERF_STYLE,
+    PERSSON_LIMIT_STYLE,
+    asperity_alphas,
+    asperity_handles,
+    converged_family,
+    draw_unconverged,
+    e_star_of,
+    family_panels,
+    family_unconverged,
+    fit_constants,
+    has_seeds,
+    mean_slope,
+    n_outside,
+    run_summary,
+    unconverged_handles,
+    unconverged_steps,
 )
-from .style import _STYLE, OKABE_ITO, _family_handles, _lambda_label, _legend_below, _require
+from .style import OKABE_ITO, STYLE, family_handles, lambda_label, legend_below, require
 
 
 def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None, *,
@@ -82,25 +82,25 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
     -------
     matplotlib.figure.Figure
     """
-    _require(stats, "stats", ("area_fraction_mean", "area_fraction_std", "pressure_mean",
+    require(stats, "stats", ("area_fraction_mean", "area_fraction_std", "pressure_mean",
                               "rms_slope_mean", "n_seeds"))
-    e_star = _e_star(agg)
-    hp = _mean_slope(stats)
-    alphas, bad = _asperity_alphas(agg), _unconverged(agg)
-    kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes = _family_panels(
+    e_star = e_star_of(agg)
+    hp = mean_slope(stats)
+    alphas, bad = asperity_alphas(agg), unconverged_steps(agg)
+    kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes = family_panels(
         stats, k_l, k_s, hurst, fit_k_l)
-    with matplotlib.rc_context(_STYLE):
+    with matplotlib.rc_context(STYLE):
         extent, crosses = _area_load_curves(axes, agg, stats, bad, e_star, kl_list, ks_list, h_list,
                                             colour, marker, style)
         xmax, ymax, sdmax = (float(v) for v in extent)
         drew_fit = _area_load_theory_panels(axes, ks_list, fit, cel_kl, estimator, xmax, ymax, e_star, hp, alphas)
-        handles = _family_handles(kl_list, h_list, colour, marker, style) + _area_load_theory_handles(sdmax)
-        handles += _asperity_handles(alphas) + _area_load_cross_handles(axes, crosses)
+        handles = family_handles(kl_list, h_list, colour, marker, style) + area_load_theory_handles(sdmax)
+        handles += asperity_handles(alphas) + _area_load_cross_handles(axes, crosses)
         if drew_fit:
             handles.append(Line2D([], [], color="0.45", lw=2.2, alpha=0.8,
-                                  label=f"CEL fit ({estimator}), " + _lambda_label(cel_kl, "l")))
-        fig.suptitle(_run_summary(agg, stats))
-        _legend_below(fig, handles, f"$h' = {hp:.3g}$")
+                                  label=f"CEL fit ({estimator}), " + lambda_label(cel_kl, "l")))
+        fig.suptitle(run_summary(agg, stats))
+        legend_below(fig, handles, f"$h' = {hp:.3g}$")
     return fig
 
 
@@ -112,12 +112,12 @@ def _area_load_curves(axes, agg, stats, bad, e_star: float, kl_list, ks_list, h_
     """
     extent, crosses = np.zeros(3), []  # largest p0/E*, A/A0 + s.d., s.d.
     for idx, ks in enumerate(ks_list):
-        families = [(kl, ks, h) for kl in kl_list for h in h_list if _present(stats, kl, ks, h)]
+        families = [(kl, ks, h) for kl in kl_list for h in h_list if has_seeds(stats, kl, ks, h)]
         panel_extent, panel_crosses = _area_load_panel(axes.flat[idx], agg, stats, bad, families, e_star,
                                                        colour, marker, style)
         extent = np.fmax(extent, panel_extent)
         crosses.append(panel_crosses)
-        axes.flat[idx].set_title(_lambda_label(ks, "s"))
+        axes.flat[idx].set_title(lambda_label(ks, "s"))
     return extent, crosses
 
 
@@ -127,7 +127,7 @@ def _area_load_theory_panels(axes, ks_list, fit, cel_kl: float, estimator: str, 
     (:func:`_area_load_axes`); the axes beyond ``ks_list`` are hidden. Returns whether a fit was drawn."""
     drew_fit = False
     for idx, ks in enumerate(ks_list):
-        consts = _fit_constants(fit, cel_kl, ks, estimator)
+        consts = fit_constants(fit, cel_kl, ks, estimator)
         _area_load_axes(axes.flat[idx], consts, xmax, ymax, e_star, hp, alphas)
         drew_fit = drew_fit or consts is not None
     for ax in list(axes.flat)[len(ks_list):]:
@@ -138,8 +138,8 @@ def _area_load_theory_panels(axes, ks_list, fit, cel_kl: float, estimator: str, 
 def _area_load_cross_handles(axes, crosses) -> list:
     """Legend entries of the unconverged steps ``crosses`` (one ``(x, y)`` per shown panel), counting
     those outside their panel's limits."""
-    n_off = sum(_n_outside(ax, *c) for ax, c in zip(axes.flat, crosses, strict=False))  # hidden axes last
-    return _unconverged_handles(sum(x.size for x, _ in crosses), n_off)
+    n_off = sum(n_outside(ax, *c) for ax, c in zip(axes.flat, crosses, strict=False))  # hidden axes last
+    return unconverged_handles(sum(x.size for x, _ in crosses), n_off)
 
 
 def _area_load_family(ax, s: Mapping[str, np.ndarray], e_star: float, colour, marker, style) -> np.ndarray:
@@ -149,8 +149,8 @@ def _area_load_family(ax, s: Mapping[str, np.ndarray], e_star: float, colour, ma
     (NaN where no step has a value)."""
     x = s["pressure_mean"] / e_star
     y, sd = s["area_fraction_mean"], s["area_fraction_std"]
-    face, edge = mcolors.to_rgba(colour, _BAND_ALPHA), mcolors.to_rgba(colour, _BAND_EDGE_ALPHA)
-    ax.fill_between(x, y - sd, y + sd, facecolor=face, edgecolor=edge, lw=_BAND_EDGE_LW, zorder=2)
+    face, edge = mcolors.to_rgba(colour, BAND_ALPHA), mcolors.to_rgba(colour, BAND_EDGE_ALPHA)
+    ax.fill_between(x, y - sd, y + sd, facecolor=face, edgecolor=edge, lw=BAND_EDGE_LW, zorder=2)
     ax.plot(x, y, color=colour, marker=marker, ls=style, markevery=3, zorder=2.5)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # a family none of whose steps converged
@@ -159,7 +159,7 @@ def _area_load_family(ax, s: Mapping[str, np.ndarray], e_star: float, colour, ma
 
 def _area_load_panel(ax, agg, stats, bad, families, e_star: float, colour, marker, style):
     """The families ``(kl, ks, h)`` of one area-load panel over their converged steps
-    (:func:`_converged_family`), and their unconverged steps as crosses.
+    (:func:`converged_family`), and their unconverged steps as crosses.
 
     Returns ``(extent, (x, y))``: ``[max p0/E*, max A/A0 + s.d., max s.d.]`` [1] (NaN ignored)
     and ``p0/E*``, ``A/A0`` [1] of the unconverged steps, shape ``(n,)`` each.
@@ -167,12 +167,12 @@ def _area_load_panel(ax, agg, stats, bad, families, e_star: float, colour, marke
     extent, crosses = np.zeros(3), [(np.array([]), np.array([]))]
     for kl, ks, h in families:
         family = {"k_l": kl, "k_s": ks, "H": h}
-        v = _converged_family(agg, stats, bad, family, ("pressure_mean", "area_fraction_mean", "area_fraction_std"))
+        v = converged_family(agg, stats, bad, family, ("pressure_mean", "area_fraction_mean", "area_fraction_std"))
         extent = np.fmax(extent, _area_load_family(ax, v, e_star, colour[h], marker[kl], style[kl]))
-        p, a = _family_unconverged(agg, bad, family, "pressure", "area_fraction")
+        p, a = family_unconverged(agg, bad, family, "pressure", "area_fraction")
         crosses.append((p / e_star, a))
     x, y = (np.concatenate(v) for v in zip(*crosses, strict=True))
-    _draw_unconverged(ax, x, y)
+    draw_unconverged(ax, x, y)
     return extent, (x, y)
 
 
@@ -183,14 +183,14 @@ def _area_load_axes(ax, consts, xmax: float, ymax: float, e_star: float, hp: flo
     if consts is not None:
         ax.plot(p / e_star, cel_area(p, kappa=consts[0], mu=consts[1], beta=consts[2], rms_slope=hp, e_star=e_star),
                 color="0.45", lw=2.2, alpha=0.8, zorder=1)
-    _area_load_theory(ax, p, e_star, hp, alphas)
+    area_load_theory(ax, p, e_star, hp, alphas)
     ax.set_xlim(0, xmax)
     ax.set_ylim(0, ymax * 1.05)
     ax.set_xlabel(r"$p_0/E^*$ [1]")
     ax.set_ylabel(r"$A/A_0$ [1]")
 
 
-def _area_load_theory(ax, p: np.ndarray, e_star: float, hp: float, alphas) -> bool:
+def area_load_theory(ax, p: np.ndarray, e_star: float, hp: float, alphas) -> bool:
     """BGT and Persson small-load limits, Persson's erf curve and the asperity models at loads ``p``.
 
     An asperity model is drawn only up to the largest load it covers (its A/A0 = 1,
@@ -199,8 +199,8 @@ def _area_load_theory(ax, p: np.ndarray, e_star: float, hp: float, alphas) -> bo
     x = p / e_star
     ax.plot(x, linear_area(p, kappa=KAPPA_BGT, rms_slope=hp, e_star=e_star),
             color=OKABE_ITO[0], lw=0.9, ls="-", zorder=3)
-    ax.plot(x, persson_area(p, rms_slope=hp, e_star=e_star), **_PERSSON_ERF_STYLE, zorder=3)
-    ax.plot(x, linear_area(p, kappa=KAPPA_PERSSON, rms_slope=hp, e_star=e_star), **_PERSSON_LIMIT_STYLE,
+    ax.plot(x, persson_area(p, rms_slope=hp, e_star=e_star), **PERSSON_ERF_STYLE, zorder=3)
+    ax.plot(x, linear_area(p, kappa=KAPPA_PERSSON, rms_slope=hp, e_star=e_star), **PERSSON_LIMIT_STYLE,
             zorder=4)
     cut = False
     for alpha, shade, _ in alphas:
@@ -212,14 +212,14 @@ def _area_load_theory(ax, p: np.ndarray, e_star: float, hp: float, alphas) -> bo
     return cut
 
 
-def _area_load_theory_handles(sdmax: float) -> list:
+def area_load_theory_handles(sdmax: float) -> list:
     """Legend entries of the s.d. band (``sdmax``: its largest half-width [1]) and of the
     BGT and Persson curves."""
     grey = np.array([0.5, 0.5, 0.5])
-    return [Patch(facecolor=(*grey, _BAND_ALPHA), edgecolor=(*grey, _BAND_EDGE_ALPHA), lw=_BAND_EDGE_LW,
+    return [Patch(facecolor=(*grey, BAND_ALPHA), edgecolor=(*grey, BAND_EDGE_ALPHA), lw=BAND_EDGE_LW,
                   label=f"$\\pm 1$ s.d. over seeds (largest: {sdmax:.2g})"),
             Line2D([], [], color=OKABE_ITO[0], lw=0.9, label=BGT_LIMIT_LABEL),
-            Line2D([], [], **_PERSSON_LIMIT_STYLE,
+            Line2D([], [], **PERSSON_LIMIT_STYLE,
                    label=r"Persson, small-load limit $A/A_0 = \sqrt{8/\pi}\,p_0/(h'E^*)$"),
-            Line2D([], [], **_PERSSON_ERF_STYLE,
+            Line2D([], [], **PERSSON_ERF_STYLE,
                    label=r"Persson, full: $A/A_0 = \mathrm{erf}(\sqrt{2}\,p_0/(h'E^*))$")]

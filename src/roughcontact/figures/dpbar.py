@@ -18,20 +18,20 @@ from ..analysis.aggregate.derivatives import log_window_edges, windowed_load_slo
 from ..theory.laws import cel_dpbar_dp0
 from .load_curves import (
     PAPER_CONSTANTS,
-    _constrained_constants,
-    _converged_family,
-    _draw_unconverged,
-    _e_star,
-    _family_panels,
-    _family_unconverged,
-    _fit_constants,
-    _n_outside,
-    _present,
-    _run_summary,
-    _unconverged,
-    _unconverged_handles,
+    constrained_constants,
+    converged_family,
+    draw_unconverged,
+    e_star_of,
+    family_panels,
+    family_unconverged,
+    fit_constants,
+    has_seeds,
+    n_outside,
+    run_summary,
+    unconverged_handles,
+    unconverged_steps,
 )
-from .style import _STYLE, OKABE_ITO, _family_handles, _lambda_label, _legend_below, _require
+from .style import OKABE_ITO, STYLE, family_handles, lambda_label, legend_below, require
 
 #: Windows per decade of ``A/A0`` of the windowed ``d pbar / d p0`` (see aggregate.windowed_load_slope).
 DPBAR_PER_DECADE = 6
@@ -50,7 +50,7 @@ def _windowed_dpbar(agg: xr.Dataset, kl: float, ks: float, h: float, per_decade:
 
     Windows: :func:`roughcontact.analysis.aggregate.log_window_edges` of the seed-mean load curve;
     slopes per seed by :func:`roughcontact.analysis.aggregate.windowed_load_slope`, the unconverged
-    steps (``bad``, :func:`_unconverged` of ``agg``) left out of both. Returns
+    steps (``bad``, :func:`unconverged_steps` of ``agg``) left out of both. Returns
     ``(a, mean, sem)``, each shape ``(n_windows,)``: mean ``A/A0`` [1], seed-mean slope [1]
     and its standard error [1] (NaN with fewer than two seeds in a window).
     """
@@ -93,11 +93,11 @@ def _dpbar_family(ax, agg, stats, bad, family, colour, marker, style, per_decade
     """Draw one family over its converged steps: faint finite differences, windowed slopes with
     log-space bars, and the unconverged steps' finite differences as crosses.
 
-    ``family``: ``{"k_l": .., "k_s": .., "H": ..}``; ``bad``: :func:`_unconverged` of ``agg``.
+    ``family``: ``{"k_l": .., "k_s": .., "H": ..}``; ``bad``: :func:`unconverged_steps` of ``agg``.
     Returns ``(x_raw, y_raw, bar_lo, bar_hi, x_bad, y_bad)`` [1] of what was drawn, 1-D each, for
     the axis limits and the count of unconverged steps.
     """
-    s = _converged_family(agg, stats, bad, family, ("area_fraction_mean", "dpbar_dp0_mean"))
+    s = converged_family(agg, stats, bad, family, ("area_fraction_mean", "dpbar_dp0_mean"))
     xr_, yr_ = s["area_fraction_mean"], s["dpbar_dp0_mean"]
     raw = np.isfinite(xr_) & np.isfinite(yr_) & (xr_ > 0) & (yr_ > 0)
     ax.plot(xr_[raw], yr_[raw], ls="none", marker=marker, ms=1.6, color=colour, alpha=0.35, mew=0, zorder=2)
@@ -106,8 +106,8 @@ def _dpbar_family(ax, agg, stats, bad, family, colour, marker, style, per_decade
     bars = _log_bars(y[ok], sem[ok])
     ax.errorbar(x[ok], y[ok], yerr=bars, color=colour, marker=marker, ls=style, ms=3.5,
                 elinewidth=0.8, capsize=2.0, zorder=3)
-    x_bad, y_bad = _family_unconverged(agg, bad, family, "area_fraction", "dpbar_dp0")
-    _draw_unconverged(ax, x_bad, y_bad)
+    x_bad, y_bad = family_unconverged(agg, bad, family, "area_fraction", "dpbar_dp0")
+    draw_unconverged(ax, x_bad, y_bad)
     return xr_[raw], yr_[raw], y[ok] - bars[0], y[ok] + bars[1], x_bad, y_bad
 
 
@@ -123,7 +123,7 @@ def _fit_law_label(consts, ks: float, many: bool, estimator: str, cel_kl: float,
 
     ``consts``: ``(kappa, mu, beta)``; ``constrained``: per name (default: all constrained).
     """
-    where = _lambda_label(cel_kl, "l") + (", " + _lambda_label(ks, "s") if many else "")
+    where = lambda_label(cel_kl, "l") + (", " + lambda_label(ks, "s") if many else "")
     constrained = constrained or {}
     parts = [f"{tex} = {consts[i]:.3f}" for name, tex, i in _LAW_CONSTANTS if constrained.get(name, True)]
     loose = [tex for name, tex, _ in _LAW_CONSTANTS if not constrained.get(name, True)]
@@ -149,7 +149,7 @@ def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
     as grey crosses, counted in the legend. Lines: the paper's ``0.21 (A0/A)^0.55``
     (black dashed) and, with ``fit``, the fitted ``beta (A0/A)^mu`` of ``fit_k_l`` (thick
     grey); the legend gives the value of each of mu and beta that the data constrain and
-    says "not constrained" of the others (:func:`_constrained_constants`).
+    says "not constrained" of the others (:func:`constrained_constants`).
 
     Parameters
     ----------
@@ -166,16 +166,16 @@ def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
     -------
     matplotlib.figure.Figure
     """
-    _require(stats, "stats", ("dpbar_dp0_mean", "area_fraction_mean", "n_seeds"))
-    _require(agg, "agg", ("pressure", "mean_contact_pressure", "area_fraction"))
-    _e_star(agg)
-    bad = _unconverged(agg)
-    kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes = _family_panels(
+    require(stats, "stats", ("dpbar_dp0_mean", "area_fraction_mean", "n_seeds"))
+    require(agg, "agg", ("pressure", "mean_contact_pressure", "area_fraction"))
+    e_star_of(agg)
+    bad = unconverged_steps(agg)
+    kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes = family_panels(
         stats, k_l, k_s, hurst, fit_k_l)
     fit_handles, counts = [], (0, 0, 0)  # faint points off the axis, unconverged steps, those off the axes
-    with matplotlib.rc_context(_STYLE):
+    with matplotlib.rc_context(STYLE):
         for idx, ks in enumerate(ks_list):
-            families = [{"k_l": kl, "k_s": ks, "H": h} for kl in kl_list for h in h_list if _present(stats, kl, ks, h)]
+            families = [{"k_l": kl, "k_s": ks, "H": h} for kl in kl_list for h in h_list if has_seeds(stats, kl, ks, h)]
             label, *panel_counts = _dpbar_ks_panel(axes.flat[idx], agg, stats, fit, bad, families, colour, marker,
                                                    style, cel_kl, ks, estimator, len(ks_list) > 1, per_decade)
             fit_handles += [Line2D([], [], **{k: v for k, v in _FIT_LAW_STYLE.items() if k != "zorder"},
@@ -184,10 +184,10 @@ def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
         n_off, n_bad, n_bad_off = counts
         for ax in list(axes.flat)[len(ks_list):]:
             ax.set_visible(False)
-        handles = _family_handles(kl_list, h_list, colour, marker, style)
-        handles += _dpbar_handles(per_decade, n_off) + _unconverged_handles(n_bad, n_bad_off) + fit_handles
-        fig.suptitle(_run_summary(agg, stats))
-        _legend_below(fig, handles, r"bars: $\pm 1$ s.e.m. over seeds, in log space ($y\,e^{\pm s/y}$)")
+        handles = family_handles(kl_list, h_list, colour, marker, style)
+        handles += _dpbar_handles(per_decade, n_off) + unconverged_handles(n_bad, n_bad_off) + fit_handles
+        fig.suptitle(run_summary(agg, stats))
+        legend_below(fig, handles, r"bars: $\pm 1$ s.e.m. over seeds, in log space ($y\,e^{\pm s/y}$)")
     return fig
 
 
@@ -207,7 +207,7 @@ def _dpbar_ks_panel(ax, agg, stats, fit, bad, families, colour, marker, style, c
         return "", 0, x_bad.size, x_bad.size  # nothing drawable on log axes in this panel
     label = _dpbar_panel(ax, fit, cel_kl, ks, estimator, many, x_raw, lo, hi)
     n_off = int(np.sum((y_raw < ax.get_ylim()[0]) | (y_raw > ax.get_ylim()[1])))
-    return label, n_off, x_bad.size, _n_outside(ax, x_bad, y_bad)
+    return label, n_off, x_bad.size, n_outside(ax, x_bad, y_bad)
 
 
 def _dpbar_panel(ax, fit, cel_kl: float, ks: float, estimator: str, many: bool, x_raw, lo, hi) -> str:
@@ -219,11 +219,11 @@ def _dpbar_panel(ax, fit, cel_kl: float, ks: float, estimator: str, many: bool, 
     a = np.geomspace(float(x_raw.min()), float(x_raw.max()), 100)
     lines = [cel_dpbar_dp0(a, mu=PAPER_CONSTANTS["mu"], beta=PAPER_CONSTANTS["beta"])]
     ax.plot(a, lines[0], **_PAPER_LAW_STYLE)
-    consts, label = _fit_constants(fit, cel_kl, ks, estimator), ""
+    consts, label = fit_constants(fit, cel_kl, ks, estimator), ""
     if consts is not None:
         lines.append(cel_dpbar_dp0(a, mu=consts[1], beta=consts[2]))
         ax.plot(a, lines[-1], **_FIT_LAW_STYLE)
-        constrained = _constrained_constants(fit, {"k_l": cel_kl, "k_s": ks, "H_group": "pooled"},
+        constrained = constrained_constants(fit, {"k_l": cel_kl, "k_s": ks, "H_group": "pooled"},
                                              estimator, ("mu", "beta"))
         label = _fit_law_label(consts, ks, many, estimator, cel_kl, constrained)
     # the range follows the window means and the laws; a bar longer than a factor 3 runs
@@ -249,7 +249,7 @@ def _dpbar_axes(ax, ks: float) -> None:
     # Minor labels help within a decade but collide once the axis spans more.
     lo, hi = ax.get_ylim()
     ax.yaxis.set_minor_formatter(FormatStrFormatter("%g") if hi / lo < 12 else NullFormatter())
-    ax.set_title(_lambda_label(ks, "s"))
+    ax.set_title(lambda_label(ks, "s"))
     ax.set_xlabel(r"$A/A_0$ [1]")
     ax.set_ylabel(r"$\partial\bar p/\partial p_0$ [1]")
 

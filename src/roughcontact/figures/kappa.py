@@ -15,31 +15,31 @@ from matplotlib.patches import Patch
 from ..theory.asperity import asperity_kappa
 from ..theory.laws import KAPPA_BGT, KAPPA_PERSSON, cel_kappa
 from .load_curves import (
-    _PERSSON_LIMIT_STYLE,
     ASPERITY_STYLES,
     BGT_LIMIT_LABEL,
     PAPER_CEL_LABEL,
     PAPER_CONSTANTS,
-    _asperity_alphas,
-    _asperity_handles,
-    _converged_family,
-    _draw_unconverged,
-    _e_star,
-    _family_panels,
-    _family_unconverged,
-    _fit_constants,
-    _fit_constrained,
-    _fit_label,
-    _n_outside,
-    _present,
-    _run_summary,
-    _unconverged,
-    _unconverged_handles,
+    PERSSON_LIMIT_STYLE,
+    asperity_alphas,
+    asperity_handles,
+    converged_family,
+    draw_unconverged,
+    e_star_of,
+    family_panels,
+    family_unconverged,
+    fit_constants,
+    fit_constrained,
+    fit_label,
+    has_seeds,
+    n_outside,
+    run_summary,
+    unconverged_handles,
+    unconverged_steps,
 )
-from .style import _STYLE, OKABE_ITO, _family_handles, _lambda_label, _legend_below, _require
+from .style import OKABE_ITO, STYLE, family_handles, lambda_label, legend_below, require
 
 
-def _kappa_theory(ax, amax: float, alphas, ylo: float, yhi: float) -> list:
+def kappa_theory(ax, amax: float, alphas, ylo: float, yhi: float) -> list:
     """BGT and Persson limits, the paper's CEL and the asperity models on ``[0, amax]``; sets the y
     limits from ``[ylo, yhi]`` (data) and the asperity curves; returns the legend entries."""
     ax.axhline(KAPPA_BGT, color=OKABE_ITO[0], lw=0.9)
@@ -54,19 +54,19 @@ def _kappa_theory(ax, amax: float, alphas, ylo: float, yhi: float) -> list:
     pad = 0.05 * (yhi - ylo)
     shown = ylo - pad <= KAPPA_PERSSON <= yhi + pad
     if shown:
-        ax.axhline(KAPPA_PERSSON, **_PERSSON_LIMIT_STYLE)
+        ax.axhline(KAPPA_PERSSON, **PERSSON_LIMIT_STYLE)
     ax.set_ylim(ylo - pad, yhi + pad)
     return [Line2D([], [], color=OKABE_ITO[0], lw=0.9, label=BGT_LIMIT_LABEL),
-            Line2D([], [], **_PERSSON_LIMIT_STYLE, label=(
+            Line2D([], [], **PERSSON_LIMIT_STYLE, label=(
                 r"Persson small-load limit, $\kappa=\sqrt{8/\pi}$" if shown
                 else rf"Persson, $\kappa=\sqrt{{8/\pi}}$ = {KAPPA_PERSSON:.2f}: below the axis")),
-            *_asperity_handles(alphas),
+            *asperity_handles(alphas),
             Line2D([], [], color=OKABE_ITO[0], lw=1.4, ls=":", label=PAPER_CEL_LABEL)]
 
 
 def _kappa_panel(ax, agg, stats, bad, families, colour, marker, style):
     """Seed-mean ``kappa(A/A0)`` with s.e.m. bars of each family ``(kl, ks, h)`` of one panel over
-    its converged steps (:func:`_converged_family`), and its unconverged steps as crosses.
+    its converged steps (:func:`converged_family`), and its unconverged steps as crosses.
 
     Returns ``(amax, ylo, yhi, (x, y))``: the largest mean ``A/A0`` [1], the range of mean -+ s.e.m.
     [1], and ``A/A0``, ``kappa`` [1] of the unconverged steps, shape ``(n,)`` each.
@@ -74,26 +74,26 @@ def _kappa_panel(ax, agg, stats, bad, families, colour, marker, style):
     amax, ylo, yhi, crosses = 0.0, np.inf, -np.inf, [(np.array([]), np.array([]))]
     for kl, ks, h in families:
         family = {"k_l": kl, "k_s": ks, "H": h}
-        v = _converged_family(agg, stats, bad, family, ("area_fraction_mean", "kappa_mean", "kappa_sem"))
+        v = converged_family(agg, stats, bad, family, ("area_fraction_mean", "kappa_mean", "kappa_sem"))
         x, y, e = v["area_fraction_mean"], v["kappa_mean"], v["kappa_sem"]
         ax.errorbar(x, y, yerr=e, color=colour[h], marker=marker[kl], ls=style[kl],
                     markevery=2, errorevery=2, elinewidth=0.6)
         if np.isfinite(x).any():  # else every step of the family failed
             amax = max(amax, float(np.nanmax(x)))
             ylo, yhi = min(ylo, float(np.nanmin(y - e))), max(yhi, float(np.nanmax(y + e)))
-        crosses.append(_family_unconverged(agg, bad, family, "area_fraction", "kappa"))
+        crosses.append(family_unconverged(agg, bad, family, "area_fraction", "kappa"))
     x, y = (np.concatenate(v) for v in zip(*crosses, strict=True))
-    _draw_unconverged(ax, x, y)
+    draw_unconverged(ax, x, y)
     return amax, ylo, yhi, (x, y)
 
 
 def _kappa_fit_handles(fit, ks_list, cel_kl, estimator) -> list:
     """Legend entries of the fitted CEL (its constants for one panel, or where it is not constrained) and its window."""
-    loose = [ks for ks in ks_list if not _fit_constrained(fit, cel_kl, ks, estimator)]
-    return [Line2D([], [], color="0.45", lw=2.2, alpha=0.8, label=_fit_label(
-                "this run", estimator, cel_kl, _fit_constants(fit, cel_kl, ks_list[0], estimator)
+    loose = [ks for ks in ks_list if not fit_constrained(fit, cel_kl, ks, estimator)]
+    return [Line2D([], [], color="0.45", lw=2.2, alpha=0.8, label=fit_label(
+                "this run", estimator, cel_kl, fit_constants(fit, cel_kl, ks_list[0], estimator)
                 if len(ks_list) == 1 else None, not loose,
-                where=", ".join(_lambda_label(ks, "s") for ks in loose) if len(ks_list) > 1 else "")),
+                where=", ".join(lambda_label(ks, "s") for ks in loose) if len(ks_list) > 1 else "")),
             Patch(facecolor="0.9", edgecolor="none", label=(
                 f"fit window $A/A_0 \\in$ [{float(fit.attrs.get('window_low', np.nan)):g}, "
                 f"{float(fit.attrs.get('window_high', np.nan)):g}]"))]
@@ -124,18 +124,18 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
     -------
     matplotlib.figure.Figure
     """
-    _require(stats, "stats", ("kappa_mean", "kappa_sem", "area_fraction_mean", "n_seeds"))
-    _e_star(agg)
-    alphas, bad = _asperity_alphas(agg), _unconverged(agg)
-    kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes = _family_panels(
+    require(stats, "stats", ("kappa_mean", "kappa_sem", "area_fraction_mean", "n_seeds"))
+    e_star_of(agg)
+    alphas, bad = asperity_alphas(agg), unconverged_steps(agg)
+    kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes = family_panels(
         stats, k_l, k_s, hurst, fit_k_l)
-    with matplotlib.rc_context(_STYLE):
+    with matplotlib.rc_context(STYLE):
         drew_fit, n_bad, n_off = False, 0, 0
         for idx, ks in enumerate(ks_list):
             ax = axes.flat[idx]
-            families = [(kl, ks, h) for kl in kl_list for h in h_list if _present(stats, kl, ks, h)]
+            families = [(kl, ks, h) for kl in kl_list for h in h_list if has_seeds(stats, kl, ks, h)]
             amax, ylo, yhi, crosses = _kappa_panel(ax, agg, stats, bad, families, colour, marker, style)
-            consts = _fit_constants(fit, cel_kl, ks, estimator)
+            consts = fit_constants(fit, cel_kl, ks, estimator)
             if consts is not None:
                 a = np.linspace(0, amax, 200)
                 ax.plot(a, cel_kappa(a, kappa=consts[0], mu=consts[1], beta=consts[2]),
@@ -144,18 +144,18 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
                            color="0.9", zorder=0, lw=0)
                 ylo, yhi = min(ylo, consts[0]), max(yhi, consts[0])
                 drew_fit = True
-            theory = _kappa_theory(ax, amax, alphas, min(ylo, KAPPA_BGT), max(yhi, KAPPA_BGT))
+            theory = kappa_theory(ax, amax, alphas, min(ylo, KAPPA_BGT), max(yhi, KAPPA_BGT))
             ax.set_xlim(0, amax * 1.02)
-            ax.set_title(_lambda_label(ks, "s"))
+            ax.set_title(lambda_label(ks, "s"))
             ax.set_xlabel(r"$A/A_0$ [1]")
             ax.set_ylabel(r"$\kappa = E^* h'/\bar p$ [1]")
-            n_bad, n_off = n_bad + crosses[0].size, n_off + _n_outside(ax, *crosses)
+            n_bad, n_off = n_bad + crosses[0].size, n_off + n_outside(ax, *crosses)
         for ax in list(axes.flat)[len(ks_list):]:
             ax.set_visible(False)
-        handles = _family_handles(kl_list, h_list, colour, marker, style) + theory
-        handles += _unconverged_handles(n_bad, n_off)
+        handles = family_handles(kl_list, h_list, colour, marker, style) + theory
+        handles += unconverged_handles(n_bad, n_off)
         if drew_fit:
             handles += _kappa_fit_handles(fit, ks_list, cel_kl, estimator)
-        fig.suptitle(_run_summary(agg, stats))
-        _legend_below(fig, handles, "error bars: s.e.m.")
+        fig.suptitle(run_summary(agg, stats))
+        legend_below(fig, handles, "error bars: s.e.m.")
     return fig

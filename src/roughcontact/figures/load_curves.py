@@ -29,15 +29,15 @@ from ..analysis.aggregate.seeds import seed_reduce
 from ..analysis.fit.estimators import at_bound
 from ..theory.laws import KAPPA_BGT
 from ..theory.summits import NAYAK_ALPHA_MIN
-from .style import _STYLE, OKABE_ITO, _family_styles, _lambda_label, _new_figure, _panel_grid, _pick, _require
+from .style import OKABE_ITO, STYLE, family_styles, lambda_label, new_figure, panel_grid, pick, require
 
 #: Persson's (2001) two curves: one colour, told apart by style (they coincide at small load).
 PERSSON_COLOUR = OKABE_ITO[6]
-_PERSSON_LIMIT_STYLE = {"color": PERSSON_COLOUR, "lw": 1.0, "ls": (0, (4, 2))}
-_PERSSON_ERF_STYLE = {"color": PERSSON_COLOUR, "lw": 2.6, "ls": "-", "alpha": 0.45}
+PERSSON_LIMIT_STYLE = {"color": PERSSON_COLOUR, "lw": 1.0, "ls": (0, (4, 2))}
+PERSSON_ERF_STYLE = {"color": PERSSON_COLOUR, "lw": 2.6, "ls": "-", "alpha": 0.45}
 
 
-def _run_summary(agg: xr.Dataset, stats: xr.Dataset) -> str:
+def run_summary(agg: xr.Dataset, stats: xr.Dataset) -> str:
     """What a contact figure shows, for its title: grid N, seeds per family, load range."""
     parts = []
     try:
@@ -58,11 +58,11 @@ def _run_summary(agg: xr.Dataset, stats: xr.Dataset) -> str:
     return ", ".join(parts)
 
 
-def _fit_constants(fit: xr.Dataset | None, k_l: float, k_s: float, estimator: str):
+def fit_constants(fit: xr.Dataset | None, k_l: float, k_s: float, estimator: str):
     """(kappa, mu, beta) of the H-pooled fit, or None where absent/NaN."""
     if fit is None:
         return None
-    _require(fit, "fit", ("value",))
+    require(fit, "fit", ("value",))
     if estimator not in list(fit["estimator"].values):
         raise ValueError(f"estimator={estimator!r} is not in fit (has {list(fit['estimator'].values)})")
     try:
@@ -73,11 +73,13 @@ def _fit_constants(fit: xr.Dataset | None, k_l: float, k_s: float, estimator: st
     return tuple(vals) if np.all(np.isfinite(vals)) else None
 
 
-def _present(stats: xr.Dataset, k_l: float, k_s: float, h: float) -> bool:
+def has_seeds(stats: xr.Dataset, k_l: float, k_s: float, h: float) -> bool:
+    """Whether the ``(k_l, k_s, H)`` family has at least one seed in ``stats`` (the aggregate's seed statistics)."""
     return int(stats["n_seeds"].sel(k_l=k_l, k_s=k_s, H=h)) > 0
 
 
-def _e_star(agg: xr.Dataset) -> float:
+def e_star_of(agg: xr.Dataset) -> float:
+    """The modulus ``E*`` [pressure] of an aggregate (its ``e_star`` attribute), checked finite and > 0."""
     if "e_star" not in agg.attrs:
         raise ValueError("agg lacks the global attribute 'e_star'")
     e = float(agg.attrs["e_star"])
@@ -91,7 +93,7 @@ def _e_star(agg: xr.Dataset) -> float:
 UNCONVERGED_STYLE = {"color": "0.5", "marker": "x", "ls": "none", "ms": 3.0, "mew": 0.7}
 
 
-def _unconverged(ds: xr.Dataset, present: xr.DataArray | bool | None = None) -> xr.DataArray | None:
+def unconverged_steps(ds: xr.Dataset, present: xr.DataArray | bool | None = None) -> xr.DataArray | None:
     """The load steps that did not converge: boolean, dims of ``ds.converged`` (``(k_l, k_s, H,
     seed, step)`` or ``(topography, step)``); None where ``ds`` has no ``converged`` (files of
     older versions: every step is taken as converged).
@@ -106,13 +108,13 @@ def _unconverged(ds: xr.Dataset, present: xr.DataArray | bool | None = None) -> 
     return ~ds["converged"].astype(bool) & present
 
 
-def _converged_family(agg: xr.Dataset, stats: xr.Dataset, bad: xr.DataArray | None, family: Mapping,
+def converged_family(agg: xr.Dataset, stats: xr.Dataset, bad: xr.DataArray | None, family: Mapping,
                       names: Sequence[str]) -> dict[str, np.ndarray]:
     """Seed statistics of one family over its converged steps, by name, shape ``(n_steps,)`` each.
 
     ``family``: ``{"k_l": .., "k_s": .., "H": ..}``; ``names``: statistics of
     :func:`roughcontact.analysis.aggregate.seed_statistics` (``"kappa_mean"``, ``"area_fraction_std"``,
-    ``"pressure_mean"`` ...), in the units of their variable; ``bad``: :func:`_unconverged` of
+    ``"pressure_mean"`` ...), in the units of their variable; ``bad``: :func:`unconverged_steps` of
     ``agg``. Taken from ``stats`` where every step of the family converged (or ``bad`` is None),
     else recomputed from ``agg`` by :func:`roughcontact.analysis.aggregate.seed_statistics`' reduction
     with the unconverged ``(seed, step)`` left out (a step none of whose seeds converged is NaN,
@@ -131,31 +133,31 @@ def _converged_family(agg: xr.Dataset, stats: xr.Dataset, bad: xr.DataArray | No
     return out
 
 
-def _masked_points(x: xr.DataArray, y: xr.DataArray, mask: xr.DataArray) -> tuple[np.ndarray, np.ndarray]:
+def masked_points(x: xr.DataArray, y: xr.DataArray, mask: xr.DataArray) -> tuple[np.ndarray, np.ndarray]:
     """``x`` and ``y`` where ``mask`` is True, broadcast against each other, flattened: shape ``(n,)`` each."""
     x, y, mask = (v.transpose(*mask.dims) for v in xr.broadcast(x, y, mask))
     m = mask.values.astype(bool)
     return x.values[m].astype(float), y.values[m].astype(float)
 
 
-def _family_unconverged(agg: xr.Dataset, bad: xr.DataArray | None, family: Mapping, x: str,
+def family_unconverged(agg: xr.Dataset, bad: xr.DataArray | None, family: Mapping, x: str,
                         y: str) -> tuple[np.ndarray, np.ndarray]:
-    """Values of the variables ``x`` and ``y`` at the unconverged steps (``bad``, :func:`_unconverged`)
+    """Values of the variables ``x`` and ``y`` at the unconverged steps (``bad``, :func:`unconverged_steps`)
     of one family, shape ``(n,)`` each."""
     mask = None if bad is None else bad.sel(family)
     if mask is None or not bool(mask.any()):
         return np.array([]), np.array([])
     case = agg.sel(family)
-    return _masked_points(case[x], case[y], mask)
+    return masked_points(case[x], case[y], mask)
 
 
-def _draw_unconverged(ax, x: np.ndarray, y: np.ndarray) -> None:
+def draw_unconverged(ax, x: np.ndarray, y: np.ndarray) -> None:
     """The unconverged steps ``(x, y)``, shape ``(n,)`` each, as crosses (nothing for ``n = 0``)."""
     if x.size:
         ax.plot(x, y, zorder=1.5, **UNCONVERGED_STYLE)
 
 
-def _n_outside(ax, x: np.ndarray, y: np.ndarray) -> int:
+def n_outside(ax, x: np.ndarray, y: np.ndarray) -> int:
     """How many points ``(x, y)`` the axes do not show at their current limits (non-finite ones,
     and non-positive ones on a log axis, included)."""
     inside = np.isfinite(x) & np.isfinite(y)
@@ -165,7 +167,7 @@ def _n_outside(ax, x: np.ndarray, y: np.ndarray) -> int:
     return int(x.size - inside.sum())
 
 
-def _unconverged_handles(n: int, n_off: int, left_out_of: str = "lines and means") -> list[Line2D]:
+def unconverged_handles(n: int, n_off: int, left_out_of: str = "lines and means") -> list[Line2D]:
     """Legend entry of ``n`` unconverged steps, ``n_off`` of them outside the axes; none for ``n = 0``."""
     if not n:
         return []
@@ -196,7 +198,7 @@ PAPER_ALPHA = 2.0
 ALPHA_SPREAD_MAX = 0.1
 
 
-def _asperity_alphas(agg: xr.Dataset) -> list[tuple[float, str, str]]:
+def asperity_alphas(agg: xr.Dataset) -> list[tuple[float, str, str]]:
     """``(alpha, colour, label)`` of the asperity curves: the paper's alpha = 2 and, when the
     surfaces carry it, it differs and the cases share it (relative spread of the means per
     (k_l, k_s) family at most :data:`ALPHA_SPREAD_MAX`), their own mean Nayak bandwidth
@@ -218,12 +220,14 @@ def _asperity_alphas(agg: xr.Dataset) -> list[tuple[float, str, str]]:
     return out
 
 
-def _asperity_handles(alphas) -> list[Line2D]:
+def asperity_handles(alphas) -> list[Line2D]:
+    """Legend handles of the asperity models' curves, one per model and Nayak alpha of ``alphas``."""
     return [Line2D([], [], color=colour, lw=1.1, ls=ls, label=f"{name}, {label}")
             for alpha, colour, label in alphas for ls, name in ASPERITY_STYLES.values()]
 
 
-def _mean_slope(stats: xr.Dataset) -> float:
+def mean_slope(stats: xr.Dataset) -> float:
+    """The mean rms slope ``h'`` of a study's cases with seeds (every case shares the target slope)."""
     # All cases of a study share the target rms slope; its mean sets the theory lines.
     hp = stats["rms_slope_mean"].where(stats["n_seeds"] > 0)
     v = float(hp.mean(skipna=True))
@@ -233,34 +237,34 @@ def _mean_slope(stats: xr.Dataset) -> float:
 
 
 def _selection(stats, k_l, k_s, hurst):
-    ks_list = _pick(stats["k_s"].values, k_s, "k_s")
-    kl_list = _pick(stats["k_l"].values, k_l, "k_l")
-    h_list = _pick(stats["H"].values, hurst, "hurst")
+    ks_list = pick(stats["k_s"].values, k_s, "k_s")
+    kl_list = pick(stats["k_l"].values, k_l, "k_l")
+    h_list = pick(stats["H"].values, hurst, "hurst")
     ks_list = [ks for ks in ks_list
-               if any(_present(stats, kl, ks, h) for kl in kl_list for h in h_list)]
+               if any(has_seeds(stats, kl, ks, h) for kl in kl_list for h in h_list)]
     if not ks_list:
         raise ValueError("no (k_l, k_s, H) family with data in the selection")
     return kl_list, ks_list, h_list
 
 
 # ---------------------------------------------------------------------- figures
-def _family_panels(stats, k_l, k_s, hurst, fit_k_l):
+def family_panels(stats, k_l, k_s, hurst, fit_k_l):
     """Selection, styles, the k_l of the drawn CEL, and one panel per k_s (Figs. 2-4)."""
     kl_list, ks_list, h_list = _selection(stats, k_l, k_s, hurst)
-    colour, marker, style = _family_styles(kl_list, h_list)
-    cel_kl = kl_list[-1] if fit_k_l is None else _pick(stats["k_l"].values, fit_k_l, "fit_k_l")[0]
-    nrows, ncols, width, height = _panel_grid(len(ks_list))
-    with matplotlib.rc_context(_STYLE):
-        fig = _new_figure(width, height)
+    colour, marker, style = family_styles(kl_list, h_list)
+    cel_kl = kl_list[-1] if fit_k_l is None else pick(stats["k_l"].values, fit_k_l, "fit_k_l")[0]
+    nrows, ncols, width, height = panel_grid(len(ks_list))
+    with matplotlib.rc_context(STYLE):
+        fig = new_figure(width, height)
         axes = fig.subplots(nrows, ncols, squeeze=False)
     return kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes
 
 
 #: The +-1 s.d. bands of the area-load figure: face and edge opacity, edge width [pt].
-_BAND_ALPHA, _BAND_EDGE_ALPHA, _BAND_EDGE_LW = 0.3, 0.8, 0.6
+BAND_ALPHA, BAND_EDGE_ALPHA, BAND_EDGE_LW = 0.3, 0.8, 0.6
 
 
-def _constrained_constants(fit: xr.Dataset, where: Mapping, estimator: str,
+def constrained_constants(fit: xr.Dataset, where: Mapping, estimator: str,
                            constants: Sequence[str]) -> dict[str, bool]:
     """Per constant, whether the data constrain it: the fit's ``constrained`` flag (95 % interval
     narrower than the value, :func:`roughcontact.analysis.fit.constrained_flags`; True for files without
@@ -278,18 +282,18 @@ def _constrained_constants(fit: xr.Dataset, where: Mapping, estimator: str,
     return out
 
 
-def _fit_constrained(fit: xr.Dataset, k_l: float, k_s: float, estimator: str,
+def fit_constrained(fit: xr.Dataset, k_l: float, k_s: float, estimator: str,
                      constants: Sequence[str] = ("kappa", "mu", "beta")) -> bool:
-    """Whether ``constants`` of the H-pooled fit are all constrained by the data (:func:`_constrained_constants`)."""
+    """Whether ``constants`` of the H-pooled fit are all constrained by the data (:func:`constrained_constants`)."""
     where = {"k_l": k_l, "k_s": k_s, "H_group": "pooled"}
-    return all(_constrained_constants(fit, where, estimator, constants).values())
+    return all(constrained_constants(fit, where, estimator, constants).values())
 
 
-def _fit_label(who: str, estimator: str, k_l: float, consts, constrained: bool = True, where: str = "") -> str:
+def fit_label(who: str, estimator: str, k_l: float, consts, constrained: bool = True, where: str = "") -> str:
     """Legend text of a fitted CEL curve, with its constants when one curve is drawn and the
     data constrain them (else "not constrained": an interval wider than the value is no number;
     ``where`` names the panels where they are not, when there are several)."""
-    text = f"CEL, {who} ({estimator}), " + _lambda_label(k_l, "l")
+    text = f"CEL, {who} ({estimator}), " + lambda_label(k_l, "l")
     if not constrained:
         return text + ": not constrained by the data" + (f" at {where}" if where else "")
     if consts is not None:

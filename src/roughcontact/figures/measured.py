@@ -28,28 +28,28 @@ from matplotlib.patches import Patch
 from ..analysis.aggregate.combine import TOPOGRAPHY_DIM as _DIM
 from ..theory.laws import KAPPA_BGT, cel_area, cel_area_limit, cel_kappa
 from . import load_curves
-from .area_load import _area_load_theory, _area_load_theory_handles
-from .kappa import _kappa_theory
+from .area_load import area_load_theory, area_load_theory_handles
+from .kappa import kappa_theory
 from .load_curves import (
-    _asperity_alphas,
-    _asperity_handles,
-    _constrained_constants,
-    _e_star,
-    _masked_points,
-    _n_outside,
-    _unconverged_handles,
+    asperity_alphas,
+    asperity_handles,
+    constrained_constants,
+    e_star_of,
+    masked_points,
+    n_outside,
+    unconverged_handles,
 )
 from .style import (
-    _MARKERS,
-    _STYLE,
     DATA_COLOURS,
     DOUBLE_COLUMN_IN,
+    MARKERS,
     SINGLE_COLUMN_IN,
-    _legend_below,
-    _new_figure,
-    _plain_log_labels,
-    _require,
-    _unit_tex,
+    STYLE,
+    legend_below,
+    new_figure,
+    plain_log_labels,
+    require,
+    unit_tex,
 )
 
 #: Largest side, in pixels, of a height map as drawn: larger maps are block-averaged (the
@@ -69,7 +69,7 @@ def _names(agg: xr.Dataset) -> list[str]:
 def _style(i: int) -> dict:
     """Colour and marker of the ``i``-th topography."""
     return {"color": DATA_COLOURS[i % len(DATA_COLOURS)],
-            "marker": _MARKERS[(i // len(DATA_COLOURS)) % len(_MARKERS)]}
+            "marker": MARKERS[(i // len(DATA_COLOURS)) % len(MARKERS)]}
 
 
 def _in_fit(agg: xr.Dataset, fit: xr.Dataset | None) -> np.ndarray:
@@ -87,14 +87,14 @@ def _fitted(fit: xr.Dataset | None, estimator: str):
     """``((kappa, mu, beta), constrained)`` of the pooled fit, or ``(None, False)`` where absent/NaN."""
     if fit is None:
         return None, False
-    _require(fit, "fit", ("value",))
+    require(fit, "fit", ("value",))
     if estimator not in [str(e) for e in fit["estimator"].values]:
         raise ValueError(f"estimator={estimator!r} is not in fit (has {list(fit['estimator'].values)})")
     v = fit["value"].sel(estimator=estimator)
     consts = tuple(float(v.sel(constant=c)) for c in ("kappa", "mu", "beta"))
     if not np.all(np.isfinite(consts)):
         return None, False
-    return consts, all(_constrained_constants(fit, {}, estimator, ("kappa", "mu", "beta")).values())
+    return consts, all(constrained_constants(fit, {}, estimator, ("kappa", "mu", "beta")).values())
 
 
 def _fit_label(estimator: str, consts, constrained: bool, n: int) -> str:
@@ -113,7 +113,7 @@ def _recorded(ds: xr.Dataset) -> dict:
     return recorded if isinstance(recorded, dict) else {}
 
 
-def _grid_text(sizes: Mapping[str, tuple[int, int]]) -> str:
+def grid_text(sizes: Mapping[str, tuple[int, int]]) -> str:
     """The grids of the files: ``N = 256``, ``N = 150-480`` when all are square, else the smallest and largest."""
     shapes = sorted(set(sizes.values()), key=lambda s: (s[0] * s[1], s))
     if all(nx == ny for nx, ny in shapes):
@@ -128,27 +128,27 @@ def _summary(agg: xr.Dataset, sizes: Mapping[str, tuple[int, int]] | None) -> st
     n = len(_names(agg))
     parts = [f"{n} topograph{'y' if n == 1 else 'ies'}"]
     if sizes:
-        parts.append(_grid_text(sizes))
+        parts.append(grid_text(sizes))
     solver = _recorded(agg).get("solver", {})
     boundary = agg.attrs.get("boundary", solver.get("boundary") if isinstance(solver, dict) else None)
     if boundary:
         parts.append(f"{boundary} boundary")
-    p = agg["pressure"].values / _e_star(agg)
+    p = agg["pressure"].values / e_star_of(agg)
     if np.isfinite(p).any():
         parts.append(f"$p_0/E^*$ = {np.nanmin(p):.3g}-{np.nanmax(p):.3g}")
     return ", ".join(parts)
 
 
 def _unconverged(agg: xr.Dataset) -> xr.DataArray:
-    """The unconverged steps, ``(topography, step)`` (:func:`roughcontact.figures.load_curves._unconverged`), of
+    """The unconverged steps, ``(topography, step)`` (:func:`roughcontact.figures.load_curves.unconverged_steps`), of
     every topography: each is drawn, whether or not it entered the fit."""
-    bad = load_curves._unconverged(agg, present=True)
+    bad = load_curves.unconverged_steps(agg, present=True)
     return xr.zeros_like(agg["area_fraction"], dtype=bool) if bad is None else bad.transpose(_DIM, "step")
 
 
 def _load(agg: xr.Dataset) -> xr.DataArray:
     """``p0/(E* h')`` [1] of every step, each topography over its own rms slope ``h'``, dims of ``area_fraction``."""
-    return agg["pressure"].broadcast_like(agg["area_fraction"]) / (_e_star(agg) * agg["rms_slope"])
+    return agg["pressure"].broadcast_like(agg["area_fraction"]) / (e_star_of(agg) * agg["rms_slope"])
 
 
 def _curve(agg: xr.Dataset, name: str, bad: xr.DataArray) -> tuple[np.ndarray, np.ndarray]:
@@ -164,8 +164,8 @@ def _curve(agg: xr.Dataset, name: str, bad: xr.DataArray) -> tuple[np.ndarray, n
 def _draw_unconverged(ax, x: xr.DataArray, y: xr.DataArray, bad: xr.DataArray) -> tuple[np.ndarray, np.ndarray]:
     """The unconverged steps as crosses at ``(x, y)`` (dims ``(topography, step)``); returns their
     ``(x, y)``, shape ``(n,)`` each, to count those outside the axes once the limits are set."""
-    points = _masked_points(x, y, bad)
-    load_curves._draw_unconverged(ax, *points)
+    points = masked_points(x, y, bad)
+    load_curves.draw_unconverged(ax, *points)
     return points
 
 
@@ -229,20 +229,20 @@ def fig_topographies(surfaces: Sequence[xr.Dataset]) -> Figure:
     if not surfaces:
         raise ValueError("surfaces must hold at least one dataset")
     for i, ds in enumerate(surfaces):
-        _require(ds, f"surfaces[{i}]", ("heights",))
+        require(ds, f"surfaces[{i}]", ("heights",))
     ncols = min(len(surfaces), 3)
     nrows = -(-len(surfaces) // ncols)
     width = SINGLE_COLUMN_IN if ncols == 1 else DOUBLE_COLUMN_IN
     # Per row: the square map (~0.75 of the column) plus its three-line title, x label and colour bar.
     row = 0.75 * width / ncols + 1.3
-    with matplotlib.rc_context(_STYLE):
-        fig = _new_figure(width, nrows * row + 0.3)
+    with matplotlib.rc_context(STYLE):
+        fig = new_figure(width, nrows * row + 0.3)
         axes = fig.subplots(nrows, ncols, squeeze=False)
         for ax, ds in zip(axes.flat, surfaces, strict=False):
             h = np.asarray(ds["heights"].transpose(..., "x", "y").values, dtype=float).squeeze()
             if h.ndim != 2:
                 raise ValueError(f"heights must be a 2-D map, got shape {h.shape}")
-            utex = _unit_tex(str(ds.attrs.get("length_units", "1")))
+            utex = unit_tex(str(ds.attrs.get("length_units", "1")))
             (lx, ly), cell = _cell_label(ds, h.shape, utex)
             name = str(ds[_DIM].values.ravel()[0]) if _DIM in ds.coords else str(ds.attrs.get("source_file", ""))
             im = ax.imshow(_block_mean(h, MAP_PIXELS).T, origin="lower", extent=(0, lx, 0, ly),
@@ -268,9 +268,9 @@ def fig_topographies(surfaces: Sequence[xr.Dataset]) -> Figure:
 
 def _prepare(agg: xr.Dataset, fit: xr.Dataset | None, estimator: str, required):
     """Checked inputs of a contact figure: names, asperity alphas, fitted constants, which cases were fitted."""
-    _require(agg, "agg", required)
+    require(agg, "agg", required)
     consts, constrained = _fitted(fit, estimator)
-    return _names(agg), _asperity_alphas(agg), consts, constrained, _in_fit(agg, fit)
+    return _names(agg), asperity_alphas(agg), consts, constrained, _in_fit(agg, fit)
 
 
 def fig_measured_area_load(agg: xr.Dataset, fit: xr.Dataset | None = None, *, estimator: str = "joint",
@@ -304,25 +304,25 @@ def fig_measured_area_load(agg: xr.Dataset, fit: xr.Dataset | None = None, *, es
     """
     names, alphas, consts, constrained, used = _prepare(agg, fit, estimator, ("area_fraction", "pressure",
                                                                               "rms_slope"))
-    with matplotlib.rc_context(_STYLE):
-        fig = _new_figure(SINGLE_COLUMN_IN + 1.3, 3.0)
+    with matplotlib.rc_context(STYLE):
+        fig = new_figure(SINGLE_COLUMN_IN + 1.3, 3.0)
         ax = fig.subplots()
         bad = _unconverged(agg)
         xs, ys = _draw_area_curves(ax, agg, names, used, bad)
         crosses = _draw_unconverged(ax, _load(agg), agg["area_fraction"], bad)
         grid = np.geomspace(xs.min() / 1.2, xs.max() * 1.2, 200)
         # Loads normalised by E* h': the theory takes p0 = x with E* = h' = 1.
-        cut = _area_load_theory(ax, grid, 1.0, 1.0, alphas)
-        handles = _topography_handles(names, used, "-") + _area_load_theory_handles(0.0)[1:]
-        handles += _asperity_handles(alphas)
+        cut = area_load_theory(ax, grid, 1.0, 1.0, alphas)
+        handles = _topography_handles(names, used, "-") + area_load_theory_handles(0.0)[1:]
+        handles += asperity_handles(alphas)
         if cut:
             handles.append(Line2D([], [], ls="none", label="BGT, Greenwood: drawn up to their full contact"))
         if consts is not None:
             handles += _draw_area_fit(ax, grid, fit, estimator, consts, constrained, used)
         _area_load_log_axes(ax, grid, ys)
-        handles += _unconverged_handles(crosses[0].size, _n_outside(ax, *crosses), "lines")
+        handles += unconverged_handles(crosses[0].size, n_outside(ax, *crosses), "lines")
         fig.suptitle(_summary(agg, sizes))
-        _legend_below(fig, handles, r"each topography's load over its own $E^* h'$")
+        legend_below(fig, handles, r"each topography's load over its own $E^* h'$")
     return fig
 
 
@@ -361,7 +361,7 @@ def _area_load_log_axes(ax, grid: np.ndarray, ys: np.ndarray) -> None:
     ax.set_xscale("log")
     ax.set_yscale("log")
     for axis in (ax.xaxis, ax.yaxis):
-        _plain_log_labels(axis)
+        plain_log_labels(axis)
     ax.set_xlim(grid[0], grid[-1])
     ax.set_ylim(ys.min() / 1.5, min(1.0, ys.max() * 1.5))
     ax.set_xlabel(r"$p_0/(E^* h')$ [1]")
@@ -392,8 +392,8 @@ def fig_measured_kappa(agg: xr.Dataset, fit: xr.Dataset | None = None, *, estima
     """
     names, alphas, consts, constrained, used = _prepare(agg, fit, estimator, ("area_fraction", "pressure",
                                                                               "rms_slope", "kappa"))
-    with matplotlib.rc_context(_STYLE):
-        fig = _new_figure(SINGLE_COLUMN_IN + 1.3, 3.0)
+    with matplotlib.rc_context(STYLE):
+        fig = new_figure(SINGLE_COLUMN_IN + 1.3, 3.0)
         ax = fig.subplots()
         amax, ylo, yhi, bad = 0.0, KAPPA_BGT, KAPPA_BGT, _unconverged(agg)
         for i, (name, u) in enumerate(zip(names, used, strict=True)):
@@ -416,12 +416,12 @@ def fig_measured_kappa(agg: xr.Dataset, fit: xr.Dataset | None = None, *, estima
             handles += [Line2D([], [], **_FIT_STYLE, label=_fit_label(estimator, consts, constrained,
                                                                       int(fit.get("n_topographies", used.sum())))),
                         _window_patch(fit)]
-        handles += _kappa_theory(ax, amax, alphas, ylo, yhi)
+        handles += kappa_theory(ax, amax, alphas, ylo, yhi)
         ax.set_xlim(0, amax * 1.02)
-        handles += _unconverged_handles(crosses[0].size, _n_outside(ax, *crosses), "lines")
+        handles += unconverged_handles(crosses[0].size, n_outside(ax, *crosses), "lines")
         ax.set_xlabel(r"$A/A_0$ [1]")
         ax.set_ylabel(r"$\kappa = E^* h'/\bar p$ [1]")
         fig.suptitle(_summary(agg, sizes))
-        _legend_below(fig, handles, "")
+        legend_below(fig, handles, "")
     return fig
 

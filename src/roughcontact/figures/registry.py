@@ -17,15 +17,18 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import xarray as xr
 from matplotlib.figure import Figure
 
+from ..pipeline.cases import cases as grid_cases, is_adhesive
 from ..pipeline.config.scenes import CASE_STEM
 from ..pipeline.io import read_dataset
 from ..pipeline.sources import source_of
 from . import measured as plots_measured
 from .accuracy import fig_accuracy
+from .adhesion import HYSTERESIS_VARIABLES, PULL_OFF_VARIABLES, fig_hysteresis, fig_pull_off
 from .area_load import fig_area_load
 from .dpbar import fig_dpbar
 from .kappa import fig_kappa
@@ -159,6 +162,47 @@ def _render_topographies(paths: Mapping[str, Paths]) -> Figure:
         [read_dataset(p, stage="surface", variables=["heights"]) for p in paths["surfaces"]])
 
 
+# ------------------------------------------------------------------ adhesive scenes
+#: Most cases :func:`fig_hysteresis` draws (seed 0 of each group, or each file, in order).
+HYSTERESIS_CASES = 8
+
+
+def _hysteresis_inputs(block: Mapping) -> dict[str, Paths]:
+    """Seed 0 of each ``(k_l, k_s, H)`` with ``k_l < k_s``, at most :data:`HYSTERESIS_CASES`."""
+    stems = [c.stem for c in grid_cases(block) if c.seed == 0 and float(c.k_l) < float(c.k_s)]
+    return {"cases": [f"contact/{stem}.nc" for stem in stems[:HYSTERESIS_CASES]]}
+
+
+def _patch_hysteresis_inputs(scene: Mapping) -> dict[str, Paths]:
+    return {"cases": [f"contact/{name}.nc" for name in sorted(source_of(scene).names(scene))][:HYSTERESIS_CASES]}
+
+
+def _render_hysteresis(paths: Mapping[str, Paths]) -> Figure:
+    cases = []
+    for path in paths["cases"]:
+        ds = read_dataset(path, stage="contact", variables=list(HYSTERESIS_VARIABLES))
+        cases.append((Path(path).stem, ds))
+    return fig_hysteresis(cases)
+
+
+def _render_pull_off(paths: Mapping[str, Paths]) -> Figure:
+    agg = read_dataset(paths["agg"], stage="aggregate", variables=list(PULL_OFF_VARIABLES))
+    dims = ("topography",) if "topography" in agg.dims else ("k_l", "k_s", "H", "seed")
+    return fig_pull_off(agg, dims)
+
+
+def _adhesive_scene(scene: Mapping) -> bool:
+    return "contact" in scene and is_adhesive(scene["contact"])
+
+
+def _elastic_scene(scene: Mapping) -> bool:
+    return "contact" in scene and not is_adhesive(scene["contact"])
+
+
+def _not_adhesive(block: Mapping) -> bool:
+    return not is_adhesive(block)
+
+
 FIGURES: dict[str, FigureSpec] = {
     "representativity": FigureSpec(
         "representativity", lambda block: {"rep": "aggregate/representativity.nc"}, _render_representativity,
@@ -166,10 +210,17 @@ FIGURES: dict[str, FigureSpec] = {
     "surface_examples": FigureSpec(
         "representativity", _example_inputs, _render_surface_examples, "Representativity",
         "surface_examples.rst", wanted=lambda block: bool(block["examples"])),
+    # the CEL and the theories of Fig. 2 describe contact without adhesion: not for an adhesive scene
     "area_load": FigureSpec(
-        "contact", _contact_inputs, _contact_figure(fig_area_load), "Contact", "area_load.rst"),
-    "kappa": FigureSpec("contact", _contact_inputs, _contact_figure(fig_kappa), "Contact", "kappa.rst"),
-    "dpbar": FigureSpec("contact", _contact_inputs, _contact_figure(fig_dpbar), "Contact", "dpbar.rst"),
+        "contact", _contact_inputs, _contact_figure(fig_area_load), "Contact", "area_load.rst", wanted=_not_adhesive),
+    "kappa": FigureSpec("contact", _contact_inputs, _contact_figure(fig_kappa), "Contact", "kappa.rst",
+                        wanted=_not_adhesive),
+    "dpbar": FigureSpec("contact", _contact_inputs, _contact_figure(fig_dpbar), "Contact", "dpbar.rst",
+                        wanted=_not_adhesive),
+    "hysteresis": FigureSpec("contact", _hysteresis_inputs, _render_hysteresis, "Adhesion", "hysteresis.rst",
+                             wanted=is_adhesive),
+    "pull_off": FigureSpec("contact", lambda block: {"agg": "aggregate/contact.nc"}, _render_pull_off, "Adhesion",
+                           "pull_off.rst", wanted=is_adhesive),
     "accuracy": FigureSpec(
         "accuracy", lambda block: {"summary": "accuracy/summary.nc"}, _render_accuracy, "Accuracy", "accuracy.rst"),
     # Patch sources' scenes: every scene has the topography maps; the contact figures need a contact study.
@@ -178,10 +229,16 @@ FIGURES: dict[str, FigureSpec] = {
         "Topographies", "topographies.rst", wanted=lambda scene: True, cases="patches"),
     "measured_area_load": FigureSpec(
         "contact", _measured_contact_inputs, _measured_contact_figure(plots_measured.fig_measured_area_load),
-        "Contact", "measured_area_load.rst", wanted=lambda scene: "contact" in scene, cases="patches"),
+        "Contact", "measured_area_load.rst", wanted=_elastic_scene, cases="patches"),
     "measured_kappa": FigureSpec(
         "contact", _measured_contact_inputs, _measured_contact_figure(plots_measured.fig_measured_kappa),
-        "Contact", "measured_kappa.rst", wanted=lambda scene: "contact" in scene, cases="patches"),
+        "Contact", "measured_kappa.rst", wanted=_elastic_scene, cases="patches"),
+    "measured_hysteresis": FigureSpec(
+        "contact", _patch_hysteresis_inputs, _render_hysteresis, "Adhesion", "hysteresis.rst",
+        wanted=_adhesive_scene, cases="patches"),
+    "measured_pull_off": FigureSpec(
+        "contact", lambda scene: {"agg": "aggregate/contact.nc"}, _render_pull_off, "Adhesion", "pull_off.rst",
+        wanted=_adhesive_scene, cases="patches"),
 }
 
 

@@ -15,20 +15,20 @@ from matplotlib.ticker import NullFormatter
 
 from ..analysis.aggregate.seeds import scale_free_statistics
 from .style import (
-    _LINESTYLES,
-    _MARKERS,
-    _STYLE,
     DATA_COLOURS,
     DOUBLE_COLUMN_IN,
+    LINESTYLES,
+    MARKERS,
     OKABE_ITO,
     SINGLE_COLUMN_IN,
-    _fmt,
-    _new_figure,
-    _number_unit,
-    _pick,
-    _plain_log_labels,
-    _require,
-    _unit_tex,
+    STYLE,
+    fmt,
+    new_figure,
+    number_unit,
+    pick,
+    plain_log_labels,
+    require,
+    unit_tex,
 )
 
 
@@ -38,7 +38,7 @@ def _rep_hurst(rep: xr.Dataset, hurst: float | None) -> float:
         if len(hs) != 1:
             raise ValueError(f"rep_stats holds several H {hs}; pass hurst= one of them")
         return hs[0]
-    return _pick(rep["H"].values, hurst, "hurst")[0]
+    return pick(rep["H"].values, hurst, "hurst")[0]
 
 
 def _rep_summary(rep: xr.Dataset, h: float) -> str:
@@ -57,7 +57,7 @@ def _rep_summary(rep: xr.Dataset, h: float) -> str:
     bins = rep.attrs.get("n_bins", recorded.get("n_bins"))
     if bins is not None:
         parts.append(f"{int(bins)} bins")
-    parts.append(f"$H = {_fmt(h)}$")
+    parts.append(f"$H = {fmt(h)}$")
     sigma = float(rep["std_height"].mean()) if "std_height" in rep else surface.get("rms_height")
     if sigma is not None and np.isfinite(sigma):
         parts.append(rf"rms height $\sigma$ = {float(sigma):.3g}")
@@ -71,8 +71,8 @@ def _rep_curves(ax, sub: xr.Dataset, ylabel: str, title: str) -> None:
         ok = ((row["n_seeds"] > 0) & np.isfinite(row["epsilon_mean"])).values
         if ok.any():
             ax.errorbar(row["k_s"].values[ok], row["epsilon_mean"].values[ok], yerr=row["epsilon_sem"].values[ok],
-                        color=DATA_COLOURS[i % len(DATA_COLOURS)], marker=_MARKERS[i % len(_MARKERS)],
-                        ls=_LINESTYLES[i % len(_LINESTYLES)], label=f"$k_l = {_fmt(kl)}$")
+                        color=DATA_COLOURS[i % len(DATA_COLOURS)], marker=MARKERS[i % len(MARKERS)],
+                        ls=LINESTYLES[i % len(LINESTYLES)], label=f"$k_l = {fmt(kl)}$")
     ax.set_xscale("log")
     ax.set_yscale("log")
     ks = [float(k) for k in sub["k_s"].values]
@@ -80,9 +80,9 @@ def _rep_curves(ax, sub: xr.Dataset, ylabel: str, title: str) -> None:
     for k in ks[1:]:  # a label only 1.4x beyond the last one: 32 and 40 would collide
         if k / labelled[-1] >= 1.4:
             labelled.append(k)
-    ax.set_xticks(ks, [_fmt(k) if k in labelled else "" for k in ks])
+    ax.set_xticks(ks, [fmt(k) if k in labelled else "" for k in ks])
     ax.xaxis.set_minor_formatter(NullFormatter())
-    _plain_log_labels(ax.yaxis)
+    plain_log_labels(ax.yaxis)
     ax.set_xlabel(r"short cutoff $k_s = L/\lambda_s$ [1]")
     ax.set_ylabel(ylabel)
     ax.set_title(title)
@@ -113,21 +113,21 @@ def _rep_map(fig: Figure, ax, sub: xr.Dataset, symbol: str, unit: str) -> None:
             dark = norm(v) < 0.55  # cividis is dark at the low end
             ax.text(j, i, f"{v:.2g}", ha="center", va="center", fontsize=5.5 if len(kss) <= 4 else 4.5,
                     color="white" if dark else "black")
-    ax.set_xticks(range(len(kss)), [_fmt(k) for k in kss])
-    ax.set_yticks(range(len(kls)), [_fmt(k) for k in kls])
+    ax.set_xticks(range(len(kss)), [fmt(k) for k in kss])
+    ax.set_yticks(range(len(kls)), [fmt(k) for k in kls])
     ax.set_xlabel(r"short cutoff $k_s$ [1]")
     ax.set_ylabel(r"long cutoff $k_l$ [1]")
     ax.set_title(rf"(c) {symbol} over $(k_l, k_s)$")
     ax.set_label("epsilon map")
     cb = fig.colorbar(mesh, ax=ax, shrink=0.9, pad=0.02)
     cb.set_label(f"{symbol} [{unit}]")
-    _plain_log_labels(cb.ax.yaxis)
+    plain_log_labels(cb.ax.yaxis)
 
 
 def _rep_panels(rep: xr.Dataset, h: float) -> list[tuple[xr.Dataset, str, str, str]]:
     """``(statistics at H=h, symbol, unit, title)`` of the paper's eps and, when the per-case
     data allow it, of the scale-free eps (:func:`roughcontact.analysis.aggregate.seeds.scale_free_statistics`)."""
-    units = _unit_tex(_number_unit(rep["epsilon_mean"].attrs))
+    units = unit_tex(number_unit(rep["epsilon_mean"].attrs))
     panels = [(rep.sel(H=h), r"$\bar\varepsilon$", units, r"(a) heights $h$ (paper's $\varepsilon$)")]
     free = scale_free_statistics(rep)
     if free is not None:
@@ -167,13 +167,13 @@ def fig_representativity(rep_stats: xr.Dataset, *, hurst: float | None = None) -
     matplotlib.figure.Figure
         7 in wide with two or three panels (4.4 in with one), legend below.
     """
-    _require(rep_stats, "rep_stats", ("epsilon_mean", "epsilon_sem", "n_seeds"))
+    require(rep_stats, "rep_stats", ("epsilon_mean", "epsilon_sem", "n_seeds"))
     h = _rep_hurst(rep_stats, hurst)
     panels = _rep_panels(rep_stats, h)
     kls, kss = _rep_grid(panels[-1][0])
     n = len(panels) + (len(kls) >= 2 and len(kss) >= 2)
-    with matplotlib.rc_context(_STYLE):
-        fig = _new_figure(DOUBLE_COLUMN_IN if n > 1 else SINGLE_COLUMN_IN + 1.0, 2.9)
+    with matplotlib.rc_context(STYLE):
+        fig = new_figure(DOUBLE_COLUMN_IN if n > 1 else SINGLE_COLUMN_IN + 1.0, 2.9)
         axes = fig.subplots(1, n, squeeze=False, width_ratios=[1.0] * len(panels) + [1.15] * (n - len(panels)))[0]
         for ax, (sub, symbol, unit, title) in zip(axes, panels, strict=False):
             _rep_curves(ax, sub, f"mean $L_2$ error {symbol} [{unit}]", title if len(panels) > 1 else "")
@@ -218,8 +218,8 @@ def fig_surface_examples(examples: Sequence[tuple[np.ndarray, str]], *, length: 
     hi = max(float(h.max()) for h, _ in fields) / length
     width = SINGLE_COLUMN_IN if n == 1 else DOUBLE_COLUMN_IN
     col_w = width / n
-    with matplotlib.rc_context(_STYLE):
-        fig = _new_figure(width, col_w * 0.95 + 1.7)
+    with matplotlib.rc_context(STYLE):
+        fig = new_figure(width, col_w * 0.95 + 1.7)
         axes = fig.subplots(2, n, squeeze=False, gridspec_kw={"height_ratios": [col_w * 0.95, 1.5]})
         for j, (h, label) in enumerate(fields):
             h = h / length

@@ -33,10 +33,10 @@ OKABE_ITO = ("#000000", "#E69F00", "#56B4E9", "#009E73", "#D55E00", "#0072B2", "
 DATA_COLOURS = OKABE_ITO[1:]
 
 
-_MARKERS = ("o", "s", "^", "D", "v", "P", "X")
+MARKERS = ("o", "s", "^", "D", "v", "P", "X")
 
 
-_LINESTYLES = ("-", "--", "-.", ":", (0, (5, 1)), (0, (1, 1)))
+LINESTYLES = ("-", "--", "-.", ":", (0, (5, 1)), (0, (1, 1)))
 
 
 #: Width of a single-column and of a two-column figure [in].
@@ -46,7 +46,9 @@ SINGLE_COLUMN_IN = 3.4
 DOUBLE_COLUMN_IN = 7.0
 
 
-_STYLE = {
+#: The package's matplotlib settings (fonts sized for a journal column, Okabe-Ito colours,
+#: reproducible PDF): draw inside ``matplotlib.rc_context(STYLE)``.
+STYLE = {
     "font.size": 8,
     "axes.labelsize": 8,
     "axes.titlesize": 8,
@@ -121,11 +123,13 @@ def save_figure(fig: Figure, path: str | os.PathLike) -> list[Path]:
 
 
 # ----------------------------------------------------------------------- helpers
-def _new_figure(width: float, height: float) -> Figure:
+def new_figure(width: float, height: float) -> Figure:
+    """A constrained-layout figure of ``width`` x ``height`` inches, not tied to pyplot's state."""
     return Figure(figsize=(width, height), layout="constrained")
 
 
-def _require(ds: xr.Dataset, name: str, variables: Sequence[str]) -> None:
+def require(ds: xr.Dataset, name: str, variables: Sequence[str]) -> None:
+    """Raise ``ValueError`` naming ``name`` unless ``ds`` is a Dataset holding every one of ``variables``."""
     if not isinstance(ds, xr.Dataset):
         raise ValueError(f"{name} must be an xarray.Dataset, got {type(ds).__name__}")
     missing = [v for v in variables if v not in ds]
@@ -133,7 +137,10 @@ def _require(ds: xr.Dataset, name: str, variables: Sequence[str]) -> None:
         raise ValueError(f"{name} lacks variable(s) {missing}")
 
 
-def _pick(values: np.ndarray, wanted, name: str) -> list[float]:
+
+def pick(values: np.ndarray, wanted, name: str) -> list[float]:
+    """The values of ``values`` matching ``wanted`` (to 1e-9 relative), all of them when ``wanted`` is None; a
+    ValueError naming ``name`` for a wanted value that is not there."""
     have = [float(v) for v in values]
     if wanted is None:
         return have
@@ -147,17 +154,17 @@ def _pick(values: np.ndarray, wanted, name: str) -> list[float]:
 
 
 #: One factor of a unit string of :func:`roughcontact.core.quantities.cf_unit` (``um``, ``um^-2``), of
-#: :func:`_number_unit` (``um^(-1/2)``) or of files of older versions (``um**-2``, ``um^-0.5``).
+#: :func:`number_unit` (``um^(-1/2)``) or of files of older versions (``um**-2``, ``um^-0.5``).
 _UNIT_FACTOR = re.compile(r"^([A-Za-z]+)(?:(?:\^|\*\*)\(?([-+]?\d+(?:/\d+|\.\d+)?)\)?)?$")
 
 
 _UNIT_SYMBOLS = frozenset(LENGTH_UNITS + PRESSURE_UNITS + ("s",)) - {"1"}
 
 
-def _unit_tex(units: str) -> str:
+def unit_tex(units: str) -> str:
     """A unit string as mathtext, upright, factors separated by a thin space.
 
-    The strings of :func:`roughcontact.core.quantities.cf_unit` and :func:`_number_unit`: ``"um^(-1/2)"``
+    The strings of :func:`roughcontact.core.quantities.cf_unit` and :func:`number_unit`: ``"um^(-1/2)"``
     -> ``$\\mathrm{\\mu m}^{-1/2}$``, ``"MPa um^-1"`` -> ``$\\mathrm{MPa}\\,\\mathrm{\\mu m}^{-1}$``,
     ``"1"`` -> ``"1"``. Other strings (files of older versions) as one upright word with
     its power: ``"length unit^-1/2"`` -> ``$(\\mathrm{length\\ unit})^{-1/2}$``.
@@ -180,7 +187,7 @@ def _unit_tex(units: str) -> str:
     return f"${tex}^{{{power}}}$" if power else f"${tex}$"
 
 
-def _number_unit(attrs) -> str:
+def number_unit(attrs) -> str:
     """The unit a variable's number is in, for a label: its ``units``, or for a value written for lengths in
     a reference unit (:func:`roughcontact.core.quantities.per_reference_length`) that unit to its power, e.g.
     ``"um^(-1/2)"`` for ``epsilon`` (``units`` ``"1"``, ``reference_length_units`` ``"um"``, power ``"-1/2"``)."""
@@ -190,16 +197,17 @@ def _number_unit(attrs) -> str:
     return f"{ref}^({power})"
 
 
-def _fmt(v: float) -> str:
+def fmt(v: float) -> str:
+    """A number as a short label (``%g``)."""
     return f"{float(v):g}"
 
 
-def _lambda_label(k: float, which: str) -> str:
+def lambda_label(k: float, which: str) -> str:
     """``lambda = L/k`` as the paper writes it: ``L`` itself for ``k = 1``."""
-    return rf"$\lambda_{which} = L$" if float(k) == 1.0 else rf"$\lambda_{which} = L/{_fmt(k)}$"
+    return rf"$\lambda_{which} = L$" if float(k) == 1.0 else rf"$\lambda_{which} = L/{fmt(k)}$"
 
 
-def _legend_below(fig: Figure, handles: list, title: str) -> None:
+def legend_below(fig: Figure, handles: list, title: str) -> None:
     """A two-column legend under the panels; the figure grows by its height, the panels keep theirs."""
     rows = int(np.ceil(len(handles) / 2)) + 1
     width, height = fig.get_size_inches()
@@ -207,7 +215,8 @@ def _legend_below(fig: Figure, handles: list, title: str) -> None:
     fig.legend(handles=handles, loc="outside lower center", ncols=2, title=title)
 
 
-def _panel_grid(n: int) -> tuple[int, int, float, float]:
+def panel_grid(n: int) -> tuple[int, int, float, float]:
+    """``(rows, columns, width, height)`` [in] of a figure of ``n`` square-ish panels in a journal column or two."""
     ncols = 1 if n == 1 else min(n, 3)
     nrows = int(np.ceil(n / ncols))
     width = SINGLE_COLUMN_IN if n == 1 else DOUBLE_COLUMN_IN
@@ -216,21 +225,23 @@ def _panel_grid(n: int) -> tuple[int, int, float, float]:
     return nrows, ncols, width + (1.3 if n == 1 else 0.0), height
 
 
-def _family_styles(k_ls: Sequence[float], hs: Sequence[float]):
+def family_styles(k_ls: Sequence[float], hs: Sequence[float]):
+    """Colour by Hurst exponent, marker and line style by long cutoff: three dicts keyed by ``H`` or ``k_l``."""
     colour = {h: DATA_COLOURS[i % len(DATA_COLOURS)] for i, h in enumerate(hs)}
-    marker = {k: _MARKERS[i % len(_MARKERS)] for i, k in enumerate(k_ls)}
-    style = {k: _LINESTYLES[i % len(_LINESTYLES)] for i, k in enumerate(k_ls)}
+    marker = {k: MARKERS[i % len(MARKERS)] for i, k in enumerate(k_ls)}
+    style = {k: LINESTYLES[i % len(LINESTYLES)] for i, k in enumerate(k_ls)}
     return colour, marker, style
 
 
-def _family_handles(k_ls, hs, colour, marker, style) -> list[Line2D]:
-    handles = [Line2D([], [], color=colour[h], lw=1.5, label=f"$H = {_fmt(h)}$") for h in hs]
-    handles += [Line2D([], [], color="0.35", marker=marker[k], ls=style[k], label=_lambda_label(k, "l"))
+def family_handles(k_ls, hs, colour, marker, style) -> list[Line2D]:
+    """Legend handles of the families: one line per ``H`` (its colour), one marker and style per ``k_l``."""
+    handles = [Line2D([], [], color=colour[h], lw=1.5, label=f"$H = {fmt(h)}$") for h in hs]
+    handles += [Line2D([], [], color="0.35", marker=marker[k], ls=style[k], label=lambda_label(k, "l"))
                 for k in k_ls]
     return handles
 
 
-def _plain_log_labels(axis) -> None:
+def plain_log_labels(axis) -> None:
     """Plain decimals on a log axis (0.3, not 3x10^-1): the decades, and 2, 3, 5 times them
     where the axis spans less than two decades (decided when drawn, from its limits)."""
     def minor(v, _pos):

@@ -46,3 +46,12 @@ def cases(block: dict) -> list[Case]:
         for kl, ks, h in itertools.product(grid["k_l"], grid["k_s"], grid["H"])
         for seed in range(block["seeds"])
     ]
+
+
+def is_adhesive(block: dict) -> bool:
+    """Whether a validated contact block asks for adhesion (``effects.adhesion``).
+
+    An adhesive study draws the load cycle and the pull-off instead of the contact evolution law:
+    its fit and the non-adhesive theory curves are neither run nor drawn (``figures.adhesion``).
+    """
+    return "adhesion" in block.get("effects", {})

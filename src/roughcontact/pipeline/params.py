@@ -15,6 +15,8 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping
 
+from .cases import is_adhesive
+
 
 def canonical(obj):
     """``obj`` with every mapping's keys sorted (recursively); lists keep their order."""
@@ -90,13 +92,13 @@ def kappa_gap_summary(block: Mapping) -> dict:
 
 
 def summary(scene: Mapping) -> dict:
-    """The report's summary of a scene: its study blocks and, with a contact study, its fit.
+    """The report's summary of a scene: its study blocks and, with a non-adhesive contact study, its fit.
 
     Not its description (free text), nor ``keep_surfaces`` (whether surface files are kept,
     which changes no result).
     """
     blocks = {key: scene[key] for key in ("representativity", "contact", "accuracy", "kappa_gap") if key in scene}
-    if "contact" in scene:
+    if "contact" in scene and not is_adhesive(scene["contact"]):  # an adhesive scene runs no fit
         blocks["fit"] = scene["fit"]
     return canonical({
         key: {k: v for k, v in block.items() if k != "keep_surfaces"} for key, block in blocks.items()

@@ -5,22 +5,118 @@
 without knowing which; :func:`~.solve.prepare` picks this one when an effect's ``functional``
 is set. Each load step is solved under pressure control by :mod:`.adhesion`'s iteration on the
 gap, warm-started from the previous step's gap; :meth:`AdhesiveSolver.unload` traces the
-unloading under displacement control (the pull-off force).
+unloading under displacement control and finds the pull-off pressure with its status
+(:class:`Unloading`).
+
+The pull-off
+------------
+Under displacement control the mean pressure falls as the surfaces are drawn apart, reaches
+its most tensile value (the pull-off pressure a load-controlled test would measure) and rises
+towards 0 once no node touches. The trace steps the mean gap by ``step`` (``rho / 4`` by
+default) from the last load step, each step warm-started from the last, until the surfaces
+have separated (a converged step with no node in contact, past the most tensile one) or
+``max_steps``. The most tensile converged step ``k`` is then bracketed: the stretch from the
+converged state before ``k`` to the step after it is traced again with a step four times
+shorter, and again, until the pull-off changes by less than ``rtol`` of itself (on a sphere's
+DMT side the fixed ``rho / 4`` step read 0.908 of the peak that ``rho / 100`` reads, 0.991).
+Steps whose final check fails are kept in the trace, flagged, and excluded from the minimum.
+The pull-off is NaN, with the reason in :data:`PULL_OFF_STATUS`, unless the grid resolves the
+process zone, the last load step converged, the surfaces separated, the steps on both sides of
+the minimum converged and the refinement met ``rtol``.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
+from dataclasses import dataclass
 
 import numpy as np
 
-from .adhesion import AdhesiveIteration, _pressure_control as pressure_control
+from .adhesion import (
+    MIN_ZONE_CELLS,
+    PULL_OFF_REASONS,
+    WARN_ZONE_CELLS,
+    AdhesiveIteration,
+    pressure_control,
+    unresolved_zone_message,
+    zone_cells,
+)
 from .results import StepRecord, contact_perimeter
 from .settings import SolverSettings
 from .units import Units, check_loads
 
 #: The iterations an adhesive step can end on (the ``solver_path`` flag).
 ADHESIVE_PATHS = ("adhesive",)
+
+#: ``solver`` attribute of an adhesive solve's output: the gap iteration that ran.
+ADHESIVE_SOLVER_NAME = "roughcontact.solver.adhesion.AdhesiveIteration"
+#: ``solver_description`` attribute of an adhesive solve's output.
+ADHESIVE_SOLVER_DESCRIPTION = (
+    "Gap-controlled constrained conjugate gradient (Polonsky & Keer 1999 with the roles of pressure and gap "
+    "exchanged, Rey, Anciaux & Molinari 2017) on a periodic FFT-BEM elastic half-space, u(q) = 2 p(q) / (E* |q|), "
+    "minimising 1/2 <g + h, M (g + h)> + sum phi(g) over g >= 0 at an imposed mean gap, phi the adhesion law's "
+    "energy (attribute adhesion_law); each load step under pressure control by an Illinois regula falsi on the "
+    "mean gap, warm-started from the previous step's gap; no preconditioner; converged when "
+    "max(max_{g>0} |p + tension(g)|, max(0, -min_{g=0}(p + tension(0))), |mean(p) - p0|) <= tol rms(M h) with "
+    "g >= 0 and the imposed mean gap to 1e-12, checked on a freshly recomputed displacement, and the grid "
+    "resolves the adhesive process zone (E* rho^2 / w over at least 1.5 cells, attribute adhesive_zone_cells)"
+)
+#: Step refinements near the minimum before giving up (each shortens the step 4x).
+MAX_REFINEMENTS = 8
+
+
+@dataclass
+class Unloading:
+    """The unloading trace of :meth:`AdhesiveSolver.unload` and its pull-off (module docstring).
+
+    Attributes
+    ----------
+    mean_gap, mean_pressure, area_fraction : ndarray, shape (k,)
+        Every unloading step, sorted by mean gap [length], [pressure], [-]; the refined stretch
+        near the minimum included. ``mean_pressure`` is NaN where the step did not converge.
+    converged : ndarray of bool, shape (k,)
+        Each step's final check (the adhesive residual <= tol on a fresh FFT).
+    pull_off : float
+        The pull-off pressure ``-min(mean_pressure)`` [pressure], > 0 when tensile; NaN unless
+        ``status`` is ``"trusted"``.
+    status : str
+        One of :data:`PULL_OFF_STATUS`; :data:`PULL_OFF_REASONS` says why for any other.
+    step : float
+        The last (shortest) step of the trace [length].
+    rtol : float
+        The refinement's tolerance on the pull-off.
+    """
+
+    mean_gap: np.ndarray
+    mean_pressure: np.ndarray
+    area_fraction: np.ndarray
+    converged: np.ndarray
+    pull_off: float
+    status: str
+    step: float
+    rtol: float
+
+    @property
+    def unconverged(self) -> int:
+        """How many unloading steps failed their final check (excluded from the minimum)."""
+        return int(np.count_nonzero(~self.converged))
+
+    @property
+    def reason(self) -> str:
+        """Why the pull-off is NaN (empty when trusted)."""
+        return PULL_OFF_REASONS.get(self.status, "")
+
+
+@dataclass
+class _Point:
+    """One unloading step: mean gap, its state (gap field) and what its final check found."""
+
+    gbar: float
+    gap: np.ndarray | None
+    mean_p: float
+    area: float
+    converged: bool
 
 #: Long names of the per-step variables whose definition differs from the non-adhesive solver's.
 LONG_NAMES = {
@@ -61,6 +157,17 @@ class AdhesiveSolver:
         self.law = laws[0].functional
         self.it = AdhesiveIteration(h, self.law, settings.e_star, settings.length)
         self.gap = h.max() - h  # the rigid surface touching at its highest node
+        self.zone_cells = zone_cells(self.law, settings.e_star, settings.length, h.shape)
+        self.resolved = self.zone_cells >= MIN_ZONE_CELLS
+        if not self.resolved:
+            warnings.warn(unresolved_zone_message(self.zone_cells, self.law, settings.e_star)
+                          + "; no step is reported converged", stacklevel=4)
+        elif self.zone_cells < WARN_ZONE_CELLS:
+            warnings.warn(f"the adhesive process zone E* rho^2 / w spans {self.zone_cells:.3g} grid cells, fewer "
+                          f"than {WARN_ZONE_CELLS:g}: steps count as converged, but a sphere's pull-off reads about "
+                          "1 % high at 1.5 cells (docs/solver.md); refine the grid for a converged pull-off",
+                          stacklevel=4)
+        self.last_converged = False
 
     backend = "numpy"
 
@@ -79,29 +186,104 @@ class AdhesiveSolver:
         mask = out.gap == 0.0
         cols = {}
         for effect in self.effects:
-            cols.update(effect.finish(out.pressure, None, p0))
+            cols.update(effect.finish(out.pressure, None, p0, gap=out.gap))
+        converged = bool(residual <= s.tol) and self.resolved
+        self.last_converged = converged
         step = StepRecord(out.pressure, mask, out.area_fraction, out.mean_gap,
                           contact_perimeter(mask, s.length, True), out.iterations, float(residual),
-                          bool(residual <= s.tol), cols, "adhesive")
+                          converged, cols, "adhesive")
         return step, (out.gap.copy() if keep_gap else None)
 
-    def unload(self, increment: float, max_steps: int = 400) -> tuple[np.ndarray, np.ndarray]:
-        """Unload under displacement control from the last step until no node touches.
+    def _unload_to(self, start: np.ndarray, gbar: float) -> _Point:
+        """One displacement-controlled step to the mean gap ``gbar`` [length] from the gap ``start``."""
+        s = self.settings
+        self.it.start(start, gbar)
+        self.it.solve(gbar, s.tol, s.max_iter)
+        _, residual, mean_p = self.it.check(gbar)
+        gap = self.it.g.copy()
+        converged = bool(residual <= s.tol)
+        return _Point(gbar, gap, mean_p if converged else math.nan,
+                      float(np.count_nonzero(gap == 0.0)) / gap.size, converged)
 
-        The mean gap grows by ``increment`` [length] a step, each step warm-started from the last;
-        returns the mean gaps [length] and mean pressures [pressure] of the steps, shape (k,).
-        The most tensile mean pressure is the pull-off pressure under load control.
+    def _trace(self, start: _Point, step: float, stop, max_steps: int) -> list[_Point]:
+        """``[start]`` and steps of ``step`` [length] from it until ``stop(points)`` or ``max_steps``.
+
+        Each step starts from the state of the one before (converged or not: the iterate is a valid
+        gap field, ``g >= 0`` with the right mean). Only the states a refinement can start from are
+        kept (the last step's and the one before the most tensile step): a trace of many steps
+        holds two or three fields, not one per step.
         """
-        s, gap = self.settings, self.gap
-        gbar, gaps, loads = float(gap.mean()), [], []
-        for _ in range(max_steps):
-            gbar += increment
-            self.it.start(gap, gbar)
-            self.it.solve(gbar, s.tol, s.max_iter)
-            _, residual, mean_p = self.it.check(gbar)
-            gap = self.it.g.copy()
-            gaps.append(gbar)
-            loads.append(mean_p if math.isfinite(residual) else math.nan)
-            if not np.any(gap == 0.0):
+        points = [start]
+        for i in range(1, max_steps + 1):
+            points.append(self._unload_to(points[-1].gap, start.gbar + i * step))
+            best = _most_tensile(points)
+            keep = {len(points) - 1, points.index(best) - 1 if best is not None else 0, 0}
+            for j, point in enumerate(points[:-1]):
+                if j not in keep:
+                    point.gap = None
+            if stop(points):
                 break
-        return np.array(gaps), np.array(loads)
+        return points
+
+    def unload(self, step: float, rtol: float = 1e-3, max_steps: int = 1000) -> Unloading:
+        """Unload under displacement control from the last load step; the trace and its pull-off.
+
+        Parameters
+        ----------
+        step : float
+            First step of the mean gap [length], > 0 (``rho / 4`` from the effect); refined 4x at a
+            time near the minimum (module docstring).
+        rtol : float
+            Tolerance on the pull-off's change between two refinements, relative.
+        max_steps : int
+            Most steps of the coarse trace before the surfaces count as not separated.
+
+        Returns
+        -------
+        Unloading
+            The trace (all steps, sorted by mean gap) and the pull-off with its status.
+        """
+        loaded = _Point(float(self.gap.mean()), self.gap, math.nan, math.nan, self.last_converged)
+
+        def separated(points):
+            best, last = _most_tensile(points), points[-1]
+            return best is not None and last.converged and last.area == 0.0 and last.mean_p > best.mean_p
+
+        points = self._trace(loaded, step, separated, max_steps)
+        trace, status = points[1:], None
+        if not self.resolved:
+            status = "adhesive_zone_unresolved"
+        elif not self.last_converged:
+            status = "last_load_step_not_converged"
+        elif not separated(points):
+            status = "not_separated"
+        pull_off = math.nan
+        for _ in range(MAX_REFINEMENTS + 1):
+            if status is not None:
+                break
+            best = _most_tensile(points)
+            k = points.index(best) if best is not None else 0
+            if k < 1 or k + 1 >= len(points) or not (points[k - 1].converged and points[k + 1].converged):
+                status = "unconverged_step_beside_minimum"
+                break
+            previous, pull_off = pull_off, -best.mean_p
+            if abs(pull_off - previous) <= rtol * abs(pull_off):  # False while previous is NaN
+                break
+            before, end, step = points[k - 1], points[k + 1].gbar, step / 4
+            points = self._trace(before, step, lambda pts: False, int(round((end - before.gbar) / step)))
+            trace += points[1:]
+        else:
+            status = "refinement_not_converged"
+        trace.sort(key=lambda pt: pt.gbar)
+        status = status or "trusted"
+        if status == "trusted":  # the most tensile converged step of the whole trace, every refinement's
+            pull_off = -_most_tensile(trace).mean_p
+        return Unloading(np.array([pt.gbar for pt in trace]), np.array([pt.mean_p for pt in trace]),
+                         np.array([pt.area for pt in trace]), np.array([pt.converged for pt in trace], dtype=bool),
+                         pull_off if status == "trusted" else math.nan, status, step, rtol)
+
+
+def _most_tensile(points: list[_Point]) -> _Point | None:
+    """The converged point of lowest mean pressure (the first of equals), or None."""
+    done = [pt for pt in points if pt.converged and not math.isnan(pt.mean_p)]
+    return min(done, key=lambda pt: pt.mean_p) if done else None

@@ -14,7 +14,7 @@ import time
 import numpy as np
 import xarray as xr
 
-from .adhesive import AdhesiveSolver
+from .adhesive import ADHESIVE_SOLVER_DESCRIPTION, ADHESIVE_SOLVER_NAME, AdhesiveSolver
 from .contact import ContactSolver
 from .results import SOLVER_NAME, StepResult, cell_attrs, solver_description, to_dataset
 from .settings import SolverSettings
@@ -175,17 +175,20 @@ def _dataset(solver: ContactSolver | AdhesiveSolver, p, cols, iters, conv, paths
     """The solve's output dataset (:func:`solve_contact`'s Returns)."""
     s = solver.settings
     sides, grid = cell_attrs(solver.shape, s.length)
+    if isinstance(solver, AdhesiveSolver):
+        name, description = ADHESIVE_SOLVER_NAME, ADHESIVE_SOLVER_DESCRIPTION
+    else:
+        name, description = SOLVER_NAME, solver_description(solver.periodic, np.ndim(s.length) == 0)
     attrs = {"e_star": s.e_star, **sides, "tol": s.tol, "max_iter": s.max_iter, "threads": s.threads,
-             "fft_backend": solver.backend, **grid, "solver": SOLVER_NAME,
-             "solver_description": solver_description(solver.periodic, np.ndim(s.length) == 0)}
+             "fft_backend": solver.backend, **grid, "solver": name, "solver_description": description}
     ds = to_dataset(p, cols, iters, conv, fields, store_fields, solver.shape, attrs, solver.effects, paths=paths,
                     length_unit=s.length_unit, pressure_unit=s.pressure_unit, path_names=solver.paths,
                     long_names=solver.long_names)
     ds.attrs["elastic_method"] = solver.method
     ds.attrs["boundary"] = s.boundary
     for effect in solver.effects:
-        for name, (value, units, long_name) in effect.after_steps(solver, s.length_unit, s.pressure_unit).items():
-            ds[name] = xr.Variable((), value, {"units": units, "long_name": long_name})
+        for name, variable in effect.after_steps(solver, s.length_unit, s.pressure_unit).items():
+            ds[name] = variable
     if masks is not None:
         from ..statistics.clusters import cluster_dataset
 

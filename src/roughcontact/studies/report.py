@@ -16,11 +16,14 @@ from __future__ import annotations
 
 import csv
 import io
+import itertools
 import json
 import os
 import subprocess
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+
+import numpy as np
 
 from ..pipeline.provenance import flatten
 from ..solver.results import cell_sides
@@ -245,12 +248,70 @@ def topographies_table(rows: Sequence[Sequence[str]]) -> str:
             "that converged.\n\n" + _list_table(list(TOPOGRAPHY_COLUMNS), rows))
 
 
+#: Columns of :func:`pull_off_table`.
+PULL_OFF_COLUMNS = ("case", "pull-off p_off/E* (mean ± s.d.)", "trusted", "left out (why)", "process zone [cells]",
+                    "final A/A0")
+
+
+def pull_off_table(agg) -> str:
+    """An adhesive scene's pull-off per group of cases, as RST, with a lead-in saying what it is.
+
+    ``agg`` is the contact aggregate (``pull_off_pressure``, ``pull_off_status``,
+    ``adhesive_zone_cells``, ``area_fraction``, attribute ``e_star``), over ``(k_l, k_s, H, seed)``
+    or ``topography``. A row per ``(k_l, k_s, H)`` (the seeds pooled: mean ± sample standard
+    deviation of the trusted pull-offs) or per topography; the cases whose pull-off is NaN are
+    counted by their status.
+    """
+    e_star = float(agg.attrs["e_star"])
+    meanings = agg["pull_off_status"].attrs["flag_meanings"].split()
+    measured = "topography" in agg.dims
+    groups = ["topography"] if measured else ["k_l", "k_s", "H"]
+    rows = []
+    for key, part in _groups(agg, groups):
+        present = (part["case_present"].values.astype(bool).ravel() if "case_present" in part
+                   else np.ones(part["pull_off_status"].size, dtype=bool))
+        pull = _flat(part["pull_off_pressure"])[present] / e_star
+        codes = _flat(part["pull_off_status"])[present].astype(int)
+        if codes.size == 0:
+            continue
+        ok = np.isfinite(pull)
+        value = "—" if not ok.any() else (f"{pull[ok].mean():.4g} ± {pull[ok].std(ddof=1):.2g}" if ok.sum() > 1
+                                          else f"{pull[ok][0]:.4g}")
+        why = ", ".join(f"{int((codes == c).sum())} {meanings[c].replace('_', ' ')}" for c in sorted(set(codes[~ok])))
+        zone = _flat(part["adhesive_zone_cells"])[present]
+        area = _flat(part["area_fraction"].isel(step=-1))[present]
+        rows.append([key, value, f"{int(ok.sum())} of {codes.size}", why or "—", f"{zone.min():.3g}",
+                     f"{np.nanmean(area):.3g}"])
+    lead = ("The pull-off pressure: minus the most tensile mean pressure on unloading under displacement control "
+            "from the last load step, the step refined near the minimum until it moves by less than its tolerance. "
+            "It is trusted only where the grid resolves the adhesive process zone E* rho^2 / w (at least 1.5 "
+            "cells), the last load step converged, the surfaces separated and the steps beside the minimum "
+            "converged; other cases are left out, counted by reason. No contact evolution law is fitted to an "
+            "adhesive scene: the law and its theories describe contact without adhesion.\n\n")
+    return lead + _list_table(list(PULL_OFF_COLUMNS), rows)
+
+
+def _flat(da) -> np.ndarray:
+    """A variable's values as a flat float64 array."""
+    return np.asarray(da.values, dtype=float).ravel()
+
+
+def _groups(agg, dims: Sequence[str]):
+    """``(label, part)`` for each combination of ``dims``' values (seeds stay in ``part``)."""
+    axes = [agg[d].values for d in dims]
+    for values in itertools.product(*axes):
+        part = agg.sel(dict(zip(dims, values, strict=True)))
+        label = str(values[0]) if len(dims) == 1 else ", ".join(
+            f"{d} = {v:g}" for d, v in zip(dims, values, strict=True))
+        yield f"``{label}``" if len(dims) == 1 else label, part
+
+
 def _heading(title: str, underline: str = "-") -> str:
     return f"{title}\n{underline * len(title)}\n"
 
 
 def summary_rst(scene: str, parameters: Mapping, *, version: str, commit: str,
-                fit_csv: str | None = None, topographies: str | None = None) -> str:
+                fit_csv: str | None = None, topographies: str | None = None, pull_off: str | None = None) -> str:
     """The report's landing-page fragment for ``scene``: code, parameters and the CEL fit.
 
     Parameters
@@ -265,6 +326,8 @@ def summary_rst(scene: str, parameters: Mapping, *, version: str, commit: str,
         The text of the scene's ``fit/cel.csv``; ``None`` for a scene without a contact study.
     topographies : str, optional
         A measured scene's :func:`topographies_table`, shown after the parameters.
+    pull_off : str, optional
+        An adhesive scene's :func:`pull_off_table`, in place of the fit (an adhesive scene has none).
     """
     if not version or not commit:
         raise ValueError("the version and the commit must be given (the commit may be 'unknown')")
@@ -278,6 +341,8 @@ def summary_rst(scene: str, parameters: Mapping, *, version: str, commit: str,
     ]
     if topographies is not None:
         parts += [_heading("Topographies"), topographies]
+    if pull_off is not None:
+        parts += [_heading("Adhesion: pull-off"), pull_off]
     if fit_csv is not None and not list(csv.DictReader(io.StringIO(fit_csv))):
         # a fit with no row: every case was excluded (e.g. unconverged steps) or none fitted
         parts += [_heading("Contact evolution law fit"),

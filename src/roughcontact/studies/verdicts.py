@@ -28,7 +28,7 @@ class Rule:
     verdict: Callable[[str, str], str]
 
 
-def _floats(pattern: str, text: str) -> list[tuple[float, ...]]:
+def floats_matching(pattern: str, text: str) -> list[tuple[float, ...]]:
     """Every match of ``pattern`` in ``text``, its groups as floats."""
     return [tuple(float(g) for g in m.groups()) for m in re.finditer(pattern, text)]
 
@@ -40,8 +40,8 @@ def _count(fraction: float) -> str:
 
 # ------------------------------------------------------------------------------- representativity
 def _threshold(paper: str, ours: str) -> str:
-    eps = _floats(rf"({NUMBER}) \(k_l=({NUMBER})\)", ours.split(";")[0])
-    floor = _floats(rf"noise floor ({NUMBER})", ours)[0][0]
+    eps = floats_matching(rf"({NUMBER}) \(k_l=({NUMBER})\)", ours.split(";")[0])
+    floor = floats_matching(rf"noise floor ({NUMBER})", ours)[0][0]
     values = [v for v, _ in eps]
     falls = all(b <= 1.05 * a for a, b in zip(values, values[1:], strict=False))
     reached = [k for v, k in eps if v <= 2 * floor]
@@ -51,35 +51,36 @@ def _threshold(paper: str, ours: str) -> str:
 
 
 def _ks_weaker(paper: str, ours: str) -> str:
-    [(ks,)], [(kl,)] = _floats(rf"at fixed k_l: ({NUMBER})", ours), _floats(rf"over k_l: ({NUMBER})", ours)
+    [(ks,)] = floats_matching(rf"at fixed k_l: ({NUMBER})", ours)
+    [(kl,)] = floats_matching(rf"over k_l: ({NUMBER})", ours)
     return "reproduced" if ks < 0.5 * kl else "not"
 
 
 def _ks_falls(paper: str, ours: str) -> str:
-    drops = _floats(rf"Δ = ({NUMBER}) ± ({NUMBER})", ours)
+    drops = floats_matching(rf"Δ = ({NUMBER}) ± ({NUMBER})", ours)
     return _count(sum(d > 2 * e for d, e in drops) / len(drops))
 
 
 # ------------------------------------------------------------------------------------------ kappa
 def _h_spread(paper: str, ours: str) -> str:
-    rep, nonrep = (v for (v,) in _floats(rf"({NUMBER}) % at", ours))
+    rep, nonrep = (v for (v,) in floats_matching(rf"({NUMBER}) % at", ours))
     return "reproduced" if rep < 0.5 * nonrep else "partly" if rep < nonrep else "not"
 
 
 def _h_direction(paper: str, ours: str) -> str:
-    pairs = _floats(rf"\): ({NUMBER}) → ({NUMBER})", ours)
+    pairs = floats_matching(rf"\): ({NUMBER}) → ({NUMBER})", ours)
     return _count(sum(b < a for a, b in pairs) / len(pairs))
 
 
 def _scatter(paper: str, ours: str) -> str:
-    by_kl = [v for v, _ in _floats(rf"({NUMBER}) % \(k_l=({NUMBER})\)", ours)]
-    by_h = [v for v, _ in _floats(rf"({NUMBER}) % \(H=({NUMBER})\)", ours)]
+    by_kl = [v for v, _ in floats_matching(rf"({NUMBER}) % \(k_l=({NUMBER})\)", ours)]
+    by_h = [v for v, _ in floats_matching(rf"({NUMBER}) % \(H=({NUMBER})\)", ours)]
     n = (by_kl[-1] < by_kl[0]) + (by_h[-1] > by_h[0])
     return "reproduced" if n == 2 else "partly" if n == 1 else "not"
 
 
 def _kl_rises(paper: str, ours: str) -> str:
-    rows = _floats(rf"({NUMBER}) ± ({NUMBER}) \(k_l=({NUMBER})\)", ours)
+    rows = floats_matching(rf"({NUMBER}) ± ({NUMBER}) \(k_l=({NUMBER})\)", ours)
     k, e = [r[0] for r in rows], [r[1] for r in rows]
     steps = [b - a for a, b in zip(k, k[1:], strict=False)]
     if all(s > 0 for s in steps):
@@ -91,22 +92,22 @@ def _kl_rises(paper: str, ours: str) -> str:
 
 
 def _not_confined(paper: str, ours: str) -> str:
-    (low, high), = _floats(rf"from ({NUMBER}) to ({NUMBER})", ours)
+    (low, high), = floats_matching(rf"from ({NUMBER}) to ({NUMBER})", ours)
     return "reproduced" if high > SQRT_2PI or low < SQRT_8_PI else "not"
 
 
 def _decreasing(paper: str, ours: str) -> str:
-    (pct,), = _floats(rf"for ({NUMBER}) % of", ours)
+    (pct,), = floats_matching(rf"for ({NUMBER}) % of", ours)
     return _count(pct / 100)
 
 
 def _persson(paper: str, ours: str) -> str:
-    (low,), = _floats(rf"any load step: ({NUMBER})", ours)
+    (low,), = floats_matching(rf"any load step: ({NUMBER})", ours)
     return "reproduced" if low > SQRT_8_PI else "not"
 
 
 def _asperity(paper: str, ours: str) -> str:
-    [(bgt,)], [(gw,)] = _floats(rf"BGT ({NUMBER}) %", ours), _floats(rf"Greenwood ({NUMBER}) %", ours)
+    [(bgt,)], [(gw,)] = floats_matching(rf"BGT ({NUMBER}) %", ours), floats_matching(rf"Greenwood ({NUMBER}) %", ours)
     worst = min(bgt, gw)
     return "reproduced" if worst >= 90 else "partly" if worst >= 50 else "not"
 
@@ -125,7 +126,7 @@ def _paper_range(text: str) -> tuple[float, float]:
 
 def _constant(paper: str, ours: str) -> str:
     """Reproduced when the data constrain the constant and the paper's range overlaps our interval."""
-    lo, hi = _floats(rf"interval \[({NUMBER}), ({NUMBER})\]", ours)[0]
+    lo, hi = floats_matching(rf"interval \[({NUMBER}), ({NUMBER})\]", ours)[0]
     plo, phi = _paper_range(paper)
     return "reproduced" if "not constrained" not in ours and lo <= phi and plo <= hi else "not"
 
@@ -137,7 +138,7 @@ def _rough_cel(paper: str, ours: str) -> str:
 
 
 def _final_area(paper: str, ours: str) -> str:
-    (mean,), = _floats(rf"^({NUMBER}) %", ours)
+    (mean,), = floats_matching(rf"^({NUMBER}) %", ours)
     return "reproduced" if 7 <= mean <= 14 else "not"
 
 

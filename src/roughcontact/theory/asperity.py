@@ -73,7 +73,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.special import hyp1f1, roots_legendre
 
-from .summits import _SQRT_2PI, _alpha, _model, _positive_scalar, _real_array, hertz_elliptic_factors
+from .summits import SQRT_2PI, checked_alpha, checked_model, hertz_elliptic_factors, positive_scalar, real_array
 
 #: Range of reduced separations ``xi_d = d / sqrt(m0)`` the curves are evaluated on [-].
 #: At ``xi_d = -10`` every model has ``A/A0 > 1`` (meaningless without interaction);
@@ -179,7 +179,7 @@ def _g_splines(alpha: float, model: str) -> tuple[CubicSpline, CubicSpline]:
     hi = np.maximum(mean + _T_SIGMAS * sd, 0.0)
     half = 0.5 * (hi - lo)
     tn = lo[:, None] + half[:, None] * (nodes + 1.0)  # (n_xi, _N_T)
-    dens = np.exp(-0.5 * ((tn - mean[:, None]) / sd) ** 2) / (sd * _SQRT_2PI)
+    dens = np.exp(-0.5 * ((tn - mean[:, None]) / sd) ** 2) / (sd * SQRT_2PI)
     wq = half[:, None] * weights * dens
     flat = tn.ravel()
     g_a = np.sum(wq * h_a(flat).reshape(tn.shape), axis=1)
@@ -213,7 +213,7 @@ def _integrals(xi_d: np.ndarray, alpha: float, model: str) -> tuple[np.ndarray, 
         w = np.concatenate([w_mid * u, w_mid + (w_max - w_mid) * u], axis=1)
         jac = np.concatenate([w_mid * wu, (w_max - w_mid) * wu], axis=1) * 2.0 * w  # dxi = 2 w dw
         xi = xd + w * w
-        base = jac * np.exp(-0.5 * xi * xi) / _SQRT_2PI
+        base = jac * np.exp(-0.5 * xi * xi) / SQRT_2PI
         ga = g_a(xi.ravel()).reshape(xi.shape) * base
         gf = g_f(xi.ravel()).reshape(xi.shape) * base
         sl = slice(start, start + _CHUNK)
@@ -253,8 +253,8 @@ def asperity_model(xi_d, *, alpha: float, model: str) -> tuple[np.ndarray, np.nd
     (area_fraction, pbar) : tuple of numpy.ndarray, shape of ``xi_d``
         ``A/A0`` [-] (not clipped at 1) and ``p0 / (E* h')`` [-]; both decrease with ``xi_d``.
     """
-    a, m = _alpha(alpha), _model(model)
-    xd = _real_array("xi_d", xi_d, *XI_D_RANGE)
+    a, m = checked_alpha(alpha), checked_model(model)
+    xd = real_array("xi_d", xi_d, *XI_D_RANGE)
     area, pbar, _, _ = _integrals(xd.ravel(), a, m)
     return area.reshape(xd.shape), pbar.reshape(xd.shape)
 
@@ -322,8 +322,8 @@ def asperity_reduced_area(pbar, *, alpha: float, model: str) -> np.ndarray:
     numpy.ndarray, shape of ``pbar``
         ``A/A0`` [-]; 0 where ``pbar = 0``.
     """
-    a, m = _alpha(alpha), _model(model)
-    p = _real_array("pbar", pbar, 0.0, _load_range(a, m, 1), " (= p0/(E* h'))")
+    a, m = checked_alpha(alpha), checked_model(model)
+    p = real_array("pbar", pbar, 0.0, _load_range(a, m, 1), " (= p0/(E* h'))")
     return _at_load(p, a, m, 1)[0]
 
 
@@ -344,8 +344,8 @@ def asperity_reduced_pressure(area_fraction, *, alpha: float, model: str) -> np.
     numpy.ndarray, shape of ``area_fraction``
         ``pbar`` [-]; 0 where ``A/A0 = 0``.
     """
-    a, m = _alpha(alpha), _model(model)
-    af = _real_array("area_fraction", area_fraction, 0.0, _load_range(a, m, 0))
+    a, m = checked_alpha(alpha), checked_model(model)
+    af = real_array("area_fraction", area_fraction, 0.0, _load_range(a, m, 0))
     return _at_load(af, a, m, 0)[1]
 
 
@@ -355,8 +355,8 @@ def asperity_max_load(*, alpha: float, rms_slope: float, e_star: float, model: s
     Its table ends at ``xi_d = -10`` (the separation at which ``A/A0`` reaches 1): above this load
     the model has no answer, and :func:`asperity_area` refuses the load.
     """
-    a, m = _alpha(alpha), _model(model)
-    return _load_range(a, m, 1) * _positive_scalar("rms_slope", rms_slope) * _positive_scalar("e_star", e_star)
+    a, m = checked_alpha(alpha), checked_model(model)
+    return _load_range(a, m, 1) * positive_scalar("rms_slope", rms_slope) * positive_scalar("e_star", e_star)
 
 
 def asperity_area(p0, *, alpha: float, rms_slope: float, e_star: float, model: str) -> np.ndarray:
@@ -380,10 +380,10 @@ def asperity_area(p0, *, alpha: float, rms_slope: float, e_star: float, model: s
     numpy.ndarray, shape of ``p0``
         ``A/A0`` [-].
     """
-    a, m = _alpha(alpha), _model(model)
-    scale = _positive_scalar("rms_slope", rms_slope) * _positive_scalar("e_star", e_star)
+    a, m = checked_alpha(alpha), checked_model(model)
+    scale = positive_scalar("rms_slope", rms_slope) * positive_scalar("e_star", e_star)
     pmax = _load_range(a, m, 1) * scale
-    p = _real_array("p0", p0, 0.0, pmax, f" (= E* h' pbar; alpha={a:.6g}, model={m!r})")
+    p = real_array("p0", p0, 0.0, pmax, f" (= E* h' pbar; alpha={a:.6g}, model={m!r})")
     return _at_load(p / scale, a, m, 1)[0]
 
 
@@ -412,12 +412,12 @@ def asperity_kappa(area_fraction=None, *, pbar=None, alpha: float, model: str) -
     """
     if (area_fraction is None) == (pbar is None):
         raise ValueError("give exactly one of area_fraction or pbar")
-    a, m = _alpha(alpha), _model(model)
+    a, m = checked_alpha(alpha), checked_model(model)
     if pbar is None:
-        load = _real_array("area_fraction", area_fraction, 0.0, _load_range(a, m, 0))
+        load = real_array("area_fraction", area_fraction, 0.0, _load_range(a, m, 0))
         area, p = _at_load(load, a, m, 0)
     else:
-        load = _real_array("pbar", pbar, 0.0, _load_range(a, m, 1), " (= p0/(E* h'))")
+        load = real_array("pbar", pbar, 0.0, _load_range(a, m, 1), " (= p0/(E* h'))")
         area, p = _at_load(load, a, m, 1)
     with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(load > 0, area / np.where(p > 0, p, 1.0), _SQRT_2PI)
+        return np.where(load > 0, area / np.where(p > 0, p, 1.0), SQRT_2PI)

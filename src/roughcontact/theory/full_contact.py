@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from .laws import _positive
+from .laws import positive_number
 
 
 def _grid(shape) -> tuple[int, int]:
@@ -97,7 +97,7 @@ def full_contact_pressure(h, p0: float, e_star: float = 1.0, length=1.0) -> np.n
     if not math.isfinite(p):
         raise ValueError(f"p0 must be a finite number, got {p0!r}")
     q = wavenumbers(arr.shape, length)
-    return p + np.real(np.fft.ifft2(np.fft.fft2(arr) * (0.5 * _positive("e_star", e_star) * q)))
+    return p + np.real(np.fft.ifft2(np.fft.fft2(arr) * (0.5 * positive_number("e_star", e_star) * q)))
 
 
 def full_contact_load(h, e_star: float = 1.0, length=1.0) -> float:

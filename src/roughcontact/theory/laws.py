@@ -28,7 +28,8 @@ KAPPA_PERSSON = math.sqrt(8.0 / math.pi)
 
 
 # --------------------------------------------------------------------------- checks
-def _positive(name: str, value) -> float:
+def positive_number(name: str, value) -> float:
+    """``float(value)``, finite and > 0; else a ValueError naming ``name``."""
     v = float(value)
     if not np.isfinite(v) or v <= 0.0:
         raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
@@ -36,15 +37,16 @@ def _positive(name: str, value) -> float:
 
 
 def _cel_constants(kappa, mu, beta) -> tuple[float, float, float]:
-    k = _positive("kappa", kappa)
+    k = positive_number("kappa", kappa)
     m = float(mu)
     if not np.isfinite(m) or not (0.0 < m < 1.0):
         raise ValueError(f"mu must lie in the open interval (0, 1), got {mu!r}")
-    b = _positive("beta", beta)
+    b = positive_number("beta", beta)
     return k, m, b
 
 
-def _nonnegative_array(name: str, value) -> np.ndarray:
+def nonnegative_array(name: str, value) -> np.ndarray:
+    """``value`` as a float array, finite and >= 0 everywhere; else a ValueError naming ``name``."""
     arr = np.asarray(value, dtype=float)
     if not np.all(np.isfinite(arr)) or np.any(arr < 0):
         raise ValueError(f"{name} must be finite and >= 0 everywhere, got {value!r}")
@@ -80,8 +82,9 @@ def linear_area(p0, *, kappa: float, rms_slope: float, e_star: float) -> np.ndar
     numpy.ndarray, shape of ``p0``
         Area fraction ``A/A0`` [-]; not clipped at 1 (it is an asymptote).
     """
-    p = _nonnegative_array("p0", p0)
-    return _positive("kappa", kappa) * p / (_positive("rms_slope", rms_slope) * _positive("e_star", e_star))
+    p = nonnegative_array("p0", p0)
+    scale = positive_number("rms_slope", rms_slope) * positive_number("e_star", e_star)
+    return positive_number("kappa", kappa) * p / scale
 
 
 def persson_area(p0, *, rms_slope: float, e_star: float) -> np.ndarray:
@@ -105,8 +108,8 @@ def persson_area(p0, *, rms_slope: float, e_star: float) -> np.ndarray:
     numpy.ndarray, shape of ``p0``
         ``A/A0`` in [0, 1) [-].
     """
-    p = _nonnegative_array("p0", p0)
-    return erf(math.sqrt(2.0) * p / (_positive("e_star", e_star) * _positive("rms_slope", rms_slope)))
+    p = nonnegative_array("p0", p0)
+    return erf(math.sqrt(2.0) * p / (positive_number("e_star", e_star) * positive_number("rms_slope", rms_slope)))
 
 
 # ------------------------------------------------------------ contact evolution law
@@ -139,8 +142,8 @@ def cel_area(p0, *, kappa: float, mu: float, beta: float, rms_slope: float, e_st
         ``A/A0`` [-]; exactly 0 where ``p0 = 0``.
     """
     k, m, b = _cel_constants(kappa, mu, beta)
-    p = _nonnegative_array("p0", p0)
-    x = k * p / (_positive("rms_slope", rms_slope) * _positive("e_star", e_star))
+    p = nonnegative_array("p0", p0)
+    x = k * p / (positive_number("rms_slope", rms_slope) * positive_number("e_star", e_star))
     out = np.zeros_like(x)
     pos = x > 0
     # Written as x (1 + b x^(1-m))^(-1/(1-m)) so that small loads keep full precision.
@@ -171,7 +174,7 @@ def cel_pressure(area_fraction, *, kappa: float, mu: float, beta: float, rms_slo
     """
     k, m, b = _cel_constants(kappa, mu, beta)
     a = _area_fraction_array("area_fraction", area_fraction, upper=cel_area_limit(m, b))
-    scale = _positive("rms_slope", rms_slope) * _positive("e_star", e_star) / k
+    scale = positive_number("rms_slope", rms_slope) * positive_number("e_star", e_star) / k
     return scale * a * (1.0 - b * a ** (1.0 - m)) ** (-1.0 / (1.0 - m))
 
 

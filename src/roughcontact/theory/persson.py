@@ -26,8 +26,8 @@ from scipy.special import erf, exp1, roots_legendre
 
 from ..surfaces.synthetic import psd_filter
 from .full_contact import wavenumbers
-from .laws import _nonnegative_array, _positive
-from .spectra import _check_band
+from .laws import nonnegative_array, positive_number
+from .spectra import check_band
 
 #: Range of ``s`` tabulated for the smooth part of ``J`` (:func:`_h_table`); outside it ``J`` is
 #: given by its series (below) or by its asymptote (above), both exact to round-off there.
@@ -67,12 +67,12 @@ def mode_spectrum(n: int, k_l: float, k_s: float, hurst: float, *, rms_slope: fl
     """
     if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < 4:
         raise ValueError(f"n (grid points per side) must be an integer >= 4, got {n!r}")
-    kl, ks, h = _check_band(k_l, k_s, hurst)
+    kl, ks, h = check_band(k_l, k_s, hurst)
     if ks > n / 2:
         raise ValueError(f"k_s must be <= n/2 = {n / 2} (Nyquist), got k_s={k_s!r}")
     if (rms_slope is None) == (rms_height is None):
         raise ValueError("give exactly one of rms_slope or rms_height")
-    L = _positive("length", length)
+    L = positive_number("length", length)
     half = psd_filter(n, kl, ks, h, length=L) ** 2
     # Columns past the rfft half are the Hermitian mirrors (-i, n - j) of stored ones.
     rows, cols = np.arange(n)[:, None], np.arange(n)[None, :]
@@ -86,9 +86,9 @@ def mode_spectrum(n: int, k_l: float, k_s: float, hurst: float, *, rms_slope: fl
     order = np.argsort(q, kind="stable")
     q, c = q[order], c[order]
     if rms_slope is not None:
-        c *= _positive("rms_slope", rms_slope) ** 2 / float(np.sum(q * q * c))
+        c *= positive_number("rms_slope", rms_slope) ** 2 / float(np.sum(q * q * c))
     else:
-        c *= _positive("rms_height", rms_height) ** 2 / float(np.sum(c))
+        c *= positive_number("rms_height", rms_height) ** 2 / float(np.sum(c))
     return q, c
 
 
@@ -117,11 +117,11 @@ def persson_pressure_distribution(p, p0: float, *, rms_slope: float, e_star: flo
     numpy.ndarray, shape of ``p``
         ``P(p)`` [1 / pressure unit].
     """
-    x = _nonnegative_array("p", p)
+    x = nonnegative_array("p", p)
     if np.ndim(p0) != 0:
         raise ValueError(f"p0 must be a single number >= 0, got {p0!r}")
-    m = float(_nonnegative_array("p0", p0))
-    four_g = 0.5 * (_positive("e_star", e_star) * _positive("rms_slope", rms_slope)) ** 2
+    m = float(nonnegative_array("p0", p0))
+    four_g = 0.5 * (positive_number("e_star", e_star) * positive_number("rms_slope", rms_slope)) ** 2
     # exp(a) - exp(b) as exp(a) (1 - exp(b - a)) with b - a = -p p0 / G: no cancellation at p p0 -> 0.
     return np.exp(-((x - m) ** 2) / four_g) * -np.expm1(-4.0 * x * m / four_g) / math.sqrt(math.pi * four_g)
 
@@ -210,7 +210,7 @@ def _gamma(gamma) -> float:
 
 
 # ------------------------------------------------------------ mean gap, stiffness
-def _mode_weights(q, c) -> tuple[np.ndarray, np.ndarray]:
+def mode_weights(q, c) -> tuple[np.ndarray, np.ndarray]:
     """``(a, W)`` per distinct ``q`` with power, ascending: ``W = (sum_{q_j <= q} q_j^2 c_j / 2)^(-1/2)`` [-]
     (Persson's ``w(q)``) and ``a = W sum_{q_k = q} q_k c_k`` [length], the modes of one ``q`` together."""
     qa, ca = np.asarray(q, dtype=float), np.asarray(c, dtype=float)
@@ -278,8 +278,8 @@ def persson_mean_gap(p0, q, c, *, e_star: float, gamma: float = 0.45) -> np.ndar
         Mean gap ``u`` [length] (from the mean plane of the deformed body to that of the surface).
     """
     values = _pressures(p0, positive=True)
-    g, es = _gamma(gamma), _positive("e_star", e_star)
-    a, w = _mode_weights(q, c)
+    g, es = _gamma(gamma), positive_number("e_star", e_star)
+    a, w = mode_weights(q, c)
     total = _mode_sum(values.ravel(), a, w, es, lambda s: persson_j(s, g))
     return (total / (2.0 * math.sqrt(math.pi))).reshape(values.shape)
 
@@ -309,8 +309,8 @@ def persson_stiffness(p0, q, c, *, e_star: float, gamma: float = 0.45) -> np.nda
         ``K`` [pressure unit / length]; at ``p0 = 0``, 0 when ``gamma > 0`` and inf when ``gamma = 0``.
     """
     values = _pressures(p0, positive=False)
-    g, es = _gamma(gamma), _positive("e_star", e_star)
-    a, w = _mode_weights(q, c)
+    g, es = _gamma(gamma), positive_number("e_star", e_star)
+    a, w = mode_weights(q, c)
     total = _mode_sum(values.ravel(), a, w, es, lambda s: _f(s, g)) / (2.0 * math.sqrt(math.pi))
     flat = values.ravel()
     with np.errstate(divide="ignore", invalid="ignore"):

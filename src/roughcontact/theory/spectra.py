@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from ..core.fft import rfft_weights, wavenumbers
-from .laws import _positive
+from .laws import positive_number
 
 # Angular factors int_0^{2 pi} cos^n(theta) d theta for n = 0, 2, 4: they turn the
 # radial integrals of an isotropic 2-D spectrum into moments of a 1-D cross-section.
@@ -21,7 +21,8 @@ _COS_INTEGRALS = {0: 2.0 * math.pi, 2: math.pi, 4: 3.0 * math.pi / 4.0}
 
 
 # ------------------------------------------------------------------ spectral moments
-def _check_band(k_l, k_s, hurst) -> tuple[float, float, float]:
+def check_band(k_l, k_s, hurst) -> tuple[float, float, float]:
+    """``(k_l, k_s, H)`` as floats, checked ``0 < k_l < k_s`` and ``0 <= H <= 1``; else a ValueError."""
     kl, ks, h = float(k_l), float(k_s), float(hurst)
     if not (np.isfinite(kl) and np.isfinite(ks)) or not (0.0 < kl < ks):
         raise ValueError(f"cutoffs must satisfy 0 < k_l < k_s, got k_l={k_l!r}, k_s={k_s!r}")
@@ -42,9 +43,9 @@ def _normalise(moments: dict[str, float], rms_slope, rms_height) -> dict[str, fl
         raise ValueError("give at most one of rms_slope or rms_height")
     scale = 1.0
     if rms_slope is not None:
-        scale = _positive("rms_slope", rms_slope) ** 2 / (2.0 * moments["m2"])
+        scale = positive_number("rms_slope", rms_slope) ** 2 / (2.0 * moments["m2"])
     elif rms_height is not None:
-        scale = _positive("rms_height", rms_height) ** 2 / moments["m0"]
+        scale = positive_number("rms_height", rms_height) ** 2 / moments["m0"]
     m0, m2, m4 = (scale * moments[k] for k in ("m0", "m2", "m4"))
     return {
         "rms_height": math.sqrt(m0),
@@ -92,8 +93,8 @@ def power_law_moments(k_l: float, k_s: float, hurst: float, *, length: float = 1
         ``rms_height`` [u], ``rms_slope`` [-], ``m0`` [u^2], ``m2`` [-], ``m4`` [u^-2],
         ``alpha`` [-] (Nayak's ``m0 m4 / m2^2``, independent of ``c`` and ``L``).
     """
-    kl, ks, h = _check_band(k_l, k_s, hurst)
-    q = 2.0 * math.pi / _positive("length", length)
+    kl, ks, h = check_band(k_l, k_s, hurst)
+    q = 2.0 * math.pi / positive_number("length", length)
     raw = {
         "m0": _COS_INTEGRALS[0] * _radial_integral(-1.0 - 2.0 * h, kl, ks),
         "m2": _COS_INTEGRALS[2] * q**2 * _radial_integral(1.0 - 2.0 * h, kl, ks),
@@ -135,10 +136,10 @@ def discrete_power_law_moments(n: int, k_l: float, k_s: float, hurst: float, *,
     """
     if not isinstance(n, (int, np.integer)) or n < 4:
         raise ValueError(f"n (grid points per side) must be an integer >= 4, got {n!r}")
-    kl, ks, h = _check_band(k_l, k_s, hurst)
+    kl, ks, h = check_band(k_l, k_s, hurst)
     if ks > n / 2:
         raise ValueError(f"k_s must be <= n/2 = {n / 2} (Nyquist), got k_s={k_s!r}")
-    L = _positive("length", length)
+    L = positive_number("length", length)
     kx, ky = wavenumbers(n, 1.0)
     k = np.hypot(kx, ky)
     band = (k >= kl) & (k <= ks)

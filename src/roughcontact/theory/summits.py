@@ -21,11 +21,11 @@ NAYAK_ALPHA_MIN = 1.5
 ASPERITY_MODELS = ("bgt", "greenwood")
 
 
-_SQRT_2PI = math.sqrt(2.0 * math.pi)
+SQRT_2PI = math.sqrt(2.0 * math.pi)
 
 
 # --------------------------------------------------------------------------- checks
-def _alpha(alpha, *, strict: bool = False) -> float:
+def checked_alpha(alpha, *, strict: bool = False) -> float:
     """Nayak's alpha as a float, >= 3/2 (> 3/2 when ``strict``), else a ValueError."""
     bound = f"{'>' if strict else '>='} {NAYAK_ALPHA_MIN}"
     msg = (f"alpha (Nayak's bandwidth m0 m4 / m2^2 of profile moments) must be a finite real number "
@@ -38,14 +38,16 @@ def _alpha(alpha, *, strict: bool = False) -> float:
     return a
 
 
-def _model(model) -> str:
+def checked_model(model) -> str:
+    """An asperity model's name, lower-cased and one of :data:`ASPERITY_MODELS`; else a ValueError."""
     m = model.lower() if isinstance(model, str) else model
     if m not in ASPERITY_MODELS:
         raise ValueError(f"model must be one of {ASPERITY_MODELS}, got {model!r}")
     return m
 
 
-def _real_array(name: str, value, lo: float, hi: float, note: str = "") -> np.ndarray:
+def real_array(name: str, value, lo: float, hi: float, note: str = "") -> np.ndarray:
+    """``value`` as a float array, finite and within ``[lo, hi]``; else a ValueError naming ``name`` (and ``note``)."""
     msg = f"{name}{note} must be finite and lie in [{lo:.6g}, {hi:.6g}], got {value!r}"
     try:
         arr = np.asarray(value, dtype=float)
@@ -56,7 +58,8 @@ def _real_array(name: str, value, lo: float, hi: float, note: str = "") -> np.nd
     return arr
 
 
-def _positive_scalar(name: str, value) -> float:
+def positive_scalar(name: str, value) -> float:
+    """``float(value)``, finite and > 0; else a ValueError naming ``name``."""
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -80,7 +83,7 @@ def nayak_summit_density(m2, m4) -> float:
     float
         Summit density [u^-2]; ``alpha / (6 pi sqrt(3))`` in units ``m0 = m2 = 1``.
     """
-    return _positive_scalar("m4", m4) / (6.0 * math.pi * math.sqrt(3.0) * _positive_scalar("m2", m2))
+    return positive_scalar("m4", m4) / (6.0 * math.pi * math.sqrt(3.0) * positive_scalar("m2", m2))
 
 
 def nayak_summit_pdf(xi, t, s, alpha) -> np.ndarray:
@@ -105,7 +108,7 @@ def nayak_summit_pdf(xi, t, s, alpha) -> np.ndarray:
     numpy.ndarray, broadcast shape of the inputs
         Probability density [-].
     """
-    a = _alpha(alpha, strict=True)
+    a = checked_alpha(alpha, strict=True)
     xi, t, s = (np.asarray(v, dtype=float) for v in (xi, t, s))
     inside = (s >= 0) & (s < t)
     shape = math.sqrt(3.0) * (t * t - s * s) * s * np.exp(-0.5 * s * s)
@@ -131,7 +134,7 @@ def nayak_summit_pdf_xi_t(xi, t, alpha) -> np.ndarray:
     numpy.ndarray, broadcast shape of the inputs
         Probability density [-].
     """
-    a = _alpha(alpha, strict=True)
+    a = checked_alpha(alpha, strict=True)
     xi, t = (np.asarray(v, dtype=float) for v in (xi, t))
     c1 = a / (2.0 * a - 3.0)
     tt = np.where(t > 0, t, 0.0)

@@ -383,7 +383,8 @@ def combine_topographies(datasets: Sequence[xr.Dataset], names: Sequence[str], *
 
 
 # ------------------------------------------------------------------- derived values
-def _first_bad_case(bad: xr.DataArray) -> str:
+def first_bad_case(bad: xr.DataArray) -> str:
+    """The coordinates of the first True element of ``bad`` as ``'dim=value, ...'`` (for error messages)."""
     idx = np.argwhere(bad.values)[0]
     parts = [f"{d}={bad[d].values[i]!r}" for d, i in zip(bad.dims, idx, strict=True)]
     return ", ".join(parts)

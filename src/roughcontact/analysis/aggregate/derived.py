@@ -12,7 +12,7 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 import xarray as xr
 
-from .combine import CASE_DIMS, CONTACT_REQUIRED, TOPOGRAPHY_DIM, _first_bad_case, combine_cases
+from .combine import CASE_DIMS, CONTACT_REQUIRED, TOPOGRAPHY_DIM, combine_cases, first_bad_case
 from .derivatives import load_derivative
 
 
@@ -101,13 +101,13 @@ def _checked_kappa(ds: xr.Dataset, e_star: float, converged: xr.DataArray, prese
     bad = usable & ~(abs(pbar - pbar_check) <= kappa_rtol * abs(pbar_check))
     if bool(bad.any()):
         raise ValueError("mean_contact_pressure differs from pressure / area_fraction beyond "
-                         f"rtol={kappa_rtol} at {_first_bad_case(bad)}")
+                         f"rtol={kappa_rtol} at {first_bad_case(bad)}")
     if "kappa" in ds:
         both = np.isfinite(ds["kappa"]) & np.isfinite(kappa)
         bad = both & ~(abs(ds["kappa"] - kappa) <= kappa_rtol * abs(kappa))
         if bool(bad.any()):
             raise ValueError("stored kappa differs from e_star * rms_slope / mean_contact_pressure "
-                             f"beyond rtol={kappa_rtol} at {_first_bad_case(bad)}")
+                             f"beyond rtol={kappa_rtol} at {first_bad_case(bad)}")
     return kappa.transpose(*pbar.dims)
 
 

@@ -12,7 +12,7 @@ import numpy as np
 import xarray as xr
 
 from ...core.quantities import REFERENCE_ATTRS
-from .combine import _first_bad_case
+from .combine import first_bad_case
 from .derived import add_derived
 
 #: Quantities reduced over seeds by :func:`seed_statistics`.
@@ -43,7 +43,7 @@ def _n_seeds(present: xr.DataArray, min_seeds: int, what: str) -> xr.DataArray:
     few = (n > 0) & (n < min_seeds)
     if bool(few.any()):
         raise ValueError(f"{what}: only {int(n.where(few).min())} seed(s) at "
-                         f"{_first_bad_case(few)}; min_seeds={min_seeds} (set min_seeds=1 to "
+                         f"{first_bad_case(few)}; min_seeds={min_seeds} (set min_seeds=1 to "
                          "accept NaN standard deviations)")
     n.attrs = {"units": "1", "long_name": "number of seeds (0: no such case)"}
     return n

@@ -15,12 +15,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .estimators import CONSTANTS, PAPER_CEL, FitError, TooFewPoints, _Curves, _fit_joint, _fit_paper
+from .estimators import CONSTANTS, PAPER_CEL, Curves, FitError, TooFewPoints, fit_joint, fit_paper
 
 _log = logging.getLogger(__name__)
 
 
-def _resample(c: _Curves, rng: np.random.Generator) -> np.ndarray:
+def _resample(c: Curves, rng: np.random.Generator) -> np.ndarray:
     """Seed indices drawn with replacement within each H stratum."""
     rows = []
     for label in np.unique(c.strata):
@@ -29,14 +29,16 @@ def _resample(c: _Curves, rng: np.random.Generator) -> np.ndarray:
     return np.concatenate(rows)
 
 
-def _group_rng(rng_seed: int, k_l: float, k_s: float, label: str) -> np.random.Generator:
+def group_rng(rng_seed: int, k_l: float, k_s: float, label: str) -> np.random.Generator:
+    """The bootstrap generator of one fit group: seeded by ``rng_seed`` and keyed by the group
+    ``(k_l, k_s, label)``, so a group's resamples do not depend on which other groups exist."""
     # Keyed by the group, so a group's resamples do not depend on which other groups exist.
     key = f"{float(k_l)!r}|{float(k_s)!r}|{label}".encode()
     digest = int.from_bytes(hashlib.sha256(key).digest()[:8], "little")
     return np.random.default_rng(np.random.SeedSequence(entropy=int(rng_seed), spawn_key=(digest,)))
 
 
-def _differing_stratum(curves: _Curves):
+def _differing_stratum(curves: Curves):
     """The first stratum whose rows have different normalised load schedules ``p0 / (E* h')``, or None.
 
     That schedule is what the CEL is a function of: surfaces of different rms slope loaded
@@ -51,12 +53,12 @@ def _differing_stratum(curves: _Curves):
     return None
 
 
-def _shared_schedule(curves: _Curves) -> bool:
+def shared_schedule(curves: Curves) -> bool:
     """Whether every stratum of ``curves`` has one normalised load schedule (see :func:`_differing_stratum`)."""
     return _differing_stratum(curves) is None
 
 
-def _check_schedules(curves: _Curves, who: Sequence[str]) -> None:
+def check_schedules(curves: Curves, who: Sequence[str]) -> None:
     """ValueError unless the rows of each stratum share one load schedule (the seed mean needs it).
 
     ``who[label]`` names the rows of stratum ``label`` in the message.
@@ -69,7 +71,7 @@ def _check_schedules(curves: _Curves, who: Sequence[str]) -> None:
                          "load.relative_to: rms_slope, not load.target_area)")
 
 
-class _GroupFit:
+class GroupFit:
     """One group's results: arrays over ``(estimator, constant)``, ``n_boot_ok`` over ``estimator``."""
 
     def __init__(self, n_methods: int):
@@ -79,21 +81,21 @@ class _GroupFit:
         self.nboot_ok = np.zeros(n_methods, dtype=np.int64)
 
 
-def _fit_group(curves: _Curves, *, methods: Sequence[str], e_star: float, min_points: int,
+def fit_group(curves: Curves, *, methods: Sequence[str], e_star: float, min_points: int,
                kappa_extrapolation: str, paper_average: str, n_boot: int, confidence: float,
-               rng: np.random.Generator, on_insufficient: str, caller: str, where: str, window) -> _GroupFit:
+               rng: np.random.Generator, on_insufficient: str, caller: str, where: str, window) -> GroupFit:
     """Every estimator on one group's curves, then the bootstrap over its rows (seeds, topographies).
 
     Shared by :func:`fit_cel` (a call per group) and :func:`fit_topographies` (one call); ``rng``
     draws the resamples; ``caller``, ``where`` and ``window`` (as passed) name the group in errors.
     """
-    out = _GroupFit(len(methods))
+    out = GroupFit(len(methods))
     q = 100.0 * (1.0 - float(confidence)) / 2.0
 
     def run(method, c, guess):
         if method == "paper":
-            return _fit_paper(c, min_points, kappa_extrapolation, paper_average == "seeds")
-        return _fit_joint(c, e_star, min_points, guess)
+            return fit_paper(c, min_points, kappa_extrapolation, paper_average == "seeds")
+        return fit_joint(c, e_star, min_points, guess)
 
     full = {}
     for m, method in enumerate(methods):
@@ -138,7 +140,7 @@ def _fit_group(curves: _Curves, *, methods: Sequence[str], e_star: float, min_po
     return out
 
 
-def _summarise_bootstrap(out: _GroupFit, boot: dict, methods: Sequence[str], inflate: float, q: float) -> None:
+def _summarise_bootstrap(out: GroupFit, boot: dict, methods: Sequence[str], inflate: float, q: float) -> None:
     """Each method's finite draws into ``out``: their count, inflated std and ``q``-percentile interval."""
     for m, method in enumerate(methods):
         if method not in boot:

@@ -9,7 +9,8 @@ from ..aggregate.combine import TOPOGRAPHY_DIM
 
 
 # --------------------------------------------------------------------------- public
-def _is_topography_layout(agg: xr.Dataset) -> bool:
+def is_topography_layout(agg: xr.Dataset) -> bool:
+    """Whether an aggregate is a measured scene's (cases along ``topography``) rather than a grid's."""
     return TOPOGRAPHY_DIM in agg.dims
 
 
@@ -21,7 +22,7 @@ def exclude_unconverged(agg: xr.Dataset) -> tuple[xr.Dataset, list[tuple[float, 
     generated scene; for a measured one (dims ``(topography, step)``) they are the
     topographies' names, and ``n_unconverged`` is counted from ``converged`` if absent.
     """
-    if _is_topography_layout(agg):
+    if is_topography_layout(agg):
         return _exclude_unconverged_topographies(agg)
     if "n_unconverged" not in agg:
         return agg, []

@@ -52,7 +52,7 @@ Measured scenes (aggregate dims ``(topography, step)``, one case per topography 
 by :func:`~roughcontact.analysis.fit.topographies.fit_topographies`: all topographies pooled as one
 surface type, the topographies in the place of the seeds (topography-mean curve for the paper route,
 bootstrap over whole topographies), with the same per-group machinery as
-:func:`~roughcontact.analysis.fit.grid.fit_cel` (``bootstrap._fit_group``).
+:func:`~roughcontact.analysis.fit.grid.fit_cel` (``bootstrap.fit_group``).
 """
 
 from __future__ import annotations
@@ -86,11 +86,11 @@ PAPER_CEL = {
 POOLED = "pooled"
 
 
-_KAPPA_EXTRAPOLATIONS = ("cel", "poly2")
+KAPPA_EXTRAPOLATIONS = ("cel", "poly2")
 
 
 # -------------------------------------------------------------------- group data
-class _Curves:
+class Curves:
     """Load curves of one fit group, one row per seed (bootstrap picks rows)."""
 
     def __init__(self, a, p0, hp, kappa, dpbar, valid, strata, window):
@@ -100,11 +100,11 @@ class _Curves:
         self.window = window
         self.ok = valid & (a >= window[0]) & (a <= window[1])
 
-    def take(self, rows: np.ndarray) -> _Curves:
-        return _Curves(self.a[rows], self.p0[rows], self.hp[rows], self.kappa[rows],
+    def take(self, rows: np.ndarray) -> Curves:
+        return Curves(self.a[rows], self.p0[rows], self.hp[rows], self.kappa[rows],
                        self.dpbar[rows], self.valid[rows], self.strata[rows], self.window)
 
-    def stratum_means(self) -> _Curves:
+    def stratum_means(self) -> Curves:
         """One row per H stratum: the seed-mean curve (steps valid in every seed)."""
         labels = np.unique(self.strata)
         rows = [np.flatnonzero(self.strata == lab) for lab in labels]
@@ -114,7 +114,7 @@ class _Curves:
             with np.errstate(invalid="ignore"):
                 return np.array([np.where(v, x[r].mean(axis=0), np.nan) for r, v in zip(rows, valid, strict=True)])
 
-        return _Curves(mean(self.a), mean(self.p0), np.array([self.hp[r].mean() for r in rows]),
+        return Curves(mean(self.a), mean(self.p0), np.array([self.hp[r].mean() for r in rows]),
                        mean(self.kappa), mean(self.dpbar), valid, labels, self.window)
 
     @property
@@ -131,7 +131,7 @@ class TooFewPoints(FitError):
     """Fewer usable points in the fit window than the fit needs (``min_points``)."""
 
 
-def _fit_paper(c: _Curves, min_points: int, extrapolation: str, average: bool):
+def fit_paper(c: Curves, min_points: int, extrapolation: str, average: bool):
     """Paper route. Returns (values, stderrs, n_points) as arrays over CONSTANTS."""
     if average:
         c = c.stratum_means()
@@ -199,7 +199,10 @@ JOINT_LOWER = np.array([1e-6, 1e-6, 1e-12])
 JOINT_UPPER = np.array([np.inf, 1.0 - 1e-6, np.inf])
 
 
-def _fit_joint(c: _Curves, e_star: float, min_points: int, x0_guess: np.ndarray):
+def fit_joint(c: Curves, e_star: float, min_points: int, x0_guess: np.ndarray):
+    """The joint fit: nonlinear least squares of the CEL to ``log A/A0`` over every curve in the window.
+
+    Returns the constants; raises :class:`TooFewPoints` when fewer than ``max(min_points, 4)`` points are in it."""
     sel = c.ok & np.isfinite(c.p0) & (c.p0 > 0)
     n = int(sel.sum())
     if n < max(min_points, 4):

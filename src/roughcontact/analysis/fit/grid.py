@@ -11,13 +11,13 @@ import xarray as xr
 from ...theory.spectra import power_law_alpha
 from ..aggregate.combine import CASE_DIMS
 from ..aggregate.derived import add_derived
-from .bootstrap import _check_schedules, _fit_group, _group_rng, _GroupFit, _shared_schedule
-from .estimators import CONSTANTS, METHODS, POOLED, _Curves
-from .settings import _check_settings, _estimate_vars, _estimator_coords, _h_label, _paper_vars, _settings_attrs
+from .bootstrap import GroupFit, check_schedules, fit_group, group_rng, shared_schedule
+from .estimators import CONSTANTS, METHODS, POOLED, Curves
+from .settings import check_settings, estimate_vars, estimator_coords, h_label, paper_vars, settings_attrs
 
 
 def _group_curves(agg: xr.Dataset, k_l: float, k_s: float, hs: Sequence[float],
-                  window: tuple[float, float]) -> _Curves:
+                  window: tuple[float, float]) -> Curves:
     rows = []
     for j, h in enumerate(hs):
         sub = agg.sel(k_l=k_l, k_s=k_s, H=h)
@@ -37,10 +37,10 @@ def _group_curves(agg: xr.Dataset, k_l: float, k_s: float, hs: Sequence[float],
     if not rows:
         n = agg.sizes["step"]
         empty = np.empty((0, n))
-        return _Curves(empty, empty, np.empty(0), empty, empty, np.empty((0, n), bool),
+        return Curves(empty, empty, np.empty(0), empty, empty, np.empty((0, n), bool),
                        np.empty(0, int), window)
     cols = list(zip(*rows, strict=True))
-    return _Curves(np.array(cols[0]), np.array(cols[1]), np.array(cols[2]), np.array(cols[3]),
+    return Curves(np.array(cols[0]), np.array(cols[1]), np.array(cols[2]), np.array(cols[3]),
                    np.array(cols[4]), np.array(cols[5]), np.array(cols[6], dtype=int), window)
 
 
@@ -81,12 +81,12 @@ def fit_cel(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.11), n_bo
         agg = add_derived(agg)
     if paper_average == "auto":
         paper_average = "seeds" if _seeds_share_schedules(agg, window) else "none"
-    (lo, hi), methods = _check_settings(window, n_boot, rng_seed, methods, min_points, kappa_extrapolation,
-                                        confidence, paper_average, on_insufficient)
+    (lo, hi), methods = check_settings(window, n_boot, rng_seed, methods, min_points, kappa_extrapolation,
+                                       confidence, paper_average, on_insufficient)
     e_star = float(agg.attrs["e_star"])
 
     kls, kss, hs = (agg[d].values for d in ("k_l", "k_s", "H"))
-    labels = [_h_label(h) for h in hs] + [POOLED]
+    labels = [h_label(h) for h in hs] + [POOLED]
     grid = _CelGrid((len(kls), len(kss), len(labels), len(methods), len(CONSTANTS)))
     fit_kw = dict(methods=methods, e_star=e_star, min_points=min_points, kappa_extrapolation=kappa_extrapolation,
                   paper_average=paper_average, n_boot=n_boot, confidence=confidence,
@@ -97,7 +97,7 @@ def fit_cel(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.11), n_bo
                 group_hs = list(hs) if label == POOLED else [hs[g]]
                 _fit_cel_group(agg, grid, (i, j, g), kl, ks, group_hs, label, (lo, hi), rng_seed, fit_kw)
     return _cel_dataset(agg, grid, labels, methods, confidence,
-                        _settings_attrs(lo, hi, n_boot, rng_seed, confidence, min_points, kappa_extrapolation,
+                        settings_attrs(lo, hi, n_boot, rng_seed, confidence, min_points, kappa_extrapolation,
                                         paper_average, e_star))
 
 
@@ -107,7 +107,7 @@ def _seeds_share_schedules(agg: xr.Dataset, window) -> bool:
     They do when loaded by ``load.p_max``; with ``load.target_area`` each seed ends at its own p0.
     """
     bounds = tuple(float(v) for v in window)
-    return all(_shared_schedule(_group_curves(agg, kl, ks, [h], bounds))
+    return all(shared_schedule(_group_curves(agg, kl, ks, [h], bounds))
                for kl in agg["k_l"].values for ks in agg["k_s"].values for h in agg["H"].values)
 
 
@@ -127,7 +127,7 @@ class _CelGrid:
         self.alpha = np.full(shape5[:3], np.nan)
         self.alpha_surf = np.full(shape5[:3], np.nan)
 
-    def store(self, idx: tuple[int, int, int], res: _GroupFit) -> None:
+    def store(self, idx: tuple[int, int, int], res: GroupFit) -> None:
         """Copy one group's fit into position ``idx = (i_k_l, i_k_s, i_H_group)``."""
         self.value[idx], self.stderr[idx], self.npts[idx] = res.value, res.stderr, res.npts
         self.bstd[idx], self.clo[idx], self.chi[idx] = res.bstd, res.clo, res.chi
@@ -140,7 +140,7 @@ def _fit_cel_group(agg: xr.Dataset, grid: _CelGrid, idx: tuple[int, int, int], k
     """Fit the group ``(kl, ks, group_hs)`` (H label ``label``) of ``agg`` into ``grid[idx]``.
 
     ``bounds`` is the checked window ``(low, high)`` of ``A/A0``; ``fit_kw`` holds
-    :func:`_fit_group`'s settings (with the window as the user passed it, for messages). A group without cases only gets
+    :func:`fit_group`'s settings (with the window as the user passed it, for messages). A group without cases only gets
     ``n_seeds = 0``.
     """
     curves = _group_curves(agg, kl, ks, group_hs, bounds)
@@ -148,13 +148,13 @@ def _fit_cel_group(agg: xr.Dataset, grid: _CelGrid, idx: tuple[int, int, int], k
     if curves.n_seeds == 0:
         return
     if fit_kw["paper_average"] == "seeds" and "paper" in fit_kw["methods"]:
-        _check_schedules(curves, [f"fit_cel: seeds at k_l={kl:g}, k_s={ks:g}, H={_h_label(h)}"
+        check_schedules(curves, [f"fit_cel: seeds at k_l={kl:g}, k_s={ks:g}, H={h_label(h)}"
                                   for h in group_hs])
     if label != POOLED and kl < ks:
         grid.alpha[idx] = power_law_alpha(kl, ks, group_hs[0])
     if "alpha" in agg:
         grid.alpha_surf[idx] = _mean_alpha_surfaces(agg, kl, ks, group_hs)
-    res = _fit_group(curves, rng=_group_rng(rng_seed, kl, ks, label), caller="fit_cel",
+    res = fit_group(curves, rng=group_rng(rng_seed, kl, ks, label), caller="fit_cel",
                      where=f"k_l={kl:g}, k_s={ks:g}, H={label}", **fit_kw)
     grid.store(idx, res)
 
@@ -175,7 +175,7 @@ def _cel_dataset(agg: xr.Dataset, grid: _CelGrid, labels: list[str], methods: Se
     one = {"units": "1"}
     return xr.Dataset(
         {
-            **_estimate_vars(dims5, grid.value, grid.stderr, grid.bstd, grid.clo, grid.chi, grid.npts,
+            **estimate_vars(dims5, grid.value, grid.stderr, grid.bstd, grid.clo, grid.chi, grid.npts,
                              confidence=confidence, resampled="seeds", methods=methods,
                              points="paper route with paper_average='seeds': seed-mean points, one per H and step"),
             "n_seeds": (dims5[:3], grid.nseeds, {**one, "long_name": "number of seeds (surfaces) in the group"}),
@@ -185,7 +185,7 @@ def _cel_dataset(agg: xr.Dataset, grid: _CelGrid, labels: list[str], methods: Se
                                 "for k_l = 1, see theory.discrete_power_law_moments)"}),
             "alpha_surfaces": (dims5[:3], grid.alpha_surf, {**one, "long_name": "mean Nayak alpha of the "
                                "group's generated surfaces (agg variable alpha; NaN if absent)"}),
-            **_paper_vars(),
+            **paper_vars(),
         },
         coords={
             "k_l": ("k_l", kls.astype(np.float64), dict(agg["k_l"].attrs)),
@@ -194,7 +194,7 @@ def _cel_dataset(agg: xr.Dataset, grid: _CelGrid, labels: list[str], methods: Se
                         {"units": "1", "long_name": "Hurst exponent of the group, or 'pooled' over all H"}),
             "H_value": ("H_group", np.append(hs.astype(np.float64), np.nan),
                         {"units": "1", "long_name": "Hurst exponent (NaN: pooled)"}),
-            **_estimator_coords(methods),
+            **estimator_coords(methods),
         },
         attrs=attrs,
     )

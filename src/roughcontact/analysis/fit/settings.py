@@ -37,10 +37,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .estimators import _KAPPA_EXTRAPOLATIONS, CONSTANTS, METHODS, PAPER_CEL, constrained_flags
+from .estimators import CONSTANTS, KAPPA_EXTRAPOLATIONS, METHODS, PAPER_CEL, constrained_flags
 
 
-def _check_window(window) -> tuple[float, float]:
+def check_window(window) -> tuple[float, float]:
+    """The fit window ``(low, high)`` of area fractions, ``0 < low < high <= 1``; else a ValueError."""
     try:
         lo, hi = (float(w) for w in window)
     except (TypeError, ValueError):
@@ -50,14 +51,15 @@ def _check_window(window) -> tuple[float, float]:
     return lo, hi
 
 
-def _h_label(h: float) -> str:
+def h_label(h: float) -> str:
+    """A Hurst exponent as the fit tables label it (``%g``)."""
     return f"{float(h):g}"
 
 
-def _check_settings(window, n_boot, rng_seed, methods, min_points, kappa_extrapolation, confidence,
+def check_settings(window, n_boot, rng_seed, methods, min_points, kappa_extrapolation, confidence,
                     paper_average, on_insufficient) -> tuple[tuple[float, float], tuple[str, ...]]:
     """The validated window ``(low, high)`` and methods; ValueError naming the first bad setting."""
-    lo, hi = _check_window(window)
+    lo, hi = check_window(window)
     if not isinstance(n_boot, (int, np.integer)) or n_boot < 10:
         raise ValueError(f"n_boot must be an integer >= 10, got {n_boot!r}")
     if not isinstance(rng_seed, (int, np.integer)) or rng_seed < 0:
@@ -67,8 +69,8 @@ def _check_settings(window, n_boot, rng_seed, methods, min_points, kappa_extrapo
         raise ValueError(f"methods must be distinct names from {METHODS}, got {methods!r}")
     if not isinstance(min_points, (int, np.integer)) or min_points < 3:
         raise ValueError(f"min_points must be an integer >= 3, got {min_points!r}")
-    if kappa_extrapolation not in _KAPPA_EXTRAPOLATIONS:
-        raise ValueError(f"kappa_extrapolation must be one of {_KAPPA_EXTRAPOLATIONS}, got "
+    if kappa_extrapolation not in KAPPA_EXTRAPOLATIONS:
+        raise ValueError(f"kappa_extrapolation must be one of {KAPPA_EXTRAPOLATIONS}, got "
                          f"{kappa_extrapolation!r}")
     if not (0.0 < float(confidence) < 1.0):
         raise ValueError(f"confidence must lie in (0, 1), got {confidence!r}")
@@ -79,7 +81,7 @@ def _check_settings(window, n_boot, rng_seed, methods, min_points, kappa_extrapo
     return (lo, hi), methods
 
 
-def _estimate_vars(dims: tuple[str, ...], value, stderr, bstd, clo, chi, npts, *, confidence: float,
+def estimate_vars(dims: tuple[str, ...], value, stderr, bstd, clo, chi, npts, *, confidence: float,
                    resampled: str, points: str, methods: Sequence[str]) -> dict:
     """The per-constant variables of a fit result, over ``dims`` (ending in estimator, constant).
 
@@ -104,7 +106,8 @@ def _estimate_vars(dims: tuple[str, ...], value, stderr, bstd, clo, chi, npts, *
     }
 
 
-def _paper_vars() -> dict:
+def paper_vars() -> dict:
+    """The published CEL constants and their uncertainties as dataset variables over ``constant``."""
     one = {"units": "1"}
     return {
         "paper_value": (("constant",), np.array([PAPER_CEL[c][0] for c in CONSTANTS]),
@@ -114,7 +117,8 @@ def _paper_vars() -> dict:
     }
 
 
-def _estimator_coords(methods: Sequence[str]) -> dict:
+def estimator_coords(methods: Sequence[str]) -> dict:
+    """The ``estimator`` and ``constant`` coordinates of a fit dataset, with their long names."""
     return {
         "estimator": ("estimator", np.array(methods, dtype=object),
                       {"units": "1", "long_name": "estimator: 'paper' (log-log d pbar/d p0 + kappa extrapolation) "
@@ -123,8 +127,9 @@ def _estimator_coords(methods: Sequence[str]) -> dict:
     }
 
 
-def _settings_attrs(lo, hi, n_boot, rng_seed, confidence, min_points, kappa_extrapolation, paper_average,
+def settings_attrs(lo, hi, n_boot, rng_seed, confidence, min_points, kappa_extrapolation, paper_average,
                     e_star) -> dict:
+    """The fit's settings as global attributes of its dataset."""
     return {
         "window_low": lo, "window_high": hi, "n_boot": int(n_boot), "rng_seed": int(rng_seed),
         "confidence": float(confidence), "min_points": int(min_points),

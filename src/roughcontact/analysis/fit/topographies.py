@@ -2,7 +2,7 @@
 
 The topographies stand in the place of the seeds (topography-mean curve for the paper route,
 bootstrap over whole topographies); the same per-group machinery as the grid fit
-(:func:`roughcontact.analysis.fit.bootstrap._fit_group`).
+(:func:`roughcontact.analysis.fit.bootstrap.fit_group`).
 """
 
 from __future__ import annotations
@@ -14,10 +14,10 @@ import xarray as xr
 
 from ..aggregate.combine import CASE_DIMS, TOPOGRAPHY_DIM
 from ..aggregate.derived import add_derived
-from .bootstrap import _check_schedules, _fit_group, _group_rng, _GroupFit, _shared_schedule
-from .cases import _is_topography_layout
-from .estimators import METHODS, _Curves
-from .settings import _check_settings, _check_window, _estimate_vars, _estimator_coords, _paper_vars, _settings_attrs
+from .bootstrap import GroupFit, check_schedules, fit_group, group_rng, shared_schedule
+from .cases import is_topography_layout
+from .estimators import METHODS, Curves
+from .settings import check_settings, check_window, estimate_vars, estimator_coords, paper_vars, settings_attrs
 
 
 def _derive_topographies(agg: xr.Dataset) -> xr.Dataset:
@@ -35,7 +35,7 @@ def _derive_topographies(agg: xr.Dataset) -> xr.Dataset:
     return out
 
 
-def _topography_curves(agg: xr.Dataset, window: tuple[float, float]) -> tuple[_Curves, list[str]]:
+def _topography_curves(agg: xr.Dataset, window: tuple[float, float]) -> tuple[Curves, list[str]]:
     """The load curves of the present topographies (one row each, one stratum) and their names."""
     names = [str(t) for t in agg[TOPOGRAPHY_DIM].values]
     dims = (TOPOGRAPHY_DIM, "step")
@@ -48,7 +48,7 @@ def _topography_curves(agg: xr.Dataset, window: tuple[float, float]) -> tuple[_C
     a = steps("area_fraction")
     valid = steps("converged", bool) & np.isfinite(a)
     hp = agg["rms_slope"].transpose(TOPOGRAPHY_DIM).values.astype(float)[present]
-    curves = _Curves(a, steps("pressure"), hp, steps("kappa"), steps("dpbar_dp0"), valid,
+    curves = Curves(a, steps("pressure"), hp, steps("kappa"), steps("dpbar_dp0"), valid,
                      np.zeros(a.shape[0], dtype=int), window)
     return curves, [n for n, p in zip(names, present, strict=True) if p]
 
@@ -95,22 +95,22 @@ def fit_topographies(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.
     _check_topography_aggregate(agg)
     if "dpbar_dp0" not in agg or "kappa" not in agg:
         agg = _derive_topographies(agg)
-    curves, fitted = _topography_curves(agg, _check_window(window))
+    curves, fitted = _topography_curves(agg, check_window(window))
     if paper_average == "auto":
-        paper_average = "seeds" if _shared_schedule(curves) else "none"
-    (lo, hi), methods = _check_settings(window, n_boot, rng_seed, methods, min_points, kappa_extrapolation,
+        paper_average = "seeds" if shared_schedule(curves) else "none"
+    (lo, hi), methods = check_settings(window, n_boot, rng_seed, methods, min_points, kappa_extrapolation,
                                         confidence, paper_average, on_insufficient)
     e_star = float(agg.attrs["e_star"])
     if paper_average == "seeds" and "paper" in methods and curves.n_seeds:
-        _check_schedules(curves, ["fit_topographies: the topographies"])
-    res = _GroupFit(len(methods))
+        check_schedules(curves, ["fit_topographies: the topographies"])
+    res = GroupFit(len(methods))
     if curves.n_seeds:
-        res = _fit_group(curves, methods=methods, e_star=e_star, min_points=min_points,
+        res = fit_group(curves, methods=methods, e_star=e_star, min_points=min_points,
                          kappa_extrapolation=kappa_extrapolation, paper_average=paper_average, n_boot=n_boot,
-                         confidence=confidence, rng=_group_rng(rng_seed, 0.0, 0.0, "topographies"),
+                         confidence=confidence, rng=group_rng(rng_seed, 0.0, 0.0, "topographies"),
                          on_insufficient=on_insufficient, caller="fit_topographies",
                          where=f"{curves.n_seeds} topographies pooled", window=window)
-    attrs = {**_settings_attrs(lo, hi, n_boot, rng_seed, confidence, min_points, kappa_extrapolation,
+    attrs = {**settings_attrs(lo, hi, n_boot, rng_seed, confidence, min_points, kappa_extrapolation,
                                paper_average, e_star), "layout": "topographies"}
     return _topography_dataset(agg, res, curves.n_seeds, fitted, methods, confidence, attrs)
 
@@ -121,7 +121,7 @@ def _check_topography_aggregate(agg: xr.Dataset) -> None:
     It needs dims ``(topography, step)`` and no generated-case dim, the variables
     ``area_fraction, pressure, converged, rms_slope`` and the global attribute ``e_star``.
     """
-    if not _is_topography_layout(agg) or "step" not in agg.dims:
+    if not is_topography_layout(agg) or "step" not in agg.dims:
         raise ValueError(f"agg must have dims (topography, step), got {tuple(agg.dims)}; "
                          "generated scenes are fitted by fit_cel")
     clash = [d for d in CASE_DIMS if d in agg.dims]
@@ -134,7 +134,7 @@ def _check_topography_aggregate(agg: xr.Dataset) -> None:
         raise ValueError("agg lacks the global attribute 'e_star' (contact modulus)")
 
 
-def _topography_dataset(agg: xr.Dataset, res: _GroupFit, n_fitted: int, fitted: list[str],
+def _topography_dataset(agg: xr.Dataset, res: GroupFit, n_fitted: int, fitted: list[str],
                         methods: Sequence[str], confidence: float, attrs: dict) -> xr.Dataset:
     """:func:`fit_topographies`' result dataset from the pooled fit ``res`` of the ``n_fitted`` topographies ``fitted``.
 
@@ -149,7 +149,7 @@ def _topography_dataset(agg: xr.Dataset, res: _GroupFit, n_fitted: int, fitted: 
     one = {"units": "1"}
     return xr.Dataset(
         {
-            **_estimate_vars(dims, res.value, res.stderr, res.bstd, res.clo, res.chi, res.npts,
+            **estimate_vars(dims, res.value, res.stderr, res.bstd, res.clo, res.chi, res.npts,
                              confidence=confidence, resampled="topographies", methods=methods,
                              points="paper route with paper_average='seeds': topography-mean points, one per step"),
             "n_topographies": ((), np.int64(n_fitted), {**one, "long_name": "number of topographies fitted"}),
@@ -158,12 +158,12 @@ def _topography_dataset(agg: xr.Dataset, res: _GroupFit, n_fitted: int, fitted: 
                                                    "0 if excluded (e.g. unconverged steps)"}),
             "alpha_surfaces": ((), alpha_surf, {**one, "long_name": "mean Nayak alpha of the fitted "
                                                 "topographies (agg variable alpha; NaN if absent)"}),
-            **_paper_vars(),
+            **paper_vars(),
         },
         coords={
             TOPOGRAPHY_DIM: (TOPOGRAPHY_DIM, np.array([str(t) for t in names], dtype=object),
                              {"units": "1", "long_name": "name of the measured topography"}),
-            **_estimator_coords(methods),
+            **estimator_coords(methods),
         },
         attrs=attrs,
     )

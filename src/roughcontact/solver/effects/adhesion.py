@@ -2,16 +2,27 @@
 
 The effect supplies its law as the ``functional`` (:mod:`..adhesion`), which makes the solver
 use the gap iteration (:class:`~..adhesive.AdhesiveSolver`, Rey, Anciaux & Molinari 2017); it
-reports the adhesive share of each step and, after the load steps, the pull-off pressure from
-unloading under displacement control.
+reports the adhesive share of each step and, after the load steps, the unloading branch under
+displacement control and the pull-off pressure with its status (:mod:`..adhesive`).
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+import xarray as xr
 
 from ...core.quantities import cf_unit
-from ..adhesion import Exponential, MaugisDugdale
+from ..adhesion import (
+    MIN_ZONE_CELLS,
+    PULL_OFF_STATUS,
+    Exponential,
+    MaugisDugdale,
+    process_zone_length,
+    unresolved_zone_message,
+    zone_cells,
+)
 from ..results import FRACTION_UNITS
 from .base import Effect, register
 
@@ -32,17 +43,34 @@ class Adhesion(Effect):
     range : float
         Range ``rho`` of the law [length], > 0.
     unloading : bool
-        Trace the unloading after the last load step (the pull-off pressure; costs about as
-        many solves as ``unloading_steps``).
+        Trace the unloading after the last load step under displacement control: the unloading
+        branch and the pull-off pressure with its status (:meth:`~..adhesive.AdhesiveSolver.unload`).
+    pull_off_rtol : float
+        Tolerance on the pull-off's change when the unloading step near the minimum is refined, relative.
+
+    Examples
+    --------
+    >>> from roughcontact.solver import solve_contact
+    >>> from roughcontact.surfaces.synthetic import generate_surface
+    >>> h = generate_surface(64, 2, 16, 0.5, seed=0, rms_slope=0.1)
+    >>> ds = solve_contact(h, [0.001, 0.002], effects=(Adhesion("exponential", 2e-6, 1e-3),))
+    >>> str(ds["pull_off_status"].attrs["flag_meanings"].split()[int(ds["pull_off_status"])])
+    'trusted'
     """
 
     name = "adhesion"
+    #: Fraction of the largest tension above which a node out of contact counts in ``adhesive_area_fraction``.
+    ZONE_FRACTION = 0.5
 
-    def __init__(self, law: str, work: float, range: float, unloading: bool = True):  # noqa: A002
+    def __init__(self, law: str, work: float, range: float, unloading: bool = True,  # noqa: A002
+                 pull_off_rtol: float = 1e-3):
         if law not in LAWS:
             raise ValueError(f"law must be one of {sorted(LAWS)}, got {law!r}")
         self.functional = LAWS[law](work, range)
         self.law, self.unloading = law, bool(unloading)
+        if not (isinstance(pull_off_rtol, (int, float)) and 0 < pull_off_rtol < 1):
+            raise ValueError(f"pull_off_rtol must be a number in (0, 1), got {pull_off_rtol!r}")
+        self.pull_off_rtol = float(pull_off_rtol)
 
     @classmethod
     def check_config(cls, contact: dict, fail) -> None:
@@ -54,33 +82,103 @@ class Adhesion(Effect):
         boundary = contact["solver"].get("boundary", "periodic")
         if boundary != "periodic":
             fail("", f"needs solver.boundary: periodic (the adhesive iteration is periodic), got {boundary!r}")
+        block = contact["effects"][cls.name]
+        surface = contact.get("surface", {})
+        if "N" in surface and "L" in surface:  # a generated surface: its grid is known before any job
+            law = Exponential(block["work"], block["range"])  # w / E* and rho: the zone in units of E* = 1
+            cells = zone_cells(law, 1.0, float(surface["L"]), (int(surface["N"]),) * 2)
+            if cells < MIN_ZONE_CELLS:
+                need = math.ceil(MIN_ZONE_CELLS * float(surface["L"]) / process_zone_length(law, 1.0))
+                fail("", unresolved_zone_message(cells, law, 1.0, f"L / N = {surface['L']:g} / {surface['N']}")
+                     + f" (surface.N >= {need})")
+        if block["law"] == "maugis-dugdale":
+            fail(".law", "maugis-dugdale is refused in a scene: its tension jumps at g = rho, so the discrete "
+                 "problem traps in many states and its pull-off does not converge with the grid (docs/solver.md, "
+                 "'Adhesion'); use law: exponential (the library's MaugisDugdale stays for studies of that trap)")
 
     @classmethod
     def from_config(cls, block: dict, *, e_star: float) -> Adhesion:
         """``contact.effects.adhesion``: ``work`` relative to ``E*`` (a length), ``range`` a length."""
-        return cls(block["law"], block["work"] * e_star, block["range"], block.get("unloading", True))
+        return cls(block["law"], block["work"] * e_star, block["range"], block.get("unloading", True),
+                   block.get("pull_off_rtol", 1e-3))
 
-    def finish(self, p: np.ndarray, p_int, p0: float) -> dict:
-        """The mean adhesive (tensile) pressure and the fraction of nodes in tension."""
-        tensile = p < 0
-        return {"adhesive_pressure": float(-p[tensile].sum()) / p.size,
-                "tensile_area_fraction": np.count_nonzero(tensile) / p.size}
+    def finish(self, p: np.ndarray, p_int, p0: float, gap: np.ndarray | None = None) -> dict:
+        """The attractive traction of the law out of contact, and the area where it is strong.
+
+        Both come from the law at the gap (``tension(g)`` where ``g > 0``), not from the sign of the
+        pressure: with the exponential law every node out of contact carries some tension, and
+        below the residual's scale the sign of ``p`` is noise.
+        """
+        law, out = self.functional, gap > 0
+        tension = law.tension(gap[out])
+        return {"adhesive_pressure": float(tension.sum()) / gap.size,
+                "adhesive_area_fraction": np.count_nonzero(tension >= self.ZONE_FRACTION * law.max_tension)
+                / gap.size}
 
     def variables(self, length_unit: str = "1", pressure_unit: str = "1") -> dict:
         return {"adhesive_pressure": (cf_unit(pressure=pressure_unit, pressure_power=1),
-                                      "mean tensile pressure of the adhesive interaction (sum of p < 0 over A0)"),
-                "tensile_area_fraction": (FRACTION_UNITS, "fraction of nodes in tension (p < 0)")}
+                                      "attractive traction of the interaction law on the nodes out of contact, "
+                                      "summed over A0: sum of tension(g) where g > 0, over the node count"),
+                "adhesive_area_fraction": (FRACTION_UNITS, "fraction of nodes out of contact whose adhesive traction "
+                                           f"is at least {self.ZONE_FRACTION:g} of the law's largest, w / rho")}
 
     def attrs(self) -> dict:
         return {"adhesion_law": self.law, "work_of_adhesion": self.functional.w,
                 "adhesion_range": self.functional.rho}
 
     def after_steps(self, solver, length_unit: str = "1", pressure_unit: str = "1") -> dict:
-        """The pull-off pressure from unloading (``rho / 4`` a step) after the last load step."""
+        """The process zone's resolution, and after unloading its branch and the pull-off with its status.
+
+        Returns name -> :class:`xarray.Variable`: ``adhesive_zone_cells`` always; with ``unloading``
+        the branch along ``unload_step`` (``unload_mean_gap``, ``unload_mean_pressure``,
+        ``unload_area_fraction``, ``unload_converged``), ``pull_off_pressure`` (NaN unless trusted,
+        the reason in its ``comment``), ``pull_off_status`` (a CF flag) and ``unload_unconverged_steps``.
+        """
+        pressure = cf_unit(pressure=pressure_unit, pressure_power=1)
+        out = {"adhesive_zone_cells": xr.Variable((), solver.zone_cells, {
+            "units": FRACTION_UNITS, "long_name": "grid cells spanned by the adhesive process zone E* rho^2 / w "
+                                                  "(the larger pixel side); steps count as converged from 1.5"})}
         if not self.unloading:
-            return {}
-        gaps, loads = solver.unload(self.functional.rho / 4)
-        pull_off = -float(np.nanmin(loads)) if loads.size else float("nan")
-        return {"pull_off_pressure": (pull_off, cf_unit(pressure=pressure_unit, pressure_power=1),
-                                      "pull-off pressure: the most tensile mean pressure on unloading under "
-                                      "displacement control from the last load step (rho / 4 a step)")}
+            return out
+        un = solver.unload(self.functional.rho / 4, rtol=self.pull_off_rtol)
+        out.update(unloading_variables(un, cf_unit(length=length_unit, length_power=1), pressure))
+        return out
+
+
+def unloading_variables(un, length_units: str, pressure_units: str) -> dict:
+    """The unloading branch and the pull-off of :class:`~..adhesive.Unloading` ``un`` as CF variables.
+
+    Along ``unload_step``: ``unload_mean_gap`` [length], ``unload_mean_pressure`` [pressure],
+    ``unload_area_fraction``, ``unload_converged`` (a flag); scalars ``unload_unconverged_steps``,
+    ``pull_off_pressure`` (NaN unless trusted; its ``comment`` says how it was found, or why it is
+    NaN) and ``pull_off_status`` (a CF flag over :data:`PULL_OFF_STATUS`).
+    """
+    dim = ("unload_step",)
+    comment = un.reason or (f"the most tensile converged step, the step near it refined 4x at a time to "
+                            f"{un.step:.3g} until it moved by less than {un.rtol:g} of itself")
+
+    def flag(dims, codes, long_name, meanings):
+        return xr.Variable(dims, codes, {"units": FRACTION_UNITS, "long_name": long_name,
+                                         "flag_values": np.arange(len(meanings), dtype=np.int8),
+                                         "flag_meanings": " ".join(meanings)})
+
+    return {
+        "unload_mean_gap": xr.Variable(dim, un.mean_gap, {
+            "units": length_units, "long_name": "mean gap on unloading under displacement control"}),
+        "unload_mean_pressure": xr.Variable(dim, un.mean_pressure, {
+            "units": pressure_units, "long_name": "mean pressure on unloading (NaN where the step did not converge)"}),
+        "unload_area_fraction": xr.Variable(dim, un.area_fraction, {
+            "units": FRACTION_UNITS, "long_name": "real contact area fraction on unloading (nodes with gap = 0)"}),
+        "unload_converged": flag(dim, un.converged.astype(np.int8),
+                                 "unloading step converged (adhesive residual <= tol on a fresh FFT)",
+                                 ("false", "true")),
+        "unload_unconverged_steps": xr.Variable((), un.unconverged, {
+            "units": FRACTION_UNITS,
+            "long_name": "unloading steps whose final check failed (left out of the pull-off)"}),
+        "pull_off_pressure": xr.Variable((), un.pull_off, {
+            "units": pressure_units, "comment": comment,
+            "long_name": "pull-off pressure: minus the most tensile mean pressure on unloading under displacement "
+                         "control from the last load step; NaN unless pull_off_status is trusted"}),
+        "pull_off_status": flag((), np.int8(PULL_OFF_STATUS.index(un.status)),
+                                "whether the pull-off pressure can be trusted, else why not", PULL_OFF_STATUS),
+    }

@@ -14,12 +14,13 @@ The solver asks every effect it is given for
   ``None``; a cap makes the solver use the bounded iteration (:mod:`..box`);
 * ``functional``: an interaction energy of the gap (with its gradient) for the gap iteration,
   or ``None``;
-* ``finish(p, p_int, p0)``: its per-step columns from the physical pressure ``p`` (which it
-  may correct in place, e.g. exactly to the cap);
+* ``finish(p, p_int, p0, gap=None)``: its per-step columns from the physical pressure ``p`` (which it
+  may correct in place, e.g. exactly to the cap) and, from the gap iteration, the gap;
 * ``variables(length_unit, pressure_unit)`` and ``attrs()``: its output variables (name ->
   (CF units, long name)) and the global attributes it adds;
-* ``after_steps(solver, length_unit, pressure_unit)``: per-solve scalars computed after the
-  load steps (name -> (value, CF units, long name)), e.g. a pull-off force;
+* ``after_steps(solver, length_unit, pressure_unit)``: per-solve variables computed after the
+  load steps (name -> :class:`xarray.Variable` with CF ``units`` or flags and ``long_name``), e.g. a
+  pull-off force and the unloading branch;
 * ``from_config(block, e_star=...)``: the effect from its config block (``contact.effects.<name>``,
   already schema-checked), ``e_star`` the modulus its relative parameters scale with;
 * ``check_config(contact, fail)``: the cross-field rules a schema cannot express, given the whole
@@ -65,8 +66,8 @@ class Effect:
     def bind(self, units: Units) -> None:
         """Convert the parameters to the solver's internal units."""
 
-    def finish(self, p: np.ndarray, p_int: np.ndarray | None, p0: float) -> dict:
-        """The effect's per-step columns from the physical pressure ``p`` (n, n)."""
+    def finish(self, p: np.ndarray, p_int: np.ndarray | None, p0: float, gap: np.ndarray | None = None) -> dict:
+        """The effect's per-step columns from the physical pressure ``p`` (n, n) (and the gap, if known)."""
         return {}
 
     def variables(self, length_unit: str = "1", pressure_unit: str = "1") -> dict:
@@ -78,7 +79,7 @@ class Effect:
         return {}
 
     def after_steps(self, solver, length_unit: str = "1", pressure_unit: str = "1") -> dict:
-        """Scalars of the whole solve, after its load steps: name -> (value, units, long name)."""
+        """Variables of the whole solve, after its load steps: name -> :class:`xarray.Variable`."""
         return {}
 
     @classmethod

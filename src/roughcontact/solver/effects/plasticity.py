@@ -70,7 +70,7 @@ class PlasticityCap(Effect):
     def bind(self, units: Units) -> None:
         self.upper_bound = None if units.flat else units.to_internal(self.hardness)
 
-    def finish(self, p: np.ndarray, p_int: np.ndarray | None, p0: float) -> dict:
+    def finish(self, p: np.ndarray, p_int: np.ndarray | None, p0: float, gap: np.ndarray | None = None) -> dict:
         """Set capped nodes exactly to ``H``; the plastic area and load fractions."""
         n2 = p.size
         if self.upper_bound is not None:

@@ -183,11 +183,12 @@ def _fit(data: xr.Dataset, label: str, definition: str) -> float:
     return fit_kappa(v[area_variable(definition)].values[ok], v["p0"].values[ok], v["rms_slope_spectral"].values[ok])
 
 
-def _pct(m: float, se: float) -> str:
+def pct(m: float, se: float) -> str:
+    """A relative shift and its standard error as percentages, ``'+1.23 ± 0.45'`` (a dash when not finite)."""
     return "—" if not np.isfinite(m) else f"{100 * m:+.2f} ± {100 * se:.2f}" if np.isfinite(se) else f"{100 * m:+.2f}"
 
 
-def _closes(shift: np.ndarray, se: np.ndarray, needed: np.ndarray, needed_se: np.ndarray) -> str:
+def closes(shift: np.ndarray, se: np.ndarray, needed: np.ndarray, needed_se: np.ndarray) -> str:
     """The printed rule (:data:`CLOSES_RULE`) applied to one candidate's shifts.
 
     ``needed``: the shift that would bring our κ onto the paper's law (positive: the
@@ -257,7 +258,7 @@ def summarise(data: xr.Dataset) -> dict:
 
     def row(section, label, shift, se, n, fitted=float("nan")):
         out["rows"].append({"section": section, "candidate": label, "shift": shift, "se": se, "n": n,
-                            "fit": fitted, "closes": _closes(shift, se, needed, gap_se / (1 + gap) ** 2)})
+                            "fit": fitted, "closes": closes(shift, se, needed, gap_se / (1 + gap) ** 2)})
 
     ref = {str(data.variant_N.sel(variant=v).item()): v for v in _role(data, "solver")
            if data.variant_method.sel(variant=v).item() == "bem"}

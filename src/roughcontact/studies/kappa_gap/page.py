@@ -11,7 +11,7 @@ import numpy as np
 
 from ...analysis.fit.estimators import PAPER_CEL
 from ...core.cli import input_errors, require_files, require_folder
-from .analysis import CLOSES_RULE, _pct, summarise
+from .analysis import CLOSES_RULE, pct, summarise
 from .cases import KAPPA_BGT, TARGET_AREAS
 
 SECTIONS = {"solver": "1. solver", "definition": "2. contact", "continuum": "3. continuum",
@@ -42,7 +42,7 @@ def _gap_table(s: dict) -> list[str]:
              "ours − paper [%] |", "|---|---|---|---|"]
     for i, a in enumerate(TARGET_AREAS):
         lines.append(f"| {a:g} | {_k(s['paper'][i])} | {_k(s['kappa_base'][i])} | "
-                     f"{_pct(s['gap'][i], s['gap_se'][i])} |")
+                     f"{pct(s['gap'][i], s['gap_se'][i])} |")
     lines.append(f"| CEL fit, μ = 0.55 and β = 0.21 held | {PAPER_CEL['kappa'][0] / KAPPA_BGT:.3f} | "
                  f"{_k(s['fit_base'])} | {100 * (s['fit_base'] / PAPER_CEL['kappa'][0] - 1):+.2f} |")
     return lines
@@ -53,7 +53,7 @@ def _candidates_table(s: dict) -> list[str]:
             " | surfaces | κ/√(2π), CEL fit with μ, β held | closes the gap? |")
     lines = [head, "|---|---|" + "---|" * len(TARGET_AREAS) + "---|---|---|"]
     for r in s["rows"]:
-        shifts = " | ".join(_pct(m, e) for m, e in zip(r["shift"], r["se"], strict=True))
+        shifts = " | ".join(pct(m, e) for m, e in zip(r["shift"], r["se"], strict=True))
         lines.append(f"| {SECTIONS[r['section']]} | {r['candidate']} | {shifts} | {r['n']} | {_k(r['fit'])} | "
                      f"{r['closes']} |")
     return lines
@@ -138,7 +138,7 @@ def conclusion(s: dict) -> str:
                  f"{_per_area(r['shift'])}, leaving {_per_area(rest, np.hypot(needed_se, r['se']))}. ")
     if not helps:
         text += "No candidate moves κ toward the paper's value by the rule above. "
-    text += ("These do not: " + "; ".join(f"{r['candidate']} ({_pct(r['shift'][2], r['se'][2])} % at 0.05)"
+    text += ("These do not: " + "; ".join(f"{r['candidate']} ({pct(r['shift'][2], r['se'][2])} % at 0.05)"
                                         for r in others) + ". ")
     i = TARGET_AREAS.index(0.05)
     c = s["continuum_pressure"]

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..verdicts import NUMBER, Rule, _floats, judged_row
+from ..verdicts import NUMBER, Rule, floats_matching, judged_row
 
 
 def _share(fraction: float) -> str:
@@ -17,68 +17,68 @@ def _share(fraction: float) -> str:
 
 
 def _cel(comparison: str, measured: str) -> str:
-    [(upto,)] = _floats(rf"within 5 % up to A/A0 = ({NUMBER})", measured)
+    [(upto,)] = floats_matching(rf"within 5 % up to A/A0 = ({NUMBER})", measured)
     return "yes" if upto >= 0.5 else "partly" if upto >= 0.11 else "no"
 
 
 def _persson_area(comparison: str, measured: str) -> str:
-    devs = [abs(d) for _, d in _floats(rf"at A/A0 = ({NUMBER}): ({NUMBER}) %", measured)]
+    devs = [abs(d) for _, d in floats_matching(rf"at A/A0 = ({NUMBER}): ({NUMBER}) %", measured)]
     return "yes" if all(d <= 5 for d in devs) else "partly" if all(d <= 5 for d in devs[-2:]) else "no"
 
 
 def _onset(comparison: str, measured: str) -> str:
-    [(k, n)] = _floats(rf"consistent in ({NUMBER}) of ({NUMBER}) cases", measured)
+    [(k, n)] = floats_matching(rf"consistent in ({NUMBER}) of ({NUMBER}) cases", measured)
     return "yes" if k == n else "no"
 
 
 def _h_independent(comparison: str, measured: str) -> str:
-    [(k, n)] = _floats(rf"z ≤ 3 at ({NUMBER}) of ({NUMBER}) steps", measured)
+    [(k, n)] = floats_matching(rf"z ≤ 3 at ({NUMBER}) of ({NUMBER}) steps", measured)
     return _share(k / n) if n else "no"
 
 
 def _tail(comparison: str, measured: str) -> str:
-    [(lo, hi)] = _floats(rf"ratio from ({NUMBER}) to ({NUMBER})", measured)
+    [(lo, hi)] = floats_matching(rf"ratio from ({NUMBER}) to ({NUMBER})", measured)
     return "yes" if 0.5 <= lo and hi <= 2.0 else "no"
 
 
 def _ratios(comparison: str, measured: str) -> str:
-    ratios = [r for r, _ in _floats(rf"({NUMBER}) \(H=({NUMBER})\)", measured)]
+    ratios = [r for r, _ in floats_matching(rf"({NUMBER}) \(H=({NUMBER})\)", measured)]
     return _share(float(np.mean([0.9 <= r <= 1.1 for r in ratios])))
 
 
 def _distance(comparison: str, measured: str) -> str:
-    d = [v for _, v in _floats(rf"A/A0 = ({NUMBER}): ({NUMBER})", measured)]
+    d = [v for _, v in floats_matching(rf"A/A0 = ({NUMBER}): ({NUMBER})", measured)]
     return _share(float(np.mean([v <= 0.1 for v in d])))
 
 
 def _percolation(comparison: str, measured: str) -> str:
-    [(m, _)] = _floats(rf"at A/A0 = ({NUMBER}) ± ({NUMBER})", measured)
+    [(m, _)] = floats_matching(rf"at A/A0 = ({NUMBER}) ± ({NUMBER})", measured)
     return "yes" if abs(m - 0.42) <= 0.05 else "no"
 
 
 def _slope(comparison: str, measured: str) -> str:
-    [(m, e)] = _floats(rf"slope = ({NUMBER}) ± ({NUMBER})", measured)
+    [(m, e)] = floats_matching(rf"slope = ({NUMBER}) ± ({NUMBER})", measured)
     return "yes" if abs(m) > 3 * e else "no"
 
 
 def _models(comparison: str, measured: str) -> str:
-    counts = _floats(rf"within 5 % of (?:BGT|Greenwood) at ({NUMBER}) of ({NUMBER}) points", measured)
+    counts = floats_matching(rf"within 5 % of (?:BGT|Greenwood) at ({NUMBER}) of ({NUMBER}) points", measured)
     best = max(k / n for k, n in counts)
     return _share(best)
 
 
 def _on_trend(comparison: str, measured: str) -> str:
-    zs = [z for z, in _floats(rf"z = ({NUMBER})", measured)]
+    zs = [z for z, in floats_matching(rf"z = ({NUMBER})", measured)]
     return _share(float(np.mean([abs(z) <= 2 for z in zs])))
 
 
 def _same_kappa(comparison: str, measured: str) -> str:
-    [(k, n)] = _floats(rf"abs\(z\) ≤ 2 at ({NUMBER}) of ({NUMBER}) points", measured)
+    [(k, n)] = floats_matching(rf"abs\(z\) ≤ 2 at ({NUMBER}) of ({NUMBER}) points", measured)
     return _share(k / n)
 
 
 def _halves(comparison: str, measured: str) -> str:
-    ci = _floats(rf"({NUMBER}) \[({NUMBER}), ({NUMBER})\]", measured)
+    ci = floats_matching(rf"({NUMBER}) \[({NUMBER}), ({NUMBER})\]", measured)
     contains = all(lo <= 0.5 <= hi for _, lo, hi in ci)
     excludes = all(hi < 1.0 for _, _, hi in ci)
     return "yes" if contains and excludes else "partly" if contains else "no"

@@ -1,72 +1,7 @@
-"""Adhesive normal contact: interaction laws and a gap-based FFT-BEM solver.
+"""The gap iteration of adhesive contact: :func:`solve_adhesive` and its :class:`AdhesiveIteration`.
 
-Problem
--------
-The conventions of :mod:`roughcontact.solver`: a rigid surface of heights ``h`` [length]
-(highest points touch first) on a periodic elastic half-space of plane-strain modulus
-``E*`` [pressure], cell ``Lx x Ly`` on ``nx x ny`` nodes (``length`` a float ``L`` means a
-square cell; ``ny = 1`` is a plane-strain 1-D problem, ``h`` independent of y). ``p`` is
-the net surface pressure [pressure], compressive positive, tensile negative, and
-
-    u(q) = 2 p(q) / (E* |q|),  u(q = 0) = 0,     g = u - h + d,   mean(g) = d - mean(h).
-
-The surfaces attract each other through an interaction law of energy ``phi(g)`` per unit
-area (:class:`Exponential`, :class:`MaugisDugdale`), ``phi(0) = -w`` with ``w`` the work of
-adhesion, ``phi(inf) = 0``, whose tensile stress ``tension(g) = d phi / d g >= 0`` pulls the
-surfaces together. (The tension is ``+d phi/d g``: ``phi`` rises from ``-w`` to 0 as the
-gap opens, and the stress it exerts is tensile, ``p = -tension(g)`` in the gap.)
-The discrete adhesive problem (the invariants that a converged step satisfies):
-
-* ``g >= 0`` everywhere (exactly: the projection sets it);
-* where ``g > 0``: ``p = -tension(g)``;
-* where ``g = 0``: ``p + tension(0) >= 0`` (the repulsive part of the pressure is >= 0);
-* displacement control: ``mean(g)`` equals the imposed mean gap; pressure control:
-  ``mean(p) = p0`` (``p0 < 0`` is a tensile load).
-
-These are the stationarity conditions of the total energy (Rey, Anciaux & Molinari 2017,
-Comput. Mech. 60, 69-81), written with the gap as primal variable:
-
-    E(g) = 1/2 <(g + h), M (g + h)> + sum phi(g)    over {g >= 0, mean(g) = gbar},
-
-``M = E* |q| / 2`` (0 at ``q = 0``) the inverse of the elastic operator, so that
-``p = M (g + h) - lam``, ``lam`` the multiplier of the mean-gap constraint and
-``mean(p) = -lam``. Both laws are concave in ``g``, so the elastic quadratic is an upper
-bound of ``E`` along any line: a step length computed from ``M`` alone lowers the energy.
-
-Algorithm (:class:`AdhesiveIteration`)
---------------------------------------
-Polonsky & Keer's constrained conjugate gradient with the roles of pressure and gap
-exchanged, as Rey et al. (2017) and Tamaas' ``PolonskyKeerRey(model, h, tol, gap, gap)``
-with an adhesion functional term: the gradient is ``r = M (g + h) + tension(g)``; the free
-set ``F`` is ``{g > 0}`` plus the contact nodes where ``r < lam`` (they want to open, PK's
-join rule, restarting the CG); the search direction is conjugate on ``F`` and zero-mean
-there (``mean(g)`` is kept); the step length is the elastic one,
-``tau = <z, t> / <t, M t>``; a step that takes nodes below 0 is clipped at 0, the mean
-restored by rescaling the gaps (Tamaas' rule) and the CG restarts. One FFT pair per
-iteration (``M t``); ``M (g + h)`` is updated incrementally and recomputed after each
-projection and before the final check. Pressure control wraps displacement control: the
-mean gap is found by a bracketing secant (Illinois) search on the load-stable branch
-(mean pressure decreasing with the mean gap), each evaluation warm-started.
-
-Convergence criterion
----------------------
-With ``p_ref`` the rms of ``M h`` (the rms pressure that flattens ``h`` completely,
-``p* / sqrt 2`` for a sinusoid of amplitude ``Delta``: ``p* = pi E* Delta / lambda``; the
-law's ``tension(0)`` when ``h`` is flat), the residual is
-
-    max( max_{g > 0} |p + tension(g)|,  max(0, -min_{g = 0} (p + tension(0))) ) / p_ref
-
-(and, under pressure control, ``|mean(p) - p0| / p_ref`` too). A step is ``converged`` only
-when this residual, recomputed from the returned gap with a fresh FFT, is ``<= tol``, every
-value is finite, ``g >= 0`` and the mean gap is the imposed one to 1e-12 relative. The
-contact area fraction is the fraction of nodes with ``g == 0`` exactly.
-
-The energy is not convex when ``w / rho^2`` exceeds ``pi E* / L`` (the smallest eigenvalue
-of ``M`` on zero-mean fields): equilibria then depend on the start (hysteresis), and a
-converged step is *an* equilibrium, not necessarily the one another solver finds. With
-the Maugis-Dugdale law each node's tension jumps at ``g = rho``; unless the cohesive zone
-spans many nodes the discrete system is trapped in many states (measured on the 1-D wavy
-surface: loading and unloading curves 0.04 p* apart where the exponential law's agree).
+Polonsky & Keer's constrained conjugate gradient on the gap (package docstring, "Algorithm"),
+under displacement control, wrapped by :func:`pressure_control` for an imposed mean pressure.
 """
 
 from __future__ import annotations
@@ -76,106 +11,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.fft import get_fft
-from .halfspace import inverse_kernel
-from .workspace import dot
+from ...core.fft import get_fft
+from ..halfspace import inverse_kernel
+from ..workspace import dot
+from .laws import LAWS, MIN_ZONE_CELLS, positive, zone_cells
 
 #: Default iteration cap of :func:`solve_adhesive` (all inner iterations of one call).
 DEFAULT_MAX_ITER = 20000
 #: Relative tolerance on the imposed mean gap in the final check.
 MEAN_GAP_RTOL = 1e-12
-
-
-def _positive(name: str, value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a finite number > 0, got {value!r}") from None
-    if isinstance(value, (bool, np.bool_)) or not math.isfinite(v) or v <= 0:
-        raise ValueError(f"{name} must be a finite number > 0, got {value!r}")
-    return v
-
-
-class Exponential:
-    """Exponential law: ``phi(g) = -w exp(-g / rho)``, tension ``(w / rho) exp(-g / rho)``.
-
-    Parameters
-    ----------
-    w : float
-        Work of adhesion [energy / area = pressure x length], > 0.
-    rho : float
-        Range [length], > 0. The largest tension is ``w / rho`` (at contact).
-
-    Tamaas' ``ExponentialAdhesionFunctional`` with ``surface_energy = w``, ``rho = rho``.
-    """
-
-    name = "exponential"
-
-    def __init__(self, w, rho):
-        self.w, self.rho = _positive("w", w), _positive("rho", rho)
-
-    @property
-    def max_tension(self) -> float:
-        return self.w / self.rho
-
-    def energy(self, g):
-        """``phi(g)`` [energy / area], array like ``g`` (``g >= 0`` [length])."""
-        return -self.w * np.exp(-np.asarray(g, dtype=float) / self.rho)
-
-    def tension(self, g):
-        """Tensile stress ``d phi / d g >= 0`` [pressure], array like ``g``."""
-        return (self.w / self.rho) * np.exp(-np.asarray(g, dtype=float) / self.rho)
-
-    def curvature(self, g):
-        """``d^2 phi / d g^2 <= 0`` [pressure / length]: the law is concave."""
-        return -(self.w / self.rho ** 2) * np.exp(-np.asarray(g, dtype=float) / self.rho)
-
-
-class MaugisDugdale:
-    """Maugis-Dugdale (cohesive zone) law: constant tension ``sigma0 = w / rho`` for ``g <= rho``.
-
-    ``phi(g) = -w + sigma0 g`` for ``0 <= g <= rho``, 0 beyond (concave, kink at ``rho``);
-    ``tension(g) = sigma0`` for ``g <= rho`` (at contact too: a contact node carries
-    ``p + sigma0 >= 0``), 0 beyond. Maugis (1992), J. Colloid Interface Sci. 150, 243.
-
-    Parameters
-    ----------
-    w : float
-        Work of adhesion [energy / area], > 0.
-    rho : float
-        Range ``h0`` of the cohesive zone [length], > 0.
-
-    Tamaas' ``MaugisAdhesionFunctional`` with ``surface_energy = w``, ``rho = rho``.
-    """
-
-    name = "maugis-dugdale"
-
-    def __init__(self, w, rho):
-        self.w, self.rho = _positive("w", w), _positive("rho", rho)
-
-    @property
-    def sigma0(self) -> float:
-        return self.w / self.rho
-
-    max_tension = sigma0
-
-    def energy(self, g):
-        """``phi(g)`` [energy / area], array like ``g``."""
-        g = np.asarray(g, dtype=float)
-        return np.where(g <= self.rho, self.sigma0 * g - self.w, 0.0)
-
-    def tension(self, g):
-        """Tensile stress [pressure]: ``sigma0`` where ``g <= rho``, else 0."""
-        g = np.asarray(g, dtype=float)
-        return np.where(g <= self.rho, self.sigma0, 0.0)
-
-    def curvature(self, g):
-        """``d^2 phi / d g^2`` off the kink: 0 (the kink at ``rho`` is concave)."""
-        return np.zeros_like(np.asarray(g, dtype=float))
-
-
-LAWS = (Exponential, MaugisDugdale)
-
 
 @dataclass
 class AdhesiveResult:
@@ -197,6 +41,7 @@ class AdhesiveResult:
     residual: float
     converged: bool
     control: str
+    zone_cells: float = math.inf
 
 
 def elastic_product(field, mult) -> np.ndarray:
@@ -335,9 +180,9 @@ def _heights(heights, length):
     if np.ndim(length) == 0:
         if h.shape[0] != h.shape[1]:
             raise ValueError(f"a float length needs square heights; give length=(Lx, Ly) for shape {h.shape}")
-        return h, _positive("length", length)
+        return h, positive("length", length)
     lx, ly = length
-    return h, (_positive("length[0]", lx), _positive("length[1]", ly))
+    return h, (positive("length[0]", lx), positive("length[1]", ly))
 
 
 def _finish(it, mean_gap, control, iterations, p0=None):
@@ -383,26 +228,28 @@ def solve_adhesive(heights, *, law, e_star=1.0, length=1.0, mean_gap=None, p0=No
     Returns
     -------
     AdhesiveResult
-        ``converged`` only when the final check (fresh FFT) passes.
+        ``converged`` only when the final check (fresh FFT) passes and the grid resolves the
+        process zone (:func:`zone_cells` >= :data:`MIN_ZONE_CELLS`).
     """
     h, length = _heights(heights, length)
     e_star, tol = _check_args(e_star, tol, law, max_iter, mean_gap, p0)
     start = _start_gap(h, initial_gap)
     it = AdhesiveIteration(h, law, e_star, length)
     if mean_gap is not None:
-        mean_gap = _positive("mean_gap", mean_gap)
+        mean_gap = positive("mean_gap", mean_gap)
         it.start(start, mean_gap)
         it.solve(mean_gap, tol, int(max_iter))
         res, out = _finish(it, mean_gap, "gap", it.iterations)
     else:
-        res, out = _pressure_control(it, _finite("p0", p0), start, tol, int(max_iter))
-    out.converged = bool(res <= tol)
+        res, out = pressure_control(it, _finite("p0", p0), start, tol, int(max_iter))
+    out.zone_cells = zone_cells(law, e_star, length, h.shape)
+    out.converged = bool(res <= tol) and out.zone_cells >= MIN_ZONE_CELLS
     return out
 
 
 def _check_args(e_star, tol, law, max_iter, mean_gap, p0) -> tuple[float, float]:
     """``(e_star, tol)`` checked, with the law, ``max_iter`` and the control; ``ValueError`` naming each."""
-    e_star, tol = _positive("e_star", e_star), _positive("tol", tol)
+    e_star, tol = positive("e_star", e_star), positive("tol", tol)
     if tol >= 1:
         raise ValueError(f"tol must be in (0, 1), got {tol!r}")
     if not isinstance(law, LAWS):
@@ -450,7 +297,7 @@ def _expand(cur, prev, step):
     return gbar / 2 if new <= 0 else new
 
 
-def _pressure_control(it, p0, start, tol, max_iter):
+def pressure_control(it, p0, start, tol, max_iter):
     """Mean gap with ``mean(p) = p0``: secant search, then Illinois regula falsi once bracketed.
 
     ``f(gbar) = mean_p - p0`` decreases with ``gbar`` on the load-stable branch. Until a sign
