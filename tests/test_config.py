@@ -262,13 +262,19 @@ def test_malformed_accuracy_settings_are_named(shipped_config, edit, field, word
 
 
 def _assert_study_error_named(shipped_config, study, scene, edit, field, words):
-    """``edit`` the defaults' ``study`` block: the error names ``scene``, ``field`` and ``words``."""
+    """``edit`` the defaults' ``study`` block: a run of ``scene`` stops with an error naming ``scene``, ``field``
+    and ``words``; a run of another scene plans, and keeps the error for a target in ``scene``."""
     cfg = copy.deepcopy(shipped_config)
     edit(cfg["defaults"][study])
-    with pytest.raises(ConfigError) as info:
-        validate_config(cfg, SCHEMA)
-    msg = str(info.value)
+    assert validate_config(cfg, SCHEMA)["invalid"][scene] == (msg := _error(cfg, scene))
     assert f"scene '{scene}'" in msg and f"field '{field}'" in msg and words in msg, msg
+
+
+def _error(cfg, scene):
+    """The error that stops a run of ``scene``."""
+    with pytest.raises(ConfigError) as info:
+        validate_config({**cfg, "scene": scene}, SCHEMA)
+    return str(info.value)
 
 
 def test_duplicate_yaml_keys_are_named(tmp_path):

@@ -52,7 +52,7 @@ def test_boundary_can_be_chosen(tmp_path):
     assert validate_config(cfg)["scenes"]["m"]["contact"]["solver"]["boundary"] == "periodic"
     cfg["scenes"]["gen"] = {"contact": {"solver": {"boundary": "sideways"}}}
     with pytest.raises(ConfigError, match=r"scene 'gen', field 'contact.solver.boundary'.*periodic.*free"):
-        validate_config(cfg)
+        validate_config(cfg, strict=True)
 
 
 def test_glob_names_cases_by_file_stem(tmp_path):
@@ -116,7 +116,7 @@ def test_unknown_units_name_the_field_and_the_allowed_units(tmp_path, block, key
     cfg = _config(tmp_path)
     cfg["scenes"]["gen"] = {"contact": {block: {key: "inch"}}}
     with pytest.raises(ConfigError, match=words):
-        validate_config(cfg)
+        validate_config(cfg, strict=True)
 
 
 @pytest.mark.parametrize("spoil, words", [

@@ -42,6 +42,9 @@ def test_scene_progress_reads_plan_and_logs(tmp_path, capsys):
     assert name == "demo" and (got.done, got.seconds, got.planned) == (6, 8.0, 24)
     main([str(tmp_path)])
     assert "6 of 24 contact solves done (25 %)" in capsys.readouterr().out
-    with pytest.raises(SystemExit, match="plan.json not found: no run of this scene has started here"):
+    (tmp_path / "other").mkdir()
+    with pytest.raises(SystemExit) as stop:
         main([str(tmp_path / "other")])
+    assert stop.value.code == 2
+    assert "plan.json not found: no run of this scene has started here" in capsys.readouterr().err
     assert planned_solves({"representativity": {}}) == 0

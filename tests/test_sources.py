@@ -114,7 +114,8 @@ def _bad(tmp_path, name, value):
 BAD_FILES = [
     ("missing.npy", None, 0.5, "does not exist", "name an existing .npy file"),
     ("heights.txt", b"1 2\n3 4\n", 0.5, "is not a .npy file", "numpy.save"),
-    ("broken.npy", b"not numpy at all", 0.5, "NumPy can read", "numpy.save"),
+    ("broken.npy", b"not numpy at all", 0.5, "does not start as a .npy file does", "numpy.save"),
+    ("truncated.npy", b"\x93NUMPY\x01\x00", 0.5, "NumPy can read", "numpy.save"),
     ("line.npy", np.zeros(16), 0.5, "shape (16,)", "2-D height map"),
     ("cube.npy", np.zeros((4, 4, 4)), 0.5, "shape (4, 4, 4)", "2-D height map"),
     ("nan.npy", np.where(np.eye(8) > 0, np.nan, 0.0), 0.5, "8 of 64 heights are NaN or infinite", "fill or crop"),
@@ -157,7 +158,7 @@ def test_a_file_without_pixel_size_is_refused(arrays):
 def test_generator_keys_and_generated_studies_are_refused_in_an_array_scene(arrays):
     cfg = _config(GOOD)
     cfg["scenes"]["s"]["contact"]["seeds"] = 3
-    with pytest.raises(ConfigError, match=r"field 'contact.seeds': not used with a array block"):
+    with pytest.raises(ConfigError, match=r"field 'contact.seeds': not used with an array block"):
         validate_config(cfg)
     cfg = _config(GOOD, accuracy={})
     with pytest.raises(ConfigError, match=r"field 'accuracy': the accuracy study runs on generated surfaces only; "

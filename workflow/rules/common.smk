@@ -5,6 +5,7 @@
 # scene's allowed values).
 from pathlib import Path
 
+from roughcontact.core.cli import one_line
 from roughcontact.figures.registry import FIGURES, scene_figures
 from roughcontact.pipeline import params
 from roughcontact.pipeline.cases import is_adhesive
@@ -29,13 +30,24 @@ except ConfigError as _err:
 
 SCENES = _VALID["scenes"]
 ACTIVE_SCENE = _VALID["scene"]
+# An invalid scene stops only a run of it (a target under results/<it>/ names its error); the others plan.
+INVALID_SCENES = _VALID["invalid"]
+for _message in INVALID_SCENES.values():
+    logger.warning(f"roughcontact: {_message} (a run of that scene would stop here)")
 # What the active scene computes, before any job runs (a large scene's cost at a glance).
 logger.info(plan_summary(ACTIVE_SCENE, SCENES[ACTIVE_SCENE]))
 
 
 # The plan each contact job's scene ETA is read against (python -m roughcontact.pipeline.progress).
 onstart:
-    write_plan(Path("results", ACTIVE_SCENE), ACTIVE_SCENE, SCENES[ACTIVE_SCENE], workflow.cores)
+    try:
+        write_plan(Path("results", ACTIVE_SCENE), ACTIVE_SCENE, SCENES[ACTIVE_SCENE], workflow.cores)
+    except OSError as _err:  # a read-only or full results/<scene>: one line, before any job runs
+        logger.error(
+            f"roughcontact: {one_line(_err)}; the run writes under results/{ACTIVE_SCENE}/: make it writable "
+            "(or free space), then run again"
+        )
+        raise SystemExit(1)
 
 
 def case_path(folder, ext="nc"):
@@ -76,6 +88,8 @@ wildcard_constraints:
 
 def scene_of(name):
     """The validated scene called ``name`` (a job's ``scene`` wildcard), or a clear error."""
+    if name in INVALID_SCENES:
+        raise WorkflowError(f"invalid config: {INVALID_SCENES[name]}")
     if name not in SCENES:
         raise WorkflowError(
             f"wildcard scene={name}: no scene {name!r} in the config; defined scenes: {', '.join(SCENES)}"

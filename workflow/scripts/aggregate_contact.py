@@ -14,11 +14,14 @@ def main(log):
     datasets = [read_dataset(p, stage="contact", variables=REQUIRED).drop_dims(UNLOADING_DIMS, errors="ignore")
                 for p in paths]
     # the surface source whose case dimensions the files have stacks them (with its statistics)
-    ds = for_dims(datasets[0].dims).aggregate(datasets, paths, snakemake.params.cases)
+    source = for_dims(datasets[0].dims)
+    ds = source.aggregate(datasets, paths, snakemake.params.cases)
     ds, common, varying = provenance.attach_settings(ds, datasets)
     if varying:
-        log.warning("cases were solved with different settings: %s; each case's value is in the "
-                    "variables %s", ", ".join(varying), ", ".join(sorted(v for v in ds if v.startswith("setting_"))))
+        # a patch file's own settings (its path, unit, size) differ by design: no warning for them
+        log.log(30 if source.unexpected_settings(varying) else 20, "cases were solved with different settings: %s; "
+                "each case's value is in the variables %s", ", ".join(varying),
+                ", ".join(sorted(v for v in ds if v.startswith("setting_"))))
         ds.attrs["varying_parameters"] = ", ".join(varying)
     bad = ds["n_unconverged"]
     if int(bad.sum()):

@@ -17,8 +17,9 @@ def main(log):
     ds = source.aggregate(datasets, paths, snakemake.params.cases, kind="representativity")
     ds, common, varying = provenance.attach_settings(ds, datasets)
     if varying:
-        log.warning("cases were computed with different settings: %s; each case's value is in the "
-                    "variables setting_*", ", ".join(varying))
+        # a patch file's own settings (its path, unit, size) differ by design: no warning for them
+        log.log(30 if source.unexpected_settings(varying) else 20, "cases were computed with different "
+                "settings: %s; each case's value is in the variables setting_*", ", ".join(varying))
         ds.attrs["varying_parameters"] = ", ".join(varying)
     write_dataset(ds, snakemake.output[0], stage="aggregate", scene=snakemake.wildcards.scene,
                   scene_parameters=common)

@@ -26,15 +26,16 @@ def main(log):
     # One group that cannot be fitted (too few points in the window, a joint fit that does not
     # converge on a non-representative case) must not sink the others: it is reported as NaN.
     fitter = fit.fit_topographies if measured else fit.fit_cel
-    # measured files loaded differently (load.target_area, or relative_to e_star on surfaces of
-    # different slopes) have no common schedule to average: every point enters the paper route
-    extra = {"paper_average": "auto"} if measured else {}
+    # cases loaded differently (load.target_area: each ends at its own p0; measured files loaded relative
+    # to e_star on surfaces of different slopes) have no common schedule to average step by step: every
+    # (case, step) point enters the paper route, each case on its own schedule (config/README.md)
     result = fitter(agg, window=tuple(cfg["window"]), n_boot=cfg["n_boot"], rng_seed=cfg["rng_seed"],
-                    on_insufficient="nan", **extra)
+                    on_insufficient="nan", paper_average="auto")
+    if result.attrs["paper_average"] == "none":
+        log.info("the cases' load schedules p0/(E* h') differ (load.target_area, or loads relative to E* on "
+                 "surfaces of different slopes): the paper route fits every (case, step) point on each case's "
+                 "own schedule instead of the mean curve over %s", "topographies" if measured else "seeds")
     if measured:
-        if result.attrs["paper_average"] == "none":
-            log.warning("the topographies' load schedules p0/(E* h') differ: the paper route fits every "
-                        "(topography, step) point instead of the topography-mean curve")
         _log_topographies(log, result)
     else:
         _log_groups(log, result)

@@ -46,12 +46,14 @@ from pathlib import Path
 import netCDF4
 import numpy as np
 
+from ..core.cli import input_errors
 from ..core.files import atomic_output, file_sha256, write_text_atomic
 from ..core.values import same_value
 from ..core.version import __version__
 from . import params
-from .config.files import ConfigError, load_config_files
+from .config.files import load_config_files
 from .config.scenes import cases, validate_config
+from .sources import source_of
 
 #: Global attributes that may differ between two runs' files of one case.
 RUN_ATTRS = ("scene", "adopted_from")
@@ -202,6 +204,23 @@ def adopt(source: Path, target: Path, scene_name: str, scene: dict, *, trust_cod
     return todo
 
 
+def check_adoptable(name: str, scene: dict) -> None:
+    """:class:`AdoptError` unless scene ``name`` has contact cases of generated surfaces, which adoption copies.
+
+    A generated case is fixed by its recorded parameters and the code; a measured or array case is also
+    its input file's heights, whose content a contact file does not record (its reader settings name the
+    path only): adoption could not tell a case solved on an older version of the file, so it refuses.
+    """
+    if "contact" not in scene:
+        raise AdoptError(f"scene {name!r} has no contact study, so it has no case to adopt")
+    source = source_of(scene, name)
+    if source.key is not None:
+        raise AdoptError(f"scene {name!r} takes its surfaces from its {source.key} block ({source.name} files), "
+                         "and adoption copies generated cases (kl.._ks.._H.._s..) only: a file's case depends on "
+                         "the file's content, which a contact file does not record; run the scene itself "
+                         f"(snakemake -j2 --config scene={name})")
+
+
 def _locked(workdir: Path) -> bool:
     locks = workdir / ".snakemake" / "locks"
     return locks.is_dir() and any(locks.iterdir())
@@ -217,21 +236,16 @@ def main(argv=None) -> None:
     ap.add_argument("--trust-code", action="store_true", help="adopt without a case computed by both runs")
     ap.add_argument("--dry-run", action="store_true", help="say what would be adopted, copy nothing")
     args = ap.parse_args(argv)
-    try:
+    with input_errors(ap):
         config = load_config_files(args.configfile)
         scenes = validate_config({**config, "scene": args.scene})["scenes"]
-    except ConfigError as exc:
-        ap.exit(2, f"error: {exc}\n")
-    if "contact" not in scenes[args.scene]:
-        ap.exit(2, f"error: scene {args.scene!r} has no contact study\n")
+        check_adoptable(args.scene, scenes[args.scene])
     target = Path("results") / args.scene
     if not args.dry_run and _locked(Path.cwd()):
         ap.exit(2, f"error: a Snakemake run holds {Path.cwd()}; stop it (or let it finish), adopt, then resume\n")
-    try:
+    with input_errors(ap):
         done = adopt(args.source, target, args.scene, scenes[args.scene], trust_code=args.trust_code,
                      dry_run=args.dry_run)
-    except AdoptError as exc:
-        ap.exit(2, f"error: {exc}\n")
     verb = "would adopt" if args.dry_run else "adopted"
     print(f"{verb} {len(done.adopt)} case(s) from {args.source} into {target}; {len(done.common)} computed by both "
           f"runs agree; {len(done.missing)} planned case(s) the source lacks")

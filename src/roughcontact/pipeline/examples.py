@@ -19,11 +19,12 @@ module writes (heights, sizes, units, undefined points).
 
 from __future__ import annotations
 
-import sys
+import argparse
 from pathlib import Path
 
 import numpy as np
 
+from ..core.cli import input_errors
 from ..surfaces.synthetic import generate_surface
 
 #: Side of the example patches [um] and their spectral band (k_l, k_s of the parent surface).
@@ -70,8 +71,18 @@ def write_examples(folder: str | Path) -> dict[str, Path]:
     return paths
 
 
-if __name__ == "__main__":
-    if len(sys.argv) != 2:
-        sys.exit("usage: python -m roughcontact.pipeline.examples FOLDER")
-    for name, path in write_examples(sys.argv[1]).items():
+def main(argv=None) -> None:
+    """``python -m roughcontact.pipeline.examples FOLDER``: write the example files into FOLDER (made if missing)."""
+    ap = argparse.ArgumentParser(prog="python -m roughcontact.pipeline.examples", description=main.__doc__)
+    ap.add_argument("folder", type=Path, help="where to write them, e.g. data/measured")
+    args = ap.parse_args(argv)
+    with input_errors(ap):
+        if args.folder.exists() and not args.folder.is_dir():
+            raise ValueError(f"{args.folder}: is a file, not a folder; give the folder to write the examples into")
+        written = write_examples(args.folder)
+    for name, path in written.items():
         print(f"{name}: {path}")
+
+
+if __name__ == "__main__":
+    main()

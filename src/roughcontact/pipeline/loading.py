@@ -73,7 +73,8 @@ def load_steps(block: Mapping, rms_slope: float | None = None, p_final: float | 
 
 
 def pressure_for_area(area_at: Callable[[float], float], target: float, *, e_star: float, rms_slope: float,
-                      n_nodes: int, rtol: float = AREA_RTOL, max_probes: int = MAX_PROBES) -> dict:
+                      n_nodes: int, rtol: float = AREA_RTOL, max_probes: int = MAX_PROBES,
+                      p_cap: float | None = None) -> dict:
     """The applied mean pressure p0 [pressure] at which the contact area fraction is ``target``.
 
     ``area_at(p0)`` solves the case at one load and returns A/A0 [1] (it grows with p0). The
@@ -82,13 +83,17 @@ def pressure_for_area(area_at: Callable[[float], float], target: float, *, e_sta
     It stops when ``|A - target| <= max(rtol target, 1.5 / n_nodes)`` (a grid's area moves in
     steps of 1 / n_nodes) or after ``max_probes`` solves.
 
+    ``p_cap`` (a hardness times E*): every probe stays below it, where a capped solve can carry the load
+    (a probe that would reach it goes halfway from the highest load below the target to the cap; with a
+    cap the area reaches 1 as p0 reaches it, so a target area always has its load below the cap).
+
     Returns ``{"pressure", "area", "probes", "reached"}``: the best p0 found, its A/A0, the
     number of solves and whether the tolerance was met.
     """
     if not 0 < target < 1:
         raise ValueError(f"target_area must lie in (0, 1), got {target!r}")
     tol = max(rtol * target, 1.5 / n_nodes)
-    p = target * e_star * rms_slope / KAPPA_GUESS
+    p = _below_cap(target * e_star * rms_slope / KAPPA_GUESS, 0.0, p_cap)
     below, above, last, best = None, None, None, None
     for probe in range(1, max_probes + 1):
         area = float(area_at(p))
@@ -103,8 +108,13 @@ def pressure_for_area(area_at: Callable[[float], float], target: float, *, e_sta
         p_next = _next_pressure(p, area, target, last)
         if below and above and not below[0] < p_next < above[0]:
             p_next = math.sqrt(below[0] * above[0])  # the secant left the bracket: bisect in log
-        last, p = (p, area), p_next
+        last, p = (p, area), _below_cap(p_next, below[0] if below else 0.0, p_cap)
     return {"pressure": best[0], "area": best[1], "probes": max_probes, "reached": False}
+
+
+def _below_cap(p: float, low: float, p_cap: float | None) -> float:
+    """``p``, or halfway from ``low`` (a load known to be below the target) to the cap when ``p`` reaches it."""
+    return p if p_cap is None or p < p_cap else 0.5 * (low + p_cap)
 
 
 def _next_pressure(p: float, area: float, target: float, last: tuple[float, float] | None) -> float:
@@ -131,9 +141,11 @@ def case_loads(block: Mapping, rms_slope: float, n_nodes: int, solve: Callable, 
     the final p0 [pressure], and ``load_pbar_max`` = p0 / (E* h') of the last step.
     """
     load, e_star = block["load"], block["solver"]["e_star"]
+    hardness = (block.get("effects") or {}).get("plasticity", {}).get("hardness")
     if "target_area" in load:
         found = pressure_for_area(lambda p: float(solve([p]).area_fraction[-1]), load["target_area"],
-                                  e_star=e_star, rms_slope=rms_slope, n_nodes=n_nodes)
+                                  e_star=e_star, rms_slope=rms_slope, n_nodes=n_nodes,
+                                  p_cap=None if hardness is None else hardness * e_star)
         if log is not None:
             log.log(20 if found["reached"] else 30, "%starget A/A0 = %g: p0 = %.6g gives A/A0 = %.6g after %d solves%s",
                     f"{name}: " if name else "", load["target_area"], found["pressure"], found["area"], found["probes"],
@@ -144,6 +156,12 @@ def case_loads(block: Mapping, rms_slope: float, n_nodes: int, solve: Callable, 
     else:
         loads = load_steps(block, rms_slope)
         attrs = {"load_relative_to": load.get("relative_to", "e_star"), "load_p_max": float(load["p_max"])}
+        if hardness is not None and not loads[-1] < hardness * e_star:
+            raise ValueError(
+                f"contact.effects.plasticity.hardness: {hardness:g} must exceed this case's final load p0/E* = "
+                f"{loads[-1] / e_star:.6g} (load.p_max {load['p_max']:g} relative to {attrs['load_relative_to']}, "
+                f"rms slope {rms_slope:.6g}): a pressure capped at the hardness cannot carry a mean load p0 >= "
+                "hardness; raise the hardness or lower load.p_max")
     attrs.update(load_p0_max=float(loads[-1]), load_pbar_max=float(loads[-1] / (e_star * rms_slope)))
     if log is not None:
         log.info("loads: p0 from %.6g to %.6g (p0/E* up to %.4g, p0/(E* h') up to %.4g) in %d steps", loads[0],

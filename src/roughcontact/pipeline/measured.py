@@ -116,7 +116,9 @@ def drop_generator_keys(name: str, scene: dict, delta: Mapping | None, key: str 
             continue
         for field in GENERATOR_KEYS:
             if field in (delta.get(study) or {}):
-                _fail(name, f"{study}.{field}", f"not used with a {key} block (the cases are its files); remove it")
+                article = "an" if key[0] in "aeiou" else "a"
+                _fail(name, f"{study}.{field}", f"not used with {article} {key} block (the cases are its files); "
+                                                "remove it")
             out[study].pop(field, None)
     return out
 
@@ -139,8 +141,9 @@ def check_measured_scene(name: str, scene: dict, delta: Mapping | None = None, *
     return out
 
 
-def check_headers(name: str, scene: Mapping) -> None:
-    """Every file's header checked now (:func:`roughcontact.surfaces.topography.check_header`), before any job.
+def check_headers(name: str, scene: Mapping) -> dict[str, tuple]:
+    """Every file's header checked now (:func:`roughcontact.surfaces.topography.check_header`), before any job;
+    the grid ``((nx, ny), (dx, dy))`` of each file's map, by case name.
 
     A file SurfaceTopography cannot read, a missing channel, unit or size, or a map the scene
     refuses fails here with the file, what is wrong and the remedy, instead of in its job.
@@ -149,13 +152,15 @@ def check_headers(name: str, scene: Mapping) -> None:
 
     block = scene["topography"]
     defaults = {key: block[key] for key in SCENE_KEYS if key in block}
+    grids = {}
     for file in block["files"]:
         settings = {**defaults, **reader_settings(scene, file)}
         path = settings.pop("path")
         try:
-            check_header(path, **settings)
+            grids[file] = check_header(path, **settings)
         except TopographyError as err:
             _fail(name, f"topography.files.{file}", str(err))
+    return grids
 
 
 def topography_names(scene: Mapping) -> list[str]:

@@ -18,6 +18,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..core.cli import input_errors, read_json_object, require_folder
 from ..core.files import write_text_atomic
 from .io import duration_text
 from .sources import source_of
@@ -78,13 +79,22 @@ def read_log_steps(text: str) -> list[float]:
     return [steps[k] for k in sorted(steps)]
 
 
+def read_plan(path: str | Path) -> dict:
+    """A plan file written by :func:`write_plan`, checked (``ValueError`` naming the file and the key otherwise)."""
+    plan = read_json_object(path, {"scene": str, "solves": int, "cores": int})
+    if plan["solves"] < 0 or plan["cores"] < 1:
+        raise ValueError(f"{path}: solves = {plan['solves']} and cores = {plan['cores']} must be >= 0 and >= 1; "
+                         "the workflow rewrites this file when a run starts")
+    return plan
+
+
 def scene_progress(scene_dir: str | Path) -> tuple[str, Progress] | None:
     """The scene's name and :class:`Progress` from its plan and contact logs; None without a plan."""
     scene_dir = Path(scene_dir)
     plan_path = scene_dir / "logs" / PLAN_FILE
     if not plan_path.is_file():
         return None
-    plan = json.loads(plan_path.read_text())
+    plan = read_plan(plan_path)
     done, seconds = 0, 0.0
     for log in sorted((scene_dir / "logs" / "contact").rglob("*.log")):
         steps = read_log_steps(log.read_text(errors="replace"))
@@ -97,10 +107,12 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(prog="python -m roughcontact.pipeline.progress", description=__doc__.split("\n\n")[0])
     ap.add_argument("scene_dir", type=Path, help="the scene's results folder, e.g. results/demo")
     args = ap.parse_args(argv)
-    got = scene_progress(args.scene_dir)
+    with input_errors(ap):
+        require_folder(args.scene_dir, "a scene's results folder, e.g. results/demo")
+        got = scene_progress(args.scene_dir)
     if got is None:
-        raise SystemExit(f"error: {args.scene_dir / 'logs' / PLAN_FILE} not found: no run of this scene has "
-                         "started here (the workflow writes it when a run starts)")
+        ap.exit(2, f"error: {args.scene_dir / 'logs' / PLAN_FILE} not found: no run of this scene has "
+                "started here (the workflow writes it when a run starts)\n")
     print(got[1].text(got[0]))
 
 

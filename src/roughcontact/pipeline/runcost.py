@@ -35,6 +35,7 @@ import statistics
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..core.cli import input_errors
 from ..core.files import file_sha256
 from .adopt import MANIFEST
 from .io import JOB_COST_PATTERN
@@ -70,8 +71,11 @@ def read_benchmark(path: str | Path) -> dict[str, float]:
     that is not a finite number (Snakemake writes ``NA`` when it could not measure).
     """
     path = Path(path)
-    with path.open(newline="") as handle:
-        rows = list(csv.DictReader(handle, delimiter="\t"))
+    try:
+        with path.open(newline="", encoding="utf-8") as handle:
+            rows = list(csv.DictReader(handle, delimiter="\t"))
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise ValueError(f"{path}: not a Snakemake benchmark file (tab-separated text): {exc}") from None
     if not rows:
         raise ValueError(f"{path}: empty benchmark file (no row under the header)")
     row = {}
@@ -84,6 +88,9 @@ def read_benchmark(path: str | Path) -> dict[str, float]:
             raise ValueError(f"{path}: {col} = {rows[0][col]!r} is not a number") from None
         if not math.isfinite(row[col]):
             raise ValueError(f"{path}: {col} = {rows[0][col]!r} is not a finite number")
+        if row[col] < 0:
+            raise ValueError(f"{path}: {col} = {rows[0][col]!r} is negative; a time, memory or load is >= 0 "
+                             "(the file is damaged: remove it, or rerun its job)")
     return row
 
 
@@ -225,10 +232,8 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(prog="python -m roughcontact.pipeline.runcost", description=__doc__.split("\n")[0])
     ap.add_argument("results", help="a run's output folder, results/<scene>")
     args = ap.parse_args(argv)
-    try:
+    with input_errors(ap):
         costs = run_cost(args.results)
-    except ValueError as exc:
-        ap.exit(2, f"error: {exc}\n")
     if not costs:
         ap.exit(1, f"error: no benchmark files under {Path(args.results) / 'benchmarks'}: no job has finished\n")
     print(markdown(costs), end="")

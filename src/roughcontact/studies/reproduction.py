@@ -1,7 +1,7 @@
 """The paper's claims measured on a run: numbers, verdicts and figures for docs/reproduction/.
 
 Pure functions over the aggregates (:func:`claims`), and the two commands of the
-reproduction (``python -m roughcontact.reproduction``):
+reproduction (``python -m roughcontact.studies.reproduction``):
 
 * ``publish RESULTS OUT``: copy a run's aggregates and fit (``results/{scene}/aggregate/*.nc``,
   ``fit/cel.{nc,csv}``; not the per-case files) into ``OUT/data``, then ``regenerate``;
@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from ..core.cli import input_errors, require_files, require_folder
 from ..core.files import write_text_atomic
 from ..figures.load_curves import PAPER_ALPHA
 from ..figures.registry import FIGURES
@@ -404,6 +405,9 @@ def regenerate(out: Path) -> None:
     """Figures and claim table of ``out`` from ``out/data`` (no solve)."""
     data = out / "data"
     figs = out / "figures"
+    require_folder(out, "the publication folder, e.g. docs/reproduction")
+    require_files(data, ["representativity.nc", "contact.nc", "cel.nc"], "regenerate reads the published data "
+                  "in OUT/data (publish a run there first)")
     figs.mkdir(parents=True, exist_ok=True)
     rep = read_dataset(data / "representativity.nc", stage="aggregate", variables=["epsilon"])
     con = read_dataset(data / "contact.nc", stage="aggregate", variables=["area_fraction", "kappa"])
@@ -427,21 +431,22 @@ def publish(results: Path, out: Path, contact_results: Path | None = None) -> No
     ``representative`` scene while the ``reproduction`` scene's contact part is running).
     """
     data = out / "data"
-    data.mkdir(parents=True, exist_ok=True)
     con = contact_results or results
     sources = {"representativity.nc": results / "aggregate" / "representativity.nc",
                "contact.nc": con / "aggregate" / "contact.nc",
                "cel.nc": con / "fit" / "cel.nc", "cel.csv": con / "fit" / "cel.csv"}
-    for name, src in sources.items():
+    for src in sources.values():
         if not src.is_file():
             raise FileNotFoundError(f"publish: {src} is missing; run the scene first "
                                     "(snakemake -j2 --config scene=reproduction)")
+    data.mkdir(parents=True, exist_ok=True)
+    for name, src in sources.items():
         shutil.copy(src, data / name)
     regenerate(out)
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(prog="python -m roughcontact.reproduction", description=__doc__.split("\n")[0])
+    ap = argparse.ArgumentParser(prog="python -m roughcontact.studies.reproduction", description=__doc__.split("\n")[0])
     sub = ap.add_subparsers(dest="command", required=True)
     p = sub.add_parser("publish", help="copy a run's aggregates into OUT/data, then regenerate")
     p.add_argument("results", type=Path, help="results/{scene} of a finished run")
@@ -451,10 +456,11 @@ def main(argv=None) -> None:
     r = sub.add_parser("regenerate", help="figures and claim table from OUT/data (seconds, no solve)")
     r.add_argument("out", type=Path, help="publication folder, e.g. docs/reproduction")
     args = ap.parse_args(argv)
-    if args.command == "publish":
-        publish(args.results, args.out, args.contact_from)
-    else:
-        regenerate(args.out)
+    with input_errors(ap):
+        if args.command == "publish":
+            publish(args.results, args.out, args.contact_from)
+        else:
+            regenerate(args.out)
 
 
 if __name__ == "__main__":

@@ -37,6 +37,7 @@ from SurfaceTopography.IO import open_topography, readers
 from SurfaceTopography.Support.UnitConversion import get_unit_conversion_factor, mangle_length_unit_ascii
 
 from ..core.files import file_sha256
+from .scales import checked_scales, length_problem
 
 #: The study's allowed length units (CF/UDUNITS spellings: micrometres are "um", not "µm").
 LENGTH_UNITS = ("m", "mm", "um", "nm")
@@ -154,7 +155,7 @@ def read_topography(path, *, unit: str, file_unit: str | None = None,
     dx, dy = _check_grid(name, topo, non_square)
     heights = _detrend_and_fill(name, topo, info, undefined=undefined, detrend=detrend, max_undefined=max_undefined)
     heights, info["crop"] = _crop(heights) if non_square == "crop" else (heights, None)
-    nx, ny = heights.shape
+    nx, ny = checked_scales(name, heights, (dx, dy), TopographyError).shape
     lx = nx * dx
     ly = lx if nx == ny and abs(dx / dy - 1.0) <= PIXEL_RTOL else ny * dy  # square: one side, exactly
     return MeasuredSurface(heights=heights, lengths=(lx, ly), unit=unit, info=info)
@@ -163,8 +164,9 @@ def read_topography(path, *, unit: str, file_unit: str | None = None,
 def check_header(path, *, unit: str, file_unit: str | None = None,
                  physical_size: tuple[float, float] | None = None, undefined: str = "reject",
                  detrend: str = "none", non_square: str = "keep", channel: int = 0,
-                 max_undefined: float = MAX_UNDEFINED, format: str | None = None) -> None:
-    """The checks of :func:`read_topography` that need only the file's header, without its heights.
+                 max_undefined: float = MAX_UNDEFINED, format: str | None = None) -> tuple:
+    """The checks of :func:`read_topography` that need only the file's header, without its heights; the grid
+    ``((nx, ny), (dx, dy))`` of the map it would return (after ``non_square: crop``), in ``unit``.
 
     Readable by SurfaceTopography, the channel present and holding a 2-D uniform height map, a unit
     and a size (the file's or the scene's), the unit convertible to ``unit``, the sizes positive,
@@ -180,10 +182,11 @@ def check_header(path, *, unit: str, file_unit: str | None = None,
     with warnings.catch_warnings():
         # as in _load: the NetCDF reader's close warns about its memory map, harmlessly
         warnings.filterwarnings("ignore", message="Cannot close a netcdf_file", category=RuntimeWarning)
-        _check_header(name, _open(name, fmt), unit, file_unit, physical_size, non_square, channel)
+        (nx, ny), pixel = _check_header(name, _open(name, fmt), unit, file_unit, physical_size, non_square, channel)
+    return ((min(nx, ny),) * 2 if non_square == "crop" else (nx, ny)), pixel
 
 
-def _check_header(name, reader, unit, file_unit, physical_size, non_square, channel) -> None:
+def _check_header(name, reader, unit, file_unit, physical_size, non_square, channel) -> tuple:
     """:func:`check_header` on an open ``reader``, which it closes."""
     try:
         chan = _channel(name, reader, channel)
@@ -195,7 +198,8 @@ def _check_header(name, reader, unit, file_unit, physical_size, non_square, chan
             raise TopographyError(f"{name}: the file's unit {file_unit!r} cannot be converted to {unit!r} "
                                   f"({err})") from err
         (nx, ny), sizes = chan.nb_grid_pts, kwargs.get("physical_sizes", chan.physical_sizes)
-        _check_grid(name, _Header((nx, ny), tuple(float(v) * factor for v in sizes), unit), non_square)
+        pixel = _check_grid(name, _Header((nx, ny), tuple(float(v) * factor for v in sizes), unit), non_square)
+        return (int(nx), int(ny)), pixel
     finally:
         _close(reader)
 
@@ -435,6 +439,10 @@ def _check_grid(name, topo, non_square) -> tuple[float, float]:
         raise TopographyError(f"{name}: the map is {nx} x {ny} points; the contact solver needs at least 4 x 4")
     if not all(np.isfinite(s) and s > 0 for s in (lx, ly)):
         raise TopographyError(f"{name}: the physical size ({lx}, {ly}) {topo.unit} is not positive and finite")
+    problem = length_problem((nx, ny), (lx / nx, ly / ny), topo.unit)
+    if problem:
+        raise TopographyError(f"{name}: {problem}; check the file's unit and size (topography.file_unit, "
+                              "physical_size) or choose another topography.unit")
     if nx != ny and non_square == "reject":
         raise TopographyError(f"{name}: the map is {nx} x {ny} points, not square, and topography.non_square is "
                               f"reject: set it to keep to use the whole map, or to crop to use the centred "

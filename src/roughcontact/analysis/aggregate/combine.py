@@ -73,12 +73,36 @@ def _units_label(da: xr.DataArray) -> str | None:
     return units if ref is None else f"{units} (lengths in {ref})"
 
 
+#: Relative tolerance on the positions of two measured maps' points stacked on one grid (pressure fields):
+#: sizes of one map converted from different units differ in their last digits.
+GRID_RTOL = 1e-9
+
+
+def _same_coordinate(got: np.ndarray, want: np.ndarray, rtol: float) -> bool:
+    if got.shape != want.shape:
+        return False
+    if rtol and got.dtype.kind == "f" and want.dtype.kind == "f":
+        return bool(np.allclose(got, want, rtol=rtol, atol=rtol * float(np.max(np.abs(want), initial=0.0))))
+    return bool(np.array_equal(got, want))
+
+
+def _coordinate_text(values) -> str:
+    """A coordinate in a few words: its length and ends (a field's x or y has hundreds of values)."""
+    if values is None:
+        return "none"
+    values = np.asarray(values)
+    if values.size <= 4:
+        return repr(values.tolist())
+    return f"{values.size} values {values[0]!r} .. {values[-1]!r}"
+
+
 def _check_like_first(ds: xr.Dataset, name: str, ref: xr.Dataset, ref_name: str, kind: str,
-                      case_dims: Sequence[str]) -> None:
+                      case_dims: Sequence[str], coord_rtol: float = 0.0) -> None:
     """Raise ``ValueError`` naming ``name`` unless ``ds`` can be stacked with the first case ``ref``.
 
     Same variables (the kind's required ones among them) with the same units, the same non-case
-    dimensions and coordinates (exact join), and for contact data the same ``e_star``.
+    dimensions and coordinates (exact join; float coordinates within ``coord_rtol`` if given), and
+    for contact data the same ``e_star``.
     """
     ref_vars = set(ref.data_vars)
     missing = [v for v in _KINDS[kind] if v not in ds.data_vars]
@@ -102,11 +126,11 @@ def _check_like_first(ds: xr.Dataset, name: str, ref: xr.Dataset, ref_name: str,
             raise ValueError(f"{name}: dimension {dim!r} has size {ds.sizes.get(dim)}, "
                              f"but {ref_name} has {ref.sizes.get(dim)}")
         if (dim in ds.coords) != (dim in ref.coords) or (
-                dim in ds.coords and not np.array_equal(ds[dim].values, ref[dim].values)):
+                dim in ds.coords and not _same_coordinate(ds[dim].values, ref[dim].values, coord_rtol)):
             got = ds[dim].values if dim in ds.coords else None
             want = ref[dim].values if dim in ref.coords else None
-            raise ValueError(f"{name}: {dim!r} coordinate {got!r} differs from {ref_name}'s "
-                             f"{want!r} (exact join required)")
+            raise ValueError(f"{name}: {dim!r} coordinate differs from {ref_name}'s ({_coordinate_text(got)} "
+                             f"against {_coordinate_text(want)}): cases are stacked on one coordinate")
     if kind == "contact":
         if "e_star" not in ds.attrs:
             raise ValueError(f"{name}: global attribute 'e_star' is missing")
@@ -344,8 +368,10 @@ def combine_topographies(datasets: Sequence[xr.Dataset], names: Sequence[str], *
             raise ValueError(f"{name}: topography {case!r} already given by {by_case[case][1]}")
         if case not in expected:
             raise ValueError(f"{name}: topography {case!r} is not among the expected {expected}")
-        _check_like_first(ds, name, datasets[0], names[0], kind, (TOPOGRAPHY_DIM,))
-        by_case[case] = (ds, name)
+        _check_like_first(ds, name, datasets[0], names[0], kind, (TOPOGRAPHY_DIM,), coord_rtol=GRID_RTOL)
+        # a field's x, y within round-off of the first map's: stacked on the first's
+        grid = {dim: datasets[0][dim] for dim in ("x", "y") if dim in ds.coords and dim in datasets[0].coords}
+        by_case[case] = (ds.assign_coords(grid), name)
     missing = [e for e in expected if e not in by_case]
     if missing:
         raise ValueError(f"{len(missing)} expected topography case(s) have no dataset: {', '.join(missing)}")

@@ -66,8 +66,9 @@ def check_schedules(curves: Curves, who: Sequence[str]) -> None:
     lab = _differing_stratum(curves)
     if lab is not None:
         raise ValueError(f"{who[lab]} have different load schedules p0/(E* h'), so their curves cannot be "
-                         "averaged step by step; pass paper_average='none' or load them alike "
-                         "(load.relative_to: rms_slope)")
+                         "averaged step by step; pass paper_average='none' (or 'auto', as the pipeline's fit does: "
+                         "'none' where the schedules differ), or load them alike (in a scene: load.p_max with "
+                         "load.relative_to: rms_slope, not load.target_area)")
 
 
 class GroupFit:

@@ -11,7 +11,7 @@ import xarray as xr
 from ...theory.spectra import power_law_alpha
 from ..aggregate.combine import CASE_DIMS
 from ..aggregate.derived import add_derived
-from .bootstrap import GroupFit, check_schedules, fit_group, group_rng
+from .bootstrap import GroupFit, check_schedules, fit_group, group_rng, shared_schedule
 from .estimators import CONSTANTS, METHODS, POOLED, Curves
 from .settings import check_settings, estimate_vars, estimator_coords, h_label, paper_vars, settings_attrs
 
@@ -74,13 +74,15 @@ def fit_cel(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.11), n_bo
         group's cases), ``paper_value(constant)``, ``paper_stderr(constant)``. Groups
         without any case are NaN with ``n_seeds = 0``. Attrs record the settings.
     """
-    (lo, hi), methods = check_settings(window, n_boot, rng_seed, methods, min_points, kappa_extrapolation,
-                                        confidence, paper_average, on_insufficient)
     for dim in CASE_DIMS + ("step",):
         if dim not in agg.dims:
             raise ValueError(f"agg lacks dimension {dim!r}; pass the output of combine_cases")
     if "dpbar_dp0" not in agg or "kappa" not in agg:
         agg = add_derived(agg)
+    if paper_average == "auto":
+        paper_average = "seeds" if _seeds_share_schedules(agg, window) else "none"
+    (lo, hi), methods = check_settings(window, n_boot, rng_seed, methods, min_points, kappa_extrapolation,
+                                       confidence, paper_average, on_insufficient)
     e_star = float(agg.attrs["e_star"])
 
     kls, kss, hs = (agg[d].values for d in ("k_l", "k_s", "H"))
@@ -97,6 +99,16 @@ def fit_cel(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.11), n_bo
     return _cel_dataset(agg, grid, labels, methods, confidence,
                         settings_attrs(lo, hi, n_boot, rng_seed, confidence, min_points, kappa_extrapolation,
                                         paper_average, e_star))
+
+
+def _seeds_share_schedules(agg: xr.Dataset, window) -> bool:
+    """Whether the seeds of every ``(k_l, k_s, H)`` share one load schedule p0/(E* h') (``paper_average='auto'``).
+
+    They do when loaded by ``load.p_max``; with ``load.target_area`` each seed ends at its own p0.
+    """
+    bounds = tuple(float(v) for v in window)
+    return all(shared_schedule(_group_curves(agg, kl, ks, [h], bounds))
+               for kl in agg["k_l"].values for ks in agg["k_s"].values for h in agg["H"].values)
 
 
 class _CelGrid:

@@ -15,12 +15,15 @@ min_points : int
     Fewest in-window points a fit accepts (>= 3; the joint fit needs >= 4).
 kappa_extrapolation : {"cel", "poly2"}
     How the paper route extrapolates ``kappa_eff(a)`` to ``a = 0``.
-paper_average : {"seeds", "none"}
+paper_average : {"seeds", "none", "auto"}
     ``"seeds"``: the paper route fits the seed-mean curve of each H (mean ``A/A0``, ``kappa``,
     ``d pbar/d p0`` per load step, steps converged in every seed; the window applies to the mean
     ``A/A0``), which needs one load schedule per H. Averaging before taking logs matters: the log
     of a noisy finite difference is biased low by about half its relative variance, and that
-    variance grows with ``A/A0``, which tilts ``mu``. ``"none"``: every (seed, step) point.
+    variance grows with ``A/A0``, which tilts ``mu``. ``"none"``: every (seed, step) point, each seed on
+    its own schedule. ``"auto"`` (the pipeline's): ``"seeds"`` where every group's seeds share one
+    schedule p0/(E* h'), else ``"none"`` (``load.target_area``, where each seed ends at its own p0);
+    the result's ``paper_average`` attribute says which.
 confidence : float
     Coverage of the percentile interval, in (0, 1).
 on_insufficient : {"raise", "nan"}

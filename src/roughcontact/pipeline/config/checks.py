@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import functools
+import importlib.util
 import itertools
 from collections.abc import Mapping
 
@@ -75,8 +76,11 @@ def _check_contact(scene: str, block: dict) -> None:
     load = block["load"]
     if "p_min" in load and load["schedule"] != "geometric":
         fail("load.p_min", f"only used by load.schedule: geometric (here {load['schedule']!r}); remove it")
+    _check_hardness_relative(fail, block)
     if "target_area" in load:
         _check_target_area(fail, load)
+        if "surface" in block:  # the generator's N x N grid
+            check_target_nodes(scene, load, block["surface"]["N"] ** 2, f"the N = {block['surface']['N']} grid")
         return
     if "p_min" in load and not load["p_min"] < load["p_max"]:
         fail("load.p_min", f"{load['p_min']:g} must be < load.p_max = {load['p_max']:g}")
@@ -111,6 +115,56 @@ def _check_target_area(fail, load: dict) -> None:
                            "(final load) / n_steps; remove it")
 
 
+#: Fewest contact nodes a ``load.target_area`` may ask for: the search stops within 1.5 nodes
+#: (:func:`roughcontact.pipeline.loading.pressure_for_area`), 10 % of 15 nodes.
+MIN_TARGET_NODES = 15
+
+
+def check_target_nodes(scene: str, load: Mapping, n_nodes: int, what: str) -> None:
+    """Refuse a ``load.target_area`` smaller than :data:`MIN_TARGET_NODES` nodes of a map of ``n_nodes`` (``what``)."""
+    target = load.get("target_area")
+    if target is not None and target * n_nodes < MIN_TARGET_NODES:
+        raise ConfigError(
+            f"scene {scene!r}, field 'contact.load.target_area': {target:g} of the {n_nodes} nodes of {what} is "
+            f"{target * n_nodes:.3g} node(s); the load search stops within 1.5 nodes, so a target below "
+            f"{MIN_TARGET_NODES} nodes ({MIN_TARGET_NODES / n_nodes:.3g} here) cannot be met: raise it or the grid")
+
+
+def check_against_fit(scene: str, contact: Mapping, fit: Mapping) -> None:
+    """A ``target_area`` below the fit window's low end leaves the CEL fit without a load step: refuse it."""
+    target, low = contact["load"].get("target_area"), fit["window"][0]
+    if target is not None and target < low:
+        raise ConfigError(f"scene {scene!r}, field 'contact.load.target_area': {target:g} is below fit.window's low "
+                          f"end {low:g}, so no load step (every one at A/A0 <= {target:g}) would enter the CEL fit; "
+                          "raise it or lower fit.window")
+
+
+def check_backend(scene: str, contact: Mapping) -> None:
+    """``solver.array_backend: cupy`` on a Python that cannot import CuPy: refused before any job (the scene that runs).
+
+    Only the import is checked here: on a cluster the jobs may run on GPU nodes the submit host lacks, and a job
+    without a GPU stops with the backend's own message.
+    """
+    backend = contact["solver"].get("array_backend", "numpy")
+    if backend == "cupy" and importlib.util.find_spec("cupy") is None:
+        raise ConfigError(f"scene {scene!r}, field 'contact.solver.array_backend': 'cupy' needs CuPy, which this "
+                          "Python cannot import; install it with `pip install roughcontact[gpu]` (a CUDA GPU "
+                          "runs the jobs), or remove array_backend (numpy)")
+
+
+def _check_hardness_relative(fail, block: dict) -> None:
+    """The hardness against the final p0/E* when that is known before any job: p_max x the generator's rms slope."""
+    load, effects = block["load"], block["effects"]
+    slope = block.get("surface", {}).get("rms_slope")
+    if "plasticity" not in effects or load.get("relative_to") != "rms_slope" or slope is None or "target_area" in load:
+        return
+    final, hardness = load["p_max"] * slope, effects["plasticity"]["hardness"]
+    if not hardness > final:
+        fail("effects.plasticity.hardness", f"{hardness:g} must exceed the final load p0/E* = load.p_max x "
+             f"surface.rms_slope = {load['p_max']:g} x {slope:g} = {final:g} (load.relative_to: rms_slope): a pressure "
+             "capped at the hardness cannot carry a mean load p0 >= hardness; raise it or lower load.p_max")
+
+
 #: A measured scene's final load when it says nothing: p0 / (E* h') = 0.05, the paper's regime
 #: (about 10 % contact on its surfaces; p0/E* = 0.005 at their h' = 0.1).
 MEASURED_P_MAX = 0.05
@@ -137,11 +191,13 @@ def _resolve_load(scene: str, load: dict, given: Mapping, measured: bool) -> Non
     if measured and "relative_to" not in given:
         for key in ("p_max", "p_min"):
             if key in given:
-                fail(f"load.{key}", "a measured scene's load is relative to each file's rms slope unless it says "
-                                    "otherwise: add load.relative_to: rms_slope (the value is p0/(E* h'), the "
-                                    "paper's pbar) or load.relative_to: e_star (p0/E*)")
+                fail(f"load.{key}", "a measured (topography or array) scene's load is relative to each file's rms "
+                                    "slope unless it says otherwise: add load.relative_to: rms_slope (the value is "
+                                    "p0/(E* h'), the paper's pbar) or load.relative_to: e_star (p0/E*)")
         load["relative_to"], load["p_max"] = "rms_slope", MEASURED_P_MAX
     load.setdefault("relative_to", "e_star")
+    if load["relative_to"] == "rms_slope" and "p_max" not in given:
+        load["p_max"] = MEASURED_P_MAX  # the default 0.005 is p0/E*; relative to h' the paper's regime is 0.05
 
 
 def _study_failure(scene: str, study: str):

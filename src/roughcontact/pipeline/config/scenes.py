@@ -16,7 +16,10 @@ scene, in two passes, both before Snakemake plans any job:
 
 Every error is a :class:`ConfigError` whose message names the scene and the field
 (``scene 'demo', field 'contact.grid.k_s': ...``) and the allowed range, and says when the
-bad value came from ``defaults``.
+bad value came from ``defaults``. An invalid scene stops only a run of that scene:
+:func:`validate_config` raises the error of the scene that runs and keeps the others' under
+``invalid`` (the workflow logs them, and stops a target in such a scene with its message).
+The scene that runs also has its files and physical ranges checked (``active``).
 
 The validated scene is canonical: schema defaults filled in, numbers typed as the schema
 says (``N: 32.0`` becomes ``32``, ``L: 1`` becomes ``1.0``), so that two configs meaning the
@@ -44,7 +47,14 @@ from pathlib import Path
 from jsonschema import Draft202012Validator
 
 from ..cases import BATCH_STEM, CASE_STEM, Case, batches, cases
-from .checks import _check_accuracy, _check_contact, _check_kappa_gap, _resolve_load
+from .checks import (
+    _check_accuracy,
+    _check_contact,
+    _check_kappa_gap,
+    _resolve_load,
+    check_against_fit,
+    check_backend,
+)
 from .files import ConfigError, load_config_files
 from .schema import (
     SCENE_STUDIES,
@@ -100,6 +110,10 @@ def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = No
         given = ((delta or {}).get("contact") or {}).get("load") or {}
         _resolve_load(name, out["contact"]["load"], given, source.relative_load)
         _check_contact(name, out["contact"])
+        check_against_fit(name, out["contact"], out["fit"])
+        if active:
+            check_backend(name, out["contact"])
+            source.check_contact_files(name, out)
     if "accuracy" in out:
         _check_accuracy(name, out["accuracy"])
     if "kappa_gap" in out:
@@ -110,13 +124,44 @@ def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = No
     return out
 
 
-def validate_config(config: dict, schema: dict | None = None) -> dict:
+def validate_config(config: dict, schema: dict | None = None, *, strict: bool = False) -> dict:
     """Validate the whole config (every scene) and return it with defaults filled in.
 
     Each scene is merged over ``config['defaults']`` first (:func:`merge_scene`);
-    ``config['scene']`` must name one of ``config['scenes']``.
+    ``config['scene']`` must name one of ``config['scenes']``. An invalid scene stops only a run of
+    that scene: the active scene's error (and one in the config's structure) is raised, another
+    scene's is kept under ``invalid`` (scene name -> message; a run of it stops with that message).
+    ``strict``: raise the first invalid scene's error whichever scene it is.
     """
     schema = schema or load_schema()
+    defaults = _check_structure(config)
+    scene_schema = {**schema["$defs"]["scene"], "$defs": schema["$defs"]}
+    defaults = coerce_strings(defaults, scene_schema)
+    default = config.get("scene")
+    validated, invalid = {}, {}
+    for name, block in config["scenes"].items():
+        if not isinstance(name, str) or not SCENE_NAME.match(name):
+            raise ConfigError(f"config field 'scenes': scene name {name!r} is not allowed; names start with "
+                              "a letter and hold only letters, digits, '_' and '-' (they become folder names)")
+        try:
+            if not isinstance(block or {}, dict):
+                raise ConfigError(f"scene {name!r}: must be a mapping of blocks, got {type(block).__name__}")
+            block = coerce_strings(block, scene_schema)
+            validated[name] = validate_scene(name, merge_scene(defaults, block or {}), schema, delta=block or {},
+                                             active=name == default)
+        except ConfigError as err:
+            if strict or name == default:
+                raise
+            invalid[name] = str(err)
+    if not isinstance(default, str) or default not in validated:
+        raise ConfigError(
+            f"config field 'scene': unknown scene {default!r}; defined scenes: {', '.join(sorted(config['scenes']))}"
+        )
+    return {"scene": default, "scenes": validated, "invalid": invalid}
+
+
+def _check_structure(config) -> dict:
+    """The config's top level checked (keys, ``scenes`` a mapping, ``defaults`` blocks); returns ``defaults``."""
     if not isinstance(config, dict):
         raise ConfigError("config must be a mapping with keys 'scene' and 'scenes'")
     unknown = sorted(set(config) - {"scene", "scenes", "defaults"})
@@ -132,24 +177,7 @@ def validate_config(config: dict, schema: dict | None = None) -> dict:
     for key in defaults:
         if key not in allowed:
             raise ConfigError(f"config field 'defaults': unknown block {key!r}; allowed: {', '.join(allowed)}")
-    scene_schema = {**schema["$defs"]["scene"], "$defs": schema["$defs"]}
-    defaults = coerce_strings(defaults, scene_schema)
-    validated = {}
-    for name, block in scenes.items():
-        if not isinstance(name, str) or not SCENE_NAME.match(name):
-            raise ConfigError(f"config field 'scenes': scene name {name!r} is not allowed; names start with "
-                              "a letter and hold only letters, digits, '_' and '-' (they become folder names)")
-        if not isinstance(block or {}, dict):
-            raise ConfigError(f"scene {name!r}: must be a mapping of blocks, got {type(block).__name__}")
-        block = coerce_strings(block, scene_schema)
-        validated[name] = validate_scene(name, merge_scene(defaults, block or {}), schema, delta=block or {},
-                                         active=name == config.get("scene"))
-    default = config.get("scene")
-    if not isinstance(default, str) or default not in validated:
-        raise ConfigError(
-            f"config field 'scene': unknown scene {default!r}; defined scenes: {', '.join(sorted(validated))}"
-        )
-    return {"scene": default, "scenes": validated}
+    return defaults
 
 
 def _load_summary(load: Mapping) -> str:
@@ -195,6 +223,8 @@ def main(argv=None) -> None:
         valid = validate_config(config)
     except ConfigError as exc:
         ap.exit(2, f"error: {exc}\n")
+    for message in valid["invalid"].values():
+        sys.stderr.write(f"warning: {message} (a run of that scene would stop here; the others run)\n")
     sys.stdout.write(plan_summary(valid["scene"], valid["scenes"][valid["scene"]]) + "\n")
 
 

@@ -7,6 +7,7 @@ The schema ``config.schema.yaml`` is package data beside this module (:func:`loa
 from __future__ import annotations
 
 import copy
+import functools
 import math
 from importlib import resources
 from pathlib import Path
@@ -28,9 +29,14 @@ SCHEMA_RESOURCE = "config.schema.yaml"
 def load_schema(path: str | Path | None = None) -> dict:
     """The config JSON schema as a dict: the package's own (:data:`SCHEMA_RESOURCE`) unless ``path`` names another."""
     if path is None:
-        return yaml.safe_load(resources.files(__package__).joinpath(SCHEMA_RESOURCE).read_text(encoding="utf-8"))
+        return copy.deepcopy(_package_schema())  # parsed once a process (~0.3 s), a fresh copy each call
     with open(path) as fh:
         return yaml.safe_load(fh)
+
+
+@functools.cache
+def _package_schema() -> dict:
+    return yaml.safe_load(resources.files(__package__).joinpath(SCHEMA_RESOURCE).read_text(encoding="utf-8"))
 
 
 def _resolve(schema: dict, root: dict) -> dict:
@@ -68,6 +74,17 @@ def _from_text(text: str, kind: str):
     return text
 
 
+def _scalar_kind(schema: dict, root: dict) -> str | None:
+    """The one non-text scalar type (integer, number, boolean) ``schema`` takes, itself or in one of its
+    ``oneOf``/``anyOf`` alternatives (``pixel_size``: a number or a pair), when it takes no text; else None."""
+    if _admits_text(schema, root):
+        return None
+    kinds = {schema.get("type")} | {_resolve(sub, root).get("type") for key in ("oneOf", "anyOf")
+                                      for sub in schema.get(key, ())}
+    kinds &= {"integer", "number", "boolean"}
+    return kinds.pop() if len(kinds) == 1 else None
+
+
 def _properties(schema: dict, root: dict) -> dict:
     props: dict = {}
     for sub in schema.get("allOf", []):
@@ -89,10 +106,11 @@ def coerce_strings(instance, schema: dict, root: dict | None = None):
     if isinstance(instance, str):
         if instance.strip() in ("null", "Null", "NULL", "~") and not _admits_text(schema, root):
             return None
-        kind = schema.get("type")
-        return _from_text(instance.strip(), kind) if kind in ("integer", "number", "boolean") else instance
+        kind = _scalar_kind(schema, root)
+        return _from_text(instance.strip(), kind) if kind is not None else instance
     if isinstance(instance, list):
-        items = schema.get("items")
+        lists = [b for b in (_resolve(b, root) for b in schema.get("oneOf", ())) if b.get("type") == "array"]
+        items = schema.get("items") if not lists or "items" in schema else lists[0].get("items")
         return [coerce_strings(v, items, root) for v in instance] if isinstance(items, dict) else instance
     if isinstance(instance, dict):
         branches = [b for b in (_resolve(b, root) for b in schema.get("oneOf", ())) if b.get("type") == "object"]
@@ -154,8 +172,10 @@ def _complete(instance, schema: dict, root: dict):
 def merge(base, delta):
     """``delta`` deep-merged over ``base`` (neither changed): mappings merge key by key,
     any other value replaces, and a ``None`` value removes the key."""
-    if not isinstance(base, dict) or not isinstance(delta, dict):
+    if not isinstance(delta, dict):
         return copy.deepcopy(delta)
+    if not isinstance(base, dict):
+        base = {}
     out = copy.deepcopy(base)
     for key, value in delta.items():
         if value is None:
@@ -187,8 +207,8 @@ def merge_scene(defaults: dict, scene: dict) -> dict:
     for key, value in scene.items():
         if key in (*SCENE_STUDIES, "fit"):
             out[key] = merge(defaults.get(key) or {}, value or {})
-        else:
-            out[key] = copy.deepcopy(value)
+        else:  # a source block: ``null`` inside it removes the key too (there is no default to remove)
+            out[key] = merge({}, value)
     if "fit" not in out and "fit" in defaults:
         out["fit"] = copy.deepcopy(defaults["fit"])
     return out
@@ -212,12 +232,49 @@ def _schema_message(err) -> str:
     if err.validator == "pattern":
         what = err.schema.get("description", f"text matching {err.schema['pattern']!r}")
         return f"{err.instance!r} is not {what}" + ("" if "spaces" in what else " (no spaces or line breaks)")
+    if err.validator in ("oneOf", "anyOf"):
+        return _alternatives_message(err)
     kind = err.schema.get("type") if err.validator == "type" else None
     if kind in _TYPE_REMEDY and isinstance(err.instance, str):
         what, example = _TYPE_REMEDY[kind]
         return (f"{err.instance!r} is not {what} (schema type '{kind}'); write {what}, e.g. {example} (text "
                 f"given with --config, which passes nested values as text, is read as {what} when it is one)")
     return err.message
+
+
+#: What a value of each JSON schema type is, in words.
+_TYPE_WORDS = {"number": "a number", "integer": "a whole number", "boolean": "true or false", "string": "text",
+               "array": "a list", "object": "a mapping of keys", "null": "nothing"}
+
+
+def _describe(schema: dict) -> str:
+    """One alternative of a ``oneOf`` in words: its description, else its type (and length, for a list)."""
+    if schema.get("description"):
+        return schema["description"]
+    kind = schema.get("type")
+    words = _TYPE_WORDS.get(kind, f"a {kind}") if kind else "a value of another form"
+    if kind == "array" and schema.get("minItems") is not None and schema.get("minItems") == schema.get("maxItems"):
+        item = _TYPE_WORDS.get((schema.get("items") or {}).get("type"), "value")
+        words = f"a list of {schema['minItems']} {item.removeprefix('a ').removeprefix('an ')}s"
+    return words
+
+
+def _type_name(value) -> str:
+    """The YAML kind of a config value, for messages."""
+    if value is None:
+        return "null (nothing)"
+    if isinstance(value, list):
+        return f"a list of {len(value)}"
+    return {bool: "a boolean", int: "a whole number", float: "a number", str: "text", dict: "a mapping"}.get(
+        type(value), type(value).__name__)
+
+
+def _alternatives_message(err) -> str:
+    """``oneOf``/``anyOf`` failed: what the field takes (its description, or each alternative) and what it got."""
+    what = err.schema.get("description") or " or ".join(_describe(b) for b in err.schema.get(err.validator, ()))
+    got = _type_name(err.instance)
+    hint = " (text that reads as a number is read as one)" if isinstance(err.instance, str) else ""
+    return f"{err.instance!r} ({got}) is not what this field takes: {what}; write a value of that form{hint}"
 
 
 #: What each schema type takes, and an example, for the message on a string that is none of them.

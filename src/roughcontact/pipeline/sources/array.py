@@ -29,10 +29,14 @@ from pathlib import Path
 import numpy as np
 
 from ...core.files import file_sha256
+from ...surfaces.scales import scale_problem
 from ..config.files import ConfigError
 from ..measured import MeasuredConfigError, _check_name
 from .base import register
 from .patches import PatchSource
+
+#: The first bytes of every .npy file.
+NPY_MAGIC = b"\x93NUMPY"
 
 #: Fewest points along each axis (the rms slope and curvature take differences inside the patch).
 MIN_POINTS = 4
@@ -53,7 +57,7 @@ def check_pixel_size(path: str, pixel_size) -> tuple[float, float]:
 
 def load_heights(path: str, pixel_size, *, mmap: bool = False) -> np.ndarray:
     """The heights of ``path``, checked (``ArrayError`` naming the file and the remedy otherwise)."""
-    check_pixel_size(path, pixel_size)
+    pixel = check_pixel_size(path, pixel_size)
     where = Path(path)
     if where.suffix != ".npy":
         raise ArrayError(f"{path!r} is not a .npy file: save the heights with numpy.save(path, heights), "
@@ -62,6 +66,13 @@ def load_heights(path: str, pixel_size, *, mmap: bool = False) -> np.ndarray:
         what = ("is a directory, not a file" if where.is_dir()
                 else f"does not exist (paths are relative to {Path.cwd()})")
         raise ArrayError(f"{path!r} {what}: name an existing .npy file")
+    with open(where, "rb") as fh:
+        magic = fh.read(len(NPY_MAGIC))
+    if magic != NPY_MAGIC:
+        what = ("is empty" if not magic
+                else "does not start as a .npy file does (\\x93NUMPY): it is text or another format")
+        raise ArrayError(f"{path!r} {what}: save the heights with numpy.save(path, heights) and name that file "
+                         "(a text or instrument file goes in a topography block)")
     try:
         h = np.load(where, mmap_mode="r" if mmap else None, allow_pickle=False)
     except (ValueError, OSError, EOFError) as err:
@@ -80,6 +91,9 @@ def load_heights(path: str, pixel_size, *, mmap: bool = False) -> np.ndarray:
     if not np.ptp(h) > 0:
         raise ArrayError(f"{path!r}: every height is {h.flat[0]}: a flat map has no roughness to study; "
                          "save the surface's heights")
+    problem = scale_problem(h, pixel, float(np.finfo(h.dtype).eps) if h.dtype.kind == "f" else 0.0)
+    if problem:
+        raise ArrayError(f"{path!r}: {problem}")
     return h
 
 
@@ -122,6 +136,11 @@ class Array(PatchSource):
             out["files"][name] = entry
         out.pop("pixel_size", None)
         return out
+
+    @classmethod
+    def grids(cls, name: str, scene: Mapping) -> dict[str, tuple]:
+        return {case: (tuple(np.load(entry["path"], mmap_mode="r", allow_pickle=False).shape),
+                       tuple(pixel_sizes(entry["pixel_size"]))) for case, entry in scene[cls.key]["files"].items()}
 
     @classmethod
     def reader_settings(cls, scene: Mapping, name: str) -> dict:

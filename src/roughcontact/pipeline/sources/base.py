@@ -60,6 +60,14 @@ class Source:
     studies: tuple[str, ...] = ("representativity", "contact")
     default_boundary = "periodic"
     relative_load = False
+    #: Recorded settings that differ between cases by design (a patch file's path, unit, size): the
+    #: aggregate keeps them per case (``setting_<key>``) without warning that cases were solved differently.
+    per_case_settings: tuple[str, ...] = ()
+
+    @classmethod
+    def unexpected_settings(cls, varying) -> list[str]:
+        """The keys of ``varying`` (settings that differ between cases) that do not differ by design."""
+        return [key for key in varying if key not in cls.per_case_settings]
 
     @classmethod
     def applies(cls, scene: Mapping) -> bool:
@@ -70,6 +78,11 @@ class Source:
     def check_scene(cls, name: str, scene: dict, delta: Mapping | None = None, *, check_files: bool = True) -> dict:
         """The schema-checked ``scene`` checked and expanded for this source (a new dict)."""
         raise NotImplementedError
+
+    @classmethod
+    def check_contact_files(cls, name: str, scene: Mapping) -> None:
+        """What the source's files allow the validated ``contact`` block (``ConfigError`` naming the field); run
+        before any job for the scene that runs. Nothing for a source without files."""
 
     @classmethod
     def cases(cls, scene: Mapping, study: str) -> list[dict]:

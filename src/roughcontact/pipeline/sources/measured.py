@@ -26,7 +26,15 @@ class Measured(PatchSource):
     @classmethod
     def check_scene(cls, name: str, scene: dict, delta: Mapping | None = None, *, check_files: bool = True) -> dict:
         try:
-            return measured.check_measured_scene(name, scene, delta, check_files=check_files)
+            out = measured.check_measured_scene(name, scene, delta, check_files=check_files)
+        except measured.MeasuredConfigError as err:
+            raise ConfigError(str(err)) from None
+        return out
+
+    @classmethod
+    def grids(cls, name: str, scene: Mapping) -> dict[str, tuple]:
+        try:
+            return measured.check_headers(name, scene)
         except measured.MeasuredConfigError as err:
             raise ConfigError(str(err)) from None
 

@@ -20,7 +20,12 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+import numpy as np
+
 from ...analysis.aggregate import TOPOGRAPHY_DIM, add_derived, combine_topographies
+from ...analysis.aggregate.combine import GRID_RTOL
+from ...surfaces.synthetic import nonperiodic_moments
+from ..config.checks import check_target_nodes
 from ..config.files import ConfigError
 from ..measured import MeasuredConfigError, drop_generator_keys
 from .base import Source
@@ -38,6 +43,9 @@ class PatchSource(Source):
     surface_rules = ("topography",)
     default_boundary = "free"
     relative_load = True
+    #: A file's own entry under ``files`` (path, unit, size, format, pixel size) is its own, by design.
+    per_case_settings = tuple(f"{TOPOGRAPHY_DIM}.{key}" for key in ("path", "file_unit", "physical_size", "format",
+                                                                   "pixel_size", "sha256"))
 
     @classmethod
     def check_scene(cls, name: str, scene: dict, delta: Mapping | None = None, *, check_files: bool = True) -> dict:
@@ -49,6 +57,60 @@ class PatchSource(Source):
             out["contact"]["solver"].setdefault("boundary", cls.default_boundary)
         out[cls.key] = cls.check_files(name, out[cls.key], check_files)
         return out
+
+    @classmethod
+    def check_contact_files(cls, name: str, scene: Mapping) -> None:
+        """What the files allow the validated contact block, before any job (the scene that runs): see
+        :meth:`_check_shapes` and :meth:`_check_hardness`."""
+        cls._check_shapes(name, scene)
+        cls._check_hardness(name, scene)
+
+    @classmethod
+    def _check_shapes(cls, name: str, scene: Mapping) -> None:
+        """Pressure fields (``outputs.fields``) are stacked on one grid by the aggregate, so every map has one
+        shape and pixel size (within :data:`GRID_RTOL`: round-off of unit conversions); a ``target_area`` spans
+        enough nodes of each map."""
+        contact = scene["contact"]
+        if not (contact["outputs"]["fields"] or "target_area" in contact["load"]):
+            return
+        grids = cls.grids(name, scene)
+        for case, ((nx, ny), _) in grids.items():
+            check_target_nodes(name, contact["load"], nx * ny, f"{cls.what} {case!r} ({nx} x {ny})")
+        shape, pixel = next(iter(grids.values()))
+        for other_shape, other_pixel in grids.values():
+            if contact["outputs"]["fields"] and (other_shape != shape or not np.allclose(
+                    other_pixel, pixel, rtol=GRID_RTOL, atol=0.0)):
+                listed = ", ".join(f"{c} {nx} x {ny} points of {dx:.6g} x {dy:.6g}"
+                                   for c, ((nx, ny), (dx, dy)) in grids.items())
+                raise ConfigError(f"scene {name!r}, field 'contact.outputs.fields': the {cls.what}s' grids differ "
+                                  f"({listed}), and the aggregate stacks every file's pressure and gap fields on one "
+                                  "grid: remove outputs.fields, or give files of one grid (a scene each)")
+
+    @classmethod
+    def _check_hardness(cls, name: str, scene: Mapping) -> None:
+        """A hardness above every file's final load p0/E* = p_max h' (``relative_to: rms_slope``): each file is
+        read as its surface job reads it, and its rms slope measured as that job measures it."""
+        contact = scene["contact"]
+        load, hardness = contact["load"], contact["effects"].get("plasticity", {}).get("hardness")
+        if hardness is None or "target_area" in load or load["relative_to"] != "rms_slope":
+            return
+        for case in cls.names(scene):
+            try:
+                surface = cls.read(cls.reader_settings(scene, case))
+            except ValueError as err:
+                raise ConfigError(f"scene {name!r}, field '{cls.key}.files.{case}': {err}") from None
+            slope = nonperiodic_moments(surface.heights, surface.lengths)["rms_slope"]
+            if not hardness > load["p_max"] * slope:
+                raise ConfigError(
+                    f"scene {name!r}, field 'contact.effects.plasticity.hardness': {hardness:g} must exceed every "
+                    f"case's final load p0/E* = load.p_max x its rms slope; {cls.what} {case!r}: {load['p_max']:g} x "
+                    f"{slope:.4g} = {load['p_max'] * slope:.4g} (a pressure capped at the hardness cannot carry a "
+                    "mean load p0 >= hardness); raise it or lower load.p_max")
+
+    @classmethod
+    def grids(cls, name: str, scene: Mapping) -> dict[str, tuple]:
+        """The grid ``((nx, ny), (dx, dy))`` of each case's map, by name, from the checked files (before any job)."""
+        raise NotImplementedError
 
     @classmethod
     def check_files(cls, scene: str, block: dict, check: bool) -> dict:

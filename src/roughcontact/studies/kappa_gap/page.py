@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ...analysis.fit.estimators import PAPER_CEL
+from ...core.cli import input_errors, require_files, require_folder
 from .analysis import CLOSES_RULE, pct, summarise
 from .cases import KAPPA_BGT, TARGET_AREAS
 
@@ -196,6 +197,8 @@ def regenerate(out: Path) -> Path:
     from ...core.files import write_text_atomic
     from ...pipeline.io import read_dataset
 
+    require_folder(out, "the page's folder, e.g. docs/reproduction")
+    require_files(Path(out) / "data", ["kappa-gap.nc"], "regenerate reads OUT/data/kappa-gap.nc (publish a run first)")
     data = read_dataset(Path(out) / "data" / "kappa-gap.nc", stage="kappa_gap")
     page = Path(out) / "kappa-gap.md"
     write_text_atomic(page, markdown(summarise(data)))
@@ -210,6 +213,7 @@ def publish(results: Path, out: Path) -> Path:
     from ...pipeline.io import read_dataset
 
     src = Path(results) / "kappa_gap" / "kappa-gap.nc"
+    require_files(src.parent, [src.name], "give a finished kappa-gap run's results folder, e.g. results/kappa-gap")
     read_dataset(src, stage="kappa_gap")  # a clear error for a missing or foreign file
     with atomic_output(Path(out) / "data" / "kappa-gap.nc") as tmp:
         shutil.copyfile(src, tmp)
@@ -225,7 +229,8 @@ def main(argv=None) -> None:
     pub.add_argument("results", type=Path)
     pub.add_argument("out", type=Path)
     args = ap.parse_args(argv)
-    page = regenerate(args.out) if args.command == "regenerate" else publish(args.results, args.out)
+    with input_errors(ap):
+        page = regenerate(args.out) if args.command == "regenerate" else publish(args.results, args.out)
     print(page)
 
 

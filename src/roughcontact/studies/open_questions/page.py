@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...core.cli import input_errors, require_files, require_folder
 from ...core.files import write_text_atomic
 from ...figures.style import save_figure
 from ...pipeline.io import read_dataset
@@ -186,8 +187,14 @@ def regenerate(out: Path, docs: Path | None = None) -> None:
     ``docs`` is the folder holding ``reproduction/`` (default: ``out``'s parent).
     """
     data, figs = out / "data", out / "figures"
+    docs = out.parent if docs is None else docs
+    require_folder(out, "the page's folder, e.g. docs/open-questions")
+    require_files(data, [n for n in DATA_FILES if n not in OPTIONAL], "regenerate reads the published data in "
+                  "OUT/data (publish a run there first)")
+    require_files(docs, list(REPRODUCTION.values()), "Q2 and Q3 read the reproduction's published aggregates "
+                  "(--docs: the folder holding reproduction/)")
+    rep = _reproduction(docs)
     figs.mkdir(parents=True, exist_ok=True)
-    rep = _reproduction(out.parent if docs is None else docs)
     large, extra = (read_dataset(data / name, stage="aggregate") if (data / name).exists() else None
                     for name in OPTIONAL)
     large = an.one_pair(large) if large is not None else None
@@ -217,8 +224,11 @@ def publish(results: Path, cells: Path, alpha: Path, out: Path) -> None:
     (``results/representative-2L``), ``alpha`` the kappa-alpha one (``results/kappa-alpha``).
     """
     data = out / "data"
-    data.mkdir(parents=True, exist_ok=True)
     runs = {"representative-2L.nc": cells, "kappa-alpha.nc": alpha}
+    for name, source in DATA_FILES.items():
+        if name not in OPTIONAL:
+            require_files(runs.get(name, results), [source], "give the finished full-contact run's results folder")
+    data.mkdir(parents=True, exist_ok=True)
     for name, source in DATA_FILES.items():
         origin = runs.get(name, results) / source
         if origin.exists() or name not in OPTIONAL:  # a run still going: its rows read "pending"
@@ -238,7 +248,8 @@ def main(argv=None) -> None:
     pub.add_argument("alpha", type=Path, help="results/kappa-alpha")
     pub.add_argument("out", type=Path)
     args = ap.parse_args(argv)
-    if args.command == "publish":
-        publish(args.results, args.cells, args.alpha, args.out)
-    else:
-        regenerate(args.out, args.docs)
+    with input_errors(ap):
+        if args.command == "publish":
+            publish(args.results, args.cells, args.alpha, args.out)
+        else:
+            regenerate(args.out, args.docs)
