@@ -291,3 +291,17 @@ def test_the_config_check_names_an_invalid_other_scene_and_plans_the_run(tmp_pat
     with pytest.raises(SystemExit) as stop:
         main([str(extra), "--scene", "broken"])
     assert stop.value.code == 2 and "error: scene 'broken', field 'contact.seeds'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("source, block, words", [("array", ARRAY, "array file 'a': the adhesive process zone"),
+                                                   ("topography", MEASURED, "topography file 'ground-a': the adhesive")])
+def test_an_adhesive_zone_a_files_grid_cannot_resolve_is_refused_before_any_job(shipped_config, source, block, words):
+    # work 1e-3 um (w / E*), range 1e-3 um: the zone range^2 / work = 1e-3 um spans 0.002 pixels of 0.5 um
+    # (the array files) or 0.0013 of 0.78 um (the measured ones)
+    contact = {"solver": {"boundary": "periodic"},
+               "effects": {"adhesion": {"law": "exponential", "work": 1e-3, "range": 1e-3}}}
+    refused(shipped_config, {source: block, "contact": contact}, "contact.effects.adhesion", words,
+            "fewer than 1.5", "refine the grid")
+    # a range of 0.1 um: the zone is 10 um, 12.8 pixels of 0.78 um, 16.7 of the array's 0.6 um
+    contact["effects"]["adhesion"]["range"] = 0.1
+    plan(shipped_config, {source: block, "contact": contact})

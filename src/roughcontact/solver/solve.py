@@ -139,7 +139,7 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
     ValueError
         For invalid input, naming the argument and its allowed range.
     """
-    if np.ndim(heights) == 3:  # B surfaces of one grid
+    if _is_batch(heights):  # B surfaces of one grid
         return _batch(heights, pressures, settings, store_fields, clusters, progress, observers, options)
     p = validate_pressures(pressures)
     store = validate_store(store_fields, p.size)
@@ -154,6 +154,14 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
 def _check_progress(progress) -> None:
     if progress is not None and not callable(progress):
         raise ValueError(f"progress must be a callable or None, got {type(progress).__name__} {progress!r}")
+
+
+def _is_batch(heights) -> bool:
+    """Whether ``heights`` is a ``(B, nx, ny)`` batch; ragged input is not (its validation names it)."""
+    try:
+        return np.ndim(heights) == 3
+    except ValueError:  # numpy refuses to size a ragged nested sequence
+        return False
 
 
 def _batch(heights, pressures, settings, store_fields, clusters, progress, observers, options) -> xr.Dataset:

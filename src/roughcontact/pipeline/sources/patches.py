@@ -25,6 +25,7 @@ import numpy as np
 from ...analysis.aggregate import TOPOGRAPHY_DIM, add_derived, combine_topographies
 from ...analysis.aggregate.combine import GRID_RTOL
 from ...surfaces.synthetic import nonperiodic_moments
+from ...solver.adhesion import MIN_ZONE_CELLS, Exponential, unresolved_zone_message, zone_cells
 from ..config.checks import check_target_nodes
 from ..config.files import ConfigError
 from ..measured import MeasuredConfigError, drop_generator_keys
@@ -61,9 +62,24 @@ class PatchSource(Source):
     @classmethod
     def check_contact_files(cls, name: str, scene: Mapping) -> None:
         """What the files allow the validated contact block, before any job (the scene that runs): see
-        :meth:`_check_shapes` and :meth:`_check_hardness`."""
+        :meth:`_check_shapes`, :meth:`_check_hardness` and :meth:`_check_adhesive_zone`."""
         cls._check_shapes(name, scene)
         cls._check_hardness(name, scene)
+        cls._check_adhesive_zone(name, scene)
+
+    @classmethod
+    def _check_adhesive_zone(cls, name: str, scene: Mapping) -> None:
+        """With adhesion, each map's grid resolves the process zone ``E* rho^2 / w`` = ``range^2 / work`` (lengths
+        in the scene's unit; :func:`roughcontact.solver.adhesion.zone_cells`), from the files' headers."""
+        block = scene["contact"]["effects"].get("adhesion")
+        if block is None:
+            return
+        law = Exponential(block["work"], block["range"])  # w / E* and rho in the scene's unit: E* = 1
+        for case, ((nx, ny), (dx, dy)) in cls.grids(name, scene).items():
+            cells = zone_cells(law, 1.0, (nx * dx, ny * dy), (nx, ny))
+            if cells < MIN_ZONE_CELLS:
+                raise ConfigError(f"scene {name!r}, field 'contact.effects.adhesion': {cls.what} {case!r}: "
+                                  + unresolved_zone_message(cells, law, 1.0, f"{dx:.4g} x {dy:.4g} {scene[cls.key]['unit']}"))
 
     @classmethod
     def _check_shapes(cls, name: str, scene: Mapping) -> None:
