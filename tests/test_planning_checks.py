@@ -293,8 +293,9 @@ def test_the_config_check_names_an_invalid_other_scene_and_plans_the_run(tmp_pat
     assert stop.value.code == 2 and "error: scene 'broken', field 'contact.seeds'" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("source, block, words", [("array", ARRAY, "array file 'a': the adhesive process zone"),
-                                                   ("topography", MEASURED, "topography file 'ground-a': the adhesive")])
+@pytest.mark.parametrize("source, block, words", [
+    ("array", ARRAY, "array file 'a': the adhesive process zone"),
+    ("topography", MEASURED, "topography file 'ground-a': the adhesive")])
 def test_an_adhesive_zone_a_files_grid_cannot_resolve_is_refused_before_any_job(shipped_config, source, block, words):
     # work 1e-3 um (w / E*), range 1e-3 um: the zone range^2 / work = 1e-3 um spans 0.002 pixels of 0.5 um
     # (the array files) or 0.0013 of 0.78 um (the measured ones)

@@ -24,8 +24,8 @@ import numpy as np
 
 from ...analysis.aggregate import TOPOGRAPHY_DIM, add_derived, combine_topographies
 from ...analysis.aggregate.combine import GRID_RTOL
-from ...surfaces.synthetic import nonperiodic_moments
 from ...solver.adhesion import MIN_ZONE_CELLS, Exponential, unresolved_zone_message, zone_cells
+from ...surfaces.synthetic import nonperiodic_moments
 from ..config.checks import check_target_nodes
 from ..config.files import ConfigError
 from ..measured import MeasuredConfigError, drop_generator_keys
@@ -78,8 +78,9 @@ class PatchSource(Source):
         for case, ((nx, ny), (dx, dy)) in cls.grids(name, scene).items():
             cells = zone_cells(law, 1.0, (nx * dx, ny * dy), (nx, ny))
             if cells < MIN_ZONE_CELLS:
+                pixel = f"{dx:.4g} x {dy:.4g} {scene[cls.key]['unit']}"
                 raise ConfigError(f"scene {name!r}, field 'contact.effects.adhesion': {cls.what} {case!r}: "
-                                  + unresolved_zone_message(cells, law, 1.0, f"{dx:.4g} x {dy:.4g} {scene[cls.key]['unit']}"))
+                                  + unresolved_zone_message(cells, law, 1.0, pixel))
 
     @classmethod
     def _check_shapes(cls, name: str, scene: Mapping) -> None:
