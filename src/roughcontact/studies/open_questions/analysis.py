@@ -112,7 +112,8 @@ def cel_validity(curve: dict, constants: dict, rtol: float = 0.05, sensitivity: 
     """Where the CEL holds: ``A_CEL / A - 1`` per step, the largest ``A/A0`` up to which it stays within ``rtol``.
 
     Returns ``deviation`` (per step), ``holds_up_to`` (the measured A/A0 of the last step of the
-    run of steps from the first one within ``rtol``; 0 if the first is not), ``fails_at`` (the next step's A/A0, or NaN),
+    run of steps from the first one within ``rtol``; 0 if the first is not), ``fails_at`` (the next
+    step's A/A0, or NaN),
     ``crossing`` and ``crossing_sensitivity`` (:func:`tolerance_crossing` at ``rtol`` and at
     ``sensitivity``) and ``cel_full`` (the law's own ``pbar`` at A/A0 = 1, :func:`cel_full_load`).
     """

@@ -102,6 +102,14 @@ _SLOPE_RULE = ("weighted least-squares slope of the seed-mean κ(0.05)/√2π ag
                "at k_s = 32, N = 1024 (λ_s = 32 Δx), its standard error scaled by the root of the reduced χ² when "
                "that exceeds 1; yes when abs(slope) > 3 standard errors, no otherwise")
 
+_PERSSON_BANDS = (
+    "at A/A0 = 0.01 and 0.1 per H, as a [low, high] band over Persson's γ = 0.4, 0.45, 0.5 beside the γ = 0.45 "
+    "value, with the generator's expected spectrum and with each surface's own (measured) one; the mode-count "
+    "cells k_l = 4 and 8 (k_s = 2 k_l, 32 px per λ_s: scenes persson-modes-256 and -512) at A/A0 = 0.01, "
+    "expected spectrum; yes when every band printed lies within [0.9, 1.1] and no mode-count cell is pending, "
+    "partly when at least half of the γ = 0.45 values are within (the γ band, the spectrum or the mode count "
+    "flips the verdict), no otherwise")
+
 RULES: dict[str, Rule] = {
     "Q1a: the CEL holds toward full contact": Rule(
         "pooled mean A/A0 over all surfaces against the CEL with the scene's own pooled-H fit; the A/A0 where "
@@ -121,18 +129,9 @@ RULES: dict[str, Rule] = {
     "Q1e: Persson's erfc(√2 p̄) gives 1 − A/A0 near full contact": Rule(
         "(1 − A/A0) / erfc(√2 p̄) of the pooled mean at the steps with A/A0 in [0.9, 1); yes when it stays "
         "within [0.5, 2] at every such step, no otherwise", _tail),
-    "Q4a: Persson's mean gap": Rule(
-        "seed-mean gap / Persson's at A/A0 = 0.01 and 0.1 per H, as a [low, high] band over Persson's γ = 0.4, 0.45, 0.5 beside the γ = 0.45 "
-        "value, with the generator's expected spectrum and with each surface's own (measured) one; yes when every "
-        "band of both spectra lies within [0.9, 1.1] and the mode-count cells (k_l = 4, 8 at 32 px per λ_s, scene "
-        "persson-modes) are published, partly when at least half of the γ = 0.45 values are within (the γ band, "
-        "the spectrum or the untested mode count can flip the verdict), no otherwise", _ratio_bands),
+    "Q4a: Persson's mean gap": Rule("seed-mean gap / Persson's " + _PERSSON_BANDS, _ratio_bands),
     "Q4b: Persson's contact stiffness": Rule(
-        "seed-mean K = −dp0/dū over Persson's −dp0/dū at A/A0 = 0.01 and 0.1 per H, as a [low, high] band over Persson's γ = 0.4, 0.45, 0.5 beside the γ = 0.45 "
-        "value, with the generator's expected spectrum and with each surface's own (measured) one; yes when every "
-        "band of both spectra lies within [0.9, 1.1] and the mode-count cells (k_l = 4, 8 at 32 px per λ_s, scene "
-        "persson-modes) are published, partly when at least half of the γ = 0.45 values are within (the γ band, "
-        "the spectrum or the untested mode count can flip the verdict), no otherwise", _ratio_bands),
+        "seed-mean K = −dp0/dū over Persson's −dp0/dū " + _PERSSON_BANDS, _ratio_bands),
     "Q4c: Persson's P(p)": Rule(
         "L1 distance Σ abs(P − P_Persson) Δp / Σ P Δp of the pooled distribution at the steps nearest A/A0 = 0.01, "
         "0.1, 0.5, 0.9; yes when ≤ 0.1 at every load, partly at at least half, no otherwise", _distance),
