@@ -209,3 +209,13 @@ def test_the_published_page_follows_from_the_published_data(tmp_path):
     assert {p.name for p in (out / "figures").glob("*.png")} == {p.name for p in pngs}
     for png in pngs:
         assert_images_close(out / "figures" / png.name, png)
+
+
+@pytest.mark.skipif(not (DOCS / page.REPRODUCTION["grid"]).is_file(), reason="the paper grid is not published")
+def test_the_whole_range_row_fits_every_point_and_reads_pending_without_its_run():
+    grid = page._reproduction(DOCS)["grid"]
+    question = "Q2e: κ(α) over the whole range, N = 1024 to 4096 at 32 px per λ_s"
+    assert page.range_row(grid, None, None)["verdict"] == "pending"
+    r = page.range_row(grid, None, grid)  # the paper grid's k_s = 128 column stands in for the N = 4096 cells
+    assert r["claim"] == question and r["verdict"] == judge(question, r["paper"], r["ours"], RULES)
+    assert "over 40 points" in r["ours"]
