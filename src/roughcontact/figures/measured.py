@@ -217,7 +217,7 @@ def fig_topographies(surfaces: Sequence[xr.Dataset]) -> Figure:
         ``(nx, ny)`` [unit]; ``rms_height``, ``rms_slope`` [1] and ``alpha`` [1] (Nayak
         bandwidth), each scalar or along a length-1 ``topography`` dim whose label is the
         name; global attrs ``length`` (side ``L``) [unit] and ``n`` for a square cell, or
-        ``length_x``, ``length_y``, ``nx``, ``ny`` (:func:`roughcontact.pipeline.datasets.cell_attrs`),
+        ``length_x``, ``length_y``, ``nx``, ``ny`` (:meth:`roughcontact.core.cell.Cell.surface_attrs`),
         and ``length_units``. Each map is drawn to scale.
 
     Returns

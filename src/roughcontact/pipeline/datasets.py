@@ -16,8 +16,8 @@ import numpy as np
 import xarray as xr
 
 from ..analysis.aggregate.combine import CASE_DIMS, TOPOGRAPHY_DIM
+from ..core.cell import Cell
 from ..core.quantities import cf_unit
-from ..solver.results import cell_attrs as solver_cell_attrs
 from ..statistics.pressure import PressureDistribution, pressure_bins
 from ..statistics.representativity import epsilon_attrs
 from ..surfaces.synthetic import finite_difference_rms_slope, nonperiodic_moments, spectral_moments
@@ -141,7 +141,7 @@ def contact_dataset(result: xr.Dataset, *, rms_slope: float, alpha: float, e_sta
     ``e_star`` in its ``pressure_units``); what this adds is dimensionless.
     """
     ds = result.drop_vars("wall_time", errors="ignore")
-    dx = pixel_scale(result.attrs)
+    dx = Cell.from_attrs(result.attrs, (int(result.attrs["nx"]), int(result.attrs["ny"]))).pixel_scale
     ds["area_fraction_corrected"] = xr.DataArray(
         perimeter_corrected_area(ds["area_fraction"].values, ds["contact_perimeter"].values, dx),
         dims=("step",),
@@ -182,7 +182,7 @@ def measured_surface_dataset(measured, *, name: str) -> xr.Dataset:
     ``heights`` (nx, ny) and ``x``, ``y`` in the study's length unit ``measured.unit``; the
     statistics come from differences inside the patch (:func:`roughcontact.surfaces.synthetic.nonperiodic_moments`:
     a measured patch is not periodic, and its spectrum would count the jump between opposite
-    edges as roughness). Global attributes (:func:`cell_attrs`): ``length`` and ``n`` for a square
+    edges as roughness). Global attributes (:meth:`~.core.cell.Cell.surface_attrs`): ``length`` and ``n`` for a square
     cell with square pixels, else ``length_x``, ``length_y``, ``nx`` and ``ny``; ``length_units``
     and ``source`` (the reader's provenance as JSON: file, sha256, reader, units and sizes before
     conversion, undefined points, detrending, cropping).
@@ -209,59 +209,10 @@ def measured_surface_dataset(measured, *, name: str) -> xr.Dataset:
             "x": ("x", np.arange(nx) * (lx / nx), {"units": u_len, "long_name": "position along x"}),
             "y": ("y", np.arange(ny) * (ly / ny), {"units": u_len, "long_name": "position along y"}),
         },
-        attrs={**cell_attrs(h.shape, measured.length), "length_units": u_len,
+        attrs={**Cell.of(h.shape, measured.length).surface_attrs(), "length_units": u_len,
                "source": json.dumps(measured.info, sort_keys=True)},
     )
     return expand_case(ds, topography=name)
-
-
-def cell_attrs(shape: tuple[int, int], length) -> dict:
-    """Global attributes of a surface file's cell: ``length`` (L) and ``n`` when square, else its sides and counts.
-
-    ``length`` is the solver's argument: a float for a square cell, the pair (Lx, Ly) otherwise.
-    As the solver's (:func:`roughcontact.solver.results.cell_attrs`): a square cell keeps the
-    attributes of a generated surface; a rectangular one (nx != ny or dx != dy) gets ``length_x``,
-    ``length_y``, ``nx`` and ``ny`` instead, so that no reader can take one side for both.
-    """
-    sides, grid = solver_cell_attrs(shape, length)
-    return {**sides, "n": grid["n"]} if "n" in grid else {**sides, **grid}
-
-
-def pixel_scale(attrs) -> float:
-    """The pixel size of a cell from its attributes (:func:`cell_attrs`).
-
-    ``dx = L / n`` for a square cell; for a rectangular one the geometric mean ``sqrt(dx dy)`` of
-    ``dx = Lx / nx`` and ``dy = Ly / ny`` (the perimeter correction's length scale, exact for
-    square pixels and a first-order estimate otherwise).
-    """
-    if "length_x" not in attrs:
-        return float(attrs["length"]) / int(attrs["n"])
-    dx, dy = float(attrs["length_x"]) / int(attrs["nx"]), float(attrs["length_y"]) / int(attrs["ny"])
-    return dx if dx == dy else float(np.sqrt(dx * dy))
-
-
-def cell_length(attrs, shape: tuple[int, int], source):
-    """The solver's ``length`` from :func:`cell_attrs`' attributes: L, or (Lx, Ly); checked.
-
-    ``source`` names the file in messages. Raises ``ValueError`` when the attributes are missing or
-    not finite numbers > 0.
-    """
-    keys = ("length_x", "length_y") if "length_x" in attrs else ("length",)
-    values = []
-    for key in keys:
-        value = attrs.get(key)
-        try:
-            value = float(value)
-        except (TypeError, ValueError):
-            raise ValueError(f"{source}: the global attribute {key!r} (side of the cell) is missing or not a "
-                             f"number: {value!r}") from None
-        if not (np.isfinite(value) and value > 0):
-            raise ValueError(f"{source}: the global attribute {key!r} must be a finite number > 0, got {value!r}")
-        values.append(value)
-    if len(values) == 1 and shape[0] != shape[1]:
-        raise ValueError(f"{source}: 'heights' is {shape[0]} x {shape[1]} but the file gives one side 'length'; a "
-                         "rectangular cell needs the attributes 'length_x' and 'length_y'")
-    return values[0] if len(values) == 1 else tuple(values)
 
 
 def surface_heights(ds: xr.Dataset, source):
@@ -269,7 +220,7 @@ def surface_heights(ds: xr.Dataset, source):
 
     ``source`` names the file in messages. Raises ``ValueError`` when the heights are
     missing, not a 2-D field of at least 4 x 4 points over ``x, y``, or not all
-    finite, or when the cell's sides (:func:`cell_attrs`) are missing or not positive numbers.
+    finite, or when the cell's sides (:meth:`~.core.cell.Cell.from_attrs`) are missing or not positive numbers.
     """
     if "heights" not in ds:
         raise ValueError(f"{source}: lacks the variable 'heights'")
@@ -281,7 +232,7 @@ def surface_heights(ds: xr.Dataset, source):
     if not np.all(np.isfinite(heights)):
         raise ValueError(f"{source}: 'heights' holds {int(np.sum(~np.isfinite(heights)))} NaN or infinite "
                          "value(s); every height must be finite")
-    return heights, cell_length(ds.attrs, heights.shape, source)
+    return heights, Cell.from_attrs(ds.attrs, heights.shape, source).length
 
 
 def representativity_batch(surface: dict, *, k_l: str, k_s: Sequence[str], hurst: str, seeds: int,

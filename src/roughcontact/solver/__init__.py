@@ -54,7 +54,7 @@ output are otherwise the same. The contact perimeter and cluster labelling do
 not wrap around. On a rectangle the contact perimeter counts an edge between
 neighbours along x as ``dy`` long and one between neighbours along y as ``dx``
 long (:func:`contact_perimeter`), and a node's area is ``dx dy`` (cluster areas);
-the output's attributes name the cell as :func:`~.results.cell_attrs` says.
+the output's attributes name the cell as :meth:`roughcontact.core.cell.Cell.solver_attrs` says.
 
 Units
 -----

@@ -47,8 +47,9 @@ import time
 import numpy as np
 import xarray as xr
 
+from ..core.cell import Cell
 from .batch_solver import BATCH_METHOD, CHECK_EVERY, BatchSolver, per_case
-from .results import SOLVER_NAME, cell_attrs, solver_description, to_dataset
+from .results import SOLVER_NAME, solver_description, to_dataset
 from .settings import SolverSettings
 from .validation import validate_heights, validate_pressures
 
@@ -154,7 +155,7 @@ def _run_steps(solver: BatchSolver, p: np.ndarray, progress):
 def _batch_dataset(solver: BatchSolver, p, cols, iters, conv, paths, wall, rounds) -> xr.Dataset:
     """The batch's dataset: case 0's single-solve layout, the per-case variables stacked over ``case``."""
     s = solver.settings
-    sides, grid = cell_attrs(solver.shape, s.length)
+    sides, grid = Cell.of(solver.shape, s.length).solver_attrs()
     attrs = {"e_star": s.e_star, **sides, "tol": s.tol, "max_iter": s.max_iter, "threads": s.threads,
              "fft_backend": solver.backend, **grid, "solver": SOLVER_NAME,
              "solver_description": solver_description(True, np.ndim(s.length) == 0),

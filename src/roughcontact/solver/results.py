@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from ..core.cell import sides_of
 from ..core.quantities import cf_unit
 from .workspace import SOLVER_PATHS
 
@@ -152,30 +153,6 @@ def _boundary_edges(m: np.ndarray, periodic: bool) -> tuple[int, int]:
     return (np.count_nonzero(padded[1:, :] != padded[:-1, :]), np.count_nonzero(padded[:, 1:] != padded[:, :-1]))
 
 
-def cell_attrs(shape: tuple[int, int], length) -> tuple[dict, dict]:
-    """The global attributes of the solver's cell: ``(sides, grid)``.
-
-    A square cell (a float ``length``, ``nx == ny``) has ``length`` (L) and ``n``, as always;
-    a rectangular one (``length = (Lx, Ly)``: ``nx != ny`` or ``Lx != Ly``) has ``length_x``
-    and ``length_y`` instead (no ``length``, no ``n``: no reader can take one side or count for
-    both, as in :func:`roughcontact.datasets.cell_attrs`). ``nx`` and ``ny``, the node counts
-    along x (axis 0) and y (axis 1), are always in ``grid``. Every value is a number (netCDF
-    attributes); the two dicts go in their places among the solver's attributes.
-    """
-    nx, ny = (int(v) for v in shape)
-    if np.ndim(length) == 0:
-        return {"length": float(length)}, {"n": nx, "nx": nx, "ny": ny}
-    lx, ly = (float(v) for v in length)
-    return {"length_x": lx, "length_y": ly}, {"nx": nx, "ny": ny}
-
-
-def cell_sides(attrs: dict) -> tuple[float, float]:
-    """``(Lx, Ly)`` from :func:`cell_attrs`' attributes (``length`` for both sides of a square cell)."""
-    if "length_x" in attrs:
-        return float(attrs["length_x"]), float(attrs["length_y"])
-    return attrs["length"], attrs["length"]
-
-
 def solver_path_variable(codes, names=SOLVER_PATHS) -> xr.Variable:
     """The per-step ``solver_path`` variable: a CF flag (``flag_values``, ``flag_meanings``) over ``step``.
 
@@ -201,7 +178,7 @@ def to_dataset(p, cols, iters, conv, fields, store_fields, shape, attrs: dict, e
     """The solver's output dataset (see :func:`roughcontact.solver.solve_contact`).
 
     ``shape`` the grid ``(nx, ny)`` (an int ``n``: ``(n, n)``), the cell's sides being in
-    ``attrs`` (:func:`cell_attrs`): the stored fields' ``x`` and ``y`` coordinates step by
+    ``attrs`` (:meth:`roughcontact.core.cell.Cell.solver_attrs`): the stored fields' ``x`` and ``y`` coordinates step by
     ``dx = Lx / nx`` and ``dy = Ly / ny``. ``p`` the loads, shape (n_steps,); ``cols``
     per-step float columns by name (including each effect's); ``iters``, ``conv`` per-step iterations and
     flags; ``fields`` a ``(pressures, gaps, step numbers)`` triple of the
@@ -286,7 +263,7 @@ def _add_fields(data_vars: dict, coords: dict, fields, store_fields, shape, attr
 def _node_positions(shape, attrs: dict) -> tuple[np.ndarray, np.ndarray]:
     """Node positions ``i dx`` along x and ``j dy`` along y [length], shapes (nx,) and (ny,)."""
     nx, ny = (shape, shape) if np.ndim(shape) == 0 else shape
-    lx, ly = cell_sides(attrs)
+    lx, ly = sides_of(attrs)
     xs = np.arange(nx) * (lx / nx)
     if "length_x" not in attrs:  # square cell: the same positions along y
         return xs, xs.copy()

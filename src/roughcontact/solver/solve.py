@@ -15,9 +15,10 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from ..core.cell import Cell
 from .adhesive import ADHESIVE_SOLVER_DESCRIPTION, ADHESIVE_SOLVER_NAME, AdhesiveSolver
 from .contact import ContactSolver
-from .results import SOLVER_NAME, StepResult, cell_attrs, solver_description, to_dataset
+from .results import SOLVER_NAME, StepResult, solver_description, to_dataset
 from .settings import SolverSettings
 from .validation import real_scalar, validate_flag, validate_heights, validate_pressures, validate_store
 
@@ -166,7 +167,7 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
         ``contact_perimeter``, ``iterations``, ``residual``, ``converged``, ``wall_time``, ``solver_path`` (a CF
         flag: the iteration that ended the step), each effect's variables; fields and ``x``/``y`` when stored.
         CF ``units`` and ``long_name`` on each; global attributes: the settings, the cell
-        (:func:`~.results.cell_attrs`), ``boundary``, ``elastic_method``. ``converged``: the final check
+        (:meth:`~.core.cell.Cell.solver_attrs`), ``boundary``, ``elastic_method``. ``converged``: the final check
         of the package docstring passed on a freshly recomputed displacement.
 
     Raises
@@ -237,7 +238,7 @@ def _dataset(solver: ContactSolver | AdhesiveSolver, p, cols, iters, conv, paths
              store_fields) -> xr.Dataset:
     """The solve's output dataset (:func:`solve_contact`'s Returns)."""
     s = solver.settings
-    sides, grid = cell_attrs(solver.shape, s.length)
+    sides, grid = Cell.of(solver.shape, s.length).solver_attrs()
     if isinstance(solver, AdhesiveSolver):
         name, description = ADHESIVE_SOLVER_NAME, ADHESIVE_SOLVER_DESCRIPTION
     else:

@@ -25,8 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.cell import sides_of
 from ..pipeline.provenance import flatten
-from ..solver.results import cell_sides
 
 #: What the commit is called when the code is not a git checkout (or git is missing).
 UNKNOWN = "unknown"
@@ -226,7 +226,7 @@ def topography_row(name: str, surface, contact=None) -> list[str]:
     """
     source = json.loads(surface.attrs.get("source", "{}"))
     nx, ny = (int(surface.sizes[d]) for d in ("x", "y"))
-    lx, ly = cell_sides(surface.attrs)
+    lx, ly = sides_of(surface.attrs)
     unit = surface.attrs.get("length_units", "1")
     # a case's file holds its name as a length-1 dimension: its scalars have that one element
     slope = float(surface["rms_slope"].squeeze())
