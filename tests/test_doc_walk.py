@@ -22,8 +22,9 @@ import yaml
 from conftest import REPO, copy_workflow, run_snakemake
 from roughcontact.figures.registry import scene_figures
 from roughcontact.pipeline import params, progress
-from roughcontact.pipeline.config import ConfigError, plan_summary, validate_config
+from roughcontact.pipeline.config import ConfigError
 from roughcontact.pipeline.loading import load_steps
+from roughcontact.pipeline.scenes import plan_summary, validate_config
 from roughcontact.pipeline.sources import source_of
 from roughcontact.studies.accuracy import variants as accuracy_variants
 

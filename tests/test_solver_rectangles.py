@@ -40,7 +40,7 @@ from roughcontact.solver import (
     solve_contact,
     solve_step,
 )
-from roughcontact.solver.halfspace import _pixel_influence, _pixel_influence_rect
+from roughcontact.solver.halfspace import pixel_influence_rect, pixel_influence_square
 from roughcontact.statistics.clusters import cluster_dataset, cluster_statistics, label_clusters
 from roughcontact.surfaces.synthetic import generate_surface
 from solver_invariants import check_solution, direct_free_displacement, pixel_integral
@@ -215,9 +215,9 @@ def test_influence_matches_quadrature_near_and_far(rho):
 
 def test_square_pixels_reduce_to_the_square_influence():
     # The aspect-ratio formula with rho = 1 performs the square one's operations: bit for bit.
-    np.testing.assert_array_equal(_pixel_influence_rect(37, 37, 1.0), _pixel_influence(37))
+    np.testing.assert_array_equal(pixel_influence_rect(37, 37, 1.0), pixel_influence_square(37))
     # a rectangle of square pixels (nx != ny, dx == dy) samples the same function
-    np.testing.assert_array_equal(_pixel_influence_rect(20, 33, 1.0), _pixel_influence(33)[:21, :34])
+    np.testing.assert_array_equal(pixel_influence_rect(20, 33, 1.0), pixel_influence_square(33)[:21, :34])
 
 
 def _love(x, y, a, b):

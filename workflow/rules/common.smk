@@ -8,7 +8,7 @@ from roughcontact.core.cli import one_line
 from roughcontact.figures.registry import FIGURES
 from roughcontact.pipeline import params
 from roughcontact.pipeline.cases import is_adhesive
-from roughcontact.pipeline.config import plan_summary
+from roughcontact.pipeline.scenes import plan_summary
 from roughcontact.pipeline.progress import write_plan
 from roughcontact.pipeline.targets import (
     WILDCARD_CONSTRAINTS,

@@ -27,8 +27,9 @@ from pathlib import Path
 from snakemake.exceptions import WorkflowError
 
 from ..figures.registry import FIGURES, scene_figures
-from .cases import is_adhesive
-from .config import BATCH_STEM, CASE_STEM, ConfigError, load_schema, validate_config
+from .cases import BATCH_STEM, CASE_STEM, is_adhesive
+from .config import ConfigError, load_schema
+from .scenes import validate_config
 from .sources import SOURCES, PatchSource, source_of
 
 #: A grid value (k_l, k_s, H) in a file name: the config's own text, holding no ``_`` or ``/``.
@@ -147,7 +148,7 @@ class Targets:
     Parameters
     ----------
     valid : Mapping
-        :func:`~roughcontact.pipeline.config.validate_config`'s result: ``scenes`` (each validated),
+        :func:`~roughcontact.pipeline.scenes.validate_config`'s result: ``scenes`` (each validated),
         ``scene`` (the one that runs) and ``invalid`` (each invalid scene's message).
     accuracy_variants : callable
         The accuracy study's settings of a block (:func:`roughcontact.studies.accuracy.variants`), given

@@ -111,7 +111,7 @@ class Source:
 
     @classmethod
     def plan(cls, scene: Mapping) -> list[str]:
-        """What the scene's studies compute, in words (parts of :func:`..config.plan_summary`)."""
+        """What the scene's studies compute, in words (parts of :func:`roughcontact.pipeline.scenes.plan_summary`)."""
         return []
 
 
