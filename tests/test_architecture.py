@@ -42,6 +42,9 @@ MAX_FUNCTION_LINES = 60
 LONG_MODULES: dict[str, str] = {
     "roughcontact.statistics.clusters": "one concept, the contact clusters of a cell: periodic labelling, each "
                                         "cluster's statistics and their per-step dataset (wrapping's bits included)",
+    "roughcontact.surfaces.topography": "one concept, an instrument's file read into a height map (format, channel, "
+                                        "units, undefined points, each failure's message), SurfaceTopography "
+                                        "imported on first use (it imports matplotlib)",
 }
 
 

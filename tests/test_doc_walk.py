@@ -419,9 +419,10 @@ def test_every_documented_module_is_walked():
 
 def _main(module):
     """The ``main`` that ``python -m module`` runs (a package's from its __main__'s import)."""
-    where = {"roughcontact.pipeline.config": ".scenes", "roughcontact.studies.kappa_gap": ".page",
-             "roughcontact.studies.open_questions": ".page"}.get(module, "")
-    return __import__(module + where, fromlist=["main"]).main
+    where = {"roughcontact.pipeline.config": "roughcontact.pipeline.scenes",
+             "roughcontact.studies.kappa_gap": "roughcontact.studies.kappa_gap.page",
+             "roughcontact.studies.open_questions": "roughcontact.studies.open_questions.page"}.get(module, module)
+    return __import__(where, fromlist=["main"]).main
 
 
 CLI_CASES = [(m, i) for m, builders in COMMANDS.items() for i, b in enumerate(builders) if b is not None]
