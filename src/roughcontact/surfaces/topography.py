@@ -72,10 +72,14 @@ def surface_topography() -> SimpleNamespace:
     layers import without matplotlib and snakemake (``tests/test_library_alone.py``), and only a
     measured scene reads files.
     """
-    from SurfaceTopography import Topography
-    from SurfaceTopography.Exceptions import CannotDetectFileFormat, CorruptFile
-    from SurfaceTopography.IO import open_topography, readers
-    from SurfaceTopography.Support.UnitConversion import get_unit_conversion_factor, mangle_length_unit_ascii
+    try:
+        from SurfaceTopography import Topography
+        from SurfaceTopography.Exceptions import CannotDetectFileFormat, CorruptFile
+        from SurfaceTopography.IO import open_topography, readers
+        from SurfaceTopography.Support.UnitConversion import get_unit_conversion_factor, mangle_length_unit_ascii
+    except ImportError as err:  # the library installed without its `topography` extra
+        raise ImportError(f"reading topography files needs SurfaceTopography ({err}): install it with "
+                          "`pip install 'roughcontact[topography]'`") from err
 
     return SimpleNamespace(Topography=Topography, CannotDetectFileFormat=CannotDetectFileFormat,
                            CorruptFile=CorruptFile, open_topography=open_topography, readers=readers,
