@@ -23,7 +23,7 @@ from conftest import REPO, copy_workflow, run_snakemake
 from roughcontact.figures.registry import scene_figures
 from roughcontact.pipeline import params, progress
 from roughcontact.pipeline.config import ConfigError
-from roughcontact.pipeline.loading import load_steps
+from roughcontact.pipeline.loading import LoadSchedule
 from roughcontact.pipeline.scenes import plan_summary, validate_config
 from roughcontact.pipeline.sources import source_of
 from roughcontact.studies.accuracy import variants as accuracy_variants
@@ -192,7 +192,7 @@ def _plans(name, scene):
         if "surface" in block:
             params.surface(block)
         if "target_area" not in block["load"]:
-            loads = load_steps(block, rms_slope=0.1)
+            loads = LoadSchedule.from_block(block).pressures(block["solver"]["e_star"], rms_slope=0.1)
             assert len(loads) == block["load"]["n_steps"] and loads[-1] > 0
         assert progress.planned_solves(scene) > 0
         params.fit(scene)

@@ -4,13 +4,23 @@ import math
 import numpy as np
 import pytest
 
-from roughcontact.pipeline.loading import AREA_RTOL, case_loads, load_steps, pressure_for_area, schedule
+from roughcontact.pipeline.loading import AREA_RTOL, LoadSchedule, pressure_for_area, schedule
 from roughcontact.solver import solve_contact
 from roughcontact.surfaces.synthetic import generate_surface
 
 
 def _block(**load):
     return {"load": {"n_steps": 10, "schedule": "uniform", **load}, "solver": {"e_star": 3.0}}
+
+
+def load_steps(block, rms_slope=None):
+    return LoadSchedule.from_block(block).pressures(block["solver"]["e_star"], rms_slope)
+
+
+def case_loads(block, rms_slope, n_nodes, solve, log=None, name=None):
+    """The case's loads as the case runner resolves them, ``solve(loads)`` the surface's solver."""
+    return LoadSchedule.from_block(block).resolve(block["solver"]["e_star"], rms_slope, n_nodes,
+                                                  lambda p: float(solve([p]).area_fraction[-1]), log, name)
 
 
 def test_relative_to_the_rms_slope_scales_each_case_by_its_own_slope():

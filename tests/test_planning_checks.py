@@ -18,7 +18,7 @@ from roughcontact.analysis.aggregate.derived import aggregate_contact
 from roughcontact.analysis.fit.grid import fit_cel
 from roughcontact.pipeline import adopt, progress, runcost
 from roughcontact.pipeline.config import ConfigError
-from roughcontact.pipeline.loading import case_loads, pressure_for_area
+from roughcontact.pipeline.loading import LoadSchedule, pressure_for_area
 from roughcontact.pipeline.scenes import validate_config
 from roughcontact.pipeline.sources import SOURCES
 
@@ -141,7 +141,7 @@ def test_hardness_below_a_cases_final_load_names_the_field_before_any_solve():
     block = {"load": {"relative_to": "rms_slope", "p_max": 0.05, "n_steps": 3},
              "solver": {"e_star": 1.0}, "effects": {"plasticity": {"hardness": 0.004}}}
     with pytest.raises(ValueError, match=r"contact.effects.plasticity.hardness: 0.004 must exceed this case's final"):
-        case_loads(block, rms_slope=0.1, n_nodes=1024, solve=None)
+        LoadSchedule.from_block(block).resolve(1.0, rms_slope=0.1, n_nodes=1024, area_at=None)
 
 
 def test_target_area_search_stays_below_the_hardness():

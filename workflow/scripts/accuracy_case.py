@@ -1,20 +1,22 @@
 """Accuracy study: generate one surface at the setting's N and solve it at its tol and steps."""
+from roughcontact.pipeline.case import ContactCase, run_case
 from roughcontact.pipeline.datasets import contact_dataset
 from roughcontact.pipeline.io import run_logged, write_dataset
-from roughcontact.solver import solve_contact
+from roughcontact.pipeline.loading import LoadSchedule
 from roughcontact.surfaces.synthetic import generate_surface, spectral_moments
 
 
 def main(log):
     w, block = snakemake.wildcards, snakemake.params.settings
     s = block["setting"]
-    n, n_steps = int(s["N"]), int(s["n_steps"])
-    length = block["surface"]["L"]
+    n, length = int(s["N"]), block["surface"]["L"]
     h = generate_surface(n, float(w.k_l), float(w.k_s), float(w.H), int(w.seed),
                          rms_slope=block["surface"]["rms_slope"], length=length)
     stats = spectral_moments(h, length)
-    pressures = [block["p_max"] * (i + 1) / n_steps for i in range(n_steps)]
-    result = solve_contact(h, pressures, length=length, tol=float(s["tol"]), threads=snakemake.threads)
+    # the paper's uniform steps to p_max E* (E* = 1)
+    case = ContactCase(LoadSchedule(int(s["n_steps"]), p_max=block["p_max"]), tol=float(s["tol"]),
+                       threads=snakemake.threads)
+    result = run_case(h, case, length=length, rms_slope=stats["rms_slope"])
     ds = contact_dataset(result, rms_slope=stats["rms_slope"], alpha=stats["alpha"], e_star=1.0,
                          k_l=w.k_l, k_s=w.k_s, hurst=w.H, seed=int(w.seed))
     ds.attrs.update(setting=w.variant, n=n, length=length)

@@ -12,13 +12,16 @@ A scene gives the final load in one of three ways (``config/README.md``, ``conta
   found on the case's own surface by :func:`pressure_for_area` before the load steps run.
 
 The load schedule (``uniform`` or ``geometric``) then runs from zero (or ``p_min``, on the same
-scale as ``p_max``) to that final load: :func:`schedule`.
+scale as ``p_max``) to that final load: :func:`schedule`. :class:`LoadSchedule` holds a case's
+schedule and resolves its pressures; it is the only schedule the package runs (the contact rule,
+the accuracy study and the κ-gap study alike).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 
 #: A/A0 ~ kappa p0 / (E* h') at small loads (kappa about 2 on the paper's surfaces): the first
 #: guess of :func:`pressure_for_area`, refined by the solver itself.
@@ -44,32 +47,122 @@ def schedule(p_max: float, n_steps: int, kind: str = "uniform", p_min: float | N
     return steps
 
 
-def pressure_scale(block: Mapping, rms_slope: float | None = None) -> float:
-    """What ``load.p_max`` and ``load.p_min`` are in units of [pressure]: ``E*`` or ``E* h'``.
+@dataclass(frozen=True)
+class LoadSchedule:
+    """The load steps of a contact case: the one implementation of every schedule the package runs.
 
-    ``rms_slope`` (h', the case's surface) is needed for ``relative_to: rms_slope``.
+    A scene's ``load`` block (:meth:`from_block`), the accuracy study's uniform steps and the κ-gap
+    study's geometric ones (:mod:`roughcontact.studies`) are all this. Pressures are resolved per
+    case, because ``relative_to: rms_slope`` scales with the case's own rms slope and
+    ``target_area`` searches the case's own surface (:meth:`resolve`).
+
+    Attributes
+    ----------
+    n_steps : int
+        Number of load steps, >= 1.
+    kind : {"uniform", "geometric"}
+        :func:`schedule`'s kind.
+    p_max, p_min : float or None
+        Final (and, geometric, first) load on the scale of ``relative_to`` [1]; ``p_max`` is None
+        with ``target_area``.
+    relative_to : {"e_star", "rms_slope"}
+        ``p0 = p_max E*`` or ``p0 = p_max E* h'`` (module docstring).
+    target_area : float or None
+        The final load is the one whose A/A0 is this (:func:`pressure_for_area`).
+    hardness : float or None
+        The plasticity effect's hardness over ``E*``: every load stays below it.
+
+    Examples
+    --------
+    >>> LoadSchedule(4, p_max=0.005).pressures(e_star=2.0)
+    [0.0025, 0.005, 0.0075, 0.01]
     """
-    e_star = block["solver"]["e_star"]
-    if block["load"].get("relative_to", "e_star") == "e_star":
-        return e_star
-    if rms_slope is None or not (math.isfinite(rms_slope) and rms_slope > 0):
-        raise ValueError(f"load.relative_to: rms_slope needs the surface's rms slope, a finite number > 0, "
-                         f"got {rms_slope!r}")
-    return e_star * rms_slope
 
+    n_steps: int
+    kind: str = "uniform"
+    p_max: float | None = None
+    p_min: float | None = None
+    relative_to: str = "e_star"
+    target_area: float | None = None
+    hardness: float | None = None
 
-def load_steps(block: Mapping, rms_slope: float | None = None, p_final: float | None = None) -> list[float]:
-    """Applied mean pressures p0 of a contact block [pressure, E*'s unit], increasing, n of them.
+    @classmethod
+    def from_block(cls, block: Mapping) -> LoadSchedule:
+        """The schedule of a validated contact block (its ``load`` and the plasticity hardness)."""
+        load = block["load"]
+        hardness = (block.get("effects") or {}).get("plasticity", {}).get("hardness")
+        return cls(int(load["n_steps"]), load.get("schedule", "uniform"),
+                   None if "target_area" in load else load["p_max"], load.get("p_min"),
+                   load.get("relative_to", "e_star"), load.get("target_area"), hardness)
 
-    ``p_final`` (from :func:`pressure_for_area`) replaces ``p_max`` for a ``target_area`` block;
-    ``rms_slope`` is the case's h' for ``relative_to: rms_slope``.
-    """
-    load = block["load"]
-    if "target_area" in load and p_final is None:
-        raise ValueError("load.target_area: find the final load first (pressure_for_area) and pass it as p_final")
-    p_max = p_final if p_final is not None else load["p_max"] * pressure_scale(block, rms_slope)
-    p_min = load["p_min"] * pressure_scale(block, rms_slope) if "p_min" in load else None
-    return schedule(p_max, load["n_steps"], load.get("schedule", "uniform"), p_min)
+    def scale(self, e_star: float, rms_slope: float | None = None) -> float:
+        """What ``p_max`` and ``p_min`` are in units of [pressure]: ``E*`` or ``E* h'``.
+
+        ``rms_slope`` (h', the case's surface) is needed for ``relative_to: rms_slope``.
+        """
+        if self.relative_to == "e_star":
+            return e_star
+        if rms_slope is None or not (math.isfinite(rms_slope) and rms_slope > 0):
+            raise ValueError(f"load.relative_to: rms_slope needs the surface's rms slope, a finite number > 0, "
+                             f"got {rms_slope!r}")
+        return e_star * rms_slope
+
+    def pressures(self, e_star: float, rms_slope: float | None = None, p_final: float | None = None) -> list[float]:
+        """Applied mean pressures p0 [pressure, E*'s unit], increasing, ``n_steps`` of them.
+
+        ``p_final`` (from :func:`pressure_for_area`) replaces ``p_max`` for a ``target_area`` schedule;
+        ``rms_slope`` is the case's h' for ``relative_to: rms_slope``.
+        """
+        if self.target_area is not None and p_final is None:
+            raise ValueError("load.target_area: find the final load first (pressure_for_area) and pass it as p_final")
+        p_max = p_final if p_final is not None else self.p_max * self.scale(e_star, rms_slope)
+        p_min = self.p_min * self.scale(e_star, rms_slope) if self.p_min is not None else None
+        return schedule(p_max, self.n_steps, self.kind, p_min)
+
+    def resolve(self, e_star: float, rms_slope: float, n_nodes: int, area_at: Callable[[float], float] | None,
+                log=None, name: str | None = None) -> tuple[list[float], dict]:
+        """The load steps of one case and what to record of them: ``(loads, attrs)``.
+
+        ``area_at(p0)`` solves the case's surface at one load and returns its A/A0, used only with
+        ``target_area`` (:func:`pressure_for_area`). ``name`` (the case's) starts the warning of a
+        target A/A0 that no probe met: jobs run side by side and their lines meet in one console.
+        ``attrs`` (netCDF global attributes): ``load_relative_to`` and ``load_p_max`` as the scene gave
+        them, or ``load_target_area``, ``load_target_area_reached`` (the probe's A/A0) and
+        ``load_probes``; always ``load_p0_max``, the final p0 [pressure], and ``load_pbar_max`` =
+        p0 / (E* h') of the last step.
+        """
+        if self.target_area is not None:
+            loads, attrs = self._target_loads(e_star, rms_slope, n_nodes, area_at, log, name)
+        else:
+            loads = self.pressures(e_star, rms_slope)
+            attrs = {"load_relative_to": self.relative_to, "load_p_max": float(self.p_max)}
+            self._check_hardness(loads[-1], e_star, rms_slope)
+        attrs.update(load_p0_max=float(loads[-1]), load_pbar_max=float(loads[-1] / (e_star * rms_slope)))
+        if log is not None:
+            log.info("loads: p0 from %.6g to %.6g (p0/E* up to %.4g, p0/(E* h') up to %.4g) in %d steps", loads[0],
+                     loads[-1], loads[-1] / e_star, attrs["load_pbar_max"], len(loads))
+        return loads, attrs
+
+    def _target_loads(self, e_star, rms_slope, n_nodes, area_at, log, name) -> tuple[list[float], dict]:
+        """The steps up to the load whose A/A0 is ``target_area``, found by probing the surface."""
+        found = pressure_for_area(area_at, self.target_area, e_star=e_star, rms_slope=rms_slope, n_nodes=n_nodes,
+                                  p_cap=None if self.hardness is None else self.hardness * e_star)
+        if log is not None:
+            log.log(20 if found["reached"] else 30, "%starget A/A0 = %g: p0 = %.6g gives A/A0 = %.6g after %d solves%s",
+                    f"{name}: " if name else "", self.target_area, found["pressure"], found["area"], found["probes"],
+                    "" if found["reached"] else " (not within tolerance: the closest is used)")
+        loads = self.pressures(e_star, rms_slope, p_final=found["pressure"])
+        return loads, {"load_target_area": float(self.target_area), "load_target_area_reached": found["area"],
+                       "load_probes": int(found["probes"])}
+
+    def _check_hardness(self, p_last: float, e_star: float, rms_slope: float) -> None:
+        """A final load the hardness cannot carry, refused naming the field (before any solve)."""
+        if self.hardness is not None and not p_last < self.hardness * e_star:
+            raise ValueError(
+                f"contact.effects.plasticity.hardness: {self.hardness:g} must exceed this case's final load p0/E* = "
+                f"{p_last / e_star:.6g} (load.p_max {self.p_max:g} relative to {self.relative_to}, "
+                f"rms slope {rms_slope:.6g}): a pressure capped at the hardness cannot carry a mean load p0 >= "
+                "hardness; raise the hardness or lower load.p_max")
 
 
 def pressure_for_area(area_at: Callable[[float], float], target: float, *, e_star: float, rms_slope: float,
@@ -125,45 +218,3 @@ def _next_pressure(p: float, area: float, target: float, last: tuple[float, floa
     if area <= 0:
         return 10.0 * p
     return p * (target / area) ** (1.0 / slope)
-
-
-def case_loads(block: Mapping, rms_slope: float, n_nodes: int, solve: Callable, log=None,
-               name: str | None = None) -> tuple[list[float], dict]:
-    """The load steps of one case and what to record of them: ``(loads, attrs)``.
-
-    ``name`` (the case's) starts the warning of a target A/A0 that no probe met: jobs run side by
-    side and their lines meet in one console.
-
-    ``solve(loads)`` solves the case's surface (the solver's dataset), used only for a
-    ``target_area`` block (:func:`pressure_for_area`). ``attrs`` (netCDF global attributes):
-    ``load_relative_to`` and ``load_p_max`` as the scene gave them, or ``load_target_area``,
-    ``load_target_area_reached`` (the probe's A/A0) and ``load_probes``; always ``load_p0_max``,
-    the final p0 [pressure], and ``load_pbar_max`` = p0 / (E* h') of the last step.
-    """
-    load, e_star = block["load"], block["solver"]["e_star"]
-    hardness = (block.get("effects") or {}).get("plasticity", {}).get("hardness")
-    if "target_area" in load:
-        found = pressure_for_area(lambda p: float(solve([p]).area_fraction[-1]), load["target_area"],
-                                  e_star=e_star, rms_slope=rms_slope, n_nodes=n_nodes,
-                                  p_cap=None if hardness is None else hardness * e_star)
-        if log is not None:
-            log.log(20 if found["reached"] else 30, "%starget A/A0 = %g: p0 = %.6g gives A/A0 = %.6g after %d solves%s",
-                    f"{name}: " if name else "", load["target_area"], found["pressure"], found["area"], found["probes"],
-                    "" if found["reached"] else " (not within tolerance: the closest is used)")
-        loads = load_steps(block, rms_slope, p_final=found["pressure"])
-        attrs = {"load_target_area": float(load["target_area"]), "load_target_area_reached": found["area"],
-                 "load_probes": int(found["probes"])}
-    else:
-        loads = load_steps(block, rms_slope)
-        attrs = {"load_relative_to": load.get("relative_to", "e_star"), "load_p_max": float(load["p_max"])}
-        if hardness is not None and not loads[-1] < hardness * e_star:
-            raise ValueError(
-                f"contact.effects.plasticity.hardness: {hardness:g} must exceed this case's final load p0/E* = "
-                f"{loads[-1] / e_star:.6g} (load.p_max {load['p_max']:g} relative to {attrs['load_relative_to']}, "
-                f"rms slope {rms_slope:.6g}): a pressure capped at the hardness cannot carry a mean load p0 >= "
-                "hardness; raise the hardness or lower load.p_max")
-    attrs.update(load_p0_max=float(loads[-1]), load_pbar_max=float(loads[-1] / (e_star * rms_slope)))
-    if log is not None:
-        log.info("loads: p0 from %.6g to %.6g (p0/E* up to %.4g, p0/(E* h') up to %.4g) in %d steps", loads[0],
-                 loads[-1], loads[-1] / e_star, attrs["load_pbar_max"], len(loads))
-    return loads, attrs

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
@@ -89,8 +90,45 @@ def solve_step(heights, p0: float, settings: SolverSettings | None = None, *, in
                       st.effect_columns.get("plastic_load_fraction"))
 
 
+#: How each load step after the first starts (``warm_start`` of :func:`solve_contact`).
+WARM_STARTS = ("extrapolated", "scaled")
+
+
+@dataclass(frozen=True)
+class StepView:
+    """What an observer of a solve sees of one load step (fields are the solver's: copy to keep them).
+
+    Attributes
+    ----------
+    step : int
+        1-based load step.
+    p0 : float
+        Applied mean pressure [pressure].
+    pressure : numpy.ndarray, shape (nx, ny)
+        Contact pressure [pressure] (host array).
+    gap : numpy.ndarray or None, shape (nx, ny)
+        Gap [length] where an observer asked for it (``needs_gap = True``) or the step's fields are
+        stored; else None.
+    mask : numpy.ndarray of bool, shape (nx, ny)
+        The contact set.
+    iterations : int
+        Iterations of the step.
+    converged : bool
+        The step's final check passed.
+    """
+
+    step: int
+    p0: float
+    pressure: np.ndarray
+    gap: np.ndarray | None
+    mask: np.ndarray
+    iterations: int
+    converged: bool
+
+
 def solve_contact(heights, pressures, settings: SolverSettings | None = None, *, store_fields=False,
-                  clusters: bool = False, progress=None, observers=(), **options) -> xr.Dataset:
+                  clusters: bool = False, progress=None, observers=(), warm_start: str = "extrapolated",
+                  **options) -> xr.Dataset:
     """Solve the normal contact of a rigid rough surface on an elastic half-space.
 
     Parameters
@@ -100,21 +138,20 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
         ``boundary="free"``), axis 0 = x; the highest points touch first. Any ``nx, ny >= 4``;
         ``nx != ny`` needs ``length=(Lx, Ly)``.
     pressures : sequence of float, shape (n_steps,)
-        Applied mean pressures ``p0 > 0`` [pressure, the unit of ``e_star``], each with
-        ``p0 * L / (e_star * s)`` in :data:`LOAD_RANGE` (``s`` the rms height, ``L`` the
-        float ``length`` or ``Lx``) and below any pressure cap. Each step warm-starts from
-        the previous one (best for increasing loads).
+        Applied mean pressures ``p0 > 0`` [pressure, ``e_star``'s unit], ``p0 L / (e_star s)`` in
+        :data:`LOAD_RANGE` (``s`` the rms height, ``L`` or ``Lx``), below any cap; increasing is best.
     settings : SolverSettings, optional
         The half-space, the iteration, the effects and the unit labels; defaults when omitted.
     store_fields : bool or iterable of int
-        ``True`` stores ``contact_pressure`` and ``gap`` for every step (dims
-        ``step, x, y``); an iterable of 1-based step numbers stores only those
-        (dims ``field_step, x, y``, coordinate ``field_step`` = step numbers).
+        ``True`` stores ``contact_pressure`` and ``gap`` for every step (dims ``step, x, y``); 1-based
+        step numbers store only those (dims ``field_step, x, y``).
     clusters : bool
         Add the per-step ``cluster_*`` statistics (:mod:`roughcontact.statistics.clusters`); off: no labelling.
     observers : sequence
-        Each with ``observe(pressure)`` (after every step, host numpy) and ``dataset(steps)`` (merged
-        into the result), e.g. :class:`roughcontact.statistics.pressure.PressureDistribution`.
+        Each with ``observe(step)`` (a :class:`StepView` after every step; with the gap if the observer
+        has ``needs_gap = True``) and ``dataset(steps)`` (merged), e.g. ``PressureDistribution``.
+    warm_start : {"extrapolated", "scaled"}
+        A step starts from the last two solutions extrapolated in the load, or the last one scaled.
     progress : callable, optional
         Called after each load step as ``progress(step, p0, area_fraction, iterations, converged,
         seconds)`` (``step`` 1-based, ``seconds`` the step's wall time).
@@ -125,14 +162,12 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
     Returns
     -------
     xarray.Dataset
-        Dimension ``step`` (coordinate 1..n_steps) with ``pressure``, ``area_fraction``, ``mean_contact_pressure``,
-        ``mean_gap``, ``contact_perimeter``, ``iterations``, ``residual``, ``converged``, ``wall_time``,
-        ``solver_path`` (the iteration that ended the step, a CF flag) and each effect's variables (with a
-        hardness: ``plastic_area_fraction``, ``plastic_load_fraction``); fields and ``x``/``y`` coordinates only
-        when stored. Every variable carries CF ``units`` and ``long_name``; the global attributes record the
-        settings, the cell (:func:`~.results.cell_attrs`: ``length`` and ``n`` for a square cell, ``length_x``,
-        ``length_y`` otherwise, ``nx`` and ``ny`` always), ``boundary`` and ``elastic_method``. ``converged``
-        is True only when the final check of the package docstring passed on a freshly recomputed displacement.
+        Dimension ``step`` (1..n_steps): ``pressure``, ``area_fraction``, ``mean_contact_pressure``, ``mean_gap``,
+        ``contact_perimeter``, ``iterations``, ``residual``, ``converged``, ``wall_time``, ``solver_path`` (a CF
+        flag: the iteration that ended the step), each effect's variables; fields and ``x``/``y`` when stored.
+        CF ``units`` and ``long_name`` on each; global attributes: the settings, the cell
+        (:func:`~.results.cell_attrs`), ``boundary``, ``elastic_method``. ``converged``: the final check
+        of the package docstring passed on a freshly recomputed displacement.
 
     Raises
     ------
@@ -144,16 +179,20 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
     p = validate_pressures(pressures)
     store = validate_store(store_fields, p.size)
     clusters = validate_flag("clusters", clusters)
-    _check_progress(progress)
+    _check_progress(progress, warm_start)
     solver = prepare(heights, p, "pressures", settings, options)
     observers = _check_observers(observers)
-    cols, iters, conv, paths, fields, masks = _run_steps(solver, p, store, clusters, progress, observers)
+    cols, iters, conv, paths, fields, masks = _run_steps(solver, p, store, clusters, progress, observers,
+                                                         scaled=warm_start == "scaled")
     return _observed(_dataset(solver, p, cols, iters, conv, paths, fields, masks, store_fields), observers)
 
 
-def _check_progress(progress) -> None:
+def _check_progress(progress, warm_start: str = "extrapolated") -> None:
+    """``progress`` a callable or None and ``warm_start`` one of :data:`WARM_STARTS`, else a ValueError."""
     if progress is not None and not callable(progress):
         raise ValueError(f"progress must be a callable or None, got {type(progress).__name__} {progress!r}")
+    if warm_start not in WARM_STARTS:
+        raise ValueError(f"warm_start must be one of {WARM_STARTS}, got {warm_start!r}")
 
 
 def _is_batch(heights) -> bool:
@@ -190,7 +229,7 @@ def _check_observers(observers) -> tuple:
         raise ValueError(f"observers must be a sequence of observers, got {type(observers).__name__}") from None
     for ob in observers:
         if not (callable(getattr(ob, "observe", None)) and callable(getattr(ob, "dataset", None))):
-            raise ValueError(f"observers: {type(ob).__name__} has no observe(pressure) and dataset(steps) methods")
+            raise ValueError(f"observers: {type(ob).__name__} has no observe(step) and dataset(steps) methods")
     return observers
 
 
@@ -223,7 +262,7 @@ def _dataset(solver: ContactSolver | AdhesiveSolver, p, cols, iters, conv, paths
 
 
 def _run_steps(solver: ContactSolver | AdhesiveSolver, p: np.ndarray, store: set, clusters: bool, progress=None,
-               observers=()):
+               observers=(), scaled: bool = False):
     """Solve every load step; per-step columns, iterations, flags, path codes, stored fields, masks."""
     n_steps = p.size
     names = ["area_fraction", "mean_contact_pressure", "mean_gap", "contact_perimeter", "residual",
@@ -234,10 +273,15 @@ def _run_steps(solver: ContactSolver | AdhesiveSolver, p: np.ndarray, store: set
     paths = np.empty(n_steps, dtype=np.int8)
     fields_p, fields_g, field_steps = [], [], []
     masks = [] if clusters else None
+    needs_gap = any(getattr(ob, "needs_gap", False) for ob in observers)
+    last = None
     for k, p0 in enumerate(p):
         p0 = float(p0)
         t0 = time.perf_counter()
-        st, gap = solver.solve(p0, keep_gap=k + 1 in store)
+        initial = None if last is None else last * (p0 / last.mean())
+        st, gap = solver.solve(p0, initial=initial, keep_gap=k + 1 in store or needs_gap)
+        if scaled:
+            last = st.pressure.copy()
         cols["wall_time"][k] = time.perf_counter() - t0
         cols["area_fraction"][k] = st.area
         cols["mean_contact_pressure"][k] = p0 / st.area
@@ -255,8 +299,9 @@ def _run_steps(solver: ContactSolver | AdhesiveSolver, p: np.ndarray, store: set
             field_steps.append(k + 1)
         if masks is not None:
             masks.append(st.mask.copy())
+        view = StepView(k + 1, p0, st.pressure, gap, st.mask, int(st.iterations), bool(st.converged))
         for observer in observers:
-            observer.observe(st.pressure)
+            observer.observe(view)
         if progress is not None:
             progress(k + 1, p0, st.area, st.iterations, st.converged, cols["wall_time"][k])
     return cols, iters, conv, paths, (fields_p, fields_g, field_steps), masks

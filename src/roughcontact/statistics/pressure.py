@@ -77,9 +77,10 @@ class PressureDistribution:
         self.densities: list[np.ndarray] = []
         self.overflow: list[float] = []
 
-    def observe(self, pressure: np.ndarray) -> None:
-        """Record one load step's pressure field (host array, shape ``(nx, ny)``)."""
-        density, over = pressure_density(pressure, self.edges, self.scale)
+    def observe(self, step) -> None:
+        """Record one load step's pressure field (``step.pressure``: host array, shape ``(nx, ny)``;
+        ``step`` a :class:`roughcontact.solver.solve.StepView`)."""
+        density, over = pressure_density(step.pressure, self.edges, self.scale)
         self.densities.append(density)
         self.overflow.append(over)
 

@@ -9,8 +9,9 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import xarray as xr
 
-from ...pipeline.loading import schedule
-from ...solver import contact_perimeter, solve_step
+from ...pipeline.case import ContactCase, run_case
+from ...pipeline.loading import LoadSchedule
+from ...solver import contact_perimeter
 from ...solver.stanley_kato import StanleyKato
 from ...surfaces.synthetic import finite_difference_rms_slope, generate_surface, spectral_moments
 from ...theory.perimeter import PERIMETER_C, perimeter_corrected_area
@@ -61,14 +62,30 @@ def _areas(pressure: np.ndarray, gap: np.ndarray, scale: float, thresholds: Sequ
     return out
 
 
-def _bem_steps(h, loads, *, length, tol):
-    """The main solver, load by load, each step warm-started from the last pressure."""
-    p_prev = None
-    for p0 in loads:
-        init = None if p_prev is None else p_prev * (p0 / p_prev.mean())
-        r = solve_step(h, p0, length=length, tol=tol, initial_pressure=init)
-        p_prev = r.pressure
-        yield r.pressure, r.gap, r.pressure > 0, r.iterations, bool(r.converged)
+class _Areas:
+    """Observer of a solve (:func:`roughcontact.pipeline.case.run_case`): every area definition of each step."""
+
+    needs_gap = True
+
+    def __init__(self, scale: float, thresholds: Sequence[str], length: float):
+        self.scale, self.thresholds, self.length, self.rows = scale, thresholds, length, []
+
+    def observe(self, step) -> None:
+        row = _areas(step.pressure, step.gap, self.scale, self.thresholds, self.length, step.mask)
+        row.update(p0=step.p0, carried_load=float(step.pressure.mean()), iterations=step.iterations,
+                   stopped=step.converged)
+        self.rows.append(row)
+
+    def dataset(self, steps) -> xr.Dataset:
+        return xr.Dataset(coords={"step": steps})  # the rows are read off the observer
+
+
+def _bem_rows(h, schedule: LoadSchedule, *, length, tol, scale, thresholds) -> list[dict]:
+    """The main solver through the case runner, each step started from the last pressure scaled to its load."""
+    areas = _Areas(scale, thresholds, length)
+    case = ContactCase(schedule, tol=tol, warm_start="scaled")
+    run_case(h, case, length=length, rms_slope=float(spectral_moments(h, length)["rms_slope"]), observers=[areas])
+    return areas.rows
 
 
 def _sk_steps(h, loads, *, length, tol):
@@ -94,16 +111,19 @@ def solve_case(h: np.ndarray, setting: Mapping, *, length: float, thresholds: Se
     """
     p_max = float(setting["p_max"])
     # A geometric schedule starts where the paper's uniform one does, at p_max/30, so that
-    # both reach below A/A0 = 0.01 whatever their number of steps.
-    loads = schedule(p_max, int(setting["n_steps"]), setting["schedule"], p_min=p_max / 30)
-    steps = _bem_steps if setting["method"] == "bem" else _sk_steps
+    # both reach below A/A0 = 0.01 whatever their number of steps (E* = 1).
+    load = LoadSchedule(int(setting["n_steps"]), setting["schedule"], p_max=p_max, p_min=p_max / 30)
     scale = float(np.sqrt(np.mean((h - h.mean()) ** 2)))
-    rows = []
-    solved = steps(h, loads, length=length, tol=float(setting["tol"]))
-    for p0, (pressure, gap, contact, its, ok) in zip(loads, solved, strict=True):
-        row = _areas(pressure, gap, scale, thresholds, length, contact)
-        row.update(p0=p0, carried_load=float(pressure.mean()), iterations=its, stopped=ok)
-        rows.append(row)
+    tol = float(setting["tol"])
+    if setting["method"] == "bem":
+        rows = _bem_rows(h, load, length=length, tol=tol, scale=scale, thresholds=thresholds)
+    else:
+        rows = []
+        for p0, (pressure, gap, contact, its, ok) in zip(load.pressures(1.0), _sk_steps(
+                h, load.pressures(1.0), length=length, tol=tol), strict=True):
+            row = _areas(pressure, gap, scale, thresholds, length, contact)
+            row.update(p0=p0, carried_load=float(pressure.mean()), iterations=its, stopped=ok)
+            rows.append(row)
     return _case_dataset(rows, h, length, thresholds)
 
 

@@ -12,6 +12,8 @@ import numpy as np
 import xarray as xr
 from scipy.special import erfc
 
+from ...statistics.wrapping import WRAPS_X, WRAPS_Y, first_wrapping
+from ...surfaces.synthetic import generate_surface
 from ...theory import (
     cel_area,
     mode_spectrum,
@@ -26,6 +28,12 @@ AREAS = (0.01, 0.1, 0.5, 0.9)
 
 #: Persson's gamma in the mean-separation integral (Yang & Persson 2008).
 GAMMA = 0.45
+
+#: The band of gamma the mean gap and stiffness are shown over (its published range of use).
+GAMMAS = (0.4, 0.45, 0.5)
+
+#: Persson's input spectra: the generator's expected one, or each surface's own (its FFT).
+SPECTRA = ("expected", "measured")
 
 
 def one_pair(ds: xr.Dataset) -> xr.Dataset:
@@ -76,22 +84,50 @@ def cel_constants(cel: xr.Dataset) -> dict[str, float]:
     return {c: float(sel.sel(constant=c)) for c in ("kappa", "mu", "beta")}
 
 
-def cel_validity(curve: dict, constants: dict, rtol: float = 0.05) -> dict:
+def cel_full_load(constants: dict) -> float:
+    """The ``pbar`` at which the CEL reaches A/A0 = 1: ``(1 - beta)^(1/(mu - 1)) / kappa`` (NaN when never)."""
+    k, m, b = constants["kappa"], constants["mu"], constants["beta"]
+    return float((1.0 - b) ** (1.0 / (m - 1.0)) / k) if b < 1 else float("nan")
+
+
+def tolerance_crossing(area: np.ndarray, deviation: np.ndarray, rtol: float) -> tuple[float, float, float]:
+    """Where ``abs(deviation)`` first exceeds ``rtol``: ``(crossing, below, above)`` in A/A0.
+
+    ``below`` and ``above`` are the A/A0 of the last step within ``rtol`` and of the first beyond
+    (they bound the crossing); ``crossing`` interpolates ``abs(deviation)`` linearly in A/A0 between
+    them. No step beyond: ``(nan, last A/A0, nan)``; the first step beyond: ``(0, nan, its A/A0)``.
+    """
+    dev = np.abs(np.asarray(deviation, dtype=float))
+    out = dev > rtol
+    if not out.any():
+        return float("nan"), float(area[-1]), float("nan")
+    k = int(np.argmax(out))
+    if k == 0:
+        return 0.0, float("nan"), float(area[0])
+    t = (rtol - dev[k - 1]) / (dev[k] - dev[k - 1])
+    return float(area[k - 1] + t * (area[k] - area[k - 1])), float(area[k - 1]), float(area[k])
+
+
+def cel_validity(curve: dict, constants: dict, rtol: float = 0.05, sensitivity: float = 0.04) -> dict:
     """Where the CEL holds: ``A_CEL / A - 1`` per step, the largest ``A/A0`` up to which it stays within ``rtol``.
 
     Returns ``deviation`` (per step), ``holds_up_to`` (the measured A/A0 of the last step of the
-    run of steps from the first one within ``rtol``; 0 if the first is not), ``fails_at`` (the next step's A/A0, or NaN)
-    and ``cel_full`` (the ``pbar`` at which the CEL reaches A/A0 = 1, NaN if never).
+    run of steps from the first one within ``rtol``; 0 if the first is not), ``fails_at`` (the next
+    step's A/A0, or NaN),
+    ``crossing`` and ``crossing_sensitivity`` (:func:`tolerance_crossing` at ``rtol`` and at
+    ``sensitivity``) and ``cel_full`` (the law's own ``pbar`` at A/A0 = 1, :func:`cel_full_load`).
     """
     pbar, area = curve["pbar"], curve["area"]
     pred = cel_area(pbar, rms_slope=1.0, e_star=1.0, **constants)
     dev = pred / area - 1.0
     ok = np.abs(dev) <= rtol
     run = int(np.argmin(ok)) if not ok.all() else ok.size
-    above = np.flatnonzero(pred >= 1.0)
     return {"deviation": dev, "holds_up_to": float(area[run - 1]) if run else 0.0,
             "fails_at": float(area[run]) if run < area.size else np.nan,
-            "cel_full": float(pbar[above[0]]) if above.size else np.nan, "prediction": pred}
+            "crossing": tolerance_crossing(area, dev, rtol),
+            "crossing_sensitivity": tolerance_crossing(area, dev, sensitivity),
+            "rtol": rtol, "sensitivity": sensitivity,
+            "cel_full": cel_full_load(constants), "prediction": pred}
 
 
 def persson_deviation(curve: dict) -> np.ndarray:
@@ -160,19 +196,66 @@ def scene_surface(ds: xr.Dataset) -> dict:
     return {"N": n, "L": float(ds.attrs["length"]), "rms_slope": float(ds["rms_slope"].mean())}
 
 
-def gap_and_stiffness(ds: xr.Dataset, hurst: float) -> dict:
-    """Seed means of the mean gap and stiffness at one H, and Persson's at the same loads."""
+def measured_spectrum(ds: xr.Dataset, hurst: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """One surface's own ``(q, c)``: regenerated from its seed, ``c = abs(FFT / N^2)^2`` of its nonzero modes.
+
+    :func:`~roughcontact.surfaces.synthetic.generate_surface` is deterministic in its arguments, so
+    the surface the scene solved is rebuilt from the aggregate's ``N``, ``L``, cutoffs, H, seed and
+    rms slope (a few hundredths of a second at N = 1024: the noise is drawn on the band's grid).
+    """
+    params = scene_surface(ds)
+    n, length = params["N"], params["L"]
+    h = generate_surface(n, float(ds["k_l"]), float(ds["k_s"]), float(hurst), int(seed),
+                         rms_slope=float(ds["rms_slope"].sel(H=hurst, seed=seed)), length=length)
+    power = np.abs(np.fft.fft2(h) / n**2) ** 2
+    k = np.fft.fftfreq(n, 1.0 / n)
+    q = 2 * np.pi / length * np.hypot(k[:, None], k[None, :])
+    keep = (power > 1e-12 * power.max()) & (q > 0)
+    order = np.argsort(q[keep], kind="stable")
+    return q[keep][order], power[keep][order]
+
+
+def gap_and_stiffness(ds: xr.Dataset, hurst: float, gammas=GAMMAS, spectra=SPECTRA) -> dict:
+    """Seed means of the mean gap and stiffness at one H, and Persson's at the same loads.
+
+    Persson's ``gap_persson`` and ``stiffness_persson`` use :data:`GAMMA` and the expected
+    spectrum; ``persson[(spectrum, gamma)]`` holds ``(gap, stiffness)`` for every spectrum of
+    :data:`SPECTRA` and gamma of ``gammas``: ``expected`` at the seed-mean loads, ``measured`` each
+    surface's at its own loads, then averaged over seeds.
+    """
     sub = ds.sel(H=hurst)
     e_star = float(ds.attrs["e_star"])
     q, c = spectrum_of(ds, hurst)
     p0 = sub["pressure"].mean("seed").values
     gap, gap_sem = seed_mean(sub["mean_gap"])
     k, k_sem = seed_mean(sub["contact_stiffness"])
+    persson = {}
+    if "expected" in spectra:
+        for g in gammas:
+            persson["expected", g] = (persson_mean_gap(p0, q, c, e_star=e_star, gamma=g),
+                                      persson_stiffness(p0, q, c, e_star=e_star, gamma=g))
+    if "measured" in spectra:
+        own = {s: measured_spectrum(ds, hurst, s) for s in sub["seed"].values}
+        for g in gammas:
+            per_seed = [(persson_mean_gap(sub["pressure"].sel(seed=s).values, *own[s], e_star=e_star, gamma=g),
+                         persson_stiffness(sub["pressure"].sel(seed=s).values, *own[s], e_star=e_star, gamma=g))
+                        for s in sub["seed"].values]
+            persson["measured", g] = tuple(np.mean([v[i] for v in per_seed], axis=0) for i in (0, 1))
     return {"pbar": reduced_load(sub).mean("seed").values, "area": sub["area_fraction"].mean("seed").values,
             "gap": gap.values, "gap_sem": gap_sem.values, "h_rms": float(np.sqrt(c.sum())),
             "gap_persson": persson_mean_gap(p0, q, c, e_star=e_star, gamma=GAMMA),
             "stiffness": k.values, "stiffness_sem": k_sem.values,
-            "stiffness_persson": persson_stiffness(p0, q, c, e_star=e_star, gamma=GAMMA)}
+            "stiffness_persson": persson_stiffness(p0, q, c, e_star=e_star, gamma=GAMMA), "persson": persson}
+
+
+def persson_ratio_band(curve: dict, key: str, spectrum: str, area: float, gammas=GAMMAS) -> tuple[float, ...]:
+    """Measured over Persson's ``key`` (``gap`` or ``stiffness``) at ``area``, one ratio per gamma of ``gammas``."""
+    index = {"gap": 0, "stiffness": 1}[key]
+    out = []
+    for g in gammas:
+        ratio = curve[key] / curve["persson"][spectrum, g][index]
+        out.append(at_areas(curve["area"], ratio, curve["pbar"], (area,))[area][1])
+    return tuple(out)
 
 
 def stiffness_exponent(curve: dict, window=(0.01, 0.1)) -> tuple[float, float]:
@@ -204,25 +287,63 @@ def pressure_distributions(ds: xr.Dataset, areas=AREAS) -> list[dict]:
     return out
 
 
-def cluster_percolation(ds: xr.Dataset, share: float = 0.5) -> dict:
-    """Per case, the A/A0 at which the largest cluster last crosses ``share`` of the contact area (upwards).
+# ----------------------------------------------------------------------------- percolation
+#: Dapp et al. (2012), PRL 108, 244301: the contact area percolates at A/A0 = 0.42.
+DAPP_THRESHOLD = 0.42
 
-    Interpolated linearly in A/A0 between the two steps around the crossing; mean and sem over all
-    cases; also the pooled cluster count per step and the A/A0 of its maximum.
+#: Wrapping bits read as "percolates": a 4-connected cluster wraps the cell in x or in y.
+WRAPS_ANY = WRAPS_X | WRAPS_Y
+
+
+def percolation_brackets(ds: xr.Dataset, share: float = 0.5, connectivity: int = 4, bit: int = WRAPS_ANY) -> dict:
+    """Per surface, the A/A0 bracket ``(below, at]`` of the load steps between which the contact percolates.
+
+    With ``cluster_wrapping`` in ``ds`` (:mod:`roughcontact.statistics.wrapping`): the first step
+    whose ``connectivity``-connected contact set wraps (``bit``), and the step before it. Without
+    (``method = "share"``, a proxy): the last upward crossing of ``share`` by the largest cluster's
+    share of the contact area. Returns ``below``, ``at`` (arrays over the surfaces), ``method``.
     """
-    frac = ds["cluster_max_area"] / ds["area_fraction"]
     area = ds["area_fraction"]
-    cross = []
+    wrap = "cluster_wrapping" in ds
+    below, at = [], []
     for h in ds["H"].values:
         for s in ds["seed"].values:
-            f, a = frac.sel(H=h, seed=s).values, area.sel(H=h, seed=s).values
-            below = np.flatnonzero(f < share)  # at small loads one spot may hold half: take the last crossing
-            k = int(below[-1]) + 1 if below.size else 0
-            if 0 < k < f.size:
-                cross.append(a[k - 1] + (share - f[k - 1]) / (f[k] - f[k - 1]) * (a[k] - a[k - 1]))
+            a = area.sel(H=h, seed=s).values
+            if wrap:
+                codes = ds["cluster_wrapping"].sel(H=h, seed=s, connectivity=connectivity).values
+                lo, hi = first_wrapping(codes, a, bit)
+            else:
+                f = (ds["cluster_max_area"] / area).sel(H=h, seed=s).values
+                under = np.flatnonzero(f < share)  # at small loads one spot may hold half: take the last crossing
+                k = int(under[-1]) + 1 if under.size else 0
+                lo, hi = (float(a[k - 1]), float(a[k])) if 0 < k < a.size else (np.nan, np.nan)
+            below.append(lo)
+            at.append(hi)
+    return {"below": np.array(below), "at": np.array(at), "method": "wrapping" if wrap else "share"}
+
+
+def percolation_threshold(brackets: dict) -> dict:
+    """The threshold from the per-surface brackets: mean of the midpoints ± ``u``.
+
+    ``sem``: standard error of the midpoints over surfaces (the seed spread); ``half_step``: half the
+    widest bracket (the step spacing, which bounds each surface's threshold); ``u``: the larger of
+    the two. ``n``: surfaces with a bracket.
+    """
+    lo, hi = brackets["below"], brackets["at"]
+    ok = np.isfinite(lo) & np.isfinite(hi)
+    mid = 0.5 * (lo[ok] + hi[ok])
+    sem = float(mid.std(ddof=1) / np.sqrt(mid.size)) if mid.size > 1 else float("nan")
+    half = float(0.5 * np.max(hi[ok] - lo[ok])) if mid.size else float("nan")
+    return {"threshold": float(mid.mean()) if mid.size else float("nan"), "sem": sem, "half_step": half,
+            "u": float(np.nanmax([sem, half])), "n": int(mid.size),
+            "below": (float(lo[ok].min()), float(lo[ok].max())), "at": (float(hi[ok].min()), float(hi[ok].max())),
+            "below_mean": float(lo[ok].mean()), "at_mean": float(hi[ok].mean()), "method": brackets["method"]}
+
+
+def cluster_counts(ds: xr.Dataset) -> dict:
+    """Pooled cluster count and largest-cluster share per step, and the A/A0 of the count's maximum."""
     count = ds["cluster_count"].mean(("H", "seed")).values
-    pooled_area = area.mean(("H", "seed")).values
-    cross = np.array(cross)
-    return {"crossing": (float(cross.mean()), float(cross.std(ddof=1) / np.sqrt(cross.size))), "n": cross.size,
-            "count": count, "area": pooled_area, "share": frac.mean(("H", "seed")).values,
+    pooled_area = ds["area_fraction"].mean(("H", "seed")).values
+    return {"count": count, "area": pooled_area,
+            "share": (ds["cluster_max_area"] / ds["area_fraction"]).mean(("H", "seed")).values,
             "count_peak_area": float(pooled_area[int(np.argmax(count))])}

@@ -96,19 +96,25 @@ def cluster_figure(clusters: dict) -> Figure:
 
 
 def alpha_figure(pixel: dict, corrected: dict, pixel_2048: dict | None = None,
-                 corrected_2048: dict | None = None) -> Figure:
+                 corrected_2048: dict | None = None, pixel_4096: dict | None = None,
+                 corrected_4096: dict | None = None) -> Figure:
     """κ(0.05)/√2π against α at λ_s = 32 Δx, (a) pixel-counted, (b) perimeter-corrected, with BGT and Greenwood.
 
     The paper grid's points (N = 1024) are dots by λ_l; the kappa-alpha scene's (N = 2048), when
-    given, open squares.
+    given, open squares; the kappa-alpha-4096 scene's (N = 4096, λ_s = L/128), when given, open diamonds.
     """
     fig, axes = _figure(1, 2, 3.0)
-    line = np.geomspace(pixel["alpha"].min(), pixel["alpha"].max(), 60)
-    for ax, pts, more, title in zip(axes, (pixel, corrected), (pixel_2048, corrected_2048),
-                                    ("pixel-counted area", "perimeter-corrected area"), strict=True):
+    every = np.concatenate([pixel["alpha"]] + ([pixel_4096["alpha"]] if pixel_4096 is not None else []))
+    line = np.geomspace(every.min(), every.max(), 60)
+    for ax, pts, more, most, title in zip(axes, (pixel, corrected), (pixel_2048, corrected_2048),
+                                          (pixel_4096, corrected_4096),
+                                          ("pixel-counted area", "perimeter-corrected area"), strict=True):
         if more is not None:
             ax.errorbar(more["alpha"], more["kappa"], yerr=more["sem"], fmt="s", ms=5, mfc="none", color="k",
                         label=r"N = 2048, $\lambda_l = L/4, L/8$")
+        if most is not None:
+            ax.errorbar(most["alpha"], most["kappa"], yerr=most["sem"], fmt="D", ms=4, mfc="none", color="0.4",
+                        label=r"N = 4096, $\lambda_s = L/128$")
         for colour, kl in zip(DATA_COLOURS, np.unique(pts["k_l"]), strict=False):
             sel = pts["k_l"] == kl
             ax.errorbar(pts["alpha"][sel], pts["kappa"][sel], yerr=pts["sem"][sel], fmt="o", ms=3, color=colour,

@@ -97,3 +97,23 @@ def trend_test(base: dict, new: dict) -> dict:
     s = float(np.sqrt(np.sum(w * resid**2) / np.sum(w) * x.size / max(x.size - 2, 1)))
     line = a + b * np.log(new["alpha"])
     return {"line": line, "z": (new["kappa"] - line) / np.sqrt(new["sem"] ** 2 + s**2), "scatter": s}
+
+
+def log_curvature(alpha: np.ndarray, kappa: np.ndarray, sem: np.ndarray) -> tuple[float, float]:
+    """The ``(ln α)²`` coefficient of a weighted quadratic fit of κ against ln α, and its standard error.
+
+    As in :func:`log_slope`, the error is scaled by the root of the reduced chi-square when that
+    exceeds 1. Zero within its error: the fall is linear in ln α; positive: it saturates.
+    """
+    x = np.log(alpha)
+    design = np.stack([np.ones_like(x), x, x * x], axis=1)
+    w = 1.0 / sem**2
+    cov = np.linalg.inv(design.T @ (design * w[:, None]))
+    coef = cov @ (design.T @ (w * kappa))
+    chi2 = float(np.sum(w * (kappa - design @ coef) ** 2)) / max(x.size - 3, 1)
+    return float(coef[2]), float(np.sqrt(cov[2, 2] * max(chi2, 1.0)))
+
+
+def merged_points(*points: dict) -> dict:
+    """Several :func:`alpha_points` results as one set of points."""
+    return {k: np.concatenate([p[k] for p in points]) for k in points[0]}

@@ -25,10 +25,21 @@ from .claims import row
 #: Published files, relative to the page's ``data/`` folder, and where ``publish`` takes them in a run
 #: (``results/full-contact``, and ``results/representative-2L`` for the last).
 DATA_FILES = {"full-contact.nc": "aggregate/contact.nc", "full-contact-cel.nc": "fit/cel.nc",
-              "representative-2L.nc": "aggregate/contact.nc", "kappa-alpha.nc": "aggregate/contact.nc"}
+              "representative-2L.nc": "aggregate/contact.nc", "kappa-alpha.nc": "aggregate/contact.nc",
+              "kappa-alpha-4096.nc": "aggregate/contact.nc", "percolation.nc": "aggregate/contact.nc",
+              "percolation-2048.nc": "aggregate/contact.nc", "persson-modes-256.nc": "aggregate/contact.nc",
+              "persson-modes-512.nc": "aggregate/contact.nc"}
 
 #: The runs that may still be going when a page is published: their rows then read "pending".
-OPTIONAL = ("representative-2L.nc", "kappa-alpha.nc")
+OPTIONAL = ("representative-2L.nc", "kappa-alpha.nc", "kappa-alpha-4096.nc", "percolation.nc",
+            "percolation-2048.nc", "persson-modes-256.nc", "persson-modes-512.nc")
+
+#: The scenes whose aggregates (``aggregate/contact.nc``) ``publish --run FILE=RUN`` takes beyond the first three.
+MORE_RUNS = ("kappa-alpha-4096.nc", "percolation.nc", "percolation-2048.nc", "persson-modes-256.nc",
+             "persson-modes-512.nc")
+
+#: The mode-count cells of Q4a/Q4b (32 pixels per λ_s, k_s = 2 k_l): data file and k_l.
+MODE_CELLS = {"persson-modes-256.nc": 4, "persson-modes-512.nc": 8}
 
 #: Aggregates published by the reproduction that Q2 and Q3 read, relative to ``docs/``: the paper
 #: grid (its λ_s = 32 Δx column) and the reproduction's L = 1 representative cells.
@@ -37,6 +48,16 @@ REPRODUCTION = {"grid": "reproduction/paper-grid/data/contact.nc", "small": "rep
 
 def _pct(x: float) -> str:
     return f"{100 * x:+.1f}"
+
+
+def _crossing(percent: str, crossing: tuple) -> str:
+    """A tolerance crossing of the CEL (:func:`analysis.tolerance_crossing`) with the steps that bound it."""
+    at, lo, hi = crossing
+    if np.isnan(at):
+        return f"{percent} % crossing at A/A0 = {lo:.3g} or beyond (none up to the last step)"
+    if np.isnan(lo):
+        return f"{percent} % crossing at A/A0 = 0 (the first step, {hi:.3g}, is beyond)"
+    return f"{percent} % crossing at A/A0 = {at:.3f} (interpolated between the steps at {lo:.3f} and {hi:.3f})"
 
 
 def full_contact_rows(ds, cel) -> list[dict]:
@@ -48,11 +69,12 @@ def full_contact_rows(ds, cel) -> list[dict]:
     k = int(np.argmax(np.abs(v["deviation"]) > 0.05)) if not np.all(np.abs(v["deviation"]) <= 0.05) else None
     beyond = (f"; first step beyond: A/A0 = {v['fails_at']:.3g}, CEL {_pct(v['deviation'][k])} %"
               if k is not None else "")
-    first_full = curve["pbar"][np.argmax(curve["area"] >= 1.0)] if (curve["area"] >= 1.0).any() else np.nan
+    m_fc = onset["pbar_fc"].max()
     rows = [row("Q1a: the CEL holds toward full contact",
                 f"CEL, κ = {const['kappa']:.3f}, μ = {const['mu']:.3f}, β = {const['beta']:.3f}",
-                f"within 5 % up to A/A0 = {v['holds_up_to']:.3g}{beyond}; the CEL reaches A/A0 = 1 at "
-                f"p̄ = {v['cel_full']:.3g}, all {onset['n']} surfaces at p̄ = {first_full:.3g}")]
+                f"within 5 % up to A/A0 = {v['holds_up_to']:.3g}{beyond}; {_crossing('5', v['crossing'])}; "
+                f"{_crossing('4', v['crossing_sensitivity'])}; the CEL reaches A/A0 = 1 at p̄ = "
+                f"(1 − β)^(1/(μ−1))/κ = {v['cel_full']:.3f}, the surfaces at p̄_fc ≤ {float(m_fc):.3g} (Q1c)")]
     dev = an.persson_deviation(curve)
     points = an.at_areas(curve["area"], dev, curve["pbar"])
     rows.append(row("Q1b: Persson's erf curve holds toward full contact", "A/A0 = erf(√2 p̄)",
@@ -76,32 +98,62 @@ def full_contact_rows(ds, cel) -> list[dict]:
     return rows
 
 
-def users_rows(ds, curves: dict) -> list[dict]:
-    """Q4's rows: mean gap, stiffness, P(p) and clusters against Persson and Dapp et al."""
-    def ratios(key: str) -> str:
-        parts = []
-        for a in (0.01, 0.1):
-            items = []
-            for h, c in curves.items():
-                ratio = c[key] / c[f"{key}_persson"]
-                items.append(f"{an.at_areas(c['area'], ratio, c['pbar'], (a,))[a][1]:.3f} (H={h:g})")
-            parts.append(f"at A/A0 = {a:g}: " + ", ".join(items))
-        return "; ".join(parts)
+def _bands(curves: dict, key: str, spectrum: str) -> str:
+    """``value [low, high] (H=h)`` of measured over Persson's ``key`` at A/A0 = 0.01 and 0.1: γ = 0.45 and its band."""
+    parts = []
+    for a in (0.01, 0.1):
+        items = []
+        for h, c in curves.items():
+            band = an.persson_ratio_band(c, key, spectrum, a)
+            items.append(f"{band[an.GAMMAS.index(an.GAMMA)]:.3f} [{min(band):.3f}, {max(band):.3f}] (H={h:g})")
+        parts.append(f"at A/A0 = {a:g}: " + ", ".join(items))
+    return "; ".join(parts)
+
+
+def _mode_count(modes: dict, key: str) -> str:
+    """The mode-count cells' bands at A/A0 = 0.01 (expected spectrum), or what is pending."""
+    missing = [f"k_l = {kl} (scene {name[:-3]})" for name, kl in MODE_CELLS.items() if name not in modes]
+    done = [f"k_l = {MODE_CELLS[name]}, k_s = {2 * MODE_CELLS[name]}: " + "; ".join(
+        _bands(curves, key, "expected").split("; ")[:1]) for name, curves in modes.items()]
+    text = "mode count (32 px per λ_s, expected spectrum): k_l = 16, k_s = 32 above"
+    text += "".join(f"; {d}" for d in done)
+    return text + (f"; pending: {', '.join(missing)}" if missing else "")
+
+
+def users_rows(ds, curves: dict, perc: dict, perc_fine: dict | None = None, modes: dict | None = None) -> list[dict]:
+    """Q4's rows: mean gap, stiffness, P(p) and clusters against Persson and Dapp et al.
+
+    ``perc``: :func:`analysis.percolation_threshold` of the percolation data (the ``percolation``
+    scene's wrapping, else the full-contact scene's largest-cluster proxy); ``perc_fine`` that of the
+    N = 2048 cells; ``modes``: the mode-count cells' curves by data file.
+    """
+    modes = modes or {}
+
+    def persson(key: str) -> str:
+        return (f"{'ū/ū_P' if key == 'gap' else 'K/K_P'} as γ = 0.45 [γ band 0.4–0.5]: expected spectrum "
+                + _bands(curves, key, "expected") + "; measured spectra " + _bands(curves, key, "measured")
+                + "; " + _mode_count(modes, key))
 
     exps = [an.stiffness_exponent(c) for c in curves.values()]
     dists = an.pressure_distributions(ds)
-    perc = an.cluster_percolation(ds)
-    m, s = perc["crossing"]
+    counts = an.cluster_counts(ds)
+    how = ("first wrapping of a 4-connected cluster (cluster_wrapping)" if perc["method"] == "wrapping" else
+           "largest-cluster share crossing half (proxy; no wrapping data yet)")
+    fine = ("" if perc_fine is None else f"; at N = 2048 (λ_s = 64 Δx): {perc_fine['threshold']:.3f}, bracket "
+            f"{perc_fine['below_mean']:.3f} → {perc_fine['at_mean']:.3f}, {perc_fine['n']} surfaces")
     return [
-        row("Q4a: Persson's mean gap", "Persson (2007), Yang & Persson (2008)", "ū/ū_P " + ratios("gap")),
+        row("Q4a: Persson's mean gap", "Persson (2007), Yang & Persson (2008)", persson("gap")),
         row("Q4b: Persson's contact stiffness", "K = −dp0/dū of Persson's ū(p0)",
-            "K/K_P " + ratios("stiffness") + "; d ln K / d ln p0 over A/A0 in [0.01, 0.1]: measured "
+            persson("stiffness") + "; d ln K / d ln p0 over A/A0 in [0.01, 0.1] (γ = 0.45, expected): measured "
             + ", ".join(f"{e:.3f}" for e, _ in exps) + ", Persson " + ", ".join(f"{p:.3f}" for _, p in exps)),
         row("Q4c: Persson's P(p)", "Persson (2001), diffusion in p with magnification",
             "L1 distance " + ", ".join(f"at A/A0 = {d['area']:.3g}: {d['distance']:.3f}" for d in dists)),
-        row("Q4d: the contact area percolates at A/A0 ≈ 0.42", "Dapp et al. (2012): 0.42",
-            f"largest cluster holds half the contact at A/A0 = {m:.3f} ± {s:.3f} ({perc['n']} surfaces); "
-            f"most clusters at A/A0 = {perc['count_peak_area']:.3g}"),
+        row("Q4d: the contact area percolates at A/A0 ≈ 0.42", "Dapp et al. (2012): 0.42; later work ≈ 0.415",
+            f"{how}: per surface between the steps at A/A0 = {perc['below_mean']:.3f} → {perc['at_mean']:.3f} "
+            f"(means; {perc['below'][0]:.3f}–{perc['below'][1]:.3f} → {perc['at'][0]:.3f}–{perc['at'][1]:.3f}); "
+            f"threshold A/A0 = {perc['threshold']:.3f} ± {perc['u']:.3f} ({perc['n']} surfaces; half the widest "
+            f"bracket {perc['half_step']:.3f}, seed standard error {perc['sem']:.3f}){fine}; most clusters at "
+            f"A/A0 = {counts['count_peak_area']:.3g}"),
     ]
 
 
@@ -121,6 +173,24 @@ def trend_row(grid, extra) -> dict:
                        for z, kl, h, a, k in zip(test["z"], new["k_l"], new["H"], new["alpha"], new["kappa"],
                                                  strict=True))
     return row(question, "the line through the 20 points at N = 1024", f"{points}; scatter s = {test['scatter']:.4f}")
+
+
+def range_row(grid, extra, big) -> dict:
+    """Q2e: κ(0.05) against ln α over every point at 32 px per λ_s, the N = 4096 cells (k_s = 128) included."""
+    question = "Q2e: κ(α) over the whole range, N = 1024 to 4096 at 32 px per λ_s"
+    if big is None:
+        return _pending(question, "kappa-alpha-4096 (75 cases at N = 4096, ≈ 4.5 CPU-hours)")
+    pts = kp.merged_points(kp.alpha_points(grid, 32.0), *([kp.alpha_points(extra, 64.0)] if extra is not None else []),
+                           kp.alpha_points(big, 128.0))
+    m, e = kp.log_slope(pts["alpha"], pts["kappa"], pts["sem"])
+    c, ce = kp.log_curvature(pts["alpha"], pts["kappa"], pts["sem"])
+    models = ", ".join(f"{name} {kp.log_slope(pts['alpha'], pts[key])[0]:.3f}"
+                       for name, key in (("BGT", "bgt"), ("Greenwood", "greenwood")))
+    top = int(np.argmax(pts["alpha"]))
+    return row(question, f"asperity models over the same α: {models}",
+               f"slope = {m:.4f} ± {e:.4f}, curvature = {c:.4f} ± {ce:.4f} (√2π per e-fold of α) over "
+               f"{pts['alpha'].size} points, α = {pts['alpha'].min():.3g} to {pts['alpha'].max():.3g}; at the largest "
+               f"α κ/√2π = {pts['kappa'][top]:.3f}, BGT {pts['bgt'][top]:.3f}, Greenwood {pts['greenwood'][top]:.3f}")
 
 
 def alpha_rows(grid) -> list[dict]:
@@ -181,6 +251,12 @@ def _reproduction(docs: Path) -> dict:
     return {"grid": grid, "small": an.one_pair(small)}
 
 
+def _optional(data: Path, name: str):
+    """The published aggregate ``data/name`` (one pair), or None while its run is pending."""
+    path = data / name
+    return an.one_pair(read_dataset(path, stage="aggregate")) if path.exists() else None
+
+
 def regenerate(out: Path, docs: Path | None = None) -> None:
     """Figures and ``claims.md`` of ``out`` from ``out/data`` and the reproduction's aggregates (no solve).
 
@@ -195,41 +271,60 @@ def regenerate(out: Path, docs: Path | None = None) -> None:
                   "(--docs: the folder holding reproduction/)")
     rep = _reproduction(docs)
     figs.mkdir(parents=True, exist_ok=True)
-    large, extra = (read_dataset(data / name, stage="aggregate") if (data / name).exists() else None
-                    for name in OPTIONAL)
-    large = an.one_pair(large) if large is not None else None
+    large = _optional(data, "representative-2L.nc")
+    extra, big = (read_dataset(data / name, stage="aggregate") if (data / name).exists() else None
+                  for name in ("kappa-alpha.nc", "kappa-alpha-4096.nc"))
     ds = an.one_pair(read_dataset(data / "full-contact.nc", stage="aggregate"))
     cel = read_dataset(data / "full-contact-cel.nc", stage="fit")
     curve = an.pooled_curve(ds)
     curves = {float(h): an.gap_and_stiffness(ds, float(h)) for h in ds["H"].values}
+    modes = {}
+    for name in MODE_CELLS:
+        cells = _optional(data, name)
+        if cells is not None:
+            modes[name] = {float(h): an.gap_and_stiffness(cells, float(h), spectra=("expected",))
+                           for h in cells["H"].values}
+    wrap, wrap_fine = (_optional(data, name) for name in ("percolation.nc", "percolation-2048.nc"))
+    perc = an.percolation_threshold(an.percolation_brackets(wrap if wrap is not None else ds))
+    perc_fine = an.percolation_threshold(an.percolation_brackets(wrap_fine)) if wrap_fine is not None else None
     save_figure(fg.area_figure(curve, an.cel_validity(curve, an.cel_constants(cel)), an.full_contact_onset(ds)),
                 figs / "full_contact.png")
     save_figure(fg.gap_stiffness_figure(curves), figs / "gap_stiffness.png")
     save_figure(fg.pressure_figure(an.pressure_distributions(ds)), figs / "pressure_distribution.png")
-    save_figure(fg.cluster_figure(an.cluster_percolation(ds)), figs / "clusters.png")
+    save_figure(fg.cluster_figure(an.cluster_counts(ds)), figs / "clusters.png")
     save_figure(fg.alpha_figure(kp.alpha_points(rep["grid"], 32.0), kp.alpha_points(kp.corrected(rep["grid"]), 32.0),
                                 *((kp.alpha_points(extra, 64.0), kp.alpha_points(kp.corrected(extra), 64.0))
-                                  if extra is not None else ())), figs / "kappa_alpha.png")
+                                  if extra is not None else (None, None)),
+                                *((kp.alpha_points(big, 128.0), kp.alpha_points(kp.corrected(big), 128.0))
+                                  if big is not None else ())), figs / "kappa_alpha.png")
     if large is not None:
         save_figure(fg.cell_figure(rep["small"], large), figs / "cell_size.png")
-    rows = (full_contact_rows(ds, cel) + alpha_rows(rep["grid"]) + [trend_row(rep["grid"], extra)]
-            + cell_rows(rep["small"], large) + users_rows(ds, curves))
+    rows = (full_contact_rows(ds, cel) + alpha_rows(rep["grid"]) + [trend_row(rep["grid"], extra),
+                                                                     range_row(rep["grid"], extra, big)]
+            + cell_rows(rep["small"], large) + users_rows(ds, curves, perc, perc_fine, modes))
     write_text_atomic(out / "claims.md", markdown_table(rows))
 
 
-def publish(results: Path, cells: Path, alpha: Path, out: Path) -> None:
+def publish(results: Path, cells: Path, alpha: Path, out: Path, more: dict[str, Path] | None = None) -> None:
     """Copy the runs' files (:data:`DATA_FILES`) into ``out/data``, then :func:`regenerate`.
 
     ``results`` is the full-contact run (``results/full-contact``), ``cells`` the 2L one
-    (``results/representative-2L``), ``alpha`` the kappa-alpha one (``results/kappa-alpha``).
+    (``results/representative-2L``), ``alpha`` the kappa-alpha one (``results/kappa-alpha``);
+    ``more`` maps a file of :data:`MORE_RUNS` to its run (``{"percolation.nc": results/percolation}``).
     """
     data = out / "data"
-    runs = {"representative-2L.nc": cells, "kappa-alpha.nc": alpha}
+    more = dict(more or {})
+    unknown = sorted(set(more) - set(MORE_RUNS))
+    if unknown:
+        raise ValueError(f"--run takes FILE=RUN with FILE one of {', '.join(MORE_RUNS)}; got {', '.join(unknown)}")
+    runs = {"representative-2L.nc": cells, "kappa-alpha.nc": alpha, **more}
     for name, source in DATA_FILES.items():
-        if name not in OPTIONAL:
-            require_files(runs.get(name, results), [source], "give the finished full-contact run's results folder")
+        if name not in OPTIONAL or name in more:
+            require_files(runs.get(name, results), [source], "give the finished run's results folder")
     data.mkdir(parents=True, exist_ok=True)
     for name, source in DATA_FILES.items():
+        if name in MORE_RUNS and name not in more:
+            continue  # published separately, or pending
         origin = runs.get(name, results) / source
         if origin.exists() or name not in OPTIONAL:  # a run still going: its rows read "pending"
             shutil.copyfile(origin, data / name)
@@ -247,9 +342,12 @@ def main(argv=None) -> None:
     pub.add_argument("cells", type=Path, help="results/representative-2L")
     pub.add_argument("alpha", type=Path, help="results/kappa-alpha")
     pub.add_argument("out", type=Path)
+    pub.add_argument("--run", action="append", default=[], metavar="FILE=RUN",
+                     help=f"a further finished run, FILE one of {', '.join(MORE_RUNS)} (repeatable)")
     args = ap.parse_args(argv)
     with input_errors(ap):
         if args.command == "publish":
-            publish(args.results, args.cells, args.alpha, args.out)
+            more = dict(item.split("=", 1) for item in args.run)
+            publish(args.results, args.cells, args.alpha, args.out, {k: Path(v) for k, v in more.items()})
         else:
             regenerate(args.out, args.docs)

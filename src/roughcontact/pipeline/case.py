@@ -1,0 +1,169 @@
+"""One way to run a contact case: :class:`ContactCase` (what to compute) and :func:`run_case` (computing it).
+
+A case is one surface under one load schedule with one set of solver settings and outputs. The
+contact rule (``workflow/scripts/contact.py``), the accuracy study and the κ-gap study all build a
+:class:`ContactCase` and call :func:`run_case`: it is the only caller of the solver outside
+:mod:`roughcontact.solver`, and :class:`~.loading.LoadSchedule` the only load schedule.
+
+Examples
+--------
+>>> from roughcontact.surfaces.synthetic import generate_surface
+>>> h = generate_surface(64, 2, 16, 0.8, seed=0, rms_slope=0.1)
+>>> case = ContactCase(LoadSchedule(5, p_max=0.005))
+>>> ds = run_case(h, case, length=1.0, rms_slope=0.1)
+>>> ds.sizes["step"], ds.attrs["load_p0_max"]
+(5, 0.005)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import xarray as xr
+
+from ..analysis.stiffness import stiffness_variable
+from ..solver import effects_from_config, solve_contact, step_notes
+from ..solver.settings import DEFAULT_MAX_ITER
+from .datasets import contact_observers, full_contact_variable
+from .io import eta
+from .loading import LoadSchedule
+
+#: The outputs a case computes when its block names none (``contact.outputs`` of the schema).
+NO_OUTPUTS = {"fields": [], "clusters": False}
+
+
+@dataclass(frozen=True)
+class ContactCase:
+    """What to compute for one surface: the solver's settings, one load schedule and the outputs asked for.
+
+    Attributes
+    ----------
+    schedule : LoadSchedule
+        The load steps (resolved per surface by :func:`run_case`).
+    e_star : float
+        Plane-strain modulus E* [pressure]; loads and ``effects`` are relative to it.
+    tol, max_iter, boundary, array_backend, method
+        The solver's (:class:`roughcontact.solver.SolverSettings`); ``method`` None: the default iteration.
+    effects : mapping
+        ``contact.effects`` blocks by name (:func:`roughcontact.solver.effects_from_config`).
+    outputs : mapping
+        ``contact.outputs``: ``fields`` (steps to store), ``clusters``, ``stiffness``,
+        ``full_contact_load``, ``pressure_distribution``.
+    length_unit, pressure_unit : str
+        The output's unit labels.
+    threads : int
+        FFTW threads.
+    warm_start : {"extrapolated", "scaled"}
+        How a step after the first starts (:func:`roughcontact.solver.solve_contact`).
+    """
+
+    schedule: LoadSchedule
+    e_star: float = 1.0
+    tol: float = 1e-8
+    max_iter: int = DEFAULT_MAX_ITER
+    boundary: str = "periodic"
+    array_backend: str = "numpy"
+    method: str | None = None
+    effects: Mapping = field(default_factory=dict)
+    outputs: Mapping = field(default_factory=lambda: dict(NO_OUTPUTS))
+    length_unit: str = "1"
+    pressure_unit: str = "1"
+    threads: int = 1
+    warm_start: str = "extrapolated"
+
+    @classmethod
+    def from_block(cls, block: Mapping, *, length_unit: str = "1", threads: int = 1) -> ContactCase:
+        """The case a validated scene's ``contact`` block asks for (``length_unit``: the study's)."""
+        solver = block["solver"]
+        return cls(LoadSchedule.from_block(block), e_star=solver["e_star"], tol=solver["tol"],
+                   max_iter=solver["max_iter"], boundary=solver["boundary"],
+                   array_backend=solver.get("array_backend", "numpy"), effects=block["effects"],
+                   outputs=block["outputs"], length_unit=length_unit, pressure_unit=solver["pressure_unit"],
+                   threads=threads)
+
+    def solver_options(self, length) -> dict:
+        """The keyword options of :func:`roughcontact.solver.solve_contact` for a cell of ``length``."""
+        options = dict(e_star=self.e_star, length=length, tol=self.tol, max_iter=self.max_iter, threads=self.threads,
+                       effects=effects_from_config(self.effects, e_star=self.e_star), boundary=self.boundary,
+                       array_backend=self.array_backend, length_unit=self.length_unit,
+                       pressure_unit=self.pressure_unit)
+        if self.method is not None:
+            options["method"] = self.method
+        return options
+
+
+def run_case(heights: np.ndarray, case: ContactCase, *, length, rms_slope: float, log=None, name: str | None = None,
+             observers: Sequence = ()) -> xr.Dataset:
+    """Solve one surface as ``case`` asks: its loads resolved, every step solved, its outputs added.
+
+    Parameters
+    ----------
+    heights : numpy.ndarray, shape (nx, ny)
+        The surface [length].
+    case : ContactCase
+        What to compute.
+    length : float or (float, float)
+        The cell's side ``L`` or sides ``(Lx, Ly)`` [length].
+    rms_slope : float
+        The surface's rms slope h' (loads relative to it, κ).
+    log : logging.Logger, optional
+        Where each step's line (with the time left), the loads and the warnings go.
+    name : str, optional
+        The case's name, at the start of its warnings (jobs' lines meet in one console).
+    observers : sequence
+        More observers of each step (:class:`roughcontact.solver.solve.StepView`), besides those
+        ``case.outputs`` asks for.
+
+    Returns
+    -------
+    xarray.Dataset
+        :func:`roughcontact.solver.solve_contact`'s dataset, with ``contact_stiffness`` and
+        ``full_contact_pressure`` where asked, and the load's attributes (``load_*``,
+        :meth:`~.loading.LoadSchedule.resolve`).
+    """
+    options = case.solver_options(length)
+
+    def area_at(p0: float) -> float:  # a target_area probe: the surface at one load
+        return float(solve_contact(heights, [p0], **options).area_fraction[-1])
+
+    loads, load_info = case.schedule.resolve(case.e_star, rms_slope, heights.size, area_at, log, name)
+    outputs = case.outputs
+    result = solve_contact(heights, loads, store_fields=outputs["fields"] or False, clusters=outputs["clusters"],
+                           progress=_progress(log, len(loads)), warm_start=case.warm_start,
+                           observers=[*contact_observers(outputs, case.e_star * rms_slope), *observers], **options)
+    if outputs.get("stiffness"):
+        result["contact_stiffness"] = stiffness_variable(result, case.length_unit, case.pressure_unit)
+    if outputs.get("full_contact_load"):
+        result["full_contact_pressure"] = full_contact_variable(heights, length, case.e_star,
+                                                                result["pressure"].attrs["units"])
+    result.attrs.update(load_info)
+    if log is not None:
+        _warn(log, result, name or "case", case.tol)
+    return result
+
+
+def _progress(log, n_steps: int):
+    """One log line per load step as it goes, with what is left (None without a log)."""
+    if log is None:
+        return None
+    spent = []
+
+    def progress(step, p0, area, iterations, converged, seconds):
+        spent.append(seconds)
+        log.info("step %d/%d: p0 = %.6g, A/A0 = %.6g, %d iterations, %.2f s%s; %s", step, n_steps, p0, area,
+                 iterations, seconds, "" if converged else ", NOT converged", eta(spent, n_steps))
+
+    return progress
+
+
+def _warn(log, result: xr.Dataset, name: str, tol: float) -> None:
+    """The solve's step notes (fallbacks, stalls) and its unconverged steps, as warnings naming the case."""
+    for note in step_notes(result):
+        log.warning("%s: %s", name, note)
+    unconverged = int((~result.converged.values).sum())
+    if unconverged:
+        log.warning("%s: %d of %d load steps did not converge to tol=%g (max residual %.3g); "
+                    "they are flagged in the output's 'converged' variable",
+                    name, unconverged, result.sizes["step"], tol, float(result.residual.max()))
