@@ -13,12 +13,13 @@ SCENE ?=
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 
-# `make run` installs what running needs; the test extras (Tamaas, ContactMechanics, hypothesis,
-# linters: several hundred MB) come only with `make test`. constraints.txt pins the versions the
-# test suite last passed with: `pip install -c constraints.txt -e '.[test]'` for that environment.
+# `make run` installs what running needs (the library and its `pipeline` extra); the test extras (Tamaas,
+# ContactMechanics, hypothesis, linters: several hundred MB) come only with `make test`. constraints.txt
+# pins the versions the test suite last passed with: `pip install -c constraints.txt -e '.[test]'` for that
+# environment.
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e .
+	$(BIN)/python -m pip install --quiet -e '.[pipeline]'
 	touch $@
 
 $(VENV)/.installed-test: pyproject.toml $(VENV)/.installed

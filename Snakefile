@@ -6,7 +6,7 @@ from pathlib import Path
 
 from snakemake.utils import min_version
 
-from roughcontact.pipeline.config import SHIPPED_CONFIG, ConfigError, read_config_file
+from roughcontact.pipeline.config import SHIPPED_CONFIG, ConfigError, check_config_files
 from roughcontact.studies import report as report_module
 
 min_version("9.0")
@@ -20,13 +20,13 @@ report_module.render_maths_as_mathml(Path(workflow.basedir, "workflow", "report"
 
 
 # Snakemake's own message for a config file that is not YAML names neither the file nor the line:
-# check the workflow's config first (a file given with --configfile is read by Snakemake before
-# this line runs; `python -m roughcontact.pipeline.config FILE` names the line of one of those).
-if Path(SHIPPED_CONFIG).is_file():
-    try:
-        read_config_file(SHIPPED_CONFIG)
-    except ConfigError as err:
-        raise WorkflowError(f"invalid config: {err}") from None
+# check every config file once, here, before `configfile:` reads the workflow's own (a file given with
+# --configfile is already in workflow.configfiles; `python -m roughcontact.pipeline.config FILE` names the
+# line of one of those). The merged config is validated once, in workflow/rules/common.smk.
+try:
+    check_config_files([*([SHIPPED_CONFIG] if Path(SHIPPED_CONFIG).is_file() else []), *workflow.configfiles])
+except ConfigError as err:
+    raise WorkflowError(f"invalid config: {err}") from None
 
 
 configfile: str(SHIPPED_CONFIG)

@@ -1,4 +1,5 @@
-"""Shared fixtures: paths of the repository and a runner for the snakemake CLI."""
+"""Shared fixtures: paths of the repository, a runner for the snakemake CLI, solver options for one test."""
+import contextlib
 import importlib.util
 import os
 import shutil
@@ -9,6 +10,8 @@ from pathlib import Path
 
 import pytest
 import yaml
+
+from roughcontact.solver import set_options
 
 REPO = Path(__file__).resolve().parents[1]
 SNAKEMAKE = str(Path(sys.executable).parent / "snakemake")
@@ -23,11 +26,18 @@ def load_script(path: Path, name: str):
 
 
 # ROUGHCONTACT_ARRAY_BACKEND=cupy runs every solve that names no backend on the GPU (the hard-case
-# suite on a lent GPU, benchmarks/gpu/run.sh); CI leaves it unset: numpy.
+# suite on a lent GPU, benchmarks/gpu/run.sh): the solver's explicit process-wide option
+# (roughcontact.solver.set_options). CI leaves it unset: numpy.
 if os.environ.get("ROUGHCONTACT_ARRAY_BACKEND"):
-    import roughcontact.solver as _solver
+    set_options(array_backend=os.environ["ROUGHCONTACT_ARRAY_BACKEND"])
 
-    _solver.ARRAY_BACKEND = os.environ["ROUGHCONTACT_ARRAY_BACKEND"]
+
+@pytest.fixture
+def solver_options():
+    """``solver_options(method=..., array_backend=...)`` sets solver options for this test only
+    (:func:`roughcontact.solver.set_options`, restored after it)."""
+    with contextlib.ExitStack() as stack:
+        yield lambda **options: stack.enter_context(set_options(**options))
 
 
 @pytest.fixture(scope="session")

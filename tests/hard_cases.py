@@ -5,7 +5,7 @@ declarative :class:`Recipe` (a base surface, then transforms), the loads (explic
 :class:`Loads` rule computed from the surface), the half-space, the reference the solution is
 compared with and at which tolerance (with its reason). Adding a case is adding one entry; any
 solver change must pass them all. Every step must converge on the scene's own iteration
-(``roughcontact.solver.ELASTIC_METHOD``, no fallback) within the entry's iteration guard, satisfy
+(``SolverSettings().method``, no fallback) within the entry's iteration guard, satisfy
 every invariant of :func:`solver_invariants.check_solution`, and agree with the reference.
 Whatever the reference, a periodic step at full contact (A/A0 = 1) is also compared with the exact
 full-contact field :func:`roughcontact.theory.full_contact.full_contact_pressure` within :func:`full_contact_bound`.

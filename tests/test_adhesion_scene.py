@@ -13,7 +13,7 @@ import xarray as xr
 from cfcheck import assert_cf_clean
 from conftest import copy_workflow, run_snakemake
 from roughcontact.figures.registry import scene_figures
-from roughcontact.pipeline.config.scenes import validate_config
+from roughcontact.pipeline.scenes import validate_config
 from test_workflow import TINY, _jobs
 
 ADHESION = {"adhesion": {"law": "exponential", "work": 1e-5, "range": 1e-3}}

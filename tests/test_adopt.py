@@ -12,8 +12,8 @@ import yaml
 
 from conftest import copy_workflow, run_snakemake
 from roughcontact.pipeline import adopt
-from roughcontact.pipeline.config.scenes import validate_config
 from roughcontact.pipeline.io import write_dataset
+from roughcontact.pipeline.scenes import validate_config
 from test_workflow import TINY, _jobs
 
 # "big" holds every case of "small" and more: same surfaces, loads and solver

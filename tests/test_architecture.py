@@ -1,7 +1,11 @@
 """The package's architecture, checked from its source: layers, no import cycles, small modules and functions.
 
 The import graph is read with :mod:`ast` over ``src/roughcontact`` (every ``import`` and ``from ... import``,
-those inside functions too); nothing is imported. Layers, bottom to top (:data:`LAYERS`): the foundation
+those inside functions too); nothing is imported. Importing ``a.b.c`` runs the packages ``a.b`` and ``a``
+first, so an import of a module counts as an import of each package above it too (those above the
+importer itself excepted: they are already running), and a cycle through a package's ``__init__`` is found.
+
+Layers, bottom to top (:data:`LAYERS`): the foundation
 ``core``; physics (``surfaces``, ``solver``, ``theory``, ``statistics``); ``analysis``; ``pipeline`` and
 ``figures``; ``studies``; the package's face ``roughcontact/__init__.py`` on top. A module may import its
 own layer and the layers below, never one above.
@@ -38,6 +42,9 @@ MAX_FUNCTION_LINES = 60
 LONG_MODULES: dict[str, str] = {
     "roughcontact.statistics.clusters": "one concept, the contact clusters of a cell: periodic labelling, each "
                                         "cluster's statistics and their per-step dataset (wrapping's bits included)",
+    "roughcontact.surfaces.topography": "one concept, an instrument's file read into a height map (format, channel, "
+                                        "units, undefined points, each failure's message), SurfaceTopography "
+                                        "imported on first use (it imports matplotlib)",
 }
 
 
@@ -57,8 +64,18 @@ def _resolve(module: str, is_package: bool, node: ast.ImportFrom) -> str:
     return ".".join(base + ([node.module] if node.module else []))
 
 
+def ancestors(module: str) -> list[str]:
+    """The packages above ``module``: ``a.b.c`` -> ``["a", "a.b"]``."""
+    parts = module.split(".")
+    return [".".join(parts[:i]) for i in range(1, len(parts))]
+
+
 def imports_of(source: str, module: str, is_package: bool, known: set[str]) -> set[str]:
-    """The modules of ``known`` that ``source`` (module ``module``) imports, anywhere in its body."""
+    """The modules of ``known`` that ``source`` (module ``module``) imports, anywhere in its body.
+
+    Each imported module brings the packages above it that are not above ``module`` (their
+    ``__init__`` runs first).
+    """
     out = set()
     for node in ast.walk(ast.parse(source)):
         if isinstance(node, ast.Import):
@@ -71,6 +88,8 @@ def imports_of(source: str, module: str, is_package: bool, known: set[str]) -> s
                     out.add(sub)
                 elif target in known:
                     out.add(target)
+    own = set(ancestors(module))
+    out |= {a for m in out for a in ancestors(m) if a in known and a not in own}
     out.discard(module)
     return out
 
@@ -202,22 +221,52 @@ def private_imports(sources: dict[str, tuple[str, bool]]) -> set[tuple[str, str,
     return found
 
 
-#: Imports of another module's underscore names still left (issue 47 empties this): each is a name to
-#: make public with a docstring, or a sign that two modules hold one concept. New ones are refused.
-PRIVATE_IMPORTS_LEFT = {
-    ("roughcontact.pipeline.config.scenes", "roughcontact.pipeline.config.checks"),
-    ("roughcontact.pipeline.config.scenes", "roughcontact.pipeline.config.schema"),
-    ("roughcontact.pipeline.sources.generated", "roughcontact.pipeline.config.checks"),
-    ("roughcontact.pipeline.sources.array", "roughcontact.pipeline.measured"),
-    ("roughcontact.solver.halfspace", "roughcontact.solver.love"),
-}
+def test_no_imports_of_private_names(sources):
+    # a name another module needs is public, with a docstring; or the two modules are one concept
+    assert sorted(private_imports(sources)) == []
 
 
-def test_no_new_imports_of_private_names(sources):
-    found = {(importer, module) for importer, module, _ in private_imports(sources)}
-    assert found <= PRIVATE_IMPORTS_LEFT, sorted(found - PRIVATE_IMPORTS_LEFT)
-    # the allow-list shrinks as names become public: no stale entry stays
-    assert PRIVATE_IMPORTS_LEFT <= found, sorted(PRIVATE_IMPORTS_LEFT - found)
+def sys_modules_lookups(source: str) -> list[int]:
+    """Lines that read ``sys.modules`` (or import ``modules`` from ``sys``): state found by name, not passed."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if (isinstance(node, ast.Attribute) and node.attr == "modules" and isinstance(node.value, ast.Name)
+                and node.value.id == "sys"):
+            found.append(node.lineno)
+        elif isinstance(node, ast.ImportFrom) and node.module == "sys" and any(a.name == "modules" for a in node.names):
+            found.append(node.lineno)
+    return found
+
+
+def test_no_sys_modules_lookups(sources):
+    # a setting reaches the code that reads it as an argument or a field, never through sys.modules
+    found = {m: lines for m, (src, _) in sources.items() if (lines := sys_modules_lookups(src))}
+    assert found == {}
+
+
+def test_checker_finds_sys_modules():
+    assert sys_modules_lookups("import sys\nx = sys.modules[__package__].X\n") == [2]
+    assert sys_modules_lookups("from sys import modules\n") == [1]
+    assert sys_modules_lookups("import sys\nsys.path\n") == []
+
+
+def test_checker_finds_a_cycle_through_a_package():
+    # config/__init__ imports config.scenes, which imports sources; a source imports config.files, which
+    # runs config/__init__ first: a cycle, though no module names another's directly in both directions
+    sources = {
+        "roughcontact.pipeline": ("", True),
+        "roughcontact.pipeline.config": ("from .scenes import validate\n", True),
+        "roughcontact.pipeline.config.files": ("", False),
+        "roughcontact.pipeline.config.scenes": ("def f():\n    from ..sources import source_of\n", False),
+        "roughcontact.pipeline.sources": ("from .base import source_of\n", True),
+        "roughcontact.pipeline.sources.base": ("from ..config.files import ConfigError\n", False),
+    }
+    g = import_graph(sources)
+    assert g["roughcontact.pipeline.sources.base"] == {"roughcontact.pipeline.config.files",
+                                                       "roughcontact.pipeline.config"}
+    assert "roughcontact.pipeline" not in g["roughcontact.pipeline.sources.base"]  # its own package: running
+    assert cycles(g) == [["roughcontact.pipeline.config", "roughcontact.pipeline.config.scenes",
+                          "roughcontact.pipeline.sources", "roughcontact.pipeline.sources.base"]]
 
 
 def test_checker_finds_a_cycle_and_an_upward_import():
@@ -230,10 +279,12 @@ def test_checker_finds_a_cycle_and_an_upward_import():
         "roughcontact.core": ("", True),
     }
     g = import_graph(sources)
-    assert g["roughcontact.core.units"] == {"roughcontact.analysis.fit.grid"}
-    assert g["roughcontact.analysis.fit.grid"] == {"roughcontact.core.units"}
+    # each import brings the packages above the imported module (their __init__ runs first)
+    assert g["roughcontact.core.units"] == {"roughcontact.analysis.fit.grid", "roughcontact.analysis.fit"}
+    assert g["roughcontact.analysis.fit.grid"] == {"roughcontact.core.units", "roughcontact.core"}
     assert cycles(g) == [["roughcontact.analysis.fit.grid", "roughcontact.core.units"]]
-    assert upward_imports(g) == [("roughcontact.core.units", "roughcontact.analysis.fit.grid")]
+    assert upward_imports(g) == [("roughcontact.core.units", "roughcontact.analysis.fit"),
+                                 ("roughcontact.core.units", "roughcontact.analysis.fit.grid")]
     with pytest.raises(KeyError, match="no layer"):
         rank("roughcontact.attic.old")
 

@@ -135,11 +135,9 @@ def test_stand_in_cupy_solves_as_numpy(stand_in_cupy, boundary):
     check_solution(got, h, tol=1e-8, boundary=boundary)
 
 
-def test_array_backend_switch(stand_in_cupy, monkeypatch):
-    """``roughcontact.solver.ARRAY_BACKEND`` is the default of settings that name none."""
-    import roughcontact.solver as solver_mod
-
-    monkeypatch.setattr(solver_mod, "ARRAY_BACKEND", "cupy")
+def test_array_backend_switch(solver_options, stand_in_cupy):
+    """``set_options(array_backend=...)`` is the default of settings that name none."""
+    solver_options(array_backend="cupy")
     assert SolverSettings().checked((8, 8)).array_backend == "cupy"
     assert SolverSettings(array_backend="numpy").checked((8, 8)).array_backend == "numpy"
     assert backend_mod.ARRAY_BACKENDS == ("numpy", "cupy")

@@ -4,9 +4,9 @@ import copy
 import pytest
 
 from roughcontact.pipeline.config.files import ConfigError
-from roughcontact.pipeline.config.scenes import cases, validate_config
 from roughcontact.pipeline.config.schema import load_schema
 from roughcontact.pipeline.loading import LoadSchedule
+from roughcontact.pipeline.scenes import cases, validate_config
 
 
 def load_steps(block):

@@ -22,8 +22,9 @@ import yaml
 from conftest import REPO, copy_workflow, run_snakemake
 from roughcontact.figures.registry import scene_figures
 from roughcontact.pipeline import params, progress
-from roughcontact.pipeline.config import ConfigError, plan_summary, validate_config
+from roughcontact.pipeline.config import ConfigError
 from roughcontact.pipeline.loading import LoadSchedule
+from roughcontact.pipeline.scenes import plan_summary, validate_config
 from roughcontact.pipeline.sources import source_of
 from roughcontact.studies.accuracy import variants as accuracy_variants
 
@@ -418,9 +419,10 @@ def test_every_documented_module_is_walked():
 
 def _main(module):
     """The ``main`` that ``python -m module`` runs (a package's from its __main__'s import)."""
-    where = {"roughcontact.pipeline.config": ".scenes", "roughcontact.studies.kappa_gap": ".page",
-             "roughcontact.studies.open_questions": ".page"}.get(module, "")
-    return __import__(module + where, fromlist=["main"]).main
+    where = {"roughcontact.pipeline.config": "roughcontact.pipeline.scenes",
+             "roughcontact.studies.kappa_gap": "roughcontact.studies.kappa_gap.page",
+             "roughcontact.studies.open_questions": "roughcontact.studies.open_questions.page"}.get(module, module)
+    return __import__(where, fromlist=["main"]).main
 
 
 CLI_CASES = [(m, i) for m, builders in COMMANDS.items() for i, b in enumerate(builders) if b is not None]

@@ -376,7 +376,7 @@ def python_adopt(cmd, ctx):
     also in b: the command adopts the other.
     """
     from roughcontact.pipeline import adopt
-    from roughcontact.pipeline.config.scenes import validate_config
+    from roughcontact.pipeline.scenes import validate_config
     from test_adopt import _case_file
 
     args = shlex.split(cmd)[3:]

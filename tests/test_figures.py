@@ -3,8 +3,8 @@ import copy
 
 from conftest import REPO
 from roughcontact.figures.registry import FIGURES, scene_figures
-from roughcontact.pipeline.config.scenes import validate_config
 from roughcontact.pipeline.config.schema import load_schema
+from roughcontact.pipeline.scenes import validate_config
 
 
 def test_every_registered_figure_has_a_caption_file():

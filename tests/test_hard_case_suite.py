@@ -260,7 +260,7 @@ def test_case_converges_and_meets_its_reference(solution, request):
 def test_case_ends_on_its_own_iteration_within_the_guard(solution):
     case, h, ds = solution
     flat = not bool(h.max() > h.min())
-    expected = case.paths or ("exact" if flat and case.boundary == "periodic" else solver_mod.ELASTIC_METHOD,)
+    expected = case.paths or ("exact" if flat and case.boundary == "periodic" else solver_mod.SolverSettings().method,)
     paths = [SOLVER_PATHS[c] for c in ds["solver_path"].values]
     its, area = ds["iterations"].values, ds["area_fraction"].values
     print(f"{case.name}: iterations {its.tolist()}, paths {sorted(set(paths))}")
@@ -288,7 +288,8 @@ def test_full_contact_is_the_exact_field(tol):
     for ds in [warm, *cold]:
         check_solution(ds, h, tol=tol, e_star=e_star, length=length)
         assert np.all(ds["area_fraction"].values == 1.0)
-        assert [SOLVER_PATHS[c] for c in ds["solver_path"].values] == [solver_mod.ELASTIC_METHOD] * ds.sizes["step"]
+        default = solver_mod.SolverSettings().method
+        assert [SOLVER_PATHS[c] for c in ds["solver_path"].values] == [default] * ds.sizes["step"]
         assert np.all(ds["iterations"].values <= MAX_FULL_CONTACT_ITERATIONS), ds["iterations"].values
         for p0, p in zip(ds["pressure"].values, ds["contact_pressure"].values, strict=True):
             exact = full_contact_pressure(h, p0, e_star, length)

@@ -6,8 +6,8 @@ from pathlib import Path
 import pytest
 
 from roughcontact.pipeline.config.files import ConfigError
-from roughcontact.pipeline.config.scenes import plan_summary, validate_config
 from roughcontact.pipeline.measured import reader_settings, topography_names
+from roughcontact.pipeline.scenes import plan_summary, validate_config
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "data" / "measured"
 

@@ -6,9 +6,9 @@ import pytest
 import xarray as xr
 
 from roughcontact.pipeline import params, provenance
-from roughcontact.pipeline.config.scenes import validate_config
 from roughcontact.pipeline.config.schema import load_schema
 from roughcontact.pipeline.io import canonical_json
+from roughcontact.pipeline.scenes import validate_config
 
 SCHEMA = load_schema()
 

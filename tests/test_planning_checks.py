@@ -17,8 +17,9 @@ from conftest import REPO
 from roughcontact.analysis.aggregate.derived import aggregate_contact
 from roughcontact.analysis.fit.grid import fit_cel
 from roughcontact.pipeline import adopt, progress, runcost
-from roughcontact.pipeline.config import ConfigError, validate_config
+from roughcontact.pipeline.config import ConfigError
 from roughcontact.pipeline.loading import LoadSchedule, pressure_for_area
+from roughcontact.pipeline.scenes import validate_config
 from roughcontact.pipeline.sources import SOURCES
 
 GEN = {"surface": {"N": 32}, "grid": {"k_l": ["2"], "k_s": ["8"], "H": ["0.5"]}, "seeds": 2}
@@ -279,7 +280,7 @@ def test_an_invalid_scene_stops_only_its_own_run(shipped_config):
 
 
 def test_the_config_check_names_an_invalid_other_scene_and_plans_the_run(tmp_path, capsys):
-    from roughcontact.pipeline.config.scenes import main
+    from roughcontact.pipeline.scenes import main
 
     extra = tmp_path / "extra.yaml"
     extra.write_text("scenes:\n  broken:\n    contact: {surface: {N: 32}, grid: {k_l: ['2'], k_s: ['8'], H: ['0.5']}, "

@@ -118,7 +118,7 @@ def test_names_are_whole_in_csv_logs_and_the_report(seven):
 def test_names_are_whole_in_every_figure(seven, monkeypatch):
     from roughcontact.figures.registry import FIGURES, scene_figures
     from roughcontact.pipeline.config.files import load_config_files
-    from roughcontact.pipeline.config.scenes import validate_config
+    from roughcontact.pipeline.scenes import validate_config
 
     monkeypatch.chdir(seven)
     scene = validate_config(load_config_files([Path("seven.yaml")]))["scenes"]["seven"]

@@ -295,12 +295,12 @@ def test_contact_mechanics_free_boundary():
 # --------------------------------------------------------------------------- invariants
 @pytest.mark.parametrize("method", ELASTIC_METHODS)
 @pytest.mark.parametrize("hardness", [None, 0.02])
-def test_invariants_with_direct_convolution(method, hardness, monkeypatch):
+def test_invariants_with_direct_convolution(solver_options, method, hardness, monkeypatch):
     # check_solution recomputes the gap by direct summation (no FFT) with a quadrature
     # influence function, then every invariant from the fields: mean p = p0 to 1e-10,
     # 0 <= p (<= H), gap >= -tol s below the cap, complementarity <= tol, zero-mean gap
     # on the elastic contact set, mean gap, perimeter without wrap-around.
-    monkeypatch.setattr(solver_mod, "ELASTIC_METHOD", method)
+    solver_options(method=method)
     n = 32
     h = generate_surface(n, 2, 8, 0.8, 3, rms_slope=0.1)
     loads = [0.001, 0.003, 0.008]
@@ -312,10 +312,10 @@ def test_invariants_with_direct_convolution(method, hardness, monkeypatch):
 
 
 @pytest.mark.parametrize("method", ELASTIC_METHODS)
-def test_invariants_on_a_patch_with_prime_factors(method, monkeypatch):
+def test_invariants_on_a_patch_with_prime_factors(solver_options, method, monkeypatch):
     # 37 x 34 (37 and 17 prime): the preconditioner runs on a 40 x 36 cell of the same spacing
     # (preconditioner_shape); every invariant on the patch, by direct summation as above
-    monkeypatch.setattr(solver_mod, "ELASTIC_METHOD", method)
+    solver_options(method=method)
     h = np.ascontiguousarray(generate_surface(40, 2, 8, 0.8, 5, rms_slope=0.1)[:37, :34])
     length = (37 / 40, 34 / 40)
     ds = solve_contact(h, [0.001, 0.004], tol=TOL, store_fields=True, boundary="free", length=length)
@@ -365,8 +365,8 @@ def test_bad_boundary_is_refused(bad):
 
 
 @pytest.mark.parametrize("method", ELASTIC_METHODS)
-def test_default_is_periodic_and_unchanged(method, monkeypatch):
-    monkeypatch.setattr(solver_mod, "ELASTIC_METHOD", method)
+def test_default_is_periodic_and_unchanged(solver_options, method, monkeypatch):
+    solver_options(method=method)
     h = _rough()
     loads = [0.0005, 0.001, 0.002, 0.004, 0.005]
     default = solve_contact(h, loads, tol=TOL, store_fields=True)

@@ -126,9 +126,10 @@ def test_unreachable_tolerance_stalls_cleanly():
     ds = solve_contact(h, [0.002, 0.004], tol=1e-16, store_fields=True)
     check_solution(ds, h, tol=1e-16, require_converged=False)
     assert not ds["converged"].values.any()
-    stages = 1 + len(FALLBACKS[solver_mod.ELASTIC_METHOD])
+    stages = 1 + len(FALLBACKS[solver_mod.SolverSettings().method])
     assert np.all(ds["iterations"].values < stages * 3 * STALL_WINDOW) and DEFAULT_MAX_ITER > stages * 3 * STALL_WINDOW
-    assert [SOLVER_PATHS[c] for c in ds["solver_path"].values] == [FALLBACKS[solver_mod.ELASTIC_METHOD][-1]] * 2
+    last = FALLBACKS[solver_mod.SolverSettings().method][-1]
+    assert [SOLVER_PATHS[c] for c in ds["solver_path"].values] == [last] * 2
     assert np.all(ds["residual"].values < 1e-12)  # it got to the floor before stopping
 
 
@@ -138,7 +139,7 @@ def test_step_notes_say_why_a_step_did_not_converge():
     capped = step_notes(solve_contact(h, [0.002], tol=TOL, max_iter=1))
     assert len(capped) == 1 and capped[0].startswith("step 1: NOT converged (max_iter = 1 reached; residual ")
     stalled = step_notes(solve_contact(h, [0.002], tol=1e-16))
-    assert len(stalled) == 1 and f"stalled, last on {FALLBACKS[solver_mod.ELASTIC_METHOD][-1]}" in stalled[0]
+    assert len(stalled) == 1 and f"stalled, last on {FALLBACKS[solver_mod.SolverSettings().method][-1]}" in stalled[0]
 
 
 def test_tight_tolerance_reachable():
@@ -322,13 +323,13 @@ def test_solve_step_refuses_a_subnormal_load():
 
 @pytest.mark.parametrize("factor", [1e-150, 1e150])
 @pytest.mark.parametrize("hardness", [None, 0.02])
-def test_extreme_but_representable_scales_are_exact(factor, hardness, monkeypatch):
+def test_extreme_but_representable_scales_are_exact(solver_options, factor, hardness, monkeypatch):
     # Inside the range the solution scales exactly: heights and pressures by one
     # factor (same dimensionless load), or heights by it and E* by its inverse.
     # The unit handling is checked with the double-precision iteration, whose
     # path does not depend on the round-off of the rescaled input; the default's
     # float32 products do (test_default_iteration_scales_to_its_tolerance).
-    monkeypatch.setattr(solver_mod, "ELASTIC_METHOD", "pk-fourier")
+    solver_options(method="pk-fourier")
     loads = [0.001, 0.01]
     ref = solve_contact(ROUGH, loads, tol=TOL, store_fields=True, hardness=hardness)
     big = solve_contact(ROUGH * factor, [p * factor for p in loads], tol=TOL, store_fields=True,
@@ -424,7 +425,7 @@ def test_a_stalled_step_on_a_measured_surface_converges_on_a_fallback():
     # whether a step stalls at all depends on the CPU's rounding (here with AVX-512: step 27; with
     # numpy's AVX-512 paths disabled: none), so the fallback itself is tested on a forced stall below
     paths = [SOLVER_PATHS[c] for c in ds["solver_path"].values]
-    assert set(paths) <= {solver_mod.ELASTIC_METHOD, *FALLBACKS[solver_mod.ELASTIC_METHOD]}
+    assert set(paths) <= {solver_mod.SolverSettings().method, *FALLBACKS[solver_mod.SolverSettings().method]}
     a_cm = _contact_mechanics_free_area(h, length, loads[-1])
     assert a_cm is not None and abs(float(ds["area_fraction"][-1]) - a_cm) <= 1e-4 * a_cm
 
@@ -459,18 +460,18 @@ def test_spikes_on_a_plateau_converge_without_a_stall():
     h, length = surface.heights, surface.length
     ds = solve_contact(h, loads, e_star=1e5, length=length, tol=MEASURED_TOL, boundary="free", store_fields=True)
     check_solution(ds, h, tol=MEASURED_TOL, e_star=1e5, length=length, boundary="free")
-    assert {SOLVER_PATHS[c] for c in ds["solver_path"].values} == {solver_mod.ELASTIC_METHOD}
+    assert {SOLVER_PATHS[c] for c in ds["solver_path"].values} == {solver_mod.SolverSettings().method}
     assert int(ds["iterations"].max()) < STALL_WINDOW // 2
     assert 0 < float(ds["area_fraction"][0]) < 1e-3  # the spikes alone carry the first load
     a_cm = _contact_mechanics_free_area(h, length, loads[-1])
     assert a_cm is not None and abs(float(ds["area_fraction"][-1]) - a_cm) <= 1e-4 * a_cm
 
 
-def test_spikes_on_a_plateau_converge_on_the_gradient_projection_after_pk(monkeypatch):
+def test_spikes_on_a_plateau_converge_on_the_gradient_projection_after_pk(solver_options, monkeypatch):
     # Unpreconditioned, Polonsky & Keer's active-set rule cycles on frt-2's first loads (residual
     # 8.8 / 4.1 / 1.4 at steps 1-3, 2026-11-25): the monotone gradient projection ("box" with an
     # unreachable cap) converges in ~10 iterations after the stall window, and steps 2-5 start on it.
-    monkeypatch.setattr(solver_mod, "ELASTIC_METHOD", "pk")
+    solver_options(method="pk")
     surface, loads = _frt2()
     h, length = surface.heights, surface.length
     ds = solve_contact(h, loads[:5], e_star=1e5, length=length, tol=MEASURED_TOL, boundary="free",
@@ -496,7 +497,7 @@ def test_a_forced_stall_is_finished_by_the_next_iteration(monkeypatch):
     from roughcontact.solver import contact
 
     real = contact.pk_solve
-    first = solver_mod.ELASTIC_METHOD
+    first = solver_mod.SolverSettings().method
 
     def stalling(ws, p0, tol, max_iter, fresh):
         if ws.method == first:

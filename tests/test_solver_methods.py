@@ -14,9 +14,9 @@ from solver_invariants import check_solution
 
 
 @pytest.fixture
-def method(monkeypatch):
+def method(solver_options):
     def set_method(name):
-        monkeypatch.setattr(solver_mod, "ELASTIC_METHOD", name)
+        solver_options(method=name)
     return set_method
 
 
@@ -32,7 +32,7 @@ def _loads(p_max=0.005, steps=8):
 def test_default_is_the_preconditioned_single_precision_iteration(surface):
     # float32 transforms inside the loop, float64 gaps, reductions and final check;
     # "pk-fourier" is the same iteration in double precision, "pk" the reference.
-    assert solver_mod.ELASTIC_METHOD == "pk-fourier-f32"
+    assert solver_mod.SolverSettings().method == "pk-fourier-f32"
     ds = solve_contact(surface, [0.001])
     assert ds.attrs["elastic_method"] == "pk-fourier-f32"
 
@@ -80,10 +80,23 @@ def test_non_monotone_loads_fall_back_to_the_scaled_start(surface, method):
     np.testing.assert_allclose(ds["area_fraction"].values, [r.area_fraction for r in cold], rtol=1e-4)
 
 
-def test_unknown_method_is_refused(surface, method):
-    method("cg")
-    with pytest.raises(ValueError, match="ELASTIC_METHOD"):
-        solve_contact(surface, [0.001])
+def test_unknown_method_is_refused(surface):
+    with pytest.raises(ValueError, match="method must be one of"):
+        solve_contact(surface, [0.001], method="cg")
+    with pytest.raises(ValueError, match="solver option method must be one of"):
+        solver_mod.set_options(method="cg")
+    with pytest.raises(TypeError, match="unknown solver option"):
+        solver_mod.set_options(tol=1e-3)
+    assert solver_mod.get_options() == {"method": "pk-fourier-f32", "array_backend": "numpy"}
+
+
+def test_set_options_is_restored_after_its_block(surface):
+    with solver_mod.set_options(method="pk"):
+        assert solver_mod.SolverSettings().method == "pk"
+        assert solve_contact(surface, [0.001]).attrs["elastic_method"] == "pk"
+        made_inside = solver_mod.SolverSettings()
+    assert solver_mod.SolverSettings().method == "pk-fourier-f32"
+    assert made_inside.method == "pk"  # a settings object keeps the default it was made with
 
 
 @pytest.mark.parametrize("backend", ["numpy", "pyfftw"])

@@ -29,7 +29,6 @@ import math
 import numpy as np
 import pytest
 
-import roughcontact.solver as solver_mod
 from roughcontact.core.fft import wavenumbers
 from roughcontact.solver import (
     ELASTIC_METHODS,
@@ -40,7 +39,7 @@ from roughcontact.solver import (
     solve_contact,
     solve_step,
 )
-from roughcontact.solver.halfspace import _pixel_influence, _pixel_influence_rect
+from roughcontact.solver.halfspace import pixel_influence_rect, pixel_influence_square
 from roughcontact.statistics.clusters import cluster_dataset, cluster_statistics, label_clusters
 from roughcontact.surfaces.synthetic import generate_surface
 from solver_invariants import check_solution, direct_free_displacement, pixel_integral
@@ -131,12 +130,12 @@ def test_westergaard_on_a_rectangle(axis, shape, sides):
 
 
 @pytest.mark.parametrize("method", ELASTIC_METHODS)
-def test_full_contact_on_a_rectangle(method, monkeypatch):
+def test_full_contact_on_a_rectangle(solver_options, method, monkeypatch):
     # Past full contact the gap is 0 everywhere, so u = h - mean(h) and, K being diagonal in
     # Fourier space, p = p0 + (E*/2) F^-1[|q| h_hat] exactly. The solver's error is its tolerance
     # on the gap (1e-12 s) times the largest |q| E*/2 (~100 / s here): 1e-9 of the peak is a
     # bound with margin (measured <= 3e-13).
-    monkeypatch.setattr(solver_mod, "ELASTIC_METHOD", method)
+    solver_options(method=method)
     e_star = 2.0
     h = _rough()
     h -= h.mean()
@@ -215,9 +214,9 @@ def test_influence_matches_quadrature_near_and_far(rho):
 
 def test_square_pixels_reduce_to_the_square_influence():
     # The aspect-ratio formula with rho = 1 performs the square one's operations: bit for bit.
-    np.testing.assert_array_equal(_pixel_influence_rect(37, 37, 1.0), _pixel_influence(37))
+    np.testing.assert_array_equal(pixel_influence_rect(37, 37, 1.0), pixel_influence_square(37))
     # a rectangle of square pixels (nx != ny, dx == dy) samples the same function
-    np.testing.assert_array_equal(_pixel_influence_rect(20, 33, 1.0), _pixel_influence(33)[:21, :34])
+    np.testing.assert_array_equal(pixel_influence_rect(20, 33, 1.0), pixel_influence_square(33)[:21, :34])
 
 
 def _love(x, y, a, b):
@@ -326,16 +325,16 @@ def test_invariants_on_a_rectangle(boundary, hardness):
 
 
 @pytest.mark.parametrize("method", ELASTIC_METHODS)
-def test_every_method_on_a_rectangle(method, monkeypatch):
+def test_every_method_on_a_rectangle(solver_options, method, monkeypatch):
     # The same answer from every elastic iteration: contact sets equal, pressures within
     # what the tolerance allows (the gap to 1e-10 s; measured 1.3e-10 of the peak): 1e-7.
-    monkeypatch.setattr(solver_mod, "ELASTIC_METHOD", method)
+    solver_options(method=method)
     h = _rough()
     loads = [0.002, 0.006]
     ds = solve_contact(h, loads, length=SIDES, tol=TOL, store_fields=True)
     assert ds.attrs["elastic_method"] == method
     check_solution(ds, h, tol=TOL, length=SIDES)
-    monkeypatch.setattr(solver_mod, "ELASTIC_METHOD", "pk")
+    solver_options(method="pk")
     ref = solve_contact(h, loads, length=SIDES, tol=TOL, store_fields=True)
     np.testing.assert_array_equal(ds["area_fraction"].values, ref["area_fraction"].values)
     p, p_ref = ds["contact_pressure"].values, ref["contact_pressure"].values

@@ -51,9 +51,11 @@ def test_settings_must_be_a_settings_object(surface):
         solve_contact(surface, LOADS, {"tol": 1e-6})
 
 
-def test_method_none_reads_the_package_switch(surface, monkeypatch):
-    monkeypatch.setattr(solver_mod, "ELASTIC_METHOD", "pk")
+def test_method_defaults_to_the_solver_option(solver_options, surface):
+    assert SolverSettings().method == "pk-fourier-f32"
+    solver_options(method="pk")
     assert SolverSettings().checked(surface.shape).method == "pk"
+    assert SolverSettings(method=None).checked(surface.shape).method == "pk"  # None: the option at the solve
     assert SolverSettings(method="pk-fourier").checked(surface.shape).method == "pk-fourier"
 
 

@@ -6,8 +6,8 @@ import pytest
 
 from conftest import copy_workflow, run_snakemake
 from roughcontact.pipeline.config import ConfigError
-from roughcontact.pipeline.config.scenes import plan_summary, validate_config
 from roughcontact.pipeline.progress import planned_solves
+from roughcontact.pipeline.scenes import plan_summary, validate_config
 from roughcontact.pipeline.sources import SOURCES, PatchSource, Source, for_case, for_dims, register, source_of
 from roughcontact.surfaces.synthetic import generate_surface
 

@@ -22,8 +22,7 @@ from pathlib import Path
 import xarray as xr
 from matplotlib.figure import Figure
 
-from ..pipeline.cases import cases as grid_cases, is_adhesive
-from ..pipeline.config.scenes import CASE_STEM
+from ..pipeline.cases import CASE_STEM, cases as grid_cases, is_adhesive
 from ..pipeline.io import read_dataset
 from ..pipeline.sources import source_of
 from . import measured as plots_measured

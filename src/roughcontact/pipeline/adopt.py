@@ -52,7 +52,7 @@ from ..core.values import same_value
 from ..core.version import __version__
 from . import params
 from .config.files import load_config_files
-from .config.scenes import cases, validate_config
+from .scenes import cases, validate_config
 from .sources import source_of
 
 #: Global attributes that may differ between two runs' files of one case.

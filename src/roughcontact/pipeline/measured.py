@@ -45,7 +45,8 @@ def _fail(scene: str, field: str, msg: str):
     raise MeasuredConfigError(f"scene {scene!r}, field '{field}': {msg}")
 
 
-def _check_name(scene: str, field: str, name: str) -> None:
+def check_name(scene: str, field: str, name: str) -> None:
+    """Stop unless ``name`` can name a case's files: :data:`NAME`'s letters, and not a generated case's stem."""
     if not NAME.match(name):
         _fail(scene, field, f"name {name!r} is not allowed: names start with a letter or digit and hold only "
                             "letters, digits, '.', '_' and '-' (they become file names)")
@@ -61,7 +62,7 @@ def _from_glob(scene: str, pattern: str, check: bool) -> dict[str, dict]:
     files = {}
     for path in paths:
         name = Path(path).stem
-        _check_name(scene, "topography.glob", name)
+        check_name(scene, "topography.glob", name)
         if name in files:
             _fail(scene, "topography.glob", f"{files[name]['path']!r} and {path!r} have the same stem {name!r}; "
                                             "list them under topography.files with distinct names")
@@ -95,7 +96,7 @@ def topography_files(scene: str, block: Mapping, check: bool = True) -> dict[str
     else:
         files = {}
         for name, entry in block["files"].items():
-            _check_name(scene, f"topography.files.{name}", name)
+            check_name(scene, f"topography.files.{name}", name)
             files[name] = {"path": entry} if isinstance(entry, str) else dict(entry)
     for name, entry in files.items():
         if check:

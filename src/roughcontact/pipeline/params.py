@@ -5,7 +5,7 @@ parameters that produced it. Both must therefore hold exactly the values the job
 depends on — nothing from elsewhere in the scene (adding a seed must not touch existing
 cases; a solver tolerance must not touch surfaces; a description touches nothing) — in one
 canonical form: keys sorted at every level, numbers typed by the schema (done by
-:func:`roughcontact.pipeline.config.validate_config`). One provider per kind of job, as PyPSA-Eur's
+:func:`roughcontact.pipeline.scenes.validate_config`). One provider per kind of job, as PyPSA-Eur's
 ``config_provider`` hands single keys to rules. Every function takes a *validated* block
 and returns a new plain ``dict`` of JSON types.
 """

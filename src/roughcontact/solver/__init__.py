@@ -108,7 +108,7 @@ set. Implementation details:
 * each load step starts from the previous step's pressure scaled to the new
   ``p0`` (for the elastic problem ``u`` scales with it, so no FFT is needed).
 
-That is the reference iteration, :data:`ELASTIC_METHOD` ``= "pk"`` (the
+That is the reference iteration, the method ``"pk"`` (:class:`SolverSettings` ``method``) (the
 iteration of Tamaas' ``PolonskyKeerRey``, with the same iteration count).
 ``"pk-fourier"`` keeps its projections, active-set rules, stall guard and final
 check, and changes two things; the default, ``"pk-fourier-f32"``, a third:
@@ -270,6 +270,7 @@ from .check import MEAN_RTOL
 from .contact import ContactSolver
 from .effects import EFFECTS, Adhesion, Effect, PlasticityCap, effects_from_config
 from .halfspace import FreeHalfSpace, PeriodicHalfSpace, displacement, elastic_kernel, free_influence
+from .options import get_options, set_options
 from .results import (
                       FRACTION_UNITS,
                       SOLVER_DESCRIPTION,
@@ -284,23 +285,12 @@ from .units import LOAD_RANGE, gap_scale
 from .validation import BOUNDARIES
 from .workspace import ELASTIC_METHODS, FALLBACKS, SOLVER_PATHS, STALL_WINDOW
 
-#: Elastic iteration used by :func:`solve_contact` and :func:`solve_step`, one of
-#: :data:`ELASTIC_METHODS` (read at each call: set it here to switch).
-ELASTIC_METHOD = "pk-fourier-f32"
-
-#: Array backend of a solve whose settings name none (:data:`ARRAY_BACKENDS`, read at each call):
-#: ``"numpy"``, or ``"cupy"`` to run a whole test suite on a GPU (tests/conftest.py reads
-#: ``ROUGHCONTACT_ARRAY_BACKEND``).
-ARRAY_BACKEND = "numpy"
-
 __all__ = [
-    "ARRAY_BACKEND",
     "ARRAY_BACKENDS",
     "BOUNDARIES",
     "Adhesion",
     "DEFAULT_MAX_ITER",
     "EFFECTS",
-    "ELASTIC_METHOD",
     "ELASTIC_METHODS",
     "FALLBACKS",
     "FRACTION_UNITS",
@@ -318,6 +308,8 @@ __all__ = [
     "SolverSettings",
     "StepResult",
     "contact_perimeter",
+    "get_options",
+    "set_options",
     "displacement",
     "effects_from_config",
     "elastic_kernel",

@@ -35,13 +35,13 @@ import numpy as np
 from ..core.backend import ArrayBackend, SpectralProduct, get_backend, multiply_spectrum, remap_rows
 from ..core.fft import default_backend, get_fft, wavenumbers
 from .love import (  # noqa: F401 (re-exported: the free operator's influence lives in love)
-    _free_multiplier,
-    _padded_fft,
-    _pixel_influence,
-    _pixel_influence_rect,
     free_influence,
+    free_multiplier,
+    padded_fft,
     padded_shape,
     pixel_influence,
+    pixel_influence_rect,
+    pixel_influence_square,
     preconditioner_shape,
 )
 from .units import cell_aspect, frexp_ratio, grid, internal_length, side_x
@@ -325,10 +325,10 @@ class FreeHalfSpace:
         self.threads, self.aspect = threads, aspect
         self.padded = padded_shape(self.shape)
         if be.name == "numpy":
-            self.fft = _padded_fft(self.shape, threads, default_backend(), "float64")  # the name: a cache key
+            self.fft = padded_fft(self.shape, threads, default_backend(), "float64")  # the name: a cache key
         else:
             self.fft = be.real_fft(self.padded)
-        self.kern2 = be.asarray(_free_multiplier(self.shape, aspect))
+        self.kern2 = be.asarray(free_multiplier(self.shape, aspect))
         mx, my = self.padded
         self.norm = 1.0 / (mx * my)
         self.out = be.xp.empty(self.shape)
@@ -368,7 +368,7 @@ class FreeHalfSpace:
         # out of place: the padded input is 3/4 zero and kept between loads (an in-place transform
         # would need the whole padded buffer zeroed before each load)
         self.prod32 = prod = SpectralProduct(self.be, self.padded, np.float32, self.threads, in_place=False)
-        mult = _free_multiplier(self.shape, self.aspect)[..., 0]
+        mult = free_multiplier(self.shape, self.aspect)[..., 0]
         self.kmult32 = prod.multiplier(mult)
         self.kquad32 = prod.quadratic_weights(mult)  # Parseval on the padded grid: x is 0 off the patch
         self.loader = SparseLoad(prod, self._padded_index)

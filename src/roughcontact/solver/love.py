@@ -32,7 +32,7 @@ def _asinh_diff(a: np.ndarray, b: np.ndarray, a_minus_b: np.ndarray) -> np.ndarr
 
 
 @functools.lru_cache(maxsize=4)
-def _pixel_influence(n: int) -> np.ndarray:
+def pixel_influence_square(n: int) -> np.ndarray:
     """Love's pixel influence ``pi * u`` at node offsets ``0..n`` (both axes), ``dx = E* = 1``.
 
     The displacement at offset ``(x, y)`` (in pixels) from the centre of a pixel
@@ -58,12 +58,12 @@ def _pixel_influence(n: int) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=4)
-def _pixel_influence_rect(nx: int, ny: int, rho: float) -> np.ndarray:
+def pixel_influence_rect(nx: int, ny: int, rho: float) -> np.ndarray:
     """Love's influence ``pi * u / dx`` at node offsets ``(i dx, j dy)``, ``i = 0..nx``, ``j = 0..ny``.
 
     The pixel is ``dx x dy`` with ``rho = dy / dx``; everything is in units of ``dx``
     (``E* = 1``, unit pressure): offsets ``x = i``, ``y = j rho`` from the pixel's centre,
-    half-sides ``1/2`` and ``rho/2``. As :func:`_pixel_influence` (the case ``rho = 1``,
+    half-sides ``1/2`` and ``rho/2``. As :func:`pixel_influence_square` (the case ``rho = 1``,
     ``nx = ny``, which it reproduces bit for bit): ``pi u`` is the integral of ``1 / r`` over
     the pixel, the mixed difference of ``F(X, Y) = X ln(Y + r) + Y ln(X + r)`` over
     ``X = x +- 1/2``, ``Y = y +- rho/2``, written as differences of ``asinh`` with the
@@ -90,12 +90,12 @@ def pixel_influence(shape, aspect: float = 1.0) -> np.ndarray:
 
     Unit pressure on one ``dx x dy`` pixel of a cell with ``Ly / Lx = aspect`` on the grid
     ``shape`` (``dy / dx = aspect * nx / ny``); the square case (``nx == ny``, ``aspect == 1``)
-    is :func:`_pixel_influence`, any other :func:`_pixel_influence_rect`. Read-only (cached).
+    is :func:`pixel_influence_square`, any other :func:`pixel_influence_rect`. Read-only (cached).
     """
     nx, ny = grid(shape)
     if nx == ny and aspect == 1.0:
-        return _pixel_influence(nx)
-    return _pixel_influence_rect(nx, ny, aspect * nx / ny)
+        return pixel_influence_square(nx)
+    return pixel_influence_rect(nx, ny, aspect * nx / ny)
 
 
 def padded_shape(shape) -> tuple[int, int]:
@@ -185,7 +185,7 @@ def free_influence(shape, e_star: float = 1.0, length=1.0, padded=None) -> np.nd
 
 
 @functools.lru_cache(maxsize=4)
-def _free_multiplier(shape: tuple[int, int], aspect: float) -> np.ndarray:
+def free_multiplier(shape: tuple[int, int], aspect: float) -> np.ndarray:
     """rfft2 of :func:`free_influence` on :func:`padded_shape` for ``E* = Lx = 1``, interleaved (re, im) real copy.
 
     The influence is real and even, so its transform is real (the imaginary
@@ -199,7 +199,7 @@ def _free_multiplier(shape: tuple[int, int], aspect: float) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=8)
-def _padded_fft(shape: tuple[int, int], threads: int, backend: str, dtype: str) -> RealFFT2:
+def padded_fft(shape: tuple[int, int], threads: int, backend: str, dtype: str) -> RealFFT2:
     """A :func:`padded_shape` FFT pair owned by :class:`FreeHalfSpace` (never shared with ``get_fft``).
 
     Only the ``nx x ny`` corner of its input buffer is ever written, so the

@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import dataclasses
-import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from ..core.backend import ARRAY_BACKENDS, get_backend
 from ..core.quantities import cf_unit
 from .effects import Effect, PlasticityCap
+from .options import option
 from .validation import check_positive, validate_boundary, validate_solver_args
 from .workspace import ELASTIC_METHODS
 
@@ -39,8 +39,9 @@ class SolverSettings:
         ``"periodic"``: the cell is one period of an infinite periodic surface. ``"free"``: an
         isolated patch on an infinite half-space loaded only there (:class:`~.halfspace.FreeHalfSpace`).
     method : str or None
-        The elastic iteration, one of :data:`~.workspace.ELASTIC_METHODS`; None: the package's
-        switch ``roughcontact.solver.ELASTIC_METHOD`` when the solve starts.
+        The elastic iteration, one of :data:`~.workspace.ELASTIC_METHODS`; default ``"pk-fourier-f32"``
+        (:data:`.options.DEFAULTS`, or what :func:`.options.set_options` set when the settings were made).
+        None: that option when the solve starts.
     effects : tuple of Effect
         What acts on the iteration besides elasticity (:mod:`.effects`), e.g.
         ``(PlasticityCap(hardness),)``.
@@ -51,8 +52,9 @@ class SolverSettings:
         Where the iteration's fields live (:mod:`roughcontact.core.backend`): ``"numpy"`` on the
         host with pyFFTW; ``"cupy"`` on a CUDA GPU (``roughcontact[gpu]``), for the elastic
         solver without effects (periodic or free). Results agree within the solver's tolerance,
-        not bit for bit (another FFT library). None: the package's switch
-        ``roughcontact.solver.ARRAY_BACKEND`` when the solve starts.
+        not bit for bit (another FFT library). Default ``"numpy"`` (:data:`.options.DEFAULTS`, or
+        what :func:`.options.set_options` set when the settings were made). None: that option when the
+        solve starts.
     """
 
     e_star: float = 1.0
@@ -61,11 +63,11 @@ class SolverSettings:
     max_iter: int = DEFAULT_MAX_ITER
     threads: int = 1
     boundary: str = "periodic"
-    method: str | None = None
+    method: str | None = field(default_factory=lambda: option("method"))
     effects: tuple[Effect, ...] = ()
     length_unit: str = "1"
     pressure_unit: str = "1"
-    array_backend: str | None = None
+    array_backend: str | None = field(default_factory=lambda: option("array_backend"))
 
     @classmethod
     def from_options(cls, settings: SolverSettings | None = None, **options) -> SolverSettings:
@@ -94,17 +96,16 @@ class SolverSettings:
         """
         e_star, length, tol, max_iter, threads = validate_solver_args(
             self.e_star, self.length, self.tol, self.max_iter, self.threads, shape=shape)
-        method = sys.modules[__package__].ELASTIC_METHOD if self.method is None else self.method
+        method = option("method") if self.method is None else self.method
         if method not in ELASTIC_METHODS:
-            source = "method" if self.method is not None else "roughcontact.solver.ELASTIC_METHOD"
-            raise ValueError(f"{source} must be one of {ELASTIC_METHODS}, got {method!r}")
+            raise ValueError(f"method must be one of {ELASTIC_METHODS}, got {method!r}")
         effects = tuple(self.effects)
         for effect in effects:
             if not isinstance(effect, Effect):
                 raise ValueError(f"effects must be Effect objects (roughcontact.solver.effects), got "
                                  f"{type(effect).__name__} {effect!r}")
         cf_unit(self.length_unit, self.pressure_unit)  # ValueError for a unit outside the declared sets
-        backend = sys.modules[__package__].ARRAY_BACKEND if self.array_backend is None else self.array_backend
+        backend = option("array_backend") if self.array_backend is None else self.array_backend
         _check_backend(backend, effects)
         return dataclasses.replace(self, e_star=e_star, length=length, tol=tol, max_iter=max_iter,
                                    threads=threads, boundary=validate_boundary(self.boundary),

@@ -83,7 +83,7 @@ class Workspace:
     def __init__(self, heights: np.ndarray, length: float, threads: int, method: str,
                  boundary: str = "periodic", scale: float | None = None, backend: str = "numpy"):
         if method not in ELASTIC_METHODS:
-            raise ValueError(f"ELASTIC_METHOD must be one of {ELASTIC_METHODS}, got {method!r}")
+            raise ValueError(f"method must be one of {ELASTIC_METHODS}, got {method!r}")
         shape = self.shape = heights.shape
         self.size = shape[0] * shape[1]
         self.length = length

@@ -24,20 +24,22 @@ what is wrong and what is allowed, and names the config field (``topography.<key
 
 from __future__ import annotations
 
+import functools
 import numbers
 import os
 import warnings
 import zipfile
 from dataclasses import dataclass
+from types import SimpleNamespace
+from typing import TYPE_CHECKING
 
 import numpy as np
-from SurfaceTopography import Topography
-from SurfaceTopography.Exceptions import CannotDetectFileFormat, CorruptFile
-from SurfaceTopography.IO import open_topography, readers
-from SurfaceTopography.Support.UnitConversion import get_unit_conversion_factor, mangle_length_unit_ascii
 
 from ..core.files import file_sha256
 from .scales import checked_scales, length_problem
+
+if TYPE_CHECKING:
+    from SurfaceTopography import Topography
 
 #: The study's allowed length units (CF/UDUNITS spellings: micrometres are "um", not "µm").
 LENGTH_UNITS = ("m", "mm", "um", "nm")
@@ -60,6 +62,29 @@ WARN_UNDEFINED = 0.1
 #: Largest relative difference |dx/dy - 1| of the pixel sizes still taken as square (the cell's
 #: sides are then recorded as one length, as for a generated surface).
 PIXEL_RTOL = 1e-6
+
+
+@functools.cache
+def surface_topography() -> SimpleNamespace:
+    """The parts of SurfaceTopography this module uses, imported when a file is first read or checked.
+
+    Imported here rather than at the top because SurfaceTopography imports matplotlib: the library's
+    layers import without matplotlib and snakemake (``tests/test_library_alone.py``), and only a
+    measured scene reads files.
+    """
+    try:
+        from SurfaceTopography import Topography
+        from SurfaceTopography.Exceptions import CannotDetectFileFormat, CorruptFile
+        from SurfaceTopography.IO import open_topography, readers
+        from SurfaceTopography.Support.UnitConversion import get_unit_conversion_factor, mangle_length_unit_ascii
+    except ImportError as err:  # the library installed without its `topography` extra
+        raise ImportError(f"reading topography files needs SurfaceTopography ({err}): install it with "
+                          "`pip install 'roughcontact[topography]'`") from err
+
+    return SimpleNamespace(Topography=Topography, CannotDetectFileFormat=CannotDetectFileFormat,
+                           CorruptFile=CorruptFile, open_topography=open_topography, readers=readers,
+                           get_unit_conversion_factor=get_unit_conversion_factor,
+                           mangle_length_unit_ascii=mangle_length_unit_ascii)
 
 
 class TopographyError(ValueError):
@@ -191,9 +216,9 @@ def _check_header(name, reader, unit, file_unit, physical_size, non_square, chan
     try:
         chan = _channel(name, reader, channel)
         kwargs = _metadata(name, chan, {}, file_unit=file_unit, physical_size=physical_size)
-        file_unit = mangle_length_unit_ascii(kwargs.get("unit", chan.unit))
+        file_unit = surface_topography().mangle_length_unit_ascii(kwargs.get("unit", chan.unit))
         try:
-            factor = get_unit_conversion_factor(file_unit, unit)
+            factor = surface_topography().get_unit_conversion_factor(file_unit, unit)
         except ValueError as err:
             raise TopographyError(f"{name}: the file's unit {file_unit!r} cannot be converted to {unit!r} "
                                   f"({err})") from err
@@ -282,11 +307,12 @@ def _load(name, info, *, unit, file_unit, physical_size, channel, fmt=None) -> T
         finally:
             _close(reader)
     mask = np.ma.getmaskarray(heights) | ~np.isfinite(data)
+    st = surface_topography()
     info.update(reader=type(reader).__name__, format=reader.format(), channel=chan.name,
-                file_unit=mangle_length_unit_ascii(raw.unit), original_shape=[int(n) for n in data.shape],
+                file_unit=st.mangle_length_unit_ascii(raw.unit), original_shape=[int(n) for n in data.shape],
                 original_physical_size=[float(s) for s in scaled.physical_sizes], periodic=bool(raw.is_periodic))
-    return Topography(np.ma.masked_array(data, mask=mask) if mask.any() else data, scaled.physical_sizes,
-                      periodic=bool(raw.is_periodic), unit=unit)
+    return st.Topography(np.ma.masked_array(data, mask=mask) if mask.any() else data, scaled.physical_sizes,
+                         periodic=bool(raw.is_periodic), unit=unit)
 
 
 def _open(name: str, fmt: str | None = None):
@@ -304,7 +330,7 @@ def _open(name: str, fmt: str | None = None):
     if fmt is None and reader.format() in CONTENT_BLIND and ext not in own:
         detected = reader.format()
         _close(reader)
-        claimed = sorted({r.format() for r in readers if ext in _extensions(r)})
+        claimed = sorted({r.format() for r in surface_topography().readers if ext in _extensions(r)})
         what = f"that of {', '.join(repr(c) for c in claimed)}" if claimed else "not one of them"
         raise TopographyError(f"{name}: SurfaceTopography reads it only as {detected!r} data (extensions "
                               f"{', '.join('.' + e for e in own)}), but its extension .{ext} is {what}: the file is "
@@ -315,7 +341,7 @@ def _open(name: str, fmt: str | None = None):
 
 def _check_format(name: str, fmt) -> str | None:
     """``fmt`` if it is None or one of SurfaceTopography's formats, else a TopographyError."""
-    formats = sorted(r.format() for r in readers)
+    formats = sorted(r.format() for r in surface_topography().readers)
     if fmt is not None and fmt not in formats:
         raise TopographyError(f"{name}: topography.format {fmt!r} is not allowed; use one of {', '.join(formats)}")
     return fmt
@@ -329,16 +355,16 @@ def _extensions(reader) -> list[str]:
 def _open_reader(name: str, fmt: str | None):
     """``open_topography``, its failures as :class:`TopographyError`."""
     try:
-        return open_topography(name, format=fmt)
-    except CannotDetectFileFormat as err:
+        return surface_topography().open_topography(name, format=fmt)
+    except surface_topography().CannotDetectFileFormat as err:
         # Its message lists every reader's complaint; the chained exception keeps them.
         archive = _archive(name)
         if archive:
             raise TopographyError(f"{name}: {archive}") from err
-        formats = ", ".join(sorted(r.format() for r in readers))
+        formats = ", ".join(sorted(r.format() for r in surface_topography().readers))
         raise TopographyError(f"{name}: not a topography file SurfaceTopography can read (unknown or unsupported "
                               f"format, or a damaged file); formats read: {formats}") from err
-    except CorruptFile as err:
+    except surface_topography().CorruptFile as err:
         raise TopographyError(f"{name}: the file is damaged ({err})") from err
     except Exception as err:
         raise TopographyError(f"{name}: SurfaceTopography cannot open the file ({type(err).__name__}: {err})") from err
@@ -426,7 +452,7 @@ def _metadata(name, chan, info, *, file_unit, physical_size) -> dict:
 def _to_unit(name, topo, unit):
     """``topo`` converted to the study's ``unit`` by SurfaceTopography (heights and sizes)."""
     try:
-        get_unit_conversion_factor(topo.unit, unit)
+        surface_topography().get_unit_conversion_factor(topo.unit, unit)
     except ValueError as err:
         raise TopographyError(f"{name}: the file's unit {topo.unit!r} cannot be converted to {unit!r} ({err})") from err
     return topo.to_unit(unit)

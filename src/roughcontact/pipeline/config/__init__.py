@@ -1,8 +1,11 @@
-"""Scenes: validate the pipeline's config and expand it into cases.
+"""The pipeline's config: its files, its schema and the cross-field rules of each study block.
 
 :mod:`.files` reads config files as Snakemake does, :mod:`.schema` applies the JSON schema (package data
-``config.schema.yaml``), :mod:`.checks` the cross-field rules of each study block, and :mod:`.scenes`
-validates whole scenes, expands them into cases and prints the plan (``python -m roughcontact.pipeline.config``).
+``config.schema.yaml``), :mod:`.checks` the cross-field rules of each study block. Whole scenes are
+validated, expanded into cases and planned one level up, in :mod:`roughcontact.pipeline.scenes`, which also
+asks each scene's surface source (:mod:`roughcontact.pipeline.sources`); the sources use this package's
+rules, so this package imports neither (``python -m roughcontact.pipeline.config`` runs
+:func:`roughcontact.pipeline.scenes.main`).
 """
 
 from .checks import (
@@ -15,17 +18,6 @@ from .files import (
     load_config_files,
     read_config_file,
     update_config,
-)
-from .scenes import (
-    BATCH_STEM,
-    CASE_STEM,
-    SCENE_NAME,
-    Case,
-    batches,
-    cases,
-    plan_summary,
-    validate_config,
-    validate_scene,
 )
 from .schema import (
     SCENE_STUDIES,
@@ -52,13 +44,4 @@ __all__ = [
     "merge",
     "merge_scene",
     "MEASURED_P_MAX",
-    "CASE_STEM",
-    "BATCH_STEM",
-    "SCENE_NAME",
-    "Case",
-    "validate_scene",
-    "validate_config",
-    "batches",
-    "cases",
-    "plan_summary",
 ]

@@ -1,6 +1,6 @@
 """python -m roughcontact.pipeline.config [FILE ...]: check the shipped config with FILEs added."""
 
-from .scenes import main
+from ..scenes import main
 
 if __name__ == "__main__":
     main()

@@ -23,7 +23,7 @@ def _duplicates_by_value(texts) -> list[str]:
     return dups
 
 
-def _check_grid(scene: str, study: str, block: dict) -> None:
+def check_grid(scene: str, study: str, block: dict) -> None:
     """Cross-field rules of a generated study's grid (k_l < k_s <= N/2, 0 < H < 1, examples, seeds)."""
     def fail(field, msg):
         raise ConfigError(f"scene {scene!r}, field '{study}.{field}': {msg}")
@@ -57,7 +57,7 @@ def _check_grid(scene: str, study: str, block: dict) -> None:
                       "at least 2")
 
 
-def _check_contact(scene: str, block: dict) -> None:
+def check_contact(scene: str, block: dict) -> None:
     """Cross-field rules of a contact block: output steps, load schedule, effects."""
     def fail(field, msg):
         raise ConfigError(f"scene {scene!r}, field 'contact.{field}': {msg}")
@@ -109,7 +109,7 @@ def _fail_effect(fail, name: str, field: str, msg: str) -> None:
 
 
 def _check_target_area(fail, load: dict) -> None:
-    """A ``load.target_area`` block: the final load is found per case (:func:`_resolve_load` dropped p_max)."""
+    """A ``load.target_area`` block: the final load is found per case (:func:`resolve_load` dropped p_max)."""
     if "p_min" in load:
         fail("load.p_min", "not used with load.target_area: the geometric schedule then starts at "
                            "(final load) / n_steps; remove it")
@@ -170,7 +170,7 @@ def _check_hardness_relative(fail, block: dict) -> None:
 MEASURED_P_MAX = 0.05
 
 
-def _resolve_load(scene: str, load: dict, given: Mapping, measured: bool) -> None:
+def resolve_load(scene: str, load: dict, given: Mapping, measured: bool) -> None:
     """Fill ``load.relative_to`` in place from what the scene wrote (``given``: its own ``contact.load``).
 
     With ``target_area`` the final load is found per case, and ``p_max`` (inherited) is dropped. A
@@ -222,7 +222,8 @@ def _check_one_case(block: dict, fail) -> float:
     return k_s
 
 
-def _check_accuracy(scene: str, block: dict) -> None:
+def check_accuracy(scene: str, block: dict) -> None:
+    """Cross-field rules of an accuracy block (its one case inside the grid, axes and seeds ordered)."""
     fail = _study_failure(scene, "accuracy")
     k_s = _check_one_case(block, fail)
     settings = [("reference", block["reference"]), ("defaults", block["defaults"])]
@@ -238,7 +239,8 @@ def _check_accuracy(scene: str, block: dict) -> None:
         fail("seed_axis", "needs at least one entry >= 1")
 
 
-def _check_kappa_gap(scene: str, block: dict) -> None:
+def check_kappa_gap(scene: str, block: dict) -> None:
+    """Cross-field rules of a kappa_gap block (its one case inside the grid, each variant's settings)."""
     fail = _study_failure(scene, "kappa_gap")
     k_s = _check_one_case(block, fail)
     variants = block["variants"]

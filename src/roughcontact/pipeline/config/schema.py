@@ -137,14 +137,14 @@ def _coerce_number(value, schema: dict):
     return value
 
 
-def _complete(instance, schema: dict, root: dict):
+def fill_defaults(instance, schema: dict, root: dict):
     """Fill the schema's ``default`` values into ``instance`` and type its numbers, in place.
 
     Returns the (possibly retyped) instance: numbers are retyped, containers changed in place.
     """
     schema = _resolve(schema, root)
     if isinstance(instance, list) and isinstance(schema.get("items"), dict):
-        instance[:] = [_complete(item, schema["items"], root) for item in instance]
+        instance[:] = [fill_defaults(item, schema["items"], root) for item in instance]
         return instance
     if not isinstance(instance, dict):
         return _coerce_number(instance, schema)
@@ -160,12 +160,12 @@ def _complete(instance, schema: dict, root: dict):
         if name not in instance and "default" in sub:
             instance[name] = copy.deepcopy(sub["default"])
         if name in instance:
-            instance[name] = _complete(instance[name], sub, root)
+            instance[name] = fill_defaults(instance[name], sub, root)
     extra = schema.get("additionalProperties")
     if isinstance(extra, dict):
         for name, value in instance.items():
             if name not in props:
-                instance[name] = _complete(value, extra, root)
+                instance[name] = fill_defaults(value, extra, root)
     return instance
 
 
@@ -185,7 +185,8 @@ def merge(base, delta):
     return out
 
 
-def _has_path(tree, path) -> bool:
+def has_path(tree, path) -> bool:
+    """Whether the nested mappings and lists ``tree`` hold ``path`` (a sequence of keys and indices)."""
     for part in path:
         if isinstance(tree, dict) and part in tree:
             tree = tree[part]
@@ -214,11 +215,13 @@ def merge_scene(defaults: dict, scene: dict) -> dict:
     return out
 
 
-def _field(path) -> str:
+def field_name(path) -> str:
+    """A validation error's path as the field name in messages (``contact.grid.k_s``; ``(top level)``)."""
     return ".".join(str(p) for p in path) or "(top level)"
 
 
-def _schema_message(err) -> str:
+def schema_message(err) -> str:
+    """One line for a :mod:`jsonschema` error: what is wrong and the allowed values or range."""
     if err.validator == "additionalProperties" or err.validator == "unevaluatedProperties":
         allowed = sorted(_resolve(err.schema, {}).get("properties", {}) or [])
         return f"{err.message}" + (f"; allowed keys: {', '.join(allowed)}" if allowed else "")
@@ -282,13 +285,13 @@ _TYPE_REMEDY = {"integer": ("a whole number", "4"), "number": ("a number", "0.00
                 "boolean": ("true or false", "true")}
 
 
-def _non_finite(tree, path=()):
+def non_finite(tree, path=()):
     """Path and value of the first NaN or infinite number in ``tree``, or None."""
     if isinstance(tree, float) and not math.isfinite(tree):
         return path, tree
     items = tree.items() if isinstance(tree, dict) else enumerate(tree) if isinstance(tree, list) else ()
     for key, value in items:
-        found = _non_finite(value, (*path, key))
+        found = non_finite(value, (*path, key))
         if found:
             return found
     return None

@@ -31,7 +31,7 @@ import numpy as np
 from ...core.files import file_sha256
 from ...surfaces.scales import scale_problem
 from ..config.files import ConfigError
-from ..measured import MeasuredConfigError, _check_name
+from ..measured import MeasuredConfigError, check_name
 from .base import register
 from .patches import PatchSource
 
@@ -119,7 +119,7 @@ class Array(PatchSource):
         for name, entry in sorted(block["files"].items()):
             field = f"array.files.{name}"
             try:
-                _check_name(scene, field, name)
+                check_name(scene, field, name)
             except MeasuredConfigError as err:
                 raise ConfigError(str(err)) from None
             entry = {"path": entry} if isinstance(entry, str) else dict(entry)

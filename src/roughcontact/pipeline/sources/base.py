@@ -3,7 +3,7 @@
 A *surface source* is where a scene's surfaces come from: the generator (``generated``), topography
 files (``measured``), plain NumPy arrays (``array``), ... Each is one module in this package holding
 one :class:`Source` subclass, registered with :func:`register` under its name. The config's
-validation, the workflow's rules (``workflow/rules/common.smk``), its scripts, the figure registry
+validation, the workflow's rules (:mod:`roughcontact.pipeline.targets`), its scripts, the figure registry
 and the progress report ask the scene's source (:func:`source_of`) instead of testing which kind
 of scene it is. A source says
 
@@ -111,7 +111,7 @@ class Source:
 
     @classmethod
     def plan(cls, scene: Mapping) -> list[str]:
-        """What the scene's studies compute, in words (parts of :func:`..config.plan_summary`)."""
+        """What the scene's studies compute, in words (parts of :func:`roughcontact.pipeline.scenes.plan_summary`)."""
         return []
 
 

@@ -14,7 +14,7 @@ from collections.abc import Mapping
 
 from ...analysis.aggregate import CASE_DIMS, add_derived, combine_cases, representativity_statistics, seed_statistics
 from ..cases import BATCH_STEM, CASE_STEM, batches, cases
-from ..config.checks import _check_grid
+from ..config.checks import check_grid
 from ..config.schema import STUDIES
 from ..datasets import split_cases
 from .base import SOURCES, Source, register
@@ -45,7 +45,7 @@ class Generated(Source):
         out = copy.deepcopy(scene)
         for study in STUDIES:
             if study in out:
-                _check_grid(name, study, out[study])
+                check_grid(name, study, out[study])
         if "contact" in out:
             out["contact"]["solver"].setdefault("boundary", cls.default_boundary)
         return out

@@ -46,27 +46,28 @@ from pathlib import Path
 
 from jsonschema import Draft202012Validator
 
-from ..cases import BATCH_STEM, CASE_STEM, Case, batches, cases
-from .checks import (
-    _check_accuracy,
-    _check_contact,
-    _check_kappa_gap,
-    _resolve_load,
+from .cases import BATCH_STEM, CASE_STEM, Case, batches, cases
+from .config.checks import (
+    check_accuracy,
     check_against_fit,
     check_backend,
+    check_contact,
+    check_kappa_gap,
+    resolve_load,
 )
-from .files import ConfigError, load_config_files
-from .schema import (
+from .config.files import ConfigError, load_config_files
+from .config.schema import (
     SCENE_STUDIES,
-    _complete,
-    _field,
-    _has_path,
-    _non_finite,
-    _schema_message,
     coerce_strings,
+    field_name,
+    fill_defaults,
+    has_path,
     load_schema,
     merge_scene,
+    non_finite,
+    schema_message,
 )
+from .sources import source_of
 
 #: Allowed scene names: they become folder names under results/.
 SCENE_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]*$")
@@ -84,11 +85,9 @@ def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = No
     is the scene that runs (only its topography files must exist now). Raises
     :class:`ConfigError` naming ``name`` and the offending field.
     """
-    bad = _non_finite(scene)
+    bad = non_finite(scene)
     if bad:
-        raise ConfigError(f"scene {name!r}, field '{_field(bad[0])}': {bad[1]} is not a finite number")
-    from ..sources import source_of  # the sources use the config's checks: imported when it runs
-
+        raise ConfigError(f"scene {name!r}, field '{field_name(bad[0])}': {bad[1]} is not a finite number")
     source = source_of(scene, name)
     for study in ("accuracy", "kappa_gap"):
         if study in scene and study not in source.studies:
@@ -101,23 +100,23 @@ def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = No
     if errors:
         err = errors[0]
         origin = ""
-        if delta is not None and err.path and not _has_path(delta, err.path) and _has_path(scene, err.path):
+        if delta is not None and err.path and not has_path(delta, err.path) and has_path(scene, err.path):
             origin = " (value from the 'defaults' block)"
-        raise ConfigError(f"scene {name!r}, field '{_field(err.path)}'{origin}: {_schema_message(err)}")
-    out = _complete(copy.deepcopy(scene), scene_schema, scene_schema)
+        raise ConfigError(f"scene {name!r}, field '{field_name(err.path)}'{origin}: {schema_message(err)}")
+    out = fill_defaults(copy.deepcopy(scene), scene_schema, scene_schema)
     out = source.check_scene(name, out, delta, check_files=active)
     if "contact" in out:
         given = ((delta or {}).get("contact") or {}).get("load") or {}
-        _resolve_load(name, out["contact"]["load"], given, source.relative_load)
-        _check_contact(name, out["contact"])
+        resolve_load(name, out["contact"]["load"], given, source.relative_load)
+        check_contact(name, out["contact"])
         check_against_fit(name, out["contact"], out["fit"])
         if active:
             check_backend(name, out["contact"])
             source.check_contact_files(name, out)
     if "accuracy" in out:
-        _check_accuracy(name, out["accuracy"])
+        check_accuracy(name, out["accuracy"])
     if "kappa_gap" in out:
-        _check_kappa_gap(name, out["kappa_gap"])
+        check_kappa_gap(name, out["kappa_gap"])
     lo, hi = out["fit"]["window"]
     if not lo < hi:
         raise ConfigError(f"scene {name!r}, field 'fit.window': needs low < high, got [{lo}, {hi}]")
@@ -192,8 +191,6 @@ def _load_summary(load: Mapping) -> str:
 
 def plan_summary(scene_name: str, scene: dict) -> str:
     """One line saying how much a validated scene computes (shown by ``snakemake -n``)."""
-    from ..sources import source_of
-
     parts = source_of(scene, scene_name).plan(scene)
     if "contact" in scene:
         parts.append(_load_summary(scene["contact"]["load"]))
