@@ -24,7 +24,7 @@ import numpy as np
 
 from ...analysis.aggregate import TOPOGRAPHY_DIM, add_derived, combine_topographies
 from ...analysis.aggregate.combine import GRID_RTOL
-from ...solver.adhesion import MIN_ZONE_CELLS, Exponential, unresolved_zone_message, zone_cells
+from ...solver.effects import Adhesion
 from ...surfaces.synthetic import nonperiodic_moments
 from ..config.checks import check_target_nodes
 from ..config.files import ConfigError
@@ -74,13 +74,11 @@ class PatchSource(Source):
         block = scene["contact"]["effects"].get("adhesion")
         if block is None:
             return
-        law = Exponential(block["work"], block["range"])  # w / E* and rho in the scene's unit: E* = 1
         for case, ((nx, ny), (dx, dy)) in cls.grids(name, scene).items():
-            cells = zone_cells(law, 1.0, (nx * dx, ny * dy), (nx, ny))
-            if cells < MIN_ZONE_CELLS:
-                pixel = f"{dx:.4g} x {dy:.4g} {scene[cls.key]['unit']}"
-                raise ConfigError(f"scene {name!r}, field 'contact.effects.adhesion': {cls.what} {case!r}: "
-                                  + unresolved_zone_message(cells, law, 1.0, pixel))
+            problem = Adhesion.unresolved(block, (nx * dx, ny * dy), (nx, ny),
+                                          f"{dx:.4g} x {dy:.4g} {scene[cls.key]['unit']}")
+            if problem:
+                raise ConfigError(f"scene {name!r}, field 'contact.effects.adhesion': {cls.what} {case!r}: {problem}")
 
     @classmethod
     def _check_shapes(cls, name: str, scene: Mapping) -> None:

@@ -85,16 +85,30 @@ class Adhesion(Effect):
         block = contact["effects"][cls.name]
         surface = contact.get("surface", {})
         if "N" in surface and "L" in surface:  # a generated surface: its grid is known before any job
-            law = Exponential(block["work"], block["range"])  # w / E* and rho: the zone in units of E* = 1
-            cells = zone_cells(law, 1.0, float(surface["L"]), (int(surface["N"]),) * 2)
-            if cells < MIN_ZONE_CELLS:
-                need = math.ceil(MIN_ZONE_CELLS * float(surface["L"]) / process_zone_length(law, 1.0))
-                fail("", unresolved_zone_message(cells, law, 1.0, f"L / N = {surface['L']:g} / {surface['N']}")
-                     + f" (surface.N >= {need})")
+            n, length = int(surface["N"]), float(surface["L"])
+            problem = cls.unresolved(block, length, (n, n), f"L / N = {surface['L']:g} / {surface['N']}")
+            if problem:
+                need = math.ceil(MIN_ZONE_CELLS * length / process_zone_length(cls.config_law(block), 1.0))
+                fail("", f"{problem} (surface.N >= {need})")
         if block["law"] == "maugis-dugdale":
             fail(".law", "maugis-dugdale is refused in a scene: its tension jumps at g = rho, so the discrete "
                  "problem traps in many states and its pull-off does not converge with the grid (docs/solver.md, "
                  "'Adhesion'); use law: exponential (the library's MaugisDugdale stays for studies of that trap)")
+
+    @staticmethod
+    def config_law(block: dict) -> Exponential:
+        """The law of a config block with E* = 1 (``work`` is w / E*), for checks of lengths alone."""
+        return Exponential(block["work"], block["range"])
+
+    @classmethod
+    def unresolved(cls, block: dict, length, shape, where: str) -> str | None:
+        """Why a grid of ``shape`` on a cell of ``length`` cannot resolve a config block's process zone, or None.
+
+        ``length`` (L or (Lx, Ly)) in the surface's unit, the block's ``range`` too; ``where`` names the pixel.
+        """
+        law = cls.config_law(block)
+        cells = zone_cells(law, 1.0, length, shape)
+        return None if cells >= MIN_ZONE_CELLS else unresolved_zone_message(cells, law, 1.0, where)
 
     @classmethod
     def from_config(cls, block: dict, *, e_star: float) -> Adhesion:
