@@ -20,6 +20,7 @@ import numpy as np
 
 from roughcontact import solver as solver_mod
 from roughcontact.solver import solve_contact, solve_step
+from roughcontact.statistics.clusters import ClusterObserver
 from roughcontact.surfaces.synthetic import generate_surface
 
 LOADS = [0.002 * k for k in range(1, 7)]
@@ -49,7 +50,8 @@ def problems():
         for shape_name, h, length in (("square", sq, 1.0), ("rect", rect, (1.0, 40 / 64))):
             name = f"{method}/{boundary}/H={hardness}/{shape_name}"
             cases.append((name, method, dict(heights=h, pressures=LOADS, length=length, boundary=boundary,
-                                             hardness=hardness, store_fields=[2, 6], clusters=True)))
+                                             hardness=hardness, store_fields=[2, 6],
+                                             observers=[ClusterObserver(length, boundary == "periodic")])))
     cases.append(("flat/periodic", "pk-fourier-f32", dict(heights=flat, pressures=LOADS[:3])))
     cases.append(("flat/free", "pk-fourier-f32", dict(heights=flat, pressures=LOADS[:3], boundary="free")))
     cases.append(("tol-1e-12", "pk-fourier-f32", dict(heights=sq, pressures=LOADS, tol=1e-12)))

@@ -10,6 +10,7 @@ import roughcontact.pipeline.case as case_module
 from roughcontact.pipeline.case import ContactCase, run_case
 from roughcontact.pipeline.loading import LoadSchedule
 from roughcontact.solver import solve_contact, solve_step
+from roughcontact.statistics.clusters import ClusterObserver
 from roughcontact.surfaces.synthetic import generate_surface
 
 REPO = Path(__file__).resolve().parents[1]
@@ -33,8 +34,8 @@ def test_a_block_runs_as_the_solver_with_its_settings(surface):
     ds = run_case(surface, case, length=1.0, rms_slope=0.1)
     loads = np.geomspace(0.05 * 2.0 * 0.1 / 6, 0.05 * 2.0 * 0.1, 6)
     ref = solve_contact(surface, LoadSchedule.from_block(block).pressures(2.0, 0.1), e_star=2.0, tol=1e-9,
-                        max_iter=5000, hardness=1.0, store_fields=[6], clusters=True, length_unit="um",
-                        pressure_unit="MPa")
+                        max_iter=5000, hardness=1.0, store_fields=[6], length_unit="um", pressure_unit="MPa",
+                        observers=[ClusterObserver(1.0, length_unit="um")])
     np.testing.assert_allclose(ds["pressure"].values, loads, rtol=1e-12)
     for name in ("area_fraction", "mean_gap", "iterations", "plastic_area_fraction", "contact_pressure",
                  "cluster_count"):

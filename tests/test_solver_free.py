@@ -48,7 +48,7 @@ from roughcontact.solver import (
     solve_step,
 )
 from roughcontact.solver.halfspace import preconditioner_shape
-from roughcontact.statistics.clusters import cluster_statistics
+from roughcontact.statistics.clusters import ClusterObserver, cluster_statistics
 from roughcontact.surfaces.synthetic import generate_surface
 from solver_invariants import check_solution, direct_free_displacement, quadrature_influence
 
@@ -344,7 +344,8 @@ def test_perimeter_and_clusters_do_not_wrap():
     assert cluster_statistics(mask)["count"] == 1
     assert cluster_statistics(mask, periodic=False)["count"] == 2
     h = _rough(32)
-    ds = solve_contact(h, [0.002, 0.004], clusters=True, boundary="free", store_fields=True)
+    ds = solve_contact(h, [0.002, 0.004], boundary="free", store_fields=True,
+                       observers=[ClusterObserver(1.0, periodic=False)])
     for k in range(2):
         m = ds["contact_pressure"].values[k] > 0
         assert ds["cluster_count"].values[k] == cluster_statistics(m, periodic=False)["count"]

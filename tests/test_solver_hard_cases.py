@@ -261,8 +261,6 @@ GOOD = np.zeros((8, 8))
         (dict(hardness="0.1"), "hardness must be a finite real number > 0, got str '0.1'"),
         (dict(hardness=True), "hardness must be a finite real number > 0, got bool True"),
         (dict(max_iter="10"), "max_iter must be an integer >= 1"),
-        (dict(clusters="yes"), "clusters must be True or False, got str 'yes'"),
-        (dict(clusters=1), "clusters must be True or False, got int 1"),
         # a load the cap cannot carry
         (dict(pressures=[0.001, 0.02], hardness=0.02),
          r"pressures: every p0 must be in the open interval \(0, hardness\) = \(0, 0.02\)"),
@@ -275,6 +273,13 @@ def test_input_validation(kwargs, match):
     pressures = args.pop("pressures")
     with pytest.raises(ValueError, match=match):
         solve_contact(heights, pressures, **args)
+
+
+def test_clusters_are_an_observer_and_the_old_flag_says_so():
+    # cluster statistics are one observer of the steps, not a path through the solver: the former
+    # flag is refused with the way to ask for them
+    with pytest.raises(TypeError, match=r"\[.clusters.\].*observers=\[roughcontact.statistics.clusters.Cluster"):
+        solve_contact(GOOD, [0.01], clusters=True)
 
 
 @pytest.mark.parametrize("p0", [0.0, -1.0, np.nan, "x", "0.01", True, [0.01]])

@@ -40,7 +40,7 @@ from roughcontact.solver import (
     solve_step,
 )
 from roughcontact.solver.halfspace import pixel_influence_rect, pixel_influence_square
-from roughcontact.statistics.clusters import cluster_dataset, cluster_statistics, label_clusters
+from roughcontact.statistics.clusters import ClusterObserver, cluster_dataset, cluster_statistics, label_clusters
 from roughcontact.surfaces.synthetic import generate_surface
 from solver_invariants import check_solution, direct_free_displacement, pixel_integral
 
@@ -314,7 +314,7 @@ def test_invariants_on_a_rectangle(boundary, hardness):
     h = _rough(shape, seed=2)
     loads = [0.001, 0.004, 0.01]
     ds = solve_contact(h, loads, length=sides, tol=TOL, store_fields=True, boundary=boundary, hardness=hardness,
-                       e_star=1.5, clusters=True)
+                       e_star=1.5, observers=[ClusterObserver(sides, periodic=boundary == "periodic")])
     check_solution(ds, h, tol=TOL, e_star=1.5, length=sides, hardness=hardness, boundary=boundary)
     if hardness is not None:
         assert ds["plastic_area_fraction"].values[-1] > 0  # the cap is really active
@@ -492,12 +492,13 @@ def test_a_square_pair_is_the_square_problem(boundary, hardness):
     # length=(L, L) (tuple, list or array) on an n x n grid is the square cell of length=L: the
     # same datasets bit for bit, attributes included (length and n, plus nx = ny = n).
     h = generate_surface(32, 2, 8, 0.8, 3, rms_slope=0.1) * 0.7
-    kwargs = dict(e_star=2.0, tol=TOL, store_fields=True, boundary=boundary, hardness=hardness, clusters=True)
-    ref = solve_contact(h, [0.001, 0.004], length=0.7, **kwargs)
+    kwargs = dict(e_star=2.0, tol=TOL, store_fields=True, boundary=boundary, hardness=hardness)
+    periodic = boundary == "periodic"
+    ref = solve_contact(h, [0.001, 0.004], length=0.7, observers=[ClusterObserver(0.7, periodic)], **kwargs)
     assert ref.attrs["length"] == 0.7 and ref.attrs["n"] == ref.attrs["nx"] == ref.attrs["ny"] == 32
     assert "length_x" not in ref.attrs
     for pair in ((0.7, 0.7), [0.7, 0.7], np.array([0.7, 0.7])):
-        ds = solve_contact(h, [0.001, 0.004], length=pair, **kwargs)
+        ds = solve_contact(h, [0.001, 0.004], length=pair, observers=[ClusterObserver(pair, periodic)], **kwargs)
         assert ds.attrs == ref.attrs
         assert list(ds.variables) == list(ref.variables)
         for name in ref.variables:
@@ -510,6 +511,5 @@ def test_a_square_pair_is_the_square_problem(boundary, hardness):
     np.testing.assert_array_equal(displacement(res.pressure, length=0.7, boundary=boundary),
                                   displacement(res.pressure, length=(0.7, 0.7), boundary=boundary))
     mask = res.pressure > 0
-    periodic = boundary == "periodic"
     assert contact_perimeter(mask, (0.7, 0.7), periodic) == contact_perimeter(mask, 0.7, periodic)
     assert cluster_dataset([mask], [1], (0.7, 0.7)).attrs == cluster_dataset([mask], [1], 0.7).attrs

@@ -27,6 +27,7 @@ from roughcontact.pipeline.datasets import (
     surface_dataset,
 )
 from roughcontact.solver import solve_contact
+from roughcontact.statistics.clusters import ClusterObserver
 from roughcontact.statistics.representativity import gaussian_l2_error
 from roughcontact.studies import accuracy
 from roughcontact.surfaces.synthetic import generate_surface, spectral_moments
@@ -155,8 +156,8 @@ def written(request):
         h = generate_surface(32, 2.0, 8.0, 0.8, seed, rms_slope=0.1, length=1.0)
         surf = surface_dataset(h, seed=seed, length=1.0, normalisation={"rms_slope": 0.1}, length_unit=lu, **kw)
         rep = representativity_dataset(gaussian_l2_error(h, 20), h, n_bins=20, seed=seed, length_unit=lu, **kw)
-        result = solve_contact(h, LOADS, clusters=True, store_fields=[1], hardness=1.0,
-                               length_unit=lu, pressure_unit=pu)
+        result = solve_contact(h, LOADS, store_fields=[1], hardness=1.0, length_unit=lu, pressure_unit=pu,
+                               observers=[ClusterObserver(1.0, length_unit=lu)])
         stats = spectral_moments(h, 1.0)
         contacts.append(contact_dataset(result, rms_slope=stats["rms_slope"], alpha=stats["alpha"], e_star=1.0,
                                         seed=seed, **kw))

@@ -26,6 +26,7 @@ import xarray as xr
 from ..analysis.stiffness import stiffness_variable
 from ..solver import effects_from_config, solve_contact, step_notes
 from ..solver.settings import DEFAULT_MAX_ITER
+from ..statistics.clusters import ClusterObserver
 from .datasets import contact_observers, full_contact_variable
 from .io import eta
 from .loading import LoadSchedule
@@ -130,9 +131,12 @@ def run_case(heights: np.ndarray, case: ContactCase, *, length, rms_slope: float
 
     loads, load_info = case.schedule.resolve(case.e_star, rms_slope, heights.size, area_at, log, name)
     outputs = case.outputs
-    result = solve_contact(heights, loads, store_fields=outputs["fields"] or False, clusters=outputs["clusters"],
+    clusters = [ClusterObserver(length, case.boundary == "periodic", length_unit=case.length_unit)
+                ] if outputs["clusters"] else []
+    result = solve_contact(heights, loads, store_fields=outputs["fields"] or False,
                            progress=_progress(log, len(loads)), warm_start=case.warm_start,
-                           observers=[*contact_observers(outputs, case.e_star * rms_slope), *observers], **options)
+                           observers=[*clusters, *contact_observers(outputs, case.e_star * rms_slope), *observers],
+                           **options)
     if outputs.get("stiffness"):
         result["contact_stiffness"] = stiffness_variable(result, case.length_unit, case.pressure_unit)
     if outputs.get("full_contact_load"):

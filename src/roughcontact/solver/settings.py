@@ -83,7 +83,9 @@ class SolverSettings:
         fields = {f.name for f in dataclasses.fields(cls)}
         unknown = sorted(set(options) - fields)
         if unknown:
-            raise TypeError(f"unexpected keyword argument(s) {unknown}; solver settings are {sorted(fields)}")
+            hint = ("; cluster statistics come from an observer: observers=[roughcontact.statistics.clusters."
+                    "ClusterObserver(length)]") if "clusters" in unknown else ""
+            raise TypeError(f"unexpected keyword argument(s) {unknown}; solver settings are {sorted(fields)}{hint}")
         if hardness is not None:
             check_positive("hardness", hardness)
             options["effects"] = (*options.get("effects", base.effects), PlasticityCap(hardness))

@@ -20,7 +20,7 @@ from .adhesive import ADHESIVE_SOLVER_DESCRIPTION, ADHESIVE_SOLVER_NAME, Adhesiv
 from .contact import ContactSolver
 from .results import SOLVER_NAME, StepResult, solver_description, to_dataset
 from .settings import SolverSettings
-from .validation import real_scalar, validate_flag, validate_heights, validate_pressures, validate_store
+from .validation import real_scalar, validate_heights, validate_pressures, validate_store
 
 
 def prepare(heights, loads: np.ndarray, name: str, settings: SolverSettings | None,
@@ -128,8 +128,7 @@ class StepView:
 
 
 def solve_contact(heights, pressures, settings: SolverSettings | None = None, *, store_fields=False,
-                  clusters: bool = False, progress=None, observers=(), warm_start: str = "extrapolated",
-                  **options) -> xr.Dataset:
+                  progress=None, observers=(), warm_start: str = "extrapolated", **options) -> xr.Dataset:
     """Solve the normal contact of a rigid rough surface on an elastic half-space.
 
     Parameters
@@ -146,11 +145,11 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
     store_fields : bool or iterable of int
         ``True`` stores ``contact_pressure`` and ``gap`` for every step (dims ``step, x, y``); 1-based
         step numbers store only those (dims ``field_step, x, y``).
-    clusters : bool
-        Add the per-step ``cluster_*`` statistics (:mod:`roughcontact.statistics.clusters`); off: no labelling.
     observers : sequence
         Each with ``observe(step)`` (a :class:`StepView` after every step; with the gap if the observer
-        has ``needs_gap = True``) and ``dataset(steps)`` (merged), e.g. ``PressureDistribution``.
+        has ``needs_gap = True``) and ``dataset(steps)`` (merged, in order), e.g.
+        :class:`~roughcontact.statistics.clusters.ClusterObserver` (the ``cluster_*`` statistics) or
+        ``PressureDistribution``.
     warm_start : {"extrapolated", "scaled"}
         A step starts from the last two solutions extrapolated in the load, or the last one scaled.
     progress : callable, optional
@@ -176,16 +175,14 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
         For invalid input, naming the argument and its allowed range.
     """
     if _is_batch(heights):  # B surfaces of one grid
-        return _batch(heights, pressures, settings, store_fields, clusters, progress, observers, options)
+        return _batch(heights, pressures, settings, store_fields, progress, observers, options)
     p = validate_pressures(pressures)
     store = validate_store(store_fields, p.size)
-    clusters = validate_flag("clusters", clusters)
     _check_progress(progress, warm_start)
     solver = prepare(heights, p, "pressures", settings, options)
     observers = _check_observers(observers)
-    cols, iters, conv, paths, fields, masks = _run_steps(solver, p, store, clusters, progress, observers,
-                                                         scaled=warm_start == "scaled")
-    return _observed(_dataset(solver, p, cols, iters, conv, paths, fields, masks, store_fields), observers)
+    cols, iters, conv, paths, fields = _run_steps(solver, p, store, progress, observers, scaled=warm_start == "scaled")
+    return _observed(_dataset(solver, p, cols, iters, conv, paths, fields, store_fields), observers)
 
 
 def _check_progress(progress, warm_start: str = "extrapolated") -> None:
@@ -204,13 +201,13 @@ def _is_batch(heights) -> bool:
         return False
 
 
-def _batch(heights, pressures, settings, store_fields, clusters, progress, observers, options) -> xr.Dataset:
+def _batch(heights, pressures, settings, store_fields, progress, observers, options) -> xr.Dataset:
     """:func:`solve_contact` of a ``(B, nx, ny)`` batch: :func:`~.batch.solve_contact_batch`, refusing what
     it does not produce."""
     from .batch import solve_contact_batch
 
-    if not (store_fields is False or store_fields is None) or clusters or tuple(observers or ()):
-        raise ValueError("a batch of surfaces (heights of shape (B, nx, ny)) stores no fields, clusters or "
+    if not (store_fields is False or store_fields is None) or tuple(observers or ()):
+        raise ValueError("a batch of surfaces (heights of shape (B, nx, ny)) stores no fields and takes no "
                          "observers; solve each case with 2-D heights for those")
     return solve_contact_batch(heights, pressures, settings, progress=progress, **options)
 
@@ -234,7 +231,7 @@ def _check_observers(observers) -> tuple:
     return observers
 
 
-def _dataset(solver: ContactSolver | AdhesiveSolver, p, cols, iters, conv, paths, fields, masks,
+def _dataset(solver: ContactSolver | AdhesiveSolver, p, cols, iters, conv, paths, fields,
              store_fields) -> xr.Dataset:
     """The solve's output dataset (:func:`solve_contact`'s Returns)."""
     s = solver.settings
@@ -253,18 +250,12 @@ def _dataset(solver: ContactSolver | AdhesiveSolver, p, cols, iters, conv, paths
     for effect in solver.effects:
         for name, variable in effect.after_steps(solver, s.length_unit, s.pressure_unit).items():
             ds[name] = variable
-    if masks is not None:
-        from ..statistics.clusters import cluster_dataset
-
-        stats = cluster_dataset(masks, ds["step"].values, s.length, periodic=solver.periodic,
-                                length_unit=s.length_unit)
-        ds = ds.merge(stats.drop_vars("step"), combine_attrs="override")
     return ds
 
 
-def _run_steps(solver: ContactSolver | AdhesiveSolver, p: np.ndarray, store: set, clusters: bool, progress=None,
+def _run_steps(solver: ContactSolver | AdhesiveSolver, p: np.ndarray, store: set, progress=None,
                observers=(), scaled: bool = False):
-    """Solve every load step; per-step columns, iterations, flags, path codes, stored fields, masks."""
+    """Solve every load step; per-step columns, iterations, flags, path codes, stored fields."""
     n_steps = p.size
     names = ["area_fraction", "mean_contact_pressure", "mean_gap", "contact_perimeter", "residual",
              "wall_time"] + [v for e in solver.effects for v in e.variables()]
@@ -273,7 +264,6 @@ def _run_steps(solver: ContactSolver | AdhesiveSolver, p: np.ndarray, store: set
     conv = np.empty(n_steps, dtype=bool)
     paths = np.empty(n_steps, dtype=np.int8)
     fields_p, fields_g, field_steps = [], [], []
-    masks = [] if clusters else None
     needs_gap = any(getattr(ob, "needs_gap", False) for ob in observers)
     last = None
     for k, p0 in enumerate(p):
@@ -298,11 +288,9 @@ def _run_steps(solver: ContactSolver | AdhesiveSolver, p: np.ndarray, store: set
             fields_p.append(st.pressure.copy())
             fields_g.append(gap)
             field_steps.append(k + 1)
-        if masks is not None:
-            masks.append(st.mask.copy())
         view = StepView(k + 1, p0, st.pressure, gap, st.mask, int(st.iterations), bool(st.converged))
         for observer in observers:
             observer.observe(view)
         if progress is not None:
             progress(k + 1, p0, st.area, st.iterations, st.converged, cols["wall_time"][k])
-    return cols, iters, conv, paths, (fields_p, fields_g, field_steps), masks
+    return cols, iters, conv, paths, (fields_p, fields_g, field_steps)

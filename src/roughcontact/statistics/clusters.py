@@ -419,6 +419,48 @@ def cluster_dataset(masks_or_pressures: Iterable, steps, length, bins=None,
     return xr.Dataset(variables, coords=coords, attrs=_cluster_attrs(length, length_units, masks[0].shape, periodic))
 
 
+class ClusterObserver:
+    """The per-step cluster statistics of a solve, as an observer of its steps.
+
+    Keeps each step's contact mask (a copy: ``nx * ny`` bools a step) and, when the solve ends,
+    labels them with :func:`cluster_dataset`. Pass it to :func:`roughcontact.solver.solve_contact`
+    (``observers=[...]``); :func:`roughcontact.pipeline.case.run_case` adds one when a case's
+    outputs ask for ``clusters``.
+
+    Parameters
+    ----------
+    length : float or (float, float)
+        The solve's ``length`` [length]: ``L`` of a square cell or ``(Lx, Ly)``.
+    periodic : bool
+        ``True`` for the periodic cell, ``False`` for a free patch (``boundary="free"``).
+    length_unit : str
+        Unit of ``length`` (the solve's ``length_unit``).
+
+    Examples
+    --------
+    >>> from roughcontact.solver import solve_contact
+    >>> from roughcontact.surfaces.synthetic import generate_surface
+    >>> h = generate_surface(64, 2, 16, 0.8, seed=0, rms_slope=0.1)
+    >>> ds = solve_contact(h, [0.001, 0.004], observers=[ClusterObserver(1.0)])
+    >>> ds.cluster_count.dims
+    ('step',)
+    """
+
+    needs_gap = False
+
+    def __init__(self, length, periodic: bool = True, *, length_unit: str = "1"):
+        self.length, self.periodic, self.length_unit = _check_length(length), bool(periodic), length_unit
+        self._masks: list[np.ndarray] = []
+
+    def observe(self, step) -> None:
+        """Keep ``step.mask`` (a :class:`roughcontact.solver.solve.StepView`)."""
+        self._masks.append(np.array(step.mask, dtype=bool, copy=True))
+
+    def dataset(self, steps) -> xr.Dataset:
+        """:func:`cluster_dataset` of the masks seen, on the solve's ``steps``."""
+        return cluster_dataset(self._masks, steps, self.length, periodic=self.periodic, length_unit=self.length_unit)
+
+
 def _add_wrapping(variables: dict, coords: dict, masks: list[np.ndarray]) -> None:
     """``cluster_wrapping`` over ``(step, connectivity)`` and its ``connectivity`` coordinate (4 and 8)."""
     variables["cluster_wrapping"] = wrapping_variable(masks, CONNECTIVITIES)
