@@ -31,7 +31,7 @@ install: $(VENV)/.installed
 install-test: $(VENV)/.installed-test
 
 run: install
-	$(BIN)/snakemake --workflow-profile workflow/profiles/default -j$(JOBS) $(if $(SCENE),--config scene=$(SCENE))
+	$(BIN)/snakemake -j$(JOBS) $(if $(SCENE),--config scene=$(SCENE))
 
 dryrun: install
 	$(BIN)/snakemake -n $(if $(SCENE),--config scene=$(SCENE))

@@ -82,10 +82,15 @@ def run_snakemake(workdir, *args, timeout=SNAKEMAKE_TIMEOUT_S, env=None):
 
 
 def copy_workflow(dest: Path, config: dict | None = None) -> Path:
-    """Copy Snakefile, workflow/, config/, envs/ and data/ into ``dest``; optionally replace the config."""
+    """Copy Snakefile, workflow/, profiles/, config/, envs/ and data/ into ``dest``; optionally replace the config.
+
+    ``profiles/default`` comes along: Snakemake reads it in every run from the copy, as it does in the
+    repository (the default workflow profile), so the tests run what a user's ``snakemake`` runs.
+    """
     dest.mkdir(parents=True, exist_ok=True)
     shutil.copy(REPO / "Snakefile", dest / "Snakefile")
     shutil.copytree(REPO / "workflow", dest / "workflow", dirs_exist_ok=True)
+    shutil.copytree(REPO / "profiles", dest / "profiles", dirs_exist_ok=True)
     shutil.copytree(REPO / "data", dest / "data", dirs_exist_ok=True)
     shutil.copytree(REPO / "config", dest / "config", dirs_exist_ok=True)
     shutil.copytree(REPO / "envs", dest / "envs", dirs_exist_ok=True)

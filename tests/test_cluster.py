@@ -1,7 +1,7 @@
 """The SLURM profile on a real SLURM: tests/cluster/run_slurm_test.sh, when the machine allows.
 
 The script brings up a single-node SLURM (Debian's slurm-wlm + munge, localhost only), runs a
-small scene through workflow/profiles/slurm and requires every NetCDF/CSV output to be
+small scene through profiles/slurm and requires every NetCDF/CSV output to be
 byte-identical to a local -j2 run. It needs root and a package manager (or SLURM already
 installed); where it cannot run it prints "SKIP: <reason>" and this test is skipped with that
 reason (shown by `pytest -ra`, i.e. by `make test`).

@@ -51,7 +51,7 @@ DOCS = ("README.md", "config/README.md",
         *(f"docs/{name}.md" for name in ("cluster", "representative", "accuracy", "solver")))
 COMMAND_START = re.compile(r"^(snakemake|make|pip|python)(\s|$)|^\.\s")
 SLOW_COMMAND = re.compile(r"scene=paper\b")  # the full paper DAG: thousands of jobs, slow on a busy machine
-SLURM_PROFILE = REPO / "workflow" / "profiles" / "slurm" / "config.yaml"
+SLURM_PROFILE = REPO / "profiles" / "slurm" / "config.yaml"
 USER_RESOURCES = {"slurm_partition", "slurm_account"}  # the site's own, commented out in the shipped profile
 PYTHON_BLOCK_TIMEOUT_S = 600  # the README's snippet takes ~15 s (N=512, 30 steps) on 2 busy cores
 

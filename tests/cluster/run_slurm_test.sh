@@ -9,7 +9,7 @@
 #    ports; everything under one temporary directory, nothing under /etc is touched);
 # 3. copies the workflow (Snakefile, workflow/, config/, envs/) into two directories, writes the same
 #    small scene into both (representativity N=32; contact N=32 when roughcontact.solver imports),
-#    runs it locally with -j2 in one and through workflow/profiles/slurm in the other;
+#    runs it locally with -j2 in one and through profiles/slurm in the other;
 # 4. compares every NetCDF and CSV output: byte-identical is required.
 # The daemons are always stopped on exit. Prints "SKIP: <reason>" and exits 0 when it cannot run
 # here (not root, no apt-get, packages cannot be installed); exits non-zero on a real failure.
@@ -246,9 +246,9 @@ for d in local slurm; do
     cp "$SCENE_YAML" "$WORK/$d/config/config.yaml"
 done
 
-log "local run: snakemake --workflow-profile workflow/profiles/default -j2"
+log "local run: snakemake --workflow-profile profiles/default -j2"
 t=$(date +%s)
-run_snakemake "$WORK/local" "$WORK/local.log" "$LOCAL_TIMEOUT" 0 --workflow-profile workflow/profiles/default \
+run_snakemake "$WORK/local" "$WORK/local.log" "$LOCAL_TIMEOUT" 0 --workflow-profile profiles/default \
     -j2 --nocolor \
     || { rc=$?; tail -n 40 "$WORK/local.log" >&2
          fail "the local -j2 run ${STOPPED:-failed} (status $rc; log above)"; }
@@ -282,7 +282,7 @@ log "SLURM node localhost is idle (checked from $(($(date +%s) - UP_T0))s after 
 # --cores: the node has $CPUS CPUs, so a group job may be at most that wide (the profile says 8).
 # squeue for status: there is no accounting database for sacct. --slurm-no-account: there are
 # no accounts (plugin 2.8 still tries to guess one and then submits without, harmlessly).
-SLURM_ARGS=(--workflow-profile workflow/profiles/slurm --cores "$CPUS"
+SLURM_ARGS=(--workflow-profile profiles/slurm --cores "$CPUS"
     --slurm-status-command squeue --slurm-no-account --slurm-init-seconds-before-status-checks 5
     --slurm-keep-successful-logs --nocolor)
 log "SLURM run: snakemake ${SLURM_ARGS[*]}"

@@ -20,7 +20,7 @@ SECTIONS = {"solver": "1. solver", "definition": "2. contact", "continuum": "3. 
 
 COMMANDS = (
     ("run the study (or resume it)",
-     "`snakemake -j2 --workflow-profile workflow/profiles/default --config scene=kappa-gap`"),
+     "`snakemake -j2 --config scene=kappa-gap`"),
     ("regenerate this page from the published data (no solve)",
      "`python -m roughcontact.studies.kappa_gap regenerate docs/reproduction`"),
     ("publish a finished run here",
