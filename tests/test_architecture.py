@@ -202,7 +202,45 @@ def test_functions_are_short(sources):
     assert long == {}
 
 
+#: Where a ``length`` may be asked whether it is a float ``L`` or a pair ``(Lx, Ly)``: the cell, and the
+#: solver's check of the user's arguments (which names each bad argument in its own words).
+LENGTH_FORM_MODULES = {"roughcontact.core.cell", "roughcontact.solver.validation"}
+
+
+def _is_length(node: ast.AST) -> bool:
+    """``length`` or ``<anything>.length``."""
+    return (isinstance(node, ast.Name) and node.id == "length") or (
+        isinstance(node, ast.Attribute) and node.attr == "length")
+
+
+def length_form_branches(source: str) -> list[int]:
+    """Lines asking a ``length`` its form: ``np.ndim(length)``, ``isinstance(length, ...)``, ``len(length)``
+    (``length`` a name or an attribute ``x.length``); :class:`roughcontact.core.cell.Cell` answers that."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if not (isinstance(node, ast.Call) and node.args and _is_length(node.args[0])):
+            continue
+        f = node.func
+        if (isinstance(f, ast.Attribute) and f.attr == "ndim") or (
+                isinstance(f, ast.Name) and f.id in {"isinstance", "len", "ndim"}):
+            found.append(node.lineno)
+    return sorted(found)
+
+
+def test_only_the_cell_asks_a_length_its_form(sources):
+    # issue 47: a float L or a pair (Lx, Ly) is converted to a Cell once, and the cell is asked after that
+    found = {m: lines for m, (src, _) in sources.items()
+             if m not in LENGTH_FORM_MODULES and (lines := length_form_branches(src))}
+    assert found == {}
+
+
 # ------------------------------------------------------------------------------ the checker can fail
+def test_checker_finds_a_length_form_branch():
+    source = ("a = np.ndim(length) == 0\nb = numpy.ndim(s.length)\nc = isinstance(length, tuple)\n"
+              "d = len(self.length)\ne = np.ndim(shape)\nf = cell.square\ng = len(lengths)\n")
+    assert length_form_branches(source) == [1, 2, 3, 4]
+
+
 def private_imports(sources: dict[str, tuple[str, bool]]) -> set[tuple[str, str, str]]:
     """``(importer, module, name)`` for every import of another module's underscore name.
 

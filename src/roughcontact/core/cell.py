@@ -4,7 +4,10 @@ A cell is ``nx x ny`` nodes on sides ``Lx x Ly`` [length], axis 0 = x. The solve
 argument writes a square cell (``nx == ny`` and ``Lx == Ly``) as the float ``L`` and any other as the
 pair ``(Lx, Ly)``; a file's global attributes write a square cell as ``length`` and ``n`` and any
 other as ``length_x``, ``length_y`` (never one side for both), with ``nx`` and ``ny`` always. This
-module is the one place that translates between the three.
+module is the one place that translates between the three, and the one place that asks whether a
+``length`` is a float or a pair: the rest of the package converts a user's ``length`` to a
+:class:`Cell` once (:meth:`Cell.canonical`, or :meth:`Cell.of` to keep the form it was given in) and
+asks the cell (``square``, ``side_x``, ``aspect``, :meth:`Cell.perimeter_per_area`, :meth:`Cell.areas`).
 
 Examples
 --------
@@ -13,14 +16,64 @@ Examples
 ((0.0078125, 0.0078125), (1.0, 0.75))
 >>> Cell.from_attrs(cell.surface_attrs(), (128, 96)) == cell
 True
+>>> Cell.canonical((64, 64), (2.0, 2.0)) == Cell.of((64, 64), 2.0)  # (L, L) on n x n is the square cell L
+True
 """
 
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
+
+#: The forms the solver's ``length`` takes, as the errors name them.
+LENGTH_FORMS = "a finite real number L > 0 (square cell) or a pair (Lx, Ly) of finite real numbers > 0"
+
+
+def check_length(length):
+    """The solver's ``length`` checked, in the form it was given: a float ``L`` or a pair ``(Lx, Ly)``.
+
+    Parameters
+    ----------
+    length : float or (float, float)
+        A real number (a Python or NumPy scalar, or a 0-d array), or a tuple, list or 1-D array of
+        two of them [length]; each finite and > 0.
+
+    Returns
+    -------
+    float or (float, float)
+        ``float(length)``, or the pair of floats.
+
+    Raises
+    ------
+    ValueError
+        Naming ``length`` and the forms it may take, for anything else (bools and strings included).
+
+    Examples
+    --------
+    >>> check_length(2), check_length([1, 0.5])
+    (2.0, (1.0, 0.5))
+    """
+    if isinstance(length, (tuple, list)) or (isinstance(length, np.ndarray) and length.ndim > 0):
+        values = list(length) if not isinstance(length, np.ndarray) or length.ndim == 1 else []
+        if len(values) != 2:
+            raise ValueError(f"length must be {LENGTH_FORMS}, got {length!r}")
+        return tuple(_side(v, length) for v in values)
+    return _side(length, length)
+
+
+def _side(value, length) -> float:
+    """One side of ``length``: a real number, finite and > 0, as a float."""
+    real = isinstance(value, numbers.Real) or (isinstance(value, np.ndarray) and value.ndim == 0
+                                                and value.dtype.kind in "iuf")
+    if not real or isinstance(value, (bool, np.bool_)):
+        raise ValueError(f"length must be {LENGTH_FORMS}, got {length!r}")
+    side = float(value)
+    if not (math.isfinite(side) and side > 0):
+        raise ValueError(f"length must be {LENGTH_FORMS}, got {length!r}")
+    return side
 
 
 @dataclass(frozen=True)
@@ -43,12 +96,67 @@ class Cell:
 
     @classmethod
     def of(cls, shape, length) -> Cell:
-        """The cell of a ``(nx, ny)`` grid and the solver's ``length`` (a float L, or (Lx, Ly))."""
+        """The cell of a ``(nx, ny)`` grid and the solver's ``length``, in the form it was given.
+
+        Parameters
+        ----------
+        shape : (int, int)
+            ``(nx, ny)``, nodes along x (axis 0) and y (axis 1).
+        length : float or (float, float)
+            A float ``L`` (``square``, sides ``(L, L)``, on any grid: the internal unit cell of a
+            rectangle of equal sides is one) or a pair ``(Lx, Ly)`` (not ``square``, even when
+            ``Lx == Ly``) [length]; checked by :func:`check_length`.
+
+        Raises
+        ------
+        ValueError
+            Naming ``length``, when it is not a float or a pair of finite numbers > 0.
+
+        Examples
+        --------
+        >>> Cell.of((8, 8), 2.0).square, Cell.of((8, 8), (2.0, 2.0)).square
+        (True, False)
+        """
         nx, ny = (int(v) for v in shape)
-        if np.ndim(length) == 0:
-            return cls((nx, ny), (float(length), float(length)), True)
-        lx, ly = (float(v) for v in length)
-        return cls((nx, ny), (lx, ly), False)
+        length = check_length(length)
+        if isinstance(length, tuple):
+            return cls((nx, ny), length, False)
+        return cls((nx, ny), (length, length), True)
+
+    @classmethod
+    def canonical(cls, shape, length, name: str = "the grid") -> Cell:
+        """The cell the solver solves on: as :meth:`of`, but a pair ``(L, L)`` on an ``n x n`` grid is the
+        square cell ``L`` (as :func:`roughcontact.solver.validation.validate_length` returns it, so that
+        both are one problem bit for bit), and a float ``L`` needs a square grid.
+
+        Parameters
+        ----------
+        shape : (int, int)
+            ``(nx, ny)`` of the array ``name`` [nodes].
+        length : float or (float, float)
+            The user's ``length`` [length].
+        name : str
+            The array whose shape ``shape`` is, for the error.
+
+        Raises
+        ------
+        ValueError
+            Naming ``length``: not a float or a pair of finite numbers > 0, or a float for a grid
+            that is not square.
+
+        Examples
+        --------
+        >>> Cell.canonical((8, 8), (1.0, 1.0)).length, Cell.canonical((8, 4), (1.0, 1.0)).length
+        (1.0, (1.0, 1.0))
+        """
+        cell = cls.of(shape, length)
+        (nx, ny), (lx, ly) = cell.shape, cell.sides
+        if cell.square and nx != ny:
+            raise ValueError(f"length: a single float means a square cell, and {name} must be a square 2-D array "
+                             f"(n, n) for it, got shape {(nx, ny)}: for a rectangular cell give length=(Lx, Ly)")
+        if not cell.square and nx == ny and lx == ly:
+            return cls(cell.shape, cell.sides, True)
+        return cell
 
     @classmethod
     def from_attrs(cls, attrs, shape, source: str = "the file") -> Cell:
@@ -80,6 +188,16 @@ class Cell:
         return self.sides[0] if self.square else self.sides
 
     @property
+    def side_x(self) -> float:
+        """``Lx`` [length], the side along x (axis 0): the solver's internal length unit."""
+        return self.sides[0]
+
+    @property
+    def aspect(self) -> float:
+        """``Ly / Lx`` [-]: exactly 1.0 for a square cell, else the y side in units of ``Lx``."""
+        return 1.0 if self.square else self.sides[1] / self.sides[0]
+
+    @property
     def pixel(self) -> tuple[float, float]:
         """``(dx, dy) = (Lx / nx, Ly / ny)`` [length]."""
         return self.sides[0] / self.shape[0], self.sides[1] / self.shape[1]
@@ -89,6 +207,56 @@ class Cell:
         """One pixel length [length]: ``dx`` for square pixels, else the geometric mean ``sqrt(dx dy)``."""
         dx, dy = self.pixel
         return dx if dx == dy else float(np.sqrt(dx * dy))
+
+    def perimeter_per_area(self, edges_x, edges_y):
+        """Length of the pixel edges counted, per unit area of the cell [1 / length].
+
+        Parameters
+        ----------
+        edges_x, edges_y : float or numpy.ndarray of float64
+            Edges between neighbours along x (axis 0), each ``dy`` long, and along y (axis 1),
+            each ``dx`` long [counts]; arrays of one shape give one value per entry.
+
+        Returns
+        -------
+        float or numpy.ndarray of float64
+            ``(edges_x dy + edges_y dx) / (Lx Ly)``; for a square cell written
+            ``(edges_x + edges_y) (L / n) / L**2``, the expression of earlier releases, bit for bit.
+
+        Examples
+        --------
+        >>> Cell.of((4, 4), 2.0).perimeter_per_area(3.0, 1.0)
+        0.5
+        """
+        (nx, ny), (lx, ly) = self.shape, self.sides
+        if self.square:
+            return (edges_x + edges_y) * (lx / nx) / lx**2
+        return (edges_x * (ly / ny) + edges_y * (lx / nx)) / (lx * ly)
+
+    def areas(self, fractions, pixels):
+        """Areas [length**2] of regions given both as fractions of the cell and as node counts.
+
+        Parameters
+        ----------
+        fractions : numpy.ndarray of float64
+            Areas as fractions of ``A0 = Lx Ly`` [-].
+        pixels : numpy.ndarray of int
+            The same areas as node counts, same shape.
+
+        Returns
+        -------
+        numpy.ndarray of float64, shape of ``fractions``
+            ``fractions * L**2`` for a square cell, else ``pixels * (dx * dy)``.
+
+        Examples
+        --------
+        >>> Cell.of((4, 2), (2.0, 1.0)).areas(np.array([0.25]), np.array([2])).tolist()
+        [0.5]
+        """
+        if self.square:
+            return fractions * self.sides[0] ** 2
+        dx, dy = self.pixel
+        return pixels * (dx * dy)
 
     def solver_attrs(self) -> tuple[dict, dict]:
         """The solver's global attributes of the cell, ``(sides, grid)``, each put in its place among them.

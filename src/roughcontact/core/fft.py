@@ -39,6 +39,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .cell import Cell
+
 try:  # pragma: no cover - exercised by whichever backend is installed
     import pyfftw
 
@@ -348,7 +350,7 @@ def wavenumbers(shape, length=1.0) -> tuple[np.ndarray, np.ndarray]:
         angular wavenumbers in rad per unit length: ``|q| = 2 pi sqrt(kx^2 + ky^2)``.
     """
     nx, ny = (shape, shape) if np.ndim(shape) == 0 else shape
-    lx, ly = (length, length) if np.ndim(length) == 0 else length
+    lx, ly = Cell.of((nx, ny), length).sides
     kx = np.fft.fftfreq(nx, d=1.0 / nx)[:, None] / lx
     ky = np.fft.rfftfreq(ny, d=1.0 / ny)[None, :] / ly
     return kx, ky

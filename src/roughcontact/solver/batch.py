@@ -155,10 +155,11 @@ def _run_steps(solver: BatchSolver, p: np.ndarray, progress):
 def _batch_dataset(solver: BatchSolver, p, cols, iters, conv, paths, wall, rounds) -> xr.Dataset:
     """The batch's dataset: case 0's single-solve layout, the per-case variables stacked over ``case``."""
     s = solver.settings
-    sides, grid = Cell.of(solver.shape, s.length).solver_attrs()
+    cell = Cell.of(solver.shape, s.length)
+    sides, grid = cell.solver_attrs()
     attrs = {"e_star": s.e_star, **sides, "tol": s.tol, "max_iter": s.max_iter, "threads": s.threads,
              "fft_backend": solver.backend, **grid, "solver": SOLVER_NAME,
-             "solver_description": solver_description(True, np.ndim(s.length) == 0),
+             "solver_description": solver_description(True, cell.square),
              "batch_size": solver.batch, "check_every": solver.check_every}
     first = {name: col[0] for name, col in cols.items()}
     first["wall_time"] = wall

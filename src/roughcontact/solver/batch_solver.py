@@ -8,6 +8,7 @@ import os
 import numpy as np
 
 from ..core.backend import get_backend
+from ..core.cell import Cell
 from .batch_cuda import fused_kernels
 from .batch_iteration import BatchIteration
 from .batch_kernels import ArrayKernels, BatchOperator
@@ -15,7 +16,7 @@ from .box import box_solve
 from .check import MEAN_RTOL
 from .elastic import pk_solve
 from .settings import SolverSettings
-from .units import Units, cell_aspect, check_loads, rms_about_mean
+from .units import Units, check_loads, rms_about_mean
 from .workspace import FALLBACKS, SOLVER_PATHS, Workspace
 
 #: The only elastic iteration a batch runs (the package default).
@@ -43,6 +44,7 @@ class BatchSolver:
         self.size = self.shape[0] * self.shape[1]
         self.tol, self.max_iter = settings.tol, settings.max_iter
         self.length, self.threads = settings.length, settings.threads
+        self.cell = Cell.canonical(self.shape, self.length, "heights")
         self.method = BATCH_METHOD
         self.periodic = True
         self.array_backend = settings.array_backend
@@ -63,7 +65,7 @@ class BatchSolver:
         self.h_rms = xp.asarray(rms.reshape(B, 1, 1))
         self.h_rms_host = rms
         self.kernels = fused_kernels(xp) if self.be.name == "cupy" else ArrayKernels(xp)
-        self.op = BatchOperator(self.be, self.shape, cell_aspect(self.length), self.threads, self.kernels)
+        self.op = BatchOperator(self.be, self.shape, self.cell.aspect, self.threads, self.kernels)
         self.h = self.be.asarray(hin)
         self.h_host = hin
         self.P = xp.zeros(h.shape)
@@ -216,14 +218,7 @@ class BatchSolver:
         ex = xp.sum(m != xp.roll(m, 1, axis=1), axis=(1, 2), dtype=np.int64)
         ey = xp.sum(m != xp.roll(m, 1, axis=2), axis=(1, 2), dtype=np.int64)
         ex, ey = (self.be.to_host(v).astype(np.float64) for v in (ex, ey))
-        nx, ny = self.shape
-        length = self.length
-        if np.ndim(length) == 1 and nx == ny and length[0] == length[1]:
-            length = float(length[0])
-        if np.ndim(length) == 0:
-            return (ex + ey) * (length / nx) / length ** 2
-        lx, ly = length
-        return (ex * (ly / ny) + ey * (lx / nx)) / (lx * ly)
+        return self.cell.perimeter_per_area(ex, ey)
 
     def solve(self, p0: float):
         """Solve one load step of every case; per-case host columns."""

@@ -33,6 +33,7 @@ import math
 import numpy as np
 
 from ..core.backend import ArrayBackend, SpectralProduct, get_backend, multiply_spectrum, remap_rows
+from ..core.cell import Cell
 from ..core.fft import default_backend, get_fft, wavenumbers
 from .love import (  # noqa: F401 (re-exported: the free operator's influence lives in love)
     free_influence,
@@ -44,7 +45,7 @@ from .love import (  # noqa: F401 (re-exported: the free operator's influence li
     pixel_influence_square,
     preconditioner_shape,
 )
-from .units import cell_aspect, frexp_ratio, grid, internal_length, side_x
+from .units import frexp_ratio, grid, internal_length
 from .validation import check_positive, validate_boundary, validate_heights, validate_length, validate_threads
 
 
@@ -122,7 +123,8 @@ def displacement(pressure: np.ndarray, *, e_star: float = 1.0, length=1.0,
     length = validate_length(length, p.shape, "pressure")
     boundary = validate_boundary(boundary)
     threads = validate_threads(threads)
-    aspect = cell_aspect(length)
+    cell = Cell.of(p.shape, length)
+    aspect = cell.aspect
     # u = (Lx / E*) K_1 p with K_1 the kernel for E* = Lx = 1; the factor is applied
     # as mantissa and exponent so that no intermediate overflows.
     pm = float(np.max(np.abs(p))) if p.size else 0.0
@@ -135,7 +137,7 @@ def displacement(pressure: np.ndarray, *, e_star: float = 1.0, length=1.0,
         fft = plans(p.shape, threads)
         kern = elastic_kernel(p.shape, 1.0, internal_length(aspect))
         u = fft.backward(fft.forward(np.ldexp(p, -ep)) * kern).copy()
-    fm, fe = frexp_ratio((side_x(length),), (e_star,))
+    fm, fe = frexp_ratio((cell.side_x,), (e_star,))
     with np.errstate(over="ignore", under="ignore"):
         u = np.ldexp(u * fm, fe + ep)
     if not np.all(np.isfinite(u)):

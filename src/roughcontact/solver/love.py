@@ -13,8 +13,9 @@ import math
 
 import numpy as np
 
+from ..core.cell import Cell
 from ..core.fft import RealFFT2
-from .units import cell_aspect, grid, internal_length, side_x
+from .units import grid, internal_length
 
 
 def _asinh_diff(a: np.ndarray, b: np.ndarray, a_minus_b: np.ndarray) -> np.ndarray:
@@ -178,10 +179,11 @@ def free_influence(shape, e_star: float = 1.0, length=1.0, padded=None) -> np.nd
     mx, my = (2 * nx, 2 * ny) if padded is None else (int(v) for v in padded)
     if mx < 2 * nx or my < 2 * ny:
         raise ValueError(f"padded grid {(mx, my)} is smaller than twice the patch {(nx, ny)}")
-    c = pixel_influence((nx, ny), cell_aspect(length))
+    cell = Cell.of((nx, ny), length)
+    c = pixel_influence((nx, ny), cell.aspect)
     i, j = np.arange(mx), np.arange(my)
     di, dj = np.minimum(np.minimum(i, mx - i), nx), np.minimum(np.minimum(j, my - j), ny)
-    return c[di[:, None], dj[None, :]] * (side_x(length) / (math.pi * nx * e_star))
+    return c[di[:, None], dj[None, :]] * (cell.side_x / (math.pi * nx * e_star))
 
 
 @functools.lru_cache(maxsize=4)

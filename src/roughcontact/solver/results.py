@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from ..core.cell import sides_of
+from ..core.cell import Cell, sides_of
 from ..core.quantities import cf_unit
 from .workspace import SOLVER_PATHS
 
@@ -134,15 +134,8 @@ def contact_perimeter(mask: np.ndarray, length=1.0, periodic: bool = True) -> fl
     """
     m = np.asarray(mask, dtype=bool)
     edges_x, edges_y = _boundary_edges(m, periodic)
-    if np.ndim(length) == 1 and m.shape[0] == m.shape[1] and length[0] == length[1]:
-        length = float(length[0])  # (L, L) on an n x n grid is the square cell L, as in the solver
-    if np.ndim(length) == 0:
-        if m.shape[0] != m.shape[1]:
-            raise ValueError(f"length: a single float means a square cell, but mask has shape {m.shape}: give "
-                             "length=(Lx, Ly)")
-        return float(edges_x + edges_y) * (length / m.shape[0]) / length**2
-    (lx, ly), (nx, ny) = length, m.shape
-    return (float(edges_x) * (ly / ny) + float(edges_y) * (lx / nx)) / (lx * ly)
+    # (L, L) on an n x n grid is the square cell L, as in the solver; the counts are exact in float64
+    return Cell.canonical(m.shape, length, "mask").perimeter_per_area(float(edges_x), float(edges_y))
 
 
 def _boundary_edges(m: np.ndarray, periodic: bool) -> tuple[int, int]:

@@ -235,11 +235,12 @@ def _dataset(solver: ContactSolver | AdhesiveSolver, p, cols, iters, conv, paths
              store_fields) -> xr.Dataset:
     """The solve's output dataset (:func:`solve_contact`'s Returns)."""
     s = solver.settings
-    sides, grid = Cell.of(solver.shape, s.length).solver_attrs()
+    cell = Cell.of(solver.shape, s.length)
+    sides, grid = cell.solver_attrs()
     if isinstance(solver, AdhesiveSolver):
         name, description = ADHESIVE_SOLVER_NAME, ADHESIVE_SOLVER_DESCRIPTION
     else:
-        name, description = SOLVER_NAME, solver_description(solver.periodic, np.ndim(s.length) == 0)
+        name, description = SOLVER_NAME, solver_description(solver.periodic, cell.square)
     attrs = {"e_star": s.e_star, **sides, "tol": s.tol, "max_iter": s.max_iter, "threads": s.threads,
              "fft_backend": solver.backend, **grid, "solver": name, "solver_description": description}
     ds = to_dataset(p, cols, iters, conv, fields, store_fields, solver.shape, attrs, solver.effects, paths=paths,

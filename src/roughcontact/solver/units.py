@@ -2,7 +2,7 @@
 
 A cell's ``length`` is a float ``L`` (square cell) or a pair ``(Lx, Ly)`` (rectangle, as
 validated by :func:`.validation.validate_length`); the internal length unit of the operators is
-``Lx`` (:func:`side_x`), so ``L`` for a square cell.
+``Lx`` (:attr:`roughcontact.core.cell.Cell.side_x`), so ``L`` for a square cell.
 """
 
 from __future__ import annotations
@@ -10,6 +10,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+from ..core.cell import Cell
 
 #: Allowed range of the dimensionless loads ``p0 * L / (E* * s)`` and
 #: ``hardness * L / (E* * s)`` (``s`` the rms height; ``L = Lx`` for a rectangular cell):
@@ -30,16 +32,6 @@ def grid(shape) -> tuple[int, int]:
 def internal_length(aspect: float):
     """The cell's ``length`` in internal units ``Lx = 1``: ``1.0`` when square, else ``(1.0, aspect)``."""
     return 1.0 if aspect == 1.0 else (1.0, aspect)
-
-
-def side_x(length) -> float:
-    """``Lx``: the side along x (axis 0) of a cell's ``length``, a float ``L`` or a pair ``(Lx, Ly)``."""
-    return float(length) if np.ndim(length) == 0 else float(length[0])
-
-
-def cell_aspect(length) -> float:
-    """``Ly / Lx`` of a cell's ``length`` (exactly 1.0 for a float ``L``): its y side in units of ``Lx``."""
-    return 1.0 if np.ndim(length) == 0 else float(length[1]) / float(length[0])
 
 
 def rms_about_mean(h: np.ndarray) -> tuple[float, float]:
@@ -69,7 +61,7 @@ def gap_scale(heights: np.ndarray, p0: float, e_star: float = 1.0, length=1.0) -
     """
     h = np.asarray(heights, dtype=float)
     rms = rms_about_mean(h)[1] if h.size and h.max() > h.min() else 0.0
-    return rms if rms > 0 else float(p0) * side_x(length) / float(e_star)
+    return rms if rms > 0 else float(p0) * Cell.of(h.shape, length).side_x / float(e_star)
 
 
 def frexp_ratio(num, den) -> tuple[float, int]:
@@ -97,8 +89,9 @@ class Units:
     """
 
     def __init__(self, h: np.ndarray, e_star: float, length):
-        self.e_star, self.length = e_star, side_x(length)
-        self.label = "length" if np.ndim(length) == 0 else "Lx"
+        cell = Cell.of(h.shape, length)
+        self.e_star, self.length = e_star, cell.side_x
+        self.label = "length" if cell.square else "Lx"
         length = self.length
         self.flat = not bool(h.max() > h.min())
         if self.flat:

@@ -7,8 +7,9 @@ import math
 import numpy as np
 
 from ..core.backend import get_backend
+from ..core.cell import Cell
 from .halfspace import half_space
-from .units import cell_aspect, rms_about_mean
+from .units import rms_about_mean
 
 #: Iterations of the elastic path (package docstring): ``"pk"``, Polonsky & Keer's
 #: CG as in Tamaas' ``PolonskyKeerRey`` (the reference); ``"pk-fourier"``, the same
@@ -91,7 +92,7 @@ class Workspace:
         self.boundary = boundary
         self.be = get_backend(backend)
         xp = self.xp = self.be.xp
-        self.op = half_space(boundary, shape, threads, cell_aspect(length), self.be)
+        self.op = half_space(boundary, shape, threads, Cell.of(shape, length).aspect, self.be)
         self.h_rms = rms_about_mean(heights)[1] if scale is None else scale
         self.h = self.be.asarray(heights)
         self.hf = self.h.ravel()

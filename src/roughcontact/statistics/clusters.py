@@ -36,6 +36,7 @@ from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from ..core.cell import Cell, check_length
 from ..core.quantities import cf_unit
 from .wrapping import CONNECTIVITIES, wrapping_variable
 
@@ -65,31 +66,6 @@ def _check_mask(mask, square: bool = True) -> np.ndarray:
             f"mask must have dtype bool, got dtype {mask.dtype}; "
             "pass e.g. `pressure > 0` for a contact pressure field")
     return mask
-
-
-def _check_length(length):
-    """A float ``L`` (square cell) or a pair ``(Lx, Ly)`` of floats, each finite and > 0."""
-    if isinstance(length, (tuple, list, np.ndarray)) and np.ndim(length) == 1:
-        if len(length) != 2:
-            raise ValueError(f"length must be a positive real number or a pair (Lx, Ly) of them, got {length!r}")
-        return tuple(_check_side(v, length) for v in length)
-    return _check_side(length, length)
-
-
-def _cell_length(length, shape):
-    """``length`` as the solver takes it for a grid of ``shape``: ``(L, L)`` on ``(n, n)`` is the float ``L``."""
-    if np.ndim(length) == 1 and shape[0] == shape[1] and length[0] == length[1]:
-        return length[0]
-    return length
-
-
-def _check_side(value, length) -> float:
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        raise ValueError(f"length must be a positive real number or a pair (Lx, Ly) of them, got {length!r}")
-    value = float(value)
-    if not (np.isfinite(value) and value > 0):
-        raise ValueError(f"length must be finite and > 0, got {length!r}")
-    return value
 
 
 def _check_edges(bins) -> np.ndarray:
@@ -309,13 +285,11 @@ def cluster_statistics(mask: np.ndarray, length=1.0, periodic: bool = True) -> d
     Raises
     ------
     ValueError
-        For a bad mask (see :func:`label_clusters`) or a non-positive length.
+        For a bad mask (see :func:`label_clusters`), a bad length or a float length for a mask that is
+        not square (:meth:`roughcontact.core.cell.Cell.canonical`).
     """
-    length = _check_length(length)
-    if isinstance(mask, np.ndarray) and mask.ndim == 2:
-        length = _cell_length(length, mask.shape)
-    square = np.ndim(length) == 0
-    labels, count = label_clusters(mask, periodic, square=square)
+    cell = Cell.canonical(_check_mask(mask, square=False).shape, length, "mask")
+    labels, count = label_clusters(mask, periodic, square=cell.square)
     n_total = labels.size
     # bincount over labels gives every cluster's node count in one pass.
     px = np.bincount(labels.ravel(), minlength=count + 1)[1:].astype(np.int64)
@@ -325,26 +299,17 @@ def cluster_statistics(mask: np.ndarray, length=1.0, periodic: bool = True) -> d
         "count": int(count),
         "areas": areas,
         "areas_pixels": px,
-        "areas_physical": _physical_areas(areas, px, length, labels.shape),
+        "areas_physical": cell.areas(areas, px),
         "mean_area": float(areas.mean()) if count else 0.0,
         "max_area": float(areas[0]) if count else 0.0,
         "n_total_pixels": int(n_total),
     }
 
 
-def _physical_areas(areas: np.ndarray, px: np.ndarray, length, shape: tuple[int, int]) -> np.ndarray:
-    """Cluster areas in [length**2] from ``areas`` (fractions of A0) or ``px`` (node counts): ``areas * L**2``
-    for a float ``length``, else ``px * dx * dy`` on the grid ``shape = (nx, ny)`` of sides ``(Lx, Ly)``."""
-    if np.ndim(length) == 0:
-        return areas * length**2
-    (lx, ly), (nx, ny) = length, shape
-    return px * ((lx / nx) * (ly / ny))  # pixel area dx * dy
-
-
-def _to_mask(field, index: int, square: bool = True) -> np.ndarray:
+def _to_mask(field, index: int) -> np.ndarray:
     arr = np.asarray(field)
-    if arr.ndim != 2 or (square and arr.shape[0] != arr.shape[1]):
-        raise ValueError(f"field {index} must be a square 2-D array (n, n) (or (nx, ny) with length=(Lx, Ly)), "
+    if arr.ndim != 2:
+        raise ValueError(f"field {index} must be a 2-D array (n, n) (or (nx, ny) with length=(Lx, Ly)), "
                          f"got shape {arr.shape}")
     if arr.dtype == np.bool_:
         return arr
@@ -403,20 +368,19 @@ def cluster_dataset(masks_or_pressures: Iterable, steps, length, bins=None,
     Raises
     ------
     ValueError
-        For fields that are not square 2-D bool/real arrays, fields of
-        different sizes, non-finite pressures, a ``steps`` length that does not
+        For fields that are not 2-D bool/real arrays (square for a float ``length``),
+        fields of different sizes, non-finite pressures, a ``steps`` length that does not
         match the number of fields, no field at all, or bad ``length``/``bins``.
     """
-    length = _check_length(length)
     length_units = cf_unit(length_unit, length_power=1)
-    masks, steps = _fields_and_steps(masks_or_pressures, steps, np.ndim(length) == 0)
-    length = _cell_length(length, masks[0].shape)
+    masks, steps = _fields_and_steps(masks_or_pressures, steps)
+    cell = Cell.canonical(masks[0].shape, length, "each field")
     n_total = masks[0].size
     edges = default_area_bins(n_total) if bins is None else _check_edges(bins)
-    variables, coords = _cluster_variables(masks, length, periodic, edges), _cluster_coords(steps, edges)
+    variables, coords = _cluster_variables(masks, cell.length, periodic, edges), _cluster_coords(steps, edges)
     if periodic:  # a free patch has no periodic image to connect to
         _add_wrapping(variables, coords, masks)
-    return xr.Dataset(variables, coords=coords, attrs=_cluster_attrs(length, length_units, masks[0].shape, periodic))
+    return xr.Dataset(variables, coords=coords, attrs=_cluster_attrs(cell, length_units, periodic))
 
 
 class ClusterObserver:
@@ -449,7 +413,7 @@ class ClusterObserver:
     needs_gap = False
 
     def __init__(self, length, periodic: bool = True, *, length_unit: str = "1"):
-        self.length, self.periodic, self.length_unit = _check_length(length), bool(periodic), length_unit
+        self.length, self.periodic, self.length_unit = check_length(length), bool(periodic), length_unit
         self._masks: list[np.ndarray] = []
 
     def observe(self, step) -> None:
@@ -468,20 +432,16 @@ def _add_wrapping(variables: dict, coords: dict, masks: list[np.ndarray]) -> Non
         "units": "1", "long_name": "neighbours that connect a cluster's nodes (4: edges, 8: edges and corners)"})
 
 
-def _cluster_attrs(length, length_units: str, shape: tuple[int, int], periodic: bool) -> dict:
+def _cluster_attrs(cell: Cell, length_units: str, periodic: bool) -> dict:
     """Global attributes of :func:`cluster_dataset`: the cell (sides, grid) and how clusters were labelled."""
-    boundary = "periodic" if periodic else "free"
-    nx, ny = shape
-    if np.ndim(length) == 0:
-        cell = {"length": length, "length_units": length_units, "n": int(nx)}
-    else:
-        cell = {"length_x": length[0], "length_y": length[1], "length_units": length_units}
-    return {**cell, "nx": int(nx), "ny": int(ny), "cluster_connectivity": 4, "cluster_boundary": boundary}
+    sides, grid = cell.solver_attrs()
+    return {**sides, "length_units": length_units, **grid, "cluster_connectivity": 4,
+            "cluster_boundary": "periodic" if periodic else "free"}
 
 
-def _fields_and_steps(masks_or_pressures: Iterable, steps, square: bool = True) -> tuple[list[np.ndarray], np.ndarray]:
-    """Contact masks (one per field, one shared shape, square if ``square``) and the matching 1-D ``steps``."""
-    masks = [_to_mask(f, i, square) for i, f in enumerate(masks_or_pressures)]
+def _fields_and_steps(masks_or_pressures: Iterable, steps) -> tuple[list[np.ndarray], np.ndarray]:
+    """Contact masks (one per field, one shared shape) and the matching 1-D ``steps``."""
+    masks = [_to_mask(f, i) for i, f in enumerate(masks_or_pressures)]
     if not masks:
         raise ValueError("masks_or_pressures is empty: need at least one (n, n) field")
     shapes = {m.shape for m in masks}

@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from ..core.cell import Cell
 from ..core.fft import get_fft, rfft_weights, wavenumbers
 
 #: Allowed ranges of the scale arguments: wide, but far enough from float64's limits that
@@ -147,7 +148,7 @@ def nonperiodic_moments(heights: np.ndarray, length=1.0) -> dict[str, float]:
     h = np.asarray(heights, dtype=float)
     if h.ndim != 2 or min(h.shape) < 3:
         raise ValueError(f"heights must be a 2-D array of at least 3 x 3, got shape {h.shape}")
-    lx, ly = (float(length),) * 2 if np.ndim(length) == 0 else (float(v) for v in length)
+    lx, ly = Cell.of(h.shape, length).sides
     dx, dy = lx / h.shape[0], ly / h.shape[1]
     m0 = float(np.mean((h - h.mean()) ** 2))
     d1 = float(np.mean(np.diff(h, axis=0) ** 2)), float(np.mean(np.diff(h, axis=1) ** 2))

@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 
+from ..core.cell import Cell
 from .laws import positive_number
 
 
@@ -27,17 +28,6 @@ def _grid(shape) -> tuple[int, int]:
     ):
         raise ValueError(f"shape must be an int >= 1 or a pair of them (nx, ny), got {shape!r}")
     return int(dims[0]), int(dims[1])
-
-
-def _lengths(length) -> tuple[float, float]:
-    """``(Lx, Ly)`` of a float (square cell) or a pair, each finite and > 0."""
-    try:
-        sides = np.broadcast_to(np.asarray(length, dtype=float), (2,)) if np.ndim(length) < 2 else ()
-    except (TypeError, ValueError):
-        sides = ()
-    if len(sides) != 2 or not np.all(np.isfinite(sides)) or np.any(sides <= 0):
-        raise ValueError(f"length must be a finite float L > 0 or a pair (Lx, Ly) of them, got {length!r}")
-    return float(sides[0]), float(sides[1])
 
 
 def _heights(h) -> np.ndarray:
@@ -66,7 +56,8 @@ def wavenumbers(shape, length=1.0) -> np.ndarray:
         ``|q| = 2 pi sqrt((mx/Lx)^2 + (my/Ly)^2)`` [rad / length], ``mx, my`` the ``fftfreq``
         mode numbers (the order of ``numpy.fft.fft2``); 0 at ``[0, 0]``.
     """
-    (nx, ny), (lx, ly) = _grid(shape), _lengths(length)
+    cell = Cell.of(_grid(shape), length)
+    (nx, ny), (lx, ly) = cell.shape, cell.sides
     qx = 2.0 * math.pi * np.fft.fftfreq(nx, 1.0 / nx) / lx
     qy = 2.0 * math.pi * np.fft.fftfreq(ny, 1.0 / ny) / ly
     return np.hypot(qx[:, None], qy[None, :])

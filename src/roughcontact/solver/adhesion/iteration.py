@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...core.cell import Cell
 from ...core.fft import get_fft
 from ..halfspace import inverse_kernel
 from ..workspace import dot
@@ -170,19 +171,15 @@ class AdhesiveIteration:
 
 
 def _heights(heights, length):
-    """``heights`` as float64 ``(nx, ny)`` and ``length`` checked (float ``L`` or ``(Lx, Ly)``)."""
+    """``heights`` as float64 ``(nx, ny)`` and ``length`` checked: the float ``L`` or ``(Lx, Ly)`` of its
+    :meth:`~roughcontact.core.cell.Cell.canonical` cell (the same sides, so the same kernel, bit for bit)."""
     h = np.ascontiguousarray(heights, dtype=np.float64)
     if h.ndim != 2 or h.shape[0] < 4 or h.size < 4:
         raise ValueError(f"heights must be a 2-D array (nx, ny) with nx >= 4 (ny = 1 for a 1-D profile), "
                          f"got shape {h.shape}")
     if not np.all(np.isfinite(h)):
         raise ValueError("heights must contain only finite values (found NaN or inf)")
-    if np.ndim(length) == 0:
-        if h.shape[0] != h.shape[1]:
-            raise ValueError(f"a float length needs square heights; give length=(Lx, Ly) for shape {h.shape}")
-        return h, positive("length", length)
-    lx, ly = length
-    return h, (positive("length[0]", lx), positive("length[1]", ly))
+    return h, Cell.canonical(h.shape, length, "heights").length
 
 
 def _finish(it, mean_gap, control, iterations, p0=None):

@@ -12,6 +12,8 @@ import math
 
 import numpy as np
 
+from ...core.cell import Cell
+
 #: Fewest grid cells the process zone ``E* rho^2 / w`` must span for a step to count as converged
 #: (:func:`zone_cells`). Measured on a sphere's pull-off (exponential law, L = R / 2; docs/solver.md,
 #: "Adhesion"): at Tabor parameter 4, 0.37 cells read 2.32 pi w R, 0.74 cells 1.62, 1.49 cells 1.541;
@@ -161,8 +163,8 @@ def zone_cells(law, e_star: float, length, shape) -> float:
     12.8
     """
     nx, ny = shape
-    lx, ly = (length, length) if np.ndim(length) == 0 else length
-    dx = float(lx) / nx if ny == 1 else max(float(lx) / nx, float(ly) / ny)
+    lx, ly = Cell.of(shape, length).sides
+    dx = lx / nx if ny == 1 else max(lx / nx, ly / ny)
     return round(process_zone_length(law, e_star) / dx, 12)
 
 
