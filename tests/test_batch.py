@@ -18,6 +18,7 @@ import pytest
 
 from roughcontact.solver import SolverSettings, solve_contact
 from roughcontact.solver.batch import CHECK_EVERY, solve_contact_batch
+from roughcontact.statistics.clusters import ClusterObserver
 from roughcontact.surfaces.synthetic import generate_surface
 from test_array_backend import stand_in_cupy  # noqa: F401 (fixture)
 
@@ -130,7 +131,7 @@ def test_batch_through_the_backend_seam(stand_in_cupy):  # noqa: F811
     ({"boundary": "free"}, "periodic half-space only"),
     ({"method": "pk"}, "elastic method 'pk-fourier-f32' only"),
     ({"store_fields": True}, "stores no fields"),
-    ({"clusters": True}, "stores no fields"),
+    ({"observers": [ClusterObserver(1.0)]}, "takes no observers"),
 ])
 def test_what_a_batch_refuses(options, match):
     h = np.stack([_surface(0)[:16, :16], _surface(2)[:16, :16]])
