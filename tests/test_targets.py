@@ -11,6 +11,7 @@ from types import SimpleNamespace
 import pytest
 from snakemake.exceptions import WorkflowError
 
+from roughcontact.figures.registry import FIGURES
 from roughcontact.pipeline import targets as t
 from roughcontact.pipeline.targets import Targets
 from roughcontact.studies.accuracy import variants
@@ -24,7 +25,7 @@ def wildcards(scene="demo", **values):
 def targets(repo, shipped_config):
     with pytest.MonkeyPatch.context() as mp:
         mp.chdir(repo)  # the measured scene's files are relative to the workflow's folder
-        return Targets.from_config(shipped_config, variants)
+        return Targets.from_config(shipped_config, variants, FIGURES)
 
 
 @pytest.fixture
@@ -44,7 +45,7 @@ def test_an_invalid_config_is_one_workflow_error(shipped_config):
     bad = copy.deepcopy(shipped_config)
     bad["scene"] = "nowhere"
     with pytest.raises(WorkflowError, match="^invalid config: "):
-        Targets.from_config(bad, variants)
+        Targets.from_config(bad, variants, FIGURES)
 
 
 def test_file_patterns():
@@ -118,7 +119,7 @@ def test_a_batch_outside_the_grid_is_refused(targets):
 def test_unknown_and_invalid_scenes(targets):
     with pytest.raises(WorkflowError, match="no scene 'nope' in the config; defined scenes: "):
         targets.scene_of("nope")
-    broken = Targets({"scenes": {}, "scene": "x", "invalid": {"x": "scene 'x', field 'a': bad"}}, variants)
+    broken = Targets({"scenes": {}, "scene": "x", "invalid": {"x": "scene 'x', field 'a': bad"}}, variants, FIGURES)
     with pytest.raises(WorkflowError, match="^invalid config: scene 'x', field 'a': bad$"):
         broken.scene_of("x")
     with pytest.raises(WorkflowError, match="declares no 'accuracy' block"):

@@ -24,7 +24,7 @@ from roughcontact.pipeline.targets import (
 )
 from roughcontact.studies.accuracy import variants as accuracy_variants
 
-TARGETS = Targets.from_config(config, accuracy_variants)
+TARGETS = Targets.from_config(config, accuracy_variants, FIGURES)
 SCENES = TARGETS.scenes
 ACTIVE_SCENE = TARGETS.active
 # An invalid scene stops only a run of it (a target under results/<it>/ names its error); the others plan.

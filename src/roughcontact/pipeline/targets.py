@@ -3,7 +3,7 @@
 The rules (``workflow/rules/*.smk``) stay declarative: each input, params or resources entry is a function
 of this module, bound to the validated config once in ``workflow/rules/common.smk``::
 
-    TARGETS = Targets.from_config(config, accuracy_variants=variants)
+    TARGETS = Targets.from_config(config, accuracy_variants=variants, figures=FIGURES)
     case_input = TARGETS.case_input
     ...
 
@@ -26,7 +26,6 @@ from pathlib import Path
 
 from snakemake.exceptions import WorkflowError
 
-from ..figures.registry import FIGURES, scene_figures
 from .cases import BATCH_STEM, CASE_STEM, is_adhesive
 from .config import ConfigError, load_schema
 from .scenes import validate_config
@@ -153,6 +152,10 @@ class Targets:
     accuracy_variants : callable
         The accuracy study's settings of a block (:func:`roughcontact.studies.accuracy.variants`), given
         here because the study sits above the pipeline's layer.
+    figures : mapping
+        The registered figures by name (:data:`roughcontact.figures.registry.FIGURES`: each with
+        ``asked_by(scene)`` and ``input_paths(scene)``), given here for the same reason: the figures
+        draw the pipeline's files and sit beside it, so the pipeline does not import them.
 
     Attributes
     ----------
@@ -164,20 +167,22 @@ class Targets:
         The message of each invalid scene: a target under ``results/<it>/`` stops with it.
     """
 
-    def __init__(self, valid: Mapping, accuracy_variants: Callable[[Mapping], list[dict]]):
+    def __init__(self, valid: Mapping, accuracy_variants: Callable[[Mapping], list[dict]], figures: Mapping):
         self.scenes = valid["scenes"]
         self.active = valid["scene"]
         self.invalid = valid["invalid"]
         self.accuracy_variants = accuracy_variants
+        self.figures = figures
 
     @classmethod
-    def from_config(cls, config: Mapping, accuracy_variants: Callable[[Mapping], list[dict]]) -> Targets:
+    def from_config(cls, config: Mapping, accuracy_variants: Callable[[Mapping], list[dict]],
+                    figures: Mapping) -> Targets:
         """The targets of ``config`` (Snakemake's ``config``), validated once: a ``WorkflowError`` if invalid."""
         try:
             valid = validate_config(config, load_schema())
         except ConfigError as err:
             raise WorkflowError(f"invalid config: {err}") from None
-        return cls(valid, accuracy_variants)
+        return cls(valid, accuracy_variants, figures)
 
     # -------------------------------------------------------------------------- scenes and blocks
     def scene_of(self, name: str) -> dict:
@@ -342,10 +347,14 @@ class Targets:
         return file_mem_mb(self.topography_file(w))
 
     # -------------------------------------------------------------------------- figures and final products
+    def scene_figures(self, scene: Mapping) -> list[str]:
+        """Names of the registered figures the validated ``scene`` asks for, in registry order."""
+        return [name for name, spec in self.figures.items() if spec.asked_by(scene)]
+
     def figure_spec(self, w):
         """The registered figure named by the wildcards, if the scene asks for it."""
-        figures = scene_figures(self.scene_of(w.scene))
-        if w.figure not in FIGURES:
+        figures = self.scene_figures(self.scene_of(w.scene))
+        if w.figure not in self.figures:
             raise WorkflowError(
                 f"scene {w.scene!r}: wildcard figure={w.figure} is not a figure of roughcontact "
                 f"(roughcontact.figures.registry.FIGURES); the scene's figures: {', '.join(figures) or 'none'}"
@@ -354,7 +363,7 @@ class Targets:
             raise WorkflowError(
                 f"scene {w.scene!r} does not ask for figure {w.figure!r}; its figures: {', '.join(figures) or 'none'}"
             )
-        return FIGURES[w.figure]
+        return self.figures[w.figure]
 
     def figure_inputs(self, w) -> dict:
         """Input files of a figure, by role, under ``results/{scene}/``."""
@@ -379,7 +388,7 @@ class Targets:
             out += [f"results/{scene}/accuracy/summary.{ext}" for ext in ("nc", "csv", "md")]
         if "kappa_gap" in s:
             out += [f"results/{scene}/kappa_gap/kappa-gap.{ext}" for ext in ("nc", "md")]
-        out += [f"results/{scene}/figures/{fig}.{ext}" for fig in scene_figures(s) for ext in ("png", "pdf")]
+        out += [f"results/{scene}/figures/{fig}.{ext}" for fig in self.scene_figures(s) for ext in ("png", "pdf")]
         out += [f"results/{scene}/report/summary.rst"]
         return out
 
