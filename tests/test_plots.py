@@ -558,3 +558,37 @@ def test_measured_figures_count_the_unconverged_steps_they_leave_out():
         lines = [ln for ln in fig.axes[0].get_lines() if ln.get_linestyle() == "-" and len(ln.get_xdata()) in (24, 30)]
         assert sorted(len(ln.get_xdata()) for ln in lines)[:2] == [24, 24]
         assert not _unconverged_labels(draw(agg.assign(converged=agg["converged"] | True)))
+
+
+def test_captions_name_exactly_the_reference_lines_each_figure_draws(contact):
+    """The area-load caption promises the asperity models at the surfaces' own alpha only where they are drawn:
+    for one family, not for families of different bandwidth (issue 52)."""
+    from caption_check import assert_caption_true, lead_of
+    from roughcontact.figures.captions import caption
+
+    agg, stats, fit = contact
+    one = {"k_l": [16.0], "k_s": [32.0]}
+    for name, draw in (("area_load", fig_area_load), ("kappa", fig_kappa), ("dpbar", fig_dpbar)):
+        lead = lead_of(name)
+        both = draw(agg.sel(one), stats.sel(one), fit.sel(one))
+        shown = assert_caption_true(both, caption(lead, both))
+        assert {"asperity_bgt_own", "cel_fit"} <= set(shown) if name != "dpbar" else "dpbar_fit" in shown
+        mixed = draw(agg, stats, fit)
+        shown = assert_caption_true(mixed, caption(lead, mixed))
+        assert "asperity_bgt_own" not in shown and "surfaces' own" not in caption(lead, mixed)
+        bare = draw(agg, stats)  # no fit: no fitted law named
+        assert "fitted" not in caption(lead, bare).split("Drawn with the data")[-1]
+
+
+def test_reference_lines_are_told_apart_and_lie_above_the_bands(contact):
+    """BGT's small-load limit and the BGT asperity model at alpha = 2 were both solid black (issue 52)."""
+    from matplotlib.collections import PolyCollection
+
+    agg, stats, fit = contact
+    one = {"k_l": [16.0], "k_s": [32.0]}
+    ax = fig_area_load(agg.sel(one), stats.sel(one), fit.sel(one)).axes[0]
+    lines = {line.get_gid(): line for line in ax.get_lines() if line.get_gid()}
+    assert lines["bgt_limit"].get_linestyle() == "-" and lines["asperity_bgt_paper"].get_linestyle() != "-"
+    band = max(c.get_zorder() for c in ax.collections if isinstance(c, PolyCollection))
+    data = max(line.get_zorder() for line in ax.get_lines() if not line.get_gid())
+    assert lines["cel_fit"].get_zorder() > max(band, data)  # the fit is drawn over the data it fits

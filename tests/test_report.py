@@ -1,5 +1,7 @@
 """The Snakemake report: its landing page (roughcontact.studies.report) and captions, and the demo's report
 in a browser."""
+import base64
+import datetime
 import os
 import re
 import shutil
@@ -17,7 +19,7 @@ from conftest import REPO, run_snakemake
 from roughcontact import __version__
 from roughcontact.analysis import fit
 from roughcontact.figures.registry import FIGURES
-from roughcontact.studies import report
+from roughcontact.studies import precision, report, run_record
 
 REPORT_DIR = REPO / "workflow" / "report"
 DOCUTILS_CONF = REPORT_DIR / "docutils.conf"
@@ -142,27 +144,46 @@ def _fit_result(n_seeds=3, ci=True):
         coords=coords)
 
 
-def test_fit_table_shows_every_value_of_cel_csv_with_its_interval(mathml):
+def test_fit_table_shows_every_constant_rounded_to_its_interval(mathml):
     csv_text = fit.to_csv_table(_fit_result())
     rows = report.read_fit_csv(csv_text)
     html = _html(report.fit_table(csv_text))
     assert html.count("<table") == 1
     # one table row per group and estimator, a header row and the published values
     assert html.count("<tr") == 1 + len(rows) // 3 + 1
-    for row in rows:
-        if row["value"]:
-            assert f"{row['value']} [{row['ci_low']}, {row['ci_high']}]" in html, row
+    # kappa 1 [0.5, 1.5] is shown as kappa/sqrt(2 pi) = 0.399 [0.199, 0.598]: to the interval's one figure
+    assert "<td>0.4 [0.2, 0.6]</td>" in html and "<td>1.1 [0.6, 1.6]</td>" in html
+    assert "0.39894" not in html and "1.1 [0.6, 1.6]" in html
     assert "—" in html  # the constant without a fit
     assert html.count(" *</td>") == 1 and "not constrained by the data" in html
-    assert "2.87009 ± 0.005" in html and "0.55 ± 0.02" in html and "published" in html
-    assert html.count("<math") == 6  # k_l, k_s, H, kappa, mu, beta in the header
+    # the paper's kappa = (2.87009 +- 0.00501326) as it states it: 1.145 +- 0.002
+    assert "1.145 ± 0.002" in html and "0.55 ± 0.02" in html and "0.210 ± 0.005" in html and "published" in html
+    assert html.count("<math") == 6  # k_l, k_s, H, kappa/sqrt(2 pi), mu, beta in the header
+    assert "<msqrt>" in html.split("</thead>")[0]
+
+
+def test_fit_table_names_a_constant_or_an_interval_on_a_bound_of_the_fit(mathml):
+    result = _fit_result()
+    # the joint fit's mu interval down to its lower bound (1e-6); its beta value on the lower bound
+    where = {"k_l": 4.0, "k_s": 32.0, "H_group": "0.36", "estimator": "joint"}
+    result["ci_low"].loc[{**where, "constant": "mu"}] = fit.JOINT_LOWER[1]
+    result["value"].loc[{**where, "constant": "beta"}] = fit.JOINT_LOWER[2]
+    html = _html(report.fit_table(fit.to_csv_table(result)))
+    assert "<td>1.40 [bound, 1.90] ‡</td>" in html and "<td>1e-12 (on a bound) [1.0, 2.0] ‡</td>" in html
+    assert "1e-06" not in html.split("</table>")[0]
+    assert "‡ on a bound of the joint least-squares fit" in html and "μ ≤ 1 − 1e-06" in html
+    # the paper's route has no bounds: the same number there is just a number
+    paper = {**where, "estimator": "paper"}
+    result = _fit_result()
+    result["ci_low"].loc[{**paper, "constant": "mu"}] = fit.JOINT_LOWER[1]
+    assert "‡" not in _html(report.fit_table(fit.to_csv_table(result)))
 
 
 def test_fit_table_without_bootstrap_shows_the_values_alone(mathml):
     csv_text = fit.to_csv_table(_fit_result(ci=False))
     html = _html(report.fit_table(csv_text))
     assert "[" not in html.split("</thead>")[1].split("published")[0]
-    assert "1.1<" in html or "1.1\n" in html
+    assert "<td>1.1</td>" in html and "<td>0.399</td>" in html  # three figures without an interval
 
 
 def test_fit_table_refuses_what_is_not_a_cel_table():
@@ -175,27 +196,125 @@ def test_fit_table_refuses_what_is_not_a_cel_table():
         report.fit_table(good.replace(",kappa,", ",gamma,"))
 
 
-def test_summary_has_the_code_the_parameters_and_the_fit(mathml):
+@pytest.mark.parametrize(("value", "low", "high", "shown"), [
+    (2.65988, 2.57646, 2.91696, ("2.66", "2.58", "2.92")),  # the issue's example: half-width 0.17
+    (0.41, 1e-6, 0.62, ("0.41", "0.00", "0.62")),
+    (1234.5, 1000.0, 1500.0, ("1230", "1000", "1500")),  # rounded to tens
+    (1.0, 1.0, 1.0, ("1", "1", "1")),  # no width: three figures
+    (-0.0001, -0.1, 0.1, ("0.0", "-0.1", "0.1")),  # no "-0.0"
+    (3.14159, float("nan"), float("nan"), ("3.14", "", "")),
+])
+def test_a_value_is_rounded_to_its_interval(value, low, high, shown):
+    assert precision.estimate(value, low, high) == shown
+
+
+def test_published_values_keep_the_figures_of_their_error():
+    assert precision.plus_minus(2.87009, 0.00501326) == "2.870 ± 0.005"
+    assert precision.plus_minus(1.145, 0.002) == "1.145 ± 0.002"
+    assert precision.plus_minus(0.55, 0.02) == "0.55 ± 0.02"
+    assert precision.plus_minus(2.0, 0.17) == "2.00 ± 0.17"
+    assert precision.plus_minus(0.21, float("nan")) == "0.21"
+    with pytest.raises(ValueError, match="finite and > 0"):
+        precision.decimals_for(0.0)
+
+
+def test_result_line_gives_the_representative_group_against_the_paper(mathml):
     csv_text = fit.to_csv_table(_fit_result())
-    rst = report.summary_rst("demo", PARAMETERS, version="1.2.3", commit="abc (uncommitted changes)",
-                             fit_csv=csv_text)
-    assert rst == report.summary_rst("demo", PARAMETERS, version="1.2.3", commit="abc (uncommitted changes)",
-                                     fit_csv=csv_text), "deterministic"
+    html = _html(report.result_rst(csv_text))
+    # k_l = 16, k_s = 32, H pooled, the paper's route: kappa 2.8 [2.3, 3.3] / sqrt(2 pi), mu 2.9, beta 3.0
+    assert "<strong>Result</strong>" in html and "λ_l = L/16, λ_s = L/32, H pooled, 3 seeds" in html
+    assert "κ/√(2π) = 1.1 [0.9, 1.3], μ = 2.9 [2.4, 3.4], β = 3.0 [2.5, 3.5]" in html
+    assert "the paper: κ/√(2π) = 1.145 ± 0.002, μ = 0.55 ± 0.02, β = 0.210 ± 0.005" in html
+    # without the representative point: the largest k_l and its largest k_s
+    four = "\n".join(line for line in csv_text.splitlines() if not line.startswith("16,"))
+    assert "λ_l = L/4, λ_s = L/32, H pooled" in report.result_rst(four)
+    assert "no constant of the contact evolution law was fitted" in report.result_rst(csv_text.splitlines()[0])
+    assert "no contact study" in report.result_rst(None)
+    assert report.result_rst(csv_text, pull_off="TABLE").endswith("TABLE")
+
+
+def test_summary_has_the_fit_then_the_parameters_folded(mathml):
+    csv_text = fit.to_csv_table(_fit_result())
+    rst = report.summary_rst("demo", PARAMETERS, fit_csv=csv_text)
+    assert rst == report.summary_rst("demo", PARAMETERS, fit_csv=csv_text), "deterministic"
     html = _html(rst)
-    for text in ("1.2.3", "abc (uncommitted changes)", "Parameters of scene demo", "contact.solver.tol",
-                 "Contact evolution law fit", "published"):
+    for text in ("Contact evolution law fit", "published", "Parameters of scene demo", "contact.solver.tol",
+                 "β ≥ 1e-12", "8 parameters (click to show)"):
         assert text in html, text
-    without_fit = _html(report.summary_rst("rep", PARAMETERS, version="1.2.3", commit="unknown"))
-    assert "Contact evolution law" not in without_fit and "unknown" in without_fit
-    with pytest.raises(ValueError, match="version and the commit"):
-        report.summary_rst("demo", PARAMETERS, version="1.2.3", commit="")
+    assert html.index("published") < html.index("<details>") < html.index("contact.solver.tol") < html.index(
+        "</details>")
+    assert html.count("<details>") == 1  # only the parameters are folded
+    without_fit = _html(report.summary_rst("rep", PARAMETERS))
+    assert "Contact evolution law" not in without_fit and "Each study of the scene" in without_fit
+    with pytest.raises(ValueError, match="one line of plain text"):
+        report.folded("a <b>", "x")
 
 
 def test_summary_of_a_fit_with_no_row_says_so(mathml):
     # every case excluded (unconverged steps): cel.csv holds its header only; the report still builds
     header = fit.to_csv_table(_fit_result()).splitlines()[0] + "\n"
-    html = _html(report.summary_rst("tiny", PARAMETERS, version="1.2.3", commit="unknown", fit_csv=header))
+    html = _html(report.summary_rst("tiny", PARAMETERS, fit_csv=header))
     assert "Contact evolution law fit" in html and "No constant was fitted" in html
+
+
+def test_cel_csv_caption_shows_the_file_as_a_table(tmp_path, monkeypatch, mathml):
+    monkeypatch.chdir(tmp_path)
+    Path("cel.csv").write_text(fit.to_csv_table(_fit_result()))
+    text = jinja2.Template((REPORT_DIR / "fit.rst").read_text()).render(
+        snakemake=type("Snakemake", (), {"output": type("Output", (), {"csv": "cel.csv"})}))
+    html = _html(text)
+    assert html.count("<table") == 1 and "<th" in html and "bootstrap_stderr" in html
+    assert html.count("<tr") == 1 + len(report.read_fit_csv(Path("cel.csv").read_text()))
+
+
+def test_figures_are_embedded_with_their_captions(mathml):
+    png = (REPO / "docs" / "figures" / "demo_kappa.png").read_bytes()
+    rst = report.figures_rst([("kappa", png, r"The caption, :math:`\bar p`." + "\n")])
+    html = _html(rst + "\n.. _kappa.png: #kappa\n")
+    assert html.count("<img") == 1 and 'src="data:image/png;base64,' in html and 'href="#kappa"' in html
+    assert base64.b64decode(html.split("base64,")[1].split('"')[0]) == png
+    assert "The caption" in html and max(len(line) for line in rst.splitlines()) < 200
+    with pytest.raises(ValueError, match="not a PNG"):
+        report.figures_rst([("kappa", b"GIF89a", "")])
+
+
+def test_bar_is_a_macron_that_chromium_draws(mathml):
+    html = _html(r":math:`\partial\bar p/\partial p_0`")
+    assert "\u00af" in html and "\u02c9" not in html and "<mover" in html
+
+
+def test_every_template_gives_maths_a_font_that_stretches_brackets():
+    for name in ("workflow.rst", "figure.rst", "fit.rst"):
+        assert report.MATH_CSS.replace(" ", "") in (REPORT_DIR / name).read_text().replace(" ", "").replace(
+            "\n", ""), name
+
+
+# --------------------------------------------------------------------------------- run record
+def test_run_record_gives_the_code_the_libraries_the_host_the_date_and_the_cpu(tmp_path, mathml):
+    versions = run_record.library_versions()
+    assert list(versions)[:4] == ["Python", "numpy", "scipy", "pyFFTW"] and re.fullmatch(r"3\.\d+\.\d+",
+                                                                                         versions["FFTW"])
+    when = datetime.datetime(2026, 11, 28, 3, 4, tzinfo=datetime.UTC)
+    rst = run_record.run_record_rst(version="1.2", commit="abc (uncommitted changes)", versions=versions,
+                                    host="box (Linux)", when=when, cpu=run_record.cpu_text(4000.0, 39, 0))
+    html = _html(rst)
+    assert rst.startswith("Provenance\n----------\n")
+    for text in ("<tt class=\"docutils literal\">abc</tt>", "uncommitted changes", "numpy",
+                 versions["numpy"], "FFTW", "box (Linux)", "2026-11-28 03:04 UTC", "66.7 min over 39 jobs"):
+        assert text in html, text
+    assert "clean" in run_record.run_record_rst(version="1", commit="abc", versions={}, host="h", when=when, cpu="")
+    assert "not a git checkout" in run_record.run_record_rst(version="1", commit="unknown", versions={}, host="h",
+                                                             when=when, cpu="")
+    with pytest.raises(ValueError, match="timezone-aware"):
+        run_record.run_record_rst(version="1", commit="a", versions={}, host="h", when=when.replace(tzinfo=None),
+                                  cpu="")
+    assert run_record.cpu_text(30.0, 1, 1) == "at least 30 s over 1 job; 1 of them sampled by Snakemake, a lower bound"
+    # the run's CPU from its benchmark files and job logs (roughcontact.pipeline.runcost)
+    bench = tmp_path / "benchmarks"
+    bench.mkdir()
+    (bench / "fit_cel.tsv").write_text("s\th:m:s\tmax_rss\tmax_vms\tmax_uss\tmax_pss\tio_in\tio_out\tmean_load\t"
+                                       "cpu_time\n2.0\t0:00:02\t100\t1\t1\t1\t0\t0\t50\t1.5\n")
+    assert run_record.total_cpu(tmp_path) == (1.5, 1, 1)
 
 
 # --------------------------------------------------------------------------------- landing page
@@ -227,23 +346,35 @@ def _landing_page(config, results):
     return html
 
 
-def test_landing_page_template_renders(tmp_path, monkeypatch, mathml):
+def test_landing_page_leads_with_the_result_then_the_figures(tmp_path, monkeypatch, mathml):
     monkeypatch.chdir(tmp_path)  # Snakemake renders the report from the working directory
-    summary = Path("results/demo/report/summary.rst")
-    summary.parent.mkdir(parents=True)
-    summary.write_text(report.summary_rst("demo", PARAMETERS, version="9.9", commit="unknown",
-                                          fit_csv=fit.to_csv_table(_fit_result())))
+    root = Path("results/demo/report")
+    root.mkdir(parents=True)
+    csv_text = fit.to_csv_table(_fit_result())
+    png = (REPO / "docs" / "figures" / "demo_kappa.png").read_bytes()
+    (root / "result.rst").write_text(report.result_rst(csv_text))
+    (root / "figures.rst").write_text(report.figures_rst([("kappa", png, "The kappa caption :math:`\\kappa`.")]))
+    (root / "summary.rst").write_text(report.summary_rst("demo", PARAMETERS, fit_csv=csv_text))
+    when = datetime.datetime(2026, 11, 28, tzinfo=datetime.UTC)
+    (root / "run.rst").write_text(run_record.run_record_rst(version="9.9", commit="unknown", versions={"numpy": "2"},
+                                                            host="h", when=when, cpu="1 s over 1 job"))
     config = {"scene": "demo", "scenes": {"demo": {"description": "A *star*, k_l and `ticks` stay text."}}}
     figure = _Result("results/demo/figures/kappa.png", "<p>The kappa caption <math><mi>κ</mi></math>.</p>")
-    html = _landing_page(config, [("Summary", _Result(summary, "<p>summary</p>")), ("Contact", figure)])
+    table = _Result("results/demo/fit/cel.csv", "<p>The fit, every row.</p>")
+    html = _landing_page(config, [("Contact", figure), ("Fit", table)])
     assert "A *star*, k_l and `ticks` stay text." in html
-    assert "Parameters of scene demo" in html and "9.9" in html and "published" in html
-    assert "kappa.png" in html and "The kappa caption <math>" in html and "(Contact)" in html
+    order = ["<strong>Result</strong>", "Figures</h", "<img", "The kappa caption", "Contact evolution law fit</h",
+             "published", "Parameters of scene demo", "<details>", "contact.solver.tol", "Other results</h",
+             "cel.csv</a> (Fit)", "The fit, every row.", "Provenance</h", "9.9"]
+    at = [html.find(text) for text in order]
+    assert -1 not in at and at == sorted(at), dict(zip(order, at, strict=True))
+    assert "kappa.png</a> (Contact)" not in html  # a figure is shown, not listed again
     assert html.count("<math") >= 3  # the law, the figure's caption, the fit's header
     assert "safe center" in html  # the page keeps its top when taller than the window
-    summary.unlink()
+    for name in ("result.rst", "run.rst"):
+        (root / name).unlink()
     html = _landing_page({"scene": "demo", "scenes": {"demo": {}}}, [("Contact", figure)])
-    assert "No summary of this scene yet" in html
+    assert "No result of this scene yet" in html and "No record of the run yet" in html
 
 
 # --------------------------------------------------------------------------------- in a browser

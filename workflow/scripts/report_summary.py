@@ -1,7 +1,6 @@
-"""The report's landing-page fragment: scene parameters, version, git commit, CEL fit or pull-off table."""
+"""The report's landing-page fragments: the result line (or pull-off table), and the fit, tables and parameters."""
 from pathlib import Path
 
-from roughcontact import __version__
 from roughcontact.core.files import write_text_atomic
 from roughcontact.pipeline.io import read_dataset, run_logged
 from roughcontact.studies import report
@@ -34,13 +33,11 @@ def pull_off():
 def main(log):
     fit = snakemake.input.fit
     fit_csv = Path(fit[0]).read_text(encoding="utf-8") if fit else None
-    # The checkout that holds this workflow; "unknown" when it is not a git work tree.
-    commit = report.git_commit(Path(snakemake.scriptdir))
-    text = report.summary_rst(snakemake.wildcards.scene, snakemake.params.parameters, version=__version__,
-                              commit=commit, fit_csv=fit_csv, topographies=topographies(),
-                              pull_off=pull_off())
-    write_text_atomic(snakemake.output[0], text)
-    log.info("report summary written to %s (version %s, commit %s)", snakemake.output[0], __version__, commit)
+    write_text_atomic(snakemake.output.result, report.result_rst(fit_csv, pull_off=pull_off()))
+    text = report.summary_rst(snakemake.wildcards.scene, snakemake.params.parameters, fit_csv=fit_csv,
+                              topographies=topographies())
+    write_text_atomic(snakemake.output.summary, text)
+    log.info("report fragments written: %s, %s", snakemake.output.result, snakemake.output.summary)
 
 
 run_logged(snakemake.log[0], main)

@@ -16,6 +16,7 @@ from matplotlib.patches import Patch
 
 from ..theory.asperity import asperity_area, asperity_max_load
 from ..theory.laws import KAPPA_BGT, KAPPA_PERSSON, cel_area, linear_area, persson_area
+from .captions import REFERENCE_STYLES
 from .load_curves import (
     ASPERITY_STYLES,
     BAND_ALPHA,
@@ -25,7 +26,9 @@ from .load_curves import (
     PERSSON_ERF_STYLE,
     PERSSON_LIMIT_STYLE,
     asperity_alphas,
+    asperity_gid,
     asperity_handles,
+    asperity_style,
     converged_family,
     draw_unconverged,
     e_star_of,
@@ -35,11 +38,12 @@ from .load_curves import (
     has_seeds,
     mean_slope,
     n_outside,
+    reference_style,
     run_summary,
     unconverged_handles,
     unconverged_steps,
 )
-from .style import OKABE_ITO, STYLE, family_handles, lambda_label, legend_below, require
+from .style import STYLE, family_handles, lambda_label, legend_below, require
 
 
 def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None, *,
@@ -97,7 +101,7 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
         handles = family_handles(kl_list, h_list, colour, marker, style) + area_load_theory_handles(sdmax)
         handles += asperity_handles(alphas) + _area_load_cross_handles(axes, crosses)
         if drew_fit:
-            handles.append(Line2D([], [], color="0.45", lw=2.2, alpha=0.8,
+            handles.append(Line2D([], [], **reference_style("cel_fit"),
                                   label=f"CEL fit ({estimator}), " + lambda_label(cel_kl, "l")))
         fig.suptitle(run_summary(agg, stats))
         legend_below(fig, handles, f"$h' = {hp:.3g}$")
@@ -182,7 +186,7 @@ def _area_load_axes(ax, consts, xmax: float, ymax: float, e_star: float, hp: flo
     p = np.linspace(0, xmax * e_star, 200)
     if consts is not None:
         ax.plot(p / e_star, cel_area(p, kappa=consts[0], mu=consts[1], beta=consts[2], rms_slope=hp, e_star=e_star),
-                color="0.45", lw=2.2, alpha=0.8, zorder=1)
+                **REFERENCE_STYLES["cel_fit"], gid="cel_fit")
     area_load_theory(ax, p, e_star, hp, alphas)
     ax.set_xlim(0, xmax)
     ax.set_ylim(0, ymax * 1.05)
@@ -197,18 +201,18 @@ def area_load_theory(ax, p: np.ndarray, e_star: float, hp: float, alphas) -> boo
     :func:`~roughcontact.theory.asperity.asperity_max_load`); returns whether one was cut there, for a note.
     """
     x = p / e_star
-    ax.plot(x, linear_area(p, kappa=KAPPA_BGT, rms_slope=hp, e_star=e_star),
-            color=OKABE_ITO[0], lw=0.9, ls="-", zorder=3)
-    ax.plot(x, persson_area(p, rms_slope=hp, e_star=e_star), **PERSSON_ERF_STYLE, zorder=3)
+    ax.plot(x, linear_area(p, kappa=KAPPA_BGT, rms_slope=hp, e_star=e_star), **REFERENCE_STYLES["bgt_limit"],
+            gid="bgt_limit")
+    ax.plot(x, persson_area(p, rms_slope=hp, e_star=e_star), **PERSSON_ERF_STYLE, zorder=3, gid="persson_erf")
     ax.plot(x, linear_area(p, kappa=KAPPA_PERSSON, rms_slope=hp, e_star=e_star), **PERSSON_LIMIT_STYLE,
-            zorder=4)
+            zorder=4, gid="persson_limit")
     cut = False
     for alpha, shade, _ in alphas:
-        for model, (ls, _name) in ASPERITY_STYLES.items():
+        for model in ASPERITY_STYLES:
             inside = p <= asperity_max_load(alpha=alpha, rms_slope=hp, e_star=e_star, model=model)
             cut |= not inside.all()
             ax.plot(x[inside], asperity_area(p[inside], alpha=alpha, rms_slope=hp, e_star=e_star, model=model),
-                    color=shade, lw=1.1, ls=ls, zorder=3)
+                    **asperity_style(model, shade), gid=asperity_gid(model, alpha))
     return cut
 
 
@@ -218,7 +222,7 @@ def area_load_theory_handles(sdmax: float) -> list:
     grey = np.array([0.5, 0.5, 0.5])
     return [Patch(facecolor=(*grey, BAND_ALPHA), edgecolor=(*grey, BAND_EDGE_ALPHA), lw=BAND_EDGE_LW,
                   label=f"$\\pm 1$ s.d. over seeds (largest: {sdmax:.2g})"),
-            Line2D([], [], color=OKABE_ITO[0], lw=0.9, label=BGT_LIMIT_LABEL),
+            Line2D([], [], **reference_style("bgt_limit"), label=BGT_LIMIT_LABEL),
             Line2D([], [], **PERSSON_LIMIT_STYLE,
                    label=r"Persson, small-load limit $A/A_0 = \sqrt{8/\pi}\,p_0/(h'E^*)$"),
             Line2D([], [], **PERSSON_ERF_STYLE,
