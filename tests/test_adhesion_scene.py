@@ -92,7 +92,7 @@ def _aggregate():
 
 
 def test_pull_off_table_pools_the_trusted_seeds_and_counts_the_others():
-    from roughcontact.studies.report import pull_off_table
+    from roughcontact.studies.report_tables import pull_off_table
 
     text = pull_off_table(_aggregate())
     # H = 0.36: both seeds, (1e-4 + 3e-4) / 2 / E* = 1e-4 +- s.d. 1.414e-4 / 2; H = 0.84: one of two, the other said why

@@ -20,7 +20,7 @@ from roughcontact.figures.measured import fig_measured_area_load, fig_measured_k
 from roughcontact.figures.registry import FIGURES, scene_figures
 from roughcontact.figures.style import save_figure
 from roughcontact.pipeline.io import read_dataset, write_dataset
-from roughcontact.studies import report
+from roughcontact.studies import report, report_tables
 from roughcontact.surfaces.synthetic import generate_surface, spectral_moments
 
 TRUTH = np.array([fit.PAPER_CEL[c][0] for c in fit.CONSTANTS])
@@ -312,8 +312,9 @@ def test_report_lists_every_topography_with_its_loads(scene_dir):
     for name in scene["topography"]["files"]:
         surface = read_dataset(root / "surfaces" / f"{name}.nc", stage="surface")
         surface.attrs["source"] = f'{{"file": "data/{name}.x3p"}}'
-        rows.append(report.topography_row(name, surface, agg.sel(topography=name)))
-    html = _html(report.summary_rst("measured", {"fit": {"n_boot": 40}}, topographies=report.topographies_table(rows)))
+        rows.append(report_tables.topography_row(name, surface, agg.sel(topography=name)))
+    tables = report_tables.topographies_table(rows)
+    html = _html(report.summary_rst("measured", {"fit": {"n_boot": 40}}, topographies=tables))
     tables = html.split("Topographies</h")[1].split("Parameters of scene")[0]
     assert "Topographies</h" in html and tables.count("<tr") == 1 + 3
     for name, row in zip(scene["topography"]["files"], rows, strict=True):
@@ -321,7 +322,7 @@ def test_report_lists_every_topography_with_its_loads(scene_dir):
         assert row[-1] == "30 of 30" and float(row[-2]) == pytest.approx(
             float(agg["area_fraction"].sel(topography=name).isel(step=-1)), rel=1e-2)
     # without a contact study: the load columns stay empty
-    assert report.topography_row("ground-a", surface)[-3:] == ["", "", ""]
+    assert report_tables.topography_row("ground-a", surface)[-3:] == ["", "", ""]
 
 
 def test_rectangular_maps_are_drawn_to_scale_with_both_sides():

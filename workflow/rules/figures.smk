@@ -17,7 +17,12 @@ rule figure:
             caption="../report/figure.rst",
             category=lambda w: FIGURES[w.figure].category,
         ),
-        pdf="results/{scene}/figures/{figure}.pdf",
+        # the vector version, attached to the report beside the PNG the landing page shows
+        pdf=report(
+            "results/{scene}/figures/{figure}.pdf",
+            category=lambda w: FIGURES[w.figure].category,
+            subcategory="vector PDF",
+        ),
         caption="results/{scene}/figures/{figure}.caption.rst",
     log:
         "results/{scene}/logs/figure_{figure}.log",

@@ -3,11 +3,11 @@ from pathlib import Path
 
 from roughcontact.core.files import write_text_atomic
 from roughcontact.pipeline.io import read_dataset, run_logged
-from roughcontact.studies import report
+from roughcontact.studies import report, report_tables
 
 
 def topographies():
-    """A measured scene's table of its files (report.topographies_table), or None for a generated one."""
+    """A measured scene's table of its files (report_tables.topographies_table), or None for a generated one."""
     surfaces = snakemake.input.surfaces
     if not surfaces:
         return None
@@ -17,17 +17,17 @@ def topographies():
     for path in surfaces:
         name = Path(path).stem
         surface = read_dataset(path, stage="surface", variables=["rms_slope"])
-        rows.append(report.topography_row(name, surface, None if agg is None else agg.sel(topography=name)))
-    return report.topographies_table(rows)
+        rows.append(report_tables.topography_row(name, surface, None if agg is None else agg.sel(topography=name)))
+    return report_tables.topographies_table(rows)
 
 
 def pull_off():
-    """An adhesive scene's pull-off table (report.pull_off_table), or None."""
+    """An adhesive scene's pull-off table (report_tables.pull_off_table), or None."""
     effects = snakemake.params.parameters.get("contact", {}).get("effects", {})
     if "adhesion" not in effects:
         return None
     agg = read_dataset(snakemake.input.contact[0], stage="aggregate", variables=["pull_off_pressure"])
-    return report.pull_off_table(agg)
+    return report_tables.pull_off_table(agg)
 
 
 def main(log):

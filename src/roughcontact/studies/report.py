@@ -23,21 +23,18 @@ from __future__ import annotations
 import base64
 import csv
 import io
-import itertools
-import json
 import os
 import subprocess
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 
 import numpy as np
 from docutils.utils.math import latex2mathml
 
 from ..analysis.fit import JOINT_LOWER, JOINT_UPPER, at_bound
-from ..core.cell import sides_of
 from ..pipeline.provenance import flatten
 from ..theory.laws import KAPPA_BGT
 from . import precision
+from .rst import folded, heading, list_table, literal
 
 #: What the commit is called when the code is not a git checkout (or git is missing).
 UNKNOWN = "unknown"
@@ -116,41 +113,12 @@ def render_maths_as_mathml(config_file: str | os.PathLike) -> None:
     latex2mathml.accents["bar"] = MACRON
 
 
-def _literal(value) -> str:
-    """A parameter value as RST inline literal text: strings bare, lists joined, the rest JSON."""
-    if isinstance(value, str):
-        text = value
-    elif isinstance(value, (list, tuple)) and all(isinstance(v, str) for v in value):
-        text = ", ".join(value)
-    else:
-        text = json.dumps(value, sort_keys=True, separators=(", ", ": "))
-    if not text:
-        return "(empty)"
-    if "`" in text or "\\" in text or text != text.strip() or "\n" in text:  # not as a literal: escaped text
-        return "".join(c if c.isalnum() else " " if c.isspace() else "\\" + c for c in text)
-    return f"``{text}``"
-
-
-def _list_table(header: Sequence[str], rows: Sequence[Sequence[str]], *, widths: str = "auto") -> str:
-    """An RST ``list-table`` with one header row; cells are RST text (one line each)."""
-    lines = [".. list-table::", "   :header-rows: 1", f"   :widths: {widths}", ""]
-    for row in [header, *rows]:
-        if len(row) != len(header):
-            raise ValueError(f"row {row!r} has {len(row)} cells, the header {len(header)}")
-        for i, cell in enumerate(row):
-            if "\n" in cell:
-                raise ValueError(f"table cell {cell!r} spans lines")
-            marker = "* -" if i == 0 else "  -"
-            lines.append(f"   {marker} {cell}".rstrip())
-    return "\n".join(lines) + "\n"
-
-
 def parameters_table(parameters: Mapping) -> str:
     """The scene's parameters as a two-column RST table: dotted key, value (keys sorted)."""
     flat = flatten(parameters)
     if not flat:
         raise ValueError("no parameters to show")
-    return _list_table(["parameter", "value"], [[f"``{key}``", _literal(flat[key])] for key in sorted(flat)])
+    return list_table(["parameter", "value"], [[f"``{key}``", literal(flat[key])] for key in sorted(flat)])
 
 
 #: Columns :func:`read_fit_csv` needs in the table of a generated scene (fit.fit_cel) and of a
@@ -273,7 +241,7 @@ def fit_table(csv_text: str) -> str:
     body.append([""] * (len(keys) - 1) + ["published", *paper_cells, ""])
     header = ["surfaces", "estimator"] if measured else [":math:`k_l`", ":math:`k_s`", ":math:`H`", "estimator"]
     header += [*CONSTANTS.values(), "topographies" if measured else "seeds"]
-    text = _list_table(header, body)
+    text = list_table(header, body)
     for mark, note in FOOTNOTES.items():
         if mark in marks:
             text += f"\n{mark} {note}\n"
@@ -312,8 +280,8 @@ def result_rst(csv_text: str | None, *, pull_off: str | None = None) -> str:
 
     With a fit (``csv_text``, cel.csv): the fitted kappa/sqrt(2 pi), mu and beta of :func:`result_group`
     with their 95 % bootstrap intervals (:func:`constant_estimate`) against the paper's values. An
-    adhesive scene (``pull_off``, :func:`pull_off_table`) leads with its pull-off table; a scene
-    without a contact study says where its result is.
+    adhesive scene (``pull_off``, :func:`~roughcontact.studies.report_tables.pull_off_table`) leads with its
+    pull-off table; a scene without a contact study says where its result is.
     """
     if pull_off is not None:
         return "**Result**: the pull-off pressure of each group of cases.\n\n" + pull_off
@@ -341,104 +309,6 @@ def result_rst(csv_text: str | None, *, pull_off: str | None = None) -> str:
     return text
 
 
-#: Columns of :func:`topographies_table`, and what each row of it must give.
-TOPOGRAPHY_COLUMNS = ("name", "file", "points", "size", "rms slope h'", "undefined", "final p0/(E* h')",
-                      "final A/A0", "converged steps")
-
-
-def topography_row(name: str, surface, contact=None) -> list[str]:
-    """One measured case as a row of :func:`topographies_table`, as RST text.
-
-    ``surface``: its surface dataset (``heights``, ``rms_slope``, ``undefined_fraction``, the cell's
-    attributes and ``source``); ``contact``: its slice of the contact aggregate (``pressure``,
-    ``area_fraction``, ``converged`` over ``step``, attribute ``e_star``) or None without a contact study.
-    """
-    source = json.loads(surface.attrs.get("source", "{}"))
-    nx, ny = (int(surface.sizes[d]) for d in ("x", "y"))
-    lx, ly = sides_of(surface.attrs)
-    unit = surface.attrs.get("length_units", "1")
-    # a case's file holds its name as a length-1 dimension: its scalars have that one element
-    slope = float(surface["rms_slope"].squeeze())
-    undefined = float(surface["undefined_fraction"].squeeze()) if "undefined_fraction" in surface else 0.0
-    row = [f"``{name}``", _literal(Path(source.get("file", "?")).name), f"{nx} x {ny}", f"{lx:.4g} x {ly:.4g} {unit}",
-           f"{slope:.3g}", f"{100 * undefined:.1f} %"]
-    if contact is None:
-        return row + ["", "", ""]
-    p_last = float(contact["pressure"].isel(step=-1)) / (float(contact.attrs["e_star"]) * slope)
-    conv = contact["converged"].values.astype(bool)
-    return row + [f"{p_last:.3g}", f"{float(contact['area_fraction'].isel(step=-1)):.3g}",
-                  f"{int(conv.sum())} of {conv.size}"]
-
-
-def topographies_table(rows: Sequence[Sequence[str]]) -> str:
-    """The measured cases of a scene (:func:`topography_row` each) as an RST table, with a lead-in."""
-    return ("Each topography file, as read (size and unit after conversion, undefined points filled) and "
-            "as loaded: the last load step's p0/(E* h') and contact area fraction, and the load steps "
-            "that converged.\n\n" + _list_table(list(TOPOGRAPHY_COLUMNS), rows))
-
-
-#: Columns of :func:`pull_off_table`.
-PULL_OFF_COLUMNS = ("case", "pull-off p_off/E* (mean ± s.d.)", "trusted", "left out (why)", "process zone [cells]",
-                    "final A/A0")
-
-
-def pull_off_table(agg) -> str:
-    """An adhesive scene's pull-off per group of cases, as RST, with a lead-in saying what it is.
-
-    ``agg`` is the contact aggregate (``pull_off_pressure``, ``pull_off_status``,
-    ``adhesive_zone_cells``, ``area_fraction``, attribute ``e_star``), over ``(k_l, k_s, H, seed)``
-    or ``topography``. A row per ``(k_l, k_s, H)`` (the seeds pooled: mean ± sample standard
-    deviation of the trusted pull-offs) or per topography; the cases whose pull-off is NaN are
-    counted by their status.
-    """
-    e_star = float(agg.attrs["e_star"])
-    meanings = agg["pull_off_status"].attrs["flag_meanings"].split()
-    measured = "topography" in agg.dims
-    groups = ["topography"] if measured else ["k_l", "k_s", "H"]
-    rows = []
-    for key, part in _groups(agg, groups):
-        present = (part["case_present"].values.astype(bool).ravel() if "case_present" in part
-                   else np.ones(part["pull_off_status"].size, dtype=bool))
-        pull = _flat(part["pull_off_pressure"])[present] / e_star
-        codes = _flat(part["pull_off_status"])[present].astype(int)
-        if codes.size == 0:
-            continue
-        ok = np.isfinite(pull)
-        value = "—" if not ok.any() else (f"{pull[ok].mean():.4g} ± {pull[ok].std(ddof=1):.2g}" if ok.sum() > 1
-                                          else f"{pull[ok][0]:.4g}")
-        why = ", ".join(f"{int((codes == c).sum())} {meanings[c].replace('_', ' ')}" for c in sorted(set(codes[~ok])))
-        zone = _flat(part["adhesive_zone_cells"])[present]
-        area = _flat(part["area_fraction"].isel(step=-1))[present]
-        rows.append([key, value, f"{int(ok.sum())} of {codes.size}", why or "—", f"{zone.min():.3g}",
-                     f"{np.nanmean(area):.3g}"])
-    lead = ("The pull-off pressure: minus the most tensile mean pressure on unloading under displacement control "
-            "from the last load step, the step refined near the minimum until it moves by less than its tolerance. "
-            "It is trusted only where the grid resolves the adhesive process zone E* rho^2 / w (at least 1.5 "
-            "cells), the last load step converged, the surfaces separated and the steps beside the minimum "
-            "converged; other cases are left out, counted by reason. No contact evolution law is fitted to an "
-            "adhesive scene: the law and its theories describe contact without adhesion.\n\n")
-    return lead + _list_table(list(PULL_OFF_COLUMNS), rows)
-
-
-def _flat(da) -> np.ndarray:
-    """A variable's values as a flat float64 array."""
-    return np.asarray(da.values, dtype=float).ravel()
-
-
-def _groups(agg, dims: Sequence[str]):
-    """``(label, part)`` for each combination of ``dims``' values (seeds stay in ``part``)."""
-    axes = [agg[d].values for d in dims]
-    for values in itertools.product(*axes):
-        part = agg.sel(dict(zip(dims, values, strict=True)))
-        label = str(values[0]) if len(dims) == 1 else ", ".join(
-            f"{d} = {v:g}" for d, v in zip(dims, values, strict=True))
-        yield f"``{label}``" if len(dims) == 1 else label, part
-
-
-def _heading(title: str, underline: str = "-") -> str:
-    return f"{title}\n{underline * len(title)}\n"
-
-
 #: Characters of an embedded image's data URI per line of RST.
 URI_LINE = 100
 
@@ -448,7 +318,7 @@ def figures_rst(figures: Sequence[tuple[str, bytes, str]]) -> str:
     link to the report's item ``{name}.png``, the image embedded (a data URI: the report is one file) and its
     caption (RST, as the figure rule wrote it).
     """
-    parts = [_heading("Figures"), "Each figure with its caption; its name opens it in the report, with its PDF "
+    parts = [heading("Figures"), "Each figure with its caption; its name opens it in the report, with its PDF "
              "beside it in the results folder.\n"]
     for name, png, caption in figures:
         if not png.startswith(b"\x89PNG"):
@@ -459,14 +329,6 @@ def figures_rst(figures: Sequence[tuple[str, bytes, str]]) -> str:
         parts += [f"`{name}.png`_\n", f".. image::\n{lines}\n   :width: 100%\n   :alt: {name}\n",
                   caption.rstrip() + "\n"]
     return "\n".join(parts)
-
-
-def folded(summary: str, rst: str) -> str:
-    """``rst`` inside an HTML ``<details>`` element, closed, opened by clicking ``summary`` (plain text)."""
-    if "<" in summary or "\n" in summary:
-        raise ValueError(f"a fold's summary is one line of plain text, got {summary!r}")
-    return (f"\n.. raw:: html\n\n   <details><summary>{summary}</summary>\n\n{rst}\n"
-            ".. raw:: html\n\n   </details>\n")
 
 
 #: The law as the fit sections write it.
@@ -489,12 +351,12 @@ def summary_rst(scene: str, parameters: Mapping, *, fit_csv: str | None = None,
         The text of the scene's ``fit/cel.csv``; ``None`` for a scene without a fit (no contact study, or
         an adhesive one: its pull-off is in :func:`result_rst`). Shown as :func:`fit_table`.
     topographies : str, optional
-        A measured scene's :func:`topographies_table`, shown after the fit.
+        A measured scene's :func:`~roughcontact.studies.report_tables.topographies_table`, shown after the fit.
     """
     parts = []
     if fit_csv is not None and not list(csv.DictReader(io.StringIO(fit_csv))):
         # a fit with no row: every case was excluded (e.g. unconverged steps) or none fitted
-        parts += [_heading("Contact evolution law fit"),
+        parts += [heading("Contact evolution law fit"),
                   "No constant was fitted: the fit table ``fit/cel.csv`` has no row (every case excluded, "
                   "e.g. for unconverged load steps, or no fit converged; the fit's log says which).\n"]
     elif fit_csv is not None:
@@ -504,7 +366,7 @@ def summary_rst(scene: str, parameters: Mapping, *, fit_csv: str | None = None,
                   ":math:`H`)")
         unit = "topographies" if "pooled as one" in pooled else "seeds"
         parts += [
-            _heading("Contact evolution law fit"),
+            heading("Contact evolution law fit"),
             f"Fit of {CEL_MATH} over the scene's window of :math:`A/A_0`, {pooled}, by the paper's route and "
             f"by a joint least-squares fit (bounds: {BOUNDS_TEXT}): each constant's value and, in brackets, its "
             f"95 % bootstrap interval (resampling whole {unit}), rounded to that interval; :math:`\\kappa` "
@@ -513,10 +375,10 @@ def summary_rst(scene: str, parameters: Mapping, *, fit_csv: str | None = None,
             fit_table(fit_csv),
         ]
     if topographies is not None:
-        parts += [_heading("Topographies"), topographies]
+        parts += [heading("Topographies"), topographies]
     flat = flatten(parameters)
     parts += [
-        _heading(f"Parameters of scene {scene}"),
+        heading(f"Parameters of scene {scene}"),
         "Each study of the scene merged over the config's ``defaults``, every default filled in (its "
         "description and ``keep_surfaces`` aside: they change no result).\n",
         folded(f"{len(flat)} parameters (click to show)", parameters_table(parameters)),
