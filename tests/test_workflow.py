@@ -423,7 +423,7 @@ def test_measured_scene_runs_end_to_end(tmp_path):
     for name in ("topographies", "measured_area_load", "measured_kappa"):
         assert (root / "figures" / f"{name}.png").stat().st_size > 10_000
     shown = assert_scene_captions_true(wd, "measured")  # captions true of what each figure drew
-    assert "cel_fit" in shown["measured_kappa"] and shown["topographies"] == []
+    assert "asperity_bgt_own" in shown["measured_kappa"] and shown["topographies"] == []
     again = run_snakemake(wd, "-n", "--config", "scene=measured")
     assert "Nothing to be done" in again.stdout + again.stderr
     # every output, remade from scratch, has the same bytes
