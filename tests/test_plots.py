@@ -592,3 +592,20 @@ def test_reference_lines_are_told_apart_and_lie_above_the_bands(contact):
     band = max(c.get_zorder() for c in ax.collections if isinstance(c, PolyCollection))
     data = max(line.get_zorder() for line in ax.get_lines() if not line.get_gid())
     assert lines["cel_fit"].get_zorder() > max(band, data)  # the fit is drawn over the data it fits
+
+
+def test_accuracy_figure_counts_the_settings_it_cannot_draw():
+    """The reference tolerance has zero error: a log axis cannot show it, so the legend says so (issue 52)."""
+    from roughcontact.figures.accuracy import fig_accuracy
+
+    axis = ["N", "N", "tol", "tol", "seeds", "seeds", "defaults"]
+    err = [0.03, 0.01, 0.0, 0.002, 0.02, 0.03, 0.01]
+    value = ["256", "512", "1e-10", "1e-8", "2", "4", "-"]
+    summary = xr.Dataset({"axis": ("variant", axis), "value": ("variant", value),
+                          "time_per_case": ("variant", [1.0, 4.0, 3.0, 2.0, 2.0, 4.0, 2.0]),
+                          **{f"err_{m}": ("variant", err) for m in ("kappa", "area", "kappa_corrected",
+                                                                   "area_corrected")}},
+                         attrs={"kappa_at": 0.05})
+    labels = [t.get_text() for t in fig_accuracy(summary).legends[0].get_texts()]
+    assert "tolerance (1 of 2 not drawn: zero error, the reference, or none)" in labels and "grid N" in labels
+    assert "seeds" in labels

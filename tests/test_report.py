@@ -222,12 +222,13 @@ def test_result_line_gives_the_representative_group_against_the_paper(mathml):
     csv_text = fit.to_csv_table(_fit_result())
     html = _html(report.result_rst(csv_text))
     # k_l = 16, k_s = 32, H pooled, the paper's route: kappa 2.8 [2.3, 3.3] / sqrt(2 pi), mu 2.9, beta 3.0
-    assert "<strong>Result</strong>" in html and "λ_l = L/16, λ_s = L/32, H pooled, 3 seeds" in html
+    assert "<strong>Result</strong>" in html and "</math> pooled, 3 seeds" in html
+    assert "<mi>λ</mi>" in html and "<mn>16</mn>" in html and "<mn>32</mn>" in html
     assert "κ/√(2π) = 1.1 [0.9, 1.3], μ = 2.9 [2.4, 3.4], β = 3.0 [2.5, 3.5]" in html
     assert "the paper: κ/√(2π) = 1.145 ± 0.002, μ = 0.55 ± 0.02, β = 0.210 ± 0.005" in html
     # without the representative point: the largest k_l and its largest k_s
     four = "\n".join(line for line in csv_text.splitlines() if not line.startswith("16,"))
-    assert "λ_l = L/4, λ_s = L/32, H pooled" in report.result_rst(four)
+    assert r"\lambda_l = L/4`, :math:`\lambda_s = L/32`, :math:`H` pooled" in report.result_rst(four)
     assert "no constant of the contact evolution law was fitted" in report.result_rst(csv_text.splitlines()[0])
     assert "no contact study" in report.result_rst(None)
     assert report.result_rst(csv_text, pull_off="TABLE").endswith("TABLE")

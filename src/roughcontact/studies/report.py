@@ -293,8 +293,8 @@ def result_rst(csv_text: str | None, *, pull_off: str | None = None) -> str:
         return ("**Result**: no constant of the contact evolution law was fitted (every case excluded, e.g. for "
                 "unconverged load steps, or no fit converged; the fit's log says which).\n")
     where = (f"{chosen[0]['group']}" if is_measured_fit(chosen) else
-             f"λ_l = L/{float(chosen[0]['k_l']):g}, λ_s = L/{float(chosen[0]['k_s']):g}, H {chosen[0]['H_group']}, "
-             f"{chosen[0]['n_seeds']} seeds")
+             rf":math:`\lambda_l = L/{float(chosen[0]['k_l']):g}`, :math:`\lambda_s = L/{float(chosen[0]['k_s']):g}`, "
+             rf":math:`H` {chosen[0]['H_group']}, {chosen[0]['n_seeds']} seeds")
     ours, marks = [], set()
     for r in chosen:
         cell, m = constant_estimate(r)
