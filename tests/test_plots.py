@@ -587,10 +587,10 @@ def test_reference_lines_are_told_apart_and_lie_above_the_bands(contact):
     agg, stats, fit = contact
     one = {"k_l": [16.0], "k_s": [32.0]}
     ax = fig_area_load(agg.sel(one), stats.sel(one), fit.sel(one)).axes[0]
-    lines = {line.get_gid(): line for line in ax.get_lines() if line.get_gid()}
+    lines = {line.get_gid(): line for line in ax.get_lines() if line.get_gid() not in (None, "family")}
     assert lines["bgt_limit"].get_linestyle() == "-" and lines["asperity_bgt_paper"].get_linestyle() != "-"
     band = max(c.get_zorder() for c in ax.collections if isinstance(c, PolyCollection))
-    data = max(line.get_zorder() for line in ax.get_lines() if not line.get_gid())
+    data = max(line.get_zorder() for line in ax.get_lines() if line.get_gid() == "family")
     assert lines["cel_fit"].get_zorder() > max(band, data)  # the fit is drawn over the data it fits
 
 
@@ -609,3 +609,15 @@ def test_accuracy_figure_counts_the_settings_it_cannot_draw():
     labels = [t.get_text() for t in fig_accuracy(summary).legends[0].get_texts()]
     assert "tolerance (1 of 2 not drawn: zero error, the reference, or none)" in labels and "grid N" in labels
     assert "seeds" in labels
+
+
+def test_area_load_panels_have_a_log_log_inset_for_small_loads(contact):
+    """Each area-load panel repeats its seed means on log-log axes, with the BGT small-load limit (issue 52)."""
+    agg, stats, fit = contact
+    fig = fig_area_load(agg, stats, fit)
+    for ax in (a for a in fig.axes if a.get_visible()):
+        (inset,) = ax.child_axes
+        assert inset.get_xscale() == inset.get_yscale() == "log"
+        families = [line for line in ax.get_lines() if line.get_gid() == "family"]
+        assert len(families) >= 2 and len(inset.get_lines()) == len(families) + 2
+        assert {line.get_gid() for line in inset.get_lines()} >= {"bgt_limit", "persson_limit"}

@@ -13,6 +13,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
+from matplotlib.ticker import NullFormatter
 
 from ..theory.asperity import asperity_area, asperity_max_load
 from ..theory.laws import KAPPA_BGT, KAPPA_PERSSON, cel_area, linear_area, persson_area
@@ -155,7 +156,7 @@ def _area_load_family(ax, s: Mapping[str, np.ndarray], e_star: float, colour, ma
     y, sd = s["area_fraction_mean"], s["area_fraction_std"]
     face, edge = mcolors.to_rgba(colour, BAND_ALPHA), mcolors.to_rgba(colour, BAND_EDGE_ALPHA)
     ax.fill_between(x, y - sd, y + sd, facecolor=face, edgecolor=edge, lw=BAND_EDGE_LW, zorder=2)
-    ax.plot(x, y, color=colour, marker=marker, ls=style, markevery=3, zorder=2.5)
+    ax.plot(x, y, color=colour, marker=marker, ls=style, markevery=3, zorder=2.5, gid=FAMILY_GID)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # a family none of whose steps converged
         return np.array([np.nanmax(x), np.nanmax(y + sd), np.nanmax(sd)])
@@ -188,10 +189,45 @@ def _area_load_axes(ax, consts, xmax: float, ymax: float, e_star: float, hp: flo
         ax.plot(p / e_star, cel_area(p, kappa=consts[0], mu=consts[1], beta=consts[2], rms_slope=hp, e_star=e_star),
                 **REFERENCE_STYLES["cel_fit"], gid="cel_fit")
     area_load_theory(ax, p, e_star, hp, alphas)
+    small_load_inset(ax, e_star, hp)
     ax.set_xlim(0, xmax)
     ax.set_ylim(0, ymax * 1.05)
     ax.set_xlabel(r"$p_0/E^*$ [1]")
     ax.set_ylabel(r"$A/A_0$ [1]")
+
+
+#: The gid of a family's seed-mean curve in an area-load panel (what the small-load inset repeats).
+FAMILY_GID = "family"
+
+#: Where the small-load inset sits in its panel, in axes fractions (x0, y0, width, height): the lower right
+#: corner, below curves that rise from the origin.
+INSET = (0.66, 0.08, 0.31, 0.25)
+
+
+def small_load_inset(ax, e_star: float, hp: float) -> None:
+    """The panel's seed-mean curves (its lines with gid :data:`FAMILY_GID`) again on log-log axes in an inset,
+    with the BGT and Persson small-load limits, where the small-load regime (A/A0 proportional to p0: slope 1)
+    shows; none when fewer than two points have a positive load and area."""
+    curves = [line for line in ax.get_lines() if line.get_gid() == FAMILY_GID]
+    xy = [(np.asarray(line.get_xdata(), float), np.asarray(line.get_ydata(), float)) for line in curves]
+    ok = [np.isfinite(x) & np.isfinite(y) & (x > 0) & (y > 0) for x, y in xy]
+    if sum(int(k.sum()) for k in ok) < 2:
+        return
+    inset = ax.inset_axes(INSET)
+    for line, (x, y), k in zip(curves, xy, ok, strict=True):
+        inset.plot(x[k], y[k], color=line.get_color(), ls=line.get_linestyle(), lw=0.8, zorder=2.5)
+    x = np.concatenate([x[k] for (x, _), k in zip(xy, ok, strict=True)])
+    p = np.geomspace(x.min(), x.max(), 50) * e_star
+    inset.plot(p / e_star, linear_area(p, kappa=KAPPA_BGT, rms_slope=hp, e_star=e_star),
+               **REFERENCE_STYLES["bgt_limit"], gid="bgt_limit")
+    inset.plot(p / e_star, linear_area(p, kappa=KAPPA_PERSSON, rms_slope=hp, e_star=e_star), **PERSSON_LIMIT_STYLE,
+               zorder=4, gid="persson_limit")
+    inset.set_xscale("log")
+    inset.set_yscale("log")
+    for axis in (inset.xaxis, inset.yaxis):  # decades only: minor labels collide in so small an inset
+        axis.set_minor_formatter(NullFormatter())
+    inset.tick_params(labelsize=5, length=2, pad=1, which="both")
+    inset.set_title("log-log: small loads", fontsize=6, pad=2)
 
 
 def area_load_theory(ax, p: np.ndarray, e_star: float, hp: float, alphas) -> bool:
