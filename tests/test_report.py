@@ -268,6 +268,17 @@ def test_cel_csv_caption_shows_the_file_as_a_table(tmp_path, monkeypatch, mathml
     assert html.count("<tr") == 1 + len(report.read_fit_csv(Path("cel.csv").read_text()))
 
 
+def test_cel_csv_is_also_an_html_table_the_report_shows():
+    csv_text = fit.to_csv_table(_fit_result()).replace("paper,kappa", "paper <&>,kappa", 1)
+    page = report.csv_html(csv_text, "fit/cel.csv of scene demo")
+    assert page == report.csv_html(csv_text, "fit/cel.csv of scene demo"), "deterministic"
+    assert page.startswith("<!DOCTYPE html>") and page.count("<table>") == 1
+    assert page.count("<tr>") == len(csv_text.splitlines()) and page.count("<th>") == 16
+    assert "<td>paper &lt;&amp;&gt;</td>" in page and "<td>2.87009</td>" in page
+    with pytest.raises(ValueError, match="empty"):
+        report.csv_html("", "x")
+
+
 def test_figures_are_embedded_with_their_captions(mathml):
     png = (REPO / "docs" / "figures" / "demo_kappa.png").read_bytes()
     rst = report.figures_rst([("kappa", png, r"The caption, :math:`\bar p`." + "\n")])
@@ -523,6 +534,7 @@ def test_demo_report_in_a_browser(demo_run, tmp_path, shipped_config):
         assert f"{name}.png" in text, name
         assert _plain_phrase((out / "figures" / f"{name}.caption.rst").read_text()) in text, name
     assert "Drawn with the data: the BGT small-load limit" in text
+    assert "cel.html (Fit)" in text and "kappa.pdf (Contact, vector PDF)" in text  # the fit as a table, the PDFs
     # the code and the run: version, commit (not a git checkout here), libraries, host, date, CPU time
     for shown in (f"roughcontact version: {__version__}", "git commit: unknown", "numpy", "pyFFTW", "FFTW",
                   "host:", "run recorded:", "total CPU time of the run's jobs:"):

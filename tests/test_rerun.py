@@ -86,10 +86,11 @@ def done(tmp_path_factory):
 
 
 def _with_report(planned: set[str]) -> set[str]:
-    """``planned`` and the report jobs it sets off: the landing page's figures when a figure reruns, and the
-    run record (written after every other output) when anything does."""
+    """``planned`` and the report jobs it sets off: the fit's HTML table when the fit reruns, the landing page's
+    figures when a figure does, and the run record (written after every other output) when anything does."""
     figures = {"results/tiny/report/figures.rst"} if any("/figures/" in p for p in planned) else set()
-    return planned | figures | ({"results/tiny/report/run.rst"} if planned else set())
+    table = {"results/tiny/fit/cel.html"} if "results/tiny/fit/cel.nc" in planned else set()
+    return planned | figures | table | ({"results/tiny/report/run.rst"} if planned else set())
 
 
 @pytest.mark.parametrize("what, edit, expected", EDITS, ids=[e[0] for e in EDITS])

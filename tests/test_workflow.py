@@ -309,7 +309,7 @@ def test_demo_scene_produces_every_figure_and_the_fit_table(demo_run):
     assert "git commit: ``unknown``" in (out / "report" / "run.rst").read_text()  # not a git checkout
     # A second run of every job writes the same bytes: NetCDF, CSV, figures and the report's fragments.
     first = _output_bytes(out)
-    assert {p.suffix for p in first} == {".nc", ".csv", ".png", ".pdf", ".rst"}
+    assert {p.suffix for p in first} == {".nc", ".csv", ".png", ".pdf", ".rst", ".html"}
     res = run_snakemake(wd, "-j2", "--forceall")
     assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
     second = _output_bytes(out)
@@ -325,7 +325,7 @@ RUN_RECORD = "report/run.rst"
 def _output_bytes(root):
     """Bytes of every result file (NetCDF, CSV, figures, report fragments but the run record) under ``root``."""
     return {p.relative_to(root): p.read_bytes() for p in sorted(root.rglob("*"))
-            if p.is_file() and p.suffix in (".nc", ".csv", ".png", ".pdf", ".rst")
+            if p.is_file() and p.suffix in (".nc", ".csv", ".png", ".pdf", ".rst", ".html")
             and p.relative_to(root).as_posix() != RUN_RECORD}
 
 

@@ -9,6 +9,7 @@
 
 localrules:
     report_summary,
+    report_fit_table,
     report_figures,
     report_run,
 
@@ -41,6 +42,25 @@ rule report_summary:
         parameters=lambda w: params.summary(SCENES[w.scene]),
     script:
         "../scripts/report_summary.py"
+
+
+rule report_fit_table:
+    input:
+        "results/{scene}/fit/cel.csv",
+    output:
+        report(
+            "results/{scene}/fit/cel.html",
+            caption="../report/fit_table.rst",
+            category="Fit",
+        ),
+    log:
+        "results/{scene}/logs/report_fit_table.log",
+    benchmark:
+        "results/{scene}/benchmarks/report_fit_table.tsv"
+    conda:
+        "../../envs/roughcontact.yaml"
+    script:
+        "../scripts/report_fit_table.py"
 
 
 rule report_figures:

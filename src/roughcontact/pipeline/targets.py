@@ -374,7 +374,7 @@ class Targets:
         if "contact" in s:
             out += [f"results/{scene}/aggregate/contact.nc"]
             if not is_adhesive(s["contact"]):  # the CEL describes contact without adhesion
-                out += [f"results/{scene}/fit/cel.nc", f"results/{scene}/fit/cel.csv"]
+                out += [f"results/{scene}/fit/cel.{ext}" for ext in ("nc", "csv", "html")]
         if "accuracy" in s:
             out += [f"results/{scene}/accuracy/summary.{ext}" for ext in ("nc", "csv", "md")]
         if "kappa_gap" in s:

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import base64
 import csv
+import html
 import io
 import os
 import subprocess
@@ -246,6 +247,25 @@ def fit_table(csv_text: str) -> str:
         if mark in marks:
             text += f"\n{mark} {note}\n"
     return text
+
+
+def csv_html(csv_text: str, title: str) -> str:
+    """A CSV file as a complete HTML page holding one table (header row, cells as written, escaped), which the
+    report shows when its eye icon is clicked: a browser downloads a CSV file instead of showing it."""
+    rows = list(csv.reader(io.StringIO(csv_text)))
+    if not rows:
+        raise ValueError("the CSV is empty")
+
+    def cells(row, tag):
+        return "".join(f"<{tag}>{html.escape(c)}</{tag}>" for c in row)
+
+    body = "\n".join(f"<tr>{cells(r, 'td')}</tr>" for r in rows[1:])
+    style = ("body { font-family: sans-serif; font-size: 13px; } table { border-collapse: collapse; } "
+             "th, td { border: 1px solid #ccc; padding: 2px 6px; text-align: right; white-space: nowrap; } "
+             "th { background: #eee; position: sticky; top: 0; }")
+    return (f"<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>{html.escape(title)}</title>"
+            f"<style>{style}</style></head>\n<body><h3>{html.escape(title)}</h3>\n<table>\n"
+            f"<thead><tr>{cells(rows[0], 'th')}</tr></thead>\n<tbody>\n{body}\n</tbody>\n</table>\n</body></html>\n")
 
 
 #: The group of cel.csv whose constants the result line gives: the paper's representative point.
