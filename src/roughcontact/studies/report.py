@@ -5,8 +5,9 @@ the ``report_summary`` rule writes two reStructuredText fragments that the descr
 ``results/{scene}/report/result.rst``, the one line a reader looks for first (:func:`result_rst`: the
 fitted CEL constants with their intervals beside the paper's, or an adhesive scene's pull-off), shown
 above the figures, and ``summary.rst`` (:func:`summary_rst`: the fit table, the scene's tables and its
-parameters, folded), shown below them. Neither carries a timestamp, so a rerun with the same config,
-results and code writes the same bytes; the run's own record (versions, host, date, CPU time) is
+parameters, folded), shown below them; between them, ``figures.rst`` of the ``report_figures`` rule
+(:func:`figures_rst`: every figure embedded with its caption). None carries a timestamp, so a rerun with the
+same config, results and code writes the same bytes; the run's own record (versions, host, date, CPU time) is
 :mod:`roughcontact.studies.run_record`'s. Numbers are rounded to their uncertainty
 (:mod:`roughcontact.studies.precision`).
 
