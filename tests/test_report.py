@@ -373,7 +373,9 @@ def test_landing_page_leads_with_the_result_then_the_figures(tmp_path, monkeypat
     config = {"scene": "demo", "scenes": {"demo": {"description": "A *star*, k_l and `ticks` stay text."}}}
     figure = _Result("results/demo/figures/kappa.png", "<p>The kappa caption <math><mi>κ</mi></math>.</p>")
     table = _Result("results/demo/fit/cel.csv", "<p>The fit, every row.</p>")
-    html = _landing_page(config, [("Contact", figure), ("Fit", table)])
+    pdf = _Result("results/demo/figures/kappa.pdf", "")  # no caption: listed without an "about"
+    html = _landing_page(config, [("Contact", figure), ("Contact", pdf), ("Fit", table)])
+    assert "kappa.pdf</a> (Contact)" in html and "about kappa.pdf" not in html
     assert "A *star*, k_l and `ticks` stay text." in html
     order = ["<strong>Result</strong>", "Figures</h", "<img", "The kappa caption", "Contact evolution law fit</h",
              "published", "Parameters of scene demo", "<details>", "contact.solver.tol", "Other results</h",
