@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from caption_check import assert_scene_captions_true
 from cfcheck import assert_cf_clean
 from conftest import copy_workflow, run_snakemake
 from roughcontact.figures.registry import scene_figures
@@ -55,8 +56,12 @@ def test_adhesive_scene_draws_the_cycle_and_the_pull_off(tmp_path):
         assert (out / "figures" / f"{name}.png").stat().st_size > 10_000
     assert not (out / "fit").exists() and not (out / "figures" / "kappa.png").exists()
     summary = (out / "report" / "summary.rst").read_text()
-    assert "Adhesion: pull-off" in summary and "Contact evolution law fit" not in summary
-    assert "published" not in summary and "contact.effects.adhesion.law" in summary
+    result = (out / "report" / "result.rst").read_text()
+    assert "pull-off pressure of each group" in result and "No contact evolution law is fitted" in result
+    assert "Contact evolution law fit" not in summary
+    assert "published" not in summary + result and "contact.effects.adhesion.law" in summary
+    shown = assert_scene_captions_true(wd, "tiny", wd / "config" / "config.yaml")  # no reference line promised
+    assert shown == {"hysteresis": [], "pull_off": []}
     with xr.open_dataset(out / "aggregate" / "contact.nc") as agg:
         pull = agg["pull_off_pressure"].values
         assert agg["pull_off_status"].dims == ("k_l", "k_s", "H", "seed")
@@ -87,7 +92,7 @@ def _aggregate():
 
 
 def test_pull_off_table_pools_the_trusted_seeds_and_counts_the_others():
-    from roughcontact.studies.report import pull_off_table
+    from roughcontact.studies.report_tables import pull_off_table
 
     text = pull_off_table(_aggregate())
     # H = 0.36: both seeds, (1e-4 + 3e-4) / 2 / E* = 1e-4 +- s.d. 1.414e-4 / 2; H = 0.84: one of two, the other said why

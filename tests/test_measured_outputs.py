@@ -20,7 +20,7 @@ from roughcontact.figures.measured import fig_measured_area_load, fig_measured_k
 from roughcontact.figures.registry import FIGURES, scene_figures
 from roughcontact.figures.style import save_figure
 from roughcontact.pipeline.io import read_dataset, write_dataset
-from roughcontact.studies import report
+from roughcontact.studies import report, report_tables
 from roughcontact.surfaces.synthetic import generate_surface, spectral_moments
 
 TRUTH = np.array([fit.PAPER_CEL[c][0] for c in fit.CONSTANTS])
@@ -293,14 +293,13 @@ def test_report_fit_table_of_a_measured_scene(agg, result):
     assert report.is_measured_fit(rows)
     html = _html(report.fit_table(csv_text))
     assert html.count("<tr") == 1 + 2 + 1  # header, paper and joint, published
-    for row in rows:
-        assert f"{row['value']} [{row['ci_low']}, {row['ci_high']}]" in html, row
-    assert "pooled (6 topographies)" in html and "topographies</th>" in html and "2.87009 ± 0.005" in html
+    for row in rows:  # each constant rounded to its interval (kappa as kappa/sqrt(2 pi))
+        assert report.constant_estimate(row)[0] in html, row
+    assert "pooled (6 topographies)" in html and "topographies</th>" in html and "1.145 ± 0.002" in html
     assert "*" not in html and "†" not in html
     one = _html(report.fit_table(fit.to_csv_table(fit.fit_topographies(agg.isel(topography=[0]), n_boot=10))))
     assert "pooled (1 topography)" in one and one.count(" †") == 6 and "a single topography" in one
-    summary = _html(report.summary_rst("measured", {"fit": {"n_boot": 40}}, version="1", commit="unknown",
-                                       fit_csv=csv_text))
+    summary = _html(report.summary_rst("measured", {"fit": {"n_boot": 40}}, fit_csv=csv_text))
     assert "all measured topographies pooled" in summary and "pooled (6 topographies)" in summary
     with pytest.raises(ValueError, match="n_topographies"):
         report.fit_table(csv_text.replace("n_topographies", "n_surfaces"))
@@ -313,16 +312,17 @@ def test_report_lists_every_topography_with_its_loads(scene_dir):
     for name in scene["topography"]["files"]:
         surface = read_dataset(root / "surfaces" / f"{name}.nc", stage="surface")
         surface.attrs["source"] = f'{{"file": "data/{name}.x3p"}}'
-        rows.append(report.topography_row(name, surface, agg.sel(topography=name)))
-    html = _html(report.summary_rst("measured", {"fit": {"n_boot": 40}}, version="1", commit="unknown",
-                                    topographies=report.topographies_table(rows)))
-    assert "Topographies</h" in html and html.split("Topographies</h")[1].count("<tr") == 1 + 3
+        rows.append(report_tables.topography_row(name, surface, agg.sel(topography=name)))
+    tables = report_tables.topographies_table(rows)
+    html = _html(report.summary_rst("measured", {"fit": {"n_boot": 40}}, topographies=tables))
+    tables = html.split("Topographies</h")[1].split("Parameters of scene")[0]
+    assert "Topographies</h" in html and tables.count("<tr") == 1 + 3
     for name, row in zip(scene["topography"]["files"], rows, strict=True):
         assert f">{name}<" in html and f"{name}.x3p" in html and "64 x 64" in row[2]
         assert row[-1] == "30 of 30" and float(row[-2]) == pytest.approx(
             float(agg["area_fraction"].sel(topography=name).isel(step=-1)), rel=1e-2)
     # without a contact study: the load columns stay empty
-    assert report.topography_row("ground-a", surface)[-3:] == ["", "", ""]
+    assert report_tables.topography_row("ground-a", surface)[-3:] == ["", "", ""]
 
 
 def test_rectangular_maps_are_drawn_to_scale_with_both_sides():

@@ -558,3 +558,66 @@ def test_measured_figures_count_the_unconverged_steps_they_leave_out():
         lines = [ln for ln in fig.axes[0].get_lines() if ln.get_linestyle() == "-" and len(ln.get_xdata()) in (24, 30)]
         assert sorted(len(ln.get_xdata()) for ln in lines)[:2] == [24, 24]
         assert not _unconverged_labels(draw(agg.assign(converged=agg["converged"] | True)))
+
+
+def test_captions_name_exactly_the_reference_lines_each_figure_draws(contact):
+    """The area-load caption promises the asperity models at the surfaces' own alpha only where they are drawn:
+    for one family, not for families of different bandwidth (issue 52)."""
+    from caption_check import assert_caption_true, lead_of
+    from roughcontact.figures.captions import caption
+
+    agg, stats, fit = contact
+    one = {"k_l": [16.0], "k_s": [32.0]}
+    for name, draw in (("area_load", fig_area_load), ("kappa", fig_kappa), ("dpbar", fig_dpbar)):
+        lead = lead_of(name)
+        both = draw(agg.sel(one), stats.sel(one), fit.sel(one))
+        shown = assert_caption_true(both, caption(lead, both))
+        assert {"asperity_bgt_own", "cel_fit"} <= set(shown) if name != "dpbar" else "dpbar_fit" in shown
+        mixed = draw(agg, stats, fit)
+        shown = assert_caption_true(mixed, caption(lead, mixed))
+        assert "asperity_bgt_own" not in shown and "surfaces' own" not in caption(lead, mixed)
+        bare = draw(agg, stats)  # no fit: no fitted law named
+        assert "fitted" not in caption(lead, bare).split("Drawn with the data")[-1]
+
+
+def test_reference_lines_are_told_apart_and_lie_above_the_bands(contact):
+    """BGT's small-load limit and the BGT asperity model at alpha = 2 were both solid black (issue 52)."""
+    from matplotlib.collections import PolyCollection
+
+    agg, stats, fit = contact
+    one = {"k_l": [16.0], "k_s": [32.0]}
+    ax = fig_area_load(agg.sel(one), stats.sel(one), fit.sel(one)).axes[0]
+    lines = {line.get_gid(): line for line in ax.get_lines() if line.get_gid() not in (None, "family")}
+    assert lines["bgt_limit"].get_linestyle() == "-" and lines["asperity_bgt_paper"].get_linestyle() != "-"
+    band = max(c.get_zorder() for c in ax.collections if isinstance(c, PolyCollection))
+    data = max(line.get_zorder() for line in ax.get_lines() if line.get_gid() == "family")
+    assert lines["cel_fit"].get_zorder() > max(band, data)  # the fit is drawn over the data it fits
+
+
+def test_accuracy_figure_counts_the_settings_it_cannot_draw():
+    """The reference tolerance has zero error: a log axis cannot show it, so the legend says so (issue 52)."""
+    from roughcontact.figures.accuracy import fig_accuracy
+
+    axis = ["N", "N", "tol", "tol", "seeds", "seeds", "defaults"]
+    err = [0.03, 0.01, 0.0, 0.002, 0.02, 0.03, 0.01]
+    value = ["256", "512", "1e-10", "1e-8", "2", "4", "-"]
+    summary = xr.Dataset({"axis": ("variant", axis), "value": ("variant", value),
+                          "time_per_case": ("variant", [1.0, 4.0, 3.0, 2.0, 2.0, 4.0, 2.0]),
+                          **{f"err_{m}": ("variant", err) for m in ("kappa", "area", "kappa_corrected",
+                                                                   "area_corrected")}},
+                         attrs={"kappa_at": 0.05})
+    labels = [t.get_text() for t in fig_accuracy(summary).legends[0].get_texts()]
+    assert "tolerance (1 of 2 not drawn: zero error, the reference, or none)" in labels and "grid N" in labels
+    assert "seeds" in labels
+
+
+def test_area_load_panels_have_a_log_log_inset_for_small_loads(contact):
+    """Each area-load panel repeats its seed means on log-log axes, with the BGT small-load limit (issue 52)."""
+    agg, stats, fit = contact
+    fig = fig_area_load(agg, stats, fit)
+    for ax in (a for a in fig.axes if a.get_visible()):
+        (inset,) = ax.child_axes
+        assert inset.get_xscale() == inset.get_yscale() == "log"
+        families = [line for line in ax.get_lines() if line.get_gid() == "family"]
+        assert len(families) >= 2 and len(inset.get_lines()) == len(families) + 2
+        assert {line.get_gid() for line in inset.get_lines()} >= {"bgt_limit", "persson_limit"}

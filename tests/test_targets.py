@@ -81,11 +81,17 @@ def test_scene_targets_are_what_the_blocks_ask(targets):
     out = targets.scene_targets("demo")
     assert out[:4] == ["results/demo/aggregate/representativity.nc", "results/demo/aggregate/contact.nc",
                        "results/demo/fit/cel.nc", "results/demo/fit/cel.csv"]
-    assert out[-1] == "results/demo/report/summary.rst"
+    assert out[-4:] == [f"results/demo/report/{name}.rst" for name in ("result", "summary", "figures", "run")]
+    assert "results/demo/figures/kappa.caption.rst" in out  # the caption true of the figure drawn
     figures = [p for p in out if "/figures/" in p]
     assert figures[:2] == ["results/demo/figures/representativity.png", "results/demo/figures/representativity.pdf"]
     adhesive = targets.scene_targets("adhesion")
     assert not any("/fit/" in p for p in adhesive)  # no CEL fit of adhesive contact
+    # the run record waits for every other output, so that its CPU time is the whole run's
+    record = targets.run_record_inputs(type("W", (), {"scene": "demo"})())
+    assert record == out[:-1]
+    assert targets.report_figure_inputs(type("W", (), {"scene": "demo"})())["caption"][-1] == (
+        "results/demo/figures/dpbar.caption.rst")
     assert "results/accuracy/accuracy/summary.md" in targets.scene_targets("accuracy")
 
 

@@ -68,17 +68,14 @@ topography_params = TARGETS.topography_params
 measured_mem_mb = TARGETS.measured_mem_mb
 figure_inputs = TARGETS.figure_inputs
 scene_targets = TARGETS.scene_targets
+run_record_inputs = TARGETS.run_record_inputs
+report_figure_inputs = TARGETS.report_figure_inputs
 accuracy_setting = TARGETS.accuracy_setting
 accuracy_input = TARGETS.accuracy_input
 accuracy_files = TARGETS.accuracy_files
 kappa_gap_setting = TARGETS.kappa_gap_setting
 kappa_gap_input = TARGETS.kappa_gap_input
 kappa_gap_files = TARGETS.kappa_gap_files
-
-
-def figure_caption(name):
-    """The report caption of a registered figure (its file in workflow/report/)."""
-    return Path(workflow.basedir, "workflow", "report", FIGURES[name].caption).read_text()
 
 
 def maybe_temp(path, study):

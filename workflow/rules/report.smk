@@ -1,11 +1,17 @@
-# The report's landing page: a reStructuredText fragment (scene parameters, version, git commit,
-# CEL fit table) that workflow/report/workflow.rst includes. Rendered by roughcontact.studies.report.
-# Its params are the scene's study blocks without the description (roughcontact.pipeline.params.summary),
-# so a description edit plans nothing; the commit is read when the job runs.
+# The report's landing page: reStructuredText fragments that workflow/report/workflow.rst includes (not
+# report items themselves: the landing page shows them). result.rst (the fitted CEL constants against the
+# paper's, or an adhesive scene's pull-off) above the figures, figures.rst (each figure embedded, with its
+# caption), summary.rst (fit table, the scene's tables, its parameters) below them; rendered by roughcontact.studies.report. Their params are the
+# scene's study blocks without the description (roughcontact.pipeline.params.summary), so a description
+# edit plans nothing. run.rst, the run's record (code, versions, host, date, CPU time:
+# roughcontact.studies.run_record), is written after every other output of the scene.
 
 
 localrules:
     report_summary,
+    report_fit_table,
+    report_figures,
+    report_run,
 
 
 rule report_summary:
@@ -24,11 +30,8 @@ rule report_summary:
             else []
         ),
     output:
-        report(
-            "results/{scene}/report/summary.rst",
-            caption="../report/summary.rst",
-            category="Summary",
-        ),
+        result="results/{scene}/report/result.rst",
+        summary="results/{scene}/report/summary.rst",
     log:
         "results/{scene}/logs/report_summary.log",
     benchmark:
@@ -39,3 +42,52 @@ rule report_summary:
         parameters=lambda w: params.summary(SCENES[w.scene]),
     script:
         "../scripts/report_summary.py"
+
+
+rule report_fit_table:
+    input:
+        "results/{scene}/fit/cel.csv",
+    output:
+        report(
+            "results/{scene}/fit/cel.html",
+            caption="../report/fit_table.rst",
+            category="Fit",
+        ),
+    log:
+        "results/{scene}/logs/report_fit_table.log",
+    benchmark:
+        "results/{scene}/benchmarks/report_fit_table.tsv"
+    conda:
+        "../../envs/roughcontact.yaml"
+    script:
+        "../scripts/report_fit_table.py"
+
+
+rule report_figures:
+    input:
+        unpack(report_figure_inputs),
+    output:
+        "results/{scene}/report/figures.rst",
+    log:
+        "results/{scene}/logs/report_figures.log",
+    benchmark:
+        "results/{scene}/benchmarks/report_figures.tsv"
+    conda:
+        "../../envs/roughcontact.yaml"
+    script:
+        "../scripts/report_figures.py"
+
+
+rule report_run:
+    input:
+        run_record_inputs,
+    output:
+        "results/{scene}/report/run.rst",
+    log:
+        "results/{scene}/logs/report_run.log",
+    benchmark:
+        "results/{scene}/benchmarks/report_run.tsv"
+    conda:
+        "../../envs/roughcontact.yaml"
+    script:
+        "../scripts/report_run.py"

@@ -1,14 +1,13 @@
-"""The report's landing-page fragment: scene parameters, version, git commit, CEL fit or pull-off table."""
+"""The report's landing-page fragments: the result line (or pull-off table), and the fit, tables and parameters."""
 from pathlib import Path
 
-from roughcontact import __version__
 from roughcontact.core.files import write_text_atomic
 from roughcontact.pipeline.io import read_dataset, run_logged
-from roughcontact.studies import report
+from roughcontact.studies import report, report_tables
 
 
 def topographies():
-    """A measured scene's table of its files (report.topographies_table), or None for a generated one."""
+    """A measured scene's table of its files (report_tables.topographies_table), or None for a generated one."""
     surfaces = snakemake.input.surfaces
     if not surfaces:
         return None
@@ -18,29 +17,27 @@ def topographies():
     for path in surfaces:
         name = Path(path).stem
         surface = read_dataset(path, stage="surface", variables=["rms_slope"])
-        rows.append(report.topography_row(name, surface, None if agg is None else agg.sel(topography=name)))
-    return report.topographies_table(rows)
+        rows.append(report_tables.topography_row(name, surface, None if agg is None else agg.sel(topography=name)))
+    return report_tables.topographies_table(rows)
 
 
 def pull_off():
-    """An adhesive scene's pull-off table (report.pull_off_table), or None."""
+    """An adhesive scene's pull-off table (report_tables.pull_off_table), or None."""
     effects = snakemake.params.parameters.get("contact", {}).get("effects", {})
     if "adhesion" not in effects:
         return None
     agg = read_dataset(snakemake.input.contact[0], stage="aggregate", variables=["pull_off_pressure"])
-    return report.pull_off_table(agg)
+    return report_tables.pull_off_table(agg)
 
 
 def main(log):
     fit = snakemake.input.fit
     fit_csv = Path(fit[0]).read_text(encoding="utf-8") if fit else None
-    # The checkout that holds this workflow; "unknown" when it is not a git work tree.
-    commit = report.git_commit(Path(snakemake.scriptdir))
-    text = report.summary_rst(snakemake.wildcards.scene, snakemake.params.parameters, version=__version__,
-                              commit=commit, fit_csv=fit_csv, topographies=topographies(),
-                              pull_off=pull_off())
-    write_text_atomic(snakemake.output[0], text)
-    log.info("report summary written to %s (version %s, commit %s)", snakemake.output[0], __version__, commit)
+    write_text_atomic(snakemake.output.result, report.result_rst(fit_csv, pull_off=pull_off()))
+    text = report.summary_rst(snakemake.wildcards.scene, snakemake.params.parameters, fit_csv=fit_csv,
+                              topographies=topographies())
+    write_text_atomic(snakemake.output.summary, text)
+    log.info("report fragments written: %s, %s", snakemake.output.result, snakemake.output.summary)
 
 
 run_logged(snakemake.log[0], main)

@@ -18,11 +18,19 @@ def fig_accuracy(summary: xr.Dataset) -> Figure:
     series per axis varied (N, tol, n_steps, seeds), each point labelled with its value;
     the N axis is drawn twice, pixel-counted (solid) and perimeter-corrected (dashed);
     the shipped defaults are marked with a star. Zero errors (the reference itself)
-    are not drawn on log axes.
+    are not drawn on log axes; the legend counts them per series (:func:`series_label`).
     """
     require(summary, "summary", ["time_per_case", "err_kappa", "err_area", "axis", "value"])
     with matplotlib.rc_context(STYLE):
         return _draw_accuracy(summary)
+
+
+def series_label(name: str, drawn: int, total: int) -> str:
+    """A series' legend entry: its name, and how many of its ``total`` settings are not drawn (an error of zero,
+    the reference setting itself, or none) when some are not."""
+    if drawn == total:
+        return name
+    return f"{name} ({total - drawn} of {total} not drawn: zero error, the reference, or none)"
 
 
 def _draw_accuracy(summary: xr.Dataset) -> Figure:
@@ -45,7 +53,8 @@ def _draw_accuracy(summary: xr.Dataset) -> Figure:
                     continue
                 e = summary[f"err_{variant}"].values[sel][order]
                 ok = np.isfinite(e) & (e > 0)
-                ax.plot(t[order][ok], e[ok], style, marker="o", ms=3, color=colour, label=label)
+                ax.plot(t[order][ok], e[ok], style, marker="o", ms=3, color=colour,
+                        label=series_label(label, int(ok.sum()), int(e.size)))
                 if style == "-":
                     for ti, ei, v in zip(t[order][ok], e[ok], summary["value"].values[sel][order][ok], strict=True):
                         ax.annotate(str(v), (ti, ei), textcoords="offset points", xytext=(3, 3), fontsize=6,
@@ -57,9 +66,10 @@ def _draw_accuracy(summary: xr.Dataset) -> Figure:
                 ax.plot(summary["time_per_case"].values[d], e, "*", ms=10, color="black", label="defaults")
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel("wall time [s] (per surface; seeds: all k seeds)")
+        ax.set_xlabel("wall time per surface [s] (seeds series: all k surfaces)")
         ax.set_ylabel("relative error [1]")
         ax.set_title(title, fontsize=9)
+    # one entry per series: the two panels may leave out different settings, the left one's count is given
     handles, labels = axes[0].get_legend_handles_labels()
     uniq = dict(zip(labels, handles, strict=True))
     fig.legend(uniq.values(), uniq.keys(), loc="outside right center", fontsize=7, frameon=False)

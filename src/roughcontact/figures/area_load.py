@@ -13,9 +13,11 @@ import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
+from matplotlib.ticker import NullFormatter
 
 from ..theory.asperity import asperity_area, asperity_max_load
 from ..theory.laws import KAPPA_BGT, KAPPA_PERSSON, cel_area, linear_area, persson_area
+from .captions import REFERENCE_STYLES
 from .load_curves import (
     ASPERITY_STYLES,
     BAND_ALPHA,
@@ -25,7 +27,9 @@ from .load_curves import (
     PERSSON_ERF_STYLE,
     PERSSON_LIMIT_STYLE,
     asperity_alphas,
+    asperity_gid,
     asperity_handles,
+    asperity_style,
     converged_family,
     draw_unconverged,
     e_star_of,
@@ -35,11 +39,12 @@ from .load_curves import (
     has_seeds,
     mean_slope,
     n_outside,
+    reference_style,
     run_summary,
     unconverged_handles,
     unconverged_steps,
 )
-from .style import OKABE_ITO, STYLE, family_handles, lambda_label, legend_below, require
+from .style import STYLE, family_handles, lambda_label, legend_below, require
 
 
 def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None, *,
@@ -97,7 +102,7 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
         handles = family_handles(kl_list, h_list, colour, marker, style) + area_load_theory_handles(sdmax)
         handles += asperity_handles(alphas) + _area_load_cross_handles(axes, crosses)
         if drew_fit:
-            handles.append(Line2D([], [], color="0.45", lw=2.2, alpha=0.8,
+            handles.append(Line2D([], [], **reference_style("cel_fit"),
                                   label=f"CEL fit ({estimator}), " + lambda_label(cel_kl, "l")))
         fig.suptitle(run_summary(agg, stats))
         legend_below(fig, handles, f"$h' = {hp:.3g}$")
@@ -151,7 +156,7 @@ def _area_load_family(ax, s: Mapping[str, np.ndarray], e_star: float, colour, ma
     y, sd = s["area_fraction_mean"], s["area_fraction_std"]
     face, edge = mcolors.to_rgba(colour, BAND_ALPHA), mcolors.to_rgba(colour, BAND_EDGE_ALPHA)
     ax.fill_between(x, y - sd, y + sd, facecolor=face, edgecolor=edge, lw=BAND_EDGE_LW, zorder=2)
-    ax.plot(x, y, color=colour, marker=marker, ls=style, markevery=3, zorder=2.5)
+    ax.plot(x, y, color=colour, marker=marker, ls=style, markevery=3, zorder=2.5, gid=FAMILY_GID)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # a family none of whose steps converged
         return np.array([np.nanmax(x), np.nanmax(y + sd), np.nanmax(sd)])
@@ -182,12 +187,47 @@ def _area_load_axes(ax, consts, xmax: float, ymax: float, e_star: float, hp: flo
     p = np.linspace(0, xmax * e_star, 200)
     if consts is not None:
         ax.plot(p / e_star, cel_area(p, kappa=consts[0], mu=consts[1], beta=consts[2], rms_slope=hp, e_star=e_star),
-                color="0.45", lw=2.2, alpha=0.8, zorder=1)
+                **REFERENCE_STYLES["cel_fit"], gid="cel_fit")
     area_load_theory(ax, p, e_star, hp, alphas)
+    small_load_inset(ax, e_star, hp)
     ax.set_xlim(0, xmax)
     ax.set_ylim(0, ymax * 1.05)
     ax.set_xlabel(r"$p_0/E^*$ [1]")
     ax.set_ylabel(r"$A/A_0$ [1]")
+
+
+#: The gid of a family's seed-mean curve in an area-load panel (what the small-load inset repeats).
+FAMILY_GID = "family"
+
+#: Where the small-load inset sits in its panel, in axes fractions (x0, y0, width, height): the lower right
+#: corner, below curves that rise from the origin.
+INSET = (0.66, 0.08, 0.31, 0.25)
+
+
+def small_load_inset(ax, e_star: float, hp: float) -> None:
+    """The panel's seed-mean curves (its lines with gid :data:`FAMILY_GID`) again on log-log axes in an inset,
+    with the BGT and Persson small-load limits, where the small-load regime (A/A0 proportional to p0: slope 1)
+    shows; none when fewer than two points have a positive load and area."""
+    curves = [line for line in ax.get_lines() if line.get_gid() == FAMILY_GID]
+    xy = [(np.asarray(line.get_xdata(), float), np.asarray(line.get_ydata(), float)) for line in curves]
+    ok = [np.isfinite(x) & np.isfinite(y) & (x > 0) & (y > 0) for x, y in xy]
+    if sum(int(k.sum()) for k in ok) < 2:
+        return
+    inset = ax.inset_axes(INSET)
+    for line, (x, y), k in zip(curves, xy, ok, strict=True):
+        inset.plot(x[k], y[k], color=line.get_color(), ls=line.get_linestyle(), lw=0.8, zorder=2.5)
+    x = np.concatenate([x[k] for (x, _), k in zip(xy, ok, strict=True)])
+    p = np.geomspace(x.min(), x.max(), 50) * e_star
+    inset.plot(p / e_star, linear_area(p, kappa=KAPPA_BGT, rms_slope=hp, e_star=e_star),
+               **REFERENCE_STYLES["bgt_limit"], gid="bgt_limit")
+    inset.plot(p / e_star, linear_area(p, kappa=KAPPA_PERSSON, rms_slope=hp, e_star=e_star), **PERSSON_LIMIT_STYLE,
+               zorder=4, gid="persson_limit")
+    inset.set_xscale("log")
+    inset.set_yscale("log")
+    for axis in (inset.xaxis, inset.yaxis):  # decades only: minor labels collide in so small an inset
+        axis.set_minor_formatter(NullFormatter())
+    inset.tick_params(labelsize=5, length=2, pad=1, which="both")
+    inset.set_title("log-log: small loads", fontsize=6, pad=2)
 
 
 def area_load_theory(ax, p: np.ndarray, e_star: float, hp: float, alphas) -> bool:
@@ -197,18 +237,18 @@ def area_load_theory(ax, p: np.ndarray, e_star: float, hp: float, alphas) -> boo
     :func:`~roughcontact.theory.asperity.asperity_max_load`); returns whether one was cut there, for a note.
     """
     x = p / e_star
-    ax.plot(x, linear_area(p, kappa=KAPPA_BGT, rms_slope=hp, e_star=e_star),
-            color=OKABE_ITO[0], lw=0.9, ls="-", zorder=3)
-    ax.plot(x, persson_area(p, rms_slope=hp, e_star=e_star), **PERSSON_ERF_STYLE, zorder=3)
+    ax.plot(x, linear_area(p, kappa=KAPPA_BGT, rms_slope=hp, e_star=e_star), **REFERENCE_STYLES["bgt_limit"],
+            gid="bgt_limit")
+    ax.plot(x, persson_area(p, rms_slope=hp, e_star=e_star), **PERSSON_ERF_STYLE, zorder=3, gid="persson_erf")
     ax.plot(x, linear_area(p, kappa=KAPPA_PERSSON, rms_slope=hp, e_star=e_star), **PERSSON_LIMIT_STYLE,
-            zorder=4)
+            zorder=4, gid="persson_limit")
     cut = False
     for alpha, shade, _ in alphas:
-        for model, (ls, _name) in ASPERITY_STYLES.items():
+        for model in ASPERITY_STYLES:
             inside = p <= asperity_max_load(alpha=alpha, rms_slope=hp, e_star=e_star, model=model)
             cut |= not inside.all()
             ax.plot(x[inside], asperity_area(p[inside], alpha=alpha, rms_slope=hp, e_star=e_star, model=model),
-                    color=shade, lw=1.1, ls=ls, zorder=3)
+                    **asperity_style(model, shade), gid=asperity_gid(model, alpha))
     return cut
 
 
@@ -218,7 +258,7 @@ def area_load_theory_handles(sdmax: float) -> list:
     grey = np.array([0.5, 0.5, 0.5])
     return [Patch(facecolor=(*grey, BAND_ALPHA), edgecolor=(*grey, BAND_EDGE_ALPHA), lw=BAND_EDGE_LW,
                   label=f"$\\pm 1$ s.d. over seeds (largest: {sdmax:.2g})"),
-            Line2D([], [], color=OKABE_ITO[0], lw=0.9, label=BGT_LIMIT_LABEL),
+            Line2D([], [], **reference_style("bgt_limit"), label=BGT_LIMIT_LABEL),
             Line2D([], [], **PERSSON_LIMIT_STYLE,
                    label=r"Persson, small-load limit $A/A_0 = \sqrt{8/\pi}\,p_0/(h'E^*)$"),
             Line2D([], [], **PERSSON_ERF_STYLE,

@@ -12,7 +12,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
-from matplotlib.ticker import FormatStrFormatter, NullFormatter
+from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter
 
 from ..analysis.aggregate.derivatives import log_window_edges, windowed_load_slope
 from ..theory.laws import cel_dpbar_dp0
@@ -41,7 +41,7 @@ DPBAR_PER_DECADE = 6
 _PAPER_LAW_STYLE = {"color": OKABE_ITO[0], "lw": 1.0, "ls": (0, (4, 2)), "zorder": 5}
 
 
-_FIT_LAW_STYLE = {"color": "0.55", "lw": 2.6, "alpha": 0.6, "ls": "-", "zorder": 1}
+_FIT_LAW_STYLE = {"color": "0.55", "lw": 2.6, "alpha": 0.6, "ls": "-", "zorder": 4}
 
 
 def _windowed_dpbar(agg: xr.Dataset, kl: float, ks: float, h: float, per_decade: int,
@@ -218,11 +218,11 @@ def _dpbar_panel(ax, fit, cel_kl: float, ks: float, estimator: str, many: bool, 
     """
     a = np.geomspace(float(x_raw.min()), float(x_raw.max()), 100)
     lines = [cel_dpbar_dp0(a, mu=PAPER_CONSTANTS["mu"], beta=PAPER_CONSTANTS["beta"])]
-    ax.plot(a, lines[0], **_PAPER_LAW_STYLE)
+    ax.plot(a, lines[0], **_PAPER_LAW_STYLE, gid="dpbar_paper")
     consts, label = fit_constants(fit, cel_kl, ks, estimator), ""
     if consts is not None:
         lines.append(cel_dpbar_dp0(a, mu=consts[1], beta=consts[2]))
-        ax.plot(a, lines[-1], **_FIT_LAW_STYLE)
+        ax.plot(a, lines[-1], **_FIT_LAW_STYLE, gid="dpbar_fit")
         constrained = constrained_constants(fit, {"k_l": cel_kl, "k_s": ks, "H_group": "pooled"},
                                              estimator, ("mu", "beta"))
         label = _fit_law_label(consts, ks, many, estimator, cel_kl, constrained)
@@ -246,9 +246,12 @@ def _dpbar_axes(ax, ks: float) -> None:
     # Plain decimals: the data span about one decade, where 4x10^0 reads badly.
     for axis in (ax.xaxis, ax.yaxis):
         axis.set_major_formatter(FormatStrFormatter("%g"))
-    # Minor labels help within a decade but collide once the axis spans more.
+    # Minor labels help within a decade; over more, only those at 2 and 5 times a power of ten
+    # (a log axis of one or two decades otherwise shows two labelled ticks); none beyond three decades.
     lo, hi = ax.get_ylim()
-    ax.yaxis.set_minor_formatter(FormatStrFormatter("%g") if hi / lo < 12 else NullFormatter())
+    if hi / lo >= 12:
+        ax.yaxis.set_minor_locator(LogLocator(subs=(2.0, 5.0)))
+    ax.yaxis.set_minor_formatter(FormatStrFormatter("%g") if hi / lo < 1000 else NullFormatter())
     ax.set_title(lambda_label(ks, "s"))
     ax.set_xlabel(r"$A/A_0$ [1]")
     ax.set_ylabel(r"$\partial\bar p/\partial p_0$ [1]")

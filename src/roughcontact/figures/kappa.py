@@ -14,6 +14,7 @@ from matplotlib.patches import Patch
 
 from ..theory.asperity import asperity_kappa
 from ..theory.laws import KAPPA_BGT, KAPPA_PERSSON, cel_kappa
+from .captions import REFERENCE_STYLES
 from .load_curves import (
     ASPERITY_STYLES,
     BGT_LIMIT_LABEL,
@@ -21,7 +22,9 @@ from .load_curves import (
     PAPER_CONSTANTS,
     PERSSON_LIMIT_STYLE,
     asperity_alphas,
+    asperity_gid,
     asperity_handles,
+    asperity_style,
     converged_family,
     draw_unconverged,
     e_star_of,
@@ -32,36 +35,37 @@ from .load_curves import (
     fit_label,
     has_seeds,
     n_outside,
+    reference_style,
     run_summary,
     unconverged_handles,
     unconverged_steps,
 )
-from .style import OKABE_ITO, STYLE, family_handles, lambda_label, legend_below, require
+from .style import STYLE, family_handles, lambda_label, legend_below, require
 
 
 def kappa_theory(ax, amax: float, alphas, ylo: float, yhi: float) -> list:
     """BGT and Persson limits, the paper's CEL and the asperity models on ``[0, amax]``; sets the y
     limits from ``[ylo, yhi]`` (data) and the asperity curves; returns the legend entries."""
-    ax.axhline(KAPPA_BGT, color=OKABE_ITO[0], lw=0.9)
+    ax.axhline(KAPPA_BGT, **REFERENCE_STYLES["bgt_limit"], gid="bgt_limit")
     a = np.linspace(0, amax, 200)
-    ax.plot(a, cel_kappa(a, **PAPER_CONSTANTS), color=OKABE_ITO[0], lw=1.4, ls=":", zorder=4)
+    ax.plot(a, cel_kappa(a, **PAPER_CONSTANTS), **REFERENCE_STYLES["cel_paper"], gid="cel_paper")
     a = np.linspace(0, amax, 120)
     for alpha, shade, _ in alphas:
-        for model, (ls, _name) in ASPERITY_STYLES.items():
+        for model in ASPERITY_STYLES:
             k = asperity_kappa(a, alpha=alpha, model=model)
-            ax.plot(a, k, color=shade, lw=1.1, ls=ls, zorder=2)
+            ax.plot(a, k, **asperity_style(model, shade), gid=asperity_gid(model, alpha))
             ylo = min(ylo, float(np.min(k)))
     pad = 0.05 * (yhi - ylo)
     shown = ylo - pad <= KAPPA_PERSSON <= yhi + pad
     if shown:
-        ax.axhline(KAPPA_PERSSON, **PERSSON_LIMIT_STYLE)
+        ax.axhline(KAPPA_PERSSON, **PERSSON_LIMIT_STYLE, zorder=3, gid="persson_limit")
     ax.set_ylim(ylo - pad, yhi + pad)
-    return [Line2D([], [], color=OKABE_ITO[0], lw=0.9, label=BGT_LIMIT_LABEL),
+    return [Line2D([], [], **reference_style("bgt_limit"), label=BGT_LIMIT_LABEL),
             Line2D([], [], **PERSSON_LIMIT_STYLE, label=(
                 r"Persson small-load limit, $\kappa=\sqrt{8/\pi}$" if shown
                 else rf"Persson, $\kappa=\sqrt{{8/\pi}}$ = {KAPPA_PERSSON:.2f}: below the axis")),
             *asperity_handles(alphas),
-            Line2D([], [], color=OKABE_ITO[0], lw=1.4, ls=":", label=PAPER_CEL_LABEL)]
+            Line2D([], [], **reference_style("cel_paper"), label=PAPER_CEL_LABEL)]
 
 
 def _kappa_panel(ax, agg, stats, bad, families, colour, marker, style):
@@ -90,7 +94,7 @@ def _kappa_panel(ax, agg, stats, bad, families, colour, marker, style):
 def _kappa_fit_handles(fit, ks_list, cel_kl, estimator) -> list:
     """Legend entries of the fitted CEL (its constants for one panel, or where it is not constrained) and its window."""
     loose = [ks for ks in ks_list if not fit_constrained(fit, cel_kl, ks, estimator)]
-    return [Line2D([], [], color="0.45", lw=2.2, alpha=0.8, label=fit_label(
+    return [Line2D([], [], **reference_style("cel_fit"), label=fit_label(
                 "this run", estimator, cel_kl, fit_constants(fit, cel_kl, ks_list[0], estimator)
                 if len(ks_list) == 1 else None, not loose,
                 where=", ".join(lambda_label(ks, "s") for ks in loose) if len(ks_list) > 1 else "")),
@@ -139,9 +143,9 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
             if consts is not None:
                 a = np.linspace(0, amax, 200)
                 ax.plot(a, cel_kappa(a, kappa=consts[0], mu=consts[1], beta=consts[2]),
-                        color="0.45", lw=2.2, alpha=0.8, zorder=1)
+                        **REFERENCE_STYLES["cel_fit"], gid="cel_fit")
                 ax.axvspan(float(fit.attrs.get("window_low", np.nan)), float(fit.attrs.get("window_high", np.nan)),
-                           color="0.9", zorder=0, lw=0)
+                           color="0.9", zorder=0, lw=0, gid="fit_window")
                 ylo, yhi = min(ylo, consts[0]), max(yhi, consts[0])
                 drew_fit = True
             theory = kappa_theory(ax, amax, alphas, min(ylo, KAPPA_BGT), max(yhi, KAPPA_BGT))

@@ -29,6 +29,7 @@ from ..analysis.aggregate.seeds import seed_reduce
 from ..analysis.fit.estimators import at_bound
 from ..theory.laws import KAPPA_BGT
 from ..theory.summits import NAYAK_ALPHA_MIN
+from .captions import REFERENCE_STYLES
 from .style import OKABE_ITO, STYLE, family_styles, lambda_label, new_figure, panel_grid, pick, require
 
 #: Persson's (2001) two curves: one colour, told apart by style (they coincide at small load).
@@ -177,7 +178,25 @@ def unconverged_handles(n: int, n_off: int, left_out_of: str = "lines and means"
 
 
 #: Finite-load asperity models drawn in the area-load and kappa figures: line style per model.
-ASPERITY_STYLES = {"bgt": ("-", "BGT"), "greenwood": ("-.", "Greenwood (2006)")}
+ASPERITY_STYLES = {"bgt": (REFERENCE_STYLES["asperity_bgt"]["ls"], "BGT"),
+                   "greenwood": (REFERENCE_STYLES["asperity_greenwood"]["ls"], "Greenwood (2006)")}
+
+
+def asperity_gid(model: str, alpha: float) -> str:
+    """The caption tag (:data:`roughcontact.figures.captions.REFERENCES`) of an asperity model's curve:
+    ``asperity_{model}_paper`` at the paper's alpha = 2, ``asperity_{model}_own`` at the surfaces' own."""
+    return f"asperity_{model}_{'paper' if alpha == PAPER_ALPHA else 'own'}"
+
+
+def asperity_style(model: str, colour) -> dict:
+    """Line style of an asperity model's curve (:data:`~roughcontact.figures.captions.REFERENCE_STYLES`)."""
+    return {**REFERENCE_STYLES[f"asperity_{model}"], "color": colour}
+
+
+def reference_style(name: str) -> dict:
+    """Line style of a reference line (:data:`roughcontact.figures.captions.REFERENCE_STYLES`), for a legend
+    handle (without its zorder)."""
+    return {k: v for k, v in REFERENCE_STYLES[name].items() if k != "zorder"}
 
 
 #: The paper's contact evolution law (Yastrebov et al. 2012): kappa, mu, beta.
@@ -222,8 +241,9 @@ def asperity_alphas(agg: xr.Dataset) -> list[tuple[float, str, str]]:
 
 def asperity_handles(alphas) -> list[Line2D]:
     """Legend handles of the asperity models' curves, one per model and Nayak alpha of ``alphas``."""
-    return [Line2D([], [], color=colour, lw=1.1, ls=ls, label=f"{name}, {label}")
-            for alpha, colour, label in alphas for ls, name in ASPERITY_STYLES.values()]
+    return [Line2D([], [], **{k: v for k, v in asperity_style(model, colour).items() if k != "zorder"},
+                   label=f"{name}, {label}")
+            for alpha, colour, label in alphas for model, (_ls, name) in ASPERITY_STYLES.items()]
 
 
 def mean_slope(stats: xr.Dataset) -> float:

@@ -37,6 +37,7 @@ from .load_curves import (
     e_star_of,
     masked_points,
     n_outside,
+    reference_style,
     unconverged_handles,
 )
 from .style import (
@@ -56,7 +57,7 @@ from .style import (
 #: figure is ~2 in wide per panel, so more pixels only bloat the PDF).
 MAP_PIXELS = 512
 #: Style of the fitted CEL (as in :mod:`roughcontact.figures`: thick translucent grey).
-_FIT_STYLE = {"color": "0.45", "lw": 2.2, "alpha": 0.8}
+_FIT_STYLE = reference_style("cel_fit")
 
 
 # ----------------------------------------------------------------------- helpers
@@ -348,9 +349,9 @@ def _draw_area_fit(ax, grid: np.ndarray, fit: xr.Dataset, estimator: str, consts
     """The pooled CEL ``A/A0`` over the loads ``grid`` (``p0/(E* h')`` [1]; ``consts``:
     ``(kappa, mu, beta)``) and its ``A/A0`` window as a shaded band; returns their legend entries."""
     ax.plot(grid, cel_area(grid, kappa=consts[0], mu=consts[1], beta=consts[2], rms_slope=1.0, e_star=1.0),
-            zorder=1, **_FIT_STYLE)
+            zorder=4.5, gid="cel_fit", **_FIT_STYLE)
     ax.axhspan(float(fit.attrs.get("window_low", np.nan)), float(fit.attrs.get("window_high", np.nan)),
-               color="0.9", lw=0, zorder=0)
+               color="0.9", lw=0, zorder=0, gid="fit_window")
     return [Line2D([], [], **_FIT_STYLE, label=_fit_label(estimator, consts, constrained,
                                                           int(fit.get("n_topographies", used.sum())))),
             _window_patch(fit)]
@@ -409,9 +410,10 @@ def fig_measured_kappa(agg: xr.Dataset, fit: xr.Dataset | None = None, *, estima
         handles = _topography_handles(names, used, "-")
         if consts is not None:
             a = np.linspace(0.0, min(amax, 0.99 * cel_area_limit(consts[1], consts[2])), 200)
-            ax.plot(a, cel_kappa(a, kappa=consts[0], mu=consts[1], beta=consts[2]), zorder=1, **_FIT_STYLE)
+            ax.plot(a, cel_kappa(a, kappa=consts[0], mu=consts[1], beta=consts[2]),
+                    zorder=4.5, gid="cel_fit", **_FIT_STYLE)
             ax.axvspan(float(fit.attrs.get("window_low", np.nan)), float(fit.attrs.get("window_high", np.nan)),
-                       color="0.9", lw=0, zorder=0)
+                       color="0.9", lw=0, zorder=0, gid="fit_window")
             ylo, yhi = min(ylo, consts[0]), max(yhi, consts[0])
             handles += [Line2D([], [], **_FIT_STYLE, label=_fit_label(estimator, consts, constrained,
                                                                       int(fit.get("n_topographies", used.sum())))),

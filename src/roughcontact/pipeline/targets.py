@@ -383,14 +383,27 @@ class Targets:
         if "contact" in s:
             out += [f"results/{scene}/aggregate/contact.nc"]
             if not is_adhesive(s["contact"]):  # the CEL describes contact without adhesion
-                out += [f"results/{scene}/fit/cel.nc", f"results/{scene}/fit/cel.csv"]
+                out += [f"results/{scene}/fit/cel.{ext}" for ext in ("nc", "csv", "html")]
         if "accuracy" in s:
             out += [f"results/{scene}/accuracy/summary.{ext}" for ext in ("nc", "csv", "md")]
         if "kappa_gap" in s:
             out += [f"results/{scene}/kappa_gap/kappa-gap.{ext}" for ext in ("nc", "md")]
-        out += [f"results/{scene}/figures/{fig}.{ext}" for fig in self.scene_figures(s) for ext in ("png", "pdf")]
-        out += [f"results/{scene}/report/summary.rst"]
+        out += [f"results/{scene}/figures/{fig}.{ext}" for fig in self.scene_figures(s)
+                for ext in ("png", "pdf", "caption.rst")]
+        out += [f"results/{scene}/report/{name}.rst" for name in ("result", "summary", "figures", "run")]
         return out
+
+    def report_figure_inputs(self, w) -> dict[str, list[str]]:
+        """The scene's figures (``png``) and their captions (``caption``), in registry order, for the report's
+        landing page (``report/figures.rst``)."""
+        names = self.scene_figures(self.scene_of(w.scene))
+        root = f"results/{w.scene}/figures"
+        return {"png": [f"{root}/{n}.png" for n in names], "caption": [f"{root}/{n}.caption.rst" for n in names]}
+
+    def run_record_inputs(self, w) -> list[str]:
+        """What the run record (``report/run.rst``) waits for: every other final product of the scene, so
+        that the CPU time it gives is the whole run's."""
+        return [t for t in self.scene_targets(w.scene) if not t.endswith("/report/run.rst")]
 
     # -------------------------------------------------------------------------- one-case studies
     def accuracy_setting(self, w) -> dict:

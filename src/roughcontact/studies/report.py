@@ -1,32 +1,42 @@
 """The landing page of the Snakemake report (``snakemake --report``): pure text builders.
 
 The report's global description (``workflow/report/workflow.rst``) only sees the config, so
-the ``report_summary`` rule writes a reStructuredText fragment, ``results/{scene}/report/
-summary.rst``, that the description includes: the scene's parameters, the package version and
-git commit, and the contact-evolution-law fit table (``fit/cel.csv``) as a table. The fragment
-carries no timestamp, so a rerun with the same config, results and code writes the same bytes.
+the ``report_summary`` rule writes two reStructuredText fragments that the description includes:
+``results/{scene}/report/result.rst``, the one line a reader looks for first (:func:`result_rst`: the
+fitted CEL constants with their intervals beside the paper's, or an adhesive scene's pull-off), shown
+above the figures, and ``summary.rst`` (:func:`summary_rst`: the fit table, the scene's tables and its
+parameters, folded), shown below them; between them, ``figures.rst`` of the ``report_figures`` rule
+(:func:`figures_rst`: every figure embedded with its caption). None carries a timestamp, so a rerun with the
+same config, results and code writes the same bytes; the run's own record (versions, host, date, CPU time) is
+:mod:`roughcontact.studies.run_record`'s. Numbers are rounded to their uncertainty
+(:mod:`roughcontact.studies.precision`).
 
 Snakemake renders captions and the description with docutils. docutils' default HTML maths
 needs a stylesheet the report does not carry, so the Snakefile calls
 :func:`render_maths_as_mathml`, which points docutils at a config file that asks for MathML
-(``workflow/report/docutils.conf``); current browsers render MathML natively.
+(``workflow/report/docutils.conf``) and writes ``\\bar`` as U+00AF (docutils' U+02C9 is dropped by
+Chromium); current browsers render MathML natively, and :data:`MATH_CSS`, which the landing page and
+every caption carry, gives them a font with OpenType maths so that brackets stretch.
 """
 
 from __future__ import annotations
 
+import base64
 import csv
+import html
 import io
-import itertools
-import json
 import os
 import subprocess
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 
 import numpy as np
+from docutils.utils.math import latex2mathml
 
-from ..core.cell import sides_of
+from ..analysis.fit import JOINT_LOWER, JOINT_UPPER, at_bound
 from ..pipeline.provenance import flatten
+from ..theory.laws import KAPPA_BGT
+from . import precision
+from .rst import folded, heading, list_table, literal
 
 #: What the commit is called when the code is not a git checkout (or git is missing).
 UNKNOWN = "unknown"
@@ -34,8 +44,24 @@ UNKNOWN = "unknown"
 #: Where docutils looks for its settings when ``DOCUTILSCONFIG`` is not set (docutils' own list).
 DOCUTILS_STANDARD_CONFIGS = ("/etc/docutils.conf", "./docutils.conf", "~/.docutils")
 
-#: The CEL constants in cel.csv's order, with their symbol in the fit table's header.
-CONSTANTS = {"kappa": r":math:`\kappa`", "mu": r":math:`\mu`", "beta": r":math:`\beta`"}
+#: The CEL constants in cel.csv's order, with their symbol in the fit table's header (kappa shown as
+#: kappa/sqrt(2 pi), the form in which the paper states it: 1.145).
+CONSTANTS = {"kappa": r":math:`\kappa/\sqrt{2\pi}`", "mu": r":math:`\mu`", "beta": r":math:`\beta`"}
+
+#: The same, as plain text (the result line).
+PLAIN_SYMBOLS = {"kappa": "κ/√(2π)", "mu": "μ", "beta": "β"}
+
+#: What each constant is divided by for the report: kappa by the BGT kappa sqrt(2 pi).
+SCALES = {"kappa": KAPPA_BGT, "mu": 1.0, "beta": 1.0}
+
+#: The overbar docutils writes for ``\bar`` (U+02C9, which Chromium drops) and the one the report uses.
+DOCUTILS_BAR, MACRON = "\u02c9", "\u00af"
+
+#: The CSS rule that gives MathML a font with an OpenType MATH table, so that brackets and parentheses
+#: stretch around fractions (Chromium stretches only with such a font). The landing page
+#: (``workflow.rst``) and the caption templates (``figure.rst``, ``fit.rst``) each carry it in a ``<style>``.
+MATH_CSS = ('math { font-family: "STIX Two Math", "Latin Modern Math", "DejaVu Math TeX Gyre", "Cambria Math", '
+            'math; }')
 
 
 def git_commit(directory: str | os.PathLike, *, timeout: float = 10.0) -> str:
@@ -81,38 +107,12 @@ def render_maths_as_mathml(config_file: str | os.PathLike) -> None:
     """Make docutils in this process read ``config_file`` (``math_output: MathML``) last.
 
     The Snakefile calls this, with ``workflow/report/docutils.conf``, before Snakemake renders
-    the report's captions and landing page with docutils in the same process.
+    the report's captions and landing page with docutils in the same process. It also makes docutils
+    write ``\\bar`` as :data:`MACRON` (U+00AF) in ``<mover>``: its own U+02C9 is dropped by Chromium,
+    which turned the caption's mean pressure into the applied one.
     """
     os.environ["DOCUTILSCONFIG"] = docutils_config_path(config_file, os.environ)
-
-
-def _literal(value) -> str:
-    """A parameter value as RST inline literal text: strings bare, lists joined, the rest JSON."""
-    if isinstance(value, str):
-        text = value
-    elif isinstance(value, (list, tuple)) and all(isinstance(v, str) for v in value):
-        text = ", ".join(value)
-    else:
-        text = json.dumps(value, sort_keys=True, separators=(", ", ": "))
-    if not text:
-        return "(empty)"
-    if "`" in text or "\\" in text or text != text.strip() or "\n" in text:  # not as a literal: escaped text
-        return "".join(c if c.isalnum() else " " if c.isspace() else "\\" + c for c in text)
-    return f"``{text}``"
-
-
-def _list_table(header: Sequence[str], rows: Sequence[Sequence[str]], *, widths: str = "auto") -> str:
-    """An RST ``list-table`` with one header row; cells are RST text (one line each)."""
-    lines = [".. list-table::", "   :header-rows: 1", f"   :widths: {widths}", ""]
-    for row in [header, *rows]:
-        if len(row) != len(header):
-            raise ValueError(f"row {row!r} has {len(row)} cells, the header {len(header)}")
-        for i, cell in enumerate(row):
-            if "\n" in cell:
-                raise ValueError(f"table cell {cell!r} spans lines")
-            marker = "* -" if i == 0 else "  -"
-            lines.append(f"   {marker} {cell}".rstrip())
-    return "\n".join(lines) + "\n"
+    latex2mathml.accents["bar"] = MACRON
 
 
 def parameters_table(parameters: Mapping) -> str:
@@ -120,7 +120,7 @@ def parameters_table(parameters: Mapping) -> str:
     flat = flatten(parameters)
     if not flat:
         raise ValueError("no parameters to show")
-    return _list_table(["parameter", "value"], [[f"``{key}``", _literal(flat[key])] for key in sorted(flat)])
+    return list_table(["parameter", "value"], [[f"``{key}``", literal(flat[key])] for key in sorted(flat)])
 
 
 #: Columns :func:`read_fit_csv` needs in the table of a generated scene (fit.fit_cel) and of a
@@ -152,22 +152,70 @@ def read_fit_csv(text: str) -> list[dict[str, str]]:
     return rows
 
 
-def _estimate(value: str, low: str, high: str) -> str:
-    """``value [low, high]`` as the CSV writes them; no interval: the value alone; no value: a dash."""
-    if not value:
-        return "—"
-    return f"{value} [{low}, {high}]" if low and high else value
+def _number(text: str) -> float:
+    """A cel.csv cell as a float: NaN when empty."""
+    return float(text) if text else float("nan")
+
+
+#: The joint least squares' bounds as the report states them (kappa and beta as shown: kappa/sqrt(2 pi)).
+BOUNDS_TEXT = (f"κ/√(2π) ≥ {JOINT_LOWER[0] / KAPPA_BGT:.1g}, {JOINT_LOWER[1]:g} ≤ μ ≤ 1 − {1 - JOINT_UPPER[1]:.1g}, "
+               f"β ≥ {JOINT_LOWER[2]:g}")
+
+
+def constant_estimate(row: Mapping[str, str]) -> tuple[str, set[str]]:
+    """One constant of a cel.csv row as the report prints it, and the footnote marks it carries.
+
+    The value and its 95 % bootstrap interval ``value [low, high]``, divided by :data:`SCALES` (kappa
+    as kappa/sqrt(2 pi)) and rounded to the interval (:func:`roughcontact.studies.precision.estimate`);
+    an end of the interval on a bound of the joint fit is written ``bound`` and the value on one
+    ``value (on a bound)``, marked ``‡``; ``*``: not constrained by the data (the interval wider than
+    the value); ``†``: no interval (a single measured topography). No value: a dash.
+    """
+    constant, estimator = row["constant"], row["estimator"]
+    value, low, high = (_number(row[k]) for k in ("value", "ci_low", "ci_high"))
+    if not np.isfinite(value):
+        return "—", set()
+    scale = SCALES[constant]
+    v, lo, hi = precision.estimate(value / scale, low / scale, high / scale)
+    marks = set()
+    ends = []
+    for raw, text in ((low, lo), (high, hi)):
+        if np.isfinite(raw) and at_bound(estimator, constant, raw):
+            text, _ = "bound", marks.add("‡")
+        ends.append(text)
+    if at_bound(estimator, constant, value):
+        v = precision.bare(value / scale) + " (on a bound)"
+        marks.add("‡")
+    cell = f"{v} [{ends[0]}, {ends[1]}]" if ends[0] and ends[1] else v
+    if row.get("constrained") == "no":
+        marks.add("†" if not (row["ci_low"] and row["ci_high"]) else r"\*")
+    return cell + "".join(f" {m}" for m in sorted(marks)), marks
+
+
+def published_estimate(row: Mapping[str, str]) -> str:
+    """The paper's value of a row's constant, ``value ± standard error`` as the report prints it."""
+    value, stderr = _number(row["paper_value"]), _number(row["paper_stderr"])
+    scale = SCALES[row["constant"]]
+    return "—" if not np.isfinite(value) else precision.plus_minus(value / scale, stderr / scale)
+
+
+#: What each footnote mark of the fit table says.
+FOOTNOTES = {
+    r"\*": "not constrained by the data: the bootstrap interval is wider than the value.",
+    "†": "no bootstrap interval: a single topography says nothing about the scatter between surfaces.",
+    "‡": f"on a bound of the joint least-squares fit ({BOUNDS_TEXT}): the data do not bound the constant there.",
+}
 
 
 def fit_table(csv_text: str) -> str:
     """The CEL fit table as RST: one row per group and estimator, a column per constant.
 
     Groups are ``(k_l, k_s, H group)`` for a generated scene and the pooled topographies for a
-    measured one. Each cell is the value and its 95 % bootstrap interval ``value [ci_low,
-    ci_high]``, exactly as cel.csv writes them, marked ``*`` where the data do not constrain the
-    constant (the interval is wider than the value); in a measured table a value without an
-    interval (a single topography: no bootstrap) is marked ``†`` instead. A last row,
-    ``published``, gives the paper's values ``value ± standard error``. Rows keep cel.csv's order.
+    measured one. Each cell is :func:`constant_estimate` (kappa as kappa/sqrt(2 pi), rounded to its
+    interval, marks for constants not constrained or on a bound), each mark explained under the
+    table. A last row, ``published``, gives the paper's values ``value ± standard error``
+    (:func:`published_estimate`). Rows keep cel.csv's order; every column of cel.csv is in the report's
+    table of it.
     """
     rows = read_fit_csv(csv_text)
     measured = is_measured_fit(rows)
@@ -186,187 +234,174 @@ def fit_table(csv_text: str) -> str:
         cells = list(key)
         for constant in CONSTANTS:
             row = by_constant.get(constant)
-            if row is None:
-                cells.append("—")
-                continue
-            cell = _estimate(row["value"], row["ci_low"], row["ci_high"])
-            if row["value"] and row["constrained"] == "no":
-                mark = "†" if measured and not (row["ci_low"] and row["ci_high"]) else r"\*"
-                cell += " " + mark
-                marks.add(mark)
+            cell, row_marks = constant_estimate(row) if row is not None else ("—", set())
+            marks |= row_marks
             cells.append(cell)
         cells.append(next(iter(by_constant.values()))[count])
         body.append(cells)
-    paper_cells = []
-    for c in CONSTANTS:
-        value, stderr = (paper[c]["paper_value"], paper[c]["paper_stderr"]) if c in paper else ("", "")
-        paper_cells.append("—" if not value else f"{value} ± {stderr}" if stderr else value)
+    paper_cells = [published_estimate(paper[c]) if c in paper else "—" for c in CONSTANTS]
     body.append([""] * (len(keys) - 1) + ["published", *paper_cells, ""])
     header = ["surfaces", "estimator"] if measured else [":math:`k_l`", ":math:`k_s`", ":math:`H`", "estimator"]
     header += [*CONSTANTS.values(), "topographies" if measured else "seeds"]
-    text = _list_table(header, body)
-    if r"\*" in marks:
-        text += "\n\\* not constrained by the data: the bootstrap interval is wider than the value.\n"
-    if "†" in marks:
-        text += "\n† no bootstrap interval: a single topography says nothing about the scatter between surfaces.\n"
+    text = list_table(header, body)
+    for mark, note in FOOTNOTES.items():
+        if mark in marks:
+            text += f"\n{mark} {note}\n"
     return text
 
 
-#: Columns of :func:`topographies_table`, and what each row of it must give.
-TOPOGRAPHY_COLUMNS = ("name", "file", "points", "size", "rms slope h'", "undefined", "final p0/(E* h')",
-                      "final A/A0", "converged steps")
+def csv_html(csv_text: str, title: str) -> str:
+    """A CSV file as a complete HTML page holding one table (header row, cells as written, escaped), which the
+    report shows when its eye icon is clicked: a browser downloads a CSV file instead of showing it."""
+    rows = list(csv.reader(io.StringIO(csv_text)))
+    if not rows:
+        raise ValueError("the CSV is empty")
+
+    def cells(row, tag):
+        return "".join(f"<{tag}>{html.escape(c)}</{tag}>" for c in row)
+
+    body = "\n".join(f"<tr>{cells(r, 'td')}</tr>" for r in rows[1:])
+    style = ("body { font-family: sans-serif; font-size: 13px; } table { border-collapse: collapse; } "
+             "th, td { border: 1px solid #ccc; padding: 2px 6px; text-align: right; white-space: nowrap; } "
+             "th { background: #eee; position: sticky; top: 0; }")
+    return (f"<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>{html.escape(title)}</title>"
+            f"<style>{style}</style></head>\n<body><h3>{html.escape(title)}</h3>\n<table>\n"
+            f"<thead><tr>{cells(rows[0], 'th')}</tr></thead>\n<tbody>\n{body}\n</tbody>\n</table>\n</body></html>\n")
 
 
-def topography_row(name: str, surface, contact=None) -> list[str]:
-    """One measured case as a row of :func:`topographies_table`, as RST text.
+#: The group of cel.csv whose constants the result line gives: the paper's representative point.
+RESULT_GROUP = {"k_l": 16.0, "k_s": 32.0}
 
-    ``surface``: its surface dataset (``heights``, ``rms_slope``, ``undefined_fraction``, the cell's
-    attributes and ``source``); ``contact``: its slice of the contact aggregate (``pressure``,
-    ``area_fraction``, ``converged`` over ``step``, attribute ``e_star``) or None without a contact study.
+#: The estimator of the result line: the paper's route, so that it compares like with like.
+RESULT_ESTIMATOR = "paper"
+
+
+def result_group(rows: Sequence[Mapping[str, str]]) -> list[dict[str, str]]:
+    """The rows of cel.csv the result line gives: the H-pooled group at :data:`RESULT_GROUP` if fitted,
+    else at the largest ``k_l`` (the most representative surfaces) and its largest ``k_s``; a
+    measured scene's one pooled group. The :data:`RESULT_ESTIMATOR`'s rows, in cel.csv's order."""
+    ours = [r for r in rows if r["estimator"] == RESULT_ESTIMATOR and r["value"]]
+    if not ours:
+        return []
+    if is_measured_fit(ours):
+        group = ours[0]["group"]
+        return [r for r in ours if r["group"] == group]
+    pooled = [r for r in ours if r["H_group"] == "pooled"] or ours
+    at = [r for r in pooled if float(r["k_l"]) == RESULT_GROUP["k_l"] and float(r["k_s"]) == RESULT_GROUP["k_s"]]
+    if not at:
+        kl = max(float(r["k_l"]) for r in pooled)
+        ks = max(float(r["k_s"]) for r in pooled if float(r["k_l"]) == kl)
+        at = [r for r in pooled if float(r["k_l"]) == kl and float(r["k_s"]) == ks]
+    first = at[0]
+    return [r for r in at if r["H_group"] == first["H_group"]]
+
+
+def result_rst(csv_text: str | None, *, pull_off: str | None = None) -> str:
+    """The result a reader looks for first, as RST: one paragraph headed **Result**.
+
+    With a fit (``csv_text``, cel.csv): the fitted kappa/sqrt(2 pi), mu and beta of :func:`result_group`
+    with their 95 % bootstrap intervals (:func:`constant_estimate`) against the paper's values. An
+    adhesive scene (``pull_off``, :func:`~roughcontact.studies.report_tables.pull_off_table`) leads with its
+    pull-off table; a scene without a contact study says where its result is.
     """
-    source = json.loads(surface.attrs.get("source", "{}"))
-    nx, ny = (int(surface.sizes[d]) for d in ("x", "y"))
-    lx, ly = sides_of(surface.attrs)
-    unit = surface.attrs.get("length_units", "1")
-    # a case's file holds its name as a length-1 dimension: its scalars have that one element
-    slope = float(surface["rms_slope"].squeeze())
-    undefined = float(surface["undefined_fraction"].squeeze()) if "undefined_fraction" in surface else 0.0
-    row = [f"``{name}``", _literal(Path(source.get("file", "?")).name), f"{nx} x {ny}", f"{lx:.4g} x {ly:.4g} {unit}",
-           f"{slope:.3g}", f"{100 * undefined:.1f} %"]
-    if contact is None:
-        return row + ["", "", ""]
-    p_last = float(contact["pressure"].isel(step=-1)) / (float(contact.attrs["e_star"]) * slope)
-    conv = contact["converged"].values.astype(bool)
-    return row + [f"{p_last:.3g}", f"{float(contact['area_fraction'].isel(step=-1)):.3g}",
-                  f"{int(conv.sum())} of {conv.size}"]
+    if pull_off is not None:
+        return "**Result**: the pull-off pressure of each group of cases.\n\n" + pull_off
+    if csv_text is None:
+        return "**Result**: this scene has no contact study; its result is the figures below.\n"
+    rows = list(csv.DictReader(io.StringIO(csv_text)))
+    chosen = result_group(rows) if rows else []
+    if not chosen:
+        return ("**Result**: no constant of the contact evolution law was fitted (every case excluded, e.g. for "
+                "unconverged load steps, or no fit converged; the fit's log says which).\n")
+    where = (f"{chosen[0]['group']}" if is_measured_fit(chosen) else
+             rf":math:`\lambda_l = L/{float(chosen[0]['k_l']):g}`, :math:`\lambda_s = L/{float(chosen[0]['k_s']):g}`, "
+             rf":math:`H` {chosen[0]['H_group']}, {chosen[0]['n_seeds']} seeds")
+    ours, marks = [], set()
+    for r in chosen:
+        cell, m = constant_estimate(r)
+        ours.append(f"{PLAIN_SYMBOLS[r['constant']]} = {cell}")
+        marks |= m
+    paper = [f"{PLAIN_SYMBOLS[r['constant']]} = {published_estimate(r)}" for r in chosen]
+    text = (f"**Result** ({where}, the paper's route, 95 % bootstrap intervals): " + ", ".join(ours)
+            + "; the paper: " + ", ".join(paper) + ".\n")
+    for mark, note in FOOTNOTES.items():
+        if mark in marks:
+            text += f"\n{mark} {note}\n"
+    return text
 
 
-def topographies_table(rows: Sequence[Sequence[str]]) -> str:
-    """The measured cases of a scene (:func:`topography_row` each) as an RST table, with a lead-in."""
-    return ("Each topography file, as read (size and unit after conversion, undefined points filled) and "
-            "as loaded: the last load step's p0/(E* h') and contact area fraction, and the load steps "
-            "that converged.\n\n" + _list_table(list(TOPOGRAPHY_COLUMNS), rows))
+#: Characters of an embedded image's data URI per line of RST.
+URI_LINE = 100
 
 
-#: Columns of :func:`pull_off_table`.
-PULL_OFF_COLUMNS = ("case", "pull-off p_off/E* (mean ± s.d.)", "trusted", "left out (why)", "process zone [cells]",
-                    "final A/A0")
-
-
-def pull_off_table(agg) -> str:
-    """An adhesive scene's pull-off per group of cases, as RST, with a lead-in saying what it is.
-
-    ``agg`` is the contact aggregate (``pull_off_pressure``, ``pull_off_status``,
-    ``adhesive_zone_cells``, ``area_fraction``, attribute ``e_star``), over ``(k_l, k_s, H, seed)``
-    or ``topography``. A row per ``(k_l, k_s, H)`` (the seeds pooled: mean ± sample standard
-    deviation of the trusted pull-offs) or per topography; the cases whose pull-off is NaN are
-    counted by their status.
+def figures_rst(figures: Sequence[tuple[str, bytes, str]]) -> str:
+    """The landing page's figures as RST: a ``Figures`` section with, for each ``(name, png, caption)``, a
+    link to the report's item ``{name}.png``, the image embedded (a data URI: the report is one file) and its
+    caption (RST, as the figure rule wrote it).
     """
-    e_star = float(agg.attrs["e_star"])
-    meanings = agg["pull_off_status"].attrs["flag_meanings"].split()
-    measured = "topography" in agg.dims
-    groups = ["topography"] if measured else ["k_l", "k_s", "H"]
-    rows = []
-    for key, part in _groups(agg, groups):
-        present = (part["case_present"].values.astype(bool).ravel() if "case_present" in part
-                   else np.ones(part["pull_off_status"].size, dtype=bool))
-        pull = _flat(part["pull_off_pressure"])[present] / e_star
-        codes = _flat(part["pull_off_status"])[present].astype(int)
-        if codes.size == 0:
-            continue
-        ok = np.isfinite(pull)
-        value = "—" if not ok.any() else (f"{pull[ok].mean():.4g} ± {pull[ok].std(ddof=1):.2g}" if ok.sum() > 1
-                                          else f"{pull[ok][0]:.4g}")
-        why = ", ".join(f"{int((codes == c).sum())} {meanings[c].replace('_', ' ')}" for c in sorted(set(codes[~ok])))
-        zone = _flat(part["adhesive_zone_cells"])[present]
-        area = _flat(part["area_fraction"].isel(step=-1))[present]
-        rows.append([key, value, f"{int(ok.sum())} of {codes.size}", why or "—", f"{zone.min():.3g}",
-                     f"{np.nanmean(area):.3g}"])
-    lead = ("The pull-off pressure: minus the most tensile mean pressure on unloading under displacement control "
-            "from the last load step, the step refined near the minimum until it moves by less than its tolerance. "
-            "It is trusted only where the grid resolves the adhesive process zone E* rho^2 / w (at least 1.5 "
-            "cells), the last load step converged, the surfaces separated and the steps beside the minimum "
-            "converged; other cases are left out, counted by reason. No contact evolution law is fitted to an "
-            "adhesive scene: the law and its theories describe contact without adhesion.\n\n")
-    return lead + _list_table(list(PULL_OFF_COLUMNS), rows)
+    parts = [heading("Figures"), "Each figure with its caption; its name opens it in the report, with its PDF "
+             "beside it in the results folder.\n"]
+    for name, png, caption in figures:
+        if not png.startswith(b"\x89PNG"):
+            raise ValueError(f"figure {name!r} is not a PNG")
+        # docutils joins the lines of a URI (and refuses a line over 10 000 characters)
+        uri = "data:image/png;base64," + base64.b64encode(png).decode("ascii")
+        lines = "\n".join("   " + uri[i:i + URI_LINE] for i in range(0, len(uri), URI_LINE))
+        parts += [f"`{name}.png`_\n", f".. image::\n{lines}\n   :width: 100%\n   :alt: {name}\n",
+                  caption.rstrip() + "\n"]
+    return "\n".join(parts)
 
 
-def _flat(da) -> np.ndarray:
-    """A variable's values as a flat float64 array."""
-    return np.asarray(da.values, dtype=float).ravel()
+#: The law as the fit sections write it.
+CEL_MATH = r":math:`A/A_0 = \left(\beta + \left[\kappa p_0/(h' E^*)\right]^{\mu-1}\right)^{1/(\mu-1)}`"
 
 
-def _groups(agg, dims: Sequence[str]):
-    """``(label, part)`` for each combination of ``dims``' values (seeds stay in ``part``)."""
-    axes = [agg[d].values for d in dims]
-    for values in itertools.product(*axes):
-        part = agg.sel(dict(zip(dims, values, strict=True)))
-        label = str(values[0]) if len(dims) == 1 else ", ".join(
-            f"{d} = {v:g}" for d, v in zip(dims, values, strict=True))
-        yield f"``{label}``" if len(dims) == 1 else label, part
-
-
-def _heading(title: str, underline: str = "-") -> str:
-    return f"{title}\n{underline * len(title)}\n"
-
-
-def summary_rst(scene: str, parameters: Mapping, *, version: str, commit: str,
-                fit_csv: str | None = None, topographies: str | None = None, pull_off: str | None = None) -> str:
-    """The report's landing-page fragment for ``scene``: code, parameters and the CEL fit.
+def summary_rst(scene: str, parameters: Mapping, *, fit_csv: str | None = None,
+                topographies: str | None = None) -> str:
+    """The report's landing-page fragment shown below the figures: the CEL fit, the scene's tables and
+    its parameters (folded).
 
     Parameters
     ----------
     scene : str
         The scene's name.
     parameters : mapping
-        Its parameters (:func:`roughcontact.pipeline.params.summary`), shown flattened to dotted keys.
-    version, commit : str
-        The package version and the git commit (:func:`git_commit`) of the code.
+        Its parameters (:func:`roughcontact.pipeline.params.summary`), shown flattened to dotted keys, last
+        and folded.
     fit_csv : str, optional
-        The text of the scene's ``fit/cel.csv``; ``None`` for a scene without a contact study.
+        The text of the scene's ``fit/cel.csv``; ``None`` for a scene without a fit (no contact study, or
+        an adhesive one: its pull-off is in :func:`result_rst`). Shown as :func:`fit_table`.
     topographies : str, optional
-        A measured scene's :func:`topographies_table`, shown after the parameters.
-    pull_off : str, optional
-        An adhesive scene's :func:`pull_off_table`, in place of the fit (an adhesive scene has none).
+        A measured scene's :func:`~roughcontact.studies.report_tables.topographies_table`, shown after the fit.
     """
-    if not version or not commit:
-        raise ValueError("the version and the commit must be given (the commit may be 'unknown')")
-    parts = [
-        _heading("Code"),
-        f"- roughcontact version: ``{version}``\n- git commit: ``{commit}``\n",
-        _heading(f"Parameters of scene {scene}"),
-        "Each study of the scene merged over the config's ``defaults``, every default filled in (its "
-        "description and ``keep_surfaces`` aside: they change no result).\n",
-        parameters_table(parameters),
-    ]
-    if topographies is not None:
-        parts += [_heading("Topographies"), topographies]
-    if pull_off is not None:
-        parts += [_heading("Adhesion: pull-off"), pull_off]
+    parts = []
     if fit_csv is not None and not list(csv.DictReader(io.StringIO(fit_csv))):
         # a fit with no row: every case was excluded (e.g. unconverged steps) or none fitted
-        parts += [_heading("Contact evolution law fit"),
+        parts += [heading("Contact evolution law fit"),
                   "No constant was fitted: the fit table ``fit/cel.csv`` has no row (every case excluded, "
                   "e.g. for unconverged load steps, or no fit converged; the fit's log says which).\n"]
-    elif fit_csv is not None and is_measured_fit(list(csv.DictReader(io.StringIO(fit_csv)))):
-        parts += [
-            _heading("Contact evolution law fit"),
-            r"Fit of :math:`A/A_0 = \left(\beta + [\kappa p_0/(h' E^*)]^{\mu-1}\right)^{1/(\mu-1)}` over the "
-            "scene's window of :math:`A/A_0`, all measured topographies pooled as one surface type, by the paper's "
-            "route and by a joint least-squares fit: each constant's value and, in brackets, its 95 % bootstrap "
-            "interval (resampling whole topographies; none for a single topography). The estimators' own "
-            "standard errors, which understate the scatter between surfaces, are in ``cel.csv``.\n",
-            fit_table(fit_csv),
-        ]
     elif fit_csv is not None:
+        pooled = ("all measured topographies pooled as one surface type" if
+                  is_measured_fit(list(csv.DictReader(io.StringIO(fit_csv)))) else
+                  "per long and short cutoff (:math:`k_l`, :math:`k_s`) and Hurst exponent (or pooled over "
+                  ":math:`H`)")
+        unit = "topographies" if "pooled as one" in pooled else "seeds"
         parts += [
-            _heading("Contact evolution law fit"),
-            r"Fit of :math:`A/A_0 = \left(\beta + [\kappa p_0/(h' E^*)]^{\mu-1}\right)^{1/(\mu-1)}` over the "
-            "scene's window of :math:`A/A_0`, per long and short cutoff (:math:`k_l`, :math:`k_s`) and Hurst "
-            "exponent (or pooled over :math:`H`), by the paper's route and by a joint least-squares fit: each "
-            "constant's value and, in brackets, its 95 % bootstrap interval (resampling whole seeds). The "
-            "estimators' own standard errors, which understate the scatter between surfaces, are in "
-            "``cel.csv``.\n",
+            heading("Contact evolution law fit"),
+            f"Fit of {CEL_MATH} over the scene's window of :math:`A/A_0`, {pooled}, by the paper's route and "
+            f"by a joint least-squares fit (bounds: {BOUNDS_TEXT}): each constant's value and, in brackets, its "
+            f"95 % bootstrap interval (resampling whole {unit}), rounded to that interval; :math:`\\kappa` "
+            "divided by :math:`\\sqrt{2\\pi}`, as the paper gives it. The estimators' own standard errors, which "
+            "understate the scatter between surfaces, are in ``cel.csv`` (its panel shows it whole).\n",
             fit_table(fit_csv),
         ]
+    if topographies is not None:
+        parts += [heading("Topographies"), topographies]
+    flat = flatten(parameters)
+    parts += [
+        heading(f"Parameters of scene {scene}"),
+        "Each study of the scene merged over the config's ``defaults``, every default filled in (its "
+        "description and ``keep_surfaces`` aside: they change no result).\n",
+        folded(f"{len(flat)} parameters (click to show)", parameters_table(parameters)),
+    ]
     return "\n".join(parts)

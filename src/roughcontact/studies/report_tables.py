@@ -1,0 +1,107 @@
+"""The report's tables of a scene's cases: the measured topographies as read and loaded, and an adhesive
+scene's pull-off per group of cases (reStructuredText, for :mod:`roughcontact.studies.report`)."""
+
+from __future__ import annotations
+
+import itertools
+import json
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from ..core.cell import sides_of
+from .rst import list_table, literal
+
+#: Columns of :func:`topographies_table`, and what each row of it must give.
+TOPOGRAPHY_COLUMNS = ("name", "file", "points", "size", "rms slope h'", "undefined", "final p0/(E* h')",
+                      "final A/A0", "converged steps")
+
+
+def topography_row(name: str, surface, contact=None) -> list[str]:
+    """One measured case as a row of :func:`topographies_table`, as RST text.
+
+    ``surface``: its surface dataset (``heights``, ``rms_slope``, ``undefined_fraction``, the cell's
+    attributes and ``source``); ``contact``: its slice of the contact aggregate (``pressure``,
+    ``area_fraction``, ``converged`` over ``step``, attribute ``e_star``) or None without a contact study.
+    """
+    source = json.loads(surface.attrs.get("source", "{}"))
+    nx, ny = (int(surface.sizes[d]) for d in ("x", "y"))
+    lx, ly = sides_of(surface.attrs)
+    unit = surface.attrs.get("length_units", "1")
+    # a case's file holds its name as a length-1 dimension: its scalars have that one element
+    slope = float(surface["rms_slope"].squeeze())
+    undefined = float(surface["undefined_fraction"].squeeze()) if "undefined_fraction" in surface else 0.0
+    row = [f"``{name}``", literal(Path(source.get("file", "?")).name), f"{nx} x {ny}", f"{lx:.4g} x {ly:.4g} {unit}",
+           f"{slope:.3g}", f"{100 * undefined:.1f} %"]
+    if contact is None:
+        return row + ["", "", ""]
+    p_last = float(contact["pressure"].isel(step=-1)) / (float(contact.attrs["e_star"]) * slope)
+    conv = contact["converged"].values.astype(bool)
+    return row + [f"{p_last:.3g}", f"{float(contact['area_fraction'].isel(step=-1)):.3g}",
+                  f"{int(conv.sum())} of {conv.size}"]
+
+
+def topographies_table(rows: Sequence[Sequence[str]]) -> str:
+    """The measured cases of a scene (:func:`topography_row` each) as an RST table, with a lead-in."""
+    return ("Each topography file, as read (size and unit after conversion, undefined points filled) and "
+            "as loaded: the last load step's p0/(E* h') and contact area fraction, and the load steps "
+            "that converged.\n\n" + list_table(list(TOPOGRAPHY_COLUMNS), rows))
+
+
+#: Columns of :func:`pull_off_table`.
+PULL_OFF_COLUMNS = ("case", "pull-off p_off/E* (mean ± s.d.)", "trusted", "left out (why)", "process zone [cells]",
+                    "final A/A0")
+
+
+def pull_off_table(agg) -> str:
+    """An adhesive scene's pull-off per group of cases, as RST, with a lead-in saying what it is.
+
+    ``agg`` is the contact aggregate (``pull_off_pressure``, ``pull_off_status``,
+    ``adhesive_zone_cells``, ``area_fraction``, attribute ``e_star``), over ``(k_l, k_s, H, seed)``
+    or ``topography``. A row per ``(k_l, k_s, H)`` (the seeds pooled: mean ± sample standard
+    deviation of the trusted pull-offs) or per topography; the cases whose pull-off is NaN are
+    counted by their status.
+    """
+    e_star = float(agg.attrs["e_star"])
+    meanings = agg["pull_off_status"].attrs["flag_meanings"].split()
+    measured = "topography" in agg.dims
+    groups = ["topography"] if measured else ["k_l", "k_s", "H"]
+    rows = []
+    for key, part in _groups(agg, groups):
+        present = (part["case_present"].values.astype(bool).ravel() if "case_present" in part
+                   else np.ones(part["pull_off_status"].size, dtype=bool))
+        pull = _flat(part["pull_off_pressure"])[present] / e_star
+        codes = _flat(part["pull_off_status"])[present].astype(int)
+        if codes.size == 0:
+            continue
+        ok = np.isfinite(pull)
+        value = "—" if not ok.any() else (f"{pull[ok].mean():.4g} ± {pull[ok].std(ddof=1):.2g}" if ok.sum() > 1
+                                          else f"{pull[ok][0]:.4g}")
+        why = ", ".join(f"{int((codes == c).sum())} {meanings[c].replace('_', ' ')}" for c in sorted(set(codes[~ok])))
+        zone = _flat(part["adhesive_zone_cells"])[present]
+        area = _flat(part["area_fraction"].isel(step=-1))[present]
+        rows.append([key, value, f"{int(ok.sum())} of {codes.size}", why or "—", f"{zone.min():.3g}",
+                     f"{np.nanmean(area):.3g}"])
+    lead = ("The pull-off pressure: minus the most tensile mean pressure on unloading under displacement control "
+            "from the last load step, the step refined near the minimum until it moves by less than its tolerance. "
+            "It is trusted only where the grid resolves the adhesive process zone E* rho^2 / w (at least 1.5 "
+            "cells), the last load step converged, the surfaces separated and the steps beside the minimum "
+            "converged; other cases are left out, counted by reason. No contact evolution law is fitted to an "
+            "adhesive scene: the law and its theories describe contact without adhesion.\n\n")
+    return lead + list_table(list(PULL_OFF_COLUMNS), rows)
+
+
+def _flat(da) -> np.ndarray:
+    """A variable's values as a flat float64 array."""
+    return np.asarray(da.values, dtype=float).ravel()
+
+
+def _groups(agg, dims: Sequence[str]):
+    """``(label, part)`` for each combination of ``dims``' values (seeds stay in ``part``)."""
+    axes = [agg[d].values for d in dims]
+    for values in itertools.product(*axes):
+        part = agg.sel(dict(zip(dims, values, strict=True)))
+        label = str(values[0]) if len(dims) == 1 else ", ".join(
+            f"{d} = {v:g}" for d, v in zip(dims, values, strict=True))
+        yield f"``{label}``" if len(dims) == 1 else label, part
