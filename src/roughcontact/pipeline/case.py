@@ -182,7 +182,7 @@ def _run_batch(heights: np.ndarray, case: ContactCase, *, length, rms_slope, log
     if log is not None:
         log.info("batch of %d cases (%s .. %s): p0 from %.6g to %.6g (p0/E* up to %.4g) in %d steps", n_cases,
                  names[0], names[-1], loads[0], loads[-1], loads[-1] / case.e_star, len(loads))
-    result = solve_contact(heights, loads, progress=_batch_progress(log, len(loads)), **case.solver_options(length))
+    result = solve_contact(heights, loads, progress=_progress(log, len(loads)), **case.solver_options(length))
     out = []
     for b, label in enumerate(names):
         one = result.isel(case=b).drop_vars("case")
@@ -227,32 +227,26 @@ def _check_batchable(case: ContactCase, observers: Sequence) -> None:
                          f"only, not {', '.join(asked)}; run each case with 2-D heights for those")
 
 
-def _batch_progress(log, n_steps: int):
-    """A batch's line per load step: the range of A/A0 over its cases, their most iterations, the time left."""
+def _progress(log, n_steps: int):
+    """One log line per load step as it goes, with what is left (None without a log).
+
+    A batch's steps report per-case arrays: its line gives the range of A/A0 over the cases, the most
+    iterations of any and how many did not converge.
+    """
     if log is None:
         return None
     spent = []
 
     def progress(step, p0, area, iterations, converged, seconds):
         spent.append(seconds)
+        if np.ndim(area) == 0:
+            log.info("step %d/%d: p0 = %.6g, A/A0 = %.6g, %d iterations, %.2f s%s; %s", step, n_steps, p0, area,
+                     iterations, seconds, "" if converged else ", NOT converged", eta(spent, n_steps))
+            return
         bad = int(np.size(converged) - np.count_nonzero(converged))
         log.info("step %d/%d: p0 = %.6g, A/A0 = %.6g .. %.6g over %d cases, %d iterations (the most), %.2f s%s; %s",
                  step, n_steps, p0, np.min(area), np.max(area), np.size(area), np.max(iterations), seconds,
                  f", {bad} NOT converged" if bad else "", eta(spent, n_steps))
-
-    return progress
-
-
-def _progress(log, n_steps: int):
-    """One log line per load step as it goes, with what is left (None without a log)."""
-    if log is None:
-        return None
-    spent = []
-
-    def progress(step, p0, area, iterations, converged, seconds):
-        spent.append(seconds)
-        log.info("step %d/%d: p0 = %.6g, A/A0 = %.6g, %d iterations, %.2f s%s; %s", step, n_steps, p0, area,
-                 iterations, seconds, "" if converged else ", NOT converged", eta(spent, n_steps))
 
     return progress
 
