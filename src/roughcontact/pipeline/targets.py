@@ -27,17 +27,9 @@ from pathlib import Path
 from snakemake.exceptions import WorkflowError
 
 from ..figures.registry import FIGURES, scene_figures
-from .cases import (
-    BATCH_STEM,
-    CASE_STEM,
-    CONTACT_BATCH_STEM,
-    ContactBatch,
-    batch_index,
-    batch_seeds,
-    batch_size,
-    is_adhesive,
-)
+from .cases import BATCH_STEM, CASE_STEM, is_adhesive
 from .config import ConfigError, load_schema
+from .contact_jobs import ContactJobs, contact_batch_path, contact_mem_mb, contact_runtime_min  # noqa: F401 (the rules')
 from .scenes import validate_config
 from .sources import SOURCES, PatchSource, source_of
 
@@ -71,12 +63,6 @@ def batch_path(folder: str, ext: str = "nc") -> str:
     return f"results/{{scene}}/{folder}/{BATCH_STEM}.{ext}"
 
 
-def contact_batch_path(folder: str, ext: str = "nc") -> str:
-    """Pattern of one contact batch's file (``contact.solver.batch`` > 1): ``results/{scene}/<folder>/``
-    ``kl{k_l}_ks{k_s}_H{H}_b{batch}.<ext>`` (:class:`~.cases.ContactBatch`)."""
-    return f"results/{{scene}}/{folder}/{CONTACT_BATCH_STEM}.{ext}"
-
-
 def topography_path(folder: str, ext: str = "nc") -> str:
     """Pattern of one named case's file (a patch source's): ``results/{scene}/<folder>/{topography}.<ext>``."""
     return f"results/{{scene}}/{folder}/{{topography}}.{ext}"
@@ -99,31 +85,6 @@ def batch_runtime_min(block: Mapping) -> int:
     return max(5, int(0.05 * surfaces * (n / 1024) ** 2))
 
 
-def contact_mem_mb(n: int) -> int:
-    """Peak memory of one contact job [MB]: interpreter + libraries + ~40 N^2 doubles of solver work."""
-    return int(300 + 40 * 8 * n * n / 2**20)
-
-
-def contact_runtime_min(n: int, n_steps: int) -> int:
-    """Wall-time request of one contact job [min]: 30 steps at N=1024 take 15-130 s (paper grid); x9 margin."""
-    return max(5, int(10 * n_steps / 30 * (n / 1024) ** 2 * 2))
-
-
-def contact_batch_mem_mb(n: int, size: int) -> int:
-    """Peak memory of one contact batch job of ``size`` cases [MB]: :func:`contact_mem_mb`'s solver work per case."""
-    return int(300 + size * 40 * 8 * n * n / 2**20)
-
-
-def contact_batch_runtime_min(n: int, n_steps: int, size: int) -> int:
-    """Wall-time request of one contact batch job [min]: ``size`` cases at :func:`contact_runtime_min`'s pace
-    (on the host a batch is no faster than its cases one by one)."""
-    return max(5, size * contact_runtime_min(n, n_steps))
-
-
-#: Peak memory [MB] and wall time [min] of a batched case's own job: it copies its case out of its batch's file.
-COPY_MEM_MB, COPY_RUNTIME_MIN = 300, 5
-
-
 def file_mem_mb(path) -> int:
     """Peak memory of a job on one named case's file [MB]: interpreter + ~160 doubles per stored value.
 
@@ -135,11 +96,6 @@ def file_mem_mb(path) -> int:
 
 
 # ------------------------------------------------------------------------------ wildcard errors
-def _case_of(w) -> dict:
-    """A generated case's wildcards (``k_l``, ``k_s``, ``H``, ``seed``) as :data:`CASE_STEM`'s fields."""
-    return {"k_l": w.k_l, "k_s": w.k_s, "H": w.H, "seed": w.seed}
-
-
 def not_allowed(scene: str, where: str, key: str, value: str, allowed) -> WorkflowError:
     """The error for wildcard ``key`` = ``value`` outside ``allowed`` (the scene's own strings).
 
@@ -178,7 +134,7 @@ def one_case_stem(block: Mapping, h: str, seed: int) -> str:
 
 
 # ------------------------------------------------------------------------------ the scenes
-class Targets:
+class Targets(ContactJobs):
     """The validated scenes of a config, and every function the rules call with a job's wildcards.
 
     Parameters
@@ -258,95 +214,25 @@ class Targets:
         return self.scenes[self.active].get(study, {}).get("keep_surfaces", True)
 
     # -------------------------------------------------------------------------- generated cases
-    def check_case(self, wildcards, study: str) -> dict:
-        """Stop with the allowed values if a requested case is not in the scene's grid; else its block."""
+    def check_grid_values(self, wildcards, study: str, keys=("k_l", "k_s", "H")) -> dict:
+        """Stop with the allowed values if a requested file's ``keys`` wildcards are not in the scene's grid; else
+        the study's block."""
         block = self.generated_block(wildcards.scene, study)
         grid = block["grid"]
-        for key in ("k_l", "k_s", "H"):
+        for key in keys:
             if getattr(wildcards, key) not in grid[key]:
                 raise not_allowed(wildcards.scene, f"{study}.grid.{key}", key, getattr(wildcards, key), grid[key])
+        return block
+
+    def check_case(self, wildcards, study: str) -> dict:
+        """Stop with the allowed values if a requested case is not in the scene's grid; else its block."""
+        block = self.check_grid_values(wildcards, study)
         check_seed(wildcards.scene, study, wildcards.seed, block["seeds"])
         return block
 
     def check_batch(self, wildcards, study: str) -> dict:
         """Stop with the allowed values if a requested batch's k_l or H is not in the scene's grid; else its block."""
-        block = self.generated_block(wildcards.scene, study)
-        for key in ("k_l", "H"):
-            if getattr(wildcards, key) not in block["grid"][key]:
-                raise not_allowed(
-                    wildcards.scene, f"{study}.grid.{key}", key, getattr(wildcards, key), block["grid"][key]
-                )
-        return block
-
-    def contact_batch_of(self, w) -> ContactBatch:
-        """The contact batch named by a job's wildcards (``k_l``, ``k_s``, ``H``, ``batch``), checked against its
-        scene: a grid value outside the grid, a scene that batches nothing or a batch past its seeds is named."""
-        block = self.generated_block(w.scene, "contact")
-        for key in ("k_l", "k_s", "H"):
-            if getattr(w, key) not in block["grid"][key]:
-                raise not_allowed(w.scene, f"contact.grid.{key}", key, getattr(w, key), block["grid"][key])
-        size = batch_size(block)
-        if size == 1:
-            raise WorkflowError(f"scene {w.scene!r} solves each contact case alone (contact.solver.batch is 1), so it "
-                                f"has no contact batch files; its cases are results/{w.scene}/contact/{CASE_STEM}.nc")
-        n_batches = -(-block["seeds"] // size)
-        if w.batch != str(int(w.batch)) or int(w.batch) >= n_batches:
-            raise WorkflowError(f"scene {w.scene!r}, contact: wildcard batch={w.batch} is not one of the scene's "
-                                f"batches 0..{n_batches - 1} ({block['seeds']} seeds in batches of {size}; written "
-                                "without leading zeros)")
-        index = int(w.batch)
-        return ContactBatch(w.k_l, w.k_s, w.H, index, batch_seeds(index, size, block["seeds"]))
-
-    def contact_batch_input(self, w) -> list[str]:
-        """The surfaces of a contact batch's cases, in seed order (the order of its solve)."""
-        return [f"results/{w.scene}/surfaces/{case.stem}.nc" for case in self.contact_batch_of(w).cases]
-
-    def contact_batch_seeds(self, w) -> list[int]:
-        """A params function: the seeds of a contact batch, in the order of its input surfaces."""
-        return list(self.contact_batch_of(w).seeds)
-
-    def contact_batch_params(self, provider):
-        """A params function: ``provider``'s values for the contact block of a batch's scene, once the batch is
-        checked."""
-
-        def values(w):
-            self.contact_batch_of(w)
-            return provider(self.scenes[w.scene]["contact"])
-
-        return values
-
-    def contact_input(self, w) -> dict:
-        """The input of one contact case's job (the case checked against its scene's grid): its surface
-        (``surface``), or with ``contact.solver.batch`` > 1 its batch's file (``batch``), which the job copies
-        its case out of."""
-        block = self.check_case(w, "contact")
-        size = batch_size(block)
-        if size == 1:
-            return {"surface": f"results/{w.scene}/surfaces/{CASE_STEM.format(**_case_of(w))}.nc"}
-        stem = CONTACT_BATCH_STEM.format(k_l=w.k_l, k_s=w.k_s, H=w.H, batch=batch_index(w.seed, size))
-        return {"batch": f"results/{w.scene}/contact_batch/{stem}.nc"}
-
-    def contact_job_mem_mb(self, w) -> int:
-        """Peak memory of one contact case's job [MB]: a solve's (:func:`contact_mem_mb`), or a batched case's copy."""
-        block = self.scenes[w.scene]["contact"]
-        return contact_mem_mb(block["surface"]["N"]) if batch_size(block) == 1 else COPY_MEM_MB
-
-    def contact_job_runtime_min(self, w) -> int:
-        """Wall-time request of one contact case's job [min]: a solve's (:func:`contact_runtime_min`), or a copy's."""
-        block = self.scenes[w.scene]["contact"]
-        if batch_size(block) > 1:
-            return COPY_RUNTIME_MIN
-        return contact_runtime_min(block["surface"]["N"], block["load"]["n_steps"])
-
-    def batch_job_mem_mb(self, w) -> int:
-        """Peak memory of one contact batch job [MB] (:func:`contact_batch_mem_mb` of the scene's N and batch)."""
-        block = self.scenes[w.scene]["contact"]
-        return contact_batch_mem_mb(block["surface"]["N"], batch_size(block))
-
-    def batch_job_runtime_min(self, w) -> int:
-        """Wall-time request of one contact batch job [min] (:func:`contact_batch_runtime_min`)."""
-        block = self.scenes[w.scene]["contact"]
-        return contact_batch_runtime_min(block["surface"]["N"], block["load"]["n_steps"], batch_size(block))
+        return self.check_grid_values(wildcards, study, ("k_l", "H"))
 
     def case_input(self, study: str, folder: str | None = None):
         """An input function: the job's case checked against the scene's grid (a clear error if it is
