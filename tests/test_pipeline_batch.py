@@ -7,6 +7,7 @@ added and only its batch planned.
 """
 import copy
 import json
+import logging
 import re
 from types import SimpleNamespace
 
@@ -22,6 +23,7 @@ from roughcontact.pipeline.cases import ContactBatch, batch_index, batch_seeds, 
 from roughcontact.pipeline.config import ConfigError
 from roughcontact.pipeline.io import InputFileError, read_dataset, write_groups
 from roughcontact.pipeline.loading import LoadSchedule
+from roughcontact.pipeline.progress import read_log_solves
 from roughcontact.pipeline.scenes import validate_config
 from roughcontact.pipeline.targets import Targets
 from roughcontact.studies.accuracy import variants
@@ -185,6 +187,15 @@ def test_run_case_on_a_batch_is_each_case_alone(surfaces):
 def test_what_a_batch_cannot_compute_is_named_by_run_case(surfaces, case, words):
     with pytest.raises(ValueError, match=re.escape(words) + ".*run each case with 2-D heights"):
         run_case(surfaces, case, length=1.0, rms_slope=0.1)
+
+
+def test_a_batch_logs_one_line_a_step_that_counts_its_cases(surfaces, caplog):
+    log = logging.getLogger("roughcontact.test_batch")
+    with caplog.at_level(logging.INFO, logger=log.name):
+        run_case(surfaces, CASE, length=1.0, rms_slope=0.1, log=log)
+    solves = read_log_solves(caplog.text)
+    assert [cases for cases, _ in solves] == [3] * 6, caplog.text  # scene progress counts 3 solves a step
+    assert "batch of 3 cases (case 0 .. case 2): p0 from" in caplog.text
 
 
 def test_a_batch_needs_one_load_schedule(surfaces):

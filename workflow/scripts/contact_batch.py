@@ -1,4 +1,6 @@
 """Stage 3, batched (contact.solver.batch > 1): solve one batch's seeds together, one group per case in its file."""
+from pathlib import Path
+
 import numpy as np
 
 from roughcontact.pipeline.case import ContactCase, run_case
@@ -6,6 +8,7 @@ from roughcontact.pipeline.cases import Case
 from roughcontact.pipeline.datasets import contact_dataset, surface_heights
 from roughcontact.pipeline.io import read_dataset, run_logged, write_groups
 from roughcontact.pipeline.params import recorded, require_made_for
+from roughcontact.pipeline.progress import scene_progress
 
 
 def main(log):
@@ -36,6 +39,9 @@ def main(log):
                  float(result.area_fraction[-1]), int(result.iterations.sum()))
     log.info("batch %s: %d cases, %d rounds in %.2f s", snakemake.output[0], len(cases),
              int(results[0].rounds.sum()), float(np.sum(results[0].wall_time)))
+    scene = scene_progress(Path(snakemake.output[0]).parents[1])  # results/{scene}
+    if scene is not None:
+        log.info(scene[1].text(scene[0]))
 
 
 run_logged(snakemake.log[0], main)

@@ -230,8 +230,8 @@ def _check_batchable(case: ContactCase, observers: Sequence) -> None:
 def _progress(log, n_steps: int):
     """One log line per load step as it goes, with what is left (None without a log).
 
-    A batch's steps report per-case arrays: its line gives the range of A/A0 over the cases, the most
-    iterations of any and how many did not converge.
+    A batch's steps report per-case arrays: its line gives the range of A/A0 over the cases, their number,
+    the most iterations of any and how many did not converge (:data:`~.progress.STEP_LINE` reads both lines).
     """
     if log is None:
         return None
@@ -244,7 +244,7 @@ def _progress(log, n_steps: int):
                      iterations, seconds, "" if converged else ", NOT converged", eta(spent, n_steps))
             return
         bad = int(np.size(converged) - np.count_nonzero(converged))
-        log.info("step %d/%d: p0 = %.6g, A/A0 = %.6g .. %.6g over %d cases, %d iterations (the most), %.2f s%s; %s",
+        log.info("step %d/%d: p0 = %.6g, A/A0 = %.6g .. %.6g, %d cases, %d iterations, %.2f s%s; %s",
                  step, n_steps, p0, np.min(area), np.max(area), np.size(area), np.max(iterations), seconds,
                  f", {bad} NOT converged" if bad else "", eta(spent, n_steps))
 
