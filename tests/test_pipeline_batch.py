@@ -280,6 +280,7 @@ def test_a_dry_run_shows_the_grouped_jobs(tmp_path):
     wd = copy_workflow(tmp_path / "wf", BATCHED)
     res = run_snakemake(wd, "-n", timeout=300)
     assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
+    assert "120 solves at N=32, in 4 batches of up to 4 cases" in res.stderr + res.stdout
     jobs = _jobs(res.stdout)
     assert jobs["contact_batch"] == 4 and jobs["contact"] == 10 and jobs["surface"] == 10, jobs
     planned = _planned(res.stdout)
