@@ -16,6 +16,7 @@ import pytest
 import xarray as xr
 from snakemake.exceptions import WorkflowError
 
+from cfcheck import assert_cf_clean
 from conftest import copy_workflow, run_snakemake
 from roughcontact.pipeline import params
 from roughcontact.pipeline.case import ContactCase, run_case
@@ -320,6 +321,7 @@ def test_batch_4_equals_the_unbatched_run_and_a_new_seed_solves_only_its_batch(t
         np.testing.assert_allclose(a.mean_gap, b.mean_gap, rtol=tol * 100, err_msg=target)
         np.testing.assert_allclose(a.kappa, b.kappa, rtol=1e-6, err_msg=target)
         assert np.all(np.abs(a.iterations.values - b.iterations.values) <= 1) and a.converged.values.all(), target
+    assert_cf_clean([batched / CONTACT.format(H="0.5", seed=1)], tmp_path / "tables")
     # a rerun of the batched scene is byte-identical
     first = {t: (batched / t).read_bytes() for t in _contact_targets()}
     batch_files = sorted((batched / "results/tiny/contact_batch").iterdir())
