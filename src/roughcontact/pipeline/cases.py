@@ -110,7 +110,7 @@ def contact_batches(block: dict) -> list[ContactBatch]:
 
     Cases of one ``(k_l, k_s, H)`` share the grid (every case of a generated scene has N and L of its
     ``surface`` block) and the load schedule (a batched scene's loads are relative to E*, the same for
-    every case: :func:`roughcontact.pipeline.config.checks.check_contact`), so each chunk of seeds can be
+    every case: :func:`roughcontact.pipeline.config.checks.check_batch`), so each chunk of seeds can be
     solved together. With ``solver.batch: 1`` every case is a batch of its own.
     """
     size, n_seeds = batch_size(block), block["seeds"]
