@@ -89,7 +89,8 @@ def test_bad_warm_start_is_named(surface):
 
 
 def _solver_callers() -> set[str]:
-    """Files outside src/roughcontact/solver that call solve_contact or solve_step (src and workflow scripts)."""
+    """Files outside src/roughcontact/solver that call solve_contact, solve_step or solve_contact_batch (src and
+    workflow scripts)."""
     found = set()
     files = [p for p in (REPO / "src" / "roughcontact").rglob("*.py") if "solver" not in p.relative_to(REPO).parts]
     files += list((REPO / "workflow" / "scripts").glob("*.py"))
@@ -98,7 +99,7 @@ def _solver_callers() -> set[str]:
             if isinstance(node, ast.Call):
                 fn = node.func
                 name = fn.id if isinstance(fn, ast.Name) else fn.attr if isinstance(fn, ast.Attribute) else ""
-                if name in ("solve_contact", "solve_step"):
+                if name in ("solve_contact", "solve_step", "solve_contact_batch"):
                     found.add(str(path.relative_to(REPO)))
     return found
 

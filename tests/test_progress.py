@@ -3,7 +3,15 @@ import json
 
 import pytest
 
-from roughcontact.pipeline.progress import Progress, main, planned_solves, read_log_steps, scene_progress, write_plan
+from roughcontact.pipeline.progress import (
+    Progress,
+    main,
+    planned_solves,
+    read_log_solves,
+    read_log_steps,
+    scene_progress,
+    write_plan,
+)
 
 LINE = "2026-11-25 10:00:00,000 INFO step {k}/{n}: p0 = 0.001, A/A0 = 0.01, 12 iterations, {s:.2f} s; about 3 s left"
 
@@ -42,6 +50,13 @@ def test_scene_progress_reads_plan_and_logs(tmp_path, capsys):
     assert name == "demo" and (got.done, got.seconds, got.planned) == (6, 8.0, 24)
     main([str(tmp_path)])
     assert "6 of 24 contact solves done (25 %)" in capsys.readouterr().out
+    # a batch's step (contact.solver.batch) counts as its cases' solves
+    batch_log = tmp_path / "logs" / "contact_batch" / "c.log"
+    batch_log.parent.mkdir()
+    batch_log.write_text(_log([3.0]).replace("12 iterations", "3 cases, 12 iterations"))
+    assert read_log_solves(batch_log.read_text()) == [(3, 3.0)]
+    _, got = scene_progress(tmp_path)
+    assert (got.done, got.seconds) == (9, 11.0)
     (tmp_path / "other").mkdir()
     with pytest.raises(SystemExit) as stop:
         main([str(tmp_path / "other")])

@@ -16,6 +16,7 @@ from roughcontact.pipeline.targets import (
     batch_path,
     batch_runtime_min,
     case_path,
+    contact_batch_path,
     contact_mem_mb,
     contact_runtime_min,
     surface_mem_mb,
@@ -55,6 +56,14 @@ scene_of = TARGETS.scene_of
 patch_names = TARGETS.patch_names
 study_block = TARGETS.study_block
 case_input = TARGETS.case_input
+contact_input = TARGETS.contact_input
+contact_batch_input = TARGETS.contact_batch_input
+contact_batch_params = TARGETS.contact_batch_params
+contact_batch_seeds = TARGETS.contact_batch_seeds
+contact_job_mem_mb = TARGETS.contact_job_mem_mb
+contact_job_runtime_min = TARGETS.contact_job_runtime_min
+batch_job_mem_mb = TARGETS.batch_job_mem_mb
+batch_job_runtime_min = TARGETS.batch_job_runtime_min
 case_params = TARGETS.case_params
 case_files = TARGETS.case_files
 case_list = TARGETS.case_list

@@ -1,10 +1,36 @@
 # Stage 3: frictionless normal contact, loaded in steps, one NetCDF per case.
 # params carry exactly the settings a solve depends on (roughcontact.pipeline.params.contact).
+# With contact.solver.batch: B (> 1) the seeds of each (k_l, k_s, H) are solved B at a time by
+# contact_batch (seeds 0..B-1, B..2B-1, ...: roughcontact.pipeline.cases.contact_batches), and each
+# case's job copies its case out of its batch's file (roughcontact.pipeline.targets.Targets.contact_input).
+
+
+rule contact_batch:
+    input:
+        contact_batch_input,
+    output:
+        contact_batch_path("contact_batch"),
+    log:
+        contact_batch_path("logs/contact_batch", "log"),
+    benchmark:
+        contact_batch_path("benchmarks/contact_batch", "tsv")
+    conda:
+        "../../envs/roughcontact.yaml"
+    threads: 1
+    resources:
+        mem_mb=batch_job_mem_mb,
+        runtime=batch_job_runtime_min,
+    params:
+        settings=contact_batch_params(params.contact),
+        surface=contact_batch_params(params.surface),
+        seeds=contact_batch_seeds,
+    script:
+        "../scripts/contact_batch.py"
 
 
 rule contact:
     input:
-        case_input("contact", "surfaces"),
+        unpack(contact_input),
     output:
         case_path("contact"),
     log:
@@ -15,11 +41,8 @@ rule contact:
         "../../envs/roughcontact.yaml"
     threads: 1
     resources:
-        mem_mb=lambda w: contact_mem_mb(SCENES[w.scene]["contact"]["surface"]["N"]),
-        runtime=lambda w: contact_runtime_min(
-            SCENES[w.scene]["contact"]["surface"]["N"],
-            SCENES[w.scene]["contact"]["load"]["n_steps"],
-        ),
+        mem_mb=contact_job_mem_mb,
+        runtime=contact_job_runtime_min,
     params:
         settings=case_params("contact", params.contact),
         surface=case_params("contact", params.surface),

@@ -1,4 +1,5 @@
-"""Stage 3: solve the contact of one surface (generated or measured) over the scene's load steps."""
+"""Stage 3: solve the contact of one surface (generated or measured) over the scene's load steps; with
+contact.solver.batch > 1, copy the case out of its batch's file (workflow/scripts/contact_batch.py solved it)."""
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +15,9 @@ from roughcontact.pipeline.sources import for_case
 def main(log):
     w, settings = snakemake.wildcards, snakemake.params.settings
     case = {key: getattr(w, key) for key in w.keys() if key != "scene"}  # k_l, k_s, H, seed; or topography
+    if "batch" in snakemake.input.keys():
+        copy_from_batch(log, w, case, settings)
+        return
     surf = read_dataset(snakemake.input[0], stage="surface", variables=["heights", "rms_slope", "alpha"])
     # a surface records what it was made with under its source's key (generator block, reader settings)
     require_made_for(surf, snakemake.input[0], case, **{for_case(case).record_key: snakemake.params.surface})
@@ -33,6 +37,17 @@ def main(log):
     scene = scene_progress(Path(snakemake.output[0]).parents[1])  # results/{scene}
     if scene is not None:
         log.info(scene[1].text(scene[0]))
+
+
+def copy_from_batch(log, w, case, settings):
+    """The case's group of its batch's file, checked to be this case made with these settings, as its own file."""
+    path = snakemake.input.batch
+    ds = read_dataset(path, stage="contact", group=Path(snakemake.output[0]).stem).drop_encoding()
+    require_made_for(ds, path, case, **settings)
+    write_dataset(ds, snakemake.output[0], stage="contact", scene=w.scene, scene_parameters=recorded(ds))
+    area = ds.area_fraction.values.ravel()
+    log.info("contact %s: A/A0 %.4g -> %.4g, %d iterations (solved in %s)", snakemake.output[0], area[0], area[-1],
+             int(ds.iterations.sum()), path)
 
 
 run_logged(snakemake.log[0], main)

@@ -13,10 +13,17 @@ Examples
 >>> ds = run_case(h, case, length=1.0, rms_slope=0.1)
 >>> ds.sizes["step"], ds.attrs["load_p0_max"]
 (5, 0.005)
+
+A batch (heights of shape ``(B, nx, ny)``, one load schedule for all) gives one dataset per case:
+
+>>> hs = np.stack([generate_surface(64, 2, 16, 0.8, seed=s, rms_slope=0.1) for s in range(3)])
+>>> [d.attrs["batch_size"] for d in run_case(hs, case, length=1.0, rms_slope=[0.1] * 3)]
+[3, 3, 3]
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -95,35 +102,44 @@ class ContactCase:
         return options
 
 
-def run_case(heights: np.ndarray, case: ContactCase, *, length, rms_slope: float, log=None, name: str | None = None,
-             observers: Sequence = ()) -> xr.Dataset:
-    """Solve one surface as ``case`` asks: its loads resolved, every step solved, its outputs added.
+def run_case(heights: np.ndarray, case: ContactCase, *, length, rms_slope, log=None, name=None,
+             observers: Sequence = ()) -> xr.Dataset | list[xr.Dataset]:
+    """Solve one surface (or a batch of them) as ``case`` asks: loads resolved, every step solved, outputs added.
 
     Parameters
     ----------
-    heights : numpy.ndarray, shape (nx, ny)
-        The surface [length].
+    heights : numpy.ndarray, shape (nx, ny) or (B, nx, ny)
+        The surface [length], or ``B`` surfaces of one grid solved together
+        (:func:`roughcontact.solver.solve_contact_batch`).
     case : ContactCase
-        What to compute.
+        What to compute. A batch runs one load schedule for all its cases: their resolved loads must be
+        equal (loads relative to E*), and it computes neither stored fields, clusters, P(p), effects nor
+        a ``target_area`` search (each refused with a ``ValueError``; a scene's ``contact.solver.batch`` is
+        refused with them before any job, :func:`roughcontact.pipeline.config.checks.check_batch`).
     length : float or (float, float)
         The cell's side ``L`` or sides ``(Lx, Ly)`` [length].
-    rms_slope : float
-        The surface's rms slope h' (loads relative to it, κ).
+    rms_slope : float, or sequence of B floats for a batch
+        The surface's rms slope h' (loads relative to it, κ); a batch's, one per case.
     log : logging.Logger, optional
         Where each step's line (with the time left), the loads and the warnings go.
-    name : str, optional
+    name : str, or sequence of B str for a batch, optional
         The case's name, at the start of its warnings (jobs' lines meet in one console).
     observers : sequence
         More observers of each step (:class:`roughcontact.solver.solve.StepView`), besides those
-        ``case.outputs`` asks for.
+        ``case.outputs`` asks for (none for a batch).
 
     Returns
     -------
-    xarray.Dataset
+    xarray.Dataset or list of xarray.Dataset
         :func:`roughcontact.solver.solve_contact`'s dataset, with ``contact_stiffness`` and
         ``full_contact_pressure`` where asked, and the load's attributes (``load_*``,
-        :meth:`~.loading.LoadSchedule.resolve`).
+        :meth:`~.loading.LoadSchedule.resolve`). A batch gives one such dataset per case, in order: the
+        batched solve's case ``b`` (its per-case variables over ``step``), with ``wall_time`` and
+        ``rounds`` of the whole batch and the attributes ``batch_size`` and ``check_every``.
     """
+    if np.ndim(heights) == 3:
+        return _run_batch(np.asarray(heights), case, length=length, rms_slope=rms_slope, log=log, names=name,
+                          observers=observers)
     options = case.solver_options(length)
 
     def area_at(p0: float) -> float:  # a target_area probe: the surface at one load
@@ -148,16 +164,89 @@ def run_case(heights: np.ndarray, case: ContactCase, *, length, rms_slope: float
     return result
 
 
+def _run_batch(heights: np.ndarray, case: ContactCase, *, length, rms_slope, log, names,
+               observers: Sequence) -> list[xr.Dataset]:
+    """:func:`run_case` of ``B`` surfaces under one load schedule: one batched solve, split into its cases."""
+    n_cases = heights.shape[0]
+    slopes = _per_case(rms_slope, n_cases, "rms_slope", float)
+    names = _per_case(names if names is not None else [f"case {b}" for b in range(n_cases)], n_cases, "name", str)
+    _check_batchable(case, observers)
+    resolved = [case.schedule.resolve(case.e_star, slope, heights[0].size, None) for slope in slopes]
+    loads = resolved[0][0]
+    for (other, _), label in zip(resolved[1:], names[1:], strict=True):
+        if other != loads:
+            raise ValueError(f"run_case: a batch runs one load schedule, but {label} resolves to other loads than "
+                             f"{names[0]} (final p0 {other[-1]:.17g} against {loads[-1]:.17g}; load.relative_to "
+                             f"{case.schedule.relative_to!r}): batch cases whose loads are equal, or run them one "
+                             "by one")
+    if log is not None:
+        log.info("batch of %d cases (%s .. %s): p0 from %.6g to %.6g (p0/E* up to %.4g) in %d steps", n_cases,
+                 names[0], names[-1], loads[0], loads[-1], loads[-1] / case.e_star, len(loads))
+    result = solve_contact(heights, loads, progress=_progress(log, len(loads)), **case.solver_options(length))
+    out = []
+    for b, label in enumerate(names):
+        one = result.isel(case=b).drop_vars("case")
+        if case.outputs.get("stiffness"):
+            one["contact_stiffness"] = stiffness_variable(one, case.length_unit, case.pressure_unit)
+        if case.outputs.get("full_contact_load"):
+            one["full_contact_pressure"] = full_contact_variable(heights[b], length, case.e_star,
+                                                                 one["pressure"].attrs["units"])
+        one.attrs.update(resolved[b][1])
+        if log is not None:
+            _warn(log, one, label, case.tol)
+        out.append(one)
+    return out
+
+
+def _per_case(values, n_cases: int, what: str, kind) -> list:
+    """``values`` as a list of ``n_cases`` (one value for every case when it is a single one), else a ValueError."""
+    if isinstance(values, (str, bytes)) or np.ndim(values) == 0:
+        values = [values] * n_cases
+    values = [kind(v) for v in values]
+    if len(values) != n_cases:
+        raise ValueError(f"run_case: a batch of {n_cases} surfaces needs {n_cases} {what} values (one per case), "
+                         f"got {len(values)}")
+    if kind is float and not all(math.isfinite(v) and v > 0 for v in values):
+        raise ValueError(f"run_case: every {what} of a batch must be a finite number > 0, got {values}")
+    return values
+
+
+def _check_batchable(case: ContactCase, observers: Sequence) -> None:
+    """What a batched solve cannot produce, refused naming the case's field and the remedy."""
+    outputs = case.outputs
+    refused = [(bool(outputs.get("fields")), "outputs['fields'] (stored fields)"),
+               (bool(outputs.get("clusters")), "outputs['clusters']"),
+               ("pressure_distribution" in outputs, "outputs['pressure_distribution'] (P(p))"),
+               (bool(case.effects), f"effects ({', '.join(case.effects)})"),
+               (case.schedule.target_area is not None, "schedule.target_area (each case's own load search)"),
+               (case.warm_start != "extrapolated", f"warm_start={case.warm_start!r}"),
+               (bool(tuple(observers)), "observers")]
+    asked = [what for flag, what in refused if flag]
+    if asked:
+        raise ValueError(f"run_case: a batch of surfaces (heights of shape (B, nx, ny)) computes per-step columns "
+                         f"only, not {', '.join(asked)}; run each case with 2-D heights for those")
+
+
 def _progress(log, n_steps: int):
-    """One log line per load step as it goes, with what is left (None without a log)."""
+    """One log line per load step as it goes, with what is left (None without a log).
+
+    A batch's steps report per-case arrays: its line gives the range of A/A0 over the cases, their number,
+    the most iterations of any and how many did not converge (:data:`~.progress.STEP_LINE` reads both lines).
+    """
     if log is None:
         return None
     spent = []
 
     def progress(step, p0, area, iterations, converged, seconds):
         spent.append(seconds)
-        log.info("step %d/%d: p0 = %.6g, A/A0 = %.6g, %d iterations, %.2f s%s; %s", step, n_steps, p0, area,
-                 iterations, seconds, "" if converged else ", NOT converged", eta(spent, n_steps))
+        if np.ndim(area) == 0:
+            log.info("step %d/%d: p0 = %.6g, A/A0 = %.6g, %d iterations, %.2f s%s; %s", step, n_steps, p0, area,
+                     iterations, seconds, "" if converged else ", NOT converged", eta(spent, n_steps))
+            return
+        bad = int(np.size(converged) - np.count_nonzero(converged))
+        log.info("step %d/%d: p0 = %.6g, A/A0 = %.6g .. %.6g, %d cases, %d iterations, %.2f s%s; %s",
+                 step, n_steps, p0, np.min(area), np.max(area), np.size(area), np.max(iterations), seconds,
+                 f", {bad} NOT converged" if bad else "", eta(spent, n_steps))
 
     return progress
 

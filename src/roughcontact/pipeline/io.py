@@ -39,7 +39,7 @@ from ..core.files import OutputFileError, atomic_output
 from ..core.version import __version__
 
 #: Stages whose files carry the ``roughcontact_stage`` attribute.
-STAGES = ("surface", "representativity", "contact", "aggregate", "fit", "accuracy", "kappa_gap")
+STAGES = ("surface", "representativity", "contact", "contact_batch", "aggregate", "fit", "accuracy", "kappa_gap")
 
 
 class InputFileError(ValueError):
@@ -152,29 +152,61 @@ def write_dataset(ds: xr.Dataset, path: str | os.PathLike, *, stage: str, scene:
     Raises ``ValueError`` if a variable lacks ``units``/``long_name`` or holds NaN/inf
     where it is not allowed (float variables whose ``allow_nan`` attr is not set).
     """
+    path = Path(path)
+    out = _checked_output(ds, path, stage, scene, scene_parameters)
+    with atomic_output(path) as tmp:
+        _to_netcdf(out, tmp)
+    return path
+
+
+def write_groups(members: Mapping[str, tuple[xr.Dataset, Mapping]], path: str | os.PathLike, *, stage: str,
+                 member_stage: str, scene: str, scene_parameters: Mapping) -> Path:
+    """Write several datasets atomically as the groups of one NetCDF-4 file (a contact batch's cases).
+
+    ``members`` maps each group's name to its dataset and that dataset's own ``scene_parameters``; each
+    group is written as :func:`write_dataset` would write the dataset alone (the same checks and
+    attributes, with stage ``member_stage``), so that :func:`read_dataset` with ``group=`` gives it back.
+    The root group holds no variables: the provenance attributes of ``stage`` with ``scene_parameters``
+    (the whole job's) and ``groups``, the members' names in order.
+    """
+    path = Path(path)
+    outs = {name: _checked_output(ds, path, member_stage, scene, params) for name, (ds, params) in members.items()}
+    root = xr.Dataset(attrs={**provenance_attrs(stage, scene, scene_parameters), "groups": " ".join(outs)})
+    with atomic_output(path) as tmp:
+        _to_netcdf(root, tmp)
+        for name, out in outs.items():
+            _to_netcdf(out, tmp, group=name)
+    return path
+
+
+def _checked_output(ds: xr.Dataset, path: Path, stage: str, scene: str, scene_parameters: Mapping) -> xr.Dataset:
+    """``ds`` as it is written: labels and finite values checked, strings as characters, provenance attributes."""
     _check_labels(ds)
     for name, var in ds.data_vars.items():
         if np.issubdtype(var.dtype, np.floating) and not var.attrs.get("allow_nan", False):
             if not np.all(np.isfinite(var.values)):
                 raise ValueError(f"variable {name!r} holds NaN or inf; refusing to write {path}")
-    path = Path(path)
     out = _char_strings(ds.copy())
     out.attrs = {**ds.attrs, **provenance_attrs(stage, scene, scene_parameters)}
-    with atomic_output(path) as tmp:
-        try:
-            out.to_netcdf(tmp, engine="netcdf4", format="NETCDF4")
-        except RuntimeError as exc:  # netCDF4's report of an I/O failure (e.g. "NetCDF: HDF error")
-            raise OSError(str(exc)) from exc
-    return path
+    return out
+
+
+def _to_netcdf(ds: xr.Dataset, tmp: Path, group: str | None = None) -> None:
+    """``ds`` into the NetCDF-4 file ``tmp`` (a new file, or a group appended to it)."""
+    try:
+        ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", mode="w" if group is None else "a", group=group)
+    except RuntimeError as exc:  # netCDF4's report of an I/O failure (e.g. "NetCDF: HDF error")
+        raise OSError(str(exc)) from exc
 
 
 def read_dataset(path: str | os.PathLike, *, stage: str,
-                 variables: Iterable[str] = ()) -> xr.Dataset:
+                 variables: Iterable[str] = (), group: str | None = None) -> xr.Dataset:
     """Load a file this package wrote, checking that it is what ``stage`` expects.
 
-    Raises :class:`InputFileError` naming the file and what is wrong: missing,
-    not NetCDF (e.g. truncated), written by something else, of another stage, or
-    lacking a required variable. The data are loaded into memory and the file closed.
+    ``group``: one group of a file of :func:`write_groups` (listed in its root's ``groups``), whose own
+    attributes are checked. Raises :class:`InputFileError` naming the file and what is wrong: missing,
+    not NetCDF (e.g. truncated), written by something else, of another stage, lacking the group or a
+    required variable. The data are loaded into memory and the file closed.
     """
     path = Path(path)
     if path.is_dir():
@@ -182,8 +214,15 @@ def read_dataset(path: str | os.PathLike, *, stage: str,
     if not path.is_file():
         raise InputFileError(f"{path}: file does not exist")
     try:
-        with xr.open_dataset(path, engine="netcdf4") as handle:
+        if group is not None:
+            with xr.open_dataset(path, engine="netcdf4") as root:
+                if group not in root.attrs.get("groups", "").split():
+                    raise InputFileError(f"{path}: holds no group {group!r}; its groups: "
+                                         f"{root.attrs.get('groups') or 'none'}")
+        with xr.open_dataset(path, engine="netcdf4", group=group) as handle:
             ds = handle.load()
+    except InputFileError:
+        raise
     except Exception as exc:  # netCDF4 raises OSError, RuntimeError or ValueError
         raise InputFileError(
             f"{path}: not a readable NetCDF file (truncated or foreign?): {exc}"
@@ -192,7 +231,8 @@ def read_dataset(path: str | os.PathLike, *, stage: str,
     if found is None:
         raise InputFileError(f"{path}: not written by roughcontact (no 'roughcontact_stage' attribute)")
     if found != stage:
-        raise InputFileError(f"{path}: holds stage {found!r}, expected {stage!r}")
+        raise InputFileError(f"{path}{'' if group is None else f' (group {group})'}: holds stage {found!r}, "
+                             f"expected {stage!r}")
     lacking = [v for v in variables if v not in ds.variables]
     if lacking:
         raise InputFileError(f"{path}: lacks required variable(s) {', '.join(lacking)}")

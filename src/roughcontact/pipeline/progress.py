@@ -1,6 +1,8 @@
 """How far a scene's contact study has got, and about how long the rest will take.
 
-Each contact job logs one line per load step (``step k/n: ..., 12 iterations, 0.41 s; ...``).
+Each contact job logs one line per load step (``step k/n: ..., 12 iterations, 0.41 s; ...``); a contact
+batch job (``contact.solver.batch``, ``logs/contact_batch/``) one line per load step of all its cases
+(``step k/n: ..., 4 cases, 12 iterations, 0.41 s; ...``), which counts as that many solves.
 When a run starts, the workflow writes the scene's plan, ``results/{scene}/logs/plan.json``
 (:func:`write_plan`: the number of planned solves and the cores Snakemake was given). From the
 plan and the step lines so far, :func:`scene_progress` tells what is done and estimates what is
@@ -23,8 +25,10 @@ from ..core.files import write_text_atomic
 from .io import duration_text
 from .sources import source_of
 
-#: The per-step line of a contact job's log (workflow/scripts/contact.py).
-STEP_LINE = re.compile(r"step (\d+)/(\d+): .*?, \d+ iterations, ([0-9.]+) s")
+#: The per-step line of a contact job's log (workflow/scripts/contact.py), or of a batch's (``B cases``).
+STEP_LINE = re.compile(r"step (\d+)/(\d+): .*?, (?:(\d+) cases, )?\d+ iterations, ([0-9.]+) s")
+#: The folders under ``results/{scene}/logs/`` of the jobs that solve contact cases.
+SOLVE_LOGS = ("contact", "contact_batch")
 PLAN_FILE = "plan.json"
 
 
@@ -70,12 +74,20 @@ class Progress:
 
 def read_log_steps(text: str) -> list[float]:
     """Seconds of each load step a contact log reports, in order (the last run's, if it ran twice)."""
-    steps: dict[int, float] = {}
+    return [seconds for _, seconds in read_log_solves(text)]
+
+
+def read_log_solves(text: str) -> list[tuple[int, float]]:
+    """``(cases, seconds)`` of each load step a contact or contact batch log reports, in order (the last run's).
+
+    A single case's step is one solve; a batch's step line names how many cases it solved together.
+    """
+    steps: dict[int, tuple[int, float]] = {}
     for match in STEP_LINE.finditer(text):
-        k, seconds = int(match.group(1)), float(match.group(3))
+        k = int(match.group(1))
         if k == 1:
             steps = {}  # a log that ran again starts over
-        steps[k] = seconds
+        steps[k] = (int(match.group(3) or 1), float(match.group(4)))
     return [steps[k] for k in sorted(steps)]
 
 
@@ -96,9 +108,9 @@ def scene_progress(scene_dir: str | Path) -> tuple[str, Progress] | None:
         return None
     plan = read_plan(plan_path)
     done, seconds = 0, 0.0
-    for log in sorted((scene_dir / "logs" / "contact").rglob("*.log")):
-        steps = read_log_steps(log.read_text(errors="replace"))
-        done, seconds = done + len(steps), seconds + sum(steps)
+    for log in sorted(log for folder in SOLVE_LOGS for log in (scene_dir / "logs" / folder).rglob("*.log")):
+        for cases, step_seconds in read_log_solves(log.read_text(errors="replace")):
+            done, seconds = done + cases, seconds + step_seconds
     return plan["scene"], Progress(plan["solves"], min(done, plan["solves"]), seconds, plan["cores"])
 
 

@@ -51,6 +51,7 @@ from .config.checks import (
     check_accuracy,
     check_against_fit,
     check_backend,
+    check_batch,
     check_contact,
     check_kappa_gap,
     resolve_load,
@@ -109,6 +110,7 @@ def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = No
         given = ((delta or {}).get("contact") or {}).get("load") or {}
         resolve_load(name, out["contact"]["load"], given, source.relative_load)
         check_contact(name, out["contact"])
+        check_batch(name, out["contact"], source.key)
         check_against_fit(name, out["contact"], out["fit"])
         if active:
             check_backend(name, out["contact"])

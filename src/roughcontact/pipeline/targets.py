@@ -28,6 +28,7 @@ from snakemake.exceptions import WorkflowError
 
 from .cases import BATCH_STEM, CASE_STEM, is_adhesive
 from .config import ConfigError, load_schema
+from .contact_jobs import ContactJobs, contact_batch_path, contact_mem_mb, contact_runtime_min  # noqa: F401 (the rules')
 from .scenes import validate_config
 from .sources import SOURCES, PatchSource, source_of
 
@@ -43,6 +44,7 @@ WILDCARD_CONSTRAINTS = {
     "k_s": GRID_VALUE,
     "H": GRID_VALUE,
     "seed": r"\d+",
+    "batch": r"\d+",
     "variant": r"[^/]+",
     "figure": r"[A-Za-z0-9_-]+",
     "topography": NOT_GENERATED + r"[A-Za-z0-9][A-Za-z0-9._-]*",
@@ -80,16 +82,6 @@ def batch_runtime_min(block: Mapping) -> int:
     """Wall-time request of a representativity job [min]: ~0.15 s a surface at N=1024, x20 margin."""
     n, surfaces = block["surface"]["N"], block["seeds"] * len(block["grid"]["k_s"])
     return max(5, int(0.05 * surfaces * (n / 1024) ** 2))
-
-
-def contact_mem_mb(n: int) -> int:
-    """Peak memory of one contact job [MB]: interpreter + libraries + ~40 N^2 doubles of solver work."""
-    return int(300 + 40 * 8 * n * n / 2**20)
-
-
-def contact_runtime_min(n: int, n_steps: int) -> int:
-    """Wall-time request of one contact job [min]: 30 steps at N=1024 take 15-130 s (paper grid); x9 margin."""
-    return max(5, int(10 * n_steps / 30 * (n / 1024) ** 2 * 2))
 
 
 def file_mem_mb(path) -> int:
@@ -141,7 +133,7 @@ def one_case_stem(block: Mapping, h: str, seed: int) -> str:
 
 
 # ------------------------------------------------------------------------------ the scenes
-class Targets:
+class Targets(ContactJobs):
     """The validated scenes of a config, and every function the rules call with a job's wildcards.
 
     Parameters
@@ -227,25 +219,25 @@ class Targets:
         return self.scenes[self.active].get(study, {}).get("keep_surfaces", True)
 
     # -------------------------------------------------------------------------- generated cases
-    def check_case(self, wildcards, study: str) -> dict:
-        """Stop with the allowed values if a requested case is not in the scene's grid; else its block."""
+    def check_grid_values(self, wildcards, study: str, keys=("k_l", "k_s", "H")) -> dict:
+        """Stop with the allowed values if a requested file's ``keys`` wildcards are not in the scene's grid; else
+        the study's block."""
         block = self.generated_block(wildcards.scene, study)
         grid = block["grid"]
-        for key in ("k_l", "k_s", "H"):
+        for key in keys:
             if getattr(wildcards, key) not in grid[key]:
                 raise not_allowed(wildcards.scene, f"{study}.grid.{key}", key, getattr(wildcards, key), grid[key])
+        return block
+
+    def check_case(self, wildcards, study: str) -> dict:
+        """Stop with the allowed values if a requested case is not in the scene's grid; else its block."""
+        block = self.check_grid_values(wildcards, study)
         check_seed(wildcards.scene, study, wildcards.seed, block["seeds"])
         return block
 
     def check_batch(self, wildcards, study: str) -> dict:
         """Stop with the allowed values if a requested batch's k_l or H is not in the scene's grid; else its block."""
-        block = self.generated_block(wildcards.scene, study)
-        for key in ("k_l", "H"):
-            if getattr(wildcards, key) not in block["grid"][key]:
-                raise not_allowed(
-                    wildcards.scene, f"{study}.grid.{key}", key, getattr(wildcards, key), block["grid"][key]
-                )
-        return block
+        return self.check_grid_values(wildcards, study, ("k_l", "H"))
 
     def case_input(self, study: str, folder: str | None = None):
         """An input function: the job's case checked against the scene's grid (a clear error if it is

@@ -89,6 +89,51 @@ def check_contact(scene: str, block: dict) -> None:
         fail("load.p_max", f"{load['p_max']:g} is p0/E* (load.relative_to: e_star) and must be <= 1")
 
 
+def check_batch(scene: str, block: dict, source: str | None) -> None:
+    """``solver.batch`` of a contact block: what a batch of cases cannot do, refused before any job is planned.
+
+    A batch (:func:`roughcontact.solver.solve_contact_batch`) solves cases of one grid under one load
+    schedule with the periodic elastic iteration and reports per-step columns only, so a batched block
+    must have generated surfaces (``source`` None: the generator), loads relative to E* (the same for
+    every case), the periodic boundary, no effects and no stored fields, clusters or P(p). ``batch: 1``
+    is the unbatched default and is dropped, so that writing it changes no job's parameters.
+    """
+    solver = block["solver"]
+    size = solver.get("batch", 1)
+    if size == 1:
+        solver.pop("batch", None)
+        return
+
+    def fail(field, msg):
+        raise ConfigError(f"scene {scene!r}, field 'contact.{field}': {msg} (contact.solver.batch: {size} solves "
+                          f"{size} cases together); {remedy(field)}")
+
+    def remedy(field):
+        if field == "solver.batch":
+            return "remove solver.batch (each file alone)"
+        return f"remove {field} or solver.batch (each case alone)"
+
+    if source is not None:
+        fail("solver.batch", f"batches generated cases of one grid, and a {source} scene's cases are files of their "
+                             "own sizes and loads")
+    load, outputs = block["load"], block["outputs"]
+    if "target_area" in load:
+        fail("load.target_area", "is searched on each case's own surface, so the cases' loads differ")
+    if load.get("relative_to", "e_star") != "e_star":
+        fail("load.relative_to", f"{load['relative_to']!r} scales each case's loads with its own rms slope, so "
+                                 "the cases' loads differ (a batch runs one load schedule)")
+    if solver["boundary"] != "periodic":
+        fail("solver.boundary", f"{solver['boundary']!r}: a batch runs the periodic half-space only")
+    if block["effects"]:
+        fail("effects", f"{', '.join(block['effects'])}: a batch runs the elastic solver without effects")
+    if outputs["fields"]:
+        fail("outputs.fields", f"steps {outputs['fields']}: a batch stores no pressure or gap fields")
+    if outputs["clusters"]:
+        fail("outputs.clusters", "needs each step's contact mask, which a batch does not keep")
+    if "pressure_distribution" in outputs:
+        fail("outputs.pressure_distribution", "needs each step's pressure field, which a batch does not keep")
+
+
 def _check_outputs(fail, block: dict) -> None:
     """The observables that hold only for some problems: P(p) for compressive contact, the exact full contact."""
     outputs, effects = block["outputs"], block["effects"]

@@ -13,7 +13,7 @@ import copy
 from collections.abc import Mapping
 
 from ...analysis.aggregate import CASE_DIMS, add_derived, combine_cases, representativity_statistics, seed_statistics
-from ..cases import BATCH_STEM, CASE_STEM, batches, cases
+from ..cases import BATCH_STEM, CASE_STEM, batch_size, batches, cases, contact_batches
 from ..config.checks import check_grid
 from ..config.schema import STUDIES
 from ..datasets import split_cases
@@ -87,4 +87,7 @@ class Generated(Source):
             n_cases, n_steps = len(cases(con)), con["load"]["n_steps"]
             parts.append(f"{n_cases} contact cases x {n_steps} load steps = {n_cases * n_steps} solves at "
                          f"N={con['surface']['N']}")
+            if batch_size(con) > 1:
+                parts[-1] += (f", in {len(contact_batches(con))} batches of up to {batch_size(con)} cases "
+                              "(contact.solver.batch)")
         return parts
