@@ -18,6 +18,7 @@ from snakemake.exceptions import WorkflowError
 
 from cfcheck import assert_cf_clean
 from conftest import copy_workflow, run_snakemake
+from roughcontact.figures.registry import FIGURES
 from roughcontact.pipeline import params
 from roughcontact.pipeline.case import ContactCase, run_case
 from roughcontact.pipeline.cases import ContactBatch, batch_index, batch_seeds, batch_size, contact_batches
@@ -237,7 +238,7 @@ def test_a_batch_file_holds_each_case_as_its_own_file_would(tmp_path):
 # ------------------------------------------------------------------------------ the rules' functions
 @pytest.fixture(scope="module")
 def targets():
-    return Targets.from_config(copy.deepcopy(BATCHED), variants)
+    return Targets.from_config(copy.deepcopy(BATCHED), variants, FIGURES)
 
 
 def _w(**values):
@@ -251,7 +252,7 @@ def test_a_batched_case_reads_its_batch(targets):
     assert targets.contact_batch_seeds(_w(batch="1")) == [4]
     assert targets.contact_batch_params(params.contact)(_w(batch="1"))["solver"]["batch"] == 4
     assert targets.contact_job_mem_mb(_w(seed="0")) < targets.batch_job_mem_mb(_w(batch="0"))
-    single = Targets.from_config(copy.deepcopy(SINGLE), variants)
+    single = Targets.from_config(copy.deepcopy(SINGLE), variants, FIGURES)
     assert single.contact_input(_w(seed="3")) == {"surface": SURF.format(H="0.8", seed=3)}
 
 
@@ -266,7 +267,7 @@ def test_a_batch_outside_the_scene_is_named(targets, w, words):
 
 
 def test_an_unbatched_scene_has_no_batch_files():
-    single = Targets.from_config(copy.deepcopy(SINGLE), variants)
+    single = Targets.from_config(copy.deepcopy(SINGLE), variants, FIGURES)
     with pytest.raises(WorkflowError, match=r"solves each contact case alone \(contact.solver.batch is 1\)"):
         single.contact_batch_input(_w(batch="0"))
 
