@@ -240,7 +240,9 @@ fi
 for d in local slurm; do
     mkdir -p "$WORK/$d"
     cp "$REPO/Snakefile" "$WORK/$d/"
-    cp -r "$REPO/workflow" "$REPO/config" "$WORK/$d/"
+    # profiles/ too: Snakemake skips a --workflow-profile it cannot find without a word, and the SLURM
+    # run would then run locally
+    cp -r "$REPO/workflow" "$REPO/profiles" "$REPO/config" "$WORK/$d/"
     [ -d "$REPO/envs" ] && cp -r "$REPO/envs" "$WORK/$d/"   # the rules' conda: files (run metadata reads them)
     rm -rf "$WORK/$d/results" "$WORK/$d/.snakemake"
     cp "$SCENE_YAML" "$WORK/$d/config/config.yaml"
