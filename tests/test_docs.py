@@ -572,7 +572,8 @@ def test_documented_item(item, ctx, tmp_path):
 def test_the_paper_dags_size_is_given_right_wherever_it_is_given():
     """Text that gives the paper scene's job count must give the DAG's (test_workflow checks PAPER_JOBS)."""
     texts = [REPO / "Makefile", *(REPO / d for d in DOCS), *sorted((REPO / "tests").glob("*.py")),
-             *sorted((REPO / "workflow").rglob("*.yaml")), *sorted((REPO / "workflow").rglob("*.smk"))]
+             *sorted((REPO / "workflow").rglob("*.yaml")), *sorted((REPO / "profiles").rglob("*.yaml")),
+             *sorted((REPO / "workflow").rglob("*.smk"))]
     stale = [f"{path.relative_to(REPO)}:{n}: {line.strip()}"
              for path in texts for n, line in enumerate(path.read_text().splitlines(), 1)
              for count in re.findall(r"\b(\d{3,})[- ]jobs?\b", line)
