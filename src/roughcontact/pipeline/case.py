@@ -153,14 +153,21 @@ def run_case(heights: np.ndarray, case: ContactCase, *, length, rms_slope, log=N
                            progress=_progress(log, len(loads)), warm_start=case.warm_start,
                            observers=[*clusters, *contact_observers(outputs, case.e_star * rms_slope), *observers],
                            **options)
-    if outputs.get("stiffness"):
+    return _finished(result, heights, case, length, load_info, log, name or "case")
+
+
+def _finished(result: xr.Dataset, heights: np.ndarray, case: ContactCase, length, load_info: dict, log,
+              name: str) -> xr.Dataset:
+    """One case's solve with the outputs computed after it (stiffness, full-contact load), its load
+    attributes and its warnings logged: the same for a single case and for each case of a batch."""
+    if case.outputs.get("stiffness"):
         result["contact_stiffness"] = stiffness_variable(result, case.length_unit, case.pressure_unit)
-    if outputs.get("full_contact_load"):
+    if case.outputs.get("full_contact_load"):
         result["full_contact_pressure"] = full_contact_variable(heights, length, case.e_star,
                                                                 result["pressure"].attrs["units"])
     result.attrs.update(load_info)
     if log is not None:
-        _warn(log, result, name or "case", case.tol)
+        _warn(log, result, name, case.tol)
     return result
 
 
@@ -183,19 +190,8 @@ def _run_batch(heights: np.ndarray, case: ContactCase, *, length, rms_slope, log
         log.info("batch of %d cases (%s .. %s): p0 from %.6g to %.6g (p0/E* up to %.4g) in %d steps", n_cases,
                  names[0], names[-1], loads[0], loads[-1], loads[-1] / case.e_star, len(loads))
     result = solve_contact(heights, loads, progress=_progress(log, len(loads)), **case.solver_options(length))
-    out = []
-    for b, label in enumerate(names):
-        one = result.isel(case=b).drop_vars("case")
-        if case.outputs.get("stiffness"):
-            one["contact_stiffness"] = stiffness_variable(one, case.length_unit, case.pressure_unit)
-        if case.outputs.get("full_contact_load"):
-            one["full_contact_pressure"] = full_contact_variable(heights[b], length, case.e_star,
-                                                                 one["pressure"].attrs["units"])
-        one.attrs.update(resolved[b][1])
-        if log is not None:
-            _warn(log, one, label, case.tol)
-        out.append(one)
-    return out
+    return [_finished(result.isel(case=b).drop_vars("case"), heights[b], case, length, resolved[b][1], log, label)
+            for b, label in enumerate(names)]
 
 
 def _per_case(values, n_cases: int, what: str, kind) -> list:
