@@ -254,10 +254,15 @@ def test_file_without_channels_rejected(tmp_path, content):
     assert str(err.value).startswith(f"{fn}: ")
 
 
-def test_line_scan_rejected(tmp_path):
+def test_line_scan_is_read_as_a_profile(tmp_path):
+    """A 1-D array is a uniform line scan (issue 49): read as a profile, its size one length [L]."""
     fn = tmp_path / "line.npy"
     np.save(fn, _noise(32))
-    with pytest.raises(TopographyError, match=r"line scan \(1-D\); only 2-D maps") as err:
+    surface = read_topography(fn, unit="um", file_unit="um", physical_size=(2.0,))
+    assert surface.heights.shape == (32,) and surface.lengths == (2.0,) and surface.length == 2.0
+    assert surface.dimension == 1 and surface.info["line_scan"] == "uniform" and "resampled" not in surface.info
+    with pytest.raises(TopographyError, match=r"physical_size \[1.0, 1.0\] has 2 value\(s\), but channel .* is a "
+                                              r"line scan: give \[L\], its length") as err:
         read_topography(fn, unit="um", file_unit="um", physical_size=(1.0, 1.0))
     assert str(err.value).startswith(f"{fn}: ")
 
@@ -284,7 +289,7 @@ def test_unknown_and_missing_files(tmp_path):
         (dict(detrend="plane"), "use one of none, center, height, curvature"),
         (dict(non_square="pad"), "topography.non_square 'pad' is not allowed; use one of keep, crop, reject"),
         (dict(physical_size=(1.0, -1.0)), "topography.physical_size (1.0, -1.0) is not allowed"),
-        (dict(physical_size=(1.0,)), "use two finite numbers > 0"),
+        (dict(physical_size=(1.0, 2.0, 3.0)), "use two finite numbers > 0"),
         (dict(channel=-1), "topography.channel -1 is not allowed"),
     ],
 )

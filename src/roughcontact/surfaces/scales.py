@@ -21,11 +21,14 @@ from .synthetic import LENGTH_RANGE, RMS_HEIGHT_RANGE, nonperiodic_moments
 ROUND_OFF_FACTOR = 100.0
 
 
-def length_problem(shape: tuple[int, int], pixel: tuple[float, float], unit: str = "") -> str | None:
-    """Pixel sizes and sides of a ``shape`` map outside :data:`LENGTH_RANGE`, in words; None if inside."""
+def length_problem(shape: tuple[int, ...], pixel: tuple[float, ...], unit: str = "") -> str | None:
+    """Pixel sizes and sides of a ``shape`` map (or (n,) profile) outside :data:`LENGTH_RANGE`, in words; None if
+    inside."""
     lo, hi = LENGTH_RANGE
-    (nx, ny), (dx, dy) = shape, pixel
-    for what, value in (("pixel size dx", dx), ("pixel size dy", dy), ("side nx dx", nx * dx), ("side ny dy", ny * dy)):
+    axes = "xy"[:len(shape)]  # a profile's (n,) and (dx,) has x alone
+    values = [(f"pixel size d{a}", d) for a, d in zip(axes, pixel, strict=True)]
+    values += [(f"side n{a} d{a}", n * d) for a, n, d in zip(axes, shape, pixel, strict=True)]
+    for what, value in values:
         if not lo <= value <= hi:
             return f"{what} = {value:g}{' ' + unit if unit else ''} is outside [{lo:g}, {hi:g}], the range of " \
                    "lengths float64 can study"
@@ -33,7 +36,8 @@ def length_problem(shape: tuple[int, int], pixel: tuple[float, float], unit: str
 
 
 def scale_problem(heights: np.ndarray, pixel: tuple[float, float], resolution: float | None = None) -> str | None:
-    """What makes ``heights`` (a 2-D map, pixels ``pixel = (dx, dy)``) unusable, in words with the remedy, or None.
+    """What makes ``heights`` (a 2-D map, pixels ``pixel = (dx, dy)``; a profile (n,), ``pixel = (dx,)``)
+    unusable, in words with the remedy, or None.
 
     ``resolution``: the relative precision of the numbers as stored (``numpy.finfo(dtype).eps``; default
     float64's). Checks, in order: pixel sizes and the patch's sides in :data:`LENGTH_RANGE`, the largest
@@ -41,7 +45,6 @@ def scale_problem(heights: np.ndarray, pixel: tuple[float, float], resolution: f
     times the resolution of the largest height, and finite statistics (moments, rms slope) of the patch.
     """
     h = np.asarray(heights)
-    (nx, ny), (dx, dy) = h.shape, pixel
     problem = length_problem(h.shape, pixel)
     if problem:
         return problem + "; give the pixel size in another unit (unit and pixel_size)"
@@ -61,7 +64,8 @@ def scale_problem(heights: np.ndarray, pixel: tuple[float, float], resolution: f
                 "subtract the mean level (in float64) before saving, or check that the map is the one meant")
     try:
         with np.errstate(all="ignore"):
-            stats = nonperiodic_moments(np.asarray(h, dtype=np.float64), (nx * dx, ny * dy))
+            sides = tuple(n * d for n, d in zip(h.shape, pixel, strict=True))
+            stats = nonperiodic_moments(np.asarray(h, dtype=np.float64), sides if h.ndim == 2 else sides[0])
     except (ZeroDivisionError, OverflowError) as err:
         stats = {"rms_slope": float("nan"), "error": f"{type(err).__name__}: {err}"}
     keys = ("rms_height", "rms_slope", "m2", "m4", "alpha")

@@ -137,6 +137,8 @@ def finite_difference_rms_slope(heights: np.ndarray, length: float = 1.0) -> flo
 def nonperiodic_moments(heights: np.ndarray, length=1.0) -> dict[str, float]:
     """Statistics of a measured ``(nx, ny)`` patch (not periodic), from finite differences.
 
+    A 1-D ``heights`` of shape (n,) is a profile: :func:`profile_moments`.
+
     ``length`` is the side L of a square patch or its sides ``(Lx, Ly)``; pixels
     ``dx = Lx / nx``, ``dy = Ly / ny``. A measured patch's spectrum would count the jump
     between opposite edges as roughness, so its moments come from differences taken inside
@@ -146,8 +148,11 @@ def nonperiodic_moments(heights: np.ndarray, length=1.0) -> dict[str, float]:
     derivative at the pixel scale, as :func:`finite_difference_rms_slope` is.
     """
     h = np.asarray(heights, dtype=float)
+    if h.ndim == 1:
+        return profile_moments(h, length)
     if h.ndim != 2 or min(h.shape) < 3:
-        raise ValueError(f"heights must be a 2-D array of at least 3 x 3, got shape {h.shape}")
+        raise ValueError(f"heights must be a 2-D array of at least 3 x 3 (or a profile of at least 3 points), "
+                         f"got shape {h.shape}")
     lx, ly = Cell.of(h.shape, length).sides
     dx, dy = lx / h.shape[0], ly / h.shape[1]
     m0 = float(np.mean((h - h.mean()) ** 2))
@@ -250,4 +255,120 @@ def generate_surface(n: int, k_l: float, k_s: float, hurst: float, seed: int, *,
             f"rms_slope={rms_slope!r} on length={length!r} gives an rms height of {rms:.3g}, outside the "
             f"representable range [{RMS_HEIGHT_RANGE[0]:g}, {RMS_HEIGHT_RANGE[1]:g}]; choose a smaller product"
         )
+    return h
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# Profiles (1-D surfaces, plane strain): the honest 1-D analogue of the maps above.
+# ---------------------------------------------------------------------------------------------------------------
+
+
+def profile_psd_filter(n: int, k_l: float, k_s: float, hurst: float, *, plateau: bool = False) -> np.ndarray:
+    """Amplitude filter sqrt(C(k)) of a profile on the rfft grid, shape ``(n//2+1,)``.
+
+    The 1-D self-affine spectrum: C(q) proportional to ``q^(-1-2H)`` for ``k_l <= k <= k_s`` (k in
+    cycles per L), zero elsewhere, or constant at C(k_l) for ``0 < k < k_l`` when ``plateau``: the
+    convention of :func:`psd_filter`, whose 2-D isotropic C(q) ~ q^(-2-2H) is this one times the
+    1/q of the radial measure. The mean (k = 0) is zero; the scale is arbitrary (callers normalise).
+    """
+    k = np.arange(n // 2 + 1, dtype=float)
+    with np.errstate(divide="ignore"):
+        amp = np.where(k > 0, k, np.inf) ** (-(0.5 + hurst))
+    out = np.where((k >= k_l) & (k <= k_s), amp, 0.0)
+    if plateau:
+        out = np.where((k > 0) & (k < k_l), float(k_l) ** (-(0.5 + hurst)), out)
+    out[0] = 0.0
+    return out
+
+
+def profile_spectral_moments(heights: np.ndarray, length: float = 1.0) -> dict[str, float]:
+    """Spectral statistics of a periodic profile ``(n,)`` of period ``length`` (length unit ``u``).
+
+    Returns ``rms_height`` [u]; ``rms_slope`` = sqrt(<(dh/dx)^2>) with the exact spectral derivative [-]
+    (a profile has one slope: no factor 2 as in the areal <|grad h|^2> = 2 m2); the moments ``m0`` [u^2],
+    ``m2`` [-], ``m4`` [u^-2]; Nayak's ``alpha`` = m0 m4 / m2^2 [-]. Same keys as :func:`spectral_moments`.
+    """
+    h = np.asarray(heights, dtype=float)
+    if h.ndim != 1 or h.size < 4:
+        raise ValueError(f"heights must be a 1-D profile of at least 4 points, got shape {h.shape}")
+    n = h.size
+    weights = np.full(n // 2 + 1, 2.0)
+    weights[0] = 1.0
+    if n % 2 == 0:
+        weights[-1] = 1.0  # the Nyquist bin has no conjugate partner
+    power = weights * np.abs(np.fft.rfft(h)) ** 2 / float(n) ** 2
+    power[0] = 0.0
+    q2 = (2 * np.pi * np.arange(n // 2 + 1)) ** 2  # on the unit period; scaled by L below (see spectral_moments)
+    m0, m2, m4 = float(power.sum()), float((q2 * power).sum()), float((q2**2 * power).sum())
+    return {"rms_height": float(np.sqrt(m0)), "rms_slope": float(np.sqrt(m2)) / length, "m0": m0,
+            "m2": m2 / length**2, "m4": m4 / length**4,
+            "alpha": float(m0 * m4 / m2**2) if m2 > 0 else float("nan")}
+
+
+def profile_moments(heights: np.ndarray, length: float = 1.0) -> dict[str, float]:
+    """Statistics of a measured profile ``(n,)`` of length ``length`` (not periodic), from forward differences.
+
+    Pixel ``dx = length / n``. The profile analogue of :func:`nonperiodic_moments` (differences inside the
+    profile only, biased low against the spectral derivative at the pixel scale); ``rms_slope`` is the
+    profile's sqrt(<(dh/dx)^2>) = sqrt(m2), the h' that loads are relative to (``load.relative_to``).
+    """
+    h = np.asarray(heights, dtype=float)
+    if h.ndim != 1 or h.size < 3:
+        raise ValueError(f"heights must be a 1-D profile of at least 3 points, got shape {h.shape}")
+    dx = float(length) / h.size
+    m0 = float(np.mean((h - h.mean()) ** 2))
+    m2 = float(np.mean(np.diff(h) ** 2)) / dx**2
+    m4 = float(np.mean(np.diff(h, 2) ** 2)) / dx**4
+    return {"rms_height": float(np.sqrt(m0)), "rms_slope": float(np.sqrt(m2)), "m0": m0, "m2": m2, "m4": m4,
+            "alpha": float(m0 * m4 / m2**2) if m2 > 0 else float("nan")}
+
+
+def generate_profile(n: int, k_l: float, k_s: float, hurst: float, seed: int, *,
+                     rms_slope: float | None = None, rms_height: float | None = None,
+                     length: float = 1.0, plateau: bool = False) -> np.ndarray:
+    """Periodic self-affine Gaussian profile, shape ``(n,)``, zero mean: the 1-D :func:`generate_surface`.
+
+    Parameters
+    ----------
+    n : int
+        Points along the profile (>= 4).
+    k_l, k_s : float
+        Cutoffs as mode numbers ``L / lambda``, 0 < k_l < k_s <= n/2.
+    hurst : float
+        Hurst exponent H in (0, 1); the 1-D PSD decays as ``q^(-1-2H)`` (:func:`profile_psd_filter`).
+    seed : int
+        Seed of the white noise (>= 0), mixed with the cutoffs and H as in :func:`case_seed`. The noise is
+        drawn on :func:`base_grid`'s points, so another ``n`` samples the same continuous profile.
+    rms_slope, rms_height : float
+        Exactly one: the profile's spectral rms slope sqrt(<(dh/dx)^2>) [-] or rms height [length unit].
+    length : float
+        Period L of the profile [length unit]; spacing ``length / n``.
+    plateau : bool
+        Keep C constant at C(k_l) below k_l instead of cutting it.
+
+    Returns
+    -------
+    numpy.ndarray, float64, shape (n,)
+        Heights h(x) [length unit] at ``x = i length / n``.
+    """
+    _check_params(n, k_l, k_s, hurst, rms_slope, rms_height, length)
+    rng = np.random.default_rng(case_seed(seed, k_l, k_s, hurst))
+    m = base_grid(n, k_s)
+    spec_m = np.fft.rfft(rng.standard_normal(m)) * profile_psd_filter(m, k_l, k_s, hurst, plateau=plateau)
+    spec = np.zeros(n // 2 + 1, dtype=complex)
+    keep = m // 2 if m < n else m // 2 + 1  # the mode m/2 lies outside the band when m < n (base_grid)
+    spec[:keep] = spec_m[:keep]
+    h = np.fft.irfft(spec, n)
+    stats = profile_spectral_moments(h, 1.0)
+    current = stats["rms_slope"] if rms_slope is not None else stats["rms_height"]
+    if not current > 0:
+        raise ValueError(f"no spectral power between k_l={k_l} and k_s={k_s} on a profile of {n} points; "
+                         "widen the band")
+    h -= h.mean()
+    h *= (float(rms_slope) * float(length) if rms_slope is not None else float(rms_height)) / current
+    rms = float(np.sqrt(np.mean(h * h))) if np.all(np.isfinite(h)) else math.inf
+    if not RMS_HEIGHT_RANGE[0] <= rms <= RMS_HEIGHT_RANGE[1]:
+        raise ValueError(f"rms_slope={rms_slope!r} on length={length!r} gives an rms height of {rms:.3g}, outside the "
+                         f"representable range [{RMS_HEIGHT_RANGE[0]:g}, {RMS_HEIGHT_RANGE[1]:g}]; choose a smaller "
+                         "product")
     return h

@@ -1,8 +1,9 @@
 """Measured topography files, read with SurfaceTopography into the contact solver's height array.
 
 Every file format is read by SurfaceTopography (``open_topography`` picks the reader from the
-file's contents); this module only checks that the data suits the solver (one 2-D uniform map;
-any number of points along each axis, pixels of any aspect ratio), converts it to the study's
+file's contents); this module only checks that the data suits the solver (one 2-D uniform map,
+any number of points along each axis, pixels of any aspect ratio; or one line scan, uniform or not,
+prepared by :mod:`roughcontact.surfaces.linescan` for the 1-D solver), converts it to the study's
 length unit and prepares it:
 
 1. **read** the channel, in the file's own unit and size where it carries them (the scene's
@@ -36,6 +37,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..core.files import file_sha256
+from .linescan import MIN_PROFILE_POINTS, prepare_profile
 from .scales import checked_scales, length_problem
 
 if TYPE_CHECKING:
@@ -99,9 +101,10 @@ class MeasuredSurface:
     ----------
     heights : np.ndarray
         Heights, float64, shape (nx, ny), C-contiguous, finite everywhere, in ``unit``; axis 0 is
-        the file's x axis, axis 1 its y axis.
-    lengths : (float, float)
-        Sides (Lx, Ly) of the patch, in ``unit``; pixels ``dx = Lx / nx``, ``dy = Ly / ny``.
+        the file's x axis, axis 1 its y axis. A line scan's: shape (n,), on a uniform grid.
+    lengths : (float, float) or (float,)
+        Sides (Lx, Ly) of the patch, in ``unit``; pixels ``dx = Lx / nx``, ``dy = Ly / ny``. A
+        profile's: its length (L,), pixel ``L / n``.
     unit : str
         The study's length unit, one of :data:`LENGTH_UNITS`.
     info : dict
@@ -115,9 +118,17 @@ class MeasuredSurface:
 
     @property
     def square(self) -> bool:
-        """Whether the cell is square with square pixels (nx == ny and |dx/dy - 1| <= PIXEL_RTOL)."""
+        """Whether the cell is square with square pixels (nx == ny and |dx/dy - 1| <= PIXEL_RTOL); a profile's
+        one length is one side (True)."""
+        if self.dimension == 1:
+            return True
         (nx, ny), (lx, ly) = self.heights.shape, self.lengths
         return nx == ny and abs(lx / ly - 1.0) <= PIXEL_RTOL
+
+    @property
+    def dimension(self) -> int:
+        """1 for a profile (a line scan), 2 for a map."""
+        return self.heights.ndim
 
     @property
     def length(self) -> float | tuple[float, float]:
@@ -140,8 +151,8 @@ def read_topography(path, *, unit: str, file_unit: str | None = None,
     file_unit : str, optional
         Length unit of the heights and sizes of a file that carries none (one of :data:`LENGTH_UNITS`).
         Ignored (and recorded so in ``info["ignored"]``) when the file has a unit.
-    physical_size : (float, float), optional
-        Size (Lx, Ly) of the measured area along the array's axes 0 and 1, in the file's unit, for a
+    physical_size : (float, float) or (float,), optional
+        Size (Lx, Ly) along the array's axes 0 and 1 (a line scan: (L,)), in the file's unit, for a
         file that carries none. Ignored (and recorded so) when the file has a size.
     undefined : str
         Undefined (not measured) points: "reject", "mean" (the mean of the defined detrended
@@ -150,13 +161,11 @@ def read_topography(path, *, unit: str, file_unit: str | None = None,
         "none", "center" (mean), "height" (best plane) or "curvature" (best quadric), fitted to the
         defined points of the full measured area, before filling and cropping.
     non_square : str
-        "keep" a map with nx != ny whole, "crop" it to the centred n x n block, n = min(nx, ny),
-        or "reject" it.
+        "keep" a map with nx != ny whole, "crop" it to the centred min(nx, ny) square, or "reject" it.
     channel : int
         Index of the data channel in a multi-channel file (0: the first).
     max_undefined : float
-        Largest accepted fraction of undefined points, in [0, 1] (default :data:`MAX_UNDEFINED`); the
-        fraction is recorded in ``info["undefined_fraction"]``.
+        Largest accepted fraction of undefined points, in [0, 1] (recorded: ``info["undefined_fraction"]``).
     format : str, optional
         SurfaceTopography's name of the file's format (e.g. "x3p"). Without it the format is
         detected from the contents and must be one that uses the file's extension.
@@ -164,7 +173,8 @@ def read_topography(path, *, unit: str, file_unit: str | None = None,
     Returns
     -------
     MeasuredSurface
-        Heights of shape (nx, ny) and the sides (Lx, Ly) in ``unit``, and provenance ``info``.
+        Heights (nx, ny) and sides (Lx, Ly) in ``unit`` (a line scan: heights (n,) on a uniform grid
+        and (L,), :mod:`~.linescan`), and provenance ``info``.
 
     Raises
     ------
@@ -177,6 +187,8 @@ def read_topography(path, *, unit: str, file_unit: str | None = None,
     info = {"file": name, "sha256": _sha256(name)}
     topo = _load(name, info, unit=unit, file_unit=file_unit, physical_size=physical_size, channel=channel,
                  fmt=_check_format(name, format))
+    if isinstance(topo, _LineScan):  # non_square does not apply
+        return _profile(name, topo, info, unit, undefined=undefined, detrend=detrend, max_undefined=max_undefined)
     dx, dy = _check_grid(name, topo, non_square)
     heights = _detrend_and_fill(name, topo, info, undefined=undefined, detrend=detrend, max_undefined=max_undefined)
     heights, info["crop"] = _crop(heights) if non_square == "crop" else (heights, None)
@@ -186,12 +198,22 @@ def read_topography(path, *, unit: str, file_unit: str | None = None,
     return MeasuredSurface(heights=heights, lengths=(lx, ly), unit=unit, info=info)
 
 
+def _profile(name, scan, info, unit, **settings) -> MeasuredSurface:
+    """A line scan prepared for the 1-D solver (:func:`~.linescan.prepare_profile`), its scales checked."""
+    heights, length = prepare_profile(name, scan.x, scan.heights, scan.undefined, uniform=scan.uniform,
+                                      length=scan.length, info=info, error=TopographyError, **settings)
+    checked_scales(name, heights, (length / heights.size,), TopographyError)
+    return MeasuredSurface(heights=np.ascontiguousarray(heights), lengths=(length,), unit=unit, info=info)
+
+
 def check_header(path, *, unit: str, file_unit: str | None = None,
                  physical_size: tuple[float, float] | None = None, undefined: str = "reject",
                  detrend: str = "none", non_square: str = "keep", channel: int = 0,
                  max_undefined: float = MAX_UNDEFINED, format: str | None = None) -> tuple:
     """The checks of :func:`read_topography` that need only the file's header, without its heights; the grid
-    ``((nx, ny), (dx, dy))`` of the map it would return (after ``non_square: crop``), in ``unit``.
+    ``((nx, ny), (dx, dy))`` of the map it would return (after ``non_square: crop``), in ``unit``; a line
+    scan's ``((n,), (dx,))`` (a non-uniform one's as it will be resampled), with at least
+    :data:`~.linescan.MIN_PROFILE_POINTS` points.
 
     Readable by SurfaceTopography, the channel present and holding a 2-D uniform height map, a unit
     and a size (the file's or the scene's), the unit convertible to ``unit``, the sizes positive,
@@ -207,8 +229,10 @@ def check_header(path, *, unit: str, file_unit: str | None = None,
     with warnings.catch_warnings():
         # as in _load: the NetCDF reader's close warns about its memory map, harmlessly
         warnings.filterwarnings("ignore", message="Cannot close a netcdf_file", category=RuntimeWarning)
-        (nx, ny), pixel = _check_header(name, _open(name, fmt), unit, file_unit, physical_size, non_square, channel)
-    return ((min(nx, ny),) * 2 if non_square == "crop" else (nx, ny)), pixel
+        shape, pixel = _check_header(name, _open(name, fmt), unit, file_unit, physical_size, non_square, channel)
+    if len(shape) == 1:  # a line scan: (n,) and (dx,); non_square does not apply
+        return shape, pixel
+    return ((min(shape),) * 2 if non_square == "crop" else shape), pixel
 
 
 def _check_header(name, reader, unit, file_unit, physical_size, non_square, channel) -> tuple:
@@ -222,11 +246,44 @@ def _check_header(name, reader, unit, file_unit, physical_size, non_square, chan
         except ValueError as err:
             raise TopographyError(f"{name}: the file's unit {file_unit!r} cannot be converted to {unit!r} "
                                   f"({err})") from err
+        if chan.dim == 1:
+            return _check_profile_header(name, chan, kwargs, factor)
         (nx, ny), sizes = chan.nb_grid_pts, kwargs.get("physical_sizes", chan.physical_sizes)
         pixel = _check_grid(name, _Header((nx, ny), tuple(float(v) * factor for v in sizes), unit), non_square)
         return (int(nx), int(ny)), pixel
     finally:
         _close(reader)
+
+
+def _check_profile_header(name, chan, kwargs, factor) -> tuple:
+    """A line scan's header: enough points, a positive size; its grid ``((n,), (dx,))`` in the study's unit
+    (a non-uniform scan's as :func:`roughcontact.surfaces.linescan.uniform_profile` will resample it)."""
+    (n,), (size,) = chan.nb_grid_pts, kwargs.get("physical_sizes", chan.physical_sizes)
+    size = float(size) * factor
+    if n < MIN_PROFILE_POINTS:
+        raise TopographyError(f"{name}: the line scan has {n} points; a profile needs at least {MIN_PROFILE_POINTS} "
+                              "to be solved and fitted (its contact length moves in steps of 1/n): measure a longer "
+                              "or denser scan")
+    if not (np.isfinite(size) and size > 0):
+        raise TopographyError(f"{name}: the scan's length {size} is not positive and finite")
+    # a non-uniform scan's size is its measured range, over n - 1 spacings
+    dx = size / n if chan.is_uniform else size / (n - 1)
+    problem = length_problem((n,), (dx,))
+    if problem:
+        raise TopographyError(f"{name}: {problem}; check the file's unit and size (topography.file_unit, "
+                              "physical_size) or choose another topography.unit")
+    return (int(n),), (dx,)
+
+
+@dataclass(frozen=True)
+class _LineScan:
+    """A line scan as read (:func:`_load`), in the study's unit: positions, heights, undefined points."""
+
+    x: np.ndarray
+    heights: np.ndarray
+    undefined: np.ndarray
+    uniform: bool
+    length: float | None
 
 
 @dataclass(frozen=True)
@@ -255,9 +312,9 @@ def _check_arguments(name, unit, file_unit, physical_size, undefined, detrend, n
         size = tuple(float(s) for s in physical_size)
     except (TypeError, ValueError):
         size = ()
-    if len(size) != 2 or not all(np.isfinite(s) and s > 0 for s in size):
+    if len(size) not in (1, 2) or not all(np.isfinite(s) and s > 0 for s in size):
         raise TopographyError(f"{name}: topography.physical_size {physical_size!r} is not allowed; "
-                              "use two finite numbers > 0, (Lx, Ly) in the file's unit")
+                              "use two finite numbers > 0, (Lx, Ly) in the file's unit ([L] for a line scan)")
     return size
 
 
@@ -293,7 +350,9 @@ def _load(name, info, *, unit, file_unit, physical_size, channel, fmt=None) -> T
             chan = _channel(name, reader, channel)
             kwargs = _metadata(name, chan, info, file_unit=file_unit, physical_size=physical_size)
             raw = chan.topography(**kwargs)
-            if raw.dim != 2 or not raw.is_uniform:
+            if raw.dim == 1:
+                return _line_scan(name, raw, info, unit, reader, chan)
+            if not raw.is_uniform:
                 raise TopographyError(f"{name}: channel {chan.name!r} is not a 2-D uniform map")
             scaled = _to_unit(name, raw, unit)
             heights = scaled.heights()
@@ -313,6 +372,21 @@ def _load(name, info, *, unit, file_unit, physical_size, channel, fmt=None) -> T
                 original_physical_size=[float(s) for s in scaled.physical_sizes], periodic=bool(raw.is_periodic))
     return st.Topography(np.ma.masked_array(data, mask=mask) if mask.any() else data, scaled.physical_sizes,
                          periodic=bool(raw.is_periodic), unit=unit)
+
+
+def _line_scan(name, raw, info, unit, reader, chan) -> _LineScan:
+    """A ``UniformLineScan`` or ``NonuniformLineScan`` in ``unit``: positions, heights and undefined points (copies)."""
+    scaled = _to_unit(name, raw, unit)
+    x, heights = scaled.positions_and_heights()
+    data = np.array(np.ma.getdata(heights), dtype=np.float64)
+    undefined = np.ma.getmaskarray(heights) | ~np.isfinite(data)
+    uniform = bool(raw.is_uniform)
+    info.update(reader=type(reader).__name__, format=reader.format(), channel=chan.name,
+                file_unit=surface_topography().mangle_length_unit_ascii(raw.unit), original_shape=[int(data.size)],
+                original_physical_size=[float(s) for s in scaled.physical_sizes], periodic=bool(raw.is_periodic),
+                line_scan="uniform" if uniform else "nonuniform")
+    return _LineScan(np.array(x, dtype=np.float64), data, undefined, uniform,
+                     float(scaled.physical_sizes[0]) if uniform else None)
 
 
 def _open(name: str, fmt: str | None = None):
@@ -415,10 +489,10 @@ def _channel(name, reader, index):
     if not chan.is_height_channel:
         raise TopographyError(f"{name}: channel {index} ({chan.name!r}) holds {chan.data_kind.value} data in "
                               f"{chan.data_unit!r}, not heights; the file's channels are {names}")
-    if chan.dim == 1 or chan.is_uniform is False:
-        kind = "a line scan (1-D)" if chan.dim == 1 else "non-uniformly sampled"
-        raise TopographyError(f"{name}: channel {index} ({chan.name!r}) is {kind}; only 2-D maps on a uniform grid "
-                              "can be used")
+    if chan.dim == 2 and chan.is_uniform is False:
+        raise TopographyError(f"{name}: channel {index} ({chan.name!r}) is a non-uniformly sampled 2-D map; maps must "
+                              "be on a uniform grid (line scans may be non-uniform: they are resampled): "
+                              "interpolate the map onto a grid first")
     return chan
 
 
@@ -441,6 +515,10 @@ def _metadata(name, chan, info, *, file_unit, physical_size) -> dict:
         if physical_size is None:
             raise TopographyError(f"{name}: the file has no physical size; give topography.physical_size "
                                   "[Lx, Ly], the size of the measured area in the file's unit")
+        if len(physical_size) != chan.dim:
+            what, remedy = ("a line scan", "[L], its length") if chan.dim == 1 else ("a map", "[Lx, Ly]")
+            raise TopographyError(f"{name}: topography.physical_size {list(physical_size)} has {len(physical_size)} "
+                                  f"value(s), but channel {chan.name!r} is {what}: give {remedy} in the file's unit")
         kwargs["physical_sizes"] = physical_size
     elif physical_size is not None:
         ignored.append("physical_size")
