@@ -20,7 +20,15 @@ from ..core.cell import Cell
 from ..core.quantities import cf_unit
 from ..statistics.pressure import PressureDistribution, pressure_bins
 from ..statistics.representativity import epsilon_attrs
-from ..surfaces.synthetic import finite_difference_rms_slope, nonperiodic_moments, spectral_moments
+from ..surfaces.synthetic import (
+    finite_difference_rms_slope,
+    generate_profile,
+    generate_surface,
+    nonperiodic_moments,
+    profile_moments,
+    profile_spectral_moments,
+    spectral_moments,
+)
 from ..theory.full_contact import full_contact_load
 from ..theory.perimeter import PERIMETER_C, perimeter_corrected_area
 
@@ -60,9 +68,18 @@ def expand_case(ds: xr.Dataset, k_l: str | None = None, k_s: str | None = None, 
     return out
 
 
+def generated_heights(surface: dict, k_l: str, k_s: str, hurst: str, seed: int) -> np.ndarray:
+    """The heights a generated study's ``surface`` block makes for one case: ``(N, N)``, or ``(N,)`` for a
+    profile (``surface.dimension: 1``, :func:`roughcontact.surfaces.synthetic.generate_profile`)."""
+    norm = {k: surface[k] for k in ("rms_slope", "rms_height") if k in surface}
+    make = generate_profile if surface.get("dimension", 2) == 1 else generate_surface
+    return make(surface["N"], float(k_l), float(k_s), float(hurst), int(seed), length=surface["L"],
+                plateau=surface["plateau"], **norm)
+
+
 def surface_dataset(heights: np.ndarray, *, k_l: str, k_s: str, hurst: str, seed: int,
                     length: float, normalisation: dict, length_unit: str = "1") -> xr.Dataset:
-    """Dataset of one generated surface.
+    """Dataset of one generated surface (a profile, ``heights`` of shape (n,): :func:`profile_surface_dataset`).
 
     ``heights`` is (n, n) [``length_unit``, the unit of ``length`` too, one of
     :data:`roughcontact.core.quantities.LENGTH_UNITS`; ``"1"``: nondimensional]; ``normalisation``
@@ -71,6 +88,10 @@ def surface_dataset(heights: np.ndarray, *, k_l: str, k_s: str, hurst: str, seed
     (``m0`` [length^2], ``m2`` [1], ``m4`` [length^-2]) and Nayak's alpha. The global
     attribute ``length_units`` is the unit of the attribute ``length``.
     """
+    if heights.ndim == 1:
+        return profile_surface_dataset(heights, length=length, length_unit=length_unit, periodic=True,
+                                       attrs={"normalisation": str(normalisation)}).pipe(
+            expand_case, k_l, k_s, hurst, seed)
     n = heights.shape[0]
     stats = spectral_moments(heights, length)
     x = np.arange(n) * (length / n)
@@ -100,6 +121,42 @@ def surface_dataset(heights: np.ndarray, *, k_l: str, k_s: str, hurst: str, seed
                "normalisation": str(normalisation)},
     )
     return expand_case(ds, k_l, k_s, hurst, seed)
+
+
+def profile_surface_dataset(heights: np.ndarray, *, length: float, length_unit: str, periodic: bool,
+                            attrs: dict) -> xr.Dataset:
+    """Dataset of one profile (a 1-D surface: heights ``(n,)`` over ``x`` [length_unit], period or length ``length``).
+
+    The statistics are the profile's (one slope, h' = sqrt(<(dh/dx)^2>), the h' of loads ``relative_to:
+    rms_slope`` and of kappa): spectral with exact derivatives when ``periodic`` (a generated profile),
+    else forward differences inside the profile (a measured one: its spectrum would count the jump between
+    its ends as roughness). Global attributes: ``length``, ``n``, ``length_units``, ``surface_dimension`` = 1
+    and ``attrs``. No case dimensions (the callers add them).
+    """
+    n = heights.size
+    u_len = cf_unit(length_unit, length_power=1)
+    stats = profile_spectral_moments(heights, length) if periodic else profile_moments(heights, length)
+    how = "from the spectrum (exact derivative)" if periodic else "from forward differences inside the profile"
+    variables = {
+        "heights": (("x",), heights, {"units": u_len, "long_name": "profile height h(x)"}),
+        "rms_height": ((), stats["rms_height"], {"units": u_len, "long_name": "rms height about the mean"}),
+        "rms_slope": ((), stats["rms_slope"], {"units": "1", "long_name": f"rms slope sqrt(<(dh/dx)^2>) {how}"}),
+        "m0": ((), stats["m0"], {"units": cf_unit(length_unit, length_power=2), "long_name": "profile moment m0"}),
+        "m2": ((), stats["m2"], {"units": "1", "long_name": "profile moment m2 = <(dh/dx)^2>"}),
+        "m4": ((), stats["m4"], {"units": cf_unit(length_unit, length_power=-2),
+                                 "long_name": "profile moment m4 = <(d2h/dx2)^2>"}),
+        "alpha": ((), stats["alpha"], {"units": "1", "long_name": "Nayak bandwidth alpha = m0 m4 / m2^2"}),
+    }
+    if periodic:
+        dx = length / n
+        slope = float(np.sqrt(np.mean(((np.roll(heights, -1) - np.roll(heights, 1)) / (2 * dx)) ** 2)))
+        variables["rms_slope_fd"] = ((), slope, {"units": "1",
+                                                 "long_name": "rms slope from periodic central differences"})
+    return xr.Dataset(
+        variables,
+        coords={"x": ("x", np.arange(n) * (length / n), {"units": u_len, "long_name": "position along x"})},
+        attrs={"length": float(length), "length_units": u_len, "n": int(n), "surface_dimension": 1, **attrs},
+    )
 
 
 def representativity_dataset(epsilon: float, heights: np.ndarray, *, n_bins: int, k_l: str | None = None,
@@ -138,18 +195,13 @@ def contact_dataset(result: xr.Dataset, *, rms_slope: float, alpha: float, e_sta
     is dropped: result files must be byte-identical across reruns, so timings go to the
     job's log and Snakemake benchmark file instead. Units: those of ``result`` (the
     ``length_unit``/``pressure_unit`` given to :func:`roughcontact.solver.solve_contact`;
-    ``e_star`` in its ``pressure_units``); what this adds is dimensionless.
+    ``e_star`` in its ``pressure_units``); what this adds is dimensionless. A profile's solve
+    (``surface_dimension`` 1) gets no ``area_fraction_corrected``: Yastrebov et al.'s (2017)
+    perimeter correction is derived for a map's pixel boundaries, not a profile's interval ends.
     """
     ds = result.drop_vars("wall_time", errors="ignore")
-    dx = Cell.from_attrs(result.attrs, (int(result.attrs["nx"]), int(result.attrs["ny"]))).pixel_scale
-    ds["area_fraction_corrected"] = xr.DataArray(
-        perimeter_corrected_area(ds["area_fraction"].values, ds["contact_perimeter"].values, dx),
-        dims=("step",),
-        attrs={"units": "1",
-               # one text for every cell, so that square and rectangular cases aggregate
-               "long_name": f"perimeter-corrected contact area fraction A_pix/A0 - c P dx, c = {PERIMETER_C:.4f}, "
-                            "dx = sqrt(dx dy) the pixel side"},
-    )
+    if result.attrs.get("surface_dimension") != 1:  # the perimeter correction is derived for maps' pixels only
+        _add_corrected_area(ds, Cell.from_attrs(result.attrs, (int(result.attrs["nx"]), int(result.attrs["ny"]))))
     ds["kappa"] = (e_star * rms_slope / ds["mean_contact_pressure"]).assign_attrs(
         units="1", long_name="kappa = E* h' / mean contact pressure")
     ds["rms_slope"] = xr.DataArray(float(rms_slope), attrs={
@@ -158,6 +210,18 @@ def contact_dataset(result: xr.Dataset, *, rms_slope: float, alpha: float, e_sta
         "units": "1", "long_name": "Nayak bandwidth alpha of the surface (profile moments)"})
     ds.attrs["e_star"] = float(e_star)
     return expand_case(ds, k_l, k_s, hurst, seed, topography=topography)
+
+
+def _add_corrected_area(ds: xr.Dataset, cell: Cell) -> None:
+    """``area_fraction_corrected`` of a map's contact (Yastrebov et al. 2017's perimeter correction)."""
+    ds["area_fraction_corrected"] = xr.DataArray(
+        perimeter_corrected_area(ds["area_fraction"].values, ds["contact_perimeter"].values, cell.pixel_scale),
+        dims=("step",),
+        attrs={"units": "1",
+               # one text for every cell, so that square and rectangular cases aggregate
+               "long_name": f"perimeter-corrected contact area fraction A_pix/A0 - c P dx, c = {PERIMETER_C:.4f}, "
+                            "dx = sqrt(dx dy) the pixel side"},
+    )
 
 
 def contact_observers(outputs: dict, scale: float) -> list:
@@ -185,9 +249,15 @@ def measured_surface_dataset(measured, *, name: str) -> xr.Dataset:
     edges as roughness). Global attributes (:meth:`~.core.cell.Cell.surface_attrs`): ``length`` and ``n`` for a square
     cell with square pixels, else ``length_x``, ``length_y``, ``nx`` and ``ny``; ``length_units``
     and ``source`` (the reader's provenance as JSON: file, sha256, reader, units and sizes before
-    conversion, undefined points, detrending, cropping).
+    conversion, undefined points, detrending, cropping). A line scan: :func:`profile_surface_dataset`.
     """
     h, unit = measured.heights, measured.unit
+    if h.ndim == 1:
+        ds = profile_surface_dataset(h, length=measured.lengths[0], length_unit=unit, periodic=False,
+                                     attrs={"source": json.dumps(measured.info, sort_keys=True)})
+        ds["undefined_fraction"] = xr.DataArray(float(measured.info.get("undefined_fraction", 0.0)), attrs={
+            "units": "1", "long_name": "fraction of the file's points not measured (filled before contact)"})
+        return expand_case(ds, topography=name)
     stats = nonperiodic_moments(h, measured.lengths)
     u_len = cf_unit(unit, length_power=1)
     (nx, ny), (lx, ly) = h.shape, measured.lengths
@@ -216,7 +286,8 @@ def measured_surface_dataset(measured, *, name: str) -> xr.Dataset:
 
 
 def surface_heights(ds: xr.Dataset, source):
-    """The ``(nx, ny)`` heights and the solver's ``length`` (L, or (Lx, Ly)) of a surface dataset, checked.
+    """The ``(nx, ny)`` heights and the solver's ``length`` (L, or (Lx, Ly)) of a surface dataset, checked; a
+    profile's (global attribute ``surface_dimension`` 1) ``(n,)`` heights and its length ``L``.
 
     ``source`` names the file in messages. Raises ``ValueError`` when the heights are
     missing, not a 2-D field of at least 4 x 4 points over ``x, y``, or not all
@@ -225,6 +296,8 @@ def surface_heights(ds: xr.Dataset, source):
     if "heights" not in ds:
         raise ValueError(f"{source}: lacks the variable 'heights'")
     da = ds["heights"].squeeze([d for d in (*CASE_DIMS, TOPOGRAPHY_DIM) if d in ds["heights"].dims])
+    if ds.attrs.get("surface_dimension") == 1:
+        return _profile_heights(da, ds.attrs, source)
     if da.dims != ("x", "y") or min(da.shape) < 4:
         raise ValueError(f"{source}: 'heights' must be a 2-D field over (x, y) of at least 4 x 4 points, "
                          f"got dims {da.dims} and shape {da.shape}")
@@ -233,6 +306,23 @@ def surface_heights(ds: xr.Dataset, source):
         raise ValueError(f"{source}: 'heights' holds {int(np.sum(~np.isfinite(heights)))} NaN or infinite "
                          "value(s); every height must be finite")
     return heights, Cell.from_attrs(ds.attrs, heights.shape, source).length
+
+
+def _profile_heights(da: xr.DataArray, attrs, source) -> tuple[np.ndarray, float]:
+    """A profile's heights ``(n,)`` over ``x`` and its length ``L`` (a float), checked as :func:`surface_heights`."""
+    if da.dims != ("x",) or da.size < 4:
+        raise ValueError(f"{source}: 'heights' of a profile (surface_dimension 1) must be a field over (x,) of at "
+                         f"least 4 points, got dims {da.dims} and shape {da.shape}")
+    heights = np.asarray(da.values, dtype=float)
+    if not np.all(np.isfinite(heights)):
+        raise ValueError(f"{source}: 'heights' holds {int(np.sum(~np.isfinite(heights)))} NaN or infinite "
+                         "value(s); every height must be finite")
+    length = attrs.get("length")
+    if isinstance(length, (bool, np.bool_)) or not isinstance(length, (int, float, np.number)) \
+            or not (np.isfinite(length) and length > 0):
+        raise ValueError(f"{source}: the global attribute 'length' (length of the profile) is missing or not a "
+                         f"finite number > 0: {length!r}")
+    return heights, float(length)
 
 
 def representativity_batch(surface: dict, *, k_l: str, k_s: Sequence[str], hurst: str, seeds: int,
@@ -250,16 +340,13 @@ def representativity_batch(surface: dict, *, k_l: str, k_s: Sequence[str], hurst
     ``ds.isel(k_s=[i], seed=[s])``, see :func:`split_cases`.
     """
     from ..statistics.representativity import gaussian_l2_error
-    from ..surfaces.synthetic import generate_surface
 
-    norm = {k: surface[k] for k in ("rms_slope", "rms_height") if k in surface}
     unit = surface.get("unit", "1") if length_unit is None else length_unit
     rows = []
     for ks in k_s:
         parts = []
         for seed in range(seeds):
-            h = generate_surface(surface["N"], float(k_l), float(ks), float(hurst), seed,
-                                 length=surface["L"], plateau=surface["plateau"], **norm)
+            h = generated_heights(surface, k_l, ks, hurst, seed)
             parts.append(representativity_dataset(gaussian_l2_error(h, n_bins), h, n_bins=n_bins, k_l=k_l,
                                                   k_s=ks, hurst=hurst, seed=seed, length_unit=unit))
         rows.append(xr.concat(parts, dim="seed", combine_attrs="override"))
