@@ -20,8 +20,9 @@ def main(log):
     ds = measured_surface_dataset(measured, name=w.topography)
     write_dataset(ds, snakemake.output[0], stage="surface", scene=w.scene, scene_parameters={"topography": s})
     log.info("topography %s from %s: %s", w.topography, s["path"], json.dumps(measured.info, sort_keys=True))
-    log.info("surface %s: %d x %d points, %g x %g %s, rms height %.6g %s, rms slope %.6g, alpha %.4g",
-             snakemake.output[0], ds.sizes["x"], ds.sizes["y"], *measured.lengths, measured.unit,
+    grid = " x ".join(str(ds.sizes[d]) for d in ("x", "y") if d in ds.sizes)  # a line scan has x alone
+    log.info("surface %s: %s points, %s %s, rms height %.6g %s, rms slope %.6g, alpha %.4g", snakemake.output[0],
+             grid, " x ".join(f"{side:g}" for side in measured.lengths), measured.unit,
              float(ds.rms_height.squeeze()), measured.unit, float(ds.rms_slope.squeeze()), float(ds.alpha.squeeze()))
 
 

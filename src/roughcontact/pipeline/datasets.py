@@ -31,6 +31,7 @@ from ..surfaces.synthetic import (
 )
 from ..theory.full_contact import full_contact_load
 from ..theory.perimeter import PERIMETER_C, perimeter_corrected_area
+from ..theory.profiles import full_contact_load_profile
 
 _CASE_COORD_ATTRS = {
     "k_l": {"units": "1", "long_name": "long-wavelength cutoff L/lambda_l"},
@@ -233,8 +234,10 @@ def contact_observers(outputs: dict, scale: float) -> list:
 
 
 def full_contact_variable(heights, length, e_star: float, pressure_units: str) -> xr.DataArray:
-    """``full_contact_pressure``: the exact mean pressure of full contact of the periodic ``heights``."""
-    return xr.DataArray(full_contact_load(heights, e_star, length), attrs={
+    """``full_contact_pressure``: the exact mean pressure of full contact of the periodic ``heights`` (a map, or a
+    profile (n,) of period ``length``: :func:`roughcontact.theory.profiles.full_contact_load_profile`)."""
+    load = full_contact_load_profile if np.ndim(heights) == 1 else full_contact_load
+    return xr.DataArray(load(heights, e_star, length), attrs={
         "units": pressure_units,
         "long_name": "mean pressure at which the periodic surface is in full contact (exact: "
                      "-min (E*/2) F^-1[|q| h_hat])"})

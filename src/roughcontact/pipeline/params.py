@@ -32,8 +32,13 @@ def _pick(block: Mapping, keys) -> dict:
 
 
 def surface(block: Mapping) -> dict:
-    """A surface job (either study): the surface block (N, L, plateau, normalisation)."""
-    return _pick(block["surface"], ("N", "L", "plateau", "rms_slope", "rms_height", "unit"))
+    """A surface job (either study): the surface block (N, L, plateau, normalisation, unit; ``dimension: 1`` for
+    profiles: ``dimension: 2``, the maps every scene made before it existed, is left out, so writing it changes
+    no job's parameters)."""
+    out = _pick(block["surface"], ("N", "L", "plateau", "rms_slope", "rms_height", "unit", "dimension"))
+    if out.get("dimension") == 2:
+        del out["dimension"]
+    return out
 
 
 def representativity(block: Mapping) -> dict:

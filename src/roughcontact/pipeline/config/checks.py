@@ -52,6 +52,8 @@ def check_grid(scene: str, study: str, block: dict) -> None:
             fail(f"examples[{i}]", f"({ex['k_l']}, {ex['k_s']}) is not in the grid's k_l x k_s")
         if float(ex["k_l"]) >= float(ex["k_s"]):
             fail(f"examples[{i}]", f"k_l={ex['k_l']} must be < k_s={ex['k_s']}")
+    if block["surface"].get("dimension") == 1 and block.get("examples"):
+        fail("examples", "draws maps of surfaces, and surface.dimension: 1 makes profiles; remove examples")
     if study == "contact" and block["seeds"] < 2:
         fail("seeds", f"{block['seeds']} is too few: the contact study's CEL fit resamples seeds and needs "
                       "at least 2")
@@ -69,6 +71,8 @@ def check_contact(scene: str, block: dict) -> None:
     for name in block["effects"]:  # each effect's own cross-field rules (schema-checked names)
         EFFECTS[name].check_config(block, functools.partial(_fail_effect, fail, name))
     _check_outputs(fail, block)
+    if block.get("surface", {}).get("dimension") == 1:
+        check_profile_contact(scene, block, "surface.dimension: 1 makes profiles")
     backend = block["solver"].get("array_backend", "numpy")
     if backend != "numpy" and block["effects"]:
         fail("solver.array_backend", f"{backend!r} runs the elastic solver only, not the effects "
@@ -79,8 +83,10 @@ def check_contact(scene: str, block: dict) -> None:
     _check_hardness_relative(fail, block)
     if "target_area" in load:
         _check_target_area(fail, load)
-        if "surface" in block:  # the generator's N x N grid
-            check_target_nodes(scene, load, block["surface"]["N"] ** 2, f"the N = {block['surface']['N']} grid")
+        if "surface" in block:  # the generator's N x N grid, or N points of a profile
+            n = block["surface"]["N"]
+            profile = block["surface"].get("dimension") == 1
+            check_target_nodes(scene, load, n if profile else n**2, f"the N = {n} {'profile' if profile else 'grid'}")
         return
     if "p_min" in load and not load["p_min"] < load["p_max"]:
         fail("load.p_min", f"{load['p_min']:g} must be < load.p_max = {load['p_max']:g}")
@@ -132,6 +138,22 @@ def check_batch(scene: str, block: dict, source: str | None) -> None:
         fail("outputs.clusters", "needs each step's contact mask, which a batch does not keep")
     if "pressure_distribution" in outputs:
         fail("outputs.pressure_distribution", "needs each step's pressure field, which a batch does not keep")
+
+
+def check_profile_contact(scene: str, block: Mapping, why: str) -> None:
+    """What the 1-D (plane-strain) solver and the profiles' outputs cannot do, refused naming the key (``why``: what
+    makes the scene's cases profiles): contact clusters (the labelling of a map's 4-connected nodes), adhesion and
+    batches (refused by the 1-D solver)."""
+    def fail(field, msg):
+        raise ConfigError(f"scene {scene!r}, field 'contact.{field}': {msg} ({why}); remove it")
+
+    if block["outputs"].get("clusters"):
+        fail("outputs.clusters", "labels a map's contact clusters; a profile's contact spots are intervals, counted by "
+                                 "contact_perimeter (interval ends per length)")
+    if "adhesion" in block["effects"]:
+        fail("effects.adhesion", "the gap iteration of adhesive contact solves maps only")
+    if block["solver"].get("batch", 1) != 1:
+        fail("solver.batch", "a batch of surfaces solves maps only")
 
 
 def _check_outputs(fail, block: dict) -> None:

@@ -80,14 +80,18 @@ class Generated(Source):
         parts = []
         if "representativity" in scene:
             rep = scene["representativity"]
-            parts.append(f"{len(cases(rep))} representativity surfaces at N={rep['surface']['N']} "
-                         f"in {len(batches(rep))} jobs")
+            parts.append(f"{len(cases(rep))} representativity surfaces at {_grid(rep)} in {len(batches(rep))} jobs")
         if "contact" in scene:
             con = scene["contact"]
             n_cases, n_steps = len(cases(con)), con["load"]["n_steps"]
-            parts.append(f"{n_cases} contact cases x {n_steps} load steps = {n_cases * n_steps} solves at "
-                         f"N={con['surface']['N']}")
+            parts.append(f"{n_cases} contact cases x {n_steps} load steps = {n_cases * n_steps} solves at {_grid(con)}")
             if batch_size(con) > 1:
                 parts[-1] += (f", in {len(contact_batches(con))} batches of up to {batch_size(con)} cases "
                               "(contact.solver.batch)")
         return parts
+
+
+def _grid(block: Mapping) -> str:
+    """A study's grid in the plan's words: ``N=1024`` (maps), ``profiles of N=4096 points`` (surface.dimension 1)."""
+    n = block["surface"]["N"]
+    return f"profiles of N={n} points" if block["surface"].get("dimension") == 1 else f"N={n}"

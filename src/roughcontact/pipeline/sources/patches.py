@@ -18,6 +18,7 @@ measured file's settings, which omit it (files made before the registry record t
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 import numpy as np
@@ -26,7 +27,7 @@ from ...analysis.aggregate import TOPOGRAPHY_DIM, add_derived, combine_topograph
 from ...analysis.aggregate.combine import GRID_RTOL
 from ...solver.effects import Adhesion
 from ...surfaces.synthetic import nonperiodic_moments
-from ..config.checks import check_target_nodes
+from ..config.checks import check_profile_contact, check_target_nodes
 from ..config.files import ConfigError
 from ..measured import MeasuredConfigError, drop_generator_keys
 from .base import Source
@@ -62,10 +63,27 @@ class PatchSource(Source):
     @classmethod
     def check_contact_files(cls, name: str, scene: Mapping) -> None:
         """What the files allow the validated contact block, before any job (the scene that runs): see
-        :meth:`_check_shapes`, :meth:`_check_hardness` and :meth:`_check_adhesive_zone`."""
+        :meth:`_check_profiles`, :meth:`_check_shapes`, :meth:`_check_hardness` and :meth:`_check_adhesive_zone`."""
+        cls._check_profiles(name, scene)
         cls._check_shapes(name, scene)
         cls._check_hardness(name, scene)
         cls._check_adhesive_zone(name, scene)
+
+    @classmethod
+    def _check_profiles(cls, name: str, scene: Mapping) -> None:
+        """Line scans (profiles, solved in plane strain) and maps are not mixed in one scene (the fit pools every
+        case as one surface type, and a profile's contact length fraction is not a map's area fraction); a scene
+        of line scans asks nothing the 1-D solver cannot do (:func:`~..config.checks.check_profile_contact`)."""
+        grids = cls.grids(name, scene)
+        lines = sorted(case for case, (shape, _) in grids.items() if len(shape) == 1)
+        if not lines:
+            return
+        maps = sorted(set(grids) - set(lines))
+        if maps:
+            raise ConfigError(f"scene {name!r}, field '{cls.key}.files': mixes line scans ({', '.join(lines)}) and "
+                              f"maps ({', '.join(maps)}); a profile's contact (plane strain, a length fraction) and a "
+                              "map's are fitted apart: put the line scans in a scene of their own")
+        check_profile_contact(name, scene["contact"], f"{cls.what}s {', '.join(lines)} are line scans")
 
     @classmethod
     def _check_adhesive_zone(cls, name: str, scene: Mapping) -> None:
@@ -89,14 +107,15 @@ class PatchSource(Source):
         if not (contact["outputs"]["fields"] or "target_area" in contact["load"]):
             return
         grids = cls.grids(name, scene)
-        for case, ((nx, ny), _) in grids.items():
-            check_target_nodes(name, contact["load"], nx * ny, f"{cls.what} {case!r} ({nx} x {ny})")
+        for case, (shape, _) in grids.items():
+            check_target_nodes(name, contact["load"], math.prod(shape),
+                               f"{cls.what} {case!r} ({' x '.join(str(n) for n in shape)})")
         shape, pixel = next(iter(grids.values()))
         for other_shape, other_pixel in grids.values():
             if contact["outputs"]["fields"] and (other_shape != shape or not np.allclose(
                     other_pixel, pixel, rtol=GRID_RTOL, atol=0.0)):
-                listed = ", ".join(f"{c} {nx} x {ny} points of {dx:.6g} x {dy:.6g}"
-                                   for c, ((nx, ny), (dx, dy)) in grids.items())
+                listed = ", ".join(f"{c} {' x '.join(str(n) for n in shape)} points of "
+                                   f"{' x '.join(f'{d:.6g}' for d in pixel)}" for c, (shape, pixel) in grids.items())
                 raise ConfigError(f"scene {name!r}, field 'contact.outputs.fields': the {cls.what}s' grids differ "
                                   f"({listed}), and the aggregate stacks every file's pressure and gap fields on one "
                                   "grid: remove outputs.fields, or give files of one grid (a scene each)")
@@ -114,7 +133,7 @@ class PatchSource(Source):
                 surface = cls.read(cls.reader_settings(scene, case))
             except ValueError as err:
                 raise ConfigError(f"scene {name!r}, field '{cls.key}.files.{case}': {err}") from None
-            slope = nonperiodic_moments(surface.heights, surface.lengths)["rms_slope"]
+            slope = nonperiodic_moments(surface.heights, surface.length)["rms_slope"]
             if not hardness > load["p_max"] * slope:
                 raise ConfigError(
                     f"scene {name!r}, field 'contact.effects.plasticity.hardness': {hardness:g} must exceed every "
