@@ -320,12 +320,15 @@ def _profile_heights(da: xr.DataArray, attrs, source) -> tuple[np.ndarray, float
     if not np.all(np.isfinite(heights)):
         raise ValueError(f"{source}: 'heights' holds {int(np.sum(~np.isfinite(heights)))} NaN or infinite "
                          "value(s); every height must be finite")
-    length = attrs.get("length")
-    if isinstance(length, (bool, np.bool_)) or not isinstance(length, (int, float, np.number)) \
-            or not (np.isfinite(length) and length > 0):
+    value = attrs.get("length")
+    try:  # as Cell.from_attrs reads a map's sides
+        length = float(value)
+    except (TypeError, ValueError):
+        length = float("nan")
+    if not (np.isfinite(length) and length > 0):
         raise ValueError(f"{source}: the global attribute 'length' (length of the profile) is missing or not a "
-                         f"finite number > 0: {length!r}")
-    return heights, float(length)
+                         f"finite number > 0: {value!r}")
+    return heights, length
 
 
 def representativity_batch(surface: dict, *, k_l: str, k_s: Sequence[str], hurst: str, seeds: int,
