@@ -19,6 +19,10 @@ result must satisfy whatever the surface, so that every test solve exercises it:
   and ``dy = Ly / ny``) are checked the same way, with their attributes (``length_x``,
   ``length_y``, ``nx``, ``ny``), the perimeter's edge lengths (``dy`` across x, ``dx``
   across y) and the quadrature over a ``dx x dy`` pixel (:func:`pixel_integral`);
+- profiles (1-D heights, plane strain) likewise, with their attributes (``length``, ``n``,
+  ``surface_dimension = 1``), the perimeter as interval ends per unit length, and the gap against
+  a plain ``numpy.fft`` 1-D product (periodic) or a direct sum with the strip's influence by
+  quadrature (free: :func:`direct_free_profile_displacement`);
 - on every converged step, the solver's convergence criterion (module docstring of
   :mod:`roughcontact.solver`) recomputed here from the fields, with ``s`` the same
   gap scale (:func:`roughcontact.solver.gap_scale`): ``gap >= -tol * s`` wherever
@@ -186,6 +190,47 @@ def _direct_free_rect(p: np.ndarray, e_star: float, lengths: tuple[float, float]
     return np.einsum("ikjl,kl->ij", pairs, p) * dx / (math.pi * e_star)
 
 
+def independent_profile_displacement(p: np.ndarray, e_star: float, length: float) -> np.ndarray:
+    """Zero-mean plane-strain displacement of a periodic profile, ``2 p(q) / (E* |q|)``, with numpy.fft (1-D)."""
+    n = p.size
+    q = 2 * np.pi * np.abs(np.fft.rfftfreq(n, d=length / n))
+    kern = np.divide(2.0 / e_star, q, out=np.zeros_like(q), where=q > 0)
+    return np.fft.irfft(np.fft.rfft(p) * kern, n)
+
+
+def strip_influence_by_quadrature(n: int, length: float) -> np.ndarray:
+    """``integral ln(L / |x - s|) ds`` over a pixel ``|s| < dx / 2`` at offsets ``x = i dx``, ``i = 0..n-1``.
+
+    Off the pixel, composite Gauss-Legendre (12 points on each of 16 pieces: the integrand is smooth
+    there); on it, the closed form ``dx (ln(2 L / dx) + 1)`` of the singular self-term. Independent of
+    the solver's antiderivative differences (:func:`roughcontact.solver.love.line_influence`).
+    """
+    dx = length / n
+    pts, wts = _composite(0.5 * dx, 16)
+    x = np.arange(n, dtype=float)[:, None] * dx
+    with np.errstate(divide="ignore"):
+        out = np.sum(wts[None, :] * np.log(length / np.abs(x - pts[None, :])), axis=1)
+    out[0] = dx * (math.log(2 * length / dx) + 1)
+    return out
+
+
+def direct_free_profile_displacement(p: np.ndarray, e_star: float, length: float) -> np.ndarray:
+    """Plane-strain displacement of a free profile by direct summation, ``2 / (pi E*)`` times the strip's
+    influence (:func:`strip_influence_by_quadrature`) against every pixel's pressure; datum ``D = L``."""
+    n = p.size
+    c = strip_influence_by_quadrature(n, length)
+    k = np.arange(n)
+    return (c[np.abs(k[:, None] - k[None, :])] @ p) * 2.0 / (math.pi * e_star)
+
+
+def _check_profile_attrs(ds, n: int) -> None:
+    """A profile's global attributes: ``length``, ``n`` and ``surface_dimension = 1``, no y side."""
+    assert ds.attrs["surface_dimension"] == 1 and ds.attrs["n"] == n
+    assert "length_x" not in ds.attrs and "ny" not in ds.attrs
+    if "contact_pressure" in ds:
+        assert ds["contact_pressure"].dims[1:] == ("x",) and "y" not in ds.coords
+
+
 def check_solution(ds, heights, *, tol, e_star=1.0, length=1.0, hardness=None,
                    require_converged=True, area_slack_nodes=0, boundary="periodic"):
     """Assert the solver invariants on ``ds`` (see module docstring).
@@ -199,7 +244,8 @@ def check_solution(ds, heights, *, tol, e_star=1.0, length=1.0, hardness=None,
     h = np.asarray(heights, dtype=float)
     n = h.shape[0]
     n2 = h.size
-    square = is_square_cell(h.shape, length)
+    profile = h.ndim == 1
+    square = profile or is_square_cell(h.shape, length)
     if square and np.ndim(length) == 1:
         length = float(length[0])  # (L, L) on an n x n grid: the square cell, as the solver takes it
     for name in STEP_VARS:
@@ -213,7 +259,9 @@ def check_solution(ds, heights, *, tol, e_star=1.0, length=1.0, hardness=None,
     cell = ("length", "n") if square else ("length_x", "length_y", "nx", "ny")
     for key in ("e_star", *cell, "tol", "max_iter", "fft_backend", "solver"):
         assert key in ds.attrs, f"missing dataset attribute {key}"
-    if square:
+    if profile:
+        _check_profile_attrs(ds, n)
+    elif square:
         assert ds.attrs["n"] == n
     else:
         assert "length" not in ds.attrs and "n" not in ds.attrs
@@ -276,7 +324,11 @@ def check_solution(ds, heights, *, tol, e_star=1.0, length=1.0, hardness=None,
             np.testing.assert_allclose(ds["plastic_load_fraction"].values[i],
                                        hardness * plastic.sum() / (pp * n2), rtol=1e-12)
         # gap = u - h + d with u from an independent path: d is a constant
-        u_ref = (independent_displacement if periodic else direct_free_displacement)(p, e_star, length)
+        if profile:
+            displacement = independent_profile_displacement if periodic else direct_free_profile_displacement
+        else:
+            displacement = independent_displacement if periodic else direct_free_displacement
+        u_ref = displacement(p, e_star, length)
         g_ref = u_ref - h
         offset = g - g_ref
         spread = offset.max() - offset.min()

@@ -1,6 +1,8 @@
 """The cell a surface is sampled on: :class:`Cell` (grid shape, sides, pixel sizes, NetCDF attributes).
 
-A cell is ``nx x ny`` nodes on sides ``Lx x Ly`` [length], axis 0 = x. The solver's ``length``
+A cell is ``nx x ny`` nodes on sides ``Lx x Ly`` [length], axis 0 = x; or a *line* (a profile: ``n``
+points on a length ``L``, plane strain), which the solver holds as the one-row grid ``(n, 1)``
+(:meth:`Cell.profile`; a 2-D grid has at least 4 nodes a side, so a grid of one row is a line). The solver's ``length``
 argument writes a square cell (``nx == ny`` and ``Lx == Ly``) as the float ``L`` and any other as the
 pair ``(Lx, Ly)``; a file's global attributes write a square cell as ``length`` and ``n`` and any
 other as ``length_x``, ``length_y`` (never one side for both), with ``nx`` and ``ny`` always. This
@@ -18,6 +20,9 @@ Examples
 True
 >>> Cell.canonical((64, 64), (2.0, 2.0)) == Cell.of((64, 64), 2.0)  # (L, L) on n x n is the square cell L
 True
+>>> line = Cell.of((512,), 2.0)  # a profile of 512 points on L = 2
+>>> line.line, line.shape, line.length, line.perimeter_per_area(6.0, 0.0)
+(True, (512, 1), 2.0, 3.0)
 """
 
 from __future__ import annotations
@@ -88,11 +93,35 @@ class Cell:
         ``(Lx, Ly)`` [length].
     square : bool
         The cell was given as one side ``L`` (the solver's float ``length``; files' ``length``, ``n``).
+    line : bool
+        A profile of ``n`` points on a length ``L`` (plane strain: the surface is the same along y):
+        ``shape = (n, 1)``, ``sides = (L, L / n)`` (one pixel wide, ``dy = dx``), not ``square``.
     """
 
     shape: tuple[int, int]
     sides: tuple[float, float]
     square: bool
+    line: bool = False
+
+    @classmethod
+    def profile(cls, n: int, length) -> Cell:
+        """The line of ``n`` points on the length ``length`` [length] (a float; a pair is refused).
+
+        Raises
+        ------
+        ValueError
+            Naming ``length``, when it is not one finite real number > 0.
+
+        Examples
+        --------
+        >>> Cell.profile(8, 2.0).pixel
+        (0.25, 0.25)
+        """
+        length = check_length(length)
+        if isinstance(length, tuple):
+            raise ValueError(f"length: a profile (1-D heights of {int(n)} points) has one length L, a finite real "
+                             f"number > 0, got the pair {length!r}")
+        return cls((int(n), 1), (length, length / int(n)), False, True)
 
     @classmethod
     def of(cls, shape, length) -> Cell:
@@ -117,6 +146,8 @@ class Cell:
         >>> Cell.of((8, 8), 2.0).square, Cell.of((8, 8), (2.0, 2.0)).square
         (True, False)
         """
+        if len(shape) == 1 or int(shape[1]) == 1:  # a profile (n,), or its one-row grid (n, 1)
+            return cls.profile(shape[0], length)
         nx, ny = (int(v) for v in shape)
         length = check_length(length)
         if isinstance(length, tuple):
@@ -151,6 +182,8 @@ class Cell:
         """
         cell = cls.of(shape, length)
         (nx, ny), (lx, ly) = cell.shape, cell.sides
+        if cell.line:
+            return cell
         if cell.square and nx != ny:
             raise ValueError(f"length: a single float means a square cell, and {name} must be a square 2-D array "
                              f"(n, n) for it, got shape {(nx, ny)}: for a rectangular cell give length=(Lx, Ly)")
@@ -177,6 +210,11 @@ class Cell:
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{source}: the global attribute {key!r} must be a finite number > 0, got {value!r}")
             values.append(value)
+        if len(shape) == 1 and len(values) == 1:
+            return cls.profile(shape[0], values[0])
+        if len(shape) == 1:
+            raise ValueError(f"{source}: 'heights' is a profile of {shape[0]} points but the file gives the sides "
+                             "'length_x' and 'length_y'; a profile needs the one attribute 'length'")
         if len(values) == 1 and shape[0] != shape[1]:
             raise ValueError(f"{source}: 'heights' is {shape[0]} x {shape[1]} but the file gives one side 'length'; "
                              "a rectangular cell needs the attributes 'length_x' and 'length_y'")
@@ -184,8 +222,8 @@ class Cell:
 
     @property
     def length(self):
-        """The solver's ``length``: the float ``L`` of a square cell, else ``(Lx, Ly)``."""
-        return self.sides[0] if self.square else self.sides
+        """The solver's ``length``: the float ``L`` of a square cell or a line, else ``(Lx, Ly)``."""
+        return self.sides[0] if self.square or self.line else self.sides
 
     @property
     def side_x(self) -> float:
@@ -194,8 +232,9 @@ class Cell:
 
     @property
     def aspect(self) -> float:
-        """``Ly / Lx`` [-]: exactly 1.0 for a square cell, else the y side in units of ``Lx``."""
-        return 1.0 if self.square else self.sides[1] / self.sides[0]
+        """``Ly / Lx`` [-]: exactly 1.0 for a square cell (and a line, whose operator has no y), else the y
+        side in units of ``Lx``."""
+        return 1.0 if self.square or self.line else self.sides[1] / self.sides[0]
 
     @property
     def pixel(self) -> tuple[float, float]:
@@ -222,6 +261,8 @@ class Cell:
         float or numpy.ndarray of float64
             ``(edges_x dy + edges_y dx) / (Lx Ly)``; for a square cell written
             ``(edges_x + edges_y) (L / n) / L**2``, the expression of earlier releases, bit for bit.
+            For a line, the ends of the contact intervals per unit length, ``edges_x / L``
+            (``edges_y`` is 0 on one row).
 
         Examples
         --------
@@ -229,6 +270,8 @@ class Cell:
         0.5
         """
         (nx, ny), (lx, ly) = self.shape, self.sides
+        if self.line:
+            return (edges_x + edges_y) / lx
         if self.square:
             return (edges_x + edges_y) * (lx / nx) / lx**2
         return (edges_x * (ly / ny) + edges_y * (lx / nx)) / (lx * ly)
@@ -246,13 +289,16 @@ class Cell:
         Returns
         -------
         numpy.ndarray of float64, shape of ``fractions``
-            ``fractions * L**2`` for a square cell, else ``pixels * (dx * dy)``.
+            ``fractions * L**2`` for a square cell, ``fractions * L`` (lengths [length]) for a line, else
+            ``pixels * (dx * dy)``.
 
         Examples
         --------
         >>> Cell.of((4, 2), (2.0, 1.0)).areas(np.array([0.25]), np.array([2])).tolist()
         [0.5]
         """
+        if self.line:
+            return fractions * self.sides[0]
         if self.square:
             return fractions * self.sides[0] ** 2
         dx, dy = self.pixel
@@ -261,21 +307,30 @@ class Cell:
     def solver_attrs(self) -> tuple[dict, dict]:
         """The solver's global attributes of the cell, ``(sides, grid)``, each put in its place among them.
 
-        Square: ``({"length": L}, {"n", "nx", "ny"})``; else ``({"length_x", "length_y"}, {"nx", "ny"})``.
+        Square: ``({"length": L}, {"n", "nx", "ny"})``; a line: ``({"length": L}, {"n", "nx",
+        "surface_dimension": 1})``; else ``({"length_x", "length_y"}, {"nx", "ny"})``.
         """
         nx, ny = self.shape
+        if self.line:
+            return {"length": self.sides[0]}, {"n": nx, "nx": nx, "surface_dimension": 1}
         if self.square:
             return {"length": self.sides[0]}, {"n": nx, "nx": nx, "ny": ny}
         return {"length_x": self.sides[0], "length_y": self.sides[1]}, {"nx": nx, "ny": ny}
 
     def surface_attrs(self) -> dict:
-        """A surface file's attributes: ``length`` and ``n`` when square, else the sides, ``nx`` and ``ny``."""
+        """A surface file's attributes: ``length`` and ``n`` when square (and ``surface_dimension = 1`` for a
+        line), else the sides, ``nx`` and ``ny``."""
         sides, grid = self.solver_attrs()
+        if self.line:
+            return {**sides, "n": grid["n"], "surface_dimension": 1}
         return {**sides, "n": grid["n"]} if "n" in grid else {**sides, **grid}
 
 
 def sides_of(attrs) -> tuple[float, float]:
-    """``(Lx, Ly)`` from a file's or a solve's cell attributes (``length`` for both sides of a square cell)."""
+    """``(Lx, Ly)`` from a file's or a solve's cell attributes (``length`` for both sides of a square cell;
+    ``(L, L / n)`` for a line, ``surface_dimension = 1``)."""
+    if int(attrs.get("surface_dimension", 2)) == 1:
+        return float(attrs["length"]), float(attrs["length"]) / int(attrs["n"])
     if "length_x" in attrs:
         return float(attrs["length_x"]), float(attrs["length_y"])
     return attrs["length"], attrs["length"]

@@ -243,7 +243,7 @@ class RealFFT2:
     Parameters
     ----------
     shape : (int, int)
-        Real-space shape ``(n0, n1)``.
+        Real-space shape ``(n0, n1)``; ``(n, 1)`` is a profile's grid (a 1-D transform along axis 0).
     threads : int
         Threads FFTW may use (numpy's pocketfft is single-threaded here).
     backend : {"pyfftw", "numpy"} or None
@@ -261,8 +261,8 @@ class RealFFT2:
     def __init__(self, shape: tuple[int, int], threads: int = 1, backend: str | None = None,
                  dtype=np.float64):
         n0, n1 = (int(s) for s in shape)
-        if n0 < 2 or n1 < 2:
-            raise ValueError(f"FFT shape must be at least 2x2, got {shape}")
+        if n0 < 2 or n1 < 1 or (n1 == 1 and n0 < 4):  # (n, 1): a profile's one-row grid (Cell.profile)
+            raise ValueError(f"FFT shape must be at least 2x2, or (n, 1) with n >= 4 for a profile, got {shape}")
         self.shape = (n0, n1)
         self.spectral_shape = (n0, n1 // 2 + 1)
         self.backend = backend or default_backend()

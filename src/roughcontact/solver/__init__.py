@@ -56,6 +56,16 @@ neighbours along x as ``dy`` long and one between neighbours along y as ``dx``
 long (:func:`contact_perimeter`), and a node's area is ``dx dy`` (cluster areas);
 the output's attributes name the cell as :meth:`roughcontact.core.cell.Cell.solver_attrs` says.
 
+A profile ``h(x)`` (1-D heights of ``n >= 4`` points, a float ``length`` ``L``: what a stylus
+profilometer gives) is the same problem in plane strain, the surface unchanged along y: the same
+kernel with ``q`` along x alone (``|q| = 2 pi |k| / L``), solved by the same code on the one-row
+grid ``(n, 1)`` (:meth:`roughcontact.core.cell.Cell.profile`). With ``boundary="free"`` the influence
+of a pixel is the plane-strain strip ``u(x) = 2 / (pi E*) integral ln(L / |x - s|) ds``
+(:func:`~.love.line_influence`; plane strain fixes ``u`` only up to a constant, absorbed by ``d``),
+padded to ``2n``. ``area_fraction`` is then the contact length fraction and ``contact_perimeter`` the
+ends of the contact intervals per unit length. The plasticity cap works on profiles; adhesion,
+cluster statistics and the GPU backend are maps' only (refused).
+
 Units
 -----
 Internally the solver works in units where ``E* = L = 1`` and lengths are

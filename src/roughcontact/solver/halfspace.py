@@ -1,7 +1,11 @@
 """The elastic half-space: the operator ``K`` from pressure to displacement.
 
 Grids are ``(nx, ny)`` (axis 0 = x, axis 1 = y; an int ``n`` means ``(n, n)``) on a cell of
-sides ``Lx x Ly``, pixels ``dx = Lx / nx`` and ``dy = Ly / ny``. Internally ``E* = Lx = 1``:
+sides ``Lx x Ly``, pixels ``dx = Lx / nx`` and ``dy = Ly / ny``. A grid of one row ``(n, 1)`` is a
+profile (:meth:`roughcontact.core.cell.Cell.profile`): the surface is the same along y (plane
+strain); the periodic operator is then ``2 / (E* |q|)`` with ``|q| = 2 pi |mx| / L`` (the 2-D
+kernel at ``qy = 0``), and the free one convolves with the plane-strain strip
+(:func:`~.love.line_influence`), so one code serves maps and profiles. Internally ``E* = Lx = 1``:
 the operators take the cell's ``aspect`` ``Ly / Lx`` (1 for a square cell), and the physical
 operator is ``Lx / E*`` times the internal one.
 
@@ -207,7 +211,10 @@ class PeriodicHalfSpace:
         self.be = backend or get_backend()
         self.threads = threads
         # the cell of the grid at the patch's spacing, in units of the patch's Lx
-        length = internal_length(aspect) if self.whole else (self.shape[0] / px, aspect * self.shape[1] / py)
+        if self.shape[1] == 1:  # a profile (Cell.profile): plane strain, no y side
+            length = self.shape[0] / px
+        else:
+            length = internal_length(aspect) if self.whole else (self.shape[0] / px, aspect * self.shape[1] / py)
         self.kern = elastic_kernel(self.shape, 1.0, length)
         # the float64 products, in place like the float32 ones
         self.prod64 = SpectralProduct(self.be, self.shape, np.float64, threads)

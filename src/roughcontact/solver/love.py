@@ -102,6 +102,7 @@ def pixel_influence(shape, aspect: float = 1.0) -> np.ndarray:
 def padded_shape(shape) -> tuple[int, int]:
     """The FFT grid of :class:`FreeHalfSpace` for an ``nx x ny`` patch: ``(fast(2 nx), fast(2 ny))``.
 
+    A profile's grid ``(n, 1)`` (:meth:`~roughcontact.core.cell.Cell.profile`) is padded along x only.
     Hockney's construction needs at least ``2n - 1`` points along each axis; ``2n`` is the
     textbook choice, but for a measured map of ``n = 563`` (a prime) FFTW then transforms a
     length with a large prime factor, ~3x slower than the next even 2-3-5 length (1152,
@@ -110,7 +111,10 @@ def padded_shape(shape) -> tuple[int, int]:
     every ``n`` whose ``2n`` is already 5-smooth (powers of two, 150, 480, 640: bit for bit
     as before).
     """
-    return tuple(_even_5_smooth(2 * n) for n in grid(shape))
+    nx, ny = grid(shape)
+    if ny == 1:  # a profile's one-row grid: no y to pad
+        return _even_5_smooth(2 * nx), 1
+    return _even_5_smooth(2 * nx), _even_5_smooth(2 * ny)
 
 
 def preconditioner_shape(shape) -> tuple[int, int]:
@@ -144,6 +148,31 @@ def _even_5_smooth(n: int) -> int:
     return m
 
 
+def line_influence(n: int) -> np.ndarray:
+    """Plane-strain influence ``pi E* u / (2 L)`` of a unit pressure on one pixel of a line, offsets ``0..n``.
+
+    A profile of ``n`` points on a length ``L`` (pixels ``dx = L / n``): a uniform pressure on
+    ``|s| < dx / 2`` (the strip of a line load, the surface the same along y) displaces the surface by
+    ``u(x) = 2 / (pi E*) integral ln(D / |x - s|) ds`` (Johnson 1985, eq. 2.19b, integrated over
+    the pixel; plane strain fixes ``u`` only up to a constant, here the datum ``D = L``). In units of
+    ``L``, ``pi E* u / (2 L) = -[G(t)]`` over ``t = x - dx/2 .. x + dx/2``, ``G(t) = t ln|t| - t``
+    (``G(0) = 0``). The datum ``D = L`` makes the operator positive definite on the patch (the kernel
+    ``ln(D / |x - s|)`` is, on an interval shorter than ``4 D``: its logarithmic capacity is a quarter
+    of its length), as the iterations need; the constant it adds to ``u`` is taken up by the rigid
+    approach, so the gap does not depend on it.
+    """
+    dx = 1.0 / n
+    x = np.arange(n + 1, dtype=np.float64) * dx
+    hi, lo = x + 0.5 * dx, np.abs(x - 0.5 * dx)
+    # G(hi) - G(x - dx/2), G odd: G(-a) = -G(a); x - dx/2 < 0 only at offset 0
+    sign = np.where(x - 0.5 * dx < 0, -1.0, 1.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        g_lo = np.where(lo > 0, lo * np.log(lo) - lo, 0.0) * sign
+    out = -((hi * np.log(hi) - hi) - g_lo)
+    out.setflags(write=False)
+    return out
+
+
 def free_influence(shape, e_star: float = 1.0, length=1.0, padded=None) -> np.ndarray:
     """Influence coefficients of the free half-space on the padded grid (default ``2nx x 2ny``).
 
@@ -173,9 +202,18 @@ def free_influence(shape, e_star: float = 1.0, length=1.0, padded=None) -> np.nd
         difference) with ``F(X, Y) = X ln(Y + r) + Y ln(X + r)``, ``r = sqrt(X^2 + Y^2)``
         (~ ``dx dy / (pi E* r)`` far away). Its cyclic convolution with a pressure
         zero-padded to ``2nx x 2ny`` is, on the ``nx x ny`` corner, the linear convolution
-        (Hockney 1970).
+        (Hockney 1970). A profile's grid ``(n, 1)`` gives shape ``(Mx, 1)``: the plane-strain
+        :func:`line_influence`, ``2 L / (pi E*)`` times it.
     """
     nx, ny = grid(shape)
+    if ny == 1:  # a profile (Cell.profile): the plane-strain strip, padded along x only
+        mx = 2 * nx if padded is None else int(padded[0])
+        if mx < 2 * nx:
+            raise ValueError(f"padded grid {(mx, 1)} is shorter than twice the profile {(nx, 1)}")
+        i = np.arange(mx)
+        di = np.minimum(np.minimum(i, mx - i), nx)
+        side = Cell.of((nx, 1), length).side_x
+        return (line_influence(nx)[di] * (2.0 * side / (math.pi * e_star)))[:, None]
     mx, my = (2 * nx, 2 * ny) if padded is None else (int(v) for v in padded)
     if mx < 2 * nx or my < 2 * ny:
         raise ValueError(f"padded grid {(mx, my)} is smaller than twice the patch {(nx, ny)}")

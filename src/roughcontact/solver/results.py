@@ -40,8 +40,16 @@ SOLVER_DESCRIPTION_FREE = SOLVER_DESCRIPTION.replace(
 ).replace("(|q| E*/2 on the contact set)", "(periodic |q| E*/2 on the contact set, an approximate inverse)")
 
 
-def solver_description(periodic: bool, square: bool = True) -> str:
-    """The ``solver_description`` attribute for the half-space and the cell (square or not)."""
+#: What a profile's ``solver_description`` says first (:func:`solver_description`).
+PROFILE_DESCRIPTION = ("profile (1-D heights, plane strain: the surface is the same along y; u(q) = 2 p(q) / "
+                       "(E* |q|) with q along x; the free half-space convolves with the plane-strain strip "
+                       "2/(pi E*) ln(L/|x - s|) instead of Love's pixel, padded to 2n); ")
+
+
+def solver_description(periodic: bool, square: bool = True, line: bool = False) -> str:
+    """The ``solver_description`` attribute for the half-space and the cell (square, rectangular or a line)."""
+    if line:
+        return PROFILE_DESCRIPTION + solver_description(periodic)
     if periodic:
         return SOLVER_DESCRIPTION
     if square:
@@ -123,9 +131,12 @@ def contact_perimeter(mask: np.ndarray, length=1.0, periodic: bool = True) -> fl
     outside the patch, so that the outer edge of a contact node on the patch's border
     counts too.
 
+    A profile (``mask`` of shape ``(n,)`` or ``(n, 1)``, a float ``length``) counts the ends of its
+    contact intervals per unit length instead (:meth:`~roughcontact.core.cell.Cell.perimeter_per_area`).
+
     Parameters
     ----------
-    mask : numpy.ndarray of bool, shape (nx, ny)
+    mask : numpy.ndarray of bool, shape (nx, ny), or (n,) for a profile
         Contact set; square ``(n, n)`` when ``length`` is a float.
     length : float or (float, float)
         Side ``L`` of a square cell, or its sides ``(Lx, Ly)`` [length].
@@ -133,6 +144,7 @@ def contact_perimeter(mask: np.ndarray, length=1.0, periodic: bool = True) -> fl
         Whether the cell wraps around (the solver's ``boundary="periodic"``).
     """
     m = np.asarray(mask, dtype=bool)
+    m = m[:, None] if m.ndim == 1 else m
     edges_x, edges_y = _boundary_edges(m, periodic)
     # (L, L) on an n x n grid is the square cell L, as in the solver; the counts are exact in float64
     return Cell.canonical(m.shape, length, "mask").perimeter_per_area(float(edges_x), float(edges_y))
@@ -142,7 +154,7 @@ def _boundary_edges(m: np.ndarray, periodic: bool) -> tuple[int, int]:
     """Edges between contact and non-contact nodes: ``(along x, along y)`` (neighbours on axis 0, axis 1)."""
     if periodic:
         return (np.count_nonzero(m != np.roll(m, 1, axis=0)), np.count_nonzero(m != np.roll(m, 1, axis=1)))
-    padded = np.pad(m, 1)  # no contact outside the patch
+    padded = np.pad(m, ((1, 1), (1, 1) if m.shape[1] > 1 else (0, 0)))  # no contact outside the patch
     return (np.count_nonzero(padded[1:, :] != padded[:-1, :]), np.count_nonzero(padded[:, 1:] != padded[:, :-1]))
 
 
@@ -235,13 +247,18 @@ def _step_meta(p, cols, iters, conv, pressure_units, length_units, inverse_lengt
 
 def _add_fields(data_vars: dict, coords: dict, fields, store_fields, shape, attrs: dict, pressure_units: str,
                 length_units: str) -> None:
-    """Add the stored pressure and gap fields (dims ``step`` or ``field_step``, ``x``, ``y``) in place."""
+    """Add the stored pressure and gap fields (dims ``step`` or ``field_step``, ``x``, ``y``; a profile's
+    ``step`` or ``field_step``, ``x``) in place."""
     fields_p, fields_g, field_steps = fields
     dim = "step" if (isinstance(store_fields, (bool, np.bool_)) and store_fields) else "field_step"
-    dims = (dim, "x", "y")
     xs, ys = _node_positions(shape, attrs)
     coords["x"] = xr.Variable(("x",), xs, {"units": length_units, "long_name": "node position along axis 0"})
-    coords["y"] = xr.Variable(("y",), ys, {"units": length_units, "long_name": "node position along axis 1"})
+    if int(attrs.get("surface_dimension", 2)) == 1:
+        dims = (dim, "x")
+        fields_p, fields_g = [f.reshape(-1) for f in fields_p], [f.reshape(-1) for f in fields_g]
+    else:
+        dims = (dim, "x", "y")
+        coords["y"] = xr.Variable(("y",), ys, {"units": length_units, "long_name": "node position along axis 1"})
     if dim == "field_step":
         coords["field_step"] = xr.Variable(("field_step",), np.array(field_steps),
                                            {"units": FRACTION_UNITS,
@@ -258,6 +275,8 @@ def _node_positions(shape, attrs: dict) -> tuple[np.ndarray, np.ndarray]:
     nx, ny = (shape, shape) if np.ndim(shape) == 0 else shape
     lx, ly = sides_of(attrs)
     xs = np.arange(nx) * (lx / nx)
+    if int(attrs.get("surface_dimension", 2)) == 1:
+        return xs, np.zeros(1)
     if "length_x" not in attrs:  # square cell: the same positions along y
         return xs, xs.copy()
     return xs, np.arange(ny) * (ly / ny)

@@ -31,13 +31,38 @@ def prepare(heights, loads: np.ndarray, name: str, settings: SolverSettings | No
     needs the gap iteration (:class:`~.adhesive.AdhesiveSolver`), anything else the pressure
     iterations (:class:`~.contact.ContactSolver`). ``loads`` (already validated numbers) are
     checked against the effects and float64's range, the error naming the argument ``name``.
+    A profile (1-D ``heights``, :meth:`~roughcontact.core.cell.Cell.profile`) is solved as its one-row
+    grid ``(n, 1)``: the solver's ``shape``.
     """
-    h = validate_heights(heights, square=False)
+    h = validate_heights(heights, square=False, profile=True)
     checked = SolverSettings.from_options(settings, **options).checked(h.shape)
-    kind = AdhesiveSolver if any(e.functional is not None for e in checked.effects) else ContactSolver
+    adhesive = any(e.functional is not None for e in checked.effects)
+    if h.ndim == 1:
+        check_profile(checked, adhesive)
+        h = h[:, None]
+    kind = AdhesiveSolver if adhesive else ContactSolver
     solver = kind(h, checked)
     solver.check_loads(loads, name)
     return solver
+
+
+def check_profile(settings: SolverSettings, adhesive: bool) -> None:
+    """Refuse, for a profile, what the solver does on maps only: an interaction energy (adhesion: its
+    zone's resolution checks and the gap iteration are 2-D) and the CuPy backend (not measured on a
+    one-row grid). The plasticity cap works on profiles.
+
+    A profile is solved as its one-row grid ``(n, 1)`` (:meth:`~roughcontact.core.cell.Cell.profile`):
+    the surface the same along y (plane strain; Johnson 1985, ch. 2), the kernel ``2 / (E* |q|)``
+    along x, periodic or free (the plane-strain strip, :func:`~.love.line_influence`).
+    """
+    if adhesive:
+        names = ", ".join(type(e).__name__ for e in settings.effects if e.functional is not None)
+        raise ValueError(f"effects: {names} acts on maps (2-D heights) only; a profile (1-D heights) takes the "
+                         "elastic solver and the plasticity cap (hardness): remove the adhesion effect, or "
+                         "solve a map")
+    if settings.array_backend != "numpy":
+        raise ValueError(f"array_backend {settings.array_backend!r} solves maps (2-D heights) only; a profile "
+                         "(1-D heights) is solved on the host: set array_backend to 'numpy'")
 
 
 def solve_step(heights, p0: float, settings: SolverSettings | None = None, *, initial_pressure=None,
@@ -46,7 +71,7 @@ def solve_step(heights, p0: float, settings: SolverSettings | None = None, *, in
 
     Parameters
     ----------
-    heights : array_like, shape (n, n) or (nx, ny)
+    heights : array_like, shape (n, n), (nx, ny), or (n,) for a profile
         Rigid surface heights [length]; the highest points touch first; as in
         :func:`solve_contact`.
     p0 : float
@@ -76,16 +101,18 @@ def solve_step(heights, p0: float, settings: SolverSettings | None = None, *, in
     if not (math.isfinite(p0_f) and p0_f > 0):
         raise ValueError(f"p0 must be a finite number > 0, got {p0!r}")
     solver = prepare(heights, np.array([p0_f]), "p0", settings, options)
+    shape = np.shape(heights)  # the user's: (n,) for a profile, whose solver shape is (n, 1)
     init = None
     if initial_pressure is not None:
-        init = validate_heights(initial_pressure, name="initial_pressure", square=False)
-        if init.shape != solver.shape:
-            raise ValueError(f"initial_pressure must have shape {solver.shape}, the shape of heights, "
+        init = validate_heights(initial_pressure, name="initial_pressure", square=False, profile=True)
+        if init.shape != shape:
+            raise ValueError(f"initial_pressure must have shape {shape}, the shape of heights, "
                              f"got {init.shape}")
+        init = init.reshape(solver.shape)
     t0 = time.perf_counter()
     st, gap = solver.solve(p0_f, initial=init, keep_gap=True)
     wall = time.perf_counter() - t0
-    return StepResult(p0_f, st.pressure.copy(), gap, st.area, st.mean_gap, st.perimeter,
+    return StepResult(p0_f, st.pressure.reshape(shape).copy(), gap.reshape(shape), st.area, st.mean_gap, st.perimeter,
                       st.iterations, st.residual, st.converged, wall,
                       st.effect_columns.get("plastic_area_fraction"),
                       st.effect_columns.get("plastic_load_fraction"))
@@ -133,10 +160,13 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
 
     Parameters
     ----------
-    heights : array_like, shape (n, n) or (nx, ny); (B, nx, ny): a batch (:func:`~.batch.solve_contact_batch`)
+    heights : array_like, shape (n, n), (nx, ny); (n,) a profile; (B, nx, ny) a batch (``solve_contact_batch``)
         Rigid surface heights [length] on the cell (periodic, or the whole patch for
         ``boundary="free"``), axis 0 = x; the highest points touch first. Any ``nx, ny >= 4``;
-        ``nx != ny`` needs ``length=(Lx, Ly)``.
+        ``nx != ny`` needs ``length=(Lx, Ly)``. A profile (``n >= 4`` points, a float ``length``) is
+        solved in plane strain (:func:`check_profile` says what it takes): ``area_fraction`` is the
+        contact length fraction, ``contact_perimeter`` the contact intervals' ends per unit length,
+        fields ``x`` only, global attribute ``surface_dimension = 1``.
     pressures : sequence of float, shape (n_steps,)
         Applied mean pressures ``p0 > 0`` [pressure, ``e_star``'s unit], ``p0 L / (e_star s)`` in
         :data:`LOAD_RANGE` (``s`` the rms height, ``L`` or ``Lx``), below any cap; increasing is best.
@@ -180,7 +210,7 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
     store = validate_store(store_fields, p.size)
     _check_progress(progress, warm_start)
     solver = prepare(heights, p, "pressures", settings, options)
-    observers = _check_observers(observers)
+    observers = _check_observers(observers, profile=Cell.of(solver.shape, solver.settings.length).line)
     cols, iters, conv, paths, fields = _run_steps(solver, p, store, progress, observers, scaled=warm_start == "scaled")
     return _observed(_dataset(solver, p, cols, iters, conv, paths, fields, store_fields), observers)
 
@@ -219,8 +249,9 @@ def _observed(ds: xr.Dataset, observers) -> xr.Dataset:
     return ds
 
 
-def _check_observers(observers) -> tuple:
-    """``observers`` as a tuple, each with ``observe`` and ``dataset`` (else a ValueError naming it)."""
+def _check_observers(observers, profile: bool = False) -> tuple:
+    """``observers`` as a tuple, each with ``observe`` and ``dataset`` (else a ValueError naming it); for a
+    ``profile``, none that says ``profiles = False`` (a map's statistic)."""
     try:
         observers = tuple(observers)
     except TypeError:
@@ -228,6 +259,9 @@ def _check_observers(observers) -> tuple:
     for ob in observers:
         if not (callable(getattr(ob, "observe", None)) and callable(getattr(ob, "dataset", None))):
             raise ValueError(f"observers: {type(ob).__name__} has no observe(step) and dataset(steps) methods")
+        if profile and not getattr(ob, "profiles", True):
+            raise ValueError(f"observers: {type(ob).__name__} is a map's statistic (2-D heights) and does not apply "
+                             "to a profile (1-D heights): remove it")
     return observers
 
 
@@ -240,7 +274,7 @@ def _dataset(solver: ContactSolver | AdhesiveSolver, p, cols, iters, conv, paths
     if isinstance(solver, AdhesiveSolver):
         name, description = ADHESIVE_SOLVER_NAME, ADHESIVE_SOLVER_DESCRIPTION
     else:
-        name, description = SOLVER_NAME, solver_description(solver.periodic, cell.square)
+        name, description = SOLVER_NAME, solver_description(solver.periodic, cell.square, cell.line)
     attrs = {"e_star": s.e_star, **sides, "tol": s.tol, "max_iter": s.max_iter, "threads": s.threads,
              "fft_backend": solver.backend, **grid, "solver": name, "solver_description": description}
     ds = to_dataset(p, cols, iters, conv, fields, store_fields, solver.shape, attrs, solver.effects, paths=paths,

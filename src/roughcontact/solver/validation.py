@@ -31,12 +31,17 @@ def check_positive(name: str, value) -> float:
     return v
 
 
-def validate_heights(heights, name: str = "heights", square: bool = True) -> np.ndarray:
+#: Fewest points of a profile (1-D heights), as of a map's side.
+MIN_PROFILE_POINTS = 4
+
+
+def validate_heights(heights, name: str = "heights", square: bool = True, profile: bool = False) -> np.ndarray:
     """``heights`` as a C-contiguous float64 array, checked: 2-D, at least 4 x 4, finite.
 
     ``square=True`` asks for a square array ``(n, n)`` (the grid of a float ``length``);
     ``square=False`` accepts any ``(nx, ny)`` with ``nx, ny >= 4`` (a rectangular cell, whose
-    ``length`` is then checked against the shape by :func:`validate_length`).
+    ``length`` is then checked against the shape by :func:`validate_length`); ``profile=True``
+    also accepts a profile, 1-D ``(n,)`` with ``n >= 4`` (:data:`MIN_PROFILE_POINTS`).
     """
     if isinstance(heights, (str, bytes)):
         raise ValueError(f"{name} must be a real numeric array, got the string {heights!r}")
@@ -49,8 +54,17 @@ def validate_heights(heights, name: str = "heights", square: bool = True) -> np.
         if a.dtype.kind == "c":
             raise ValueError(f"{name} must be real, got complex dtype {a.dtype}")
         raise ValueError(f"{name} must be a real numeric array, got dtype {a.dtype}")
+    if profile and a.ndim == 1:
+        if a.size < MIN_PROFILE_POINTS:
+            raise ValueError(f"{name}: a profile (1-D heights) needs at least {MIN_PROFILE_POINTS} points, got "
+                             f"{a.size}")
+        a = np.ascontiguousarray(a, dtype=np.float64)
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"{name} must contain only finite values (found NaN or inf)")
+        return a
     if a.ndim != 2 or (square and a.shape[0] != a.shape[1]):
-        raise ValueError(f"{name} must be a 2-D square array (n, n), or (nx, ny) with length=(Lx, Ly), "
+        line = ", or a 1-D profile (n,)" if profile else ""
+        raise ValueError(f"{name} must be a 2-D square array (n, n), or (nx, ny) with length=(Lx, Ly){line}, "
                          f"got shape {a.shape}")
     if min(a.shape) < 4:
         raise ValueError(f"{name} must be at least 4 x 4 (nx, ny >= 4), got shape {a.shape}")
@@ -74,6 +88,11 @@ def validate_length(length, shape: tuple[int, int], name: str = "heights"):
         grid is returned as the float ``L``, so that it is the same problem bit for bit), else
         the pair ``(Lx, Ly)`` of floats.
     """
+    if len(shape) == 1:  # a profile: one length
+        if isinstance(length, (tuple, list)) or (isinstance(length, np.ndarray) and length.ndim > 0):
+            raise ValueError(f"length: a profile ({name} 1-D, {shape[0]} points) has one length L, a finite real "
+                             f"number > 0; got {length!r}")
+        return check_positive("length", length)
     nx, ny = shape
     if isinstance(length, (tuple, list)) or (isinstance(length, np.ndarray) and length.ndim > 0):
         return _length_pair(length, nx, ny)

@@ -411,6 +411,9 @@ class ClusterObserver:
     """
 
     needs_gap = False
+    #: Clusters are a map's (labelled with 2-D connectivity, wrapping along x and y): a profile's solve
+    #: refuses this observer (:func:`roughcontact.solver.solve_contact`).
+    profiles = False
 
     def __init__(self, length, periodic: bool = True, *, length_unit: str = "1"):
         self.length, self.periodic, self.length_unit = check_length(length), bool(periodic), length_unit
