@@ -1,7 +1,7 @@
 """Profiles through the pipeline (issue 49): surface files, the contact case, its file, the aggregate and the fit.
 
-The solves here are :func:`profile_solves.profile_solve` (a profile as the y-invariant map, the plane-strain
-problem exactly, shaped as the 1-D solver's result), so that what follows the solve is tested on its own.
+The 1-D solver is checked first against the same profile solved as the y-invariant map
+(:func:`profile_solves.profile_solve`, the plane-strain problem exactly), which these tests used before it existed.
 """
 
 from __future__ import annotations
@@ -13,7 +13,6 @@ import xarray as xr
 from cfcheck import own_checks
 from profile_solves import profile_solve
 from roughcontact.analysis import fit
-from roughcontact.pipeline import case as case_module
 from roughcontact.pipeline.case import ContactCase, run_case
 from roughcontact.pipeline.config import ConfigError
 from roughcontact.pipeline.config.checks import check_contact, check_profile_contact
@@ -35,10 +34,16 @@ from roughcontact.theory.profiles import full_contact_load_profile
 SURFACE = {"N": 512, "L": 2.0, "plateau": False, "rms_slope": 0.1, "unit": "um", "dimension": 1}
 
 
-@pytest.fixture
-def profile_solver(monkeypatch):
-    """run_case solving profiles as y-invariant maps (the 1-D solver's contract, :mod:`profile_solves`)."""
-    monkeypatch.setattr(case_module, "solve_contact", profile_solve)
+def test_the_1d_solver_is_the_y_invariant_map():
+    """run_case's solve of a profile equals the same profile as an (n, 4) map invariant along y: A/A0 and the
+    interval ends per length to the last bit here (one iteration path), the mean gap to 1e-9 relative."""
+    h = generate_profile(1024, 4, 64, 0.8, 0, rms_slope=0.1)
+    one = run_case(h, ContactCase(LoadSchedule(8, p_max=1e-2)), length=1.0, rms_slope=0.1)
+    two = profile_solve(h, one.pressure.values)
+    assert one.attrs["surface_dimension"] == 1 and bool(one.converged.all())
+    np.testing.assert_allclose(one.area_fraction, two.area_fraction, rtol=1e-12)
+    np.testing.assert_allclose(one.contact_perimeter, two.contact_perimeter, rtol=1e-12)
+    np.testing.assert_allclose(one.mean_gap, two.mean_gap, rtol=1e-9)
 
 
 def test_generated_profile_surface_file(tmp_path):
@@ -83,7 +88,7 @@ def test_bad_profile_surface_file_named():
         surface_heights(ds, "f.nc")
 
 
-def test_run_case_on_a_profile_loads_relative_to_its_slope(profile_solver):
+def test_run_case_on_a_profile_loads_relative_to_its_slope():
     """Loads p0/(E* h') with h' the profile's rms slope; stiffness and the exact full-contact load of a profile;
     the contact file has kappa and no perimeter-corrected area (derived for maps only)."""
     h = generate_profile(512, 4, 32, 0.8, 0, rms_slope=0.1)
@@ -116,7 +121,7 @@ def _cases():
     return out
 
 
-def test_aggregate_and_fit_of_profiles(profile_solver):
+def test_aggregate_and_fit_of_profiles():
     """The generated source's aggregate indexes profiles by (k_l, k_s, H, seed) and step as maps; the CEL fit
     runs on them and reports each group with its seeds. On these profiles
     (16 points per lambda_s) kappa = (A/A0) / pbar falls from ~4.4 to ~2.5 over the window and the paper
