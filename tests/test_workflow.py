@@ -65,7 +65,7 @@ def _jobs(stdout):
 
 
 @pytest.mark.parametrize("scene", ["demo", pytest.param("paper", marks=pytest.mark.slow), "representative",
-                                   "kappa-gap", "adhesion", "array"])
+                                   "kappa-gap", "adhesion", "array", "lines"])
 def test_dry_run_every_shipped_scene(repo, scene):
     # --forceall: the full job list, whatever a local results/ already holds
     res = run_snakemake(repo, "-n", "--forceall", "--config", f"scene={scene}", timeout=600)
@@ -80,6 +80,9 @@ def test_dry_run_every_shipped_scene(repo, scene):
     if scene == "kappa-gap":
         # every variant's seeds x 3 H, one summary, and nothing of the other studies
         assert jobs["kappa_gap_case"] == 63 and jobs["kappa_gap_summary"] == 1 and "contact" not in jobs
+    if scene == "lines":
+        # profiles (surface.dimension: 1): the generator's rules, one surface per case
+        assert jobs["contact"] == 16 and jobs["surface"] == 16 and jobs["representativity"] == 2
     if scene == "array":
         # two .npy patches: their own surface rule, no generated surfaces
         assert jobs["contact_topography"] == 2 and "surface" not in jobs and "contact" not in jobs
@@ -89,7 +92,8 @@ def test_dry_run_every_shipped_scene(repo, scene):
               "representative": "60 contact cases x 30 load steps = 1800 solves at N=1024",
               "kappa-gap": "the kappa-gap study (63 solves in 9 variants)",
               "adhesion": "4 contact cases x 10 load steps = 40 solves at N=128",
-              "array": "contact of 2 array file(s) x 30 load steps = 60 solves"}[scene]
+              "array": "contact of 2 array file(s) x 30 load steps = 60 solves",
+              "lines": "16 contact cases x 30 load steps = 480 solves at profiles of N=4096 points"}[scene]
     assert f"roughcontact: scene '{scene}' plans" in res.stderr + res.stdout and solves in res.stderr + res.stdout
 
 

@@ -40,7 +40,7 @@ from .load_curves import (
     mean_slope,
     n_outside,
     reference_style,
-    run_summary,
+    title_figure,
     unconverged_handles,
     unconverged_steps,
 )
@@ -104,7 +104,7 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
         if drew_fit:
             handles.append(Line2D([], [], **reference_style("cel_fit"),
                                   label=f"CEL fit ({estimator}), " + lambda_label(cel_kl, "l")))
-        fig.suptitle(run_summary(agg, stats))
+        title_figure(fig, agg, stats)
         legend_below(fig, handles, f"$h' = {hp:.3g}$")
     return fig
 

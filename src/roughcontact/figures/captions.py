@@ -86,10 +86,23 @@ def drawn(fig: Figure) -> list[str]:
     return [gid for gid in REFERENCES if gid in shown]
 
 
+#: The gid of a figure whose cases are profiles (1-D surfaces, plane strain):
+#: :func:`roughcontact.figures.load_curves.title_figure` sets it, :func:`caption` adds :data:`PROFILES_NOTE`.
+PROFILES_GID = "profiles"
+#: What a caption of profiles says of its references (:mod:`roughcontact.theory.profiles`).
+PROFILES_NOTE = (
+    "\nThese cases are profiles (1-D surfaces in plane strain; A/A0 is the contact length fraction, h' the "
+    "profile's rms slope). Persson's curves hold for a profile with its own h'. The BGT limit and the paper's "
+    "contact evolution law and power law are laws of 2-D surfaces, drawn for comparison only: they make no "
+    "prediction for a profile (no constant small-load kappa is known for line contacts: van Dokkum et al. 2018, "
+    "Tribol. Lett. 66, 115), and the asperity models of a 2-D surface's summits are not drawn.\n")
+
+
 def caption(lead: str, fig: Figure) -> str:
     """The caption of ``fig``: its ``lead`` (reStructuredText), then one sentence naming the reference lines
-    it shows (:func:`drawn`), or none when it shows none."""
-    lead = lead.rstrip() + "\n"
+    it shows (:func:`drawn`), or none when it shows none; a figure of profiles (gid :data:`PROFILES_GID`)
+    also :data:`PROFILES_NOTE`."""
+    lead = lead.rstrip() + "\n" + (PROFILES_NOTE if fig.get_gid() == PROFILES_GID else "")
     gids = drawn(fig)
     if not gids:
         return lead

@@ -27,7 +27,7 @@ from .load_curves import (
     fit_constants,
     has_seeds,
     n_outside,
-    run_summary,
+    title_figure,
     unconverged_handles,
     unconverged_steps,
 )
@@ -186,7 +186,7 @@ def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
             ax.set_visible(False)
         handles = family_handles(kl_list, h_list, colour, marker, style)
         handles += _dpbar_handles(per_decade, n_off) + unconverged_handles(n_bad, n_bad_off) + fit_handles
-        fig.suptitle(run_summary(agg, stats))
+        title_figure(fig, agg, stats)
         legend_below(fig, handles, r"bars: $\pm 1$ s.e.m. over seeds, in log space ($y\,e^{\pm s/y}$)")
     return fig
 

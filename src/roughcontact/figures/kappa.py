@@ -36,7 +36,7 @@ from .load_curves import (
     has_seeds,
     n_outside,
     reference_style,
-    run_summary,
+    title_figure,
     unconverged_handles,
     unconverged_steps,
 )
@@ -160,6 +160,6 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
         handles += unconverged_handles(n_bad, n_off)
         if drew_fit:
             handles += _kappa_fit_handles(fit, ks_list, cel_kl, estimator)
-        fig.suptitle(run_summary(agg, stats))
+        title_figure(fig, agg, stats)
         legend_below(fig, handles, "error bars: s.e.m.")
     return fig

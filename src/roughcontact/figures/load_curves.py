@@ -29,7 +29,7 @@ from ..analysis.aggregate.seeds import seed_reduce
 from ..analysis.fit.estimators import at_bound
 from ..theory.laws import KAPPA_BGT
 from ..theory.summits import NAYAK_ALPHA_MIN
-from .captions import REFERENCE_STYLES
+from .captions import PROFILES_GID, REFERENCE_STYLES
 from .style import OKABE_ITO, STYLE, family_styles, lambda_label, new_figure, panel_grid, pick, require
 
 #: Persson's (2001) two curves: one colour, told apart by style (they coincide at small load).
@@ -77,6 +77,21 @@ def fit_constants(fit: xr.Dataset | None, k_l: float, k_s: float, estimator: str
 def has_seeds(stats: xr.Dataset, k_l: float, k_s: float, h: float) -> bool:
     """Whether the ``(k_l, k_s, H)`` family has at least one seed in ``stats`` (the aggregate's seed statistics)."""
     return int(stats["n_seeds"].sel(k_l=k_l, k_s=k_s, H=h)) > 0
+
+
+def is_profiles(agg: xr.Dataset) -> bool:
+    """Whether an aggregate's cases are profiles (1-D surfaces in plane strain: ``surface_dimension`` 1)."""
+    return int(agg.attrs.get("surface_dimension", 2)) == 1
+
+
+def title_figure(fig, agg: xr.Dataset, stats: xr.Dataset) -> None:
+    """The figure's title (:func:`run_summary`); a figure of profiles says so in it and is tagged
+    :data:`~.captions.PROFILES_GID`, so that its caption says which references are 2-D laws."""
+    if is_profiles(agg):
+        fig.set_gid(PROFILES_GID)
+        fig.suptitle("profiles (1-D, plane strain), " + run_summary(agg, stats))
+        return
+    fig.suptitle(run_summary(agg, stats))
 
 
 def e_star_of(agg: xr.Dataset) -> float:
@@ -224,8 +239,11 @@ def asperity_alphas(agg: xr.Dataset) -> list[tuple[float, str, str]]:
     (profile moments).
 
     Families of different bandwidth (k_s / k_l from 2 to 128 gives alpha from ~1.5 to ~30)
-    have no common alpha: their mean would be a curve that describes none of them.
+    have no common alpha: their mean would be a curve that describes none of them. None for profiles
+    (:func:`is_profiles`): the models count a 2-D surface's summits.
     """
+    if is_profiles(agg):  # the asperity models are of a 2-D surface's summits: no prediction for a profile
+        return []
     out = [(PAPER_ALPHA, "0.15", r"$\alpha = 2$ (paper)")]
     if "alpha" in agg:
         present = agg["case_present"] if "case_present" in agg else True

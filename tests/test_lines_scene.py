@@ -1,0 +1,103 @@
+"""Line scans and generated profiles as scenes (issue 49): planning checks, and slow end-to-end runs to the report."""
+
+from __future__ import annotations
+
+import copy
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from caption_check import assert_scene_captions_true
+from cfcheck import assert_cf_clean
+from conftest import copy_workflow, run_snakemake
+from roughcontact.pipeline.config import ConfigError
+from roughcontact.pipeline.scenes import validate_config
+from test_workflow import TINY
+
+LINESCANS = Path(__file__).parent / "data" / "linescans"
+
+
+def _measured(files: dict, **contact) -> dict:
+    """A config with one scene ``m`` of line-scan files (paths relative to the working directory)."""
+    return {"scene": "m", "scenes": {"m": {
+        "topography": {"files": files, "unit": "um", "file_unit": "um", "detrend": "height"},
+        "contact": {"load": {"n_steps": 12}, **contact},
+        "fit": {"window": [0.02, 0.3], "n_boot": 20},
+    }}}
+
+
+def _profiles() -> dict:
+    """TINY's contact study on profiles of 256 points (surface.dimension: 1)."""
+    cfg = copy.deepcopy(TINY)
+    del cfg["scenes"]["tiny"]["representativity"]["examples"]
+    for study in ("representativity", "contact"):
+        cfg["scenes"]["tiny"][study]["surface"].update(N=256, dimension=1)
+    cfg["scenes"]["tiny"]["contact"]["grid"] = {"k_l": ["2"], "k_s": ["32"], "H": ["0.5", "0.8"]}
+    return cfg
+
+
+def test_a_too_short_line_scan_is_refused_at_planning(monkeypatch):
+    monkeypatch.chdir(LINESCANS)
+    with pytest.raises(ConfigError, match=r"scene 'm', field 'topography.files.short': csv-2.csv: the line scan has "
+                                          r"8 points; a profile needs at least 16"):
+        validate_config(_measured({"short": "csv-2.csv", "scan": "nonuniform.asc"}))
+
+
+def test_line_scans_and_maps_are_not_mixed(tmp_path, monkeypatch):
+    np.save(tmp_path / "map.npy", np.random.default_rng(0).standard_normal((16, 16)))
+    shutil.copy(LINESCANS / "nonuniform.asc", tmp_path)
+    monkeypatch.chdir(tmp_path)
+    cfg = _measured({"scan": "nonuniform.asc", "map": {"path": "map.npy", "physical_size": [1.0, 1.0]}})
+    with pytest.raises(ConfigError, match=r"field 'topography.files': mixes line scans \(scan\) and maps \(map\); "
+                                          r".* put the line scans in a scene of their own"):
+        validate_config(cfg)
+
+
+def test_a_line_scan_scene_refuses_clusters(monkeypatch):
+    monkeypatch.chdir(LINESCANS)
+    cfg = _measured({"scan": "nonuniform.asc", "xy": "xy-1.txt"}, outputs={"clusters": True})
+    with pytest.raises(ConfigError, match=r"field 'contact.outputs.clusters': labels a map's contact clusters; .* "
+                                          r"\(topography files scan, xy are line scans\); remove it"):
+        validate_config(cfg)
+
+
+def _assert_ran(wd: Path, scene: str, res) -> Path:
+    """The run succeeded, every load step of every case converged, and the report was built."""
+    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
+    out = wd / "results" / scene
+    contact = sorted((out / "contact").glob("*.nc"))
+    assert contact
+    for path in contact:
+        with xr.open_dataset(path) as ds:
+            assert ds.attrs["surface_dimension"] == 1 and "y" not in ds.dims
+            assert bool(ds.converged.all()), path
+    for name in ("area_load", "kappa"):
+        assert (out / "figures" / f"{name}.png").stat().st_size > 10_000
+        assert "These cases are profiles" in (out / "figures" / f"{name}.caption.rst").read_text()
+    assert (out / "report" / "summary.rst").stat().st_size > 0
+    assert_cf_clean(contact + sorted((out / "surfaces").glob("*.nc")), wd / "cf-tables")
+    return out
+
+
+@pytest.mark.slow
+def test_a_measured_scene_of_line_scans_runs_to_the_report(tmp_path):
+    """SurfaceTopography's two non-uniform line scans (134 and 132 points), resampled and solved in plane strain
+    on the free boundary, every step converged, the fit and the report built."""
+    wd = copy_workflow(tmp_path / "run", _measured({"scan": "nonuniform.asc", "xy": "xy-1.txt"}))
+    for name in ("nonuniform.asc", "xy-1.txt"):
+        shutil.copy(LINESCANS / name, wd / name)
+    out = _assert_ran(wd, "m", run_snakemake(wd, "-j2", "--config", "scene=m"))
+    with xr.open_dataset(out / "surfaces" / "scan.nc") as surface:
+        assert '"resampled"' in surface.attrs["source"] and surface.heights.dims == ("topography", "x")
+    assert (out / "fit" / "cel.nc").exists()
+    assert_scene_captions_true(wd, "m")
+
+
+@pytest.mark.slow
+def test_a_generated_profile_scene_runs_to_the_report(tmp_path):
+    wd = copy_workflow(tmp_path / "run", _profiles())
+    _assert_ran(wd, "tiny", run_snakemake(wd, "-j2", "--config", "scene=tiny"))
+    assert_scene_captions_true(wd, "tiny")
