@@ -30,12 +30,25 @@ def pull_off():
     return report_tables.pull_off_table(agg)
 
 
+def profiles():
+    """Whether the scene's cases are profiles (1-D surfaces): generated with surface.dimension 1, or line scans (the
+    contact aggregate of a patch scene, which this job reads, has surface_dimension 1)."""
+    if snakemake.params.parameters.get("contact", {}).get("surface", {}).get("dimension") == 1:
+        return True
+    contact = snakemake.input.contact
+    if not contact:
+        return False
+    agg = read_dataset(contact[0], stage="aggregate", variables=["pressure"])
+    return int(agg.attrs.get("surface_dimension", 2)) == 1
+
+
 def main(log):
     fit = snakemake.input.fit
     fit_csv = Path(fit[0]).read_text(encoding="utf-8") if fit else None
-    write_text_atomic(snakemake.output.result, report.result_rst(fit_csv, pull_off=pull_off()))
+    lines = profiles()
+    write_text_atomic(snakemake.output.result, report.result_rst(fit_csv, pull_off=pull_off(), profiles=lines))
     text = report.summary_rst(snakemake.wildcards.scene, snakemake.params.parameters, fit_csv=fit_csv,
-                              topographies=topographies())
+                              topographies=topographies(), profiles=lines)
     write_text_atomic(snakemake.output.summary, text)
     log.info("report fragments written: %s, %s", snakemake.output.result, snakemake.output.summary)
 

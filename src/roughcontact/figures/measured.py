@@ -29,12 +29,14 @@ from ..analysis.aggregate.combine import TOPOGRAPHY_DIM as _DIM
 from ..theory.laws import KAPPA_BGT, cel_area, cel_area_limit, cel_kappa
 from . import load_curves
 from .area_load import area_load_theory, area_load_theory_handles
+from .captions import PROFILES_GID
 from .kappa import kappa_theory
 from .load_curves import (
     asperity_alphas,
     asperity_handles,
     constrained_constants,
     e_star_of,
+    is_profiles,
     masked_points,
     n_outside,
     reference_style,
@@ -115,13 +117,27 @@ def _recorded(ds: xr.Dataset) -> dict:
 
 
 def grid_text(sizes: Mapping[str, tuple[int, int]]) -> str:
-    """The grids of the files: ``N = 256``, ``N = 150-480`` when all are square, else the smallest and largest."""
+    """The grids of the files: ``N = 256``, ``N = 150-480`` when all are square, else the smallest and largest;
+    line scans' ``n = 132-134 points`` (shapes ``(n,)``)."""
+    if all(len(shape) == 1 for shape in sizes.values()):
+        lo, hi = min(s[0] for s in sizes.values()), max(s[0] for s in sizes.values())
+        return f"$n = {lo}$ points" if lo == hi else f"$n$ = {lo}-{hi} points"
     shapes = sorted(set(sizes.values()), key=lambda s: (s[0] * s[1], s))
     if all(nx == ny for nx, ny in shapes):
         lo, hi = shapes[0][0], shapes[-1][0]
         return f"$N = {lo}$" if lo == hi else f"$N$ = {lo}-{hi}"
     (ax, ay), (bx, by) = shapes[0], shapes[-1]
     return rf"grid ${ax} \times {ay}$" if len(shapes) == 1 else rf"grids ${ax} \times {ay}$ to ${bx} \times {by}$"
+
+
+def _title(fig, agg: xr.Dataset, sizes) -> None:
+    """The figure's title (:func:`_summary`); line scans' figures are tagged as profiles (their captions say which
+    references are 2-D laws: :data:`~.captions.PROFILES_NOTE`)."""
+    if is_profiles(agg):
+        fig.set_gid(PROFILES_GID)
+        fig.suptitle("profiles (1-D, plane strain), " + _summary(agg, sizes))
+        return
+    fig.suptitle(_summary(agg, sizes))
 
 
 def _summary(agg: xr.Dataset, sizes: Mapping[str, tuple[int, int]] | None) -> str:
@@ -203,6 +219,36 @@ def _cell_label(ds: xr.Dataset, shape: tuple[int, int], utex: str) -> tuple[tupl
     return (length, length), f"$L$ = {length:.3g} {utex}, $N$ = {int(ds.attrs.get('n', shape[0]))}"
 
 
+def _draw_map(fig, ax, ds: xr.Dataset, utex: str, text: list[str]) -> None:
+    """One map panel of :func:`fig_topographies`: the heights to scale, its title (``text``: name, sigma, slope)
+    and a colour bar below."""
+    name, sigma, slope = text
+    h = np.asarray(ds["heights"].transpose(..., "x", "y").values, dtype=float).squeeze()
+    if h.ndim != 2:
+        raise ValueError(f"heights must be a 2-D map, got shape {h.shape}")
+    (lx, ly), cell = _cell_label(ds, h.shape, utex)
+    im = ax.imshow(_block_mean(h, MAP_PIXELS).T, origin="lower", extent=(0, lx, 0, ly), interpolation="nearest")
+    # a rectangle's two sizes fill the line: its sigma goes to the next one
+    lines = [cell, f"{sigma}, {slope}"] if "length_x" in ds.attrs else [f"{cell}, {sigma}", slope]
+    ax.set_title("\n".join([name, *lines]), fontsize=7)
+    ax.set_xlabel(f"$x$ [{utex}]")
+    ax.set_ylabel(f"$y$ [{utex}]")
+    # Below the map: a colour bar at the side would sit under the (wider) title.
+    fig.colorbar(im, ax=ax, location="bottom", shrink=0.8, pad=0.02, aspect=30).set_label(f"height $h$ [{utex}]")
+
+
+def _draw_profile(ax, ds: xr.Dataset, utex: str, text: list[str]) -> None:
+    """One line-scan panel of :func:`fig_topographies`: h(x) [unit] on its uniform grid, its title as a map's."""
+    name, sigma, slope = text
+    h = np.asarray(ds["heights"].values, dtype=float).ravel()
+    length = float(ds.attrs.get("length", h.size))
+    ax.plot(np.arange(h.size) * (length / h.size), h, lw=0.6, color="0.2")
+    ax.set_title("\n".join([name, f"profile: $L$ = {length:.4g} {utex}, $n$ = {h.size}, {sigma}", slope]),
+                 fontsize=7)
+    ax.set_xlabel(f"$x$ [{utex}]")
+    ax.set_ylabel(f"height $h$ [{utex}]")
+
+
 def _scalar(ds: xr.Dataset, name: str) -> float:
     return float(ds[name].values.squeeze()) if name in ds else float("nan")
 
@@ -215,11 +261,11 @@ def fig_topographies(surfaces: Sequence[xr.Dataset]) -> Figure:
     ----------
     surfaces : sequence of xarray.Dataset
         One per topography (``results/{scene}/surfaces/{name}.nc``): ``heights(x, y)``,
-        ``(nx, ny)`` [unit]; ``rms_height``, ``rms_slope`` [1] and ``alpha`` [1] (Nayak
-        bandwidth), each scalar or along a length-1 ``topography`` dim whose label is the
-        name; global attrs ``length`` (side ``L``) [unit] and ``n`` for a square cell, or
-        ``length_x``, ``length_y``, ``nx``, ``ny`` (:meth:`roughcontact.core.cell.Cell.surface_attrs`),
-        and ``length_units``. Each map is drawn to scale.
+        ``(nx, ny)`` [unit] (a line scan's ``heights(x)``, drawn as a profile); ``rms_height``,
+        ``rms_slope`` [1] and ``alpha`` [1] (Nayak bandwidth), each scalar or along a length-1
+        ``topography`` dim whose label is the name; global attrs ``length`` (side ``L``) [unit] and
+        ``n`` for a square cell, or ``length_x``, ``length_y``, ``nx``, ``ny``
+        (:meth:`roughcontact.core.cell.Cell.surface_attrs`), and ``length_units``. Each map is drawn to scale.
 
     Returns
     -------
@@ -240,24 +286,14 @@ def fig_topographies(surfaces: Sequence[xr.Dataset]) -> Figure:
         fig = new_figure(width, nrows * row + 0.3)
         axes = fig.subplots(nrows, ncols, squeeze=False)
         for ax, ds in zip(axes.flat, surfaces, strict=False):
-            h = np.asarray(ds["heights"].transpose(..., "x", "y").values, dtype=float).squeeze()
-            if h.ndim != 2:
-                raise ValueError(f"heights must be a 2-D map, got shape {h.shape}")
             utex = unit_tex(str(ds.attrs.get("length_units", "1")))
-            (lx, ly), cell = _cell_label(ds, h.shape, utex)
             name = str(ds[_DIM].values.ravel()[0]) if _DIM in ds.coords else str(ds.attrs.get("source_file", ""))
-            im = ax.imshow(_block_mean(h, MAP_PIXELS).T, origin="lower", extent=(0, lx, 0, ly),
-                           interpolation="nearest")
             sigma = rf"$\sigma$ = {_scalar(ds, 'rms_height'):.3g} {utex}"
             slope = rf"$h'$ = {_scalar(ds, 'rms_slope'):.3g}, $\alpha$ = {_scalar(ds, 'alpha'):.3g}"
-            # a rectangle's two sizes fill the line: its sigma goes to the next one
-            lines = [cell, f"{sigma}, {slope}"] if "length_x" in ds.attrs else [f"{cell}, {sigma}", slope]
-            ax.set_title("\n".join([name, *lines]), fontsize=7)
-            ax.set_xlabel(f"$x$ [{utex}]")
-            ax.set_ylabel(f"$y$ [{utex}]")
-            # Below the map: a colour bar at the side would sit under the (wider) title.
-            fig.colorbar(im, ax=ax, location="bottom", shrink=0.8, pad=0.02, aspect=30).set_label(
-                f"height $h$ [{utex}]")
+            if "y" in ds["heights"].dims:
+                _draw_map(fig, ax, ds, utex, [name, sigma, slope])
+            else:  # a line scan (profile): its heights along x
+                _draw_profile(ax, ds, utex, [name, sigma, slope])
         for ax in list(axes.flat)[len(surfaces):]:
             ax.set_visible(False)
         n = len(surfaces)
@@ -322,7 +358,7 @@ def fig_measured_area_load(agg: xr.Dataset, fit: xr.Dataset | None = None, *, es
             handles += _draw_area_fit(ax, grid, fit, estimator, consts, constrained, used)
         _area_load_log_axes(ax, grid, ys)
         handles += unconverged_handles(crosses[0].size, n_outside(ax, *crosses), "lines")
-        fig.suptitle(_summary(agg, sizes))
+        _title(fig, agg, sizes)
         legend_below(fig, handles, r"each topography's load over its own $E^* h'$")
     return fig
 
@@ -423,7 +459,7 @@ def fig_measured_kappa(agg: xr.Dataset, fit: xr.Dataset | None = None, *, estima
         handles += unconverged_handles(crosses[0].size, n_outside(ax, *crosses), "lines")
         ax.set_xlabel(r"$A/A_0$ [1]")
         ax.set_ylabel(r"$\kappa = E^* h'/\bar p$ [1]")
-        fig.suptitle(_summary(agg, sizes))
+        _title(fig, agg, sizes)
         legend_below(fig, handles, "")
     return fig
 

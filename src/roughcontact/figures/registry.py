@@ -138,13 +138,13 @@ def _measured_contact_inputs(scene: Mapping) -> dict[str, Paths]:
 
 
 def _grid_sizes(paths: Sequence[str]) -> dict[str, tuple[int, int]]:
-    """Grid ``(nx, ny)`` of each surface file by topography name, from its dimensions alone (a
-    measured height map can be large, and only its size is needed)."""
+    """Grid ``(nx, ny)`` (a line scan's ``(n,)``) of each surface file by topography name, from its dimensions
+    alone (a measured height map can be large, and only its size is needed)."""
     sizes = {}
     for path in paths:
         with xr.open_dataset(path, engine="netcdf4") as ds:
             name = str(ds["topography"].values.ravel()[0]) if "topography" in ds.coords else path
-            sizes[name] = (int(ds.sizes["x"]), int(ds.sizes["y"]))
+            sizes[name] = tuple(int(ds.sizes[d]) for d in ("x", "y") if d in ds.sizes)  # a line scan: (n,)
     return sizes
 
 

@@ -296,14 +296,29 @@ def result_group(rows: Sequence[Mapping[str, str]]) -> list[dict[str, str]]:
     return [r for r in at if r["H_group"] == first["H_group"]]
 
 
-def result_rst(csv_text: str | None, *, pull_off: str | None = None) -> str:
+#: What the report says of a scene of profiles (1-D surfaces, plane strain), after its result and its fit.
+PROFILES_TEXT = ("These cases are profiles (1-D surfaces in plane strain: A/A0 is the contact length fraction, h' "
+                 "the profile's rms slope). The paper's constants, shown for comparison, were fitted to 2-D surfaces "
+                 "and make no prediction for a profile; no constant small-load kappa is known for line contacts "
+                 "(van Dokkum et al. 2018, Tribol. Lett. 66, 115). A constant shown as — is one whose fit failed, "
+                 "often because the law's form does not fit a profile's curve (the fit's log says why).\n")
+
+
+def result_rst(csv_text: str | None, *, pull_off: str | None = None, profiles: bool = False) -> str:
     """The result a reader looks for first, as RST: one paragraph headed **Result**.
 
     With a fit (``csv_text``, cel.csv): the fitted kappa/sqrt(2 pi), mu and beta of :func:`result_group`
     with their 95 % bootstrap intervals (:func:`constant_estimate`) against the paper's values. An
     adhesive scene (``pull_off``, :func:`~roughcontact.studies.report_tables.pull_off_table`) leads with its
-    pull-off table; a scene without a contact study says where its result is.
+    pull-off table; a scene without a contact study says where its result is. With ``profiles`` (the cases
+    are 1-D surfaces) the result is followed by :data:`PROFILES_TEXT`.
     """
+    text = _result_text(csv_text, pull_off)
+    return text + "\n" + PROFILES_TEXT if profiles and csv_text is not None else text
+
+
+def _result_text(csv_text: str | None, pull_off: str | None) -> str:
+    """:func:`result_rst` without the profiles' note."""
     if pull_off is not None:
         return "**Result**: the pull-off pressure of each group of cases.\n\n" + pull_off
     if csv_text is None:
@@ -357,7 +372,7 @@ CEL_MATH = r":math:`A/A_0 = \left(\beta + \left[\kappa p_0/(h' E^*)\right]^{\mu-
 
 
 def summary_rst(scene: str, parameters: Mapping, *, fit_csv: str | None = None,
-                topographies: str | None = None) -> str:
+                topographies: str | None = None, profiles: bool = False) -> str:
     """The report's landing-page fragment shown below the figures: the CEL fit, the scene's tables and
     its parameters (folded).
 
@@ -373,6 +388,8 @@ def summary_rst(scene: str, parameters: Mapping, *, fit_csv: str | None = None,
         an adhesive one: its pull-off is in :func:`result_rst`). Shown as :func:`fit_table`.
     topographies : str, optional
         A measured scene's :func:`~roughcontact.studies.report_tables.topographies_table`, shown after the fit.
+    profiles : bool
+        The cases are profiles (1-D surfaces): the fit is followed by :data:`PROFILES_TEXT`.
     """
     parts = []
     if fit_csv is not None and not list(csv.DictReader(io.StringIO(fit_csv))):
@@ -394,7 +411,7 @@ def summary_rst(scene: str, parameters: Mapping, *, fit_csv: str | None = None,
             "divided by :math:`\\sqrt{2\\pi}`, as the paper gives it. The estimators' own standard errors, which "
             "understate the scatter between surfaces, are in ``cel.csv`` (its panel shows it whole).\n",
             fit_table(fit_csv),
-        ]
+        ] + ([PROFILES_TEXT] if profiles else [])
     if topographies is not None:
         parts += [heading("Topographies"), topographies]
     flat = flatten(parameters)

@@ -26,14 +26,19 @@ def topography_row(name: str, surface, contact=None) -> list[str]:
     ``area_fraction``, ``converged`` over ``step``, attribute ``e_star``) or None without a contact study.
     """
     source = json.loads(surface.attrs.get("source", "{}"))
-    nx, ny = (int(surface.sizes[d]) for d in ("x", "y"))
-    lx, ly = sides_of(surface.attrs)
     unit = surface.attrs.get("length_units", "1")
+    if "y" in surface.sizes:
+        nx, ny = (int(surface.sizes[d]) for d in ("x", "y"))
+        lx, ly = sides_of(surface.attrs)
+        points, size = f"{nx} x {ny}", f"{lx:.4g} x {ly:.4g} {unit}"
+    else:  # a line scan: n points on its length L (resampled where the scan was not uniform)
+        resampled = " (resampled)" if "resampled" in source else ""
+        points, size = f"{int(surface.sizes['x'])}{resampled}", f"{float(surface.attrs['length']):.4g} {unit}"
     # a case's file holds its name as a length-1 dimension: its scalars have that one element
     slope = float(surface["rms_slope"].squeeze())
     undefined = float(surface["undefined_fraction"].squeeze()) if "undefined_fraction" in surface else 0.0
-    row = [f"``{name}``", literal(Path(source.get("file", "?")).name), f"{nx} x {ny}", f"{lx:.4g} x {ly:.4g} {unit}",
-           f"{slope:.3g}", f"{100 * undefined:.1f} %"]
+    row = [f"``{name}``", literal(Path(source.get("file", "?")).name), points, size, f"{slope:.3g}",
+           f"{100 * undefined:.1f} %"]
     if contact is None:
         return row + ["", "", ""]
     p_last = float(contact["pressure"].isel(step=-1)) / (float(contact.attrs["e_star"]) * slope)
