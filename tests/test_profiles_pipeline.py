@@ -84,7 +84,7 @@ def test_bad_profile_surface_file_named():
     with pytest.raises(ValueError, match=r"f.nc: 'heights' holds 1 NaN or infinite value\(s\)"):
         surface_heights(ds, "f.nc")
     ds = xr.Dataset({"heights": (("x",), np.arange(8.0))}, attrs={"surface_dimension": 1})
-    with pytest.raises(ValueError, match=r"f.nc: the global attribute 'length' \(length of the profile\) is missing"):
+    with pytest.raises(ValueError, match=r"f.nc: the global attribute 'length' \(side of the cell\) is missing"):
         surface_heights(ds, "f.nc")
 
 

@@ -299,9 +299,11 @@ def surface_heights(ds: xr.Dataset, source):
     if "heights" not in ds:
         raise ValueError(f"{source}: lacks the variable 'heights'")
     da = ds["heights"].squeeze([d for d in (*CASE_DIMS, TOPOGRAPHY_DIM) if d in ds["heights"].dims])
-    if ds.attrs.get("surface_dimension") == 1:
-        return _profile_heights(da, ds.attrs, source)
-    if da.dims != ("x", "y") or min(da.shape) < 4:
+    if ds.attrs.get("surface_dimension") == 1:  # a profile: (n,) over x (Cell.from_attrs: its one 'length')
+        if da.dims != ("x",) or da.size < 4:
+            raise ValueError(f"{source}: 'heights' of a profile (surface_dimension 1) must be a field over (x,) of "
+                             f"at least 4 points, got dims {da.dims} and shape {da.shape}")
+    elif da.dims != ("x", "y") or min(da.shape) < 4:
         raise ValueError(f"{source}: 'heights' must be a 2-D field over (x, y) of at least 4 x 4 points, "
                          f"got dims {da.dims} and shape {da.shape}")
     heights = np.asarray(da.values, dtype=float)
@@ -309,26 +311,6 @@ def surface_heights(ds: xr.Dataset, source):
         raise ValueError(f"{source}: 'heights' holds {int(np.sum(~np.isfinite(heights)))} NaN or infinite "
                          "value(s); every height must be finite")
     return heights, Cell.from_attrs(ds.attrs, heights.shape, source).length
-
-
-def _profile_heights(da: xr.DataArray, attrs, source) -> tuple[np.ndarray, float]:
-    """A profile's heights ``(n,)`` over ``x`` and its length ``L`` (a float), checked as :func:`surface_heights`."""
-    if da.dims != ("x",) or da.size < 4:
-        raise ValueError(f"{source}: 'heights' of a profile (surface_dimension 1) must be a field over (x,) of at "
-                         f"least 4 points, got dims {da.dims} and shape {da.shape}")
-    heights = np.asarray(da.values, dtype=float)
-    if not np.all(np.isfinite(heights)):
-        raise ValueError(f"{source}: 'heights' holds {int(np.sum(~np.isfinite(heights)))} NaN or infinite "
-                         "value(s); every height must be finite")
-    value = attrs.get("length")
-    try:  # as Cell.from_attrs reads a map's sides
-        length = float(value)
-    except (TypeError, ValueError):
-        length = float("nan")
-    if not (np.isfinite(length) and length > 0):
-        raise ValueError(f"{source}: the global attribute 'length' (length of the profile) is missing or not a "
-                         f"finite number > 0: {value!r}")
-    return heights, length
 
 
 def representativity_batch(surface: dict, *, k_l: str, k_s: Sequence[str], hurst: str, seeds: int,
