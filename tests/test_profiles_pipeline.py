@@ -16,6 +16,7 @@ from roughcontact.analysis import fit
 from roughcontact.pipeline.case import ContactCase, run_case
 from roughcontact.pipeline.config import ConfigError
 from roughcontact.pipeline.config.checks import check_contact, check_profile_contact
+from roughcontact.pipeline.contact_jobs import contact_mem_mb, contact_runtime_min, map_side
 from roughcontact.pipeline.datasets import (
     contact_dataset,
     generated_heights,
@@ -160,3 +161,11 @@ def test_dimension_two_written_out_changes_no_job():
     two = {"surface": {**base["surface"], "dimension": 2}}
     assert surface_params(two) == surface_params(base) and "dimension" not in surface_params(base)
     assert surface_params({"surface": {**base["surface"], "dimension": 1}})["dimension"] == 1
+
+
+def test_profile_jobs_request_a_profiles_resources():
+    """A profile of N points has N nodes, not N^2: its jobs' resource formulas get the side sqrt(N) of the square
+    map with as many nodes (N = 4096: 64), so a contact job asks ~300 MB and 5 min, not 5.4 GB and 5 h."""
+    assert map_side({"N": 4096, "dimension": 1}) == 64 and map_side({"N": 4096}) == 4096
+    assert contact_mem_mb(map_side({"N": 4096, "dimension": 1})) < 310 < 5000 < contact_mem_mb(4096)
+    assert contact_runtime_min(map_side({"N": 4096, "dimension": 1}), 30) == 5

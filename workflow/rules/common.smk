@@ -19,6 +19,7 @@ from roughcontact.pipeline.targets import (
     contact_batch_path,
     contact_mem_mb,
     contact_runtime_min,
+    map_side,
     surface_mem_mb,
     surface_runtime_min,
     topography_path,

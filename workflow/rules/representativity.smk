@@ -17,7 +17,7 @@ rule representativity:
     conda:
         "../../envs/roughcontact.yaml"
     resources:
-        mem_mb=lambda w: surface_mem_mb(SCENES[w.scene]["representativity"]["surface"]["N"]),
+        mem_mb=lambda w: surface_mem_mb(map_side(SCENES[w.scene]["representativity"]["surface"])),
         runtime=lambda w: batch_runtime_min(SCENES[w.scene]["representativity"]),
     params:
         settings=batch_params("representativity", params.representativity),

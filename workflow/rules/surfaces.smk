@@ -17,8 +17,8 @@ rule surface_rep:
     conda:
         "../../envs/roughcontact.yaml"
     resources:
-        mem_mb=lambda w: surface_mem_mb(SCENES[w.scene]["representativity"]["surface"]["N"]),
-        runtime=lambda w: surface_runtime_min(SCENES[w.scene]["representativity"]["surface"]["N"]),
+        mem_mb=lambda w: surface_mem_mb(map_side(SCENES[w.scene]["representativity"]["surface"])),
+        runtime=lambda w: surface_runtime_min(map_side(SCENES[w.scene]["representativity"]["surface"])),
     params:
         surface=case_params("representativity", params.surface),
     script:
@@ -37,8 +37,8 @@ rule surface:
     conda:
         "../../envs/roughcontact.yaml"
     resources:
-        mem_mb=lambda w: surface_mem_mb(SCENES[w.scene]["contact"]["surface"]["N"]),
-        runtime=lambda w: surface_runtime_min(SCENES[w.scene]["contact"]["surface"]["N"]),
+        mem_mb=lambda w: surface_mem_mb(map_side(SCENES[w.scene]["contact"]["surface"])),
+        runtime=lambda w: surface_runtime_min(map_side(SCENES[w.scene]["contact"]["surface"])),
     params:
         surface=case_params("contact", params.surface),
     script:

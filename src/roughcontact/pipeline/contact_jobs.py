@@ -9,18 +9,29 @@ the functions the rules call with a job's wildcards; :class:`roughcontact.pipeli
 
 from __future__ import annotations
 
+import math
+from collections.abc import Mapping
+
 from snakemake.exceptions import WorkflowError
 
 from .cases import CASE_STEM, CONTACT_BATCH_STEM, ContactBatch, batch_index, batch_seeds, batch_size
 
 __all__ = ["COPY_MEM_MB", "COPY_RUNTIME_MIN", "ContactJobs", "contact_batch_mem_mb", "contact_batch_path",
-           "contact_batch_runtime_min", "contact_mem_mb", "contact_runtime_min"]
+           "contact_batch_runtime_min", "contact_mem_mb", "contact_runtime_min", "map_side"]
 
 
 def contact_batch_path(folder: str, ext: str = "nc") -> str:
     """Pattern of one contact batch's file (``contact.solver.batch`` > 1): ``results/{scene}/<folder>/``
     ``kl{k_l}_ks{k_s}_H{H}_b{batch}.<ext>`` (:class:`~.cases.ContactBatch`)."""
     return f"results/{{scene}}/{folder}/{CONTACT_BATCH_STEM}.{ext}"
+
+
+def map_side(surface: Mapping) -> float:
+    """The side N of the square map with as many nodes as a generated study's ``surface`` block makes: ``N``, or
+    ``sqrt(N)`` for profiles of N points (``dimension: 1``), so that the resource formulas (functions of a map's
+    side) hold for both."""
+    n = surface["N"]
+    return math.sqrt(n) if surface.get("dimension") == 1 else n
 
 
 def contact_mem_mb(n: int) -> int:
@@ -109,14 +120,14 @@ class ContactJobs:
     def contact_job_mem_mb(self, w) -> int:
         """Peak memory of one contact case's job [MB]: a solve's (:func:`contact_mem_mb`), or a batched case's copy."""
         block = self.scenes[w.scene]["contact"]
-        return contact_mem_mb(block["surface"]["N"]) if batch_size(block) == 1 else COPY_MEM_MB
+        return contact_mem_mb(map_side(block["surface"])) if batch_size(block) == 1 else COPY_MEM_MB
 
     def contact_job_runtime_min(self, w) -> int:
         """Wall-time request of one contact case's job [min]: a solve's (:func:`contact_runtime_min`), or a copy's."""
         block = self.scenes[w.scene]["contact"]
         if batch_size(block) > 1:
             return COPY_RUNTIME_MIN
-        return contact_runtime_min(block["surface"]["N"], block["load"]["n_steps"])
+        return contact_runtime_min(map_side(block["surface"]), block["load"]["n_steps"])
 
     def batch_job_mem_mb(self, w) -> int:
         """Peak memory of one contact batch job [MB] (:func:`contact_batch_mem_mb` of the scene's N and batch)."""

@@ -28,7 +28,13 @@ from snakemake.exceptions import WorkflowError
 
 from .cases import BATCH_STEM, CASE_STEM, is_adhesive
 from .config import ConfigError, load_schema
-from .contact_jobs import ContactJobs, contact_batch_path, contact_mem_mb, contact_runtime_min  # noqa: F401 (the rules')
+from .contact_jobs import (  # noqa: F401 (the rules' resource formulas)
+    ContactJobs,
+    contact_batch_path,
+    contact_mem_mb,
+    contact_runtime_min,
+    map_side,
+)
 from .scenes import validate_config
 from .sources import SOURCES, PatchSource, source_of
 
@@ -80,7 +86,7 @@ def surface_runtime_min(n: int) -> int:
 
 def batch_runtime_min(block: Mapping) -> int:
     """Wall-time request of a representativity job [min]: ~0.15 s a surface at N=1024, x20 margin."""
-    n, surfaces = block["surface"]["N"], block["seeds"] * len(block["grid"]["k_s"])
+    n, surfaces = map_side(block["surface"]), block["seeds"] * len(block["grid"]["k_s"])
     return max(5, int(0.05 * surfaces * (n / 1024) ** 2))
 
 
