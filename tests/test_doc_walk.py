@@ -98,6 +98,7 @@ SAMPLES = {
                     "array": [{"files": {"a": {"path": "data/array/patch-a.npy", "pixel_size": 1.0}}, "unit": "nm"}]},
     "Shared by both studies": {"surface.N": [64], "surface.L": [2.0], "surface.rms_slope": [0.2],
                                "surface.rms_height": [_rms_height], "surface.plateau": [True],
+                               "surface.dimension": [1, 2],
                                "grid.k_l": [["1", "2"]], "grid.k_s": [["8", "16"]], "grid.H": [["0.3", "0.8"]],
                                "seeds": [3], "keep_surfaces": [False]},
     "`representativity`": {"n_bins": [20], "examples": [[{"k_l": "2", "k_s": "8"}]]},
