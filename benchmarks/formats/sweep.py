@@ -61,9 +61,13 @@ def read_one(path: Path) -> tuple[str, str]:
     except Exception as err:  # what the sweep is for: anything but a TopographyError is a bug
         frame = traceback.extract_tb(err.__traceback__)[-1]
         return "CRASH", f"{type(err).__name__}: {err} (at {Path(frame.filename).name}:{frame.lineno})"
+    undefined = surface.info.get("undefined_fraction", 0.0)
+    if surface.dimension == 1:  # a line scan, read as a profile (issue 49); a non-uniform one resampled
+        how = "non-uniform, resampled" if "resampled" in surface.info else "uniform"
+        return "read", (f"profile of {surface.heights.size} points ({how}), {surface.length:.4g} um, "
+                        f"{100 * undefined:.1f} % undefined, {surface.info['format']}")
     nx, ny = surface.heights.shape
     lx, ly = np.broadcast_to(surface.lengths, 2)
-    undefined = surface.info.get("undefined_fraction", 0.0)
     return "read", f"{nx} x {ny}, {lx:.4g} x {ly:.4g} um, {100 * undefined:.1f} % undefined, {surface.info['format']}"
 
 
@@ -79,10 +83,11 @@ def case_name(file_name: str) -> str:
 
 
 def scene(folder: Path, rows: list[tuple[str, str, str]]) -> dict:
-    """A measured scene (the test-suite's loads: 4 steps to p0/(E* h') = 0.02) with every read file."""
+    """A measured scene (the test-suite's loads: 4 steps to p0/(E* h') = 0.02) with every read map (line scans,
+    read as profiles, cannot share a scene with maps)."""
     files = {case_name(name): {"path": str(folder.resolve() / name), "file_unit": "um",
                                "physical_size": [10.0, 10.0]}
-             for name, outcome, _ in rows if outcome == "read"}
+             for name, outcome, detail in rows if outcome == "read" and not detail.startswith("profile")}
     return {"scene": "formats", "scenes": {"formats": {
         "description": "Every example file of SurfaceTopography's test suite that reads, through every stage.",
         "topography": {"files": files, "unit": "um", "undefined": "harmonic", "detrend": "height"},
@@ -106,7 +111,7 @@ def solve_one(path: Path, p_max: float, steps: int = 30, hardness: float | None 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         surface = read_topography(path, **READ_OPTIONS)
-    slope = nonperiodic_moments(surface.heights, surface.lengths)["rms_slope"]
+    slope = nonperiodic_moments(surface.heights, surface.length)["rms_slope"]
     loads = [p_max * slope * (k + 1) / steps for k in range(steps)]
     cpu = time.process_time()
     cap = {} if hardness is None else {"hardness": hardness * slope}
@@ -114,7 +119,7 @@ def solve_one(path: Path, p_max: float, steps: int = 30, hardness: float | None 
     cpu = time.process_time() - cpu
     converged = int(ds["converged"].sum())
     paths = dict(collections.Counter(SOLVER_PATHS[x] for x in ds["solver_path"].values))
-    return converged == steps, (f"| {path.name} | {surface.heights.shape[0]} x {surface.heights.shape[1]} | "
+    return converged == steps, (f"| {path.name} | {' x '.join(str(n) for n in surface.heights.shape)} | "
                                 f"{converged}/{steps} | {int(ds['iterations'].sum())} | "
                                 f"{', '.join(f'{k} {v}' for k, v in sorted(paths.items()))} | {cpu:.1f} | "
                                 f"{float(ds['area_fraction'][-1]):.4f} |"
@@ -181,8 +186,8 @@ def main(argv=None) -> int:
               f"{args.p_max:g} |{''.join(f' {e} |' for e in extra)}\n|{'---|' * (7 + len(extra))}", flush=True)
         for name, outcome, detail in rows:
             if outcome == "read":
-                nx, ny = map(int, re.match(r"(\d+) x (\d+),", detail).groups())  # read_one's detail
-                nodes = nx * ny
+                grid = re.match(r"(\d+) x (\d+),", detail) or re.match(r"profile of (\d+) points", detail)
+                nodes = np.prod([int(n) for n in grid.groups()])  # read_one's detail: nx x ny, or a profile's n
                 ok, line = solve_one(args.folder / name, args.p_max, hardness=args.hardness,
                                      peer=args.peer > 0 and nodes <= args.peer)
                 line += " - | - | - |" if args.peer > 0 and nodes > args.peer else ""
