@@ -92,7 +92,7 @@ def test_one_map_per_case_and_stored_step_with_the_pressure_only_on_the_contact_
     assert maps[0].images[1].norm.vmax == pytest.approx(top)
     labels = [ax.get_ylabel() for ax in fig.axes if ax not in maps] + [ax.get_xlabel() for ax in fig.axes]
     assert sum("height $h$ [$\\mathrm{\\mu m}$]" in t for t in labels) == len(cases_2d)
-    assert any("contact pressure $p/E^*$ [1]" in t for t in labels)
+    assert any("contact pressure $p/E^*$ [1] (where $p > 0$: the contact patches)" in t for t in labels)
     assert maps[0].get_xlabel() == "$x$ [$\\mathrm{\\mu m}$]"
 
 
@@ -121,6 +121,14 @@ def test_many_stored_steps_and_cases_are_capped():
     assert stored_steps(contact) == [1, 2, 3, 4]
     fig = fig_contact_maps([(surface, contact)] * (MAP_CASES + 2))
     assert len([ax for ax in fig.axes if len(ax.images) == 2]) == MAP_CASES * 4
+
+
+def test_one_stored_step_puts_the_cases_side_by_side_each_named():
+    cases = [_case_2d("2", "0.5", store=[4]), _case_2d("4", "0.8", store=[4])]
+    maps = [ax for ax in fig_contact_maps(cases).axes if len(ax.images) == 2]
+    assert len(maps) == 2 and maps[0].get_position().y0 == pytest.approx(maps[1].get_position().y0)
+    assert "$k_l$ = 2, $k_s$ = 8, $H$ = 0.5\nseed 0, step 4\n$A/A_0$" in maps[0].get_title()
+    assert "$k_l$ = 4" in maps[1].get_title() and maps[1].get_ylabel() == ""
 
 
 def test_bad_cases_are_named(cases_2d):

@@ -34,8 +34,20 @@ import numpy as np
 import xarray as xr
 from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
+from matplotlib.ticker import FuncFormatter, MaxNLocator
 
-from .style import DOUBLE_COLUMN_IN, MAP_PIXELS, OKABE_ITO, STYLE, block_mean, fmt, new_figure, require, unit_tex
+from .style import (
+    DOUBLE_COLUMN_IN,
+    MAP_PIXELS,
+    OKABE_ITO,
+    SINGLE_COLUMN_IN,
+    STYLE,
+    block_mean,
+    fmt,
+    new_figure,
+    require,
+    unit_tex,
+)
 
 #: Most cases (rows) a contact-map figure draws.
 MAP_CASES = 4
@@ -269,29 +281,49 @@ def _pressure_norm(cases, steps) -> Normalize:
 
 
 def _fig_maps(cases, steps) -> Figure:
-    """The 2-D figure of :func:`fig_contact_maps`: one row of maps per case, a height colour bar each."""
-    nrows, ncols = len(cases), len(steps)
+    """The 2-D figure of :func:`fig_contact_maps`: a row of maps per case (its height colour bar at the right),
+    or with one stored step the cases side by side (each its colour bar below), so that the figure stays wide."""
+    across = len(steps) == 1
+    nrows, ncols = (1, len(cases)) if across else (len(cases), len(steps))
     panel = min(2.0, (DOUBLE_COLUMN_IN - 1.2) / ncols)
-    fig = new_figure(min(DOUBLE_COLUMN_IN, ncols * panel + 1.6), nrows * (panel + 0.45) + 0.9)
+    width = min(DOUBLE_COLUMN_IN, max(ncols * panel + 1.6, SINGLE_COLUMN_IN + 1.3))
+    fig = new_figure(width, nrows * (panel + 0.45) + 0.9)
     axes = fig.subplots(nrows, ncols, squeeze=False)
     norm = _pressure_norm(cases, steps)
-    p_img = None
-    for row, (surface, contact) in zip(axes, cases, strict=True):
-        heights, utex = case_values(surface["heights"]), _length_tex(contact)
+    for i, (surface, contact) in enumerate(cases):
+        row, utex = (axes[0, i:i + 1] if across else axes[i]), _length_tex(contact)
         x, y = (np.asarray(contact[d].values, dtype=float) for d in ("x", "y"))
         extent = (0.0, x[-1] + (x[1] - x[0]), 0.0, y[-1] + (y[1] - y[0]))
         e_star = float(contact.attrs.get("e_star", 1.0))
         for j, (ax, k) in enumerate(zip(row, steps, strict=True)):
-            h_img, p_img = draw_map(ax, heights, case_values(contact["contact_pressure"], k) / e_star, extent, norm)
-            ax.set_title(step_title(contact, k).replace(": ", ":\n"), fontsize=7)
+            h_img, p_img = draw_map(ax, case_values(surface["heights"]),
+                                    case_values(contact["contact_pressure"], k) / e_star, extent, norm)
+            ax.set_title(_map_title(contact, k, across), fontsize=6.5 if across else 7)
             ax.set_xlabel(f"$x$ [{utex}]")
-            ax.set_ylabel(f"{case_label(contact)}\n$y$ [{utex}]" if j == 0 else "")
+            if j == 0 and not (across and i):  # side by side, the cells' y axis is labelled once
+                ax.set_ylabel(f"$y$ [{utex}]" if across else f"{case_label(contact)}\n$y$ [{utex}]")
         htex = unit_tex(str(surface["heights"].attrs.get("units", "1")))
-        fig.colorbar(h_img, ax=list(row), location="right", shrink=0.9, aspect=20).set_label(f"height $h$ [{htex}]")
-    fig.colorbar(p_img, ax=axes.ravel().tolist(), location="bottom", shrink=0.6, aspect=40).set_label(
-        r"contact pressure $p/E^*$ [1], drawn where $p > 0$ (the contact patches)")
-    fig.suptitle("Contact maps: heights (grey) and the pressure on the contact patches")
+        bar = fig.colorbar(h_img, ax=list(row), location="bottom" if across else "right", shrink=0.9, aspect=20)
+        bar.set_label(f"height $h$ [{htex}]")
+        # a narrow bar below a map: few short labels (0.0025, not 0.0025 and 0.0000), none overlapping
+        bar.locator = MaxNLocator(3 if across else 5)
+        bar.formatter = FuncFormatter(lambda v, _: f"{v:g}".replace("-", "\N{MINUS SIGN}"))
+        bar.update_ticks()
+    # the pressure's bar spans the figure on the side the heights' bars leave free
+    fig.colorbar(p_img, ax=axes.ravel().tolist(), location="right" if across else "bottom", shrink=0.8,
+                 aspect=25 if across else 40).set_label(
+        r"contact pressure $p/E^*$ [1]" + ("\n" if across else " ") + r"(where $p > 0$: the contact patches)")
+    fig.suptitle("Contact maps: heights (grey), pressure on the contact patches (colour)")
     return fig
+
+
+def _map_title(contact: xr.Dataset, step: int, with_case: bool) -> str:
+    """A map's title: its step, ``A/A0`` and ``p0/E*`` on two lines, under its case's name ``with_case``."""
+    title = step_title(contact, step).replace(": ", ":\n")
+    if not with_case:
+        return title
+    case = case_label(contact).replace(", seed", "\nseed")  # a narrow panel: the seed on the step's line
+    return f"{case}, {title.replace(':' + chr(10), chr(10))}"
 
 
 def _fig_profiles(cases, steps) -> Figure:
