@@ -173,6 +173,14 @@ def test_a_profile_shows_heights_deformed_surface_and_pressure(case_dims):
     assert {t.get_text() for t in fig.legends[0].get_texts()} >= {"rigid flat $z = d$", "in contact ($p > 0$)"}
 
 
+def test_a_profile_written_without_coordinates_draws_over_the_node_numbers():
+    surface, contact = _case_1d(case_dims=False)
+    contact, surface = contact.drop_vars("x"), surface.drop_vars("x")
+    fig = fig_contact_maps([(surface, contact.assign_attrs(length_units="um"))])
+    line = next(ax for ax in fig.axes if len(ax.lines) >= 3).lines[0]
+    np.testing.assert_array_equal(line.get_xdata(), np.arange(64))
+
+
 def test_the_deformed_surface_keeps_the_profile_mean_and_touches_the_flat_where_the_gap_is_zero():
     h = np.array([0.0, 1.0, 3.0, 1.0])
     g = np.array([2.0, 1.0, 0.0, 1.0])

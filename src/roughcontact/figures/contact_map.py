@@ -173,7 +173,8 @@ def case_label(contact: xr.Dataset) -> str:
 
 
 def _length_tex(contact: xr.Dataset) -> str:
-    return unit_tex(str(contact["x"].attrs.get("units", contact.attrs.get("length_units", "1"))))
+    units = contact["x"].attrs.get("units") if "x" in contact.coords else None
+    return unit_tex(str(units or contact.attrs.get("length_units", "1")))
 
 
 # ----------------------------------------------------------------------- drawing
@@ -317,6 +318,15 @@ def _fig_maps(cases, steps) -> Figure:
     return fig
 
 
+def _positions(surface: xr.Dataset, contact: xr.Dataset, n: int) -> np.ndarray:
+    """Node positions along ``x`` [length]: the contact file's ``x``, else the surface file's, else the node
+    numbers (a 1-D file written without coordinates still draws)."""
+    for ds in (contact, surface):
+        if "x" in ds.coords and ds["x"].size == n:
+            return np.asarray(ds["x"].values, dtype=float)
+    return np.arange(n, dtype=float)
+
+
 def _map_title(contact: xr.Dataset, step: int, with_case: bool) -> str:
     """A map's title: its step, ``A/A0`` and ``p0/E*`` on two lines, under its case's name ``with_case``."""
     title = step_title(contact, step).replace(": ", ":\n")
@@ -335,7 +345,7 @@ def _fig_profiles(cases, steps) -> Figure:
     for i, (surface, contact) in enumerate(cases):
         heights, utex = case_values(surface["heights"]), _length_tex(contact)
         htex = unit_tex(str(surface["heights"].attrs.get("units", "1")))
-        x = np.asarray(contact["x"].values, dtype=float)
+        x = _positions(surface, contact, heights.size)
         e_star = float(contact.attrs.get("e_star", 1.0))
         for j, k in enumerate(steps):
             ax_h, ax_p = axes[2 * i, j], axes[2 * i + 1, j]
