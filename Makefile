@@ -39,9 +39,10 @@ dryrun: install
 # Lint runs first (seconds) and stops `make test` when it fails. One pytest worker per core
 # (pytest-xdist): most tests use one core, so a serial run left the second idle (28 min serial
 # on 2 quiet cores on 2026-11-26, over the 30-min CI budget under load). `--dist loadgroup` keeps
-# the tests of the demo run on one worker (tests/conftest.py), so the demo runs once, not per worker.
+# the tests of the demo run on one worker (tests/conftest.py), so the demo runs once, not per worker;
+# `--durations=30` prints the slowest tests, to keep CI under its 30 min.
 test: install-test lint browser
-	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest -n $(JOBS) --dist loadgroup
+	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest -n $(JOBS) --dist loadgroup --durations=30
 
 # tests/test_report.py opens the report in a real browser: Debian's chromium, installed here when
 # missing and possible (root and apt-get). Never fails: without chromium that test skips, saying why.
