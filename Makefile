@@ -38,9 +38,11 @@ dryrun: install
 
 # Lint runs first (seconds) and stops `make test` when it fails. One pytest worker per core
 # (pytest-xdist): most tests use one core, so a serial run left the second idle (28 min serial
-# on 2 quiet cores on 2026-11-26, over the 30-min CI budget under load).
+# on 2 quiet cores on 2026-11-26, over the 30-min CI budget under load). `--dist loadgroup` keeps
+# the tests of the demo run on one worker (tests/conftest.py), so the demo runs once, not per worker;
+# `--durations=30` prints the slowest tests, to keep CI under its 30 min.
 test: install-test lint browser
-	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest -n $(JOBS)
+	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest -n $(JOBS) --dist loadgroup --durations=30
 
 # tests/test_report.py opens the report in a real browser: Debian's chromium, installed here when
 # missing and possible (root and apt-get). Never fails: without chromium that test skips, saying why.
@@ -59,7 +61,7 @@ browser:
 # core): every test not marked slow. Slow tests (real runs of small scenes, dry runs of the
 # paper scene's full DAG, concurrency and bootstrap studies) run in `make test`.
 test-fast: install-test
-	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest -m "not slow" -n $(JOBS)
+	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest -m "not slow" -n $(JOBS) --dist loadgroup
 
 # Checks only, never rewrites: ruff over the Python, snakefmt over the rules (settings in
 # pyproject.toml). Both always run; it fails if either finds something.

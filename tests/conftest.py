@@ -100,6 +100,18 @@ def copy_workflow(dest: Path, config: dict | None = None) -> Path:
     return dest
 
 
+def pytest_collection_modifyitems(config, items):
+    """Every test that uses :func:`demo_run` in one xdist group (``make test`` runs ``--dist loadgroup``).
+
+    A session fixture runs once per worker: spread over two workers, the demo ran twice, each a
+    ``-j2`` Snakemake run on a 2-core machine (~1.5 min quiet, several under load). In one group the
+    tests share one run, one after the other, while the other worker takes the rest of the suite.
+    """
+    for item in items:
+        if "demo_run" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.xdist_group("demo_run"))
+
+
 @pytest.fixture(scope="session")
 def demo_run(tmp_path_factory):
     """A workflow copy where the shipped default scene (demo) has run, as `make run` runs it.

@@ -136,10 +136,13 @@ def test_unknown_top_level_key(shipped_config):
 def test_defaults_filled(shipped_config):
     cfg = _demo(shipped_config)
     del cfg["defaults"]["contact"]["solver"]
-    demo = validate_config(cfg, SCHEMA)["scenes"]["demo"]
+    scenes = validate_config(cfg, SCHEMA)["scenes"]
+    demo = scenes["demo"]
     assert demo["contact"]["solver"] == {"e_star": 1.0, "tol": 1e-8, "max_iter": 10000, "pressure_unit": "1",
                                          "boundary": "periodic"}
-    assert demo["contact"]["outputs"] == {"fields": [], "clusters": False}
+    # the demo stores its last step's fields (its contact map); a scene that names no outputs, none
+    assert demo["contact"]["outputs"] == {"fields": [30], "clusters": False}
+    assert scenes["representative"]["contact"]["outputs"] == {"fields": [], "clusters": False}
 
 
 def test_scene_is_a_delta_over_defaults(shipped_config):

@@ -16,7 +16,8 @@ def test_every_registered_figure_has_a_caption_file():
 
 def test_scene_figures_follow_the_scene_blocks(shipped_config):
     scenes = validate_config(shipped_config, load_schema())["scenes"]
-    assert scene_figures(scenes["demo"]) == ["representativity", "surface_examples", "area_load", "kappa", "dpbar"]
+    assert scene_figures(scenes["demo"]) == ["representativity", "surface_examples", "area_load", "kappa", "dpbar",
+                                             "contact_map"]
     assert scene_figures(scenes["representative"]) == ["area_load", "kappa", "dpbar"]
     assert scene_figures(scenes["accuracy"]) == ["accuracy"]
     cfg = copy.deepcopy(shipped_config)

@@ -36,7 +36,8 @@ PROVIDERS = {
     [
         (lambda s: s["contact"].update(seeds=5), set()),
         (lambda s: s["contact"].setdefault("solver", {}).update(tol=1e-9), {"contact"}),
-        (lambda s: s["contact"].setdefault("load", {}).update(n_steps=10), {"contact"}),
+        # (more steps, not fewer: the demo stores step 30's fields)
+        (lambda s: s["contact"].setdefault("load", {}).update(n_steps=40), {"contact"}),
         (lambda s: s["contact"]["surface"].update(N=512), {"surface"}),
         (lambda s: s["representativity"].update(n_bins=100), {"representativity"}),
         (lambda s: s.setdefault("fit", {}).update(window=[0.02, 0.11]), {"fit"}),

@@ -16,8 +16,9 @@ code: the periodic kernel ``2 / (E* |q|)`` along x, the free one the plane-strai
   unit length, ``a^2 = 4 P' R / (pi E*)``, ``p(x) = 2 P' / (pi a^2) sqrt(a^2 - x^2)``: the contact
   width to one pixel, the peak pressure to 1 % (collocation at the peak is smooth), the pressure to
   3 % of its peak away from the edges.
-- Tamaas ``model_type.basic_1d`` (test-only peer, ``PolonskyKeerRey``): the same discrete problem, so
-  the contact sets agree node for node on rough profiles (A/A0 equal), as for maps.
+- Tamaas ``model_type.basic_1d`` (test-only peer, ``PolonskyKeerRey``; ``KatoSaturated`` with a
+  hardness): the same discrete problem, so the contact sets (and the nodes at the cap) agree node for
+  node on rough profiles (A/A0 equal), as for maps.
 - Every solve passes ``solver_invariants.check_solution`` (complementarity, gap against an
   independent displacement: numpy.fft for periodic, a direct sum with a quadrature of the strip for
   free).
@@ -175,6 +176,24 @@ def test_tamaas_basic_1d_rough_profiles(seed):
         assert traction.mean() == pytest.approx(p0, rel=1e-10)
         nodes.append(np.count_nonzero(traction > 0))
     np.testing.assert_array_equal(np.rint(ds["area_fraction"].values * n), nodes)
+
+
+@pytest.mark.peer
+def test_tamaas_kato_saturated_basic_1d_cap():
+    """With a hardness: A/A0 and the plastic nodes equal Tamaas' KatoSaturated on ``basic_1d`` node for node."""
+    tm = _tamaas()
+    n, hardness = 1024, 0.02
+    h = rough_profile(n, 4, 128, 0.8, 0)
+    loads = [0.002, 0.006]
+    ds = solve_contact(h, loads, tol=1e-10, hardness=hardness)
+    model = tm.ModelFactory.createModel(tm.model_type.basic_1d, [1.0], [n])
+    model.E, model.nu = 1.0, 0.0
+    solver = tm.KatoSaturated(model, h, 1e-12, hardness)
+    for k, p0 in enumerate(loads):
+        solver.solve(p0)
+        traction = np.asarray(model.traction).ravel()
+        assert round(float(ds["area_fraction"][k]) * n) == np.count_nonzero(traction > 0)
+        assert round(float(ds["plastic_area_fraction"][k]) * n) == np.count_nonzero(traction >= hardness * (1 - 1e-12))
 
 
 @pytest.mark.parametrize(("heights", "options", "match"), [

@@ -95,6 +95,8 @@ def test_dry_run_every_shipped_scene(repo, scene):
               "array": "contact of 2 array file(s) x 30 load steps = 60 solves",
               "lines": "16 contact cases x 30 load steps = 480 solves at profiles of N=4096 points"}[scene]
     assert f"roughcontact: scene '{scene}' plans" in res.stderr + res.stdout and solves in res.stderr + res.stdout
+    # the contact map is planned only where the scene stores fields (outputs.fields: of these, the demo)
+    assert (f"output: results/{scene}/figures/contact_map.png" in res.stdout + res.stderr) == (scene == "demo")
 
 
 def test_representativity_only_scene_plans_no_contact(tmp_path):
@@ -299,7 +301,7 @@ def test_demo_scene_produces_every_figure_and_the_fit_table(demo_run):
     # job again (about 1.5 min each on 2 cores).
     wd = demo_run
     out = wd / "results" / "demo"
-    for fig in ("representativity", "surface_examples", "area_load", "kappa", "dpbar"):
+    for fig in ("representativity", "surface_examples", "area_load", "kappa", "dpbar", "contact_map"):
         for ext in ("png", "pdf"):
             assert (out / "figures" / f"{fig}.{ext}").stat().st_size > 1000, fig
     # each caption names exactly the reference lines its figure drew: the demo's families differ in bandwidth,

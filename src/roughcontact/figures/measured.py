@@ -45,9 +45,11 @@ from .load_curves import (
 from .style import (
     DATA_COLOURS,
     DOUBLE_COLUMN_IN,
+    MAP_PIXELS,
     MARKERS,
     SINGLE_COLUMN_IN,
     STYLE,
+    block_mean,
     legend_below,
     new_figure,
     plain_log_labels,
@@ -55,9 +57,6 @@ from .style import (
     unit_tex,
 )
 
-#: Largest side, in pixels, of a height map as drawn: larger maps are block-averaged (the
-#: figure is ~2 in wide per panel, so more pixels only bloat the PDF).
-MAP_PIXELS = 512
 #: Style of the fitted CEL (as in :mod:`roughcontact.figures`: thick translucent grey).
 _FIT_STYLE = reference_style("cel_fit")
 
@@ -198,15 +197,6 @@ def _window_patch(fit: xr.Dataset) -> Patch:
         f"{float(fit.attrs.get('window_high', np.nan)):g}]"))
 
 
-def _block_mean(h: np.ndarray, pixels: int) -> np.ndarray:
-    """``h`` (nx, ny) averaged over ``f x f`` blocks (``f = ceil(max(nx, ny) / pixels)``; ragged edges cropped)."""
-    f = -(-max(h.shape) // pixels)
-    if f <= 1:
-        return h
-    mx, my = h.shape[0] // f, h.shape[1] // f
-    return h[:mx * f, :my * f].reshape(mx, f, my, f).mean(axis=(1, 3))
-
-
 def _cell_label(ds: xr.Dataset, shape: tuple[int, int], utex: str) -> tuple[tuple[float, float], str]:
     """The sides (Lx, Ly) of a surface file's cell and its title text (``L``, ``N`` or both sides)."""
     if "length_x" in ds.attrs:
@@ -227,7 +217,7 @@ def _draw_map(fig, ax, ds: xr.Dataset, utex: str, text: list[str]) -> None:
     if h.ndim != 2:
         raise ValueError(f"heights must be a 2-D map, got shape {h.shape}")
     (lx, ly), cell = _cell_label(ds, h.shape, utex)
-    im = ax.imshow(_block_mean(h, MAP_PIXELS).T, origin="lower", extent=(0, lx, 0, ly), interpolation="nearest")
+    im = ax.imshow(block_mean(h, MAP_PIXELS).T, origin="lower", extent=(0, lx, 0, ly), interpolation="nearest")
     # a rectangle's two sizes fill the line: its sigma goes to the next one
     lines = [cell, f"{sigma}, {slope}"] if "length_x" in ds.attrs else [f"{cell}, {sigma}", slope]
     ax.set_title("\n".join([name, *lines]), fontsize=7)

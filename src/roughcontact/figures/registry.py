@@ -29,6 +29,7 @@ from . import measured as plots_measured
 from .accuracy import fig_accuracy
 from .adhesion import HYSTERESIS_VARIABLES, PULL_OFF_VARIABLES, fig_hysteresis, fig_pull_off
 from .area_load import fig_area_load
+from .contact_map import CONTACT_MAP_VARIABLES, MAP_CASES, fig_contact_maps
 from .dpbar import fig_dpbar
 from .kappa import fig_kappa
 from .representativity import fig_representativity, fig_surface_examples
@@ -190,6 +191,36 @@ def _render_pull_off(paths: Mapping[str, Paths]) -> Figure:
     return fig_pull_off(agg, dims)
 
 
+# ------------------------------------------------------------------ stored fields (outputs.fields)
+def _stores_fields(block: Mapping) -> bool:
+    """Whether a contact block asks for the pressure and gap fields of some steps (``outputs.fields``)."""
+    return bool(block.get("outputs", {}).get("fields"))
+
+
+def _case_files(stems: Sequence[str]) -> dict[str, Paths]:
+    """Each case's surface (its heights) and contact file (its fields), in the same order."""
+    return {"surfaces": [f"surfaces/{s}.nc" for s in stems], "contact": [f"contact/{s}.nc" for s in stems]}
+
+
+def _contact_map_inputs(block: Mapping) -> dict[str, Paths]:
+    """Seed 0 of each ``(k_l, k_s, H)``, at most :data:`~.contact_map.MAP_CASES`: a few cases, one figure."""
+    return _case_files([c.stem for c in grid_cases(block) if c.seed == 0][:MAP_CASES])
+
+
+def _patch_contact_map_inputs(scene: Mapping) -> dict[str, Paths]:
+    return _case_files(sorted(source_of(scene).names(scene))[:MAP_CASES])
+
+
+def _render_contact_maps(paths: Mapping[str, Paths]) -> Figure:
+    return fig_contact_maps([(read_dataset(s, stage="surface", variables=["heights"]),
+                              read_dataset(c, stage="contact", variables=list(CONTACT_MAP_VARIABLES)))
+                             for s, c in zip(paths["surfaces"], paths["contact"], strict=True)])
+
+
+def _patch_scene_stores_fields(scene: Mapping) -> bool:
+    return "contact" in scene and _stores_fields(scene["contact"])
+
+
 def _adhesive_scene(scene: Mapping) -> bool:
     return "contact" in scene and is_adhesive(scene["contact"])
 
@@ -220,6 +251,9 @@ FIGURES: dict[str, FigureSpec] = {
                              wanted=is_adhesive),
     "pull_off": FigureSpec("contact", lambda block: {"agg": "aggregate/contact.nc"}, _render_pull_off, "Adhesion",
                            "pull_off.rst", wanted=is_adhesive),
+    # only where the scene stores fields (outputs.fields): the maps of a few cases at those steps
+    "contact_map": FigureSpec("contact", _contact_map_inputs, _render_contact_maps, "Contact", "contact_map.rst",
+                              wanted=_stores_fields),
     "accuracy": FigureSpec(
         "accuracy", lambda block: {"summary": "accuracy/summary.nc"}, _render_accuracy, "Accuracy", "accuracy.rst"),
     # Patch sources' scenes: every scene has the topography maps; the contact figures need a contact study.
@@ -232,6 +266,9 @@ FIGURES: dict[str, FigureSpec] = {
     "measured_kappa": FigureSpec(
         "contact", _measured_contact_inputs, _measured_contact_figure(plots_measured.fig_measured_kappa),
         "Contact", "measured_kappa.rst", wanted=_elastic_scene, cases="patches"),
+    "measured_contact_map": FigureSpec(
+        "contact", _patch_contact_map_inputs, _render_contact_maps, "Contact", "contact_map.rst",
+        wanted=_patch_scene_stores_fields, cases="patches"),
     "measured_hysteresis": FigureSpec(
         "contact", _patch_hysteresis_inputs, _render_hysteresis, "Adhesion", "hysteresis.rst",
         wanted=_adhesive_scene, cases="patches"),

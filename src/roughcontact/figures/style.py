@@ -70,6 +70,11 @@ STYLE = {
 _PNG_DPI = 300
 
 
+#: Largest side, in pixels, of a map as drawn: larger maps are block-averaged (:func:`block_mean`; a
+#: panel is ~2 in wide, so more pixels only bloat the PDF).
+MAP_PIXELS = 512
+
+
 # ------------------------------------------------------------------------ saving
 def save_figure(fig: Figure, path: str | os.PathLike) -> list[Path]:
     """Write ``fig`` as ``<path>.png`` (300 dpi) and ``<path>.pdf``, byte-reproducibly.
@@ -136,6 +141,15 @@ def require(ds: xr.Dataset, name: str, variables: Sequence[str]) -> None:
     if missing:
         raise ValueError(f"{name} lacks variable(s) {missing}")
 
+
+
+def block_mean(h: np.ndarray, pixels: int) -> np.ndarray:
+    """``h`` (nx, ny) averaged over ``f x f`` blocks (``f = ceil(max(nx, ny) / pixels)``; ragged edges cropped)."""
+    f = -(-max(h.shape) // pixels)
+    if f <= 1:
+        return h
+    mx, my = h.shape[0] // f, h.shape[1] // f
+    return h[:mx * f, :my * f].reshape(mx, f, my, f).mean(axis=(1, 3))
 
 
 def pick(values: np.ndarray, wanted, name: str) -> list[float]:
