@@ -36,6 +36,9 @@ def _profiles() -> dict:
     for study in ("representativity", "contact"):
         cfg["scenes"]["tiny"][study]["surface"].update(N=256, dimension=1)
     cfg["scenes"]["tiny"]["contact"]["grid"] = {"k_l": ["2"], "k_s": ["32"], "H": ["0.5", "0.8"]}
+    # the last step's fields: the contact map draws the profiles (issue 49 item 4)
+    n_steps = cfg["scenes"]["tiny"]["contact"].get("load", {}).get("n_steps", 30)
+    cfg["scenes"]["tiny"]["contact"].setdefault("outputs", {})["fields"] = [n_steps]
     return cfg
 
 
@@ -103,5 +106,6 @@ def test_a_measured_scene_of_line_scans_runs_to_the_report(tmp_path, monkeypatch
 @pytest.mark.slow
 def test_a_generated_profile_scene_runs_to_the_report(tmp_path):
     wd = copy_workflow(tmp_path / "run", _profiles())
-    _assert_ran(wd, "tiny", run_snakemake(wd, "-j2", "--config", "scene=tiny"))
+    out = _assert_ran(wd, "tiny", run_snakemake(wd, "-j2", "--config", "scene=tiny"))
+    assert (out / "figures" / "contact_map.png").stat().st_size > 10_000  # profiles, deformed surface, pressure
     assert_scene_captions_true(wd, "tiny")
