@@ -3,15 +3,16 @@
 The surface is a NetCDF file (``--surface``: the variable ``heights`` over ``x, y``, any other
 dimension of length 1, as the pipeline's surface files; every rank reads its own rows) or is
 generated (``--generate N K_L K_S H SEED`` with ``--rms-slope`` or ``--rms-height``: rank 0 generates
-it and sends each rank its rows). The loads are ``--steps`` equal steps up to ``--p-max``
-[pressure] (``p0 = p_max k / steps``, ``k = 1..steps``). Rank 0 writes the contact NetCDF file
+it and sends each rank its rows; ``--plateau`` keeps the spectrum flat below ``K_L``: a roll-off).
+The loads are ``--steps`` equal steps up to ``--p-max`` [pressure] (``p0 = p_max k / steps``,
+``k = 1..steps``). Rank 0 writes the contact NetCDF file
 (``--out``), :func:`~roughcontact.solver.solve_contact`'s dataset, and logs each step to stderr.
 Bad input ends in one line ``error: ...`` on rank 0 and exit status 2 on every rank.
 
 Example (the Contact-Mechanics-Challenge-like surface of issue 50 at N = 8192 on 2 ranks)::
 
-    mpiexec -n 2 python -m roughcontact.solver.mpi --generate 8192 5 1000 0.8 0 --rms-slope 1 \\
-        --p-max 0.01 --steps 10 --out cmc_8192.nc
+    mpiexec -n 2 python -m roughcontact.solver.mpi --generate 8192 5 1000 0.8 0 --plateau --rms-slope 1 \\
+        --p-max 0.01 --steps 1 --out cmc_8192.nc
 """
 
 from __future__ import annotations
@@ -35,6 +36,9 @@ def parser() -> argparse.ArgumentParser:
                      help="a self-affine surface: grid points per side, cutoffs (mode numbers), Hurst exponent, seed")
     ap.add_argument("--rms-slope", type=float, help="rms slope of the generated surface")
     ap.add_argument("--rms-height", type=float, help="rms height of the generated surface")
+    ap.add_argument("--plateau", action="store_true",
+                    help="keep the spectrum constant below K_L (a roll-off, as the Contact-Mechanics Challenge's) "
+                         "instead of cutting it")
     ap.add_argument("--length", type=float, default=None, help="side L of the cell (default: the file's, or 1)")
     ap.add_argument("--p-max", type=float, required=True, help="last mean pressure [pressure]")
     ap.add_argument("--steps", type=int, default=10, help="equal load steps up to --p-max (default 10)")
@@ -75,7 +79,7 @@ def generated_rows(args, comm) -> tuple[np.ndarray, tuple[int, int], float]:
 
         k_l, k_s, hurst = (float(v) for v in args.generate[1:4])
         full = generate_surface(n, k_l, k_s, hurst, int(args.generate[4]), rms_slope=args.rms_slope,
-                                rms_height=args.rms_height, length=length)
+                                rms_height=args.rms_height, length=length, plateau=args.plateau)
     x0, x1 = rows_of((n, n), comm)
     mine = np.empty((x1 - x0, n))
     counts = comm.allgather(mine.size)
