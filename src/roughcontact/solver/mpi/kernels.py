@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...core.fft import rfft_weights, wavenumbers
-from ..batch_kernels import ArrayKernels
+from ..batch_kernels import ArrayKernels, BatchOperator
 from ..units import internal_length
 
 
@@ -72,13 +72,13 @@ class _SlabTransforms:
         return self.impl.backward(spec)
 
 
-class SlabOperator:
+class SlabOperator(BatchOperator):
     """The periodic half-space's products on the rank's slab (internal units, ``E* = Lx = 1``).
 
-    As :class:`~roughcontact.solver.batch_kernels.BatchOperator` (the same attribute names and
-    methods, which :class:`~roughcontact.solver.batch_iteration.BatchIteration` calls), with the
-    multipliers ``K``, ``M = |q| E* / 2`` and Parseval's weights on the rank's spectral columns
-    ``[c0, c1)`` (shape ``(nx, c1 - c0)``), computed there alone.
+    :class:`~roughcontact.solver.batch_kernels.BatchOperator`'s products (its methods, which
+    :class:`~roughcontact.solver.batch_iteration.BatchIteration` calls), with the distributed
+    transforms and the multipliers ``K``, ``M = |q| E* / 2`` and Parseval's weights on the rank's
+    spectral columns ``[c0, c1)`` (shape ``(nx, c1 - c0)``), computed there alone.
 
     Parameters
     ----------
@@ -93,6 +93,7 @@ class SlabOperator:
     """
 
     def __init__(self, slabs, aspect: float, fft, kernels: MpiKernels):
+        # not the parent's __init__: it makes the whole half spectrum's multipliers and a batched FFT
         self.k, self.xp = kernels, np
         nx, ny = self.shape = slabs.shape
         self.fft = _SlabTransforms(fft)
@@ -109,22 +110,3 @@ class SlabOperator:
         self.kmult32 = (kern * norm).astype(np.float32)
         self.mmult32 = (minv * norm).astype(np.float32)
         self.kquad32 = (kern * herm * norm).astype(np.float32)
-
-    def spectrum32(self, x, inv_sigma):
-        """float32 spectrum part of ``x * inv_sigma`` (one distributed forward transform)."""
-        return self.fft.rfft2(self.k.to32(x, inv_sigma))
-
-    def quadratic32(self, spec):
-        """``x . (K x) / sigma^2`` per case over every rank's columns, ``(B, 1, 1)`` float64."""
-        return self.k.quadratic(spec, self.kquad32)
-
-    def inverse32(self, spec, mult):
-        """``F^-1[mult spec]`` on the rank's slab, float32 (the spectrum is overwritten)."""
-        spec *= mult
-        return self.fft.irfft2(spec)
-
-    def apply64(self, P):
-        """``K P`` in float64 on the rank's slab."""
-        spec = self.fft.rfft2(P)
-        spec *= self.kmult64
-        return self.fft.irfft2(spec)

@@ -15,9 +15,8 @@ import time
 import numpy as np
 import xarray as xr
 
-from ...core.cell import Cell
 from ..batch_solver import BATCH_METHOD
-from ..results import SOLVER_NAME, solver_description, to_dataset
+from ..results import periodic_elastic_attrs, to_dataset
 from ..settings import SolverSettings
 from ..validation import validate_pressures
 from .slabs import Slabs
@@ -175,12 +174,8 @@ def _gather_fields(solver: MpiSolver):
 def _dataset(solver: MpiSolver, p, cols, iters, conv, paths, field, fft_library: str) -> xr.Dataset:
     """Rank 0's dataset: :func:`~roughcontact.solver.solve_contact`'s layout and attributes."""
     s = solver.settings
-    cell = Cell.of(solver.shape, s.length)
-    sides, grid = cell.solver_attrs()
-    attrs = {"e_star": s.e_star, **sides, "tol": s.tol, "max_iter": s.max_iter, "threads": s.threads,
-             "fft_backend": solver.backend, **grid, "solver": SOLVER_NAME,
-             "solver_description": solver_description(True, cell.square),
-             "mpi_ranks": solver.comm.size, "fft_library": fft_library}
+    attrs = {**periodic_elastic_attrs(s, solver.shape, solver.backend), "mpi_ranks": solver.comm.size,
+             "fft_library": fft_library}
     fields = ([field[0]], [field[1]], [p.size]) if field is not None else ([], [], [])
     ds = to_dataset(p, cols, iters, conv, fields, [p.size] if field is not None else False, solver.shape, attrs,
                     (), paths=paths, length_unit=s.length_unit, pressure_unit=s.pressure_unit)
