@@ -194,3 +194,17 @@ def test_mpi_requested_but_not_installed(tmp_path):
     assert res.returncode == 2
     assert res.stderr.startswith("error: the MPI solver needs mpi4py and an MPI runtime, not importable here")
     assert "pip install 'roughcontact[mpi]'" in res.stderr and res.stderr.count("\n") == 1
+
+
+def test_slabs_split_rows_and_spectral_columns():
+    """The decomposition alone (no MPI): consecutive blocks, the first ones a row or column larger; refusals."""
+    from roughcontact.solver.mpi import Slabs
+
+    parts = [Slabs((129, 128), 3, r) for r in range(3)]
+    assert [p.rows[p.rank] for p in parts] == [(0, 43), (43, 86), (86, 129)]
+    assert [(p.c0, p.c1) for p in parts] == [(0, 22), (22, 44), (44, 65)]
+    assert parts[2].local_shape == (43, 128) and parts[2].spectrum_shape == (129, 22)
+    with pytest.raises(ValueError, match=r"ranks: 5 MPI ranks for 4 rows along x"):
+        Slabs((4, 16), 5, 0)
+    with pytest.raises(ValueError, match=r"ranks: 4 MPI ranks for 3 columns of the half spectrum \(ny = 4\)"):
+        Slabs((8, 4), 4, 0)
