@@ -18,6 +18,7 @@ Example (the Contact-Mechanics-Challenge-like surface of issue 50 at N = 8192 on
 from __future__ import annotations
 
 import argparse
+import resource
 import sys
 
 import numpy as np
@@ -109,11 +110,15 @@ def main(argv=None) -> int:
         if comm.rank == 0:
             print(f"error: {one_line(exc)}", file=sys.stderr)
         return BAD_INPUT
+    # each rank's peak resident memory (ru_maxrss, KiB on Linux): what a run at a new size must budget
+    rss = comm.gather(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20, root=0)
     if comm.rank == 0:
         with atomic_output(args.out) as tmp:
             ds.to_netcdf(tmp)
         print(f"{args.out}: {shape[0]} x {shape[1]} over {comm.size} ranks, {len(p)} steps, "
-              f"converged {int(ds.converged.sum())}/{len(p)}", file=sys.stderr)
+              f"converged {int(ds.converged.sum())}/{len(p)}, {int(ds.iterations.sum())} iterations, "
+              f"{float(ds.wall_time.sum()):.1f} s; peak RSS per rank [GiB]: {' '.join(f'{r:.2f}' for r in rss)}",
+              file=sys.stderr)
     return 0
 
 
