@@ -8,8 +8,8 @@ differently from pyFFTW's in-place plans, as the batched solver's do: tests/test
 1 and 2 ranks; with 2 ranks the exact full-contact solution ``p = p0 + (E*/2) F^-1[|q| h^]`` and
 Westergaard's partial contact, whose wave runs along x, across the slab boundary. An odd split
 (3 ranks on 129 rows) too. The tests skip, saying why, where mpi4py or ``mpiexec`` is missing
-(``pip install 'roughcontact[mpi]'``, which the ``test`` extra brings); the refusal of a missing MPI
-runs everywhere.
+(``pip install 'roughcontact[mpi]'``, which the ``test`` extra brings); the slab split, the named
+refusals (on a one-rank stand-in communicator) and the refusal of a missing MPI run everywhere.
 """
 
 from __future__ import annotations
@@ -161,15 +161,26 @@ def test_more_ranks_than_rows_is_refused(tmp_path):
     assert not (tmp_path / "c.nc").exists()
 
 
-@needs_mpi
-def test_what_the_mpi_solver_refuses():
-    from mpi4py import MPI
+class OneRank:
+    """A communicator of one rank without MPI: all that the checks before a solve call (``allgather``).
 
+    The refusals run in the test process itself, which then never initialises MPI (an MPI library
+    loaded in a pytest worker would stay there for the worker's later tests).
+    """
+
+    size, rank = 1, 0
+
+    def allgather(self, value):
+        return [value]
+
+
+def test_what_the_mpi_solver_refuses():
+    """Named refusals, checked before any transform (runs without mpi4py too)."""
     from roughcontact.solver import PlasticityCap
     from roughcontact.solver.mpi import solve_contact_mpi
 
     h = _surface(0)
-    comm = MPI.COMM_SELF
+    comm = OneRank()
     with pytest.raises(ValueError, match="periodic half-space only, got boundary='free': the free boundary's"):
         solve_contact_mpi(h, h.shape, [0.001], comm=comm, boundary="free")
     with pytest.raises(ValueError, match=r"not the effects \(PlasticityCap\)"):
