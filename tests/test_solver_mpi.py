@@ -25,6 +25,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from cfcheck import assert_cf_clean
 from roughcontact.solver import solve_contact
 from roughcontact.surfaces.synthetic import generate_surface
 from roughcontact.theory.full_contact import full_contact_load, full_contact_pressure
@@ -130,6 +131,8 @@ def test_full_contact_is_exact_on_two_ranks(tmp_path):
     assert bool(ds.converged.all()) and float(ds.area_fraction[0]) == 1.0
     exact = full_contact_pressure(h, p0)
     assert np.abs(ds.contact_pressure.values[0] - exact).max() <= 1e-6 * exact.max()
+    # the command's file, fields included, is CF-clean (cfchecks where it runs, else tests/cfcheck.py's checks)
+    assert_cf_clean([tmp_path / "contact_2.nc"], tmp_path)
 
 
 @needs_mpi

@@ -113,6 +113,8 @@ def main(argv=None) -> int:
     # each rank's peak resident memory (ru_maxrss, KiB on Linux): what a run at a new size must budget
     rss = comm.gather(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20, root=0)
     if comm.rank == 0:
+        # a file of its own, outside the pipeline (whose writer adds the same attribute): CF-checked
+        ds.attrs["Conventions"] = "CF-1.8"
         with atomic_output(args.out) as tmp:
             ds.to_netcdf(tmp)
         print(f"{args.out}: {shape[0]} x {shape[1]} over {comm.size} ranks, {len(p)} steps, "
