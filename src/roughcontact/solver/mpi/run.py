@@ -31,7 +31,7 @@ def world():
     """``mpi4py.MPI.COMM_WORLD``, or :class:`MpiUnavailableError` saying how to install it."""
     try:
         from mpi4py import MPI
-    except ImportError as exc:  # no mpi4py, or mpi4py without an MPI library to load
+    except (ImportError, RuntimeError) as exc:  # no mpi4py; mpi4py's wheel without an MPI library to load
         raise MpiUnavailableError(f"the MPI solver needs mpi4py and an MPI runtime, not importable here ({exc}); "
                                   "install them with pip install 'roughcontact[mpi]'") from exc
     return MPI.COMM_WORLD
