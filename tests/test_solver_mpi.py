@@ -201,13 +201,24 @@ def test_what_the_mpi_solver_refuses():
         solve_contact_mpi(h, (256, 256), [0.001], comm=comm)
 
 
-def test_mpi_requested_but_not_installed(tmp_path):
-    """Without mpi4py the command says how to install it, in one line, exit status 2 (runs everywhere)."""
-    code = ("import sys; sys.modules['mpi4py'] = None; from roughcontact.solver.mpi.__main__ import main; "
+#: Ways a Python can lack MPI: no mpi4py at all; mpi4py's wheel without an MPI library, whose ``from mpi4py
+#: import MPI`` raises ``RuntimeError: cannot load MPI library`` (mpi4py 4.1, checked in a venv without mpich).
+NO_MPI = {
+    "no mpi4py": "sys.modules['mpi4py'] = None",
+    "no MPI library": ("import types; m = types.ModuleType('mpi4py'); m.__path__ = []; "
+                       "m.__getattr__ = lambda name: (_ for _ in ()).throw(RuntimeError('cannot load MPI library')); "
+                       "sys.modules['mpi4py'] = m"),
+}
+
+
+@pytest.mark.parametrize("how", list(NO_MPI))
+def test_mpi_requested_but_not_installed(tmp_path, how):
+    """Without MPI the command says how to install it, in one line, exit status 2 (runs everywhere)."""
+    code = (f"import sys; {NO_MPI[how]}; from roughcontact.solver.mpi.__main__ import main; "
             f"sys.exit(main(['--generate', '64', '2', '16', '0.8', '0', '--rms-slope', '0.1', '--p-max', '0.001', "
             f"'--out', {str(tmp_path / 'c.nc')!r}]))")
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=CAP)
-    assert res.returncode == 2
+    assert res.returncode == 2, res.stderr
     assert res.stderr.startswith("error: the MPI solver needs mpi4py and an MPI runtime, not importable here")
     assert "pip install 'roughcontact[mpi]'" in res.stderr and res.stderr.count("\n") == 1
 
