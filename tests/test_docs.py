@@ -18,6 +18,7 @@ What the handlers check:
   recurse). pip: the extra named in `pip install -e '.[X]'` exists in pyproject.toml.
   `. .venv/bin/activate`: the Makefile's VENV is `.venv` and it is made by `python -m venv`.
 - `python -m roughcontact.pipeline.config FILE`: exit 0 in the workflow copy that holds the scene files.
+- `mpiexec -n R python -m roughcontact.solver.mpi ...` (or `srun python -m ...`): its arguments parse.
 - python: run in a subprocess in an empty directory. yaml: parses; an excerpt of shipped scenes
   equals config/config.yaml's; a SLURM profile copy has only
   the shipped profile's keys and values (plus the site's partition and account), and the command
@@ -419,6 +420,17 @@ def pip_extra(cmd, ctx):
         assert extra in extras, f"`{cmd}`: pyproject.toml has no extra {extra!r} (has {sorted(extras)})"
 
 
+def mpi_command(cmd, ctx):
+    """``mpiexec -n R`` / ``srun`` + ``python -m roughcontact.solver.mpi ...``: its arguments parse (nothing runs:
+    the documented runs are N = 8192 and larger; tests/test_solver_mpi.py runs the command line)."""
+    from roughcontact.solver.mpi.__main__ import parser
+
+    args = shlex.split(cmd)
+    start = args.index("-m") + 2
+    assert args[start - 1] == "roughcontact.solver.mpi", cmd
+    parser().parse_args(args[start:])
+
+
 def activate_venv(cmd, ctx):
     m = re.fullmatch(r"\.\s+(\S+)/bin/activate", cmd)
     assert m, cmd
@@ -517,6 +529,7 @@ COMMANDS = [
     (r"^python -m roughcontact\.pipeline\.adopt\s", python_adopt, "adopts a case between two small runs"),
     (r"^python -m roughcontact\.pipeline\.config(\s|$)", python_config, "checks the config with the scene files"),
     (r"^pip install -e ", pip_extra, "the extra exists"),
+    (r"^(mpiexec -n \d+|srun) python -m roughcontact\.solver\.mpi\s", mpi_command, "its arguments parse"),
     (r"^\.\s+\S+/bin/activate$", activate_venv, "the Makefile makes that venv"),
 ]
 # (block language, predicate on the text, handler, what it checks) - first match wins.

@@ -47,9 +47,8 @@ import time
 import numpy as np
 import xarray as xr
 
-from ..core.cell import Cell
 from .batch_solver import BATCH_METHOD, CHECK_EVERY, BatchSolver, per_case
-from .results import SOLVER_NAME, solver_description, to_dataset
+from .results import periodic_elastic_attrs, to_dataset
 from .settings import SolverSettings
 from .validation import validate_heights, validate_pressures
 
@@ -155,12 +154,8 @@ def _run_steps(solver: BatchSolver, p: np.ndarray, progress):
 def _batch_dataset(solver: BatchSolver, p, cols, iters, conv, paths, wall, rounds) -> xr.Dataset:
     """The batch's dataset: case 0's single-solve layout, the per-case variables stacked over ``case``."""
     s = solver.settings
-    cell = Cell.of(solver.shape, s.length)
-    sides, grid = cell.solver_attrs()
-    attrs = {"e_star": s.e_star, **sides, "tol": s.tol, "max_iter": s.max_iter, "threads": s.threads,
-             "fft_backend": solver.backend, **grid, "solver": SOLVER_NAME,
-             "solver_description": solver_description(True, cell.square),
-             "batch_size": solver.batch, "check_every": solver.check_every}
+    attrs = {**periodic_elastic_attrs(s, solver.shape, solver.backend), "batch_size": solver.batch,
+             "check_every": solver.check_every}
     first = {name: col[0] for name, col in cols.items()}
     first["wall_time"] = wall
     ds = to_dataset(p, first, iters[0], conv[0], ([], [], []), False, solver.shape, attrs, (), paths=paths[0],

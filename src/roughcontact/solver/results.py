@@ -57,6 +57,21 @@ def solver_description(periodic: bool, square: bool = True, line: bool = False) 
     return SOLVER_DESCRIPTION_FREE.replace("2n x 2n", "2nx x 2ny").replace("square pixel", "rectangular pixel")
 
 
+def periodic_elastic_attrs(settings, shape, fft_backend: str) -> dict:
+    """The global attributes of a periodic elastic solve of ``shape`` (``(nx, ny)``) with ``settings``.
+
+    As :func:`~.solve.solve_contact` writes them for the periodic half-space: modulus, the cell's
+    sides and grid (:meth:`roughcontact.core.cell.Cell.solver_attrs`), tolerance, iterations, threads,
+    ``fft_backend``, the solver's name and description; the batched and the MPI solvers' datasets
+    start from these.
+    """
+    cell = Cell.of(shape, settings.length)
+    sides, grid = cell.solver_attrs()
+    return {"e_star": settings.e_star, **sides, "tol": settings.tol, "max_iter": settings.max_iter,
+            "threads": settings.threads, "fft_backend": fft_backend, **grid, "solver": SOLVER_NAME,
+            "solver_description": solver_description(True, cell.square)}
+
+
 @dataclass
 class StepResult:
     """Outcome of one load step of :func:`solve_step`.

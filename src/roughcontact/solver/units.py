@@ -89,25 +89,40 @@ class Units:
     """
 
     def __init__(self, h: np.ndarray, e_star: float, length):
-        cell = Cell.of(h.shape, length)
+        flat = not bool(h.max() > h.min())
+        self._set(h.shape, e_star, length, flat, *((0.0, 0.0) if flat else rms_about_mean(h)))
+        self.heights = None if flat else self.internal_heights(h)
+
+    @classmethod
+    def of_moments(cls, shape, e_star: float, length, flat: bool, mean: float, rms: float) -> Units:
+        """The units of a surface known by its moments alone (``mean``, ``rms`` about it, as
+        :func:`rms_about_mean`), e.g. one split over MPI ranks; ``heights`` is None: the caller
+        converts its part with :meth:`internal_heights`."""
+        self = cls.__new__(cls)
+        self._set(shape, e_star, length, flat, mean, rms)
+        self.heights = None
+        return self
+
+    def _set(self, shape, e_star: float, length, flat: bool, mean: float, rms: float) -> None:
+        cell = Cell.of(shape, length)
         self.e_star, self.length = e_star, cell.side_x
         self.label = "length" if cell.square else "Lx"
-        length = self.length
-        self.flat = not bool(h.max() > h.min())
-        if self.flat:
+        self.flat = flat
+        if flat:
             self.rms = 0.0
-            self.heights = None
             return
-        mean, rms = rms_about_mean(h)
-        self.rms = rms
+        self.mean, self.rms = mean, rms
         self.e_len = math.frexp(rms)[1]
-        if abs(mean) > rms:
+        pm, pe = frexp_ratio((e_star,), (self.length,))
+        self.pm, self.pe = pm, pe + self.e_len
+
+    def internal_heights(self, h: np.ndarray) -> np.ndarray:
+        """``h`` [length] (the whole surface or a part of it) in internal lengths, exactly scaled."""
+        if abs(self.mean) > self.rms:
             # a rigid offset larger than the roughness: remove it (absorbed by d)
             # so that the round-off of the gap is relative to the roughness.
-            h = h - mean
-        self.heights = np.ldexp(h, -self.e_len)
-        pm, pe = frexp_ratio((e_star,), (length,))
-        self.pm, self.pe = pm, pe + self.e_len
+            h = h - self.mean
+        return np.ldexp(h, -self.e_len)
 
     def ratio_log10(self, p: float) -> float:
         """``log10(p * L / (E* s))``, the dimensionless load (no overflow)."""

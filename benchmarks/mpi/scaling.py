@@ -1,0 +1,89 @@
+"""Strong and weak scaling and the memory per rank of the MPI solver (issue 50).
+
+``mpiexec -n R python benchmarks/mpi/scaling.py SURFACE.npy STEPS [--tile T]`` solves the surface
+(a ``.npy`` file, memory-mapped: each rank reads its rows only) under ``STEPS`` equal loads up to
+``P_MAX`` and prints one line on rank 0: grid, ranks, iterations, wall time, time per iteration and
+the peak resident memory of each rank (``ru_maxrss``). ``--tile T`` stacks the surface ``T`` times
+along x (a ``T L x L`` cell): the same contact problem repeated, so the iterations stay the same and
+the work per rank is constant when ``T`` grows with ``R`` (weak scaling). ``--max-iter`` stops each
+step early: every field is allocated in the first iterations, so a few give the peak memory.
+``python benchmarks/mpi/scaling.py --make N SURFACE.npy`` writes the surface (k_l = 4, k_s = N / 8,
+H = 0.8, rms slope 0.1) first, in a process of its own; ``--single`` solves it without MPI
+(:func:`~roughcontact.solver.solve_contact` and the batched solver with B = 1), for reference.
+"""
+
+from __future__ import annotations
+
+import argparse
+import resource
+import time
+
+import numpy as np
+
+P_MAX = 0.005
+
+
+def make(n: int, path: str) -> None:
+    from roughcontact.surfaces.synthetic import generate_surface
+
+    np.save(path, generate_surface(n, 4, n // 8, 0.8, 0, rms_slope=0.1))
+
+
+def run(path: str, steps: int, tile: int, max_iter: int | None) -> None:
+    from mpi4py import MPI
+
+    from roughcontact.solver.mpi import rows_of, solve_contact_mpi
+
+    comm = MPI.COMM_WORLD
+    h = np.load(path, mmap_mode="r")
+    n = h.shape[0]
+    shape = (tile * n, n)
+    x0, x1 = rows_of(shape, comm)
+    rows = np.ascontiguousarray(np.take(h, np.arange(x0, x1) % n, axis=0))
+    comm.Barrier()
+    t0, c0 = time.perf_counter(), time.process_time()
+    ds = solve_contact_mpi(rows, shape, P_MAX * np.arange(1, steps + 1) / steps, comm=comm,
+                           length=(float(tile), 1.0) if tile > 1 else 1.0,
+                           **({} if max_iter is None else {"max_iter": max_iter}))
+    wall = time.perf_counter() - t0
+    cpu = comm.gather(time.process_time() - c0, root=0)  # each rank's CPU: its share of the work on a busy machine
+    rss = comm.gather(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20, root=0)  # GiB (ru_maxrss in KiB)
+    if comm.rank == 0:
+        its = int(ds.iterations.sum())
+        print(f"grid {shape[0]}x{shape[1]} ranks {comm.size} steps {steps} iterations {its} "
+              f"converged {int(ds.converged.sum())}/{steps} wall {wall:.1f} s per_iteration {1e3 * wall / its:.1f} ms "
+              f"cpu_per_rank {' '.join(f'{c:.1f}' for c in cpu)} s "
+              f"A/A0 {float(ds.area_fraction[-1]):.6f} peak_rss_GiB {' '.join(f'{r:.2f}' for r in rss)}", flush=True)
+
+
+def single(path: str, steps: int) -> None:
+    """The same problem without MPI: solve_contact (pyFFTW's in-place plans) and the batched solver (B = 1)."""
+    from roughcontact.solver import solve_contact, solve_contact_batch
+
+    h = np.load(path)
+    loads = P_MAX * np.arange(1, steps + 1) / steps
+    for name, fn in (("solve_contact", lambda: solve_contact(h, loads)),
+                     ("solve_contact_batch", lambda: solve_contact_batch(h[None], loads))):
+        t0, c0 = time.perf_counter(), time.process_time()
+        ds = fn()
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        its = int(ds.iterations.sum())
+        print(f"grid {h.shape[0]}x{h.shape[1]} {name} steps {steps} iterations {its} wall {wall:.1f} s per_iteration "
+              f"{1e3 * wall / its:.1f} ms cpu {cpu:.1f} s", flush=True)
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--make", type=int, default=None)
+    ap.add_argument("surface")
+    ap.add_argument("steps", type=int, nargs="?", default=4)
+    ap.add_argument("--tile", type=int, default=1)
+    ap.add_argument("--single", action="store_true", help="the same problem by solve_contact and the batch, no MPI")
+    ap.add_argument("--max-iter", type=int, default=None, help="iterations per step at most (memory runs)")
+    a = ap.parse_args()
+    if a.make:
+        make(a.make, a.surface)
+    elif a.single:
+        single(a.surface, a.steps)
+    else:
+        run(a.surface, a.steps, a.tile, a.max_iter)

@@ -1,0 +1,112 @@
+"""The batched iteration's kernels and operator over MPI ranks: collective reductions, slab transforms.
+
+:class:`MpiKernels` are :class:`~roughcontact.solver.batch_kernels.ArrayKernels` whose per-case
+reductions add the ranks' partial results: every reduction of the iteration (sums, dots, the
+complementarity, the masked sums, the quadratic form over the half spectrum, the projection's
+positive part) goes through :meth:`MpiKernels.rsum`, plus :meth:`~MpiKernels.rcount`,
+:meth:`~MpiKernels.rmin` and :meth:`~MpiKernels.proj_any`. Each gathers the ranks' local results
+(``Allgather``, a few bytes per case) and combines them in rank order on every rank, instead of
+``Allreduce``: the MPI standard does not promise the same floating-point sum on every rank, and the
+iteration's decisions (converge, join, stop) must be the same on all of them or the ranks would
+take different branches and wait on each other for ever. The element-wise passes and per-case
+decisions are the batched ones unchanged: they act on the rank's slab and on per-case numbers that
+are equal on every rank.
+
+:class:`SlabOperator` is :class:`~roughcontact.solver.batch_kernels.BatchOperator` with the
+transforms of :mod:`.slabs`: multipliers for the rank's columns of the half spectrum only, so no
+rank ever holds a whole field.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...core.fft import rfft_weights, wavenumbers
+from ..batch_kernels import ArrayKernels, BatchOperator
+from ..units import internal_length
+
+
+class MpiKernels(ArrayKernels):
+    """:class:`ArrayKernels` on the host whose reductions run over the ranks of ``comm`` (numpy only)."""
+
+    def __init__(self, comm):
+        super().__init__(np)
+        self.comm = comm
+
+    def _gather(self, local):
+        """``(size, *local.shape)``: every rank's ``local``, on every rank."""
+        local = np.ascontiguousarray(local)
+        out = np.empty((self.comm.size, *local.shape), dtype=local.dtype)
+        self.comm.Allgather(local, out)
+        return out
+
+    def rsum(self, x):
+        """Sum over every rank's slab per case ``(B, 1, 1)`` float64, added in rank order."""
+        parts = self._gather(super().rsum(x))
+        total = parts[0].copy()
+        for part in parts[1:]:
+            total += part
+        return total
+
+    def rcount(self, m):
+        return self._gather(super().rcount(m)).sum(axis=0)
+
+    def rmin(self, x):
+        # np.min over the ranks: a NaN on any rank is a NaN on all (MPI's MIN leaves that unsaid)
+        return self._gather(super().rmin(x)).min(axis=0)
+
+    def proj_any(self, P, t, tau, F):
+        return self._gather(super().proj_any(P, t, tau, F)).any(axis=0)
+
+
+class _SlabTransforms:
+    """The ``rfft2`` / ``irfft2`` pair of :class:`SlabOperator` (the interface of the batched ``_BatchFFT``)."""
+
+    def __init__(self, fft):
+        self.impl = fft
+
+    def rfft2(self, x):
+        return self.impl.forward(x)
+
+    def irfft2(self, spec):
+        return self.impl.backward(spec)
+
+
+class SlabOperator(BatchOperator):
+    """The periodic half-space's products on the rank's slab (internal units, ``E* = Lx = 1``).
+
+    :class:`~roughcontact.solver.batch_kernels.BatchOperator`'s products (its methods, which
+    :class:`~roughcontact.solver.batch_iteration.BatchIteration` calls), with the distributed
+    transforms and the multipliers ``K``, ``M = |q| E* / 2`` and Parseval's weights on the rank's
+    spectral columns ``[c0, c1)`` (shape ``(nx, c1 - c0)``), computed there alone.
+
+    Parameters
+    ----------
+    slabs : .slabs.Slabs
+        The decomposition.
+    aspect : float
+        ``Ly / Lx`` of the cell.
+    fft : .slabs.SlabFFT or .slabs.MpiFFTPlan
+        The distributed transforms.
+    kernels : MpiKernels
+        The reductions (the quadratic form sums over every rank's columns).
+    """
+
+    def __init__(self, slabs, aspect: float, fft, kernels: MpiKernels):
+        # not the parent's __init__: it makes the whole half spectrum's multipliers and a batched FFT
+        self.k, self.xp = kernels, np
+        nx, ny = self.shape = slabs.shape
+        self.fft = _SlabTransforms(fft)
+        kx, ky = wavenumbers(self.shape, internal_length(aspect))
+        ky = ky[:, slabs.c0:slabs.c1]
+        q = 2.0 * np.pi * np.hypot(kx, ky)  # (nx, c1 - c0): this rank's columns only
+        kern = np.zeros_like(q)
+        np.divide(2.0, q, out=kern, where=q > 0)
+        minv = np.zeros_like(kern)
+        np.divide(1.0, kern, out=minv, where=kern > 0)
+        norm = 1.0 / (nx * ny)
+        herm = rfft_weights(ny)[:, slabs.c0:slabs.c1]
+        self.kmult64 = kern * norm
+        self.kmult32 = (kern * norm).astype(np.float32)
+        self.mmult32 = (minv * norm).astype(np.float32)
+        self.kquad32 = (kern * herm * norm).astype(np.float32)

@@ -1,0 +1,168 @@
+"""The grid split in slabs over MPI ranks, and the distributed real 2-D FFT on it.
+
+A case of ``nx x ny`` nodes is split along x (axis 0) into ``R`` slabs of consecutive rows, rank
+``r`` holding rows ``[x0, x1)`` (:class:`Slabs`: ``nx // R`` rows each, the first ``nx % R`` ranks
+one more). The spectrum of the real transform (``nx x (ny // 2 + 1)``) is split along the other
+axis: rank ``r`` holds every row and the columns ``[c0, c1)`` of the half spectrum. A forward
+transform is a real FFT along y on the slab, one all-to-all exchange (the transpose) and a complex
+FFT along x; the inverse runs backwards. The inverse is unnormalised, as the batched solver's
+(:class:`~roughcontact.solver.batch_kernels.BatchOperator` keeps the ``1 / (nx ny)`` in its
+multipliers).
+
+Two implementations of that one layout (:data:`FFT_LIBRARIES`):
+
+- ``"slab"`` (:class:`SlabFFT`, the default): scipy.fft's 1-D transforms and mpi4py's
+  ``Alltoallv``, pip-installable with the ``mpi`` extra;
+- ``"mpi4py-fft"`` (:class:`MpiFFTPlan`): mpi4py-fft's ``PFFT`` on FFTW, which has no wheel on
+  PyPI and builds only where FFTW's headers and libraries are installed (``libfftw3-dev``):
+  measured against the first in ``benchmarks/README.md`` ("The solver over MPI ranks").
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Distributed FFT implementations :func:`make_fft` accepts.
+FFT_LIBRARIES = ("slab", "mpi4py-fft")
+
+
+def split(n: int, parts: int) -> list[tuple[int, int]]:
+    """``[(start, stop), ...]``: ``n`` items in ``parts`` consecutive blocks, the first ``n % parts`` one larger."""
+    base, extra = divmod(n, parts)
+    out, start = [], 0
+    for r in range(parts):
+        stop = start + base + (r < extra)
+        out.append((start, stop))
+        start = stop
+    return out
+
+
+class Slabs:
+    """The slab decomposition of an ``(nx, ny)`` grid and its half spectrum over ``size`` ranks.
+
+    Attributes: ``rows[r] = (x0, x1)`` (real-space rows of rank ``r``), ``cols[r] = (c0, c1)``
+    (columns of the half spectrum, ``ny // 2 + 1`` in all), ``x0, x1, c0, c1`` this ``rank``'s.
+
+    Raises
+    ------
+    ValueError
+        When a rank would hold no row or no spectral column (more ranks than ``nx`` or than
+        ``ny // 2 + 1``).
+    """
+
+    def __init__(self, shape, size: int, rank: int):
+        self.shape = nx, ny = (int(shape[0]), int(shape[1]))
+        self.size, self.rank = int(size), int(rank)
+        nc = ny // 2 + 1
+        if self.size > nx:
+            raise ValueError(f"ranks: {self.size} MPI ranks for {nx} rows along x: each rank needs at least one "
+                             f"row (run at most {nx} ranks)")
+        if self.size > nc:
+            raise ValueError(f"ranks: {self.size} MPI ranks for {nc} columns of the half spectrum (ny = {ny}): "
+                             f"each rank needs at least one (run at most {nc} ranks)")
+        self.rows, self.cols = split(nx, self.size), split(nc, self.size)
+        self.x0, self.x1 = self.rows[self.rank]
+        self.c0, self.c1 = self.cols[self.rank]
+        self.local_shape = (self.x1 - self.x0, ny)
+        self.spectrum_shape = (nx, self.c1 - self.c0)
+
+
+class SlabFFT:
+    """Real 2-D FFT of slabs: scipy.fft along each axis, mpi4py's ``Alltoallv`` for the transpose.
+
+    ``forward`` takes the rank's real slab ``(B, x1 - x0, ny)`` and gives its part of the spectrum
+    ``(B, nx, c1 - c0)``; ``backward`` the reverse, unnormalised. Either precision: float32 data
+    give complex64 spectra. One rank skips the exchange (the serial transform).
+    """
+
+    name = "slab"
+
+    def __init__(self, comm, slabs: Slabs, threads: int = 1):
+        import scipy.fft
+
+        self.comm, self.slabs, self.sp = comm, slabs, scipy.fft
+        self.workers = threads
+        self.shape = slabs.shape
+
+    def _exchange(self, send_blocks, recv_shapes, dtype):
+        """Alltoallv of one contiguous block per rank; the received blocks, in rank order."""
+        from mpi4py import MPI
+
+        sendbuf = np.concatenate([b.reshape(-1) for b in send_blocks])
+        counts = [int(np.prod(s)) for s in recv_shapes]
+        recv = np.empty(sum(counts), dtype=dtype)
+        scounts = [b.size for b in send_blocks]
+        mt = MPI.C_FLOAT_COMPLEX if dtype == np.complex64 else MPI.C_DOUBLE_COMPLEX
+        self.comm.Alltoallv([sendbuf, (scounts, np.cumsum([0] + scounts[:-1])), mt],
+                            [recv, (counts, np.cumsum([0] + counts[:-1])), mt])
+        out, start = [], 0
+        for shape, c in zip(recv_shapes, counts, strict=True):
+            out.append(recv[start:start + c].reshape(shape))
+            start += c
+        return out
+
+    def forward(self, x):
+        """Spectrum ``(B, nx, c1 - c0)`` of the real slabs ``x`` ``(B, x1 - x0, ny)``."""
+        s = self.slabs
+        a = self.sp.rfft(x, axis=-1, workers=self.workers)
+        if s.size > 1:
+            B = a.shape[0]
+            blocks = [a[:, :, c0:c1] for c0, c1 in s.cols]
+            recv = self._exchange(blocks, [(B, x1 - x0, s.c1 - s.c0) for x0, x1 in s.rows], a.dtype)
+            a = np.concatenate(recv, axis=1)
+        return self.sp.fft(a, axis=-2, workers=self.workers, overwrite_x=True)
+
+    def backward(self, spec):
+        """The real slabs ``(B, x1 - x0, ny)`` of the spectrum part ``spec``, unnormalised."""
+        s = self.slabs
+        a = self.sp.ifft(spec, axis=-2, norm="forward", workers=self.workers, overwrite_x=True)
+        if s.size > 1:
+            B = a.shape[0]
+            blocks = [a[:, x0:x1, :] for x0, x1 in s.rows]
+            recv = self._exchange(blocks, [(B, s.x1 - s.x0, c1 - c0) for c0, c1 in s.cols], a.dtype)
+            a = np.concatenate(recv, axis=2)
+        return self.sp.irfft(a, n=self.shape[1], axis=-1, norm="forward", workers=self.workers)
+
+
+class MpiFFTPlan:
+    """The same transforms by mpi4py-fft's ``PFFT`` (FFTW), one plan per precision, on one case (B = 1).
+
+    mpi4py-fft splits rows and spectral columns as :class:`Slabs` does (checked at construction:
+    a different split is refused).
+    """
+
+    name = "mpi4py-fft"
+
+    def __init__(self, comm, slabs: Slabs, threads: int = 1):
+        try:
+            from mpi4py_fft import PFFT
+        except ImportError as exc:
+            raise ValueError(f"fft_library='mpi4py-fft' needs mpi4py-fft, not importable here ({exc}); it builds "
+                             "only with FFTW installed (libfftw3-dev): use fft_library='slab'") from exc
+        self.slabs, self.shape = slabs, slabs.shape
+        self.plans = {np.dtype(d): PFFT(comm, slabs.shape, axes=(0, 1), dtype=d, grid=(-1,), threads=threads)
+                      for d in (np.float32, np.float64)}
+        plan = self.plans[np.dtype(np.float64)]
+        rows, cols = plan.local_slice(False)[0], plan.local_slice(True)[1]
+        if (rows.start, rows.stop, cols.start, cols.stop) != (slabs.x0, slabs.x1, slabs.c0, slabs.c1):
+            raise ValueError(f"mpi4py-fft split the grid differently ({rows}, {cols}) from the solver's slabs")
+
+    def forward(self, x):
+        plan = self.plans[x.dtype]
+        out = np.empty((1, *plan.shape(True)), dtype=plan.forward.output_array.dtype)
+        plan.forward(np.ascontiguousarray(x[0]), out[0], normalize=False)
+        return out
+
+    def backward(self, spec):
+        real = np.float32 if spec.dtype == np.complex64 else np.float64
+        plan = self.plans[np.dtype(real)]
+        out = np.empty((1, *plan.shape(False)), dtype=real)
+        plan.backward(np.ascontiguousarray(spec[0]), out[0], normalize=False)
+        return out
+
+
+def make_fft(library: str, comm, slabs: Slabs, threads: int = 1):
+    """The distributed FFT named ``library`` (:data:`FFT_LIBRARIES`) on ``slabs``."""
+    if library not in FFT_LIBRARIES:
+        raise ValueError(f"fft_library must be one of {FFT_LIBRARIES}, got {library!r}")
+    return SlabFFT(comm, slabs, threads) if library == "slab" else MpiFFTPlan(comm, slabs, threads)

@@ -1,0 +1,146 @@
+"""One case split over MPI ranks: :class:`MpiSolver`, the batched solver (B = 1) on the rank's slab.
+
+The iteration is :class:`~roughcontact.solver.batch_iteration.BatchIteration` unchanged, with
+:class:`~.kernels.MpiKernels` (collective reductions) and :class:`~.kernels.SlabOperator` (the
+distributed transforms). What the batched solver does on a whole field is made rank-aware here:
+the surface's moments (the internal units, the rms height of the convergence criterion) are
+collective (:func:`moments`), and so is the contact perimeter, whose edges along x cross the slab
+boundaries (:meth:`MpiSolver.perimeter` exchanges one row with each neighbour). Nothing else in the
+iteration indexes a whole field: its only index operations select cases along the leading axis.
+
+Not distributed: the single solve's fallbacks after a stalled iteration (a
+:class:`~roughcontact.solver.workspace.Workspace` holds a whole field); a step whose iteration stalls
+ends ``converged = False`` (its ``solver_path`` the batched iteration's), as one that reaches
+``max_iter``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...core.backend import get_backend
+from ...core.cell import Cell
+from ..batch_solver import BATCH_METHOD, BatchSolver
+from ..units import Units
+from ..workspace import SOLVER_PATHS
+from .kernels import MpiKernels, SlabOperator
+from .slabs import make_fft
+
+
+def collective(comm, fn):
+    """``fn()`` on every rank; a ``ValueError`` on any rank is raised on every rank (the first rank's message).
+
+    A check that fails on one rank only (its slab holds the bad value) would otherwise leave the
+    others waiting in the next collective call for ever.
+    """
+    try:
+        out, msg = fn(), None
+    except ValueError as exc:
+        out, msg = None, str(exc)
+    msgs = comm.allgather(msg)
+    bad = [m for m in msgs if m is not None]
+    if bad:
+        raise ValueError(bad[0])
+    return out
+
+
+def moments(comm, h: np.ndarray, size: int) -> tuple[bool, float, float]:
+    """``(flat, mean, rms about the mean)`` of a surface split over the ranks (``h`` the rank's part).
+
+    As :func:`~roughcontact.solver.units.rms_about_mean`: squares of heights scaled by a power of two
+    so that the largest is in [0.5, 1), no overflow or underflow; sums added in rank order.
+    """
+    lo = min(comm.allgather(float(h.min())))
+    hi = max(comm.allgather(float(h.max())))
+    if not hi > lo:
+        return True, 0.0, 0.0
+    e = math.frexp(max(hi, -lo))[1]
+    hs = np.ldexp(h, -e)
+    mu = sum(comm.allgather(float(np.sum(hs)))) / size
+    hs -= mu
+    var = sum(comm.allgather(float(np.sum(hs * hs)))) / size
+    return False, math.ldexp(mu, e), math.ldexp(math.sqrt(var), e)
+
+
+class MpiSolver(BatchSolver):
+    """The batched solver of one case whose fields are the rank's slab ``(1, x1 - x0, ny)``.
+
+    Parameters
+    ----------
+    comm : mpi4py.MPI.Comm
+        The ranks sharing the case.
+    slabs : .slabs.Slabs
+        The decomposition of the grid ``(nx, ny)``.
+    h : numpy.ndarray, shape (x1 - x0, ny)
+        The rank's rows of the validated heights [length].
+    settings : SolverSettings
+        Checked for ``(nx, ny)``; the periodic ``"pk-fourier-f32"`` iteration without effects.
+    fft_library : str
+        :data:`.slabs.FFT_LIBRARIES`.
+    """
+
+    def __init__(self, comm, slabs, h: np.ndarray, settings, fft_library: str = "slab"):
+        self.comm, self.slabs = comm, slabs
+        self.settings = settings
+        self.batch = 1
+        self.shape = slabs.shape
+        self.size = self.shape[0] * self.shape[1]
+        self.tol, self.max_iter = settings.tol, settings.max_iter
+        self.length, self.threads = settings.length, settings.threads
+        self.cell = Cell.canonical(self.shape, self.length, "heights")
+        self.method, self.periodic, self.array_backend = BATCH_METHOD, True, "numpy"
+        self.be = get_backend("numpy")
+        self.xp = np
+        self.check_every = 1
+        flat, mean, rms = moments(comm, h, self.size)
+        if flat:
+            raise ValueError("heights: the surface is flat (all heights equal); the MPI solver takes rough surfaces "
+                             "only (solve a flat surface with solve_contact)")
+        unit = Units.of_moments(self.shape, settings.e_star, settings.length, False, mean, rms)
+        self.units = [unit]
+        hin = unit.internal_heights(h)[None]
+        rms_int = moments(comm, hin[0], self.size)[2]
+        self.h_rms = np.full((1, 1, 1), rms_int)
+        self.h_rms_host = np.array([rms_int])
+        self.kernels = MpiKernels(comm)
+        self.fft = make_fft(fft_library, comm, slabs, self.threads)
+        self.op = SlabOperator(slabs, self.cell.aspect, self.fft, self.kernels)
+        self.h = self.h_host = np.ascontiguousarray(hin)
+        self.P = np.zeros(hin.shape)
+        self.w = np.empty(hin.shape)
+        self.prev = None
+        self._older = None
+        self._last = None
+        self._ws = {}
+        self.paths = SOLVER_PATHS
+
+    @property
+    def backend(self) -> str:
+        return f"mpi-{self.fft.name}"
+
+    def fallback(self, b: int, p_int: float, its: int) -> tuple[int, str, bool]:
+        """No fallback over ranks (module docstring): the stalled step ends unconverged where it stopped."""
+        return its, BATCH_METHOD, False
+
+    def perimeter(self) -> np.ndarray:
+        """Contact perimeter per unit area (periodic), the edges along x across slab boundaries included; (1,)."""
+        m = self.P[0] > 0.0
+        comm, r, R = self.comm, self.comm.rank, self.comm.size
+        # the row before this slab's first: the previous rank's last (periodic)
+        before = np.empty(m.shape[1], dtype=bool)
+        comm.Sendrecv(np.ascontiguousarray(m[-1]), dest=(r + 1) % R, recvbuf=before, source=(r - 1) % R)
+        ex = int(np.count_nonzero(m[1:] != m[:-1])) + int(np.count_nonzero(m[0] != before))
+        ey = int(np.count_nonzero(m != np.roll(m, 1, axis=1)))
+        ex, ey = (sum(comm.allgather(v)) for v in (ex, ey))
+        return self.cell.perimeter_per_area(np.array([float(ex)]), np.array([float(ey)]))
+
+    def fields(self) -> tuple[np.ndarray, np.ndarray]:
+        """The rank's rows of the last step's pressure [pressure] and gap ``w - gbar`` [length]."""
+        unit = self.units[0]
+        w = self.w[0]
+        pos = self.P[0] > 0.0
+        nf = self.kernels.rcount(pos[None])
+        gbar = float((self.kernels.masked_sum(w[None], pos[None]) / np.where(nf > 0, nf, 1)).reshape(()))
+        return unit.pressure(self.P[0].copy()), unit.length_field(w - gbar)

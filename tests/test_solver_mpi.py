@@ -1,0 +1,237 @@
+"""The solver over MPI ranks (issue 50): ``mpiexec -n R python -m roughcontact.solver.mpi`` against the single solve.
+
+Each check launches the command line under ``mpiexec`` (a subprocess with a time cap) on a small
+problem written to a NetCDF file, and compares rank 0's contact file with
+:func:`~roughcontact.solver.solve_contact` on the same heights: the same A/A0 to a node or two, the
+mean gap to 1e-6 and the iterations within two per step (the distributed transforms round
+differently from pyFFTW's in-place plans, as the batched solver's do: tests/test_batch.py), with
+1 and 2 ranks; with 2 ranks the exact full-contact solution ``p = p0 + (E*/2) F^-1[|q| h^]`` and
+Westergaard's partial contact, whose wave runs along x, across the slab boundary. An odd split
+(3 ranks on 129 rows) too. The tests skip, saying why, where mpi4py or ``mpiexec`` is missing
+(``pip install 'roughcontact[mpi]'``, which the ``test`` extra brings); the slab split, the named
+refusals (on a one-rank stand-in communicator) and the refusal of a missing MPI run everywhere.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from cfcheck import assert_cf_clean
+from roughcontact.solver import solve_contact
+from roughcontact.surfaces.synthetic import generate_surface
+from roughcontact.theory.full_contact import full_contact_load, full_contact_pressure
+from test_solver_exact import westergaard_heights, westergaard_pressure
+
+#: Wall-clock cap of one mpiexec run (a run here takes 2-10 s on 2 busy cores): catches a hang only.
+CAP = 120 * float(os.environ.get("ROUGHCONTACT_TEST_TIME_SCALE", "1"))
+N = 128
+P_MAX = 0.005
+STEPS = 8
+
+
+def _mpiexec() -> str | None:
+    """The ``mpiexec`` beside this Python (the mpich wheel's), else on PATH; None without mpi4py."""
+    try:
+        import mpi4py  # noqa: F401
+    except ImportError:
+        return None
+    here = Path(sys.executable).parent / "mpiexec"
+    return str(here) if here.exists() else shutil.which("mpiexec")
+
+
+MPIEXEC = _mpiexec()
+needs_mpi = pytest.mark.skipif(MPIEXEC is None, reason="mpi4py or mpiexec not installed (pip install "
+                               "'roughcontact[mpi]'; the test extra brings it)")
+
+
+def write_surface(path: Path, h: np.ndarray) -> Path:
+    xr.Dataset({"heights": (("x", "y"), h)}, attrs={"length": 1.0}).to_netcdf(path)
+    return path
+
+
+def run_mpi(ranks: int, *args, check=True) -> subprocess.CompletedProcess:
+    cmd = [MPIEXEC, "-n", str(ranks), sys.executable, "-m", "roughcontact.solver.mpi", *map(str, args)]
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=CAP)
+    if check:
+        assert res.returncode == 0, res.stderr
+    return res
+
+
+def solve_mpi(tmp_path: Path, h: np.ndarray, ranks: int, p_max: float = P_MAX, steps: int = STEPS, tol=1e-8,
+              fields=False) -> xr.Dataset:
+    src = write_surface(tmp_path / f"surface_{ranks}.nc", h)
+    out = tmp_path / f"contact_{ranks}.nc"
+    run_mpi(ranks, "--surface", src, "--p-max", p_max, "--steps", steps, "--tol", tol, "--out", out,
+            *(["--fields"] if fields else []))
+    return xr.load_dataset(out)
+
+
+@functools.cache
+def _surface(k: int, n: int = N) -> np.ndarray:
+    # the paper's kind of surface, and test_batch's broadband one in wide contact (the slow case)
+    return generate_surface(n, *[(2, 16, 0.8, 0, 0.1), (1, 64, 0.2, 1, 0.02)][k][:4],
+                            rms_slope=[0.1, 0.02][k])
+
+
+def _loads(p_max=P_MAX, steps=STEPS):
+    return p_max * np.arange(1, steps + 1) / steps
+
+
+@needs_mpi
+@pytest.mark.parametrize("ranks", [1, 2])
+# the broadband case's 2-rank run is the longest here (9 s on 2 busy cores): make test only
+@pytest.mark.parametrize("k", [0, pytest.param(1, marks=pytest.mark.slow)])
+def test_same_answers_as_the_single_solve(tmp_path, ranks, k):
+    h = _surface(k)
+    ds = solve_mpi(tmp_path, h, ranks)
+    ref = solve_contact(h, _loads())
+    assert bool(ds.converged.all()) and ds.attrs["mpi_ranks"] == ranks
+    assert np.max(np.abs(ds.area_fraction.values - ref.area_fraction.values)) <= 2.0 / N**2
+    np.testing.assert_allclose(ds.mean_gap.values, ref.mean_gap.values, rtol=1e-6)
+    np.testing.assert_allclose(ds.contact_perimeter.values, ref.contact_perimeter.values, rtol=1e-3)
+    assert np.max(np.abs(ds.iterations.values - ref.iterations.values)) <= 2
+    assert np.all(ds.residual.values <= 1e-8)
+    # the dataset of solve_contact: the same variables, units and long names
+    for name in ref.data_vars:
+        for key in ("units", "long_name"):
+            assert ds[name].attrs[key] == ref[name].attrs[key] or name == "wall_time", (name, key)
+    assert ds.attrs["fft_backend"] == "mpi-slab" and ds.attrs["boundary"] == "periodic"
+
+
+@needs_mpi
+@pytest.mark.slow  # 3 ranks on 2 cores: 8 s
+def test_odd_split_three_ranks_and_gathered_fields(tmp_path):
+    """129 rows on 3 ranks (43 each) and 65 spectral columns (22, 22, 21); the gathered fields are the
+    single solve's to the tolerance."""
+    h = generate_surface(129, 2, 16, 0.8, 3, rms_slope=0.1)
+    ds = solve_mpi(tmp_path, h, 3, steps=3, fields=True)
+    ref = solve_contact(h, _loads(steps=3), store_fields=[3])
+    assert bool(ds.converged.all())
+    assert np.max(np.abs(ds.area_fraction.values - ref.area_fraction.values)) <= 2.0 / 129**2
+    p, p_ref = ds.contact_pressure.values[0], ref.contact_pressure.values[0]
+    assert np.abs(p - p_ref).max() <= 1e-3 * p_ref.max()
+    assert abs(p.mean() - P_MAX) <= 1e-10 * P_MAX
+
+
+@needs_mpi
+def test_full_contact_is_exact_on_two_ranks(tmp_path):
+    """Past the full-contact load the pressure is ``p0 + (E*/2) F^-1[|q| h^]`` everywhere."""
+    h = generate_surface(N, 2, 8, 0.8, 5, rms_slope=0.05)
+    p0 = 1.5 * full_contact_load(h)
+    ds = solve_mpi(tmp_path, h, 2, p_max=p0, steps=1, tol=1e-10, fields=True)
+    assert bool(ds.converged.all()) and float(ds.area_fraction[0]) == 1.0
+    exact = full_contact_pressure(h, p0)
+    assert np.abs(ds.contact_pressure.values[0] - exact).max() <= 1e-6 * exact.max()
+    # the command's file, fields included, is CF-clean (cfchecks where it runs, else tests/cfcheck.py's checks)
+    assert_cf_clean([tmp_path / "contact_2.nc"], tmp_path)
+
+
+@needs_mpi
+def test_westergaard_on_two_ranks(tmp_path):
+    """The wave runs along x, the split axis: half-width to a node, pressure to 1 % of its peak, mean gap to 1e-3."""
+    n, delta = 256, 0.01
+    p_star = np.pi * delta
+    s = 0.5
+    h = westergaard_heights(n, delta)
+    ds = solve_mpi(tmp_path, h, 2, p_max=s * p_star, steps=1, tol=1e-10, fields=True)
+    assert bool(ds.converged.all())
+    a_exact = np.arcsin(np.sqrt(s)) / np.pi
+    assert abs(float(ds.area_fraction[0]) / 2 - a_exact) <= 1.0 / n
+    x = np.arange(n) / n
+    p_exact = westergaard_pressure(np.where(x > 0.5, x - 1, x), s * p_star, p_star)
+    profile = ds.contact_pressure.values[0][:, 0]
+    assert np.linalg.norm(profile - p_exact) / (p_exact.max() * np.sqrt(n)) <= 0.01
+    g_exact = delta * ((1 - s) + s * np.log(s))
+    assert abs(float(ds.mean_gap[0]) - g_exact) <= 1e-3 * g_exact
+
+
+@needs_mpi
+def test_more_ranks_than_rows_is_refused(tmp_path):
+    h = generate_surface(8, 1, 2, 0.8, 0, rms_slope=0.1)[:4]  # 4 rows
+    res = run_mpi(5, "--surface", write_surface(tmp_path / "s.nc", h), "--p-max", 0.01, "--out",
+                  tmp_path / "c.nc", check=False)
+    assert res.returncode == 2
+    assert "error: ranks: 5 MPI ranks for 4 rows along x: each rank needs at least one row (run at most 4 ranks)" \
+        in res.stderr
+    assert res.stderr.count("error:") == 1  # rank 0 alone says it
+    assert not (tmp_path / "c.nc").exists()
+
+
+class OneRank:
+    """A communicator of one rank without MPI: all that the checks before a solve call (``allgather``).
+
+    The refusals run in the test process itself, which then never initialises MPI (an MPI library
+    loaded in a pytest worker would stay there for the worker's later tests).
+    """
+
+    size, rank = 1, 0
+
+    def allgather(self, value):
+        return [value]
+
+
+def test_what_the_mpi_solver_refuses():
+    """Named refusals, checked before any transform (runs without mpi4py too)."""
+    from roughcontact.solver import PlasticityCap
+    from roughcontact.solver.mpi import solve_contact_mpi
+
+    h = _surface(0)
+    comm = OneRank()
+    with pytest.raises(ValueError, match="periodic half-space only, got boundary='free': the free boundary's"):
+        solve_contact_mpi(h, h.shape, [0.001], comm=comm, boundary="free")
+    with pytest.raises(ValueError, match=r"not the effects \(PlasticityCap\)"):
+        solve_contact_mpi(h, h.shape, [0.001], comm=comm, effects=(PlasticityCap(0.5),))
+    with pytest.raises(ValueError, match="elastic method 'pk-fourier-f32' only, got 'pk'"):
+        solve_contact_mpi(h, h.shape, [0.001], comm=comm, method="pk")
+    with pytest.raises(ValueError, match="surface is flat"):
+        solve_contact_mpi(np.ones_like(h), h.shape, [0.001], comm=comm)
+    with pytest.raises(ValueError, match=r"rows 0..127\) must contain only finite"):
+        solve_contact_mpi(np.where(h > 0, np.nan, h), h.shape, [0.001], comm=comm)
+    with pytest.raises(ValueError, match=r"holds rows 0..255 of the grid \(256, 256\), shape \(256, 256\); got "
+                                         r"\(128, 128\)"):
+        solve_contact_mpi(h, (256, 256), [0.001], comm=comm)
+
+
+#: Ways a Python can lack MPI: no mpi4py at all; mpi4py's wheel without an MPI library, whose ``from mpi4py
+#: import MPI`` raises ``RuntimeError: cannot load MPI library`` (mpi4py 4.1, checked in a venv without mpich).
+NO_MPI = {
+    "no mpi4py": "sys.modules['mpi4py'] = None",
+    "no MPI library": ("import types; m = types.ModuleType('mpi4py'); m.__path__ = []; "
+                       "m.__getattr__ = lambda name: (_ for _ in ()).throw(RuntimeError('cannot load MPI library')); "
+                       "sys.modules['mpi4py'] = m"),
+}
+
+
+@pytest.mark.parametrize("how", list(NO_MPI))
+def test_mpi_requested_but_not_installed(tmp_path, how):
+    """Without MPI the command says how to install it, in one line, exit status 2 (runs everywhere)."""
+    code = (f"import sys; {NO_MPI[how]}; from roughcontact.solver.mpi.__main__ import main; "
+            f"sys.exit(main(['--generate', '64', '2', '16', '0.8', '0', '--rms-slope', '0.1', '--p-max', '0.001', "
+            f"'--out', {str(tmp_path / 'c.nc')!r}]))")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=CAP)
+    assert res.returncode == 2, res.stderr
+    assert res.stderr.startswith("error: the MPI solver needs mpi4py and an MPI runtime, not importable here")
+    assert "pip install 'roughcontact[mpi]'" in res.stderr and res.stderr.count("\n") == 1
+
+
+def test_slabs_split_rows_and_spectral_columns():
+    """The decomposition alone (no MPI): consecutive blocks, the first ones a row or column larger; refusals."""
+    from roughcontact.solver.mpi import Slabs
+
+    parts = [Slabs((129, 128), 3, r) for r in range(3)]
+    assert [p.rows[p.rank] for p in parts] == [(0, 43), (43, 86), (86, 129)]
+    assert [(p.c0, p.c1) for p in parts] == [(0, 22), (22, 44), (44, 65)]
+    assert parts[2].local_shape == (43, 128) and parts[2].spectrum_shape == (129, 21)
+    with pytest.raises(ValueError, match=r"ranks: 5 MPI ranks for 4 rows along x"):
+        Slabs((4, 16), 5, 0)
+    with pytest.raises(ValueError, match=r"ranks: 4 MPI ranks for 3 columns of the half spectrum \(ny = 4\)"):
+        Slabs((8, 4), 4, 0)
