@@ -2,7 +2,8 @@
 
 A cell is ``nx x ny`` nodes on sides ``Lx x Ly`` [length], axis 0 = x; or a *line* (a profile: ``n``
 points on a length ``L``, plane strain), which the solver holds as the one-row grid ``(n, 1)``
-(:meth:`Cell.profile`; a 2-D grid has at least 4 nodes a side, so a grid of one row is a line). The solver's ``length``
+(:meth:`Cell.profile`; a 2-D grid has at least 4 nodes a side, so a grid of one row with one length is a
+line). The solver's ``length``
 argument writes a square cell (``nx == ny`` and ``Lx == Ly``) as the float ``L`` and any other as the
 pair ``(Lx, Ly)``; a file's global attributes write a square cell as ``length`` and ``n`` and any
 other as ``length_x``, ``length_y`` (never one side for both), with ``nx`` and ``ny`` always. This
@@ -146,7 +147,9 @@ class Cell:
         >>> Cell.of((8, 8), 2.0).square, Cell.of((8, 8), (2.0, 2.0)).square
         (True, False)
         """
-        if len(shape) == 1 or int(shape[1]) == 1:  # a profile (n,), or its one-row grid (n, 1)
+        # a profile (n,), or its one-row grid (n, 1) with one length; a one-row grid given the pair
+        # (Lx, Ly) stays the rectangle it is (a strip one pixel wide: the adhesion tests' wavy surface)
+        if len(shape) == 1 or (int(shape[1]) == 1 and not isinstance(check_length(length), tuple)):
             return cls.profile(shape[0], length)
         nx, ny = (int(v) for v in shape)
         length = check_length(length)
