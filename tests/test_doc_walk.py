@@ -377,6 +377,16 @@ def _corrupt_case(tmp):
     return tmp
 
 
+def _not_netcdf(tmp):
+    (tmp / "h.nc").write_bytes(b"not netcdf")
+    return tmp / "h.nc"
+
+
+def _mpi_argv(surface, out):
+    """The MPI solver's command line (one rank, no mpiexec) on ``surface``, writing ``out``."""
+    return ["--surface", str(surface), "--p-max", "0.005", "--out", str(out)]
+
+
 def _list_yaml(tmp):
     (tmp / "list.yaml").write_text("- a\n- b\n")
     return tmp / "list.yaml"
@@ -404,6 +414,10 @@ COMMANDS = {
     "roughcontact.studies.reproduction": (
         lambda p: ["regenerate", str(p)], lambda p: ["regenerate", str(p)],
         lambda p: ["regenerate", str(_truncated(p, ["representativity.nc", "contact.nc", "cel.nc"], RP))]),
+    # a surface file, not a folder: the "empty folder" case gives the folder itself as the surface
+    "roughcontact.solver.mpi": (lambda p: _mpi_argv(p / "h.nc", p.parent / "out.nc"),
+                                lambda p: _mpi_argv(p, p / "out.nc"),
+                                lambda p: _mpi_argv(_not_netcdf(p), p / "out.nc")),
 }
 
 
@@ -421,6 +435,10 @@ def test_every_documented_module_is_walked():
 
 def _main(module):
     """The ``main`` that ``python -m module`` runs (a package's from its __main__'s import)."""
+    if module == "roughcontact.solver.mpi":  # its main returns the exit code (each MPI rank exits with it)
+        from roughcontact.solver.mpi.__main__ import main
+
+        return lambda argv: sys.exit(main(argv))
     where = {"roughcontact.pipeline.config": "roughcontact.pipeline.scenes",
              "roughcontact.studies.kappa_gap": "roughcontact.studies.kappa_gap.page",
              "roughcontact.studies.open_questions": "roughcontact.studies.open_questions.page"}.get(module, module)

@@ -228,7 +228,8 @@ GOOD = np.zeros((8, 8))
     [
         (dict(heights=np.full((8, 8), np.nan)), "heights must contain only finite"),
         (dict(heights=np.zeros((8, 7))), "heights must be a 2-D square"),
-        (dict(heights=np.zeros(8)), "heights must be a 2-D square"),
+        (dict(heights=np.zeros(3)), "heights: a profile \\(1-D heights\\) needs at least 4 points"),
+        (dict(heights=np.zeros((2, 4, 4, 4))), "heights must be a 2-D square"),
         (dict(heights=np.zeros((8, 8), complex)), "heights must be real"),
         (dict(heights=[[1, 2], [3]]), "heights must be a real 2-D square array"),
         (dict(heights=np.zeros((2, 2))), "at least 4 x 4"),

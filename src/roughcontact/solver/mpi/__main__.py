@@ -18,6 +18,7 @@ Example (the Contact-Mechanics-Challenge-like surface of issue 50 at N = 8192 on
 from __future__ import annotations
 
 import argparse
+import os
 import resource
 import sys
 
@@ -135,10 +136,17 @@ def _heights(args, comm):
 
 
 def _file_rows(path, comm):
+    if os.path.isdir(path):
+        raise ValueError(f"{path}: is a folder; give a surface file (NetCDF with 'heights', as the surface jobs write)")
     try:
         return read_rows(path, comm)
     except OSError as exc:
         raise ValueError(f"{path}: cannot be read as NetCDF ({one_line(exc)})") from None
+    except ValueError as exc:
+        if path in str(exc):
+            raise
+        # xarray names no file when no engine recognises it: a truncated or foreign file
+        raise ValueError(f"{path}: not a readable NetCDF file (truncated or foreign?): {one_line(exc)}") from None
 
 
 def _check_generate(args, comm):
