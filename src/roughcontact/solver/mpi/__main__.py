@@ -143,8 +143,8 @@ def _file_rows(path, comm):
     except OSError as exc:
         raise ValueError(f"{path}: cannot be read as NetCDF ({one_line(exc)})") from None
     except ValueError as exc:
-        if path in str(exc):
-            raise
+        if "IO backends" not in str(exc):
+            raise  # the file's content refused (rows, NaN, ...): the message says why
         # xarray names no file when no engine recognises it: a truncated or foreign file
         raise ValueError(f"{path}: not a readable NetCDF file (truncated or foreign?): {one_line(exc)}") from None
 
