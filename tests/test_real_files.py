@@ -20,7 +20,9 @@ import yaml
 
 from conftest import REPO, copy_workflow, run_snakemake
 
-pytestmark = pytest.mark.slow
+# one xdist group (make test: --dist loadgroup): the module's workflow fixture then runs once, not once per
+# worker (~110 s of setup on each of the two workers in the 2026-11-28 CI-like run)
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("real_files")]
 
 DATA = REPO / "tests" / "data" / "surfacetopography"
 FILES = {"di": "di-3.di", "frt2": "frt-2.frt", "ibwspot": "spot_1-1000nm.ibw", "mi": "mi-1.mi",

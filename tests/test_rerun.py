@@ -9,7 +9,9 @@ from conftest import copy_workflow, run_snakemake
 from test_workflow import TINY
 
 # One real run of the tiny scene, then a dry run per edit: about 2.5 min on 2 cores.
-pytestmark = pytest.mark.slow
+# one xdist group (make test: --dist loadgroup): the module's workflow fixture then runs once, not once per
+# worker (~110 s of setup on each of the two workers in the 2026-11-28 CI-like run)
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("rerun")]
 
 SURF = "results/tiny/surfaces/kl2_ks8_H{H}_s{seed}.nc"
 CONTACT = "results/tiny/contact/kl2_ks8_H{H}_s{seed}.nc"
