@@ -58,16 +58,19 @@ def validate_heights(heights, name: str = "heights", square: bool = True, profil
         if a.size < MIN_PROFILE_POINTS:
             raise ValueError(f"{name}: a profile (1-D heights) needs at least {MIN_PROFILE_POINTS} points, got "
                              f"{a.size}")
-        a = np.ascontiguousarray(a, dtype=np.float64)
-        if not np.all(np.isfinite(a)):
-            raise ValueError(f"{name} must contain only finite values (found NaN or inf)")
-        return a
+        return finite_float64(a, name)
     if a.ndim != 2 or (square and a.shape[0] != a.shape[1]):
         line = ", or a 1-D profile (n,)" if profile else ""
         raise ValueError(f"{name} must be a 2-D square array (n, n), or (nx, ny) with length=(Lx, Ly){line}, "
                          f"got shape {a.shape}")
     if min(a.shape) < 4:
         raise ValueError(f"{name} must be at least 4 x 4 (nx, ny >= 4), got shape {a.shape}")
+    return finite_float64(a, name)
+
+
+def finite_float64(a: np.ndarray, name: str) -> np.ndarray:
+    """``a`` (real, any shape) as a C-contiguous float64 array; a ValueError naming ``name`` if any value is
+    NaN or infinite."""
     a = np.ascontiguousarray(a, dtype=np.float64)
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{name} must contain only finite values (found NaN or inf)")

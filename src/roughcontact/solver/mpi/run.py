@@ -18,7 +18,7 @@ import xarray as xr
 from ..batch_solver import BATCH_METHOD
 from ..results import periodic_elastic_attrs, to_dataset
 from ..settings import SolverSettings
-from ..validation import validate_pressures
+from ..validation import finite_float64, validate_pressures
 from .slabs import Slabs
 from .solver import MpiSolver, collective
 
@@ -130,10 +130,7 @@ def _local_heights(heights, slabs: Slabs) -> np.ndarray:
     if a.shape != slabs.local_shape:
         raise ValueError(f"heights: this rank holds rows {slabs.x0}..{slabs.x1 - 1} of the grid {slabs.shape}, "
                          f"shape {slabs.local_shape}; got {a.shape}")
-    a = np.ascontiguousarray(a, dtype=np.float64)
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} must contain only finite values (found NaN or inf)")
-    return a
+    return finite_float64(a, name)
 
 
 def _run_steps(solver: MpiSolver, p: np.ndarray, progress):
