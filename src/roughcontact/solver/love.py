@@ -163,12 +163,10 @@ def line_influence(n: int) -> np.ndarray:
     """
     dx = 1.0 / n
     x = np.arange(n + 1, dtype=np.float64) * dx
-    hi, lo = x + 0.5 * dx, np.abs(x - 0.5 * dx)
-    # G(hi) - G(x - dx/2), G odd: G(-a) = -G(a); x - dx/2 < 0 only at offset 0
-    sign = np.where(x - 0.5 * dx < 0, -1.0, 1.0)
+    t = np.stack([x + 0.5 * dx, x - 0.5 * dx])  # the pixel's ends seen from x (x - dx/2 < 0 at offset 0)
     with np.errstate(divide="ignore", invalid="ignore"):
-        g_lo = np.where(lo > 0, lo * np.log(lo) - lo, 0.0) * sign
-    out = -((hi * np.log(hi) - hi) - g_lo)
+        g = np.where(t != 0, t * np.log(np.abs(t)) - t, 0.0)
+    out = -(g[0] - g[1])
     out.setflags(write=False)
     return out
 
