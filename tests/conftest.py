@@ -100,6 +100,25 @@ def copy_workflow(dest: Path, config: dict | None = None) -> Path:
     return dest
 
 
+def edited_contact(cfg: dict, scene: str = "tiny", **edits) -> dict:
+    """A deep copy of ``cfg`` with ``edits`` applied to scene ``scene``'s contact block: dotted keys
+    (``"solver.batch"``), each set to its value, or removed where the value is None."""
+    import copy
+
+    cfg = copy.deepcopy(cfg)
+    block = cfg["scenes"][scene]["contact"]
+    for dotted, value in edits.items():
+        *head, last = dotted.split(".")
+        node = block
+        for key in head:
+            node = node.setdefault(key, {})
+        if value is None:
+            node.pop(last)
+        else:
+            node[last] = value
+    return cfg
+
+
 def pytest_collection_modifyitems(config, items):
     """Every test that uses :func:`demo_run` in one xdist group (``make test`` runs ``--dist loadgroup``).
 

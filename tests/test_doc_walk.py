@@ -106,7 +106,7 @@ SAMPLES = {
         "load.p_max": [0.01], "load.relative_to": ["rms_slope", "e_star"], "load.target_area": [0.05, 0.5],
         "load.n_steps": [5], "load.schedule": ["geometric"], "load.p_min": [_p_min], "solver.e_star": [2.0],
         "solver.tol": [1e-6], "solver.max_iter": [100], "solver.array_backend": ["numpy", "cupy"],
-        "solver.batch": [2, 1],
+        "solver.batch": [2, 1], "solver.ranks": [2, 1],
         "outputs.fields": [[1]], "outputs.clusters": [True],
         "outputs.pressure_distribution": [{"bins": 10, "max": 5.0}], "outputs.stiffness": [True],
         "outputs.full_contact_load": [True], "effects.plasticity.hardness": [0.5, 0.004],

@@ -17,7 +17,7 @@ import xarray as xr
 from snakemake.exceptions import WorkflowError
 
 from cfcheck import assert_cf_clean
-from conftest import copy_workflow, run_snakemake
+from conftest import copy_workflow, edited_contact, run_snakemake
 from roughcontact.figures.registry import FIGURES
 from roughcontact.pipeline import params
 from roughcontact.pipeline.case import ContactCase, run_case
@@ -45,25 +45,9 @@ BATCH = "results/tiny/contact_batch/kl2_ks8_H{H}_b{index}.nc"
 SURF = "results/tiny/surfaces/kl2_ks8_H{H}_s{seed}.nc"
 
 
-def _edited(cfg, **edits):
-    """``cfg`` with ``edits`` (dotted keys under the tiny scene's contact block; None removes) applied."""
-    cfg = copy.deepcopy(cfg)
-    block = cfg["scenes"]["tiny"]["contact"]
-    for dotted, value in edits.items():
-        *head, last = dotted.split(".")
-        node = block
-        for key in head:
-            node = node.setdefault(key, {})
-        if value is None:
-            node.pop(last)
-        else:
-            node[last] = value
-    return cfg
-
-
 def _contact(cfg=BATCHED, **edits):
-    """The tiny scene's contact block validated, with ``edits`` applied first (:func:`_edited`)."""
-    return validate_config(_edited(cfg, **edits))["scenes"]["tiny"]["contact"]
+    """The tiny scene's contact block validated, with ``edits`` applied first (``conftest.edited_contact``)."""
+    return validate_config(edited_contact(cfg, **edits))["scenes"]["tiny"]["contact"]
 
 
 # ------------------------------------------------------------------------------ the grouping

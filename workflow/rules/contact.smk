@@ -50,6 +50,33 @@ rule contact:
         "../scripts/contact.py"
 
 
+# One case over MPI ranks (contact.solver.ranks > 1): an MPI job, `mpi` resource `mpiexec` locally (the
+# SLURM profile sets `srun`), `tasks` the ranks; the case's contact job copies its file.
+rule contact_mpi:
+    input:
+        contact_mpi_input,
+    output:
+        case_path("contact_mpi"),
+    log:
+        case_path("logs/contact_mpi", "log"),
+    benchmark:
+        case_path("benchmarks/contact_mpi", "tsv")
+    conda:
+        "../../envs/roughcontact.yaml"
+    # locally the ranks' cores (the SLURM profile sets 1 CPU per task)
+    threads: mpi_job_tasks
+    resources:
+        mem_mb=mpi_job_mem_mb,
+        runtime=mpi_job_runtime_min,
+        tasks=mpi_job_tasks,
+        mpi="mpiexec",
+    params:
+        settings=contact_mpi_params(params.contact),
+        surface=contact_mpi_params(params.surface),
+    script:
+        "../scripts/contact_mpi.py"
+
+
 # Measured surfaces: the same load steps on one topography file (free boundary by default).
 rule contact_topography:
     input:

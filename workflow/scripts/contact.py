@@ -1,5 +1,6 @@
 """Stage 3: solve the contact of one surface (generated or measured) over the scene's load steps; with
-contact.solver.batch > 1, copy the case out of its batch's file (workflow/scripts/contact_batch.py solved it)."""
+contact.solver.batch > 1, copy the case out of its batch's file (workflow/scripts/contact_batch.py solved it),
+with contact.solver.ranks > 1 out of its MPI job's file (workflow/scripts/contact_mpi.py)."""
 from pathlib import Path
 
 import numpy as np
@@ -15,8 +16,8 @@ from roughcontact.pipeline.sources import for_case
 def main(log):
     w, settings = snakemake.wildcards, snakemake.params.settings
     case = {key: getattr(w, key) for key in w.keys() if key != "scene"}  # k_l, k_s, H, seed; or topography
-    if "batch" in snakemake.input.keys():
-        copy_from_batch(log, w, case, settings)
+    if "batch" in snakemake.input.keys() or "mpi" in snakemake.input.keys():
+        copy_solved(log, w, case, settings)
         return
     surf = read_dataset(snakemake.input[0], stage="surface", variables=["heights", "rms_slope", "alpha"])
     # a surface records what it was made with under its source's key (generator block, reader settings)
@@ -39,10 +40,12 @@ def main(log):
         log.info(scene[1].text(scene[0]))
 
 
-def copy_from_batch(log, w, case, settings):
-    """The case's group of its batch's file, checked to be this case made with these settings, as its own file."""
-    path = snakemake.input.batch
-    ds = read_dataset(path, stage="contact", group=Path(snakemake.output[0]).stem).drop_encoding()
+def copy_solved(log, w, case, settings):
+    """The case solved by another job (its group of a batch's file, or an MPI job's file), checked to be this case
+    made with these settings, as its own file."""
+    batched = "batch" in snakemake.input.keys()
+    path = snakemake.input.batch if batched else snakemake.input.mpi
+    ds = read_dataset(path, stage="contact", group=Path(snakemake.output[0]).stem if batched else None).drop_encoding()
     require_made_for(ds, path, case, **settings)
     write_dataset(ds, snakemake.output[0], stage="contact", scene=w.scene, scene_parameters=recorded(ds))
     area = ds.area_fraction.values.ravel()

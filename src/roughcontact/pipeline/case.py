@@ -19,13 +19,24 @@ A batch (heights of shape ``(B, nx, ny)``, one load schedule for all) gives one 
 >>> hs = np.stack([generate_surface(64, 2, 16, 0.8, seed=s, rms_slope=0.1) for s in range(3)])
 >>> [d.attrs["batch_size"] for d in run_case(hs, case, length=1.0, rms_slope=[0.1] * 3)]
 [3, 3, 3]
+
+A case split over MPI ranks (``ContactCase(..., ranks=R)``, ``contact.solver.ranks``) runs from its
+surface's file, every rank reading its own rows: :func:`run_case_on_ranks`.
 """
 
 from __future__ import annotations
 
 import math
+import os
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import xarray as xr
@@ -65,6 +76,10 @@ class ContactCase:
         FFTW threads.
     warm_start : {"extrapolated", "scaled"}
         How a step after the first starts (:func:`roughcontact.solver.solve_contact`).
+    ranks : int
+        MPI ranks the case is split over (``contact.solver.ranks``): 1 solves it in this process
+        (:func:`run_case`), more in ``ranks`` processes of :mod:`roughcontact.solver.mpi`
+        (:func:`run_case_on_ranks`).
     """
 
     schedule: LoadSchedule
@@ -80,6 +95,7 @@ class ContactCase:
     pressure_unit: str = "1"
     threads: int = 1
     warm_start: str = "extrapolated"
+    ranks: int = 1
 
     @classmethod
     def from_block(cls, block: Mapping, *, length_unit: str = "1", threads: int = 1) -> ContactCase:
@@ -89,7 +105,7 @@ class ContactCase:
                    max_iter=solver["max_iter"], boundary=solver["boundary"],
                    array_backend=solver.get("array_backend", "numpy"), effects=block["effects"],
                    outputs=block["outputs"], length_unit=length_unit, pressure_unit=solver["pressure_unit"],
-                   threads=threads)
+                   threads=threads, ranks=solver.get("ranks", 1))
 
     def solver_options(self, length) -> dict:
         """The keyword options of :func:`roughcontact.solver.solve_contact` for a cell of ``length``."""
@@ -137,6 +153,9 @@ def run_case(heights: np.ndarray, case: ContactCase, *, length, rms_slope, log=N
         batched solve's case ``b`` (its per-case variables over ``step``), with ``wall_time`` and
         ``rounds`` of the whole batch and the attributes ``batch_size`` and ``check_every``.
     """
+    if case.ranks != 1:
+        raise ValueError(f"run_case: a case over {case.ranks} MPI ranks reads its surface from a file on every rank; "
+                         "run it with run_case_on_ranks (the surface's file), or give ContactCase ranks=1")
     if np.ndim(heights) == 3:
         return _run_batch(np.asarray(heights), case, length=length, rms_slope=rms_slope, log=log, names=name,
                           observers=observers)
@@ -154,6 +173,134 @@ def run_case(heights: np.ndarray, case: ContactCase, *, length, rms_slope, log=N
                            observers=[*clusters, *contact_observers(outputs, case.e_star * rms_slope), *observers],
                            **options)
     return _finished(result, heights, case, length, load_info, log, name or "case")
+
+
+def _refused_over_ranks(case: ContactCase) -> list[str]:
+    """What ``case`` asks that a solve over MPI ranks cannot compute (:mod:`roughcontact.solver.mpi` solves the
+    periodic elastic problem and reports per-step columns), named; a scene's are refused before any job by
+    :func:`roughcontact.pipeline.config.checks.check_ranks`."""
+    outputs = case.outputs
+    refused = [(bool(outputs.get("fields")), "outputs['fields'] (stored fields)"),
+               (bool(outputs.get("clusters")), "outputs['clusters']"),
+               ("pressure_distribution" in outputs, "outputs['pressure_distribution'] (P(p))"),
+               (bool(outputs.get("full_contact_load")), "outputs['full_contact_load']"),
+               (bool(case.effects), f"effects ({', '.join(case.effects)})"),
+               (case.boundary != "periodic", f"boundary={case.boundary!r}"),
+               (case.array_backend != "numpy", f"array_backend={case.array_backend!r}"),
+               (case.method is not None, f"method={case.method!r}"),
+               (case.schedule.target_area is not None, "schedule.target_area (a load search)"),
+               (case.warm_start != "extrapolated", f"warm_start={case.warm_start!r}")]
+    return [what for flag, what in refused if flag]
+
+
+def mpi_command(launcher: str, ranks: int) -> list[str]:
+    """The command that starts ``ranks`` processes: ``launcher`` (e.g. ``"mpiexec"``, ``"srun"``, or with options:
+    ``"mpiexec --bind-to core"``) split into words, then ``-n ranks``.
+
+    ``mpiexec`` not on ``PATH`` is the one beside this Python (``pip install 'roughcontact[mpi]'`` puts MPICH's
+    there); a launcher found nowhere is a ``ValueError`` naming it and the remedy.
+    """
+    words = shlex.split(launcher)
+    if not words:
+        raise ValueError("contact.solver.ranks: the MPI launcher (the rule's 'mpi' resource) is empty; set it to "
+                         "mpiexec (local runs) or srun (SLURM)")
+    found = shutil.which(words[0])
+    if found is None and words[0] == "mpiexec" and (Path(sys.executable).parent / "mpiexec").exists():
+        found = str(Path(sys.executable).parent / "mpiexec")
+    if found is None:
+        raise ValueError(f"contact.solver.ranks: the MPI launcher {words[0]!r} (the rule's 'mpi' resource) is not "
+                         "found; install one with pip install 'roughcontact[mpi]' (mpiexec), or on a cluster run "
+                         "with --workflow-profile profiles/slurm (srun)")
+    return [found, *words[1:], "-n", str(int(ranks))]
+
+
+#: A step line of ``python -m roughcontact.solver.mpi`` (its ``_log_step``), re-logged as :func:`run_case`'s.
+_MPI_STEP = re.compile(r"^step (\d+): p0=(\S+) A/A0=(\S+) iterations=(\d+) converged=(True|False) (\S+) s$")
+
+
+def run_case_on_ranks(surface_file, case: ContactCase, *, length, rms_slope: float, n_nodes: int,
+                      launcher: str = "mpiexec", log=None, name=None) -> xr.Dataset:
+    """Solve one surface over ``case.ranks`` MPI processes: :func:`run_case`'s dataset, computed by
+    ``launcher -n ranks python -m roughcontact.solver.mpi`` (:mod:`roughcontact.solver.mpi`).
+
+    Every rank reads its own rows of ``surface_file`` (the grid is split in slabs along x), so no
+    process but rank 0's writer ever holds a whole field; rank 0 writes the per-step columns to a
+    temporary file, read back here. The load schedule is resolved here as :func:`run_case` does and
+    passed exactly (``repr`` of each p0).
+
+    Parameters
+    ----------
+    surface_file : path
+        A NetCDF file with ``heights`` over ``(x, y)`` (other dimensions of length 1): a surface job's file.
+    case : ContactCase
+        With ``ranks`` >= 1; the periodic elastic solve with per-step outputs only (stiffness allowed):
+        stored fields, clusters, P(p), the full-contact load, effects, the free boundary, CuPy, another
+        method and ``target_area`` are refused with a ``ValueError`` (a scene's are refused before any
+        job: :func:`roughcontact.pipeline.config.checks.check_ranks`).
+    length : float or (float, float)
+        The cell's side(s) [length].
+    rms_slope : float
+        The surface's rms slope h' (loads relative to it, κ).
+    n_nodes : int
+        The grid's nodes ``nx ny`` (the schedule's resolution).
+    launcher : str
+        The command that starts MPI processes (:func:`mpi_command`): ``mpiexec`` locally, ``srun`` in a SLURM job.
+    log : logging.Logger, optional
+        Each step's line (as :func:`run_case`'s), the ranks' peak memory, the warnings.
+    name : str, optional
+        The case's name in warnings.
+
+    Returns
+    -------
+    xarray.Dataset
+        :func:`roughcontact.solver.solve_contact`'s layout (attributes ``mpi_ranks``, ``fft_library``),
+        with ``contact_stiffness`` where asked and the load's attributes.
+
+    Raises
+    ------
+    ValueError
+        A refused setting, a launcher not found, or the MPI solver's own refusal (its one-line message).
+    RuntimeError
+        The MPI processes ended otherwise (the last lines of their output).
+    """
+    refused = _refused_over_ranks(case)
+    if refused:
+        raise ValueError(f"run_case_on_ranks: a case over MPI ranks computes the periodic elastic solve's per-step "
+                         f"columns only, not {', '.join(refused)}; run it with run_case (ranks=1) for those")
+    loads, load_info = case.schedule.resolve(case.e_star, rms_slope, n_nodes, None, log, name)
+    sides = [length] if np.ndim(length) == 0 else list(length)
+    with tempfile.TemporaryDirectory(prefix="roughcontact-mpi-") as tmp:
+        out = Path(tmp) / "contact.nc"
+        cmd = [*mpi_command(launcher, case.ranks), sys.executable, "-m", "roughcontact.solver.mpi",
+               "--surface", os.fspath(surface_file), "--loads", *(repr(float(p)) for p in loads),
+               "--length", *(repr(float(v)) for v in sides), "--e-star", repr(float(case.e_star)),
+               "--tol", repr(float(case.tol)), "--max-iter", str(int(case.max_iter)),
+               "--length-unit", case.length_unit, "--pressure-unit", case.pressure_unit, "--out", os.fspath(out)]
+        if log is not None:
+            log.info("%s over %d MPI ranks: %s", name or "case", case.ranks, " ".join(cmd[:cmd.index("--loads")]))
+        _run_ranks(cmd, _progress(log, len(loads)), log)
+        result = xr.load_dataset(out)
+    return _finished(result, None, case, length, load_info, log, name or "case")
+
+
+def _run_ranks(cmd: list[str], progress, log) -> None:
+    """Run the MPI command, passing its step lines to ``progress`` and its other lines to ``log`` as they come."""
+    tail: list[str] = []
+    with subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True) as proc:
+        for line in proc.stdout:
+            line = line.rstrip("\n")
+            tail = [*tail[-19:], line]
+            step = _MPI_STEP.match(line)
+            if step is not None and progress is not None:
+                progress(int(step[1]), float(step[2]), float(step[3]), int(step[4]), step[5] == "True", float(step[6]))
+            elif step is None and line and log is not None:
+                log.info("mpi: %s", line)
+    if proc.returncode == 2:  # the MPI solver's bad input: its own one line
+        errors = [line.removeprefix("error: ") for line in tail if line.startswith("error: ")]
+        raise ValueError(errors[-1] if errors else "\n".join(tail))
+    if proc.returncode != 0:
+        raise RuntimeError(f"the MPI solve ({' '.join(cmd[:4])} ...) ended with exit status {proc.returncode}; its "
+                           "last lines:\n" + "\n".join(tail))
 
 
 def _finished(result: xr.Dataset, heights: np.ndarray, case: ContactCase, length, load_info: dict, log,

@@ -3,8 +3,12 @@
 With ``contact.solver.batch: B`` (> 1) the seeds of each ``(k_l, k_s, H)`` are solved ``B`` at a time
 (:func:`roughcontact.pipeline.cases.contact_batches`) by the ``contact_batch`` rule, whose file
 (:func:`contact_batch_path`) holds one group per case, and each case's ``contact`` job copies its group
-out (:meth:`ContactJobs.contact_input` names the batch file as its input). :class:`ContactJobs` holds
-the functions the rules call with a job's wildcards; :class:`roughcontact.pipeline.targets.Targets` is one.
+out (:meth:`ContactJobs.contact_input` names the batch file as its input). With ``contact.solver.ranks: R``
+(> 1) each case is solved over ``R`` MPI processes by the ``contact_mpi`` rule (an MPI job: Snakemake's
+``mpi`` and ``tasks`` resources), whose file ``results/{scene}/contact_mpi/<case>.nc`` the case's ``contact``
+job copies, as it copies a batch's group: the MPI job stays out of the SLURM profile's group of contact jobs.
+:class:`ContactJobs` holds the functions the rules call with a job's wildcards;
+:class:`roughcontact.pipeline.targets.Targets` is one.
 """
 
 from __future__ import annotations
@@ -17,7 +21,8 @@ from snakemake.exceptions import WorkflowError
 from .cases import CASE_STEM, CONTACT_BATCH_STEM, ContactBatch, batch_index, batch_seeds, batch_size
 
 __all__ = ["COPY_MEM_MB", "COPY_RUNTIME_MIN", "ContactJobs", "contact_batch_mem_mb", "contact_batch_path",
-           "contact_batch_runtime_min", "contact_mem_mb", "contact_runtime_min", "map_side"]
+           "contact_batch_runtime_min", "contact_mem_mb", "contact_mpi_mem_mb", "contact_mpi_runtime_min",
+           "contact_runtime_min", "map_side", "ranks_of"]
 
 
 def contact_batch_path(folder: str, ext: str = "nc") -> str:
@@ -53,6 +58,24 @@ def contact_batch_runtime_min(n: int, n_steps: int, size: int) -> int:
     """Wall-time request of one contact batch job [min]: ``size`` cases at :func:`contact_runtime_min`'s pace
     (on the host a batch is no faster than its cases one by one)."""
     return max(5, size * contact_runtime_min(n, n_steps))
+
+
+def ranks_of(block: Mapping) -> int:
+    """The MPI processes one case of a validated contact block is split over: ``solver.ranks`` (absent: 1)."""
+    return int(block["solver"].get("ranks", 1))
+
+
+def contact_mpi_mem_mb(n: int, ranks: int) -> int:
+    """Peak memory of one contact case over ``ranks`` MPI processes [MB], all ranks together: an interpreter per
+    rank and :func:`contact_mem_mb`'s solver work, split (measured at N = 8192 on 2 ranks: 9.8 GiB in all, ~20
+    doubles a node: benchmarks/README.md)."""
+    return int(300 * ranks + 40 * 8 * n * n / 2**20)
+
+
+def contact_mpi_runtime_min(n: int, n_steps: int, ranks: int) -> int:
+    """Wall-time request of one contact case over ``ranks`` processes [min]: :func:`contact_runtime_min` x 4 (the
+    distributed iteration's CPU per iteration, 3.6-4.1x the single solve's), shared by the ranks."""
+    return max(5, math.ceil(4 * contact_runtime_min(n, n_steps) / ranks))
 
 
 #: Peak memory [MB] and wall time [min] of a batched case's own job: it copies its case out of its batch's file.
@@ -108,24 +131,29 @@ class ContactJobs:
 
     def contact_input(self, w) -> dict:
         """The input of one contact case's job (the case checked against its scene's grid): its surface
-        (``surface``), or with ``contact.solver.batch`` > 1 its batch's file (``batch``), which the job copies
-        its case out of."""
+        (``surface``), with ``contact.solver.batch`` > 1 its batch's file (``batch``), with ``contact.solver.ranks``
+        > 1 its MPI job's file (``mpi``): the job copies its case out of either."""
         block = self.check_case(w, "contact")
         size = batch_size(block)
+        if ranks_of(block) > 1:
+            return {"mpi": f"results/{w.scene}/contact_mpi/{CASE_STEM.format(**_case_of(w))}.nc"}
         if size == 1:
             return {"surface": f"results/{w.scene}/surfaces/{CASE_STEM.format(**_case_of(w))}.nc"}
         stem = CONTACT_BATCH_STEM.format(k_l=w.k_l, k_s=w.k_s, H=w.H, batch=batch_index(w.seed, size))
         return {"batch": f"results/{w.scene}/contact_batch/{stem}.nc"}
 
     def contact_job_mem_mb(self, w) -> int:
-        """Peak memory of one contact case's job [MB]: a solve's (:func:`contact_mem_mb`), or a batched case's copy."""
+        """Peak memory of one contact case's job [MB]: a solve's (:func:`contact_mem_mb`), or a batched or MPI
+        case's copy."""
         block = self.scenes[w.scene]["contact"]
-        return contact_mem_mb(map_side(block["surface"])) if batch_size(block) == 1 else COPY_MEM_MB
+        if batch_size(block) > 1 or ranks_of(block) > 1:
+            return COPY_MEM_MB
+        return contact_mem_mb(map_side(block["surface"]))
 
     def contact_job_runtime_min(self, w) -> int:
         """Wall-time request of one contact case's job [min]: a solve's (:func:`contact_runtime_min`), or a copy's."""
         block = self.scenes[w.scene]["contact"]
-        if batch_size(block) > 1:
+        if batch_size(block) > 1 or ranks_of(block) > 1:
             return COPY_RUNTIME_MIN
         return contact_runtime_min(map_side(block["surface"]), block["load"]["n_steps"])
 
@@ -139,3 +167,36 @@ class ContactJobs:
         block = self.scenes[w.scene]["contact"]
         return contact_batch_runtime_min(block["surface"]["N"], block["load"]["n_steps"], batch_size(block))
 
+
+    def contact_mpi_block(self, w) -> Mapping:
+        """The contact block of a case over MPI ranks, the case checked against its scene: a scene that solves its
+        cases in one process (``contact.solver.ranks`` 1) has no ``contact_mpi`` files, and says so."""
+        block = self.check_case(w, "contact")
+        if ranks_of(block) == 1:
+            raise WorkflowError(f"scene {w.scene!r} solves each contact case in one process (contact.solver.ranks is "
+                                f"1), so it has no contact_mpi files; its cases are "
+                                f"results/{w.scene}/contact/{CASE_STEM}.nc")
+        return block
+
+    def contact_mpi_input(self, w) -> str:
+        """The surface of a case over MPI ranks (every rank reads its rows of it)."""
+        self.contact_mpi_block(w)
+        return f"results/{w.scene}/surfaces/{CASE_STEM.format(**_case_of(w))}.nc"
+
+    def contact_mpi_params(self, provider):
+        """A params function: ``provider``'s values for the contact block of a case over MPI ranks."""
+        return lambda w: provider(self.contact_mpi_block(w))
+
+    def mpi_job_tasks(self, w) -> int:
+        """MPI processes of one case's ``contact_mpi`` job: ``contact.solver.ranks`` (SLURM's ``--ntasks``)."""
+        return ranks_of(self.scenes[w.scene]["contact"])
+
+    def mpi_job_mem_mb(self, w) -> int:
+        """Peak memory of one ``contact_mpi`` job [MB], all ranks (:func:`contact_mpi_mem_mb`)."""
+        block = self.scenes[w.scene]["contact"]
+        return contact_mpi_mem_mb(block["surface"]["N"], ranks_of(block))
+
+    def mpi_job_runtime_min(self, w) -> int:
+        """Wall-time request of one ``contact_mpi`` job [min] (:func:`contact_mpi_runtime_min`)."""
+        block = self.scenes[w.scene]["contact"]
+        return contact_mpi_runtime_min(block["surface"]["N"], block["load"]["n_steps"], ranks_of(block))

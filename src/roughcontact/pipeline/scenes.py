@@ -54,6 +54,8 @@ from .config.checks import (
     check_batch,
     check_contact,
     check_kappa_gap,
+    check_mpi,
+    check_ranks,
     resolve_load,
 )
 from .config.files import ConfigError, load_config_files
@@ -111,9 +113,11 @@ def validate_scene(name: str, scene: dict, schema: dict, delta: dict | None = No
         resolve_load(name, out["contact"]["load"], given, source.relative_load)
         check_contact(name, out["contact"])
         check_batch(name, out["contact"], source.key)
+        check_ranks(name, out["contact"], source.key)
         check_against_fit(name, out["contact"], out["fit"])
         if active:
             check_backend(name, out["contact"])
+            check_mpi(name, out["contact"])
             source.check_contact_files(name, out)
     if "accuracy" in out:
         check_accuracy(name, out["accuracy"])

@@ -140,6 +140,74 @@ def check_batch(scene: str, block: dict, source: str | None) -> None:
         fail("outputs.pressure_distribution", "needs each step's pressure field, which a batch does not keep")
 
 
+def check_ranks(scene: str, block: dict, source: str | None) -> None:
+    """``solver.ranks`` of a contact block: what a case over MPI ranks cannot do, refused before any job is planned.
+
+    A case over ranks (:func:`roughcontact.pipeline.case.run_case_on_ranks`) is solved by
+    :mod:`roughcontact.solver.mpi`: a generated map (``source`` None) split in slabs of rows along x, the periodic
+    elastic iteration on numpy, per-step columns only. So a block with ``ranks`` > 1 has no batch, effects, free
+    boundary, CuPy, stored fields, clusters, P(p), full-contact load or ``target_area``, and at most one rank per
+    row of the grid. ``ranks: 1`` is the default and is dropped, so that writing it changes no job's parameters.
+    Whether MPI is installed is checked for the scene that runs (:func:`check_mpi`).
+    """
+    solver = block["solver"]
+    ranks = solver.get("ranks", 1)
+    if ranks == 1:
+        solver.pop("ranks", None)
+        return
+
+    def fail(field, msg):
+        remedy = "remove solver.ranks (one process)" if field == "solver.ranks" else \
+            f"remove {field} or solver.ranks (one process)"
+        raise ConfigError(f"scene {scene!r}, field 'contact.{field}': {msg} (contact.solver.ranks: {ranks} splits "
+                          f"each case over {ranks} MPI processes); {remedy}")
+
+    if source is not None:
+        fail("solver.ranks", f"splits generated maps, and a {source} scene's cases are files solved whole (run "
+                             "one over ranks with python -m roughcontact.solver.mpi --surface FILE)")
+    surface = block.get("surface", {})
+    if surface.get("dimension") == 1:
+        fail("surface.dimension", "1 makes profiles, and the MPI solver splits maps")
+    if ranks > surface.get("N", ranks):
+        fail("solver.ranks", f"{ranks} ranks for the N = {surface['N']} grid's {surface['N']} rows along x: each "
+                             f"rank needs at least one row (at most {surface['N']})")
+    if solver.get("batch", 1) != 1:
+        fail("solver.batch", f"{solver['batch']}: a batch solves several cases in one process, ranks one case "
+                             "over several")
+    if solver["boundary"] != "periodic":
+        fail("solver.boundary", f"{solver['boundary']!r}: the MPI solver runs the periodic half-space only (the "
+                                "free boundary's padded grid is not split)")
+    if solver.get("array_backend", "numpy") != "numpy":
+        fail("solver.array_backend", f"{solver['array_backend']!r}: the MPI solver runs on numpy")
+    if block["effects"]:
+        fail("effects", f"{', '.join(block['effects'])}: the MPI solver runs the elastic solver without effects")
+    if "target_area" in block["load"]:
+        fail("load.target_area", "is searched by solving the case again and again in one process")
+    outputs = block["outputs"]
+    if outputs["fields"]:
+        fail("outputs.fields", f"steps {outputs['fields']}: a case over ranks stores no fields (a whole field on "
+                               "one process is what the split avoids)")
+    if outputs["clusters"]:
+        fail("outputs.clusters", "labels each step's whole contact mask in one process")
+    if "pressure_distribution" in outputs:
+        fail("outputs.pressure_distribution", "needs each step's whole pressure field in one process")
+    if outputs.get("full_contact_load"):
+        fail("outputs.full_contact_load", "transforms the whole surface in one process")
+
+
+def check_mpi(scene: str, contact: Mapping) -> None:
+    """``solver.ranks`` > 1 on a Python that cannot import mpi4py: refused before any job (the scene that runs).
+
+    Only the import is checked here (the launcher, ``mpiexec`` or ``srun``, is found by the job:
+    :func:`roughcontact.pipeline.case.mpi_command`).
+    """
+    ranks = contact["solver"].get("ranks", 1)
+    if ranks > 1 and importlib.util.find_spec("mpi4py") is None:
+        raise ConfigError(f"scene {scene!r}, field 'contact.solver.ranks': {ranks} MPI ranks need mpi4py and an MPI "
+                          "runtime, which this Python cannot import; install them with `pip install "
+                          "'roughcontact[mpi]'`, or remove solver.ranks (one process)")
+
+
 def check_profile_contact(scene: str, block: Mapping, why: str) -> None:
     """What the 1-D (plane-strain) solver and the profiles' outputs cannot do, refused naming the key (``why``: what
     makes the scene's cases profiles): contact clusters (the labelling of a map's 4-connected nodes), adhesion and

@@ -5,7 +5,8 @@ dimension of length 1, as the pipeline's surface files; every rank reads its own
 generated (``--generate N K_L K_S H SEED`` with ``--rms-slope`` or ``--rms-height``: rank 0 generates
 it and sends each rank its rows; ``--plateau`` keeps the spectrum flat below ``K_L``: a roll-off).
 The loads are ``--steps`` equal steps up to ``--p-max`` [pressure] (``p0 = p_max k / steps``,
-``k = 1..steps``). Rank 0 writes the contact NetCDF file
+``k = 1..steps``), or the mean pressures listed by ``--loads`` (the pipeline's resolved schedule,
+:class:`roughcontact.pipeline.loading.LoadSchedule`, as ``repr`` strings: exact). Rank 0 writes the contact NetCDF file
 (``--out``), :func:`~roughcontact.solver.solve_contact`'s dataset, and logs each step to stderr.
 Bad input ends in one line ``error: ...`` on rank 0 and exit status 2 on every rank.
 
@@ -41,12 +42,17 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--plateau", action="store_true",
                     help="keep the spectrum constant below K_L (a roll-off, as the Contact-Mechanics Challenge's) "
                          "instead of cutting it")
-    ap.add_argument("--length", type=float, default=None, help="side L of the cell (default: the file's, or 1)")
-    ap.add_argument("--p-max", type=float, required=True, help="last mean pressure [pressure]")
+    ap.add_argument("--length", type=float, nargs="+", default=None, metavar="L",
+                    help="side L of the cell, or its sides Lx Ly (default: the file's, or 1)")
+    loads = ap.add_mutually_exclusive_group(required=True)
+    loads.add_argument("--p-max", type=float, help="last mean pressure [pressure] of --steps equal steps")
+    loads.add_argument("--loads", type=float, nargs="+", metavar="P0", help="the mean pressures [pressure], in order")
     ap.add_argument("--steps", type=int, default=10, help="equal load steps up to --p-max (default 10)")
     ap.add_argument("--e-star", type=float, default=1.0, help="plane-strain modulus E* [pressure] (default 1)")
     ap.add_argument("--tol", type=float, default=1e-8, help="convergence tolerance (default 1e-8)")
     ap.add_argument("--max-iter", type=int, default=None, help="iterations per step at most")
+    ap.add_argument("--length-unit", default="1", help="unit of heights and lengths, as the file says it (default 1)")
+    ap.add_argument("--pressure-unit", default="1", help="unit of E* and the pressures (default 1: nondimensional)")
     ap.add_argument("--fft-library", choices=FFT_LIBRARIES, default="slab", help="distributed FFT (default slab)")
     ap.add_argument("--fields", action="store_true", help="gather the last step's pressure and gap into the file")
     ap.add_argument("--out", required=True, help="contact NetCDF file written by rank 0")
@@ -74,7 +80,7 @@ def read_rows(path: str, comm) -> tuple[np.ndarray, tuple[int, int], float]:
 def generated_rows(args, comm) -> tuple[np.ndarray, tuple[int, int], float]:
     """Rank 0 generates the surface and sends each rank its rows (``Scatterv``)."""
     n = int(args.generate[0])
-    length = 1.0 if args.length is None else args.length
+    length = 1.0 if args.length is None else args.length[0]
     full = None
     if comm.rank == 0:
         from ...surfaces.synthetic import generate_surface
@@ -100,9 +106,14 @@ def main(argv=None) -> int:
     try:
         if args.steps < 1:
             raise ValueError(f"--steps must be >= 1, got {args.steps}")
+        if args.length is not None and len(args.length) > 2:
+            raise ValueError(f"--length takes L or Lx Ly, got {len(args.length)} values")
         h, shape, length = _heights(args, comm)
-        p = args.p_max * np.arange(1, args.steps + 1) / args.steps
-        options = {"tol": args.tol, "e_star": args.e_star, "length": length if args.length is None else args.length}
+        p = np.asarray(args.loads) if args.loads is not None else args.p_max * np.arange(1, args.steps + 1) / args.steps
+        if args.length is not None:
+            length = args.length[0] if len(args.length) == 1 else tuple(args.length)
+        options = {"tol": args.tol, "e_star": args.e_star, "length": length, "length_unit": args.length_unit,
+                   "pressure_unit": args.pressure_unit}
         if args.max_iter is not None:
             options["max_iter"] = args.max_iter
         ds = solve_contact_mpi(h, shape, p, comm=comm, fft_library=args.fft_library, fields=args.fields,

@@ -1,0 +1,253 @@
+"""One case over MPI ranks in the pipeline (issue 50, item 2): ``contact.solver.ranks`` from the config to the file.
+
+The config's refusals (each named, before any job), MPI asked for but not installed, ``ranks: 1`` dropped,
+the rules' functions and resources, the launcher (:func:`~roughcontact.pipeline.case.mpi_command`),
+:func:`~roughcontact.pipeline.case.run_case_on_ranks` against :func:`~roughcontact.pipeline.case.run_case`
+on the same surface file, the MPI solver's own refusal passed on as one line, a dry run under the SLURM
+profile (an MPI job: ``mpi=srun``, ``tasks`` = ranks) and (slow) a tiny scene with ``ranks: 2`` against
+the same scene in one process, file by file. The runs skip, saying why, where mpi4py or ``mpiexec`` is
+missing (the ``test`` extra brings them).
+"""
+from __future__ import annotations
+
+import copy
+import importlib.util
+import json
+import logging
+import re
+import sys
+from dataclasses import replace
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+import xarray as xr
+from snakemake.exceptions import WorkflowError
+
+from conftest import copy_workflow, edited_contact, run_snakemake
+from roughcontact.figures.registry import FIGURES
+from roughcontact.pipeline import params
+from roughcontact.pipeline.case import ContactCase, mpi_command, run_case, run_case_on_ranks
+from roughcontact.pipeline.config import ConfigError
+from roughcontact.pipeline.contact_jobs import contact_mpi_mem_mb, contact_mpi_runtime_min, contact_runtime_min
+from roughcontact.pipeline.loading import LoadSchedule
+from roughcontact.pipeline.scenes import validate_config
+from roughcontact.pipeline.targets import Targets
+from roughcontact.studies.accuracy import variants
+from roughcontact.surfaces.synthetic import generate_surface
+from test_solver_mpi import MPIEXEC, needs_mpi
+from test_workflow import TINY
+
+#: The tiny scene (contact only, N = 64) split over 2 ranks, and the same scene in one process.
+SPLIT = copy.deepcopy(TINY)
+del SPLIT["scenes"]["tiny"]["representativity"]
+SPLIT["scenes"]["tiny"]["contact"].update(surface={"N": 64, "rms_slope": 0.1}, solver={"tol": 1e-8, "ranks": 2},
+                                          outputs={"stiffness": True})
+SINGLE = copy.deepcopy(SPLIT)
+del SINGLE["scenes"]["tiny"]["contact"]["solver"]["ranks"]
+
+HS = ("0.5", "0.8")
+CONTACT = "results/tiny/contact/kl2_ks8_H{H}_s{seed}.nc"
+#: Two of its cases (the runs' time is Snakemake's and the processes' start-up, not the solves').
+TARGETS = [CONTACT.format(H=h, seed=0) for h in HS]
+
+
+def _contact(cfg=SPLIT, **edits):
+    return validate_config(edited_contact(cfg, **edits))["scenes"]["tiny"]["contact"]
+
+
+# ------------------------------------------------------------------------------ the config
+@pytest.mark.parametrize("edits, field, why", [
+    ({"solver.batch": 4}, "solver.batch", "a batch solves several cases in one process"),
+    ({"solver.boundary": "free"}, "solver.boundary", "periodic half-space only"),
+    ({"solver.array_backend": "cupy"}, "solver.array_backend", "runs on numpy"),
+    ({"effects": {"plasticity": {"hardness": 0.5}}}, "effects", "without effects"),
+    ({"outputs.fields": [12]}, "outputs.fields", "stores no fields"),
+    ({"outputs.clusters": True}, "outputs.clusters", "whole contact mask"),
+    ({"outputs.pressure_distribution": {"bins": 10, "max": 3}}, "outputs.pressure_distribution", "pressure field"),
+    ({"outputs.full_contact_load": True}, "outputs.full_contact_load", "whole surface"),
+    ({"load": {"target_area": 0.1}}, "load.target_area", "again and again"),
+    ({"solver.ranks": 65}, "solver.ranks", "at most 64"),
+    ({"surface.dimension": 1}, "surface.dimension", "profiles"),
+])
+def test_what_a_case_over_ranks_cannot_do_is_refused_naming_the_field(edits, field, why):
+    with pytest.raises(ConfigError) as err:
+        _contact(**edits)
+    msg = str(err.value)
+    assert f"field 'contact.{field}'" in msg and why in msg and "contact.solver.ranks: " in msg, msg
+    assert "remove" in msg
+
+
+def test_a_measured_scene_over_ranks_is_refused(shipped_config, repo, monkeypatch):
+    monkeypatch.chdir(repo)
+    cfg = copy.deepcopy(shipped_config)
+    cfg["scene"] = "measured"
+    cfg["scenes"]["measured"].setdefault("contact", {}).setdefault("solver", {}).update(ranks=2, boundary="periodic")
+    with pytest.raises(ConfigError, match=r"scene 'measured', field 'contact.solver.ranks': splits generated maps.*"
+                                          r"python -m roughcontact.solver.mpi --surface FILE.*remove solver.ranks"):
+        validate_config(cfg)
+
+
+@pytest.mark.parametrize("value", [0, -2, 2.5, "two", 70000])
+def test_bad_ranks_values_are_named(value):
+    with pytest.raises(ConfigError, match=r"field 'contact.solver.ranks'"):
+        _contact(**{"solver.ranks": value})
+
+
+def test_ranks_one_is_dropped_so_it_changes_no_job():
+    assert "ranks" not in _contact(SINGLE, **{"solver.ranks": 1})["solver"]
+    assert params.contact(_contact(SINGLE, **{"solver.ranks": 1})) == params.contact(_contact(SINGLE))
+    assert _contact()["solver"]["ranks"] == 2
+
+
+def test_mpi_asked_for_but_not_installed_is_refused_before_any_job(monkeypatch):
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "mpi4py" else real(name, *a))
+    with pytest.raises(ConfigError, match=r"field 'contact.solver.ranks': 2 MPI ranks need mpi4py.*"
+                                          r"roughcontact\[mpi\]"):
+        validate_config(SPLIT)
+    validate_config(SINGLE)  # one process needs no MPI
+
+
+# ------------------------------------------------------------------------------ the rules' functions
+def _targets(cfg=SPLIT) -> Targets:
+    return Targets.from_config(copy.deepcopy(cfg), variants, FIGURES)
+
+
+def _w(seed="0", **more):
+    return SimpleNamespace(scene="tiny", k_l="2", k_s="8", H="0.5", seed=seed, **more)
+
+
+def test_a_case_over_ranks_is_an_mpi_job_its_contact_job_copies():
+    t = _targets()
+    assert t.contact_input(_w()) == {"mpi": "results/tiny/contact_mpi/kl2_ks8_H0.5_s0.nc"}
+    assert t.contact_mpi_input(_w("1")) == "results/tiny/surfaces/kl2_ks8_H0.5_s1.nc"
+    assert t.mpi_job_tasks(_w()) == 2
+    assert t.mpi_job_mem_mb(_w()) == contact_mpi_mem_mb(64, 2) == 600 + int(40 * 8 * 64**2 / 2**20)
+    assert t.mpi_job_runtime_min(_w()) == contact_mpi_runtime_min(64, 12, 2) == 10  # 4 x the 5-min floor, over 2
+    assert contact_mpi_runtime_min(8192, 30, 4) == int(np.ceil(4 * contact_runtime_min(8192, 30) / 4))
+    assert t.contact_job_mem_mb(_w()) == 300  # the copy's
+    assert t.contact_mpi_params(params.contact)(_w()) == params.contact(t.scenes["tiny"]["contact"])
+    with pytest.raises(WorkflowError, match="seed=5"):
+        t.contact_mpi_input(_w("5"))
+    single = _targets(SINGLE)
+    with pytest.raises(WorkflowError, match=r"no contact_mpi files; its cases are results/tiny/contact/"):
+        single.contact_mpi_input(_w())
+    assert "surface" in single.contact_input(_w())
+
+
+# ------------------------------------------------------------------------------ the launcher and the runner
+def test_the_launcher_is_found_or_named(monkeypatch):
+    if MPIEXEC is not None:
+        cmd = mpi_command("mpiexec", 3)
+        assert Path(cmd[0]).name == "mpiexec" and cmd[1:] == ["-n", "3"]
+    assert mpi_command(f"{sys.executable} --flag", 2)[1:] == ["--flag", "-n", "2"]
+    with pytest.raises(ValueError, match=r"'no-such-launcher' \(the rule's 'mpi' resource\) is not found.*"
+                                         r"roughcontact\[mpi\]"):
+        mpi_command("no-such-launcher", 2)
+    with pytest.raises(ValueError, match="launcher .* is empty"):
+        mpi_command("  ", 2)
+
+
+def _surface_file(path: Path, n=64, seed=0) -> tuple[Path, np.ndarray]:
+    h = generate_surface(n, 1, n // 4, 0.8, seed, rms_slope=0.1)
+    xr.Dataset({"heights": (("x", "y"), h)}).to_netcdf(path)
+    return path, h
+
+
+def test_run_case_asks_for_the_file_and_the_runner_refuses_what_ranks_cannot_compute(tmp_path):
+    path, h = _surface_file(tmp_path / "s.nc")
+    case = ContactCase(LoadSchedule(4, p_max=0.005), ranks=2)
+    with pytest.raises(ValueError, match="run_case_on_ranks"):
+        run_case(h, case, length=1.0, rms_slope=0.1)
+    for changed, named in ((dict(outputs={"fields": [4], "clusters": False}), "outputs['fields']"),
+                           (dict(boundary="free"), "boundary='free'"),
+                           (dict(effects={"plasticity": {"hardness": 0.5}}), "effects (plasticity)"),
+                           (dict(schedule=LoadSchedule(4, target_area=0.1)), "target_area")):
+        bad = replace(case, **changed)
+        with pytest.raises(ValueError, match=re.escape(named)):
+            run_case_on_ranks(path, bad, length=1.0, rms_slope=0.1, n_nodes=h.size)
+
+
+@needs_mpi
+def test_run_case_on_ranks_gives_run_cases_answers(tmp_path, caplog):
+    path, h = _surface_file(tmp_path / "s.nc")
+    case = ContactCase(LoadSchedule(6, p_max=0.005), outputs={"fields": [], "clusters": False, "stiffness": True},
+                       length_unit="um", pressure_unit="MPa")
+    log = logging.getLogger("test_pipeline_mpi")
+    with caplog.at_level(logging.INFO, logger="test_pipeline_mpi"):
+        got = run_case_on_ranks(path, replace(case, ranks=2), length=(1.0, 1.0),
+                                rms_slope=0.1, n_nodes=h.size, log=log, name="s")
+    ref = run_case(h, case, length=(1.0, 1.0), rms_slope=0.1)
+    assert got.attrs["mpi_ranks"] == 2 and bool(got.converged.all())
+    assert np.max(np.abs(got.area_fraction.values - ref.area_fraction.values)) <= 2.0 / h.size
+    np.testing.assert_allclose(got.mean_gap.values, ref.mean_gap.values, rtol=1e-6)
+    np.testing.assert_allclose(got.contact_stiffness.values, ref.contact_stiffness.values, rtol=1e-4)
+    assert np.all(np.abs(got.iterations.values - ref.iterations.values) <= 2)
+    assert {k: got.attrs[k] for k in ("load_p0_max", "load_p_max")} == {k: ref.attrs[k] for k in
+                                                                         ("load_p0_max", "load_p_max")}
+    for name in ("pressure", "mean_gap", "contact_stiffness"):
+        assert got[name].attrs["units"] == ref[name].attrs["units"], name
+    lines = [r.getMessage() for r in caplog.records]
+    assert sum(line.startswith("step ") for line in lines) == 6 and any("over 2 MPI ranks" in x for x in lines)
+
+
+@needs_mpi
+def test_the_mpi_solvers_refusal_comes_back_as_its_one_line(tmp_path):
+    path, h = _surface_file(tmp_path / "s.nc", n=8)
+    case = ContactCase(LoadSchedule(3, p_max=0.005), ranks=9)  # 9 ranks for 8 rows
+    with pytest.raises(ValueError, match=r"^ranks: 9 MPI ranks for 8 rows|each rank needs at least one row"):
+        run_case_on_ranks(path, case, length=1.0, rms_slope=0.1, n_nodes=h.size)
+
+
+# ------------------------------------------------------------------------------ the workflow
+def test_the_slurm_profile_makes_it_an_mpi_job(tmp_path):
+    """Under profiles/slurm the contact_mpi job carries ``mpi=srun`` and ``tasks=2`` (the executor's MPI job: one
+    allocation of 2 tasks, srun inside it), 1 thread per task; locally ``mpi=mpiexec`` and 2 threads."""
+    if importlib.util.find_spec("snakemake_executor_plugin_slurm") is None:
+        pytest.skip("snakemake-executor-plugin-slurm not installed (pip install -e '.[slurm]')")
+    if importlib.util.find_spec("mpi4py") is None:
+        pytest.skip("mpi4py not installed (pip install 'roughcontact[mpi]'): the scene is refused before planning")
+    wd = copy_workflow(tmp_path / "wf", SPLIT)
+    target = "results/tiny/contact_mpi/kl2_ks8_H0.5_s0.nc"
+    res = run_snakemake(wd, "-n", "--workflow-profile", "profiles/slurm", target)
+    assert res.returncode == 0, res.stderr[-3000:]
+    job = res.stdout.split("rule contact_mpi:")[1].split("\n\n")[0]
+    assert "mpi=srun" in job and "tasks=2" in job and "threads:" not in job, job
+    res = run_snakemake(wd, "-n", target)
+    job = res.stdout.split("rule contact_mpi:")[1].split("\n\n")[0]
+    assert "mpi=mpiexec" in job and "tasks=2" in job and "threads: 2" in job, job
+
+
+@needs_mpi
+@pytest.mark.slow  # two tiny runs (2 cases at N = 64, contact files only) and a rerun: ~2 min on 2 busy cores
+def test_ranks_2_equals_the_run_in_one_process(tmp_path):
+    runs = {}
+    for name, cfg in (("split", SPLIT), ("single", SINGLE)):
+        wd = copy_workflow(tmp_path / name, cfg)
+        res = run_snakemake(wd, "-j2", *TARGETS)
+        assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
+        runs[name] = wd
+    split = runs["split"]
+    assert sorted(p.name for p in (split / "results/tiny/contact_mpi").iterdir()) == sorted(
+        Path(t).name for t in TARGETS)
+    for target in TARGETS:
+        with xr.open_dataset(split / target) as a, xr.open_dataset(runs["single"] / target) as b:
+            a, b = a.load(), b.load()
+        assert set(a.variables) == set(b.variables), target
+        assert a.attrs["mpi_ranks"] == 2 and a.attrs["fft_backend"] == "mpi-slab", target
+        recorded_a, recorded_b = json.loads(a.attrs["scene_parameters"]), json.loads(b.attrs["scene_parameters"])
+        assert recorded_a["solver"].pop("ranks") == 2 and recorded_a == recorded_b, target
+        np.testing.assert_allclose(a.area_fraction, b.area_fraction, atol=2 / 64**2, err_msg=target)
+        np.testing.assert_allclose(a.mean_gap, b.mean_gap, rtol=1e-6, err_msg=target)
+        np.testing.assert_allclose(a.kappa, b.kappa, rtol=1e-4, err_msg=target)
+        assert np.all(np.abs(a.iterations.values - b.iterations.values) <= 2) and a.converged.values.all(), target
+    # a rerun is byte-identical
+    first = {t: (split / t).read_bytes() for t in TARGETS}
+    solved = sorted((split / "results/tiny/contact_mpi").iterdir())
+    stamps = [p.stat().st_mtime_ns for p in solved]
+    res = run_snakemake(split, "-j2", "-R", "contact_mpi", *TARGETS)
+    assert res.returncode == 0, res.stderr[-3000:]
+    assert all(p.stat().st_mtime_ns != t for p, t in zip(solved, stamps, strict=True))  # solved again
+    assert {t: (split / t).read_bytes() for t in TARGETS} == first
