@@ -18,20 +18,40 @@ def _scene(**contact_extra):
     return cfg
 
 
-def _variables(tmp_path, name, cfg):
-    wd = copy_workflow(tmp_path / name, cfg)
-    res = run_snakemake(wd, "-j1", CASE)
+#: The tiny scene's contact block extended by each optional output and effect, a scene each.
+VARIANTS = {
+    "base": {},
+    "fields": {"outputs": {"fields": [3, 12]}},
+    "plastic": {"effects": {"plasticity": {"hardness": 0.02}}},
+    "clusters": {"outputs": {"clusters": True}},
+    "adhesion": {"effects": {"adhesion": {"law": "exponential", "work": 1e-5, "range": 1e-3}}},
+}
+
+
+def _variables(tmp_path) -> dict:
+    """Each variant's case file (one Snakemake run of every scene's one case, side by side): name -> (variables,
+    dataset)."""
+    cfg = _scene()
+    for name, extra in VARIANTS.items():
+        cfg["scenes"][name] = copy.deepcopy(_scene(**extra)["scenes"]["tiny"])
+    wd = copy_workflow(tmp_path / "wf", cfg)
+    targets = [CASE.replace("results/tiny/", f"results/{name}/") for name in VARIANTS]
+    res = run_snakemake(wd, "-j2", *targets)
     assert res.returncode == 0, res.stdout[-2000:] + res.stderr[-2000:]
-    with xr.open_dataset(wd / CASE) as ds:
-        return set(ds.variables), ds.load()
+    out = {}
+    for name, target in zip(VARIANTS, targets, strict=True):
+        with xr.open_dataset(wd / target) as ds:
+            out[name] = (set(ds.variables), ds.load())
+    return out
 
 
 @pytest.mark.slow
 def test_optional_outputs_and_effects_add_exactly_their_variables(tmp_path):
-    base, ds_base = _variables(tmp_path, "base", _scene())
-    fields, ds_f = _variables(tmp_path, "fields", _scene(outputs={"fields": [3, 12]}))
-    plastic, ds_p = _variables(tmp_path, "plastic", _scene(effects={"plasticity": {"hardness": 0.02}}))
-    clusters, ds_c = _variables(tmp_path, "clusters", _scene(outputs={"clusters": True}))
+    runs = _variables(tmp_path)
+    base, ds_base = runs["base"]
+    fields, ds_f = runs["fields"]
+    plastic, ds_p = runs["plastic"]
+    clusters, ds_c = runs["clusters"]
     assert clusters - base == {"cluster_count", "cluster_mean_area", "cluster_max_area", "cluster_area_histogram",
                                "area_bin", "area_bin_low", "area_bin_high", "cluster_wrapping", "connectivity"}
     assert int(ds_c["cluster_count"].min()) >= 1
@@ -41,8 +61,7 @@ def test_optional_outputs_and_effects_add_exactly_their_variables(tmp_path):
     assert ds_f["field_step"].values.tolist() == [3, 12]
     assert plastic - base == {"plastic_area_fraction", "plastic_load_fraction"}
     assert float(ds_p["plastic_area_fraction"].max()) > 0
-    adhesive, ds_a = _variables(tmp_path, "adhesion", _scene(
-        effects={"adhesion": {"law": "exponential", "work": 1e-5, "range": 1e-3}}))
+    adhesive, ds_a = runs["adhesion"]
     assert adhesive - base == {"adhesive_pressure", "adhesive_area_fraction", "adhesive_zone_cells",
                                "unload_mean_gap", "unload_mean_pressure", "unload_area_fraction",
                                "unload_converged", "unload_unconverged_steps", "pull_off_pressure", "pull_off_status"}

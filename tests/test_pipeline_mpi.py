@@ -167,7 +167,7 @@ def test_run_case_asks_for_the_file_and_the_runner_refuses_what_ranks_cannot_com
                            (dict(schedule=LoadSchedule(4, target_area=0.1)), "target_area")):
         bad = replace(case, **changed)
         with pytest.raises(ValueError, match=re.escape(named)):
-            run_case_on_ranks(path, bad, length=1.0, rms_slope=0.1, n_nodes=h.size)
+            run_case_on_ranks(path, bad, length=1.0, rms_slope=0.1, shape=h.shape)
 
 
 @needs_mpi
@@ -178,7 +178,7 @@ def test_run_case_on_ranks_gives_run_cases_answers(tmp_path, caplog):
     log = logging.getLogger("test_pipeline_mpi")
     with caplog.at_level(logging.INFO, logger="test_pipeline_mpi"):
         got = run_case_on_ranks(path, replace(case, ranks=2), length=(1.0, 1.0),
-                                rms_slope=0.1, n_nodes=h.size, log=log, name="s")
+                                rms_slope=0.1, shape=h.shape, log=log, name="s")
     ref = run_case(h, case, length=(1.0, 1.0), rms_slope=0.1)
     assert got.attrs["mpi_ranks"] == 2 and bool(got.converged.all())
     assert np.max(np.abs(got.area_fraction.values - ref.area_fraction.values)) <= 2.0 / h.size
@@ -198,7 +198,7 @@ def test_the_mpi_solvers_refusal_comes_back_as_its_one_line(tmp_path):
     path, h = _surface_file(tmp_path / "s.nc", n=8)
     case = ContactCase(LoadSchedule(3, p_max=0.005), ranks=9)  # 9 ranks for 8 rows
     with pytest.raises(ValueError, match=r"^ranks: 9 MPI ranks for 8 rows|each rank needs at least one row"):
-        run_case_on_ranks(path, case, length=1.0, rms_slope=0.1, n_nodes=h.size)
+        run_case_on_ranks(path, case, length=1.0, rms_slope=0.1, shape=h.shape)
 
 
 # ------------------------------------------------------------------------------ the workflow

@@ -166,6 +166,25 @@ def test_more_ranks_than_rows_is_refused(tmp_path):
     assert not (tmp_path / "c.nc").exists()
 
 
+@needs_mpi
+def test_explicit_loads_and_a_rectangular_cell(tmp_path):
+    """``--loads`` (the pipeline's resolved schedule, exact) and ``--length Lx --length-y Ly``: the single solve's
+    answers on the same rectangle; ``--length-y`` alone is refused in one line."""
+    h = _surface(0)
+    src = write_surface(tmp_path / "s.nc", h)
+    loads = [0.001, 0.0025, 0.004]
+    run_mpi(2, "--surface", src, "--loads", *map(repr, loads), "--length", 2.0, "--length-y", 1.5,
+            "--length-unit", "um", "--pressure-unit", "MPa", "--out", tmp_path / "c.nc")
+    ds = xr.load_dataset(tmp_path / "c.nc")
+    ref = solve_contact(h, loads, length=(2.0, 1.5), length_unit="um", pressure_unit="MPa")
+    assert ds.pressure.values.tolist() == loads and ds.attrs["length_y"] == ref.attrs["length_y"] == 1.5
+    assert np.max(np.abs(ds.area_fraction.values - ref.area_fraction.values)) <= 2.0 / N**2
+    np.testing.assert_allclose(ds.mean_gap.values, ref.mean_gap.values, rtol=1e-6)
+    assert ds.mean_gap.attrs["units"] == ref.mean_gap.attrs["units"] == "um"
+    res = run_mpi(1, "--surface", src, "--loads", 0.001, "--length-y", 1.5, "--out", tmp_path / "d.nc", check=False)
+    assert res.returncode == 2 and "error: --length-y needs --length (the side along x)" in res.stderr
+
+
 class OneRank:
     """A communicator of one rank without MPI: all that the checks before a solve call (``allgather``).
 

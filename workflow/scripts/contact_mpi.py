@@ -14,11 +14,11 @@ def main(log):
     surf = read_dataset(path, stage="surface", variables=["heights", "rms_slope", "alpha"])
     require_made_for(surf, path, case, surface=snakemake.params.surface)
     heights, length = surface_heights(surf, path)  # checked here, once; the ranks read their rows of the file
-    n_nodes = heights.size
+    shape = heights.shape
     del heights
     contact = ContactCase.from_block(settings, length_unit=snakemake.params.surface["unit"])
     rms_slope = float(surf.rms_slope.squeeze())
-    result = run_case_on_ranks(path, contact, length=length, rms_slope=rms_slope, n_nodes=n_nodes,
+    result = run_case_on_ranks(path, contact, length=length, rms_slope=rms_slope, shape=shape,
                                launcher=snakemake.resources.mpi, log=log, name=f"kl{w.k_l}_ks{w.k_s}_H{w.H}_s{w.seed}")
     ds = contact_dataset(result, rms_slope=rms_slope, alpha=float(surf.alpha.squeeze()), e_star=contact.e_star,
                          k_l=w.k_l, k_s=w.k_s, hurst=w.H, seed=w.seed)

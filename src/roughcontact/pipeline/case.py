@@ -42,6 +42,7 @@ import numpy as np
 import xarray as xr
 
 from ..analysis.stiffness import stiffness_variable
+from ..core.cell import Cell
 from ..solver import effects_from_config, solve_contact, step_notes
 from ..solver.settings import DEFAULT_MAX_ITER
 from ..statistics.clusters import ClusterObserver
@@ -218,7 +219,7 @@ def mpi_command(launcher: str, ranks: int) -> list[str]:
 _MPI_STEP = re.compile(r"^step (\d+): p0=(\S+) A/A0=(\S+) iterations=(\d+) converged=(True|False) (\S+) s$")
 
 
-def run_case_on_ranks(surface_file, case: ContactCase, *, length, rms_slope: float, n_nodes: int,
+def run_case_on_ranks(surface_file, case: ContactCase, *, shape, length, rms_slope: float,
                       launcher: str = "mpiexec", log=None, name=None) -> xr.Dataset:
     """Solve one surface over ``case.ranks`` MPI processes: :func:`run_case`'s dataset, computed by
     ``launcher -n ranks python -m roughcontact.solver.mpi`` (:mod:`roughcontact.solver.mpi`).
@@ -237,12 +238,12 @@ def run_case_on_ranks(surface_file, case: ContactCase, *, length, rms_slope: flo
         stored fields, clusters, P(p), the full-contact load, effects, the free boundary, CuPy, another
         method and ``target_area`` are refused with a ``ValueError`` (a scene's are refused before any
         job: :func:`roughcontact.pipeline.config.checks.check_ranks`).
+    shape : (int, int)
+        The file's grid ``(nx, ny)``.
     length : float or (float, float)
-        The cell's side(s) [length].
+        The cell's side ``L`` or sides ``(Lx, Ly)`` [length].
     rms_slope : float
         The surface's rms slope h' (loads relative to it, κ).
-    n_nodes : int
-        The grid's nodes ``nx ny`` (the schedule's resolution).
     launcher : str
         The command that starts MPI processes (:func:`mpi_command`): ``mpiexec`` locally, ``srun`` in a SLURM job.
     log : logging.Logger, optional
@@ -267,20 +268,26 @@ def run_case_on_ranks(surface_file, case: ContactCase, *, length, rms_slope: flo
     if refused:
         raise ValueError(f"run_case_on_ranks: a case over MPI ranks computes the periodic elastic solve's per-step "
                          f"columns only, not {', '.join(refused)}; run it with run_case (ranks=1) for those")
-    loads, load_info = case.schedule.resolve(case.e_star, rms_slope, n_nodes, None, log, name)
-    sides = [length] if np.ndim(length) == 0 else list(length)
+    cell = Cell.of(shape, length)
+    loads, load_info = case.schedule.resolve(case.e_star, rms_slope, cell.shape[0] * cell.shape[1], None, log, name)
     with tempfile.TemporaryDirectory(prefix="roughcontact-mpi-") as tmp:
         out = Path(tmp) / "contact.nc"
-        cmd = [*mpi_command(launcher, case.ranks), sys.executable, "-m", "roughcontact.solver.mpi",
-               "--surface", os.fspath(surface_file), "--loads", *(repr(float(p)) for p in loads),
-               "--length", *(repr(float(v)) for v in sides), "--e-star", repr(float(case.e_star)),
-               "--tol", repr(float(case.tol)), "--max-iter", str(int(case.max_iter)),
-               "--length-unit", case.length_unit, "--pressure-unit", case.pressure_unit, "--out", os.fspath(out)]
+        cmd = [*mpi_command(launcher, case.ranks), *_mpi_solver_args(surface_file, case, loads, cell, out)]
         if log is not None:
             log.info("%s over %d MPI ranks: %s", name or "case", case.ranks, " ".join(cmd[:cmd.index("--loads")]))
         _run_ranks(cmd, _progress(log, len(loads)), log)
         result = xr.load_dataset(out)
     return _finished(result, None, case, length, load_info, log, name or "case")
+
+
+def _mpi_solver_args(surface_file, case: ContactCase, loads, cell: Cell, out: Path) -> list[str]:
+    """``python -m roughcontact.solver.mpi`` with ``case``'s settings and ``loads`` (exact: ``repr``) writing
+    ``out``."""
+    sides = ["--length", repr(cell.sides[0])] + ([] if cell.square else ["--length-y", repr(cell.sides[1])])
+    return [sys.executable, "-m", "roughcontact.solver.mpi", "--surface", os.fspath(surface_file),
+            "--loads", *(repr(float(p)) for p in loads), *sides, "--e-star", repr(float(case.e_star)),
+            "--tol", repr(float(case.tol)), "--max-iter", str(int(case.max_iter)),
+            "--length-unit", case.length_unit, "--pressure-unit", case.pressure_unit, "--out", os.fspath(out)]
 
 
 def _run_ranks(cmd: list[str], progress, log) -> None:

@@ -42,8 +42,10 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--plateau", action="store_true",
                     help="keep the spectrum constant below K_L (a roll-off, as the Contact-Mechanics Challenge's) "
                          "instead of cutting it")
-    ap.add_argument("--length", type=float, nargs="+", default=None, metavar="L",
-                    help="side L of the cell, or its sides Lx Ly (default: the file's, or 1)")
+    ap.add_argument("--length", type=float, default=None, help="side L of the cell, or its side Lx along x with "
+                                                                   "--length-y (default: the file's, or 1)")
+    ap.add_argument("--length-y", type=float, default=None, help="side Ly along y of a rectangular cell (with "
+                                                                 "--length)")
     loads = ap.add_mutually_exclusive_group(required=True)
     loads.add_argument("--p-max", type=float, help="last mean pressure [pressure] of --steps equal steps")
     loads.add_argument("--loads", type=float, nargs="+", metavar="P0", help="the mean pressures [pressure], in order")
@@ -80,7 +82,7 @@ def read_rows(path: str, comm) -> tuple[np.ndarray, tuple[int, int], float]:
 def generated_rows(args, comm) -> tuple[np.ndarray, tuple[int, int], float]:
     """Rank 0 generates the surface and sends each rank its rows (``Scatterv``)."""
     n = int(args.generate[0])
-    length = 1.0 if args.length is None else args.length[0]
+    length = 1.0 if args.length is None else args.length
     full = None
     if comm.rank == 0:
         from ...surfaces.synthetic import generate_surface
@@ -106,12 +108,12 @@ def main(argv=None) -> int:
     try:
         if args.steps < 1:
             raise ValueError(f"--steps must be >= 1, got {args.steps}")
-        if args.length is not None and len(args.length) > 2:
-            raise ValueError(f"--length takes L or Lx Ly, got {len(args.length)} values")
+        if args.length_y is not None and args.length is None:
+            raise ValueError("--length-y needs --length (the side along x)")
         h, shape, length = _heights(args, comm)
         p = np.asarray(args.loads) if args.loads is not None else args.p_max * np.arange(1, args.steps + 1) / args.steps
         if args.length is not None:
-            length = args.length[0] if len(args.length) == 1 else tuple(args.length)
+            length = args.length if args.length_y is None else (args.length, args.length_y)
         options = {"tol": args.tol, "e_star": args.e_star, "length": length, "length_unit": args.length_unit,
                    "pressure_unit": args.pressure_unit}
         if args.max_iter is not None:
