@@ -201,6 +201,24 @@ def test_the_mpi_solvers_refusal_comes_back_as_its_one_line(tmp_path):
         run_case_on_ranks(path, case, length=1.0, rms_slope=0.1, shape=h.shape)
 
 
+@needs_mpi
+def test_processes_the_launcher_started_but_mpi_did_not_join_are_refused(tmp_path):
+    """A launcher that starts R unconnected processes (srun without the MPI library's PMI does: R one-rank worlds,
+    each solving the whole case) is an error naming the cause, not R copies of the solve."""
+    path, h = _surface_file(tmp_path / "s.nc")
+    fake = tmp_path / "unjoined"
+    # drops "-n R", starts two singletons, exits with the failing one's status
+    fake.write_text('#!/bin/sh\nshift 2\n"$@" & pid=$!\n"$@"; s=$?\nwait $pid || s=$?\nexit $s\n')
+    fake.chmod(0o755)
+    case = ContactCase(LoadSchedule(3, p_max=0.005), ranks=2)
+    with pytest.raises(ValueError, match=r"ranks: 2 MPI ranks were asked for, but this process sees a world of 1.*"
+                                         r"srun --mpi=pmi2"):
+        run_case_on_ranks(path, case, shape=h.shape, length=1.0, rms_slope=0.1, launcher=str(fake))
+    fake.write_text("#!/bin/sh\nexit 0\n")  # a wrapper that runs nothing and says all is well
+    with pytest.raises(RuntimeError, match="ended with status 0 but wrote no file"):
+        run_case_on_ranks(path, case, shape=h.shape, length=1.0, rms_slope=0.1, launcher=str(fake))
+
+
 # ------------------------------------------------------------------------------ the workflow
 def test_the_slurm_profile_makes_it_an_mpi_job(tmp_path):
     """Under profiles/slurm the contact_mpi job carries ``mpi=srun`` and ``tasks=2`` (the executor's MPI job: one

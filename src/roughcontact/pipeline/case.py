@@ -276,6 +276,9 @@ def run_case_on_ranks(surface_file, case: ContactCase, *, shape, length, rms_slo
         if log is not None:
             log.info("%s over %d MPI ranks: %s", name or "case", case.ranks, " ".join(cmd[:cmd.index("--loads")]))
         _run_ranks(cmd, _progress(log, len(loads)), log)
+        if not out.is_file():  # a launcher that ends well without running the solve (a wrapper that drops it)
+            raise RuntimeError(f"the MPI solve ({' '.join(cmd[:4])} ...) ended with status 0 but wrote no file; the "
+                               "launcher (the rule's 'mpi' resource) must run the command it is given")
         result = xr.load_dataset(out)
     return _finished(result, None, case, length, load_info, log, name or "case")
 
@@ -285,7 +288,8 @@ def _mpi_solver_args(surface_file, case: ContactCase, loads, cell: Cell, out: Pa
     ``out``."""
     sides = ["--length", repr(cell.sides[0])] + ([] if cell.square else ["--length-y", repr(cell.sides[1])])
     return [sys.executable, "-m", "roughcontact.solver.mpi", "--surface", os.fspath(surface_file),
-            "--loads", *(repr(float(p)) for p in loads), *sides, "--e-star", repr(float(case.e_star)),
+            "--expect-ranks", str(int(case.ranks)), "--loads", *(repr(float(p)) for p in loads), *sides,
+            "--e-star", repr(float(case.e_star)),
             "--tol", repr(float(case.tol)), "--max-iter", str(int(case.max_iter)),
             "--length-unit", case.length_unit, "--pressure-unit", case.pressure_unit, "--out", os.fspath(out)]
 

@@ -56,6 +56,9 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--length-unit", default="1", help="unit of heights and lengths, as the file says it (default 1)")
     ap.add_argument("--pressure-unit", default="1", help="unit of E* and the pressures (default 1: nondimensional)")
     ap.add_argument("--fft-library", choices=FFT_LIBRARIES, default="slab", help="distributed FFT (default slab)")
+    ap.add_argument("--expect-ranks", type=int, default=None, metavar="R",
+                    help="fail unless MPI joins R ranks (a launcher that starts R unconnected processes, e.g. srun "
+                         "without the MPI library's PMI, gives R one-rank worlds)")
     ap.add_argument("--fields", action="store_true", help="gather the last step's pressure and gap into the file")
     ap.add_argument("--out", required=True, help="contact NetCDF file written by rank 0")
     return ap
@@ -106,6 +109,11 @@ def main(argv=None) -> int:
         print(f"error: {one_line(exc)}", file=sys.stderr)
         return BAD_INPUT
     try:
+        if args.expect_ranks is not None and comm.size != args.expect_ranks:
+            raise ValueError(f"ranks: {args.expect_ranks} MPI ranks were asked for, but this process sees a world of "
+                             f"{comm.size}: the launcher started processes MPI did not join (srun without the PMI "
+                             "of the MPI library mpi4py was built with: try srun --mpi=pmi2, or build mpi4py "
+                             "against the site's MPI, docs/cluster.md)")
         if args.steps < 1:
             raise ValueError(f"--steps must be >= 1, got {args.steps}")
         if args.length_y is not None and args.length is None:
