@@ -208,7 +208,9 @@ run_snakemake() {
 # ---------------------------------------------------------------- the scene, twice
 SCENE_YAML="$WORK/config.yaml"
 if "$PY" -c 'import roughcontact.solver' 2>/dev/null; then WITH_CONTACT=1; else WITH_CONTACT=0; fi
-WITH_CONTACT=$WITH_CONTACT "$PY" - "$SCENE_YAML" <<'EOF' || fail "could not write the scene config"
+# one case over 2 MPI ranks (contact.solver.ranks) where mpi4py imports: an MPI job under SLURM (srun)
+if [ "$WITH_CONTACT" = 1 ] && "$PY" -c 'import mpi4py' 2>/dev/null; then WITH_MPI=1; else WITH_MPI=0; fi
+WITH_CONTACT=$WITH_CONTACT WITH_MPI=$WITH_MPI "$PY" - "$SCENE_YAML" <<'EOF' || fail "could not write the scene config"
 import os, sys, yaml
 scene = {
     "description": "tests/cluster: the same small scene run locally and through SLURM",
@@ -229,10 +231,20 @@ if os.environ["WITH_CONTACT"] == "1":
         "solver": {"tol": 1e-8},
     }
     scene["fit"] = {"window": [0.01, 0.3], "n_boot": 20}
+scenes = {"slurmtest": scene}
+if os.environ["WITH_MPI"] == "1":
+    scenes["slurmmpi"] = {"contact": {"surface": {"N": 64, "rms_slope": 0.1},
+                                      "grid": {"k_l": ["2"], "k_s": ["8"], "H": ["0.8"]}, "seeds": 1,
+                                      "load": {"p_max": 0.01, "n_steps": 6}, "solver": {"tol": 1e-8, "ranks": 2}}}
 with open(sys.argv[1], "w") as fh:
-    yaml.safe_dump({"scene": "slurmtest", "scenes": {"slurmtest": scene}}, fh, sort_keys=False)
+    yaml.safe_dump({"scene": "slurmtest", "scenes": scenes}, fh, sort_keys=False)
 EOF
-if [ "$WITH_CONTACT" = 1 ]; then
+# the scene's targets (rule all), and with MPI the 2-rank case's file too
+TARGETS=(all)
+[ "$WITH_MPI" = 1 ] && TARGETS+=(results/slurmmpi/contact/kl2_ks8_H0.8_s0.nc)
+if [ "$WITH_MPI" = 1 ]; then
+    log "scene: representativity N=32 (4 surfaces) + contact N=32 (4 cases); one N=64 case over 2 MPI ranks"
+elif [ "$WITH_CONTACT" = 1 ]; then
     log "scene: representativity N=32 (4 surfaces) + contact N=32 (4 cases)"
 else
     log "scene: representativity only (roughcontact.solver does not import, contact left out)"
@@ -251,7 +263,7 @@ done
 log "local run: snakemake --workflow-profile profiles/default -j2"
 t=$(date +%s)
 run_snakemake "$WORK/local" "$WORK/local.log" "$LOCAL_TIMEOUT" 0 --workflow-profile profiles/default \
-    -j2 --nocolor \
+    -j2 --nocolor "${TARGETS[@]}" \
     || { rc=$?; tail -n 40 "$WORK/local.log" >&2
          fail "the local -j2 run ${STOPPED:-failed} (status $rc; log above)"; }
 LOCAL_S=$(($(date +%s) - t))
@@ -289,7 +301,7 @@ SLURM_ARGS=(--workflow-profile profiles/slurm --cores "$CPUS"
     --slurm-keep-successful-logs --nocolor)
 log "SLURM run: snakemake ${SLURM_ARGS[*]}"
 t=$(date +%s)
-run_snakemake "$WORK/slurm" "$WORK/slurm.log" "$RUN_TIMEOUT" 1 "${SLURM_ARGS[@]}"
+run_snakemake "$WORK/slurm" "$WORK/slurm.log" "$RUN_TIMEOUT" 1 "${SLURM_ARGS[@]}" "${TARGETS[@]}"
 rc=$?
 SLURM_S=$(($(date +%s) - t))
 if [ "$rc" != 0 ]; then
