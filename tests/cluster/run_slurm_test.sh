@@ -234,7 +234,7 @@ if os.environ["WITH_CONTACT"] == "1":
 scenes = {"slurmtest": scene}
 if os.environ["WITH_MPI"] == "1":
     scenes["slurmmpi"] = {"contact": {"surface": {"N": 64, "rms_slope": 0.1},
-                                      "grid": {"k_l": ["2"], "k_s": ["8"], "H": ["0.8"]}, "seeds": 1,
+                                      "grid": {"k_l": ["2"], "k_s": ["8"], "H": ["0.8"]}, "seeds": 2,
                                       "load": {"p_max": 0.01, "n_steps": 6}, "solver": {"tol": 1e-8, "ranks": 2}}}
 with open(sys.argv[1], "w") as fh:
     yaml.safe_dump({"scene": "slurmtest", "scenes": scenes}, fh, sort_keys=False)
