@@ -275,11 +275,7 @@ def run_case_on_ranks(surface_file, case: ContactCase, *, shape, length, rms_slo
         cmd = [*mpi_command(launcher, case.ranks), *_mpi_solver_args(surface_file, case, loads, cell, out)]
         if log is not None:
             log.info("%s over %d MPI ranks: %s", name or "case", case.ranks, " ".join(cmd[:cmd.index("--loads")]))
-        _run_ranks(cmd, _progress(log, len(loads)), log)
-        if not out.is_file():  # a launcher that ends well without running the solve (a wrapper that drops it)
-            raise RuntimeError(f"the MPI solve ({' '.join(cmd[:4])} ...) ended with status 0 but wrote no file; the "
-                               "launcher (the rule's 'mpi' resource) must run the command it is given")
-        result = xr.load_dataset(out)
+        result = _run_ranks(cmd, out, _progress(log, len(loads)), log)
     return _finished(result, None, case, length, load_info, log, name or "case")
 
 
@@ -294,8 +290,9 @@ def _mpi_solver_args(surface_file, case: ContactCase, loads, cell: Cell, out: Pa
             "--length-unit", case.length_unit, "--pressure-unit", case.pressure_unit, "--out", os.fspath(out)]
 
 
-def _run_ranks(cmd: list[str], progress, log) -> None:
-    """Run the MPI command, passing its step lines to ``progress`` and its other lines to ``log`` as they come."""
+def _run_ranks(cmd: list[str], out: Path, progress, log) -> xr.Dataset:
+    """Run the MPI command, passing its step lines to ``progress`` and its other lines to ``log`` as they come;
+    the file ``out`` it wrote, loaded."""
     tail: list[str] = []
     with subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True) as proc:
         for line in proc.stdout:
@@ -312,6 +309,10 @@ def _run_ranks(cmd: list[str], progress, log) -> None:
     if proc.returncode != 0:
         raise RuntimeError(f"the MPI solve ({' '.join(cmd[:4])} ...) ended with exit status {proc.returncode}; its "
                            "last lines:\n" + "\n".join(tail))
+    if not out.is_file():  # a launcher that ends well without running the solve (a wrapper that drops it)
+        raise RuntimeError(f"the MPI solve ({' '.join(cmd[:4])} ...) ended with status 0 but wrote no file; the "
+                           "launcher (the rule's 'mpi' resource) must run the command it is given")
+    return xr.load_dataset(out)
 
 
 def _finished(result: xr.Dataset, heights: np.ndarray, case: ContactCase, length, load_info: dict, log,
