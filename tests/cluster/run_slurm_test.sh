@@ -126,7 +126,8 @@ for s in socks:
 print(*(s.getsockname()[1] for s in socks))
 EOF
 )
-CPUS=$(nproc)
+# the CPUs this process may use (nproc alone honours OMP_NUM_THREADS, which a test run may set to 1)
+CPUS=$(env -u OMP_NUM_THREADS -u OMP_THREAD_LIMIT nproc)
 MEM_TOTAL=$(awk '/^MemTotal:/ {print int($2 / 1024)}' /proc/meminfo)   # MB, as `free -m`
 MARGIN=$((MEM_TOTAL / 10 > 512 ? MEM_TOTAL / 10 : 512))
 REAL_MEMORY=$((MEM_TOTAL - MARGIN))
@@ -209,7 +210,8 @@ run_snakemake() {
 SCENE_YAML="$WORK/config.yaml"
 if "$PY" -c 'import roughcontact.solver' 2>/dev/null; then WITH_CONTACT=1; else WITH_CONTACT=0; fi
 # one case over 2 MPI ranks (contact.solver.ranks) where mpi4py imports: an MPI job under SLURM (srun)
-if [ "$WITH_CONTACT" = 1 ] && "$PY" -c 'import mpi4py' 2>/dev/null; then WITH_MPI=1; else WITH_MPI=0; fi
+# (2 tasks: a node of at least 2 CPUs)
+if [ "$WITH_CONTACT" = 1 ] && [ "$CPUS" -ge 2 ] && "$PY" -c 'import mpi4py' 2>/dev/null; then WITH_MPI=1; else WITH_MPI=0; fi
 WITH_CONTACT=$WITH_CONTACT WITH_MPI=$WITH_MPI "$PY" - "$SCENE_YAML" <<'EOF' || fail "could not write the scene config"
 import os, sys, yaml
 scene = {
