@@ -239,19 +239,20 @@ def test_the_slurm_profile_makes_it_an_mpi_job(tmp_path):
 
 
 @needs_mpi
-@pytest.mark.slow  # two tiny runs (2 cases at N = 64, contact files only) and a rerun: ~2 min on 2 busy cores
+@pytest.mark.slow  # one tiny run (2 + 2 cases at N = 64, contact files only) and a rerun: ~1.5 min on 2 busy cores
 def test_ranks_2_equals_the_run_in_one_process(tmp_path):
-    runs = {}
-    for name, cfg in (("split", SPLIT), ("single", SINGLE)):
-        wd = copy_workflow(tmp_path / name, cfg)
-        res = run_snakemake(wd, "-j2", *TARGETS)
-        assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
-        runs[name] = wd
-    split = runs["split"]
-    assert sorted(p.name for p in (split / "results/tiny/contact_mpi").iterdir()) == sorted(
+    # both scenes in one workflow, their cases solved side by side in one Snakemake run
+    cfg = copy.deepcopy(SPLIT)
+    cfg["scenes"]["single"] = copy.deepcopy(SINGLE["scenes"]["tiny"])
+    wd = copy_workflow(tmp_path / "wf", cfg)
+    single = [t.replace("results/tiny/", "results/single/") for t in TARGETS]
+    res = run_snakemake(wd, "-j2", *TARGETS, *single)
+    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
+    assert sorted(p.name for p in (wd / "results/tiny/contact_mpi").iterdir()) == sorted(
         Path(t).name for t in TARGETS)
-    for target in TARGETS:
-        with xr.open_dataset(split / target) as a, xr.open_dataset(runs["single"] / target) as b:
+    assert not (wd / "results/single/contact_mpi").exists()
+    for target, other in zip(TARGETS, single, strict=True):
+        with xr.open_dataset(wd / target) as a, xr.open_dataset(wd / other) as b:
             a, b = a.load(), b.load()
         assert set(a.variables) == set(b.variables), target
         assert a.attrs["mpi_ranks"] == 2 and a.attrs["fft_backend"] == "mpi-slab", target
@@ -261,11 +262,11 @@ def test_ranks_2_equals_the_run_in_one_process(tmp_path):
         np.testing.assert_allclose(a.mean_gap, b.mean_gap, rtol=1e-6, err_msg=target)
         np.testing.assert_allclose(a.kappa, b.kappa, rtol=1e-4, err_msg=target)
         assert np.all(np.abs(a.iterations.values - b.iterations.values) <= 2) and a.converged.values.all(), target
-    # a rerun is byte-identical
-    first = {t: (split / t).read_bytes() for t in TARGETS}
-    solved = sorted((split / "results/tiny/contact_mpi").iterdir())
+    # the MPI solves again: byte-identical
+    first = {t: (wd / t).read_bytes() for t in TARGETS}
+    solved = sorted((wd / "results/tiny/contact_mpi").iterdir())
     stamps = [p.stat().st_mtime_ns for p in solved]
-    res = run_snakemake(split, "-j2", "-R", "contact_mpi", *TARGETS)
+    res = run_snakemake(wd, "-j2", "-R", "contact_mpi", *TARGETS)
     assert res.returncode == 0, res.stderr[-3000:]
     assert all(p.stat().st_mtime_ns != t for p, t in zip(solved, stamps, strict=True))  # solved again
-    assert {t: (split / t).read_bytes() for t in TARGETS} == first
+    assert {t: (wd / t).read_bytes() for t in TARGETS} == first
