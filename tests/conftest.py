@@ -1,5 +1,6 @@
 """Shared fixtures: paths of the repository, a runner for the snakemake CLI, solver options for one test."""
 import contextlib
+import copy
 import importlib.util
 import os
 import shutil
@@ -103,8 +104,6 @@ def copy_workflow(dest: Path, config: dict | None = None) -> Path:
 def edited_contact(cfg: dict, scene: str = "tiny", **edits) -> dict:
     """A deep copy of ``cfg`` with ``edits`` applied to scene ``scene``'s contact block: dotted keys
     (``"solver.batch"``), each set to its value, or removed where the value is None."""
-    import copy
-
     cfg = copy.deepcopy(cfg)
     block = cfg["scenes"][scene]["contact"]
     for dotted, value in edits.items():

@@ -180,18 +180,11 @@ def _refused_over_ranks(case: ContactCase) -> list[str]:
     """What ``case`` asks that a solve over MPI ranks cannot compute (:mod:`roughcontact.solver.mpi` solves the
     periodic elastic problem and reports per-step columns), named; a scene's are refused before any job by
     :func:`roughcontact.pipeline.config.checks.check_ranks`."""
-    outputs = case.outputs
-    refused = [(bool(outputs.get("fields")), "outputs['fields'] (stored fields)"),
-               (bool(outputs.get("clusters")), "outputs['clusters']"),
-               ("pressure_distribution" in outputs, "outputs['pressure_distribution'] (P(p))"),
-               (bool(outputs.get("full_contact_load")), "outputs['full_contact_load']"),
-               (bool(case.effects), f"effects ({', '.join(case.effects)})"),
+    refused = [(bool(case.outputs.get("full_contact_load")), "outputs['full_contact_load']"),
                (case.boundary != "periodic", f"boundary={case.boundary!r}"),
                (case.array_backend != "numpy", f"array_backend={case.array_backend!r}"),
-               (case.method is not None, f"method={case.method!r}"),
-               (case.schedule.target_area is not None, "schedule.target_area (a load search)"),
-               (case.warm_start != "extrapolated", f"warm_start={case.warm_start!r}")]
-    return [what for flag, what in refused if flag]
+               (case.method is not None, f"method={case.method!r}")]
+    return _beyond_per_step_columns(case) + [what for flag, what in refused if flag]
 
 
 def mpi_command(launcher: str, ranks: int) -> list[str]:
@@ -366,17 +359,23 @@ def _per_case(values, n_cases: int, what: str, kind) -> list:
     return values
 
 
+def _beyond_per_step_columns(case: ContactCase) -> list[str]:
+    """What ``case`` asks beyond the per-step columns of one load schedule solved with the default warm start
+    (what a batch and a solve over MPI ranks compute), named: stored fields, clusters, P(p), effects, a
+    ``target_area`` search, another warm start."""
+    outputs = case.outputs
+    asked = [(bool(outputs.get("fields")), "outputs['fields'] (stored fields)"),
+             (bool(outputs.get("clusters")), "outputs['clusters']"),
+             ("pressure_distribution" in outputs, "outputs['pressure_distribution'] (P(p))"),
+             (bool(case.effects), f"effects ({', '.join(case.effects)})"),
+             (case.schedule.target_area is not None, "schedule.target_area (each case's own load search)"),
+             (case.warm_start != "extrapolated", f"warm_start={case.warm_start!r}")]
+    return [what for flag, what in asked if flag]
+
+
 def _check_batchable(case: ContactCase, observers: Sequence) -> None:
     """What a batched solve cannot produce, refused naming the case's field and the remedy."""
-    outputs = case.outputs
-    refused = [(bool(outputs.get("fields")), "outputs['fields'] (stored fields)"),
-               (bool(outputs.get("clusters")), "outputs['clusters']"),
-               ("pressure_distribution" in outputs, "outputs['pressure_distribution'] (P(p))"),
-               (bool(case.effects), f"effects ({', '.join(case.effects)})"),
-               (case.schedule.target_area is not None, "schedule.target_area (each case's own load search)"),
-               (case.warm_start != "extrapolated", f"warm_start={case.warm_start!r}"),
-               (bool(tuple(observers)), "observers")]
-    asked = [what for flag, what in refused if flag]
+    asked = _beyond_per_step_columns(case) + (["observers"] if tuple(observers) else [])
     if asked:
         raise ValueError(f"run_case: a batch of surfaces (heights of shape (B, nx, ny)) computes per-step columns "
                          f"only, not {', '.join(asked)}; run each case with 2-D heights for those")

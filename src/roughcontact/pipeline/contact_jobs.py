@@ -167,7 +167,6 @@ class ContactJobs:
         block = self.scenes[w.scene]["contact"]
         return contact_batch_runtime_min(block["surface"]["N"], block["load"]["n_steps"], batch_size(block))
 
-
     def contact_mpi_block(self, w) -> Mapping:
         """The contact block of a case over MPI ranks, the case checked against its scene: a scene that solves its
         cases in one process (``contact.solver.ranks`` 1) has no ``contact_mpi`` files, and says so."""

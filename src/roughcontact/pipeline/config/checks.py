@@ -165,10 +165,10 @@ def check_ranks(scene: str, block: dict, source: str | None) -> None:
     if source is not None:
         fail("solver.ranks", f"splits generated maps, and a {source} scene's cases are files solved whole (run "
                              "one over ranks with python -m roughcontact.solver.mpi --surface FILE)")
-    surface = block.get("surface", {})
+    surface = block["surface"]  # a generated scene's generator block, defaults filled
     if surface.get("dimension") == 1:
         fail("surface.dimension", "1 makes profiles, and the MPI solver splits maps")
-    if ranks > surface.get("N", ranks):
+    if ranks > surface["N"]:
         fail("solver.ranks", f"{ranks} ranks for the N = {surface['N']} grid's {surface['N']} rows along x: each "
                              f"rank needs at least one row (at most {surface['N']})")
     if solver.get("batch", 1) != 1:
