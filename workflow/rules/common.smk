@@ -10,6 +10,7 @@ from roughcontact.pipeline import params
 from roughcontact.pipeline.cases import is_adhesive
 from roughcontact.pipeline.scenes import plan_summary
 from roughcontact.pipeline.progress import write_plan
+from roughcontact.pipeline.run_end import cancel_job_rate_timers
 from roughcontact.pipeline.targets import (
     WILDCARD_CONSTRAINTS,
     Targets,
@@ -46,6 +47,16 @@ onstart:
             "(or free space), then run again"
         )
         raise SystemExit(1)
+
+
+# Snakemake's job-rate timer (profiles/default: once a minute) would hold the process up to a minute
+# after the last job (roughcontact.pipeline.run_end).
+onsuccess:
+    cancel_job_rate_timers()
+
+
+onerror:
+    cancel_job_rate_timers()
 
 
 wildcard_constraints:

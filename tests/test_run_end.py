@@ -1,0 +1,47 @@
+"""A Snakemake run of this workflow returns when its work is done (roughcontact.pipeline.run_end).
+
+Snakemake's job-rate limit leaves a non-daemon re-evaluation timer pending one timespan after each
+round of job selection; the workflow's onsuccess/onerror hooks cancel it. The runs below set the
+timespan to an hour: without the hooks each command would hold its process for that hour, and
+run_snakemake's cap (10 min, a hang catcher, not a speed measurement) would fail the test.
+"""
+import threading
+
+import pytest
+
+from conftest import copy_workflow, run_snakemake
+from roughcontact.pipeline.run_end import cancel_job_rate_timers
+from test_workflow import TINY
+
+HOUR_LIMIT = ("--max-jobs-per-timespan", "10000/1h")
+SURFACE = "results/tiny/surfaces/kl2_ks8_H0.5_s1.nc"
+
+
+def test_cancels_only_the_scheduler_timers():
+    def reevaluate():  # as Snakemake's scheduler defines it
+        raise AssertionError("a cancelled timer ran")
+
+    reevaluate.__module__ = "snakemake.scheduling.job_scheduler"
+    other_ran = threading.Event()
+    theirs, ours = threading.Timer(3600, reevaluate), threading.Timer(0.2, other_ran.set)
+    theirs.start()
+    ours.start()
+    try:
+        assert cancel_job_rate_timers() == 1
+        theirs.join(timeout=10)
+        assert not theirs.is_alive()
+        assert other_ran.wait(timeout=10), "a timer that is not Snakemake's was cancelled"
+    finally:
+        theirs.cancel()
+        ours.cancel()
+
+
+@pytest.mark.slow
+def test_a_run_returns_after_its_last_job_whether_it_succeeds_or_fails(tmp_path):
+    wd = copy_workflow(tmp_path / "wf", TINY)
+    res = run_snakemake(wd, "-j1", *HOUR_LIMIT, SURFACE, timeout=600)
+    assert res.returncode == 0, res.stderr[-3000:]
+    # a job that fails: the case's surface file replaced by one it cannot read (newer, so not remade)
+    (wd / SURFACE).write_text("not a NetCDF file")
+    res = run_snakemake(wd, "-j1", *HOUR_LIMIT, "results/tiny/contact/kl2_ks8_H0.5_s1.nc", timeout=600)
+    assert res.returncode == 1 and "not a readable NetCDF file" in res.stderr, res.stderr[-3000:]
