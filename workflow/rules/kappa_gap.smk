@@ -25,7 +25,6 @@ rule kappa_gap_case:
 rule kappa_gap_summary:
     input:
         cases=lambda w: kappa_gap_files(w.scene, "kappa_gap"),
-        benchmarks=lambda w: kappa_gap_files(w.scene, "benchmarks/kappa_gap", "tsv"),
     output:
         nc="results/{scene}/kappa_gap/kappa-gap.nc",
         md=report(

@@ -1,5 +1,4 @@
 """Kappa gap: pair the variants surface by surface and write the table."""
-import csv
 from collections import defaultdict
 from pathlib import Path
 
@@ -10,12 +9,10 @@ from roughcontact.studies import kappa_gap
 
 def main(log):
     block = snakemake.params.settings
-    cases, seconds = defaultdict(list), defaultdict(list)
-    for path, tsv in zip(snakemake.input.cases, snakemake.input.benchmarks, strict=True):
+    cases = defaultdict(list)
+    for path in snakemake.input.cases:
         cases[Path(path).parent.name].append(read_dataset(path, stage="kappa_gap"))
-        with open(tsv) as fh:
-            seconds[Path(path).parent.name].append(float(next(csv.DictReader(fh, delimiter="\t"))["s"]))
-    data = kappa_gap.collect(cases, block, seconds)
+    data = kappa_gap.collect(cases, block)
     write_dataset(data, snakemake.output.nc, stage="kappa_gap", scene=snakemake.wildcards.scene,
                   scene_parameters=block)
     text = kappa_gap.markdown(kappa_gap.summarise(data))

@@ -94,16 +94,15 @@ def richardson(values: np.ndarray, ratio: float = 2.0) -> tuple[float, float]:
     return float(v[2] + d2 / (ratio**order - 1.0)), order
 
 
-def collect(cases: Mapping[str, Sequence[xr.Dataset]], block: Mapping,
-            seconds: Mapping[str, Sequence[float]] | None = None) -> xr.Dataset:
+def collect(cases: Mapping[str, Sequence[xr.Dataset]], block: Mapping) -> xr.Dataset:
     """One Dataset over ``(variant, case, step)`` from each variant's case Datasets.
 
     ``cases[label]`` holds the variant's per-case Datasets (:func:`solve_case`, with attrs
     ``H`` and ``seed``); missing cases and steps are NaN (``allow_nan``). ``block`` is the
     study's config block: variant settings become coordinates along ``variant``, the
-    surfaces' parameters global attributes. ``seconds[label]``, in the order of
-    ``cases[label]``: each case's job wall time [s] (Snakemake's benchmark), written as
-    ``job_wall_time`` (NaN when not given).
+    surfaces' parameters global attributes. No timing: the Dataset is a function of the cases
+    alone, so a rerun writes the same bytes (a job's wall time is in Snakemake's benchmark file,
+    ``python -m roughcontact.pipeline.runcost``).
     """
     variants = block["variants"]
     labels = list(variants)
@@ -117,11 +116,9 @@ def collect(cases: Mapping[str, Sequence[xr.Dataset]], block: Mapping,
     out = {k: np.full((len(labels), len(names), n_steps), np.nan) for k in keys}
     slopes = {k: np.full((len(labels), len(names)), np.nan) for k in ("rms_slope_spectral", "rms_slope_discrete",
                                                                       "rms_height")}
-    job = np.full((len(labels), len(names)), np.nan)
     for i, label in enumerate(labels):
-        for c, ds in enumerate(cases[label]):
+        for ds in cases[label]:
             j = names.index(name(ds))
-            job[i, j] = seconds[label][c] if seconds else np.nan
             for k in keys:
                 out[k][i, j, : ds.sizes["step"]] = ds[k].values
             for k in slopes:
@@ -141,8 +138,6 @@ def collect(cases: Mapping[str, Sequence[xr.Dataset]], block: Mapping,
         what = {"rms_slope_spectral": "rms slope from the spectrum", "rms_slope_discrete":
                 "rms slope from central differences", "rms_height": "rms height"}[k]
         res[k] = (("variant", "case"), v, {"units": "1", "long_name": what, "allow_nan": 1})
-    res["job_wall_time"] = (("variant", "case"), job, {"units": "s", "allow_nan": 1, "long_name":
-                            "wall-clock time of the case's job (Snakemake's benchmark)"})
     kinds = {"role": str, "method": str, "N": int, "tol": str, "p_max": float, "n_steps": int, "schedule": str}
     for key, kind in kinds.items():
         res.coords[f"variant_{key}"] = ("variant", [kind(variants[label][key]) for label in labels],
@@ -322,12 +317,15 @@ def _solver_detail(data: xr.Dataset, label: str, ref: Mapping[str, str]) -> dict
 
 
 def _cost(data: xr.Dataset) -> list[dict]:
+    """Each variant's solver iterations (all steps of all its surfaces) and their work, iterations x N²."""
     rows = []
     for v in data.variant.values:
-        w = data["job_wall_time"].sel(variant=v).values
-        cases = int(np.sum(np.isfinite(data["p0"].sel(variant=v).values[:, 0])))
-        rows.append({"label": str(v), "role": str(data.variant_role.sel(variant=v).item()),
-                     "N": int(data.variant_N.sel(variant=v).item()),
-                     "method": str(data.variant_method.sel(variant=v).item()),
-                     "cases": cases, "seconds": float(np.nansum(w)), "per_case": float(np.nansum(w)) / max(cases, 1)})
+        its = data["iterations"].sel(variant=v).values
+        solved = np.isfinite(its[:, 0])
+        total = int(np.nansum(its[solved]))
+        n = int(data.variant_N.sel(variant=v).item())
+        cases = int(solved.sum())
+        rows.append({"label": str(v), "role": str(data.variant_role.sel(variant=v).item()), "N": n,
+                     "method": str(data.variant_method.sel(variant=v).item()), "cases": cases,
+                     "iterations": total, "per_case": total / max(cases, 1), "node_iterations": float(total) * n * n})
     return rows

@@ -106,8 +106,8 @@ def solve_case(h: np.ndarray, setting: Mapping, *, length: float, thresholds: Se
     solver), ``area_<definition>`` for every :func:`definitions` entry,
     ``contact_perimeter``, ``iterations``, ``stopped`` (the solver's own rule ended the
     step: the main solver's converged check, or Stanley & Kato's load and move rule); attrs
-    carry both rms slopes and the rms height. No timing: a rerun writes the same bytes (the
-    cost is the job's, from Snakemake's benchmark, :func:`collect`).
+    carry both rms slopes and the rms height. No timing: a rerun writes the same bytes (a job's
+    wall time is in its Snakemake benchmark file).
     """
     p_max = float(setting["p_max"])
     # A geometric schedule starts where the paper's uniform one does, at p_max/30, so that
