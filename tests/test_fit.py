@@ -179,6 +179,11 @@ def test_structure_groups_and_reproducibility():
     np.testing.assert_array_equal(alone["bootstrap_stderr"].values[0, 0],
                                   fit["bootstrap_stderr"].sel(k_l=4.0, k_s=8.0).values)
     assert float(fit["alpha_power_law"].sel(k_l=16.0, k_s=32.0, H_group="0.84")) == pytest.approx(1.7553, abs=1e-3)
+    # profiles (the solver's surface_dimension 1): the profile's own spectrum, 2/3 of the surface's alpha
+    band = dict(k_l=[16.0], k_s=[32.0])
+    lines = fit_cel(agg.sel(band).assign_attrs(surface_dimension=1), n_boot=20, rng_seed=7)
+    assert float(lines["alpha_power_law"].sel(k_l=16.0, k_s=32.0, H_group="0.84")) == pytest.approx(
+        2 / 3 * float(fit["alpha_power_law"].sel(k_l=16.0, k_s=32.0, H_group="0.84")), rel=1e-12)
     # simulate_cel_cases stores the closed-form alpha per case; the pooled mean averages H.
     sel = dict(k_l=4.0, k_s=32.0)
     assert float(fit["alpha_surfaces"].sel(dict(sel, H_group="0.36"))) == pytest.approx(

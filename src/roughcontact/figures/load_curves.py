@@ -25,6 +25,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.lines import Line2D
 
+from ..analysis.aggregate import is_profiles
 from ..analysis.aggregate.seeds import seed_reduce
 from ..analysis.fit.estimators import at_bound
 from ..theory.laws import KAPPA_BGT
@@ -77,11 +78,6 @@ def fit_constants(fit: xr.Dataset | None, k_l: float, k_s: float, estimator: str
 def has_seeds(stats: xr.Dataset, k_l: float, k_s: float, h: float) -> bool:
     """Whether the ``(k_l, k_s, H)`` family has at least one seed in ``stats`` (the aggregate's seed statistics)."""
     return int(stats["n_seeds"].sel(k_l=k_l, k_s=k_s, H=h)) > 0
-
-
-def is_profiles(agg: xr.Dataset) -> bool:
-    """Whether an aggregate's cases are profiles (1-D surfaces in plane strain: ``surface_dimension`` 1)."""
-    return int(agg.attrs.get("surface_dimension", 2)) == 1
 
 
 def title_figure(fig, agg: xr.Dataset, stats: xr.Dataset) -> None:
@@ -240,7 +236,7 @@ def asperity_alphas(agg: xr.Dataset) -> list[tuple[float, str, str]]:
 
     Families of different bandwidth (k_s / k_l from 2 to 128 gives alpha from ~1.5 to ~30)
     have no common alpha: their mean would be a curve that describes none of them. None for profiles
-    (:func:`is_profiles`): the models count a 2-D surface's summits.
+    (:func:`roughcontact.analysis.aggregate.is_profiles`): the models count a 2-D surface's summits.
     """
     if is_profiles(agg):  # the asperity models are of a 2-D surface's summits: no prediction for a profile
         return []

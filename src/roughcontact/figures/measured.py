@@ -25,6 +25,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
+from ..analysis.aggregate import is_profiles
 from ..analysis.aggregate.combine import TOPOGRAPHY_DIM as _DIM
 from ..theory.laws import KAPPA_BGT, cel_area, cel_area_limit, cel_kappa
 from . import load_curves
@@ -36,7 +37,6 @@ from .load_curves import (
     asperity_handles,
     constrained_constants,
     e_star_of,
-    is_profiles,
     masked_points,
     n_outside,
     reference_style,

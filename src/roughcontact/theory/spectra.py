@@ -204,7 +204,7 @@ def areal_moments(m0: float, m2: float, m4: float) -> tuple[float, float, float]
     return float(m0), 2.0 * float(m2), 8.0 / 3.0 * float(m4)
 
 
-def power_law_alpha(k_l: float, k_s: float, hurst: float) -> float:
+def power_law_alpha(k_l: float, k_s: float, hurst: float, *, dimension: int = 2) -> float:
     """Nayak's ``alpha`` of the ideal continuous power-law spectrum (closed form) [-].
 
     Parameters
@@ -213,10 +213,27 @@ def power_law_alpha(k_l: float, k_s: float, hurst: float) -> float:
         Cutoff mode numbers, ``0 < k_l < k_s``.
     hurst : float
         Hurst exponent in [0, 1].
+    dimension : {2, 1}
+        2: a cross-section of the isotropic surface (:func:`power_law_moments`); 1: a profile whose
+        own spectrum is the power law, ``C(k) ~ |k|^(-1-2H)`` with one mode per unit ``k``
+        (:func:`roughcontact.surfaces.synthetic.generate_profile`). Both have the same radial
+        integrals; the surface's moments carry the angular factors ``I_0, I_2, I_4`` and the
+        profile's do not, so the profile's alpha is the surface's times ``I_2^2 / (I_0 I_4) = 2/3``.
 
     Returns
     -------
     float
-        ``m0 m4 / m2^2`` from :func:`power_law_moments`; depends on ``k_s / k_l`` and H only.
+        ``m0 m4 / m2^2``; depends on ``k_s / k_l`` and H only. A narrow band tends to 3/2 (surface)
+        and 1 (profile: one sinusoid).
+
+    Examples
+    --------
+    >>> round(power_law_alpha(16, 32, 0.8), 4), round(power_law_alpha(16, 32, 0.8, dimension=1), 4)
+    (1.7552, 1.1701)
     """
-    return power_law_moments(k_l, k_s, hurst)["alpha"]
+    alpha = power_law_moments(k_l, k_s, hurst)["alpha"]
+    if dimension == 2:
+        return alpha
+    if dimension == 1:
+        return alpha * _COS_INTEGRALS[2] ** 2 / (_COS_INTEGRALS[0] * _COS_INTEGRALS[4])
+    raise ValueError(f"dimension must be 1 (a profile) or 2 (a surface), got {dimension!r}")

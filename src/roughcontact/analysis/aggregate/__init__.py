@@ -13,6 +13,7 @@ from .combine import (
     TOPOGRAPHY_DIM,
     combine_cases,
     combine_topographies,
+    is_profiles,
 )
 from .derivatives import (
     DERIVATIVE_VARIABLES,
@@ -40,6 +41,7 @@ __all__ = [
     "REPRESENTATIVITY_REQUIRED",
     "combine_cases",
     "combine_topographies",
+    "is_profiles",
     "fd_weights",
     "DERIVATIVE_VARIABLES",
     "load_derivative",

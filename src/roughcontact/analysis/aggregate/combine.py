@@ -39,6 +39,21 @@ _KINDS = {"contact": CONTACT_REQUIRED, "representativity": REPRESENTATIVITY_REQU
 
 
 # ------------------------------------------------------------------------ combining
+def is_profiles(agg: xr.Dataset) -> bool:
+    """Whether a combined dataset's cases are profiles (1-D surfaces in plane strain).
+
+    The solver marks a profile's result with the global attribute ``surface_dimension = 1``
+    (:func:`roughcontact.solver.solve_contact`); :func:`combine_cases` keeps the attributes its cases
+    share. A dataset without the attribute holds 2-D maps.
+
+    Examples
+    --------
+    >>> is_profiles(xr.Dataset(attrs={"surface_dimension": 1})), is_profiles(xr.Dataset())
+    (True, False)
+    """
+    return int(agg.attrs.get("surface_dimension", 2)) == 1
+
+
 def _case_key(ds: xr.Dataset, name: str) -> tuple[float, float, float, int]:
     key = []
     for dim in CASE_DIMS:

@@ -9,7 +9,7 @@ import numpy as np
 import xarray as xr
 
 from ...theory.spectra import power_law_alpha
-from ..aggregate.combine import CASE_DIMS
+from ..aggregate.combine import CASE_DIMS, is_profiles
 from ..aggregate.derived import add_derived
 from .bootstrap import GroupFit, check_schedules, fit_group, group_rng, shared_schedule
 from .estimators import CONSTANTS, METHODS, POOLED, Curves
@@ -69,8 +69,9 @@ def fit_cel(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.11), n_bo
         ``value``, ``stderr`` (the estimator's own), ``bootstrap_stderr``, ``ci_low``,
         ``ci_high`` (percentile interval), ``n_points(k_l, k_s, H_group, estimator, constant)``,
         ``n_seeds(k_l, k_s, H_group)``, ``n_boot_ok(k_l, k_s, H_group, estimator)``,
-        ``alpha_power_law(k_l, k_s, H_group)`` (Nayak alpha of the ideal spectrum, NaN
-        when pooled), ``alpha_surfaces(k_l, k_s, H_group)`` (mean of ``agg.alpha`` over the
+        ``alpha_power_law(k_l, k_s, H_group)`` (Nayak alpha of the ideal spectrum, a profile's
+        own when ``agg`` holds profiles, :func:`~roughcontact.analysis.aggregate.is_profiles`;
+        NaN when pooled), ``alpha_surfaces(k_l, k_s, H_group)`` (mean of ``agg.alpha`` over the
         group's cases), ``paper_value(constant)``, ``paper_stderr(constant)``. Groups
         without any case are NaN with ``n_seeds = 0``. Attrs record the settings.
     """
@@ -151,7 +152,7 @@ def _fit_cel_group(agg: xr.Dataset, grid: _CelGrid, idx: tuple[int, int, int], k
         check_schedules(curves, [f"fit_cel: seeds at k_l={kl:g}, k_s={ks:g}, H={h_label(h)}"
                                   for h in group_hs])
     if label != POOLED and kl < ks:
-        grid.alpha[idx] = power_law_alpha(kl, ks, group_hs[0])
+        grid.alpha[idx] = power_law_alpha(kl, ks, group_hs[0], dimension=1 if is_profiles(agg) else 2)
     if "alpha" in agg:
         grid.alpha_surf[idx] = _mean_alpha_surfaces(agg, kl, ks, group_hs)
     res = fit_group(curves, rng=group_rng(rng_seed, kl, ks, label), caller="fit_cel",
