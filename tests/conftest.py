@@ -118,8 +118,12 @@ def edited_contact(cfg: dict, scene: str = "tiny", **edits) -> dict:
     return cfg
 
 
+@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
     """Every test that uses :func:`demo_run` in one xdist group (``make test`` runs ``--dist loadgroup``).
+
+    First among the hooks (``tryfirst``): pytest-xdist's worker reads the groups in its own hook of
+    the same name; a mark added after it is ignored (and the demo ran once per worker).
 
     A session fixture runs once per worker: spread over two workers, the demo ran twice, each a
     ``-j2`` Snakemake run on a 2-core machine (~1.5 min quiet, several under load). In one group the
