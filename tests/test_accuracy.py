@@ -63,7 +63,7 @@ def test_perimeter_correction_reduces_the_pixel_bias():
 def test_relative_error_and_cost_table():
     assert accuracy.relative_error(1.01, 1.0) == pytest.approx(0.01)
     summary = xr.Dataset({"err_kappa": ("variant", [0.02, 0.005, 0.0005]),
-                          "time_per_case": ("variant", [1.0, 3.0, 9.0])},
+                          "work_per_case": ("variant", [1.0, 3.0, 9.0])},
                          coords={"variant": ["a", "b", "c"]})
     table = accuracy.cost_table(summary, "kappa", targets=(1e-2, 1e-3, 1e-4))
     assert table == {1e-2: ("b", 3.0), 1e-3: ("c", 9.0), 1e-4: None}
@@ -83,6 +83,15 @@ def test_tiny_accuracy_scene_end_to_end(tmp_path):
     e16 = float(s.sel(variant="N16_tol1e-10_steps20")["err_area"])
     e32 = float(s.sel(variant="N32_tol1e-10_steps20")["err_area"])
     assert e16 > e32 > 0
-    assert np.all(s["time_per_case"].values > 0)
+    # the work is N² x the iterations of each setting's cases (the seeds rows: of all k x 2 H surfaces)
+    case = xr.open_dataset(out / "accuracy" / "N32_tol1e-10_steps20" / "kl2_ks8_H0.5_s0.nc")
+    assert np.all(s["work_per_case"].values > 0) and float(s.sel(variant="N32_tol1e-10_steps20")["work_per_case"]) \
+        == pytest.approx(32 ** 2 * np.mean([float(xr.open_dataset(p)["iterations"].sum()) for p in
+                                            sorted((out / "accuracy" / "N32_tol1e-10_steps20").glob("*.nc"))]))
+    assert int(case["iterations"].sum()) > 0
+    # no timing inside: the summary made again from the same cases is the same bytes
+    first = {p: (out / "accuracy" / p).read_bytes() for p in ("summary.nc", "summary.csv", "summary.md")}
+    assert run_snakemake(wd, "-j1", "-R", "accuracy_summary", "--", "results/acc/accuracy/summary.nc").returncode == 0
+    assert {p: (out / "accuracy" / p).read_bytes() for p in first} == first
     assert (out / "figures" / "accuracy.png").stat().st_size > 1000
     assert "err kappa" in (out / "accuracy" / "summary.md").read_text()

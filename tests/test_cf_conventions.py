@@ -78,7 +78,7 @@ def _generated(root: Path) -> dict[str, Path]:
     cel = fit.fit_cel(agg, n_boot=10, on_insufficient="nan", window=WINDOW, min_points=3)
     out["fit"] = _write(_allow_nan(cel), root / "fit.nc", "fit")
     setting = {"label": "N32", "value": "", "N": "32", "tol": "1e-8", "n_steps": "3", "seeds": 2}
-    summary = accuracy.summarize({"N32": (agg, [1.0, 1.0], [100.0, 100.0])},
+    summary = accuracy.summarize({"N32": agg},
                                  [{**setting, "axis": "reference"}, {**setting, "axis": "defaults"}],
                                  length=1.0, kappa_at=0.05, n_boot=10, length_unit="um")
     out["accuracy"] = _write(summary, root / "accuracy.nc", "accuracy")

@@ -602,7 +602,7 @@ def test_accuracy_figure_counts_the_settings_it_cannot_draw():
     err = [0.03, 0.01, 0.0, 0.002, 0.02, 0.03, 0.01]
     value = ["256", "512", "1e-10", "1e-8", "2", "4", "-"]
     summary = xr.Dataset({"axis": ("variant", axis), "value": ("variant", value),
-                          "time_per_case": ("variant", [1.0, 4.0, 3.0, 2.0, 2.0, 4.0, 2.0]),
+                          "work_per_case": ("variant", [1.0, 4.0, 3.0, 2.0, 2.0, 4.0, 2.0]),
                           **{f"err_{m}": ("variant", err) for m in ("kappa", "area", "kappa_corrected",
                                                                    "area_corrected")}},
                          attrs={"kappa_at": 0.05})

@@ -174,7 +174,7 @@ def written(request):
     out["scale_free"] = scale_free_statistics(rep_agg)
     out["fit"] = fit_cel(agg, n_boot=10, on_insufficient="nan", window=(0.01, 0.2), min_points=3)
     setting = {"label": "N32", "value": "", "N": "32", "tol": "1e-8", "n_steps": "3", "seeds": 2}
-    out["accuracy"] = accuracy.summarize({"N32": (agg, [1.0, 1.0], [100.0, 100.0])},
+    out["accuracy"] = accuracy.summarize({"N32": agg},
                                          [{**setting, "axis": "reference"}, {**setting, "axis": "defaults"}],
                                          length=1.0, kappa_at=0.05, n_boot=10, length_unit=lu)
     return lu, pu, out
@@ -209,7 +209,7 @@ def test_units_follow_the_declared_length_and_pressure_units(written):
         "representativity_batch": {"epsilon": "1", "std_height": length},
         "aggregate_representativity": {"epsilon_mean": "1", "epsilon_sem": "1", "std_height": length},
         "scale_free": {"epsilon_mean": "1"},
-        "accuracy": {"time_per_case": "s", "max_rss": "2^20 byte", "err_kappa": "1"},
+        "accuracy": {"work_per_case": "1", "err_kappa": "1"},
     }
     for kind, wanted in expect.items():
         got = {name: out[kind][name].attrs["units"] for name in wanted}

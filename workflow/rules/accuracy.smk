@@ -25,7 +25,6 @@ rule accuracy_case:
 rule accuracy_summary:
     input:
         cases=lambda w: accuracy_files(w.scene, "results/{scene}/accuracy/{label}/{stem}.nc"),
-        benchmarks=lambda w: accuracy_files(w.scene, "results/{scene}/benchmarks/accuracy/{label}/{stem}.tsv"),
     output:
         nc="results/{scene}/accuracy/summary.nc",
         csv="results/{scene}/accuracy/summary.csv",

@@ -1,5 +1,4 @@
-"""Accuracy study: errors against the reference and the cost of every setting."""
-import csv
+"""Accuracy study: errors against the reference and the solver work of every setting."""
 from collections import defaultdict
 from pathlib import Path
 
@@ -12,25 +11,20 @@ from roughcontact.studies import accuracy
 def main(log):
     block = snakemake.params.settings
     settings = accuracy.variants(block)
-    groups = defaultdict(lambda: ([], [], [], []))
-    for nc, tsv in zip(snakemake.input.cases, snakemake.input.benchmarks, strict=True):
-        label = Path(nc).parent.name
+    groups = defaultdict(lambda: ([], []))
+    for nc in snakemake.input.cases:
         ds = read_dataset(nc, stage="contact",
-                          variables=["area_fraction", "contact_perimeter", "pressure", "rms_slope"])
-        with open(tsv) as fh:
-            bench = next(csv.DictReader(fh, delimiter="\t"))
-        g = groups[label]
-        g[0].append(ds)
-        g[1].append(nc)
-        g[2].append(float(bench["s"]))
-        g[3].append(float(bench["max_rss"]) if bench["max_rss"] not in ("", "NA", "-") else float("nan"))
+                          variables=["area_fraction", "contact_perimeter", "pressure", "rms_slope", "iterations"])
+        datasets, names = groups[Path(nc).parent.name]
+        datasets.append(ds)
+        names.append(nc)
     results = {}
-    for label, (datasets, names, times, rss) in groups.items():
+    for label, (datasets, names) in groups.items():
         agg = aggregate.add_derived(aggregate.combine_cases(datasets, names))
         unconverged = int((~agg["converged"].astype(bool)).sum())
         if unconverged:
             log.warning("setting %s: %d unconverged load steps", label, unconverged)
-        results[label] = (agg, times, rss)
+        results[label] = agg
     summary = accuracy.summarize(results, settings, length=block["surface"]["L"], kappa_at=block["kappa_at"],
                                  seed_axis=block["seed_axis"], n_boot=block["n_boot"])
     write_dataset(summary, snakemake.output.nc, stage="accuracy", scene=snakemake.wildcards.scene,

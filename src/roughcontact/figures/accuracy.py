@@ -12,7 +12,7 @@ from .style import OKABE_ITO, STYLE, new_figure, require
 
 
 def fig_accuracy(summary: xr.Dataset) -> Figure:
-    """What accuracy costs: relative error against wall time per surface, log-log.
+    """What accuracy costs: relative error against solver work per surface (N² x iterations), log-log.
 
     Two panels: kappa at A/A0 = ``summary.attrs['kappa_at']`` and A/A0 at p_max. One
     series per axis varied (N, tol, n_steps, seeds), each point labelled with its value;
@@ -20,7 +20,7 @@ def fig_accuracy(summary: xr.Dataset) -> Figure:
     the shipped defaults are marked with a star. Zero errors (the reference itself)
     are not drawn on log axes; the legend counts them per series (:func:`series_label`).
     """
-    require(summary, "summary", ["time_per_case", "err_kappa", "err_area", "axis", "value"])
+    require(summary, "summary", ["work_per_case", "err_kappa", "err_area", "axis", "value"])
     with matplotlib.rc_context(STYLE):
         return _draw_accuracy(summary)
 
@@ -45,7 +45,7 @@ def _draw_accuracy(summary: xr.Dataset) -> Figure:
             sel = np.flatnonzero(axis_of == name)
             if sel.size == 0:
                 continue
-            t = summary["time_per_case"].values[sel]
+            t = summary["work_per_case"].values[sel]
             order = np.argsort(t)
             for variant, style, label in ((metric, "-", names[name]),
                                           (f"{metric}_corrected", "--", "N, perimeter-corrected")):
@@ -63,10 +63,10 @@ def _draw_accuracy(summary: xr.Dataset) -> Figure:
         if d.size:
             e = summary[f"err_{metric}"].values[d]
             if np.all(e > 0):
-                ax.plot(summary["time_per_case"].values[d], e, "*", ms=10, color="black", label="defaults")
+                ax.plot(summary["work_per_case"].values[d], e, "*", ms=10, color="black", label="defaults")
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel("wall time per surface [s] (seeds series: all k surfaces)")
+        ax.set_xlabel("solver work per surface, $N^2$ × iterations (seeds series: all k surfaces)")
         ax.set_ylabel("relative error [1]")
         ax.set_title(title, fontsize=9)
     # one entry per series: the two panels may leave out different settings, the left one's count is given

@@ -35,11 +35,6 @@ import xarray as xr
 from ..core.quantities import cf_unit
 from ..theory.perimeter import PERIMETER_C, perimeter_corrected_area
 
-#: ``units`` of memory in MiB (Snakemake's ``max_rss``): UDUNITS has no binary prefixes,
-#: "2^20 byte" parses with it (``cf_units``) and with ``pint.UnitRegistry().parse_expression``.
-MIB_UNITS = "2^20 byte"
-
-
 METRICS = ("area", "area_corrected", "kappa", "kappa_corrected", "cel_kappa", "cel_mu", "cel_beta")
 
 
@@ -129,13 +124,30 @@ def fit_perimeter_c(areas: Sequence[float], perimeters: Sequence[float], dxs: Se
     return float(np.sum(x * (a - reference)) / np.sum(x * x))
 
 
+def solver_work(agg: xr.Dataset, n: int) -> float:
+    """Mean solver work of a setting's cases: ``N² x`` its iterations summed over the load steps [1].
+
+    A machine-independent cost (an iteration is about one FFT pair over the N² nodes), counted so
+    that the study's outputs are the same bytes on every rerun; a job's wall time and memory are
+    Snakemake's benchmark (``python -m roughcontact.pipeline.runcost``).
+
+    Examples
+    --------
+    >>> its = xr.DataArray([[10, 20], [30, 40]], dims=("seed", "step"))
+    >>> solver_work(xr.Dataset({"iterations": its}), 4)
+    800.0
+    """
+    per_case = agg["iterations"].sum("step")
+    return float(per_case.mean()) * n * n
+
+
 def cost_table(summary: xr.Dataset, metric: str, targets: Sequence[float] = (1e-2, 1e-3)) -> dict:
     """Cheapest setting reaching each relative-error target for ``metric``.
 
-    Returns {target: (label, seconds per surface) or None if no setting reaches it}.
+    Returns {target: (label, work per case [node-iterations]) or None if no setting reaches it}.
     """
     err = summary[f"err_{metric}"].values
-    time = summary["time_per_case"].values
+    work = summary["work_per_case"].values
     labels = summary["variant"].values
     out = {}
     for target in targets:
@@ -143,8 +155,8 @@ def cost_table(summary: xr.Dataset, metric: str, targets: Sequence[float] = (1e-
         if ok.size == 0:
             out[target] = None
         else:
-            best = ok[np.argmin(time[ok])]
-            out[target] = (str(labels[best]), float(time[best]))
+            best = ok[np.argmin(work[ok])]
+            out[target] = (str(labels[best]), float(work[best]))
     return out
 
 
@@ -168,7 +180,7 @@ def _metric_means(agg: xr.Dataset, *, kappa_at: float, dx: float, n_boot: int, c
     return out
 
 
-def summarize(results: Mapping[str, tuple[xr.Dataset, Sequence[float], Sequence[float]]],
+def summarize(results: Mapping[str, xr.Dataset],
               settings: Sequence[Mapping], *, length: float, kappa_at: float = 0.05,
               seed_axis: Sequence[str] = (), n_boot: int = 10, c: float = PERIMETER_C,
               length_unit: str = "1") -> xr.Dataset:
@@ -176,7 +188,7 @@ def summarize(results: Mapping[str, tuple[xr.Dataset, Sequence[float], Sequence[
 
     Parameters
     ----------
-    results : mapping label -> (combined contact dataset, wall seconds per case, peak RSS [MiB] per case)
+    results : mapping label -> combined contact dataset of the setting (with ``iterations`` per step)
     settings : the output of :func:`variants`
     length : domain side L (grid spacing L/N)
     seed_axis : numbers of seeds (strings) compared at the "defaults" setting
@@ -187,8 +199,7 @@ def summarize(results: Mapping[str, tuple[xr.Dataset, Sequence[float], Sequence[
     -------
     xarray.Dataset over dim ``variant`` (one row per N/tol/n_steps setting, plus one per
     entry of ``seed_axis``) with coords ``axis``, ``value``, ``N``, ``tol``, ``n_steps``,
-    ``n_seeds`` and variables ``time_per_case`` [s], ``max_rss`` [MiB, units ``"2^20 byte"``,
-    Snakemake's ``max_rss``], the metric values
+    ``n_seeds`` and variables ``work_per_case`` [1] (:func:`solver_work`), the metric values
     and ``err_<metric>`` (relative error against the reference; for the seeds axis against
     the all-seeds mean at the defaults). Attr ``perimeter_c_fit``: the c that best
     removes the N dependence of A/A0 at p_max (:func:`fit_perimeter_c`).
@@ -196,7 +207,7 @@ def summarize(results: Mapping[str, tuple[xr.Dataset, Sequence[float], Sequence[
     ref = next(s for s in settings if s["axis"] == "reference")
     d = next(s for s in settings if s["axis"] == "defaults")
     metric_kw = dict(kappa_at=kappa_at, n_boot=n_boot, c=c)
-    rows = _setting_rows(results, settings, results[ref["label"]][0], length, metric_kw)
+    rows = _setting_rows(results, settings, results[ref["label"]], length, metric_kw)
     ref_vals = next(r["vals"] for r in rows if r["axis"] == "reference")
     for r in rows:
         r["err"] = {k: float(relative_error(r["vals"][k], ref_vals[k])) for k in METRICS}
@@ -215,10 +226,10 @@ def summarize(results: Mapping[str, tuple[xr.Dataset, Sequence[float], Sequence[
 
 
 def _setting_rows(results, settings, ref_agg: xr.Dataset, length: float, metric_kw: dict) -> list[dict]:
-    """One row per setting: its metrics on the reference's (H, seed) cases, time and memory."""
+    """One row per setting: its metrics on the reference's (H, seed) cases and its solver work."""
     rows = []
     for s in settings:
-        agg, times, rss = results[s["label"]]
+        agg = results[s["label"]]
         dx = length / int(s["N"])
         try:
             vals = _metric_means(agg.sel(H=ref_agg["H"], seed=ref_agg["seed"]), dx=dx, **metric_kw)
@@ -226,13 +237,13 @@ def _setting_rows(results, settings, ref_agg: xr.Dataset, length: float, metric_
             raise ValueError(f"setting {s['label']}: {exc}; lower p_max/n_steps or change kappa_at") from None
         rows.append(dict(label=s["label"], axis=s["axis"], value=s["value"], N=s["N"], tol=s["tol"],
                          n_steps=s["n_steps"], n_seeds=int(ref_agg.sizes["seed"]),
-                         time=float(np.mean(times)), rss=float(np.max(rss)), vals=vals))
+                         work=solver_work(agg, int(s["N"])), vals=vals))
     return rows
 
 
 def _seed_rows(result, d: Mapping, seed_axis: Sequence[str], length: float, metric_kw: dict) -> list[dict]:
     """One row per entry of ``seed_axis``: the first k seeds at the defaults against all of them."""
-    agg_d, times_d, rss_d = result
+    agg_d = result
     dx_d = length / int(d["N"])
     all_vals = _metric_means(agg_d, dx=dx_d, **metric_kw)
     rows = []
@@ -241,7 +252,7 @@ def _seed_rows(result, d: Mapping, seed_axis: Sequence[str], length: float, metr
         vals = _metric_means(agg_d.isel(seed=slice(0, k)), dx=dx_d, **metric_kw)
         rows.append(dict(label=f"{d['label']}_seeds{k_text}", axis="seeds", value=k_text, N=d["N"], tol=d["tol"],
                          n_steps=d["n_steps"], n_seeds=k,
-                         time=float(np.mean(times_d)) * k * agg_d.sizes["H"], rss=float(np.max(rss_d)), vals=vals,
+                         work=solver_work(agg_d, int(d["N"])) * k * agg_d.sizes["H"], vals=vals,
                          err={m: float(relative_error(vals[m], all_vals[m])) for m in METRICS}))
     return rows
 
@@ -250,10 +261,9 @@ def _summary_dataset(rows: list[dict], attrs: dict) -> xr.Dataset:
     """The rows as a Dataset over ``variant`` (:func:`summarize`'s Returns)."""
     one = {"units": "1"}
     data = {
-        "time_per_case": ("variant", [r["time"] for r in rows],
-                          {"units": "s", "long_name": "wall time per case (seeds axis: for all its cases)"}),
-        "max_rss": ("variant", [r["rss"] for r in rows],
-                    {"units": MIB_UNITS, "long_name": "peak resident memory of a job (Snakemake's max_rss, MiB)"}),
+        "work_per_case": ("variant", [r["work"] for r in rows],
+                          {"units": "1", "long_name": "solver work per case, N^2 x iterations summed over the load "
+                           "steps (seeds axis: for all its cases)"}),
     }
     for m in METRICS:
         data[m] = ("variant", [r["vals"][m] for r in rows],
@@ -273,13 +283,14 @@ def _summary_dataset(rows: list[dict], attrs: dict) -> xr.Dataset:
 
 
 def markdown_table(summary: xr.Dataset) -> str:
-    """The summary as a markdown table (time, memory, relative errors in %)."""
+    """The summary as a markdown table (solver work, relative errors in %)."""
     cols = ["area", "area_corrected", "kappa", "kappa_corrected", "cel_kappa", "cel_mu", "cel_beta"]
-    head = "| axis | setting | s per case | peak MB | " + " | ".join(f"err {c} [%]" for c in cols) + " |"
-    lines = [head, "|" + "---|" * (4 + len(cols))]
+    head = "| axis | setting | work per case [10⁹ N² × iterations] | " + \
+        " | ".join(f"err {c} [%]" for c in cols) + " |"
+    lines = [head, "|" + "---|" * (3 + len(cols))]
     for i in range(summary.sizes["variant"]):
         row = summary.isel(variant=i)
         errs = " | ".join(f"{100 * float(row[f'err_{c}']):.3g}" for c in cols)
-        lines.append(f"| {row['axis'].item()} | {row['variant'].item()} | {float(row['time_per_case']):.3g} | "
-                     f"{float(row['max_rss']):.0f} | {errs} |")
+        lines.append(f"| {row['axis'].item()} | {row['variant'].item()} | {float(row['work_per_case']) / 1e9:.3g} | "
+                     f"{errs} |")
     return "\n".join(lines) + "\n"
