@@ -39,8 +39,9 @@ dryrun: install
 # Lint runs first (seconds) and stops `make test` when it fails. One pytest worker per core
 # (pytest-xdist): most tests use one core, so a serial run left the second idle (28 min serial
 # on 2 quiet cores on 2026-11-26, over the 30-min CI budget under load). `--dist loadgroup` keeps
-# the tests of the demo run on one worker (tests/conftest.py), so the demo runs once, not per worker;
-# `--durations=30` prints the slowest tests, to keep CI under its 30 min.
+# the tests of the demo run on one worker (tests/conftest.py), so the demo runs once, not per worker
+# (pytest < 9.2: tests/test_xdist_groups.py); `--durations=30` prints the slowest tests, to keep CI
+# under its 30 min (2026-11-28, a fresh clone beside two niced N = 4096 solves: 25 min in all).
 test: install-test lint browser
 	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest -n $(JOBS) --dist loadgroup --durations=30
 
