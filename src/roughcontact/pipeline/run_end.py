@@ -5,7 +5,7 @@ so that job selection runs once a minute, not once a second) re-evaluates the wa
 :class:`threading.Timer` started after every round of job selection, one timespan later. The timer is
 not a daemon thread, so the interpreter waits for the last one before it exits: every local run,
 however short, lingered up to a minute after its last job (measured 2026-11-28: the ``tiny`` test
-scene, 42 s of jobs, 104 s until the command returned; 45 s with the timer cancelled). When the run
+scene, 42 s of jobs, 104 s until the command returned; 43 s with the timer cancelled). When the run
 has ended (Snakemake's ``onsuccess`` / ``onerror`` hooks, after its scheduler has returned) no job
 is left to select, and :func:`cancel_job_rate_timers` cancels those timers.
 """
