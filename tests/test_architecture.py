@@ -202,9 +202,9 @@ def test_functions_are_short(sources):
     assert long == {}
 
 
-#: Where a ``length`` may be asked whether it is a float ``L`` or a pair ``(Lx, Ly)``: the cell, and the
-#: solver's check of the user's arguments (which names each bad argument in its own words).
-LENGTH_FORM_MODULES = {"roughcontact.core.cell", "roughcontact.solver.validation"}
+#: Where a ``length`` may be asked whether it is a float ``L`` or a pair ``(Lx, Ly)``: the cell alone (the
+#: solver's check of the user's arguments parses it with ``check_length``).
+LENGTH_FORM_MODULES = {"roughcontact.core.cell"}
 
 
 def _is_length(node: ast.AST) -> bool:

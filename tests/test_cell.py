@@ -77,7 +77,7 @@ def test_areas_from_fractions_or_node_counts():
 @pytest.mark.parametrize("length", [0.0, -1.0, float("inf"), float("nan"), "1", True, None, (1.0,), (1.0, 2.0, 3.0),
                                     [1.0, -2.0], (1.0, "a"), np.ones((2, 1)), np.array([1.0, np.nan])])
 def test_a_bad_length_is_named(length):
-    with pytest.raises(ValueError, match="^length must be a finite real number L > 0"):
+    with pytest.raises(ValueError, match="^length must be a finite real number > 0"):
         Cell.of((8, 8), length)
     with pytest.raises(ValueError, match="^length must be"):
         check_length(length)
@@ -92,3 +92,13 @@ def test_a_float_length_needs_a_square_grid():
 def test_check_length_keeps_the_form():
     assert check_length(np.float32(0.5)) == 0.5 and check_length(np.array(2)) == 2.0
     assert check_length(np.array([1, 2])) == (1.0, 2.0) and check_length([1, 2]) == (1.0, 2.0)
+
+
+@pytest.mark.parametrize(("length", "given"), [((1.0,), r"got 1 values \(1.0,\)"), ([1, 2, 3], "got 3 values"),
+                                               (np.ones((2, 2)), r"got an array of shape \(2, 2\)"),
+                                               ((1.0, "a"), "got str 'a'"), (True, "got bool True")])
+def test_the_solver_and_the_cell_refuse_a_length_with_one_message(length, given):
+    from roughcontact.solver.validation import validate_length
+    for check in (check_length, lambda v: validate_length(v, (8, 8)), lambda v: Cell.of((8, 8), v)):
+        with pytest.raises(ValueError, match=f"^length must be a finite real number > 0 .*{given}"):
+            check(length)

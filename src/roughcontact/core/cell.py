@@ -35,11 +35,19 @@ from dataclasses import dataclass
 import numpy as np
 
 #: The forms the solver's ``length`` takes, as the errors name them.
-LENGTH_FORMS = "a finite real number L > 0 (square cell) or a pair (Lx, Ly) of finite real numbers > 0"
+LENGTH_FORMS = "a finite real number > 0 (square cell) or a pair (Lx, Ly) of finite real numbers > 0"
+
+
+def is_pair_form(length) -> bool:
+    """Whether ``length`` is written as a sequence (tuple, list or array of >= 1 dimension), not one number."""
+    return isinstance(length, (tuple, list)) or (isinstance(length, np.ndarray) and length.ndim > 0)
 
 
 def check_length(length):
     """The solver's ``length`` checked, in the form it was given: a float ``L`` or a pair ``(Lx, Ly)``.
+
+    The one parser of ``length`` in the package: :func:`roughcontact.solver.validation.validate_length`
+    adds the checks against a grid's shape.
 
     Parameters
     ----------
@@ -55,17 +63,19 @@ def check_length(length):
     Raises
     ------
     ValueError
-        Naming ``length`` and the forms it may take, for anything else (bools and strings included).
+        Naming ``length``, the forms it may take and what was given (how many values, or the type of
+        the one at fault), for anything else (bools and strings included).
 
     Examples
     --------
     >>> check_length(2), check_length([1, 0.5])
     (2.0, (1.0, 0.5))
     """
-    if isinstance(length, (tuple, list)) or (isinstance(length, np.ndarray) and length.ndim > 0):
+    if is_pair_form(length):
         values = list(length) if not isinstance(length, np.ndarray) or length.ndim == 1 else []
         if len(values) != 2:
-            raise ValueError(f"length must be {LENGTH_FORMS}, got {length!r}")
+            given = f"{len(values)} values {length!r}" if values else f"an array of shape {np.shape(length)}"
+            raise ValueError(f"length must be {LENGTH_FORMS}, got {given}")
         return tuple(_side(v, length) for v in values)
     return _side(length, length)
 
@@ -75,7 +85,7 @@ def _side(value, length) -> float:
     real = isinstance(value, numbers.Real) or (isinstance(value, np.ndarray) and value.ndim == 0
                                                 and value.dtype.kind in "iuf")
     if not real or isinstance(value, (bool, np.bool_)):
-        raise ValueError(f"length must be {LENGTH_FORMS}, got {length!r}")
+        raise ValueError(f"length must be {LENGTH_FORMS}, got {type(value).__name__} {value!r}")
     side = float(value)
     if not (math.isfinite(side) and side > 0):
         raise ValueError(f"length must be {LENGTH_FORMS}, got {length!r}")

@@ -7,6 +7,8 @@ from collections.abc import Iterable
 
 import numpy as np
 
+from ..core.cell import check_length, is_pair_form
+
 #: Boundary conditions of the elastic half-space, the ``boundary`` argument of the
 #: solver: ``"periodic"`` (the default; the cell is one period of an infinite surface)
 #: or ``"free"`` (the patch is all there is; no periodic images).
@@ -82,7 +84,8 @@ def validate_length(length, shape: tuple[int, int], name: str = "heights"):
 
     A float (a real scalar) means the square cell ``Lx = Ly = L`` and needs ``nx == ny``; a pair
     (tuple, list or 1-D array of two real numbers) gives the sides along x (axis 0) and y (axis 1),
-    pixels ``dx = Lx / nx`` and ``dy = Ly / ny``. Every side must be finite and > 0.
+    pixels ``dx = Lx / nx`` and ``dy = Ly / ny``. Every side must be finite and > 0
+    (:func:`roughcontact.core.cell.check_length` parses it); a profile (``shape == (n,)``) has one length.
 
     Returns
     -------
@@ -92,35 +95,21 @@ def validate_length(length, shape: tuple[int, int], name: str = "heights"):
         the pair ``(Lx, Ly)`` of floats.
     """
     if len(shape) == 1:  # a profile: one length
-        if isinstance(length, (tuple, list)) or (isinstance(length, np.ndarray) and length.ndim > 0):
+        if is_pair_form(length):
             raise ValueError(f"length: a profile ({name} 1-D, {shape[0]} points) has one length L, a finite real "
                              f"number > 0; got {length!r}")
         return check_positive("length", length)
     nx, ny = shape
-    if isinstance(length, (tuple, list)) or (isinstance(length, np.ndarray) and length.ndim > 0):
-        return _length_pair(length, nx, ny)
-    value = check_positive("length", length)
+    value = check_length(length)
+    if isinstance(value, tuple):
+        lx, ly = value
+        return lx if (nx == ny and lx == ly) else value
     if nx != ny:
         raise ValueError(
             f"length: a single float means a square cell, and {name} must be a 2-D square array (n, n) "
             f"for it; got length={length!r} and {name} of shape {(nx, ny)}: for a rectangular cell give "
             f"length=(Lx, Ly), the sides along x (axis 0) and y (axis 1)")
     return value
-
-
-def _length_pair(length, nx: int, ny: int):
-    expected = "a finite real number > 0 (square cell) or a pair (Lx, Ly) of finite real numbers > 0"
-    values = list(np.asarray(length, dtype=object).ravel()) if isinstance(length, np.ndarray) else list(length)
-    if len(values) != 2 or (isinstance(length, np.ndarray) and length.ndim != 1):
-        raise ValueError(f"length must be {expected}, got {len(values)} values {length!r}")
-    sides = []
-    for value in values:
-        side = real_scalar("length", value, expected)
-        if not (math.isfinite(side) and side > 0):
-            raise ValueError(f"length must be {expected}, got {length!r}")
-        sides.append(side)
-    lx, ly = sides
-    return lx if (nx == ny and lx == ly) else (lx, ly)
 
 
 def validate_pressures(pressures) -> np.ndarray:
