@@ -219,3 +219,20 @@ def test_the_whole_range_row_fits_every_point_and_reads_pending_without_its_run(
     r = page.range_row(grid, None, grid)  # the paper grid's k_s = 128 column stands in for the N = 4096 cells
     assert r["claim"] == question and r["verdict"] == judge(question, r["paper"], r["ours"], RULES)
     assert "over 40 points" in r["ours"]
+
+
+def test_the_alpha_figure_draws_the_models_over_every_point_and_shows_where_they_fall():
+    from roughcontact.studies.open_questions import figures
+
+    def points(alpha, k_l):
+        alpha = np.asarray(alpha, float)
+        return {"alpha": alpha, "kappa": np.full(alpha.size, 0.9), "sem": np.full(alpha.size, 0.01),
+                "k_l": np.full(alpha.size, k_l), "H": np.full(alpha.size, 0.36),
+                "bgt": 1.0 - 0.12 * np.log(alpha), "greenwood": 1.02 - 0.12 * np.log(alpha)}
+
+    small, big = points([2.0, 10.0, 48.0], 4.0), points([5.0, 250.0], 16.0)
+    fig = figures.alpha_figure(small, small, pixel_4096=big, corrected_4096=big)
+    for ax in fig.axes:
+        models = [line for line in ax.get_lines() if line.get_label() in ("BGT", "Greenwood")]
+        assert len(models) == 2 and all(line.get_xdata().max() == 250.0 for line in models)
+        assert ax.get_ylim()[0] <= 1.0 - 0.12 * np.log(250.0)  # the models' lowest value is in view

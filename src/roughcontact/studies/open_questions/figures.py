@@ -103,9 +103,12 @@ def alpha_figure(pixel: dict, corrected: dict, pixel_2048: dict | None = None,
     The paper grid's points (N = 1024) are dots by λ_l; the kappa-alpha scene's (N = 2048), when
     given, open squares; the kappa-alpha-4096 scene's (N = 4096, λ_s = L/128), when given, open diamonds.
     """
-    fig, axes = _figure(1, 2, 3.0)
+    fig, axes = _figure(1, 2, 3.2)
     every = np.concatenate([pixel["alpha"]] + ([pixel_4096["alpha"]] if pixel_4096 is not None else []))
     line = np.geomspace(every.min(), every.max(), 60)
+    # the models are functions of alpha: drawn through every point's alpha, so that they span the whole range
+    floor = min(0.45, *(np.nanmin(p[m]) - 0.05 for p in (pixel, pixel_2048, pixel_4096) if p is not None
+                        for m in ("bgt", "greenwood")))
     for ax, pts, more, most, title in zip(axes, (pixel, corrected), (pixel_2048, corrected_2048),
                                           (pixel_4096, corrected_4096),
                                           ("pixel-counted area", "perimeter-corrected area"), strict=True):
@@ -119,16 +122,18 @@ def alpha_figure(pixel: dict, corrected: dict, pixel_2048: dict | None = None,
             sel = pts["k_l"] == kl
             ax.errorbar(pts["alpha"][sel], pts["kappa"][sel], yerr=pts["sem"][sel], fmt="o", ms=3, color=colour,
                         label=rf"$\lambda_l = L/{kl:g}$")
-        order = np.argsort(pts["alpha"])
+        every_pts = [p for p in (pts, more, most) if p is not None]
+        alpha = np.concatenate([p["alpha"] for p in every_pts])
+        order = np.argsort(alpha)
         for model, style in (("bgt", ":"), ("greenwood", "--")):
-            ax.semilogx(pts["alpha"][order], pts[model][order], style, color="k", label=model.upper()
-                        if model == "bgt" else "Greenwood")
+            ax.semilogx(alpha[order], np.concatenate([p[model] for p in every_pts])[order], style, color="k",
+                        label=model.upper() if model == "bgt" else "Greenwood")
         ax.set(xscale="log", xlabel=r"Nayak's $\alpha$", ylabel=r"$\kappa(A/A_0 = 0.05)/\sqrt{2\pi}$", title=title,
-               xlim=(line[0] / 1.2, line[-1] * 1.2), ylim=(0.45, 1.05))
+               xlim=(line[0] / 1.2, line[-1] * 1.2), ylim=(floor, 1.05))
         ax.xaxis.set_major_formatter(ScalarFormatter())
         ax.xaxis.set_minor_formatter(NullFormatter())
         ax.title.set_fontsize(8)
-    axes[0].legend(fontsize=6, ncol=2, loc="lower left")
+    fig.legend(*axes[0].get_legend_handles_labels(), fontsize=6, ncol=4, loc="outside lower center")
     return fig
 
 
