@@ -58,6 +58,15 @@ PUBLISHED = DOCS / "open-questions"
      "slope = -0.045 ± 0.003, curvature = 0.012 ± 0.002 (√2π", "partly"),
     ("Q2e: κ(α) over the whole range, N = 1024 to 4096 at 32 px per λ_s",
      "slope = -0.005 ± 0.003, curvature = 0.0 ± 0.002 (√2π", "no"),
+    ("Q2e: κ(α) over the whole range, N = 1024 to 4096 at 32 px per λ_s",
+     "pixel-counted: slope = -0.044 ± 0.002, curvature = 0.003 ± 0.0015; perimeter-corrected: slope = -0.039 ± "
+     "0.0015, curvature = 0.0006 ± 0.0012 (√2π", "yes"),
+    ("Q2e: κ(α) over the whole range, N = 1024 to 4096 at 32 px per λ_s",
+     "pixel-counted: slope = -0.044 ± 0.002, curvature = 0.0031 ± 0.0015; perimeter-corrected: slope = -0.039 ± "
+     "0.0015, curvature = 0.0006 ± 0.0012 (√2π", "partly"),
+    ("Q2e: κ(α) over the whole range, N = 1024 to 4096 at 32 px per λ_s",
+     "pixel-counted: slope = -0.044 ± 0.002, curvature = 0.01 ± 0.001; perimeter-corrected: slope = -0.039 ± "
+     "0.0015, curvature = 0.01 ± 0.001 (√2π", "partly"),
 ])
 def test_each_verdict_follows_its_rule(question, measured, verdict):
     assert judge(question, "", measured, RULES) == verdict
@@ -218,7 +227,7 @@ def test_the_whole_range_row_fits_every_point_and_reads_pending_without_its_run(
     assert page.range_row(grid, None, None)["verdict"] == "pending"
     r = page.range_row(grid, None, grid)  # the paper grid's k_s = 128 column stands in for the N = 4096 cells
     assert r["claim"] == question and r["verdict"] == judge(question, r["paper"], r["ours"], RULES)
-    assert "over 40 points" in r["ours"]
+    assert "over 40 points" in r["ours"] and r["ours"].count("slope = ") == 2  # pixel-counted and corrected
 
 
 def test_the_alpha_figure_draws_the_models_over_every_point_and_shows_where_they_fall():

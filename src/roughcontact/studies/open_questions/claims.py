@@ -63,11 +63,11 @@ def _percolation(comparison: str, measured: str) -> str:
 
 
 def _slope_range(comparison: str, measured: str) -> str:
-    [(m, e)] = floats_matching(rf"slope = ({NUMBER}) ± ({NUMBER})", measured)
-    [(c, ce)] = floats_matching(rf"curvature = ({NUMBER}) ± ({NUMBER})", measured)
-    if abs(m) <= 3 * e:
-        return "no"
-    return "yes" if abs(c) <= 2 * ce else "partly"
+    slopes = floats_matching(rf"slope = ({NUMBER}) ± ({NUMBER})", measured)
+    curvatures = floats_matching(rf"curvature = ({NUMBER}) ± ({NUMBER})", measured)
+    verdicts = {"no" if abs(m) <= 3 * e else "yes" if abs(c) <= 2 * ce else "partly"
+                for (m, e), (c, ce) in zip(slopes, curvatures, strict=True)}
+    return verdicts.pop() if len(verdicts) == 1 else "partly"  # the area's definition flips it: partly
 
 
 def _slope(comparison: str, measured: str) -> str:
@@ -159,7 +159,8 @@ RULES: dict[str, Rule] = {
         "4096 k_s = 128), standard errors scaled by the root of the reduced χ² when that exceeds 1; slope from the "
         "linear fit, curvature the (ln α)² coefficient; yes when abs(slope) > 3 standard errors and abs(curvature) "
         "≤ 2 standard errors (a fall linear in ln α), partly when the slope is significant but the curvature is "
-        "not zero (it bends or saturates), no otherwise", _slope_range),
+        "not zero (it bends or saturates), no otherwise; the same fit of the perimeter-corrected κ is the "
+        "sensitivity: the verdict when both areas give it, partly when they differ", _slope_range),
     "Q3a: κ is the same on L and 2L cells": Rule(
         "z = (κ_2L − κ_L) / √(s_L² + s_2L²) of the seed means (s: standard errors) at A/A0 = 0.01, 0.05, 0.1 per "
         "H; yes when abs(z) ≤ 2 at every point, partly at at least half, no otherwise", _same_kappa),

@@ -180,17 +180,24 @@ def range_row(grid, extra, big) -> dict:
     question = "Q2e: κ(α) over the whole range, N = 1024 to 4096 at 32 px per λ_s"
     if big is None:
         return _pending(question, "kappa-alpha-4096 (75 cases at N = 4096, ≈ 12.6 CPU-hours measured)")
-    pts = kp.merged_points(kp.alpha_points(grid, 32.0), *([kp.alpha_points(extra, 64.0)] if extra is not None else []),
-                           kp.alpha_points(big, 128.0))
-    m, e = kp.log_slope(pts["alpha"], pts["kappa"], pts["sem"])
-    c, ce = kp.log_curvature(pts["alpha"], pts["kappa"], pts["sem"])
-    models = ", ".join(f"{name} {kp.log_slope(pts['alpha'], pts[key])[0]:.3f}"
+    fits = []
+    for label, area in (("pixel-counted", lambda con: con), ("perimeter-corrected", kp.corrected)):
+        pts = kp.merged_points(kp.alpha_points(area(grid), 32.0),
+                               *([kp.alpha_points(area(extra), 64.0)] if extra is not None else []),
+                               kp.alpha_points(area(big), 128.0))
+        m, e = kp.log_slope(pts["alpha"], pts["kappa"], pts["sem"])
+        c, ce = kp.log_curvature(pts["alpha"], pts["kappa"], pts["sem"])
+        fits.append(f"{label}: slope = {m:.4f} ± {e:.4f}, curvature = {c:.4f} ± {ce:.4f}")
+        if label == "pixel-counted":
+            pixel = pts
+    models = ", ".join(f"{name} {kp.log_slope(pixel['alpha'], pixel[key])[0]:.3f}"
                        for name, key in (("BGT", "bgt"), ("Greenwood", "greenwood")))
-    top = int(np.argmax(pts["alpha"]))
+    top = int(np.argmax(pixel["alpha"]))
     return row(question, f"asperity models over the same α: {models}",
-               f"slope = {m:.4f} ± {e:.4f}, curvature = {c:.4f} ± {ce:.4f} (√2π per e-fold of α) over "
-               f"{pts['alpha'].size} points, α = {pts['alpha'].min():.3g} to {pts['alpha'].max():.3g}; at the largest "
-               f"α κ/√2π = {pts['kappa'][top]:.3f}, BGT {pts['bgt'][top]:.3f}, Greenwood {pts['greenwood'][top]:.3f}")
+               f"{'; '.join(fits)} (√2π per e-fold of α) over {pixel['alpha'].size} points, α = "
+               f"{pixel['alpha'].min():.3g} to {pixel['alpha'].max():.3g}; at the largest α κ/√2π = "
+               f"{pixel['kappa'][top]:.3f} (pixel-counted), BGT {pixel['bgt'][top]:.3f}, Greenwood "
+               f"{pixel['greenwood'][top]:.3f}")
 
 
 def alpha_rows(grid) -> list[dict]:
