@@ -179,7 +179,7 @@ def range_row(grid, extra, big) -> dict:
     """Q2e: κ(0.05) against ln α over every point at 32 px per λ_s, the N = 4096 cells (k_s = 128) included."""
     question = "Q2e: κ(α) over the whole range, N = 1024 to 4096 at 32 px per λ_s"
     if big is None:
-        return _pending(question, "kappa-alpha-4096 (75 cases at N = 4096, ≈ 12.6 CPU-hours measured)")
+        return _pending(question, "kappa-alpha-4096 (75 cases at N = 4096, 11.8 CPU-hours measured)")
     fits = []
     for label, area in (("pixel-counted", lambda con: con), ("perimeter-corrected", kp.corrected)):
         pts = kp.merged_points(kp.alpha_points(area(grid), 32.0),
