@@ -106,7 +106,7 @@ def alpha_figure(pixel: dict, corrected: dict, pixel_2048: dict | None = None,
     fig, axes = _figure(1, 2, 3.2)
     every = np.concatenate([pixel["alpha"]] + ([pixel_4096["alpha"]] if pixel_4096 is not None else []))
     line = np.geomspace(every.min(), every.max(), 60)
-    # the models are functions of alpha: drawn through every point's alpha, so that they span the whole range
+    # the y range reaches down to the models' lowest value (they fall far below the data at large alpha)
     floor = min(0.45, *(np.nanmin(p[m]) - 0.05 for p in (pixel, pixel_2048, pixel_4096) if p is not None
                         for m in ("bgt", "greenwood")))
     for ax, pts, more, most, title in zip(axes, (pixel, corrected), (pixel_2048, corrected_2048),
@@ -122,6 +122,7 @@ def alpha_figure(pixel: dict, corrected: dict, pixel_2048: dict | None = None,
             sel = pts["k_l"] == kl
             ax.errorbar(pts["alpha"][sel], pts["kappa"][sel], yerr=pts["sem"][sel], fmt="o", ms=3, color=colour,
                         label=rf"$\lambda_l = L/{kl:g}$")
+        # the models are functions of alpha: drawn through every point's alpha, so that they span the whole range
         every_pts = [p for p in (pts, more, most) if p is not None]
         alpha = np.concatenate([p["alpha"] for p in every_pts])
         order = np.argsort(alpha)

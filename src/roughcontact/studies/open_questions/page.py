@@ -180,16 +180,17 @@ def range_row(grid, extra, big) -> dict:
     question = "Q2e: κ(α) over the whole range, N = 1024 to 4096 at 32 px per λ_s"
     if big is None:
         return _pending(question, "kappa-alpha-4096 (75 cases at N = 4096, 11.8 CPU-hours measured)")
+    def points(area):
+        return kp.merged_points(kp.alpha_points(area(grid), 32.0),
+                                *([kp.alpha_points(area(extra), 64.0)] if extra is not None else []),
+                                kp.alpha_points(area(big), 128.0))
+
+    pixel = points(lambda con: con)
     fits = []
-    for label, area in (("pixel-counted", lambda con: con), ("perimeter-corrected", kp.corrected)):
-        pts = kp.merged_points(kp.alpha_points(area(grid), 32.0),
-                               *([kp.alpha_points(area(extra), 64.0)] if extra is not None else []),
-                               kp.alpha_points(area(big), 128.0))
+    for label, pts in (("pixel-counted", pixel), ("perimeter-corrected", points(kp.corrected))):
         m, e = kp.log_slope(pts["alpha"], pts["kappa"], pts["sem"])
         c, ce = kp.log_curvature(pts["alpha"], pts["kappa"], pts["sem"])
         fits.append(f"{label}: slope = {m:.4f} ± {e:.4f}, curvature = {c:.4f} ± {ce:.4f}")
-        if label == "pixel-counted":
-            pixel = pts
     models = ", ".join(f"{name} {kp.log_slope(pixel['alpha'], pixel[key])[0]:.3f}"
                        for name, key in (("BGT", "bgt"), ("Greenwood", "greenwood")))
     top = int(np.argmax(pixel["alpha"]))
