@@ -267,6 +267,29 @@ def test_a_seed_count_says_how_many_values_of_h_were_pooled():
     assert report.seed_count(one, one[0]) == "1 seed"
 
 
+#: Symbols typed as plain text: A/A0, p0, E*, h', k_l, rho^2 (a report writes them as :math:).
+PLAIN_MATHS = re.compile(r"A/A0|\bp0\b|\bE\*|\bh'|\bk_[ls]\b|\w\^\d|\brho\b")
+
+
+def _prose(rst: str) -> str:
+    """``rst`` without its maths, literals and directives' options."""
+    return re.sub(r":math:`[^`]*`|``[^`]*``|^\s*:\w+:.*$", "", rst, flags=re.M)
+
+
+def test_the_reports_prose_writes_its_symbols_as_maths(mathml):
+    from roughcontact.studies import report_tables
+
+    csv_text = fit.to_csv_table(_fit_result())
+    texts = {"profiles": report.PROFILES_TEXT, "topographies": report_tables.topographies_table(
+        [["``a``", "``a.x3p``", "64", "1 um", "0.1", "0.0 %", "", "", ""]]),
+             "summary": report.summary_rst("demo", PARAMETERS, fit_csv=csv_text, profiles=True),
+             "result": report.result_rst(_lines_like(), profiles=True)}
+    for name, text in texts.items():
+        assert not PLAIN_MATHS.search(_prose(text)), (name, PLAIN_MATHS.search(_prose(text)))
+        _html(text)
+    assert PLAIN_MATHS.search("the last step's p0/(E* h')")  # the check finds what it looks for
+
+
 def test_summary_has_the_fit_then_the_parameters_folded(mathml):
     csv_text = fit.to_csv_table(_fit_result())
     rst = report.summary_rst("demo", PARAMETERS, fit_csv=csv_text)

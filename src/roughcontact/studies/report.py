@@ -350,11 +350,12 @@ def result_group(rows: Sequence[Mapping[str, str]]) -> list[dict[str, str]]:
 
 
 #: What the report says of a scene of profiles (1-D surfaces, plane strain), after its result and its fit.
-PROFILES_TEXT = ("These cases are profiles (1-D surfaces in plane strain: A/A0 is the contact length fraction, h' "
-                 "the profile's rms slope). The paper's constants, shown for comparison, were fitted to 2-D surfaces "
-                 "and make no prediction for a profile; no constant small-load kappa is known for line contacts "
-                 "(van Dokkum et al. 2018, Tribol. Lett. 66, 115). A constant shown as — is one whose fit failed, "
-                 "often because the law's form does not fit a profile's curve (the fit's log says why).\n")
+PROFILES_TEXT = ("These cases are profiles (1-D surfaces in plane strain: :math:`A/A_0` is the contact length "
+                 "fraction, :math:`h'` the profile's rms slope). The paper's constants, shown for comparison, were "
+                 "fitted to 2-D surfaces and make no prediction for a profile; no constant small-load :math:`\\kappa` "
+                 "is known for line contacts (van Dokkum et al. 2018, Tribol. Lett. 66, 115). A constant shown as — is "
+                 "one whose fit failed, often because the law's form does not fit a profile's curve (the fit's log "
+                 "says why).\n")
 
 
 def result_rst(csv_text: str | None, *, pull_off: str | None = None, profiles: bool = False) -> str:
