@@ -324,6 +324,10 @@ def test_cel_csv_caption_shows_the_file_as_a_table(tmp_path, monkeypatch, mathml
     assert html.count("<tr") == 1 + len(report.read_fit_csv(Path("cel.csv").read_text()))
 
 
+def test_cel_csv_caption_states_the_rule_of_its_constrained_column():
+    assert " ".join(fit.UNCONSTRAINED_RULE.split()) in " ".join((REPORT_DIR / "fit.rst").read_text().split())
+
+
 def test_cel_csv_is_also_an_html_table_the_report_shows():
     csv_text = fit.to_csv_table(_fit_result()).replace("paper,kappa", "paper <&>,kappa", 1)
     page = report.csv_html(csv_text, "fit/cel.csv of scene demo")
