@@ -115,7 +115,8 @@ def test_an_interval_on_its_estimate_is_not_constrained():
     do not bound the constant on that side."""
     result = fit.fit_topographies(_measured(_cases(n=2, rng_seed=0, seed_scatter=0.05)), n_boot=20)
     value, low, high = (result[k].sel(estimator="paper").values for k in ("value", "ci_low", "ci_high"))
-    touching = np.isclose(low, value, rtol=1e-9, atol=0) | np.isclose(high, value, rtol=1e-9, atol=0)
+    touching = np.isclose(low, value, rtol=fit.TOUCH_RTOL, atol=0) | np.isclose(high, value, rtol=fit.TOUCH_RTOL,
+                                                                                 atol=0)
     assert touching.any(), "this draw is meant to give an interval on its estimate"
     assert not result["constrained"].sel(estimator="paper").values[touching].any()
     rows = [r for r in csv.DictReader(io.StringIO(fit.to_csv_table(result))) if r["estimator"] == "paper"]
