@@ -5,6 +5,8 @@ scene runs no fit and draws none of the non-adhesive figures; it draws the hyste
 and its report shows a pull-off table instead of a fit row.
 """
 import copy
+import os
+import re
 
 import numpy as np
 import pytest
@@ -12,7 +14,7 @@ import xarray as xr
 
 from caption_check import assert_scene_captions_true
 from cfcheck import assert_cf_clean
-from conftest import copy_workflow, run_snakemake
+from conftest import REPO, copy_workflow, run_snakemake
 from roughcontact.figures.registry import scene_figures
 from roughcontact.pipeline.scenes import validate_config
 from test_workflow import TINY, _jobs
@@ -95,10 +97,41 @@ def test_pull_off_table_pools_the_trusted_seeds_and_counts_the_others():
     from roughcontact.studies.report_tables import pull_off_table
 
     text = pull_off_table(_aggregate())
-    # H = 0.36: both seeds, (1e-4 + 3e-4) / 2 / E* = 1e-4 +- s.d. 1.414e-4 / 2; H = 0.84: one of two, the other said why
-    assert "0.0001 ± 7.1e-05" in text and "2 of 2" in text
+    # H = 0.36: both seeds, (1e-4 + 3e-4) / 2 / E* = 1e-4 +- s.d. 1.414e-4 / 2 = 7.1e-5, rounded to the s.d.'s one
+    # figure (studies.precision); H = 0.84: one of two (three figures), the other said why
+    assert "0.00010 ± 0.00007" in text and "2 of 2" in text
     assert "0.0001\n" in text and "1 of 2" in text and "1 adhesive zone unresolved" in text
     assert "No contact evolution law is fitted" in text
+
+
+def test_pull_off_table_prints_its_numbers_at_their_precision_and_its_maths_as_maths():
+    """The adhesion scene's table read "0.0003511 ± 0.00011", "0.000835 ± 1.3e-05", "E* rho^2 / w", "k_l = 4, k_s = 32"
+    and set p_off's "off" under the bar."""
+    from docutils.core import publish_parts
+
+    from roughcontact.studies import report
+    from roughcontact.studies.report_tables import pull_off_table
+
+    agg = _aggregate()
+    e_star = agg.attrs["e_star"]
+    pulls = [[0.000835 - 0.92e-5, 0.000835 + 0.92e-5], [0.0003511 - 0.78e-4, 0.0003511 + 0.78e-4]]
+    agg["pull_off_pressure"].values = np.array(pulls).reshape(1, 1, 2, 2) * e_star
+    agg["pull_off_status"].values[...] = 0
+    text = pull_off_table(agg)
+    assert "0.000835 ± 0.000013" in text and "0.00035 ± 0.00011" in text, text
+    assert not re.search(r"\de[-+]\d", text) and "E* rho" not in text and "p_off/E*" not in text
+    assert r":math:`E^* \rho^2 / w`" in text
+    assert r":math:`k_l = 4`, :math:`k_s = 32`, :math:`H = 0.36`" in text
+    assert r"pull-off :math:`\bar p_\mathrm{off}/E^*` (mean ± s.d.)" in text
+    old = os.environ.get("DOCUTILSCONFIG")
+    try:
+        report.render_maths_as_mathml(REPO / "workflow" / "report" / "docutils.conf")
+        html = publish_parts(text, writer="html", settings_overrides={"report_level": 1, "halt_level": 2})["body"]
+    finally:
+        os.environ.pop("DOCUTILSCONFIG") if old is None else os.environ.update(DOCUTILSCONFIG=old)
+    flat = html.replace("\n", "").replace(" ", "")
+    assert "<munderover>" not in flat and "<msub><mover" in flat  # "off" beside the bar, not under it
+    assert flat.count("<msub><mi>k</mi><mi>l</mi></msub>") == 2  # k_l of each row's group
 
 
 def test_pull_off_figure_says_what_it_left_out():

@@ -290,9 +290,49 @@ def test_unconstrained_constants_are_flagged():
     flags = constrained_flags([4.79, 2.87, 0.5, np.nan, 1.0], [3.1, 2.80, 0.3, 0.0, np.nan], [6368, 2.95, 0.7, 1, 2])
     assert flags.tolist() == [0, 1, 1, 0, 0]
     fitted = fit_cel(_agg(seeds=range(3)), n_boot=20)
+    v, lo, hi = (fitted[k].values for k in ("value", "ci_low", "ci_high"))
+    with np.errstate(invalid="ignore"):  # the rule, written out again (no bound reached in this fit)
+        near = np.minimum(v - lo, hi - v) <= 1e-5 * np.abs(v)
+        loose = ~np.isfinite(v + lo + hi) | (hi - lo >= np.abs(v)) | near
+    assert ((fitted["constrained"].values == 0) == loose).all()
     rows = list(csv.DictReader(io.StringIO(to_csv_table(fitted))))
-    assert {r["constrained"] for r in rows} <= {"yes", "no"}
-    for r in rows:
-        if r["value"] and r["ci_low"] and r["ci_high"]:
-            wide = float(r["ci_high"]) - float(r["ci_low"]) >= abs(float(r["value"]))
-            assert (r["constrained"] == "no") == wide, r
+    assert [r["constrained"] for r in rows] == ["no" if x else "yes" for x in loose[fitted["n_seeds"].values > 0]
+                                                .ravel()], "cel.csv writes the dataset's flag"
+
+
+def test_an_interval_that_touches_its_estimate_is_not_constrained():
+    """The percentile bootstrap puts an end on the estimate when the fit sits on the edge of its resamples
+    (the lines scene's beta = 1.87 [0.18, 1.87]; two real line scans' kappa = 108.7 [7.09, 108.68]): the
+    data do not bound the constant on that side. An end beyond the estimate is no better."""
+    from roughcontact.analysis.fit.estimators import TOUCH_RTOL, constrained_flags
+
+    value = [1.87413, 108.68, 108.68 * (1 + TOUCH_RTOL / 2), 0.00763363, 2.87, 2.87, 0.0, 102.00116]
+    low = [0.181539, 7.09, 100.0, 0.00788074, 2.80, 2.87 * (1 - 10 * TOUCH_RTOL), 0.0, 102.00116 * (1 - 1e-6)]
+    high = [1.87413, 108.68, 108.68, 0.84936, 2.95, 2.95, 1e-3, 102.00116 * (1 + 3e-6)]
+    # beta at its upper end; kappa at its upper end, exactly and within the tolerance; mu below its
+    # interval (already wide); a narrow interval holding its value; one just off it; 0 at its lower end;
+    # an interval of the joint fit's reproducibility alone (every fitting resample the same seeds)
+    assert constrained_flags(value, low, high).tolist() == [0, 0, 0, 0, 1, 1, 0, 0]
+
+
+def test_an_interval_that_ends_on_a_bound_of_the_joint_fit_is_not_constrained():
+    """An end on the joint fit's bound (mu <= 1 - 1e-6): the bootstrap draws pile up there, so the data do not
+    bound the constant on that side, however narrow the interval; the paper's route has no bounds."""
+    from roughcontact.analysis.fit.estimators import JOINT_UPPER, constrained_flags
+
+    value = np.array([[2.5, 0.95, 0.3], [2.5, 0.95, 0.3]])
+    low = value * 0.95
+    high = np.array([[2.6, JOINT_UPPER[1], 0.31], [2.6, JOINT_UPPER[1], 0.31]])
+    assert constrained_flags(value, low, high, ["paper", "joint"]).tolist() == [[1, 1, 1], [1, 0, 1]]
+
+
+def test_the_flag_states_the_rule_it_follows():
+    """constrained_flags' docstring, the NetCDF's long_name and the report's footnote print one rule."""
+    from roughcontact.analysis.fit import estimators
+
+    def words(text):
+        return " ".join(text.split())
+
+    assert words(estimators.UNCONSTRAINED_RULE) in words(estimators.constrained_flags.__doc__)
+    fitted = fit_cel(_agg(seeds=range(3)), n_boot=20)
+    assert words(estimators.UNCONSTRAINED_RULE) in fitted["constrained"].attrs["long_name"]

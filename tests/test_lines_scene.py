@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import re
 import shutil
 from pathlib import Path
 
@@ -15,6 +16,7 @@ from cfcheck import assert_cf_clean
 from conftest import copy_workflow, run_snakemake
 from roughcontact.pipeline.config import ConfigError
 from roughcontact.pipeline.scenes import validate_config
+from roughcontact.studies import report
 from test_workflow import TINY
 
 LINESCANS = Path(__file__).parent / "data" / "linescans"
@@ -82,8 +84,22 @@ def _assert_ran(wd: Path, scene: str, res, figures=("area_load", "kappa")) -> Pa
         assert "These cases are profiles" in (out / "figures" / f"{name}.caption.rst").read_text()
     for part in ("summary", "result"):  # the report says the paper's constants are of 2-D surfaces
         assert "These cases are profiles" in (out / "report" / f"{part}.rst").read_text()
+    _assert_flags_and_numbers_true(out)
     assert_cf_clean(contact + sorted((out / "surfaces").glob("*.nc")), wd / "cf-tables")
     return out
+
+
+def _assert_flags_and_numbers_true(out: Path) -> None:
+    """No constant of cel.csv is marked constrained whose interval does not hold it strictly inside (two real line
+    scans gave kappa = 108.7 [7.09, 108.68] "yes", the lines scene beta = 1.87 [0.18, 1.87]), and the report prints
+    no number as 0 that is not (the lines scene's "0 [0, 3100]")."""
+    rows = report.read_fit_csv((out / "fit" / "cel.csv").read_text())
+    for row in rows:
+        if row["constrained"] == "yes":
+            value, low, high = (float(row[k]) for k in ("value", "ci_low", "ci_high"))
+            assert low < value < high and high - low < abs(value), row
+    text = "".join((out / "report" / f"{part}.rst").read_text() for part in ("summary", "result"))
+    assert not re.search(r"(?<![\d.])0(\.0+)? \[", text), text  # a fitted value is never exactly 0
 
 
 @pytest.mark.slow

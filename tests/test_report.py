@@ -18,7 +18,7 @@ from docutils.core import publish_parts
 from conftest import REPO, run_snakemake
 from roughcontact import __version__
 from roughcontact.analysis import fit
-from roughcontact.studies import precision, report, run_record
+from roughcontact.studies import report, run_record
 from roughcontact.studies.rst import folded
 
 REPORT_DIR = REPO / "workflow" / "report"
@@ -124,9 +124,10 @@ def test_parameters_table_lists_every_dotted_key_sorted(mathml):
     assert "<td>a`b\\c *d*_</td>" in odd.replace("\n", "")
 
 
-def _fit_result(n_seeds=3, ci=True):
-    """A small dataset shaped like roughcontact.analysis.fit.fit_cel's result, for fit.to_csv_table."""
-    coords = {"k_l": [4.0, 16.0], "k_s": [32.0], "H_group": ["0.36", "pooled"], "estimator": ["paper", "joint"],
+def _fit_result(n_seeds=3, ci=True, hs=("0.36",)):
+    """A small dataset shaped like roughcontact.analysis.fit.fit_cel's result, for fit.to_csv_table: ``n_seeds``
+    seeds at each H of ``hs``, pooled over them."""
+    coords = {"k_l": [4.0, 16.0], "k_s": [32.0], "H_group": [*hs, "pooled"], "estimator": ["paper", "joint"],
               "constant": list(fit.CONSTANTS)}
     dims = tuple(coords)
     shape = tuple(len(v) for v in coords.values())
@@ -138,7 +139,9 @@ def _fit_result(n_seeds=3, ci=True):
     return xr.Dataset(
         {"value": (dims, value), "stderr": (dims, value / 100), "bootstrap_stderr": (dims, value / 10),
          "ci_low": (dims, lo), "ci_high": (dims, hi), "constrained": (dims, constrained),
-         "n_points": (dims, np.full(shape, 25)), "n_seeds": (dims[:3], np.full(shape[:3], n_seeds)),
+         "n_points": (dims, np.full(shape, 25)),
+         "n_seeds": (dims[:3], np.where(np.array(coords["H_group"]) == "pooled", n_seeds * len(hs), n_seeds)
+                     * np.ones(shape[:3], dtype=int)),
          "n_boot_ok": (dims[:4], np.full(shape[:4], 200)),
          "paper_value": (("constant",), [2.87009, 0.55, 0.21]), "paper_stderr": (("constant",), [0.005, 0.02, 0.005])},
         coords=coords)
@@ -169,7 +172,7 @@ def test_fit_table_names_a_constant_or_an_interval_on_a_bound_of_the_fit(mathml)
     result["ci_low"].loc[{**where, "constant": "mu"}] = fit.JOINT_LOWER[1]
     result["value"].loc[{**where, "constant": "beta"}] = fit.JOINT_LOWER[2]
     html = _html(report.fit_table(fit.to_csv_table(result)))
-    assert "<td>1.40 [bound, 1.90] ‡</td>" in html and "<td>1e-12 (on a bound) [1.0, 2.0] ‡</td>" in html
+    assert "<td>1.4 [bound, 1.9] ‡</td>" in html and "<td>1e-12 (on a bound) [1.0, 2.0] ‡</td>" in html
     assert "1e-06" not in html.split("</table>")[0]
     assert "‡ on a bound of the joint least-squares fit" in html and "μ ≤ 1 − 1e-06" in html
     # the paper's route has no bounds: the same number there is just a number
@@ -196,28 +199,6 @@ def test_fit_table_refuses_what_is_not_a_cel_table():
         report.fit_table(good.replace(",kappa,", ",gamma,"))
 
 
-@pytest.mark.parametrize(("value", "low", "high", "shown"), [
-    (2.65988, 2.57646, 2.91696, ("2.66", "2.58", "2.92")),  # the issue's example: half-width 0.17
-    (0.41, 1e-6, 0.62, ("0.41", "0.00", "0.62")),
-    (1234.5, 1000.0, 1500.0, ("1230", "1000", "1500")),  # rounded to tens
-    (1.0, 1.0, 1.0, ("1", "1", "1")),  # no width: three figures
-    (-0.0001, -0.1, 0.1, ("0.0", "-0.1", "0.1")),  # no "-0.0"
-    (3.14159, float("nan"), float("nan"), ("3.14", "", "")),
-])
-def test_a_value_is_rounded_to_its_interval(value, low, high, shown):
-    assert precision.estimate(value, low, high) == shown
-
-
-def test_published_values_keep_the_figures_of_their_error():
-    assert precision.plus_minus(2.87009, 0.00501326) == "2.870 ± 0.005"
-    assert precision.plus_minus(1.145, 0.002) == "1.145 ± 0.002"
-    assert precision.plus_minus(0.55, 0.02) == "0.55 ± 0.02"
-    assert precision.plus_minus(2.0, 0.17) == "2.00 ± 0.17"
-    assert precision.plus_minus(0.21, float("nan")) == "0.21"
-    with pytest.raises(ValueError, match="finite and > 0"):
-        precision.decimals_for(0.0)
-
-
 def test_result_line_gives_the_representative_group_against_the_paper(mathml):
     csv_text = fit.to_csv_table(_fit_result())
     html = _html(report.result_rst(csv_text))
@@ -232,6 +213,81 @@ def test_result_line_gives_the_representative_group_against_the_paper(mathml):
     assert "no constant of the contact evolution law was fitted" in report.result_rst(csv_text.splitlines()[0])
     assert "no contact study" in report.result_rst(None)
     assert report.result_rst(csv_text, pull_off="TABLE").endswith("TABLE")
+
+
+def _lines_like():
+    """cel.csv of a fit like the lines scene's at (k_l, k_s) = (16, 32), H pooled, the paper's route: kappa
+    3.67558 [2.92474, 7819.49] (kappa/sqrt(2 pi) = 1.47 [1.17, 3120]), mu below its interval, beta on its upper
+    end; 4 seeds at each of two H; flagged as the fit flags them."""
+    result = _fit_result(n_seeds=4, hs=("0.36", "0.84"))
+    where = {"k_l": 16.0, "k_s": 32.0, "H_group": "pooled", "estimator": "paper"}
+    for c, (v, lo, hi) in {"kappa": (3.67558, 2.92474, 7819.49), "mu": (0.00763363, 0.00788074, 0.84936),
+                           "beta": (1.87413, 0.181539, 1.87413)}.items():
+        for var, x in (("value", v), ("ci_low", lo), ("ci_high", hi)):
+            result[var].loc[{**where, "constant": c}] = x
+    result["constrained"].values = fit.constrained_flags(result["value"].values, result["ci_low"].values,
+                                                         result["ci_high"].values, result["estimator"].values)
+    return fit.to_csv_table(result)
+
+
+def test_result_line_prints_no_number_as_zero_and_marks_what_the_data_do_not_bound(mathml):
+    rst = report.result_rst(_lines_like())
+    # it read "κ/√(2π) = 0 [0, 3100]" and "β = 1.87 [0.18, 1.87]" without a mark
+    assert "κ/√(2π) = 1 [1, 3100] \\*, μ = 0.008 [0.008, 0.8] \\*, β = 1.9 [0.2, 1.9] \\*;" in rst, rst
+    assert "0 [0," not in rst
+    footnote = "\\* not constrained by the data: " + fit.UNCONSTRAINED_RULE + "."
+    assert footnote in rst
+    # the pooled group's seeds as they are: 4 seeds at each of 2 values of H (it read "8 seeds")
+    assert ":math:`H` pooled, 4 seeds × 2 values of :math:`H`," in rst
+    html = _html(rst)
+    assert "4 seeds × 2 values of" in html and "8 seeds" not in html
+
+
+def test_fit_table_marks_an_interval_that_touches_its_estimate(mathml):
+    text = report.fit_table(_lines_like())
+    rows = [[c.strip() for c in row.split("\n     - ")] for row in text.split("</table>")[0].split("   * - ")[1:]]
+    cells = next(r for r in rows if r[:4] == ["16", "32", "pooled", "paper"])
+    assert cells[2:] == ["pooled", "paper", "1 [1, 3100] \\*", "0.008 [0.008, 0.8] \\*", "1.9 [0.2, 1.9] \\*",
+                         "4 seeds × 2 values of :math:`H`"], cells
+    assert "\\* not constrained by the data: " + fit.UNCONSTRAINED_RULE + "." in text
+    assert "4 seeds\n" in text  # a group of one H: its seeds
+    _html(text)
+
+
+def test_a_seed_count_says_how_many_values_of_h_were_pooled():
+    rows = report.read_fit_csv(fit.to_csv_table(_fit_result(n_seeds=3, hs=("0.36", "0.84"))))
+    pooled = next(r for r in rows if r["H_group"] == "pooled")
+    assert report.seed_count(rows, pooled) == "3 seeds × 2 values of :math:`H`"
+    assert report.seed_count(rows, rows[0]) == "3 seeds"
+    uneven = [dict(r, n_seeds="2") if r["H_group"] == "0.84" else dict(r, n_seeds="5") if r is pooled
+              or r["H_group"] == "pooled" else r for r in rows]
+    assert report.seed_count(uneven, next(r for r in uneven if r["H_group"] == "pooled")) == (
+        "5 seeds: 3 at :math:`H` = 0.36, 2 at :math:`H` = 0.84")
+    one = report.read_fit_csv(fit.to_csv_table(_fit_result(n_seeds=1)))
+    assert report.seed_count(one, one[0]) == "1 seed"
+
+
+#: Symbols typed as plain text: A/A0, p0, E*, h', k_l, rho^2 (a report writes them as :math:).
+PLAIN_MATHS = re.compile(r"A/A0|\bp0\b|\bE\*|\bh'|\bk_[ls]\b|\w\^\d|\brho\b")
+
+
+def _prose(rst: str) -> str:
+    """``rst`` without its maths, literals and directives' options."""
+    return re.sub(r":math:`[^`]*`|``[^`]*``|^\s*:\w+:.*$", "", rst, flags=re.M)
+
+
+def test_the_reports_prose_writes_its_symbols_as_maths(mathml):
+    from roughcontact.studies import report_tables
+
+    csv_text = fit.to_csv_table(_fit_result())
+    texts = {"profiles": report.PROFILES_TEXT, "topographies": report_tables.topographies_table(
+        [["``a``", "``a.x3p``", "64", "1 um", "0.1", "0.0 %", "", "", ""]]),
+             "summary": report.summary_rst("demo", PARAMETERS, fit_csv=csv_text, profiles=True),
+             "result": report.result_rst(_lines_like(), profiles=True)}
+    for name, text in texts.items():
+        assert not PLAIN_MATHS.search(_prose(text)), (name, PLAIN_MATHS.search(_prose(text)))
+        _html(text)
+    assert PLAIN_MATHS.search("the last step's p0/(E* h')")  # the check finds what it looks for
 
 
 def test_summary_has_the_fit_then_the_parameters_folded(mathml):
@@ -268,6 +324,10 @@ def test_cel_csv_caption_shows_the_file_as_a_table(tmp_path, monkeypatch, mathml
     assert html.count("<tr") == 1 + len(report.read_fit_csv(Path("cel.csv").read_text()))
 
 
+def test_cel_csv_caption_states_the_rule_of_its_constrained_column():
+    assert " ".join(fit.UNCONSTRAINED_RULE.split()) in " ".join((REPORT_DIR / "fit.rst").read_text().split())
+
+
 def test_cel_csv_is_also_an_html_table_the_report_shows():
     csv_text = fit.to_csv_table(_fit_result()).replace("paper,kappa", "paper <&>,kappa", 1)
     page = report.csv_html(csv_text, "fit/cel.csv of scene demo")
@@ -293,6 +353,17 @@ def test_figures_are_embedded_with_their_captions(mathml):
 def test_bar_is_a_macron_that_chromium_draws(mathml):
     html = _html(r":math:`\partial\bar p/\partial p_0`")
     assert report.MACRON in html and report.DOCUTILS_BAR not in html and "<mover" in html
+
+
+def test_a_subscript_of_a_barred_symbol_sits_beside_the_bar(mathml):
+    """LaTeX sets the subscript of \\bar p beside the bar; docutils set it under p (munderover)."""
+    for tex in (r"\bar p_\mathrm{off}", r"\bar{p}_\mathrm{off}", r"{\bar p}_\mathrm{off}"):
+        html = _html(f":math:`{tex}`").replace("\n", "").replace(" ", "")
+        assert "<munderover>" not in html, tex
+        assert re.search(r"<msub><mover[^>]*><mi>p</mi><mo[^>]*>\u00af</mo></mover><mi>off</mi></msub>", html), html
+    # an accent's superscript, and a limit's subscript, stay as they were
+    assert "<msup><mover" in _html(r":math:`\bar p^2`").replace("\n", "").replace(" ", "")
+    assert "<munder>" in _html(r":math:`\sum_{i}`").replace("\n", "").replace(" ", "")
 
 
 def test_every_template_gives_maths_a_font_that_stretches_brackets():
