@@ -6,13 +6,16 @@ exponential law with work ``w`` and range ``rho = w^(2/3) R^(1/3) / mu_T`` (Tabo
 is pressed by a tiny load and unloaded by the adhesion effect's own refined unloading
 (:meth:`roughcontact.solver.adhesive.AdhesiveSolver.unload`). Printed per case: the process zone's
 cells ``E* rho^2 / w / dx``, the pull-off force over ``pi w R`` (measured with the resolution check
-switched off, so that unresolved grids show what they would report) and the status the solver
-gives it. JKR's pull-off is 1.5, Derjaguin's (DMT) 2; no sphere exceeds 2.
+switched off, so that unresolved grids show what they would report), the attraction across the cell
+at the pull-off (``attraction_across_cell``: for the centred sphere the tension at the cell's edge over
+``w / rho``), the status the solver gives it and the steps whose own residual check failed. JKR's
+pull-off is 1.5, Derjaguin's (DMT) 2; no sphere exceeds 2.
 
 Usage::
 
-    python benchmarks/adhesion_resolution.py                  # the table of docs/solver.md (~5 min)
-    python benchmarks/adhesion_resolution.py --cases 2,64 8,64 --length 0.5
+    python benchmarks/adhesion_resolution.py                  # the resolution table of docs/solver.md (~5 min)
+    python benchmarks/adhesion_resolution.py --cell           # its cell-size table (L = R/2 against 2R, ~10 s)
+    python benchmarks/adhesion_resolution.py --cases 2,64 8,64,2.0 --length 0.5   # mu_T,N[,L]
 """
 
 from __future__ import annotations
@@ -26,11 +29,13 @@ import numpy as np
 
 import roughcontact.solver.adhesive as adhesive
 from roughcontact.solver import Adhesion, solve_contact
-from roughcontact.solver.adhesion import MIN_ZONE_CELLS, PULL_OFF_STATUS
+from roughcontact.solver.adhesion import MAX_ATTRACTION_ACROSS_CELL, MIN_ZONE_CELLS, PULL_OFF_STATUS
 
 #: (mu_T, N) of the table in docs/solver.md.
 CASES = [(8, 64), (8, 128), (4, 64), (4, 128), (4, 256), (2.44, 64), (2.44, 128), (2.44, 256), (2, 64), (2, 128),
          (2, 256), (1.41, 64), (1.41, 128), (1, 64), (1, 128)]
+#: (mu_T, N, L) of the cell-size table in docs/solver.md: the DMT side at L = R / 2 and 2 R.
+CELL_CASES = [(mu_t, 64, length) for mu_t in (0.05, 0.1, 0.2, 0.3, 0.5) for length in (0.5, 2.0)]
 
 
 def sphere(n: int, length: float, radius: float = 1.0) -> np.ndarray:
@@ -56,25 +61,30 @@ def pull_off(mu_t: float, n: int, length: float, w: float = 1e-4) -> dict:
     status = PULL_OFF_STATUS[int(ds["pull_off_status"])]
     if cells < MIN_ZONE_CELLS:
         status = "adhesive_zone_unresolved"  # what the solver says with its check on
-    raw = -float(np.nanmin(ds["unload_mean_pressure"].values)) * length ** 2 / (math.pi * w)
-    return {"mu_T": mu_t, "N": n, "cells": cells, "F": raw, "status": status,
-            "unconverged": int(ds["unload_unconverged_steps"]), "steps": int(ds.sizes["unload_step"]),
-            "cpu": time.process_time() - t0}
+    loads = ds["unload_mean_pressure"].values
+    raw = -float(np.nanmin(loads)) * length ** 2 / (math.pi * w)
+    return {"mu_T": mu_t, "N": n, "L": length, "cells": cells, "F": raw, "status": status,
+            "across": float(ds["attraction_across_cell"]), "failed": int(np.count_nonzero(np.isnan(loads))),
+            "steps": int(ds.sizes["unload_step"]), "cpu": time.process_time() - t0}
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--cases", nargs="*", help="mu_T,N pairs (default: the table of docs/solver.md)")
-    ap.add_argument("--length", type=float, default=0.5, help="cell side L / R (default 0.5)")
+    ap.add_argument("--cases", nargs="*", help="mu_T,N or mu_T,N,L (default: the table of docs/solver.md)")
+    ap.add_argument("--cell", action="store_true", help="the cell-size table (L = R/2 against 2R) instead")
+    ap.add_argument("--length", type=float, default=0.5, help="cell side L / R where a case gives none (default 0.5)")
     args = ap.parse_args()
-    cases = [tuple(float(v) for v in c.split(",")) for c in args.cases] if args.cases else CASES
-    print(f"sphere R = 1, E* = 1, w = 1e-4, L = {args.length:g}; check threshold {MIN_ZONE_CELLS:g} cells")
-    print("| mu_T | N | zone cells | F/(pi w R) | status (check on) | unloading steps | unconverged | CPU s |")
-    print("|---|---|---|---|---|---|---|---|")
-    for mu_t, n in cases:
-        r = pull_off(mu_t, int(n), args.length)
-        print(f"| {r['mu_T']:g} | {r['N']} | {r['cells']:.3g} | {r['F']:.4f} | {r['status']} | {r['steps']} | "
-              f"{r['unconverged']} | {r['cpu']:.1f} |", flush=True)
+    cases = [tuple(float(v) for v in c.split(",")) for c in args.cases] if args.cases else (
+        CELL_CASES if args.cell else CASES)
+    print(f"sphere R = 1, E* = 1, w = 1e-4, L = {args.length:g} unless given; zone check {MIN_ZONE_CELLS:g} cells, "
+          f"attraction across the cell below {MAX_ATTRACTION_ACROSS_CELL:g}")
+    print("| mu_T | N | L/R | zone cells | F/(pi w R) | attraction across cell | status (check on) | unloading steps "
+          "| residual failed | CPU s |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for case in cases:
+        r = pull_off(case[0], int(case[1]), case[2] if len(case) > 2 else args.length)
+        print(f"| {r['mu_T']:g} | {r['N']} | {r['L']:g} | {r['cells']:.3g} | {r['F']:.4f} | {r['across']:.3g} | "
+              f"{r['status']} | {r['steps']} | {r['failed']} | {r['cpu']:.1f} |", flush=True)
 
 
 if __name__ == "__main__":

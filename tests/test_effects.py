@@ -64,7 +64,8 @@ def test_optional_outputs_and_effects_add_exactly_their_variables(tmp_path):
     adhesive, ds_a = runs["adhesion"]
     assert adhesive - base == {"adhesive_pressure", "adhesive_area_fraction", "adhesive_zone_cells",
                                "unload_mean_gap", "unload_mean_pressure", "unload_area_fraction",
-                               "unload_converged", "unload_unconverged_steps", "pull_off_pressure", "pull_off_status"}
+                               "unload_converged", "unload_unconverged_steps", "pull_off_pressure", "pull_off_status",
+                               "attraction_across_cell"}
     assert ds_a.attrs["adhesion_law"] == "exponential" and ds_a.attrs["elastic_method"] == "adhesive"
     assert bool(ds_a["converged"].all()) and float(ds_a["pull_off_pressure"].min()) > 0
     assert ds_a.attrs["solver"] == "roughcontact.solver.adhesion.AdhesiveIteration"

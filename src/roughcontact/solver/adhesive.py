@@ -22,7 +22,11 @@ DMT side the fixed ``rho / 4`` step read 0.908 of the peak that ``rho / 100`` re
 Steps whose final check fails are kept in the trace, flagged, and excluded from the minimum.
 The pull-off is NaN, with the reason in :data:`PULL_OFF_STATUS`, unless the grid resolves the
 process zone, the last load step converged, the surfaces separated, the steps on both sides of
-the minimum converged and the refinement met ``rtol``.
+the minimum converged, the refinement met ``rtol`` and, at the pull-off, the attraction dies out
+inside the cell (:func:`~.adhesion.attraction_across_cell` below
+:data:`~.adhesion.MAX_ATTRACTION_ACROSS_CELL`: else the cell's edge cuts the body's attraction off
+and the periodic images pull). When it is NaN no step of the trace is reported converged
+(:class:`Unloading`).
 """
 
 from __future__ import annotations
@@ -34,10 +38,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from .adhesion import (
+    MAX_ATTRACTION_ACROSS_CELL,
     MIN_ZONE_CELLS,
     PULL_OFF_REASONS,
     WARN_ZONE_CELLS,
     AdhesiveIteration,
+    attraction_across_cell,
     pressure_control,
     unresolved_zone_message,
     zone_cells,
@@ -74,9 +80,9 @@ class Unloading:
     ----------
     mean_gap, mean_pressure, area_fraction : ndarray, shape (k,)
         Every unloading step, sorted by mean gap [length], [pressure], [-]; the refined stretch
-        near the minimum included. ``mean_pressure`` is NaN where the step did not converge.
-    converged : ndarray of bool, shape (k,)
-        Each step's final check (the adhesive residual <= tol on a fresh FFT).
+        near the minimum included. ``mean_pressure`` is NaN where the step's final check failed.
+    checked : ndarray of bool, shape (k,)
+        Each step's own final check (the adhesive residual <= tol on a fresh FFT).
     pull_off : float
         The pull-off pressure ``-min(mean_pressure)`` [pressure], > 0 when tensile; NaN unless
         ``status`` is ``"trusted"``.
@@ -86,20 +92,34 @@ class Unloading:
         The last (shortest) step of the trace [length].
     rtol : float
         The refinement's tolerance on the pull-off.
+    across_cell : float
+        :func:`~.adhesion.attraction_across_cell` at the most tensile step that passed its check
+        (the pull-off's step when trusted), NaN without one [-].
     """
 
     mean_gap: np.ndarray
     mean_pressure: np.ndarray
     area_fraction: np.ndarray
-    converged: np.ndarray
+    checked: np.ndarray
     pull_off: float
     status: str
     step: float
     rtol: float
+    across_cell: float = math.nan
+
+    @property
+    def converged(self) -> np.ndarray:
+        """Each step converged: its own check passed *and* the pull-off is trusted (bool, shape (k,)).
+
+        Whatever makes the pull-off untrusted leaves no step of the trace standing as a converged
+        point of the unloading curve (:data:`~.adhesion.UNTRUSTED_TRACE_STEPS` says why); a step that
+        met its own residual keeps its finite ``mean_pressure`` (``checked``).
+        """
+        return self.checked & (self.status == "trusted")
 
     @property
     def unconverged(self) -> int:
-        """How many unloading steps failed their final check (excluded from the minimum)."""
+        """How many unloading steps are not reported converged (:attr:`converged`)."""
         return int(np.count_nonzero(~self.converged))
 
     @property
@@ -117,6 +137,7 @@ class _Point:
     mean_p: float
     area: float
     converged: bool
+    across_cell: float = math.nan
 
 #: Long names of the per-step variables whose definition differs from the non-adhesive solver's.
 LONG_NAMES = {
@@ -203,7 +224,7 @@ class AdhesiveSolver:
         gap = self.it.g.copy()
         converged = bool(residual <= s.tol)
         return _Point(gbar, gap, mean_p if converged else math.nan,
-                      float(np.count_nonzero(gap == 0.0)) / gap.size, converged)
+                      float(np.count_nonzero(gap == 0.0)) / gap.size, converged, attraction_across_cell(self.law, gap))
 
     def _trace(self, start: _Point, step: float, stop, max_steps: int) -> list[_Point]:
         """``[start]`` and steps of ``step`` [length] from it until ``stop(points)`` or ``max_steps``.
@@ -275,12 +296,14 @@ class AdhesiveSolver:
         else:
             status = "refinement_not_converged"
         trace.sort(key=lambda pt: pt.gbar)
-        status = status or "trusted"
-        if status == "trusted":  # the most tensile converged step of the whole trace, every refinement's
-            pull_off = -_most_tensile(trace).mean_p
+        best = _most_tensile(trace)  # the most tensile converged step of the whole trace, every refinement's
+        status = status or ("attraction_spans_cell" if best.across_cell >= MAX_ATTRACTION_ACROSS_CELL else "trusted")
+        if status == "trusted":
+            pull_off = -best.mean_p
         return Unloading(np.array([pt.gbar for pt in trace]), np.array([pt.mean_p for pt in trace]),
                          np.array([pt.area for pt in trace]), np.array([pt.converged for pt in trace], dtype=bool),
-                         pull_off if status == "trusted" else math.nan, status, step, rtol)
+                         pull_off if status == "trusted" else math.nan, status, step, rtol,
+                         best.across_cell if best is not None else math.nan)
 
 
 def _most_tensile(points: list[_Point]) -> _Point | None:

@@ -93,18 +93,22 @@ from .iteration import (
 )
 from .laws import (
     LAWS,
+    MAX_ATTRACTION_ACROSS_CELL,
     MIN_ZONE_CELLS,
     PULL_OFF_REASONS,
     PULL_OFF_STATUS,
+    UNTRUSTED_TRACE_STEPS,
     WARN_ZONE_CELLS,
     Exponential,
     MaugisDugdale,
+    attraction_across_cell,
     process_zone_length,
     unresolved_zone_message,
     zone_cells,
 )
 
-__all__ = ["DEFAULT_MAX_ITER", "LAWS", "MAX_OUTER", "MEAN_GAP_RTOL", "MIN_ZONE_CELLS", "PULL_OFF_REASONS",
-           "PULL_OFF_STATUS", "WARN_ZONE_CELLS", "AdhesiveIteration", "AdhesiveResult", "Exponential",
-           "MaugisDugdale", "adhesive_state", "elastic_product", "pressure_control", "process_zone_length",
-           "solve_adhesive", "unresolved_zone_message", "zone_cells"]
+__all__ = ["DEFAULT_MAX_ITER", "LAWS", "MAX_ATTRACTION_ACROSS_CELL", "MAX_OUTER", "MEAN_GAP_RTOL", "MIN_ZONE_CELLS",
+           "PULL_OFF_REASONS", "PULL_OFF_STATUS", "UNTRUSTED_TRACE_STEPS", "WARN_ZONE_CELLS", "AdhesiveIteration",
+           "AdhesiveResult", "Exponential", "MaugisDugdale", "adhesive_state", "attraction_across_cell",
+           "elastic_product", "pressure_control", "process_zone_length", "solve_adhesive", "unresolved_zone_message",
+           "zone_cells"]

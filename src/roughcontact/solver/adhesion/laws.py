@@ -116,9 +116,21 @@ class MaugisDugdale:
 
 LAWS = (Exponential, MaugisDugdale)
 
-#: What a pull-off's status code means (index = code); only ``trusted`` carries a number.
+#: Largest :func:`attraction_across_cell` (at the pull-off, a fraction of ``w / rho``) for a trusted pull-off.
+#: For a body centred in the cell it is the tension at the cell's edge; with the exponential law on a
+#: paraboloid, exp(-a^2 / (2 R rho)) is both the tension at radius ``a`` over ``w / rho`` and the share of
+#: Derjaguin's force ``2 pi w R`` beyond ``a``, so the edge cuts off at most this share of a rigid sphere's
+#: pull-off. Measured (sphere, w = 1e-4 E* R; docs/solver.md, "Adhesion"), the pull-off at L = R / 2 against
+#: L = 2 R and this fraction at L = R / 2: mu_T = 0.05: -40 % at 0.483; 0.1: -16 % at 0.230; 0.2: -3.3 % at
+#: 0.052; 0.3: -1.1 % at 0.012; 0.5: +0.9 % at 6e-4 (the grids' own difference): the pull-off moves by 0.6-1.0
+#: times the fraction, so below 0.05 by less than 5 %. The adhesion scene's rough surfaces (rms height 1.3-1.9
+#: rho) read 0.002-0.022.
+MAX_ATTRACTION_ACROSS_CELL = 0.05
+
+#: What a pull-off's status code means (index = code); only ``trusted`` carries a number. New codes are
+#: appended, so that a stored code keeps its meaning.
 PULL_OFF_STATUS = ("trusted", "adhesive_zone_unresolved", "last_load_step_not_converged", "not_separated",
-                   "unconverged_step_beside_minimum", "refinement_not_converged")
+                   "unconverged_step_beside_minimum", "refinement_not_converged", "attraction_spans_cell")
 #: Why each status other than ``trusted`` leaves the pull-off NaN, and what to do.
 PULL_OFF_REASONS = {
     "adhesive_zone_unresolved": "the grid does not resolve the adhesive process zone (zone_cells): refine the "
@@ -129,7 +141,21 @@ PULL_OFF_REASONS = {
                                        "is not bracketed: raise max_iter",
     "refinement_not_converged": "halving the unloading step near the minimum still moved the pull-off by more "
                                 "than its tolerance",
+    "attraction_spans_cell": f"at the pull-off the law still pulls at {MAX_ATTRACTION_ACROSS_CELL:g} of w / rho or "
+                             "more all along a row or column of the cell (attraction_across_cell): the cell's edge "
+                             "cuts the body's attraction off and the periodic images' surfaces lie within its "
+                             "range, so the pull-off depends on the cell's size (a sphere at L = R / 2, mu_T = 0.1: "
+                             "1.64 pi w R against 1.95 at L = 2 R); enlarge the cell until the attraction dies out "
+                             "inside it (for a sphere L^2 / (8 R rho) >= 3), or shorten the range",
 }
+#: Why no unloading step counts as converged when the pull-off is not trusted (``unload_converged``'s comment).
+UNTRUSTED_TRACE_STEPS = (
+    "The unloading trace is one measurement: each step starts from the one before and the pull-off is their "
+    "minimum. When pull_off_status is not trusted no step of the trace is reported converged: an unresolved "
+    "adhesive zone (below 1.5 cells no step counts as converged) or an attraction that spans the cell makes every "
+    "step wrong, a trace from an unconverged load step may follow another branch throughout, and a trace that did "
+    "not separate, whose minimum is not bracketed or whose refinement did not settle is no complete branch. A step "
+    "that met its own residual keeps its finite unload_mean_pressure.")
 
 
 def process_zone_length(law, e_star: float) -> float:
@@ -166,6 +192,33 @@ def zone_cells(law, e_star: float, length, shape) -> float:
     lx, ly = Cell.of(shape, length).sides
     dx = lx / nx if ny == 1 else max(lx / nx, ly / ny)
     return round(process_zone_length(law, e_star) / dx, 12)
+
+
+def attraction_across_cell(law, gap) -> float:
+    """The strongest attraction held all along a grid line across the cell, over the law's largest ``w / rho``.
+
+    For each row and each column of ``gap`` (each axis with more than one node), the weakest tension
+    ``tension(g)`` along it; the largest of these, divided by ``law.max_tension`` [-], in [0, 1]. For a
+    body centred in the cell (a sphere) the line through its centre is weakest at the cell's edge: this is
+    the attraction there, the share of the body's attraction the edge cuts off (:data:`MAX_ATTRACTION_ACROSS_CELL`).
+    On a periodic rough surface a line meets deep valleys, unless an attracting band wraps the cell.
+
+    Parameters
+    ----------
+    law : Exponential or MaugisDugdale
+        The interaction law (``tension`` [pressure], ``max_tension = w / rho``).
+    gap : ndarray, shape (nx, ny)
+        The gap [length], ``>= 0``.
+
+    Examples
+    --------
+    >>> g = np.array([[0.0, 1.0], [1.0, 2.0]]) * 1e-3
+    >>> round(attraction_across_cell(Exponential(1e-5, 1e-3), g), 4)  # the line [0, 1] rho: exp(-1)
+    0.3679
+    """
+    t = law.tension(gap)
+    lines = [t.min(axis=axis) for axis in (0, 1) if t.shape[axis] > 1]
+    return float(max(line.max() for line in lines) / law.max_tension)
 
 
 def unresolved_zone_message(cells: float, law, e_star: float, dx_name: str = "the cell") -> str:

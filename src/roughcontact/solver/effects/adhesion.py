@@ -15,8 +15,10 @@ import xarray as xr
 
 from ...core.quantities import cf_unit
 from ..adhesion import (
+    MAX_ATTRACTION_ACROSS_CELL,
     MIN_ZONE_CELLS,
     PULL_OFF_STATUS,
+    UNTRUSTED_TRACE_STEPS,
     Exponential,
     MaugisDugdale,
     process_zone_length,
@@ -146,7 +148,8 @@ class Adhesion(Effect):
         Returns name -> :class:`xarray.Variable`: ``adhesive_zone_cells`` always; with ``unloading``
         the branch along ``unload_step`` (``unload_mean_gap``, ``unload_mean_pressure``,
         ``unload_area_fraction``, ``unload_converged``), ``pull_off_pressure`` (NaN unless trusted,
-        the reason in its ``comment``), ``pull_off_status`` (a CF flag) and ``unload_unconverged_steps``.
+        the reason in its ``comment``), ``pull_off_status`` (a CF flag), ``unload_unconverged_steps``
+        and ``attraction_across_cell``.
         """
         pressure = cf_unit(pressure=pressure_unit, pressure_power=1)
         out = {"adhesive_zone_cells": xr.Variable((), solver.zone_cells, {
@@ -163,36 +166,48 @@ def unloading_variables(un, length_units: str, pressure_units: str) -> dict:
     """The unloading branch and the pull-off of :class:`~..adhesive.Unloading` ``un`` as CF variables.
 
     Along ``unload_step``: ``unload_mean_gap`` [length], ``unload_mean_pressure`` [pressure],
-    ``unload_area_fraction``, ``unload_converged`` (a flag); scalars ``unload_unconverged_steps``,
+    ``unload_area_fraction``, ``unload_converged`` (a flag: 0 on every step unless the pull-off is
+    trusted, :attr:`~..adhesive.Unloading.converged`); scalars ``unload_unconverged_steps``,
     ``pull_off_pressure`` (NaN unless trusted; its ``comment`` says how it was found, or why it is
-    NaN) and ``pull_off_status`` (a CF flag over :data:`PULL_OFF_STATUS`).
+    NaN), ``pull_off_status`` (a CF flag over :data:`PULL_OFF_STATUS`) and ``attraction_across_cell``.
     """
     dim = ("unload_step",)
     comment = un.reason or (f"the most tensile converged step, the step near it refined 4x at a time to "
                             f"{un.step:.3g} until it moved by less than {un.rtol:g} of itself")
 
-    def flag(dims, codes, long_name, meanings):
+    def flag(dims, codes, long_name, meanings, **attrs):
         return xr.Variable(dims, codes, {"units": FRACTION_UNITS, "long_name": long_name,
                                          "flag_values": np.arange(len(meanings), dtype=np.int8),
-                                         "flag_meanings": " ".join(meanings)})
+                                         "flag_meanings": " ".join(meanings), **attrs})
 
     return {
         "unload_mean_gap": xr.Variable(dim, un.mean_gap, {
             "units": length_units, "long_name": "mean gap on unloading under displacement control"}),
         "unload_mean_pressure": xr.Variable(dim, un.mean_pressure, {
-            "units": pressure_units, "long_name": "mean pressure on unloading (NaN where the step did not converge)"}),
+            "units": pressure_units,
+            "long_name": "mean pressure on unloading (NaN where the step's own residual check failed)"}),
         "unload_area_fraction": xr.Variable(dim, un.area_fraction, {
             "units": FRACTION_UNITS, "long_name": "real contact area fraction on unloading (nodes with gap = 0)"}),
         "unload_converged": flag(dim, un.converged.astype(np.int8),
-                                 "unloading step converged (adhesive residual <= tol on a fresh FFT)",
-                                 ("false", "true")),
+                                 "unloading step converged: adhesive residual <= tol on a fresh FFT and the "
+                                 "pull-off trusted (pull_off_status trusted); 0 on every step otherwise",
+                                 ("false", "true"), comment=UNTRUSTED_TRACE_STEPS),
         "unload_unconverged_steps": xr.Variable((), un.unconverged, {
             "units": FRACTION_UNITS,
-            "long_name": "unloading steps whose final check failed (left out of the pull-off)"}),
+            "long_name": "unloading steps not flagged converged (unload_converged = 0): all of them unless the "
+                         "pull-off is trusted; those whose own residual check failed have a NaN mean pressure"}),
         "pull_off_pressure": xr.Variable((), un.pull_off, {
             "units": pressure_units, "comment": comment,
             "long_name": "pull-off pressure: minus the most tensile mean pressure on unloading under displacement "
                          "control from the last load step; NaN unless pull_off_status is trusted"}),
         "pull_off_status": flag((), np.int8(PULL_OFF_STATUS.index(un.status)),
                                 "whether the pull-off pressure can be trusted, else why not", PULL_OFF_STATUS),
+        "attraction_across_cell": xr.Variable((), un.across_cell, {
+            "units": FRACTION_UNITS,
+            "long_name": "at the most tensile unloading step that met its residual (the pull-off's), the strongest "
+                         "adhesive tension held all along a row or column of the cell (the largest over lines of "
+                         "the line's weakest tension(g)) over the law's largest, w / rho; for a body centred in the "
+                         "cell the tension at the cell's edge; from "
+                         f"{MAX_ATTRACTION_ACROSS_CELL:g} pull_off_status is attraction_spans_cell"}),
     }
+
