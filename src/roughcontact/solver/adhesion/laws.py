@@ -170,7 +170,7 @@ def process_zone_length(law, e_star: float) -> float:
 
     Examples
     --------
-    >>> process_zone_length(Exponential(1e-5, 1e-3), 1.0)
+    >>> round(process_zone_length(Exponential(1e-5, 1e-3), 1.0), 12)  # E* rho^2 / w = 1e-6 / 1e-5
     0.1
     """
     return float(e_star) * law.rho ** 2 / law.w
