@@ -4,7 +4,7 @@ Each ``fig_*`` function takes datasets and returns a :class:`matplotlib.figure.F
 built without pyplot (no global figure registry, no GUI backend); :func:`save_figure`
 writes it as PNG and PDF with byte-identical output on every rerun.
 
-Conventions: single-column figures are 3.4 in wide, multi-panel ones 7 in; legends sit
+Conventions: every figure is 7 in wide (:data:`~.style.FIGURE_WIDTH_IN`), one panel sized for a column; legends sit
 outside the axes; colours are the Okabe-Ito palette (distinguishable with the common
 colour-vision deficiencies), one colour per Hurst exponent; the long cutoff
 ``lambda_l = L / k_l`` is told apart by marker and line style. Theory curves are black

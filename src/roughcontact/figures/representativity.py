@@ -173,7 +173,7 @@ def fig_representativity(rep_stats: xr.Dataset, *, hurst: float | None = None) -
     Returns
     -------
     matplotlib.figure.Figure
-        7 in wide with two or three panels (4.4 in with one), legend below.
+        7 in wide (:data:`~.style.FIGURE_WIDTH_IN`) with one to three panels, legend below.
     """
     require(rep_stats, "rep_stats", ("epsilon_mean", "epsilon_sem", "n_seeds"))
     h = _rep_hurst(rep_stats, hurst)
@@ -222,7 +222,7 @@ def fig_surface_examples(examples: Sequence[tuple[np.ndarray, str]], *, length: 
     Returns
     -------
     matplotlib.figure.Figure
-        7 in wide (3.4 in for a single example), two rows.
+        7 in wide (:data:`~.style.FIGURE_WIDTH_IN`; a single example sized for one column), two rows.
     """
     fields = _example_fields(examples, length, bins)
     n = len(fields)
