@@ -62,6 +62,8 @@ def test_adhesive_scene_draws_the_cycle_and_the_pull_off(tmp_path):
     assert "pull-off pressure of each group" in result and "No contact evolution law is fitted" in result
     assert "Contact evolution law fit" not in summary
     assert "published" not in summary + result and "contact.effects.adhesion.law" in summary
+    intro = (out / "report" / "intro.rst").read_text()  # the page opens with what the scene computes (issue 60)
+    assert "**adhesive contact**" in intro and "evolution law" not in intro and "representativity" not in intro
     shown = assert_scene_captions_true(wd, "tiny", wd / "config" / "config.yaml")  # no reference line promised
     assert shown == {"hysteresis": [], "pull_off": []}
     with xr.open_dataset(out / "aggregate" / "contact.nc") as agg:

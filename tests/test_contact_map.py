@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from caption_check import assert_caption_true, lead_of
+from caption_check import assert_caption_says_the_record, assert_caption_true, lead_of
 from roughcontact.figures.captions import caption
 from roughcontact.figures.contact_map import (
     MAP_CASES,
@@ -18,6 +18,7 @@ from roughcontact.figures.contact_map import (
     shown_steps,
     stored_steps,
 )
+from roughcontact.figures.record import figure_record
 from roughcontact.figures.registry import FIGURES, scene_figures
 from roughcontact.figures.style import save_figure
 from roughcontact.pipeline.config.schema import load_schema
@@ -104,13 +105,46 @@ def test_a_map_without_contact_draws_no_pressure():
 
 def test_the_figure_and_its_caption_are_reproducible_and_true(cases_2d, tmp_path):
     fig = fig_contact_maps(cases_2d)
-    # the lead names no reference line, and the figure draws none: its caption is the lead alone
-    text = caption(lead_of("contact_map"), fig)
-    assert assert_caption_true(fig, text) == [] and text == lead_of("contact_map").rstrip() + "\n"
+    # the figure draws no reference line: its caption is the lead and the notes of a 2-D map's layout
+    record = figure_record("contact_map", fig)
+    text = caption(lead_of("contact_map"), record)
+    assert assert_caption_true(fig, text) == [] and record["notes"] == ["rows_of_steps", "maps"]
+    assert_caption_says_the_record(record, text)
     first = save_figure(fig, tmp_path / "a" / "contact_map")
     second = save_figure(fig_contact_maps(cases_2d), tmp_path / "b" / "contact_map")
     for a, b in zip(first, second, strict=True):
         assert a.read_bytes() == b.read_bytes(), a.name
+
+
+def _big_map_case(n: int = 520) -> tuple[xr.Dataset, xr.Dataset]:
+    """A made-up 2-D case of ``n x n`` points (more than MAP_PIXELS a side: drawn block-averaged), fields at step 2."""
+    rng = np.random.default_rng(0)
+    x = np.arange(n) / n
+    coords = {"x": ("x", x, {"units": "um"}), "y": ("y", x.copy(), {"units": "um"}), "field_step": [2], "step": [1, 2]}
+    heights = rng.standard_normal((n, n))
+    pressure = np.where(heights > 2.0, heights, 0.0)[None]
+    contact = xr.Dataset({"contact_pressure": (("field_step", "x", "y"), pressure), "gap": (("field_step", "x", "y"),
+                          np.maximum(2.0 - heights, 0.0)[None]), "pressure": ("step", [0.001, 0.002]),
+                          "area_fraction": ("step", [0.01, 0.02])}, coords=coords, attrs={"e_star": 1.0})
+    return xr.Dataset({"heights": (("x", "y"), heights, {"units": "um"})}, coords=coords), contact
+
+
+@pytest.mark.parametrize("kind", ["maps", "big maps", "side by side", "profiles"])
+def test_the_caption_says_the_layout_drawn_and_block_averaging_only_where_it_happened(kind, cases_2d):
+    """The caption described the 1-D layout and 512-point block averaging on the demo's 2-D maps of 256 points
+    (issue 60): the lead holds what every rendering shows, the record adds the layout drawn, block averaging
+    where a map was larger than MAP_PIXELS, and what profiles mean."""
+    cases = {"maps": cases_2d, "big maps": [_big_map_case()],
+             "side by side": [_case_2d("2", "0.5", store=[4]), _case_2d("4", "0.8", store=[4])],
+             "profiles": [_case_1d()]}[kind]
+    record = figure_record("contact_map", fig_contact_maps(cases))
+    text = caption(lead_of("contact_map"), record)
+    assert_caption_says_the_record(record, text)
+    two_d = kind != "profiles"
+    assert ("grey-scale" in text) == two_d and ("deformed surface" in text) == (not two_d)
+    assert ("1-D" in text) == (not two_d) and record["profiles"] == (not two_d)
+    assert ("block-averaged" in text) == (kind == "big maps"), text
+    assert ("side by side" in text) == (kind in ("side by side", "big maps"))  # one stored step each
 
 
 def test_many_stored_steps_and_cases_are_capped():

@@ -244,7 +244,8 @@ def test_figure_contents(agg, result):
     ax = fig.axes[0]
     assert ax.get_xscale() == "log" and ax.get_yscale() == "log"
     labels = [t.get_text() for t in fig.legends[0].get_texts()]
-    assert labels[:len(NAMES)] == NAMES and any("CEL fitted to the 6 topographies (joint)" in t for t in labels)
+    assert labels[:len(NAMES)] == NAMES
+    assert any("CEL fitted to the 6 topographies (joint least squares)" in t for t in labels)
     assert any("BGT small-load limit" in t for t in labels) and any("Persson, full" in t for t in labels)
     assert "$p_0/E^*$ = " in fig._suptitle.get_text()
     # without a fit, and with a topography left out of it

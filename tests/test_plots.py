@@ -11,11 +11,10 @@ import pytest
 import xarray as xr
 from matplotlib.figure import Figure
 
+import figure_builders
 from cel_synthetic import simulate_cel_cases
-from roughcontact.analysis.aggregate.combine import CASE_DIMS, combine_cases
 from roughcontact.analysis.aggregate.derived import aggregate_contact
-from roughcontact.analysis.aggregate.seeds import representativity_statistics, seed_statistics
-from roughcontact.analysis.fit.grid import fit_cel
+from roughcontact.analysis.aggregate.seeds import seed_statistics
 from roughcontact.figures.area_load import fig_area_load
 from roughcontact.figures.dpbar import fig_dpbar
 from roughcontact.figures.kappa import fig_kappa
@@ -26,28 +25,12 @@ from roughcontact.surfaces.synthetic import generate_surface
 
 @pytest.fixture(scope="module")
 def contact():
-    dss, names = simulate_cel_cases(k_l=(4.0, 16.0), k_s=(32.0, 128.0), hurst=(0.36, 0.84), seeds=range(3),
-                                    point_noise=1e-4, seed_scatter=0.01, rng_seed=5)
-    agg = aggregate_contact(dss, names)
-    return agg, seed_statistics(agg), fit_cel(agg, n_boot=10)
+    return figure_builders.contact()
 
 
 @pytest.fixture(scope="module")
 def rep_stats():
-    dss, names = [], []
-    rng = np.random.default_rng(0)
-    for kl in (1.0, 4.0, 16.0):
-        for ks in (32.0, 64.0, 128.0):
-            for s in range(3):
-                eps = 0.3 / kl * (32 / ks) ** 0.3 * (1 + 0.1 * rng.standard_normal())
-                dss.append(xr.Dataset(
-                    {"epsilon": (CASE_DIMS, np.full((1, 1, 1, 1), eps), {"units": "1/L", "long_name": "L2 error"}),
-                     "std_height": (CASE_DIMS, np.full((1, 1, 1, 1), 0.1), {"units": "L"})},
-                    coords={"k_l": [kl], "k_s": [ks], "H": [0.8], "seed": np.array([s], dtype=np.int64)}))
-                names.append(f"kl{kl:g}_ks{ks:g}_s{s}.nc")
-    # As the workflow's aggregate/representativity.nc: per-case values and their seed statistics.
-    cases = combine_cases(dss, names, kind="representativity")
-    return cases.merge(representativity_statistics(cases))
+    return figure_builders.rep_stats()
 
 
 @pytest.fixture(scope="module")
@@ -193,7 +176,7 @@ def test_kappa_figure_names_paper_and_run_curves(contact):
     fig = fig_kappa(agg, stats, fit)
     labels = [t.get_text() for t in fig.legends[0].get_texts()]
     assert any(lab.startswith("CEL, paper: ") and "1.145" in lab for lab in labels), labels
-    assert any(lab.startswith("CEL, this run (paper)") for lab in labels), labels
+    assert any(lab.startswith("CEL fitted (paper's route)") for lab in labels), labels
     assert any(lab.startswith("fit window") for lab in labels) and any("Persson" in lab for lab in labels)
     ax = fig.axes[0]
     a = np.linspace(0, float(stats["area_fraction_mean"].sel(k_s=32.0).max()), 200)
@@ -204,7 +187,15 @@ def test_kappa_figure_names_paper_and_run_curves(contact):
 def _fit_law_labels(agg, stats, fit, **kw):
     """The legend texts of this run's fitted power law in fig_dpbar, one per k_s panel."""
     return [t.get_text() for t in fig_dpbar(agg, stats, fit, **kw).legends[0].get_texts()
-            if "this run" in t.get_text()]
+            if t.get_text().startswith("fitted (")]
+
+
+def _at_interval(fit, constant, k_s=32.0, estimator="paper"):
+    """A constant of the pooled k_l = 16 group, rounded to its interval (the legend's rule, issue 60)."""
+    from roughcontact.figures.style import at_interval
+
+    sel = {"k_l": 16.0, "k_s": k_s, "H_group": "pooled", "estimator": estimator, "constant": constant}
+    return at_interval(*(float(fit[v].sel(sel)) for v in ("value", "ci_low", "ci_high")))
 
 
 def _loosen(fit, constants, k_s=32.0, estimator="paper"):
@@ -220,9 +211,8 @@ def test_dpbar_legend_labels_each_constant_for_what_it_is(contact):
     """Issue 24: each of mu and beta is printed when the data constrain it and called "not constrained
     by the data" when they do not (an interval wider than the value is no number), never both for one."""
     agg, stats, fit = contact
-    head = r"this run (fit: paper), $\lambda_l = L/16$, $\lambda_s = L/32$: "
-    v = fit["value"].sel(k_l=16.0, k_s=32.0, H_group="pooled", estimator="paper")
-    mu, beta = f"{float(v.sel(constant='mu')):.3f}", f"{float(v.sel(constant='beta')):.3f}"
+    head = r"fitted (paper's route), $\lambda_l = L/16$, $\lambda_s = L/32$: "
+    mu, beta = _at_interval(fit, "mu"), _at_interval(fit, "beta")
     assert fit["constrained"].sel(k_l=16.0, H_group="pooled", estimator="paper").all()
     both, other = _fit_law_labels(agg, stats, fit)
     assert both == head + rf"$\beta$ = {beta}, $\mu$ = {mu}", both
@@ -255,7 +245,7 @@ def test_a_constant_on_a_bound_of_the_joint_fit_is_not_constrained(contact):
     first, _ = _fit_law_labels(agg, stats, fit, estimator="joint")
     assert r"$\mu$ = " in first and "not constrained" not in first, first
     labels = [t.get_text() for t in fig_kappa(agg, stats, on_bound, estimator="joint").legends[0].get_texts()]
-    assert any(lab.startswith("CEL, this run (joint)") and lab.endswith(r"not constrained by the data at "
+    assert any(lab.startswith("CEL fitted (joint least squares)") and lab.endswith(r"not constrained by the data at "
                                                                        r"$\lambda_s = L/32$") for lab in labels)
 
 
@@ -293,8 +283,12 @@ def test_contact_figures_state_grid_seeds_and_loads(contact):
     agg, stats, fit = contact
     agg = agg.assign_attrs(scene_parameters=json.dumps({"surface": {"N": 256}}))
     for draw in (fig_area_load, fig_kappa, fig_dpbar):
-        title = draw(agg, stats, fit)._suptitle.get_text()
-        assert "$N = 256$" in title and "3 seeds" in title and "$p_0/E^*$ = " in title, (draw.__name__, title)
+        title = draw(agg, stats, fit).get_suptitle()
+        # 3 seeds per curve, 2 values of H: the 6 surfaces an H-pooled fit (and the result line) counts (issue 60)
+        assert "$N = 256$" in title and r"3 seeds $\times$ 2 values of $H$" in title and "$p_0/E^*$ = " in title, \
+            (draw.__name__, title)
+        one_h = draw(agg.sel(H=[0.84]), stats.sel(H=[0.84]), fit).get_suptitle()
+        assert "3 seeds" in one_h and "values of $H$" not in one_h, one_h
 
 
 # ------------------------------------------------------------ issue 12: readability
@@ -563,21 +557,27 @@ def test_measured_figures_count_the_unconverged_steps_they_leave_out():
 def test_captions_name_exactly_the_reference_lines_each_figure_draws(contact):
     """The area-load caption promises the asperity models at the surfaces' own alpha only where they are drawn:
     for one family, not for families of different bandwidth (issue 52)."""
-    from caption_check import assert_caption_true, lead_of
+    from caption_check import assert_caption_says_the_record, assert_caption_true, lead_of
     from roughcontact.figures.captions import caption
+    from roughcontact.figures.record import figure_record
+
+    def text(name, fig):
+        record = figure_record(name, fig)
+        out = caption(lead_of(name), record)
+        assert_caption_says_the_record(record, out)
+        return out
 
     agg, stats, fit = contact
     one = {"k_l": [16.0], "k_s": [32.0]}
     for name, draw in (("area_load", fig_area_load), ("kappa", fig_kappa), ("dpbar", fig_dpbar)):
-        lead = lead_of(name)
         both = draw(agg.sel(one), stats.sel(one), fit.sel(one))
-        shown = assert_caption_true(both, caption(lead, both))
+        shown = assert_caption_true(both, text(name, both))
         assert {"asperity_bgt_own", "cel_fit"} <= set(shown) if name != "dpbar" else "dpbar_fit" in shown
         mixed = draw(agg, stats, fit)
-        shown = assert_caption_true(mixed, caption(lead, mixed))
-        assert "asperity_bgt_own" not in shown and "surfaces' own" not in caption(lead, mixed)
+        shown = assert_caption_true(mixed, text(name, mixed))
+        assert "asperity_bgt_own" not in shown and "surfaces' own" not in text(name, mixed)
         bare = draw(agg, stats)  # no fit: no fitted law named
-        assert "fitted" not in caption(lead, bare).split("Drawn with the data")[-1]
+        assert "fitted" not in text(name, bare).split("Drawn with the data")[-1]
 
 
 def test_reference_lines_are_told_apart_and_lie_above_the_bands(contact):
@@ -621,3 +621,113 @@ def test_area_load_panels_have_a_log_log_inset_for_small_loads(contact):
         families = [line for line in ax.get_lines() if line.get_gid() == "family"]
         assert len(families) >= 2 and len(inset.get_lines()) == len(families) + 2
         assert {line.get_gid() for line in inset.get_lines()} >= {"bgt_limit", "persson_limit"}
+
+
+# ------------------------------------------------------------ issue 60: what is drawn is what is said
+def _caption_of(name, fig):
+    from caption_check import assert_caption_says_the_record, lead_of
+    from roughcontact.figures.captions import caption
+    from roughcontact.figures.record import figure_record
+
+    record = figure_record(name, fig)
+    text = caption(lead_of(name), record)
+    assert_caption_says_the_record(record, text)
+    return record, text
+
+
+def test_a_figure_of_profiles_names_only_the_2d_laws_it_drew(contact):
+    """The profiles' note named the BGT limit, the paper's CEL and its power law on every figure: area_load draws
+    neither the paper's CEL nor the power law, kappa no power law, dpbar no BGT limit nor CEL (issue 60)."""
+    agg, stats, fit = contact
+    lines = agg.assign_attrs(surface_dimension=1)
+    named = {}
+    for name, draw in (("area_load", fig_area_load), ("kappa", fig_kappa), ("dpbar", fig_dpbar)):
+        record, text = _caption_of(name, draw(lines, stats, fit))
+        note = text.split("Drawn with the data")[0]
+        assert record["profiles"] and "These cases are profiles" in text
+        named[name] = {law for law in ("BGT", "evolution law", "power law") if law in note}
+        assert ("asperity models are not drawn" in note) == (name != "dpbar"), name
+        assert ("Persson's curves hold" in note) == any(g.startswith("persson") for g in record["references"])
+    assert named == {"area_load": {"BGT"}, "kappa": {"BGT", "evolution law"}, "dpbar": {"power law"}}, named
+    _, text = _caption_of("area_load", fig_area_load(agg, stats, fit))  # 2-D surfaces: no note of profiles
+    assert "profile" not in text and "comparison only" not in text
+
+
+def test_the_caption_names_the_route_of_the_fit_drawn(contact):
+    """area_load draws the joint least-squares fit, kappa and dpbar the paper's route: each caption names the one
+    drawn, with its window, and none without a fit (issue 60: "fitted to this run" said neither)."""
+    from roughcontact.figures.captions import ROUTES
+
+    agg, stats, fit = contact
+    for name, draw, route in (("area_load", fig_area_load, "joint"), ("kappa", fig_kappa, "paper"),
+                              ("dpbar", fig_dpbar, "paper")):
+        record, text = _caption_of(name, draw(agg, stats, fit))
+        assert {f["route"] for f in record["fits"]} == {route} and record["window"] == [0.01, 0.11]
+        assert ROUTES[route] in text and all(p not in text for r, p in ROUTES.items() if r != route), name
+        assert "from 0.01 to 0.11" in text
+        other = "paper" if route == "joint" else "joint"
+        record, text = _caption_of(name, draw(agg, stats, fit, estimator=other))
+        assert ROUTES[other] in text and ROUTES[route] not in text
+        record, text = _caption_of(name, draw(agg, stats))
+        assert not record["fits"] and record["window"] is None and not any(p in text for p in ROUTES.values())
+
+
+def test_legends_give_each_fitted_constant_at_its_interval(contact):
+    """The dpbar legend printed mu = 0.537 beside the result's 0.54 [0.15, 0.66] (issue 60): every legend
+    rounds a constant to its interval by the report's rule."""
+    agg, stats, fit = contact
+    sel = {"k_l": 16.0, "k_s": 32.0, "H_group": "pooled", "estimator": "paper"}
+    demo = fit.copy(deep=True)
+    for var, value in (("value", 0.537), ("ci_low", 0.15), ("ci_high", 0.66)):
+        demo[var].loc[{**sel, "constant": "mu"}] = value
+    first, _ = _fit_law_labels(agg, stats, demo)
+    assert r"$\mu$ = 0.54" in first and "0.537" not in first, first
+    one = {"k_s": [32.0]}
+    labels = [t.get_text() for t in fig_kappa(agg.sel(one), stats.sel(one), demo.sel(one)).legends[0].get_texts()]
+    (label,) = [lab for lab in labels if lab.startswith("CEL fitted")]
+    assert r"$\mu$ = 0.54" in label and rf"$\beta$ = {_at_interval(fit, 'beta')}" in label, label
+
+
+@pytest.mark.parametrize(("value", "low", "high"), [
+    (2.65988, 2.57646, 2.91696), (0.2113, 0.1801, 0.2399), (1.145, 1.143, 1.147), (0.21, 0.205, 0.215),
+    (1234.5, 1011.0, 1499.0), (-0.0413, -0.0611, -0.0289), (0.0003511, 0.00025, 0.00047), (5.0, 4.0, 6.0),
+    (3.14159, float("nan"), float("nan")), (3.14159, None, None), (float("nan"), 1.0, 2.0)])
+def test_a_legend_value_is_rounded_as_the_report_rounds_it(value, low, high):
+    """The figures' rounding (figures below studies in the layers: not precision.py itself) agrees with
+    roughcontact.studies.precision.estimate, on intervals whose half-width leads with 1 or 2 or is one figure."""
+    from roughcontact.figures.style import at_interval
+    from roughcontact.studies.precision import estimate
+
+    expected = estimate(value, low, high)[0]
+    assert at_interval(value, low, high) == expected
+
+
+@pytest.mark.parametrize(("value", "low", "high", "shown"), [
+    (0.537, 0.15, 0.66, "0.54"), (1.0612, 1.0281, 1.1642, "1.06"), (1.466, 1.167, 3120.0, "1"),
+    (0.0413, -0.5, 0.5, "0.04"), (0.0, -0.3, 0.4, "0.0"), (12345678.9, 12345670.0, 12345690.0, "12346000")])
+def test_a_legend_value_keeps_the_figures_of_its_interval_and_is_never_a_false_zero(value, low, high, shown):
+    """One figure of a half-width leading with 3 to 9 (0.068 -> 1.06, not 1.061); a value that is not 0 keeps one
+    significant figure where its interval would round it to 0 (issue 60's "0 [0, 3100]")."""
+    from roughcontact.figures.style import at_interval
+
+    assert at_interval(value, low, high) == shown
+
+
+def test_every_axis_of_the_lines_representativity_figure_has_readable_ticks():
+    """The lines scene's representativity: eps 0.53-0.87 (panel a) had no y tick label, the scale-free eps
+    0.17-0.28 (panel b) and the colour bar only "0.2" (issue 60): a log axis over less than a decade has no
+    decade to label. Every axis, the colour bar's too, shows at least two labelled ticks."""
+    from figure_builders import labelled_ticks, rep_stats
+
+    rep = rep_stats(eps=lambda kl, ks: {(4.0, 64.0): 0.87, (4.0, 128.0): 0.79, (16.0, 64.0): 0.59,
+                                        (16.0, 128.0): 0.53}[(kl, ks)], k_l=(4.0, 16.0), k_s=(64.0, 128.0),
+                    std=0.1, seed=3)
+    fig = fig_representativity(rep)
+    fig.draw_without_rendering()
+    axes = [ax for ax in fig.axes if ax.get_visible()]
+    assert len(axes) == 4  # (a), (b), the map (c) and its colour bar
+    for ax in axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            if axis.get_scale() == "log" or ax.get_label() == "<colorbar>" and axis is ax.yaxis:
+                labels = labelled_ticks(axis)
+                assert len(labels) >= 2, (ax.get_title(), axis.axis_name, axis.get_view_interval(), labels)

@@ -1,7 +1,8 @@
 # Figures: one rule for every figure of roughcontact.figures.registry.FIGURES, PNG and PDF,
-# byte-identical across reruns, and the figure's report caption (figures.captions: its lead in
-# workflow/report/ and the reference lines this rendering drew), which workflow/report/figure.rst shows.
-# A scene gets the figures its blocks ask for.
+# byte-identical across reruns, the record of what the rendering drew (figures.record: its data series,
+# reference lines, fits with their route, window) and the figure's report caption built from that record
+# (figures.captions: its lead in workflow/report/, then what was drawn), which workflow/report/figure.rst
+# shows. A scene gets the figures its blocks ask for.
 
 
 localrules:
@@ -24,6 +25,7 @@ rule figure:
             subcategory="vector PDF",
         ),
         caption="results/{scene}/figures/{figure}.caption.rst",
+        record="results/{scene}/figures/{figure}.record.json",
     log:
         "results/{scene}/logs/figure_{figure}.log",
     benchmark:

@@ -1,10 +1,13 @@
 # The report's landing page: reStructuredText fragments that workflow/report/workflow.rst includes (not
-# report items themselves: the landing page shows them). result.rst (the fitted CEL constants against the
+# report items themselves: the landing page shows them). intro.rst (the stages the scene runs, the contact
+# evolution law only where it is fitted: roughcontact.studies.report_intro) opens the page; result.rst (the fitted CEL constants against the
 # paper's, or an adhesive scene's pull-off) above the figures, figures.rst (each figure embedded, with its
 # caption), summary.rst (fit table, the scene's tables, its parameters) below them; rendered by roughcontact.studies.report. Their params are the
 # scene's study blocks without the description (roughcontact.pipeline.params.summary), so a description
 # edit plans nothing. run.rst, the run's record (code, versions, host, date, CPU time:
 # roughcontact.studies.run_record), is written after every other output of the scene.
+
+from roughcontact.studies.report_intro import intro_facts
 
 
 localrules:
@@ -32,6 +35,7 @@ rule report_summary:
     output:
         result="results/{scene}/report/result.rst",
         summary="results/{scene}/report/summary.rst",
+        intro="results/{scene}/report/intro.rst",
     log:
         "results/{scene}/logs/report_summary.log",
     benchmark:
@@ -40,6 +44,7 @@ rule report_summary:
         "../../envs/roughcontact.yaml"
     params:
         parameters=lambda w: params.summary(SCENES[w.scene]),
+        intro=lambda w: intro_facts(SCENES[w.scene]),
     script:
         "../scripts/report_summary.py"
 

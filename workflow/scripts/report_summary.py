@@ -3,7 +3,7 @@ from pathlib import Path
 
 from roughcontact.core.files import write_text_atomic
 from roughcontact.pipeline.io import read_dataset, run_logged
-from roughcontact.studies import report, report_tables
+from roughcontact.studies import report, report_intro, report_tables
 
 
 def topographies():
@@ -50,6 +50,7 @@ def main(log):
     text = report.summary_rst(snakemake.wildcards.scene, snakemake.params.parameters, fit_csv=fit_csv,
                               topographies=topographies(), profiles=lines)
     write_text_atomic(snakemake.output.summary, text)
+    write_text_atomic(snakemake.output.intro, report_intro.intro_rst(snakemake.wildcards.scene, snakemake.params.intro))
     log.info("report fragments written: %s, %s", snakemake.output.result, snakemake.output.summary)
 
 

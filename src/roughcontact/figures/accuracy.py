@@ -8,6 +8,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
+from .record import note_series
 from .style import OKABE_ITO, STYLE, new_figure, require
 
 
@@ -34,7 +35,7 @@ def series_label(name: str, drawn: int, total: int) -> str:
 
 
 def _draw_accuracy(summary: xr.Dataset) -> Figure:
-    fig = new_figure(7.0, 3.2)
+    fig = new_figure(3.2)
     axes = fig.subplots(1, 2)
     colours = dict(zip(("N", "tol", "n_steps", "seeds"), OKABE_ITO[1:5], strict=True))
     names = {"N": "grid N", "tol": "tolerance", "n_steps": "load steps", "seeds": "seeds"}
@@ -73,4 +74,5 @@ def _draw_accuracy(summary: xr.Dataset) -> Figure:
     handles, labels = axes[0].get_legend_handles_labels()
     uniq = dict(zip(labels, handles, strict=True))
     fig.legend(uniq.values(), uniq.keys(), loc="outside right center", fontsize=7, frameon=False)
+    note_series(fig, list(uniq))
     return fig

@@ -14,7 +14,8 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 
-from .style import DOUBLE_COLUMN_IN, OKABE_ITO, STYLE, new_figure, require
+from .record import note_series
+from .style import OKABE_ITO, STYLE, new_figure, require
 
 #: Variables :func:`fig_hysteresis` reads from each case's contact dataset.
 HYSTERESIS_VARIABLES = ("pressure", "area_fraction", "mean_gap", "converged", "unload_mean_gap",
@@ -48,7 +49,7 @@ def fig_hysteresis(cases: Sequence[tuple[str, xr.Dataset]]) -> Figure:
     for label, ds in cases:
         require(ds, f"case {label}", HYSTERESIS_VARIABLES)
     with matplotlib.rc_context(STYLE):
-        fig = new_figure(DOUBLE_COLUMN_IN, 2.8)
+        fig = new_figure(2.8)
         ax_a, ax_p = fig.subplots(1, 2)
         for i, (label, ds) in enumerate(cases):
             colour = OKABE_ITO[1 + i % (len(OKABE_ITO) - 1)]
@@ -75,6 +76,7 @@ def fig_hysteresis(cases: Sequence[tuple[str, xr.Dataset]]) -> Figure:
         ax_a.legend(loc="upper right")
         ax_p.legend(loc="lower right")
         fig.suptitle("Adhesive load cycle: loading and unloading against the mean gap")
+        note_series(fig, [label for label, _ in cases])
     return fig
 
 
@@ -112,7 +114,7 @@ def fig_pull_off(agg: xr.Dataset, case_dims: Sequence[str]) -> Figure:
     groups = [d for d in case_dims if d != "seed"]
     stacked = pull.stack(group=groups) if len(groups) > 1 else pull.rename({groups[0]: "group"})
     with matplotlib.rc_context(STYLE):
-        fig = new_figure(DOUBLE_COLUMN_IN / 2 if stacked.sizes["group"] <= 4 else DOUBLE_COLUMN_IN, 2.8)
+        fig = new_figure(2.8)
         ax = fig.subplots()
         labels = []
         for i in range(stacked.sizes["group"]):
@@ -131,15 +133,21 @@ def fig_pull_off(agg: xr.Dataset, case_dims: Sequence[str]) -> Figure:
         ax.set_ylabel(r"pull-off pressure $\bar p_{\rm off}/E^*$")
         ax.set_xlim(-0.5, len(labels) - 0.5)
         ax.set_title(_left_out(status.where(present), meanings))
+        note_series(fig, labels)
     return fig
 
 
+#: The case dimensions' symbols (mathtext) in a tick label.
+_SYMBOLS = {"k_l": "$k_l$", "k_s": "$k_s$", "H": "$H$"}
+
+
 def _group_label(stacked: xr.DataArray, i: int, groups: Sequence[str]) -> str:
-    """A group's tick label: ``k_l/k_s/H`` values or the topography's name."""
+    """A group's tick label: ``k_l, k_s, H`` values (``$k_l$ = 4, $k_s$ = 32, $H$ = 0.36``) or the topography's
+    name."""
     if len(groups) == 1:
         return str(stacked["group"].values[i])
     values = stacked["group"].values[i]
-    return ", ".join(f"{d}={v:g}" for d, v in zip(groups, values, strict=True))
+    return ", ".join(f"{_SYMBOLS.get(d, d)} = {v:g}" for d, v in zip(groups, values, strict=True))
 
 
 def _left_out(status: xr.DataArray, meanings: Sequence[str]) -> str:

@@ -13,7 +13,6 @@ import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
-from matplotlib.ticker import NullFormatter
 
 from ..theory.asperity import asperity_area, asperity_max_load
 from ..theory.laws import KAPPA_BGT, KAPPA_PERSSON, cel_area, linear_area, persson_area
@@ -39,12 +38,12 @@ from .load_curves import (
     has_seeds,
     mean_slope,
     n_outside,
+    record_panels,
     reference_style,
-    title_figure,
     unconverged_handles,
     unconverged_steps,
 )
-from .style import STYLE, family_handles, lambda_label, legend_below, require
+from .style import STYLE, family_handles, lambda_label, legend_below, plain_log_labels, require
 
 
 def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None, *,
@@ -101,10 +100,9 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
         drew_fit = _area_load_theory_panels(axes, ks_list, fit, cel_kl, estimator, xmax, ymax, e_star, hp, alphas)
         handles = family_handles(kl_list, h_list, colour, marker, style) + area_load_theory_handles(sdmax)
         handles += asperity_handles(alphas) + _area_load_cross_handles(axes, crosses)
-        if drew_fit:
-            handles.append(Line2D([], [], **reference_style("cel_fit"),
-                                  label=f"CEL fit ({estimator}), " + lambda_label(cel_kl, "l")))
-        title_figure(fig, agg, stats)
+        label = record_panels(fig, axes.flat, agg, stats, (kl_list, ks_list, h_list), fit, cel_kl, estimator, drew_fit)
+        if label is not None:
+            handles.append(Line2D([], [], **reference_style("cel_fit"), label=label))
         legend_below(fig, handles, f"$h' = {hp:.3g}$")
     return fig
 
@@ -224,8 +222,8 @@ def small_load_inset(ax, e_star: float, hp: float) -> None:
                zorder=4, gid="persson_limit")
     inset.set_xscale("log")
     inset.set_yscale("log")
-    for axis in (inset.xaxis, inset.yaxis):  # decades only: minor labels collide in so small an inset
-        axis.set_minor_formatter(NullFormatter())
+    for axis in (inset.xaxis, inset.yaxis):  # decades where two show: more labels collide in so small an inset
+        plain_log_labels(axis, dense=False)
     inset.tick_params(labelsize=5, length=2, pad=1, which="both")
     inset.set_title("log-log: small loads", fontsize=6, pad=2)
 

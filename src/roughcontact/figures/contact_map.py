@@ -36,11 +36,12 @@ from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, MaxNLocator
 
+from .captions import PROFILES_GID
+from .record import note, note_series
 from .style import (
     DOUBLE_COLUMN_IN,
     MAP_PIXELS,
     OKABE_ITO,
-    SINGLE_COLUMN_IN,
     STYLE,
     block_mean,
     fmt,
@@ -271,6 +272,7 @@ def fig_contact_maps(cases: Sequence[tuple[xr.Dataset, xr.Dataset]]) -> Figure:
             raise ValueError(f"cases store different steps: {stored_steps(contact)} and {stored_steps(cases[0][1])}")
     with matplotlib.rc_context(STYLE):
         fig = (_fig_profiles if profiles.pop() else _fig_maps)(cases, steps)
+    note_series(fig, [case_label(contact) for _, contact in cases])
     return fig
 
 
@@ -287,10 +289,12 @@ def _fig_maps(cases, steps) -> Figure:
     across = len(steps) == 1
     nrows, ncols = (1, len(cases)) if across else (len(cases), len(steps))
     panel = min(2.0, (DOUBLE_COLUMN_IN - 1.2) / ncols)
-    width = min(DOUBLE_COLUMN_IN, max(ncols * panel + 1.6, SINGLE_COLUMN_IN + 1.3))
-    fig = new_figure(width, nrows * (panel + 0.45) + 0.9)
+    fig = new_figure(nrows * (panel + 0.45) + 0.9)
     axes = fig.subplots(nrows, ncols, squeeze=False)
     norm = _pressure_norm(cases, steps)
+    note(fig, "side_by_side" if across else "rows_of_steps", "maps")
+    if any(max(case_values(s["heights"]).shape) > MAP_PIXELS for s, _ in cases):
+        note(fig, "block_averaged_pressure")
     for i, (surface, contact) in enumerate(cases):
         row, utex = (axes[0, i:i + 1] if across else axes[i]), _length_tex(contact)
         x, y = (np.asarray(contact[d].values, dtype=float) for d in ("x", "y"))
@@ -339,9 +343,11 @@ def _map_title(contact: xr.Dataset, step: int, with_case: bool) -> str:
 def _fig_profiles(cases, steps) -> Figure:
     """The 1-D figure of :func:`fig_contact_maps`: per case a row of profiles over a row of pressures."""
     nrows, ncols = len(cases), len(steps)
-    fig = new_figure(DOUBLE_COLUMN_IN, nrows * 2.3 + 0.7)
+    fig = new_figure(nrows * 2.3 + 0.7)
     axes = fig.subplots(2 * nrows, ncols, squeeze=False, sharex="col",
                         gridspec_kw={"height_ratios": [2.0, 1.0] * nrows})
+    fig.set_gid(PROFILES_GID)
+    note(fig, "profiles_layout", "profiles_contact")
     for i, (surface, contact) in enumerate(cases):
         heights, utex = case_values(surface["heights"]), _length_tex(contact)
         htex = unit_tex(str(surface["heights"].attrs.get("units", "1")))

@@ -12,12 +12,13 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
-from matplotlib.ticker import FormatStrFormatter, LogLocator, NullFormatter
 
 from ..analysis.aggregate.derivatives import log_window_edges, windowed_load_slope
 from ..theory.laws import cel_dpbar_dp0
+from .captions import ROUTE_LEGEND
 from .load_curves import (
     PAPER_CONSTANTS,
+    constant_text,
     constrained_constants,
     converged_family,
     draw_unconverged,
@@ -25,13 +26,16 @@ from .load_curves import (
     family_panels,
     family_unconverged,
     fit_constants,
+    fit_estimates,
     has_seeds,
     n_outside,
+    note_families,
     title_figure,
     unconverged_handles,
     unconverged_steps,
 )
-from .style import OKABE_ITO, STYLE, family_handles, lambda_label, legend_below, require
+from .record import note_fit
+from .style import OKABE_ITO, STYLE, family_handles, lambda_label, legend_below, plain_log_labels, require
 
 #: Windows per decade of ``A/A0`` of the windowed ``d pbar / d p0`` (see aggregate.windowed_load_slope).
 DPBAR_PER_DECADE = 6
@@ -115,21 +119,22 @@ def _dpbar_family(ax, agg, stats, bad, family, colour, marker, style, per_decade
 _LAW_CONSTANTS = (("beta", r"$\beta$", 2), ("mu", r"$\mu$", 1))
 
 
-def _fit_law_label(consts, ks: float, many: bool, estimator: str, cel_kl: float,
-                   constrained: Mapping[str, bool] | None = None) -> str:
-    """Legend text of this run's fitted power law: the value of each of beta and mu that the data
-    constrain, and "not constrained by the data" for the others (an interval wider than the value
-    is no number), e.g. ``mu = 0.537, beta not constrained by the data``.
+def _fit_law_label(estimates: Mapping[str, tuple[float, float, float]], ks: float, many: bool, estimator: str,
+                   cel_kl: float, constrained: Mapping[str, bool] | None = None) -> str:
+    """Legend text of the fitted power law: its route, the value of each of beta and mu that the data
+    constrain, rounded to its interval (:func:`~.load_curves.constant_text`), and "not constrained by the data"
+    for the others (an interval wider than the value is no number), e.g. ``mu = 0.54, beta not constrained by
+    the data``.
 
-    ``consts``: ``(kappa, mu, beta)``; ``constrained``: per name (default: all constrained).
+    ``estimates``: :func:`~.load_curves.fit_estimates`; ``constrained``: per name (default: all constrained).
     """
     where = lambda_label(cel_kl, "l") + (", " + lambda_label(ks, "s") if many else "")
     constrained = constrained or {}
-    parts = [f"{tex} = {consts[i]:.3f}" for name, tex, i in _LAW_CONSTANTS if constrained.get(name, True)]
+    parts = [constant_text(name, estimates[name]) for name, _, _ in _LAW_CONSTANTS if constrained.get(name, True)]
     loose = [tex for name, tex, _ in _LAW_CONSTANTS if not constrained.get(name, True)]
     if loose:
         parts.append(", ".join(loose) + " not constrained by the data")
-    return rf"this run (fit: {estimator}), {where}: " + ", ".join(parts)
+    return rf"fitted ({ROUTE_LEGEND[estimator]}), {where}: " + ", ".join(parts)
 
 
 def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None, *,
@@ -186,6 +191,8 @@ def fig_dpbar(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
             ax.set_visible(False)
         handles = family_handles(kl_list, h_list, colour, marker, style)
         handles += _dpbar_handles(per_decade, n_off) + unconverged_handles(n_bad, n_bad_off) + fit_handles
+        note_families(fig, [(kl, ks, h) for ks in ks_list for kl in kl_list for h in h_list
+                            if has_seeds(stats, kl, ks, h)])
         title_figure(fig, agg, stats)
         legend_below(fig, handles, r"bars: $\pm 1$ s.e.m. over seeds, in log space ($y\,e^{\pm s/y}$)")
     return fig
@@ -222,10 +229,12 @@ def _dpbar_panel(ax, fit, cel_kl: float, ks: float, estimator: str, many: bool, 
     consts, label = fit_constants(fit, cel_kl, ks, estimator), ""
     if consts is not None:
         lines.append(cel_dpbar_dp0(a, mu=consts[1], beta=consts[2]))
-        ax.plot(a, lines[-1], **_FIT_LAW_STYLE, gid="dpbar_fit")
-        constrained = constrained_constants(fit, {"k_l": cel_kl, "k_s": ks, "H_group": "pooled"},
-                                             estimator, ("mu", "beta"))
-        label = _fit_law_label(consts, ks, many, estimator, cel_kl, constrained)
+        (curve,) = ax.plot(a, lines[-1], **_FIT_LAW_STYLE, gid="dpbar_fit")
+        group = {"k_l": cel_kl, "k_s": ks, "H_group": "pooled"}
+        constrained = constrained_constants(fit, group, estimator, ("mu", "beta"))
+        label = _fit_law_label(fit_estimates(fit, group, estimator), ks, many, estimator, cel_kl, constrained)
+        note_fit(ax.figure, curve, estimator, label, f"k_l = {cel_kl:g}, k_s = {ks:g}, H pooled",
+                 (float(fit.attrs.get("window_low", np.nan)), float(fit.attrs.get("window_high", np.nan))))
     # the range follows the window means and the laws; a bar longer than a factor 3 runs
     # off the axis rather than squeezing every other point into a sliver of it
     means = np.sqrt(lo * hi)  # bars are y e^(-s/y) .. y e^(s/y) around the mean y
@@ -240,18 +249,12 @@ def _dpbar_panel(ax, fit, cel_kl: float, ks: float, estimator: str, many: bool, 
 
 
 def _dpbar_axes(ax, ks: float) -> None:
-    """Log axes with plain decimal labels, title and labels of a d pbar / d p0 panel."""
+    """Log axes with plain decimal labels (at least two on each, whatever its range: :func:`plain_log_labels`),
+    title and labels of a d pbar / d p0 panel."""
     ax.set_xscale("log")
     ax.set_yscale("log")
-    # Plain decimals: the data span about one decade, where 4x10^0 reads badly.
     for axis in (ax.xaxis, ax.yaxis):
-        axis.set_major_formatter(FormatStrFormatter("%g"))
-    # Minor labels help within a decade; over more, only those at 2 and 5 times a power of ten
-    # (a log axis of one or two decades otherwise shows two labelled ticks); none beyond three decades.
-    lo, hi = ax.get_ylim()
-    if hi / lo >= 12:
-        ax.yaxis.set_minor_locator(LogLocator(subs=(2.0, 5.0)))
-    ax.yaxis.set_minor_formatter(FormatStrFormatter("%g") if hi / lo < 1000 else NullFormatter())
+        plain_log_labels(axis)
     ax.set_title(lambda_label(ks, "s"))
     ax.set_xlabel(r"$A/A_0$ [1]")
     ax.set_ylabel(r"$\partial\bar p/\partial p_0$ [1]")

@@ -31,12 +31,10 @@ from .load_curves import (
     family_panels,
     family_unconverged,
     fit_constants,
-    fit_constrained,
-    fit_label,
     has_seeds,
     n_outside,
+    record_panels,
     reference_style,
-    title_figure,
     unconverged_handles,
     unconverged_steps,
 )
@@ -91,13 +89,9 @@ def _kappa_panel(ax, agg, stats, bad, families, colour, marker, style):
     return amax, ylo, yhi, (x, y)
 
 
-def _kappa_fit_handles(fit, ks_list, cel_kl, estimator) -> list:
-    """Legend entries of the fitted CEL (its constants for one panel, or where it is not constrained) and its window."""
-    loose = [ks for ks in ks_list if not fit_constrained(fit, cel_kl, ks, estimator)]
-    return [Line2D([], [], **reference_style("cel_fit"), label=fit_label(
-                "this run", estimator, cel_kl, fit_constants(fit, cel_kl, ks_list[0], estimator)
-                if len(ks_list) == 1 else None, not loose,
-                where=", ".join(lambda_label(ks, "s") for ks in loose) if len(ks_list) > 1 else "")),
+def _kappa_fit_handles(fit, label: str) -> list:
+    """Legend entries of the fitted CEL (``label``: :func:`cel_fit_label`) and its window."""
+    return [Line2D([], [], **reference_style("cel_fit"), label=label),
             Patch(facecolor="0.9", edgecolor="none", label=(
                 f"fit window $A/A_0 \\in$ [{float(fit.attrs.get('window_low', np.nan)):g}, "
                 f"{float(fit.attrs.get('window_high', np.nan)):g}]"))]
@@ -158,8 +152,8 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
             ax.set_visible(False)
         handles = family_handles(kl_list, h_list, colour, marker, style) + theory
         handles += unconverged_handles(n_bad, n_off)
-        if drew_fit:
-            handles += _kappa_fit_handles(fit, ks_list, cel_kl, estimator)
-        title_figure(fig, agg, stats)
+        label = record_panels(fig, axes.flat, agg, stats, (kl_list, ks_list, h_list), fit, cel_kl, estimator, drew_fit)
+        if label is not None:
+            handles += _kappa_fit_handles(fit, label)
         legend_below(fig, handles, "error bars: s.e.m.")
     return fig

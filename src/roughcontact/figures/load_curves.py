@@ -4,7 +4,7 @@ Each ``fig_*`` function takes datasets and returns a :class:`matplotlib.figure.F
 built without pyplot (no global figure registry, no GUI backend); :func:`save_figure`
 writes it as PNG and PDF with byte-identical output on every rerun.
 
-Conventions: single-column figures are 3.4 in wide, multi-panel ones 7 in; legends sit
+Conventions: every figure is 7 in wide (:data:`~.style.FIGURE_WIDTH_IN`), one panel sized for a column; legends sit
 outside the axes; colours are the Okabe-Ito palette (distinguishable with the common
 colour-vision deficiencies), one colour per Hurst exponent; the long cutoff
 ``lambda_l = L / k_l`` is told apart by marker and line style. Theory curves are black
@@ -30,8 +30,9 @@ from ..analysis.aggregate.seeds import seed_reduce
 from ..analysis.fit.estimators import at_bound
 from ..theory.laws import KAPPA_BGT
 from ..theory.summits import NAYAK_ALPHA_MIN
-from .captions import PROFILES_GID, REFERENCE_STYLES
-from .style import OKABE_ITO, STYLE, family_styles, lambda_label, new_figure, panel_grid, pick, require
+from .captions import PROFILES_GID, REFERENCE_STYLES, ROUTE_LEGEND
+from .record import note, note_fit, note_left_out, note_series
+from .style import OKABE_ITO, STYLE, at_interval, family_styles, lambda_label, new_figure, panel_grid, pick, require
 
 #: Persson's (2001) two curves: one colour, told apart by style (they coincide at small load).
 PERSSON_COLOUR = OKABE_ITO[6]
@@ -40,7 +41,8 @@ PERSSON_ERF_STYLE = {"color": PERSSON_COLOUR, "lw": 2.6, "ls": "-", "alpha": 0.4
 
 
 def run_summary(agg: xr.Dataset, stats: xr.Dataset) -> str:
-    """What a contact figure shows, for its title: grid N, seeds per family, load range."""
+    """What a contact figure shows, for its title: grid N, seeds per curve times the values of H (what an
+    H-pooled fit pools: 3 seeds x 2 values of H are 6 surfaces per (k_l, k_s)), load range."""
     parts = []
     try:
         recorded = json.loads(agg.attrs.get("scene_parameters", "{}"))
@@ -52,7 +54,10 @@ def run_summary(agg: xr.Dataset, stats: xr.Dataset) -> str:
     seeds = stats["n_seeds"].values[stats["n_seeds"].values > 0] if "n_seeds" in stats else np.array([])
     if seeds.size:
         lo, hi = int(seeds.min()), int(seeds.max())
-        parts.append(f"{lo} seeds" if lo == hi else f"{lo}-{hi} seeds")
+        n_h = int((stats["n_seeds"] > 0).any([d for d in stats["n_seeds"].dims if d != "H"]).sum()) \
+            if "H" in stats["n_seeds"].dims else 1
+        text = f"{lo} seeds" if lo == hi else f"{lo}-{hi} seeds"
+        parts.append(text + (rf" $\times$ {n_h} values of $H$" if n_h > 1 else ""))
     if "pressure" in agg and "e_star" in agg.attrs:
         p = agg["pressure"].values / float(agg.attrs["e_star"])
         if np.isfinite(p).any():
@@ -80,14 +85,49 @@ def has_seeds(stats: xr.Dataset, k_l: float, k_s: float, h: float) -> bool:
     return int(stats["n_seeds"].sel(k_l=k_l, k_s=k_s, H=h)) > 0
 
 
-def title_figure(fig, agg: xr.Dataset, stats: xr.Dataset) -> None:
-    """The figure's title (:func:`run_summary`); a figure of profiles says so in it and is tagged
-    :data:`~.captions.PROFILES_GID`, so that its caption says which references are 2-D laws."""
+def title_figure(fig, agg: xr.Dataset, stats: xr.Dataset, left_out: Sequence[str] = ()) -> None:
+    """The figure's title (:func:`run_summary`); a figure of profiles says so in it, is tagged
+    :data:`~.captions.PROFILES_GID` and notes it (:func:`mark_profiles`, with what it ``left_out`` for them), so
+    that its caption says which references are 2-D laws."""
     if is_profiles(agg):
-        fig.set_gid(PROFILES_GID)
+        mark_profiles(fig, left_out)
         fig.suptitle("profiles (1-D, plane strain), " + run_summary(agg, stats))
         return
     fig.suptitle(run_summary(agg, stats))
+
+
+#: What a figure that draws the asperity models leaves out for profiles (:func:`asperity_alphas` gives none).
+NO_ASPERITY = ("asperity",)
+
+
+def mark_profiles(fig, left_out: Sequence[str] = ()) -> None:
+    """Tag a contact figure of profiles (:data:`~.captions.PROFILES_GID`) and note what its caption says of them:
+    what ``A/A0`` and ``h'`` mean for a profile, and what the figure leaves out for them (``left_out``: keys of
+    :data:`~.captions.LEFT_OUT`, e.g. :data:`NO_ASPERITY` for a figure that draws the asperity models)."""
+    fig.set_gid(PROFILES_GID)
+    note(fig, "profiles_contact")
+    note_left_out(fig, *left_out)
+
+
+def family_name(family: Mapping) -> str:
+    """A ``(k_l, k_s, H)`` family's name as a record's data series: ``"k_l = 4, k_s = 32, H = 0.36"``."""
+    return ", ".join(f"{k} = {float(family[k]):g}" for k in ("k_l", "k_s", "H"))
+
+
+def note_families(fig, families) -> None:
+    """Record the families ``(kl, ks, h)`` (or mappings) drawn on ``fig`` as its data series."""
+    note_series(fig, [family_name(f if isinstance(f, Mapping) else dict(zip(("k_l", "k_s", "H"), f, strict=True)))
+                      for f in families])
+
+
+def note_fit_curves(fig, gid: str, route: str, label: str, where, fit: xr.Dataset) -> None:
+    """Record every line tagged ``gid`` on ``fig``'s axes as a fitted curve of ``route`` with the legend ``label``,
+    fitted to the group ``where(ax)`` (plain text, from the line's axes) over the window of ``fit``."""
+    window = (float(fit.attrs.get("window_low", np.nan)), float(fit.attrs.get("window_high", np.nan)))
+    for ax in fig.axes:
+        for line in ax.get_lines():
+            if line.get_gid() == gid:
+                note_fit(fig, line, route, label, where(ax), window)
 
 
 def e_star_of(agg: xr.Dataset) -> float:
@@ -287,9 +327,9 @@ def family_panels(stats, k_l, k_s, hurst, fit_k_l):
     kl_list, ks_list, h_list = _selection(stats, k_l, k_s, hurst)
     colour, marker, style = family_styles(kl_list, h_list)
     cel_kl = kl_list[-1] if fit_k_l is None else pick(stats["k_l"].values, fit_k_l, "fit_k_l")[0]
-    nrows, ncols, width, height = panel_grid(len(ks_list))
+    nrows, ncols, height = panel_grid(len(ks_list))
     with matplotlib.rc_context(STYLE):
-        fig = new_figure(width, height)
+        fig = new_figure(height)
         axes = fig.subplots(nrows, ncols, squeeze=False)
     return kl_list, ks_list, h_list, colour, marker, style, cel_kl, fig, axes
 
@@ -323,14 +363,73 @@ def fit_constrained(fit: xr.Dataset, k_l: float, k_s: float, estimator: str,
     return all(constrained_constants(fit, where, estimator, constants).values())
 
 
-def fit_label(who: str, estimator: str, k_l: float, consts, constrained: bool = True, where: str = "") -> str:
-    """Legend text of a fitted CEL curve, with its constants when one curve is drawn and the
-    data constrain them (else "not constrained": an interval wider than the value is no number;
-    ``where`` names the panels where they are not, when there are several)."""
-    text = f"CEL, {who} ({estimator}), " + lambda_label(k_l, "l")
+#: The CEL's constants, in the order of a fit's ``constant`` coordinate; their mathtext in a legend, and the
+#: factor a legend divides each by (kappa is shown as kappa/sqrt(2 pi), as the paper gives it).
+CEL_CONSTANTS = ("kappa", "mu", "beta")
+CONSTANT_TEX = {"kappa": r"$\kappa/\sqrt{2\pi}$", "mu": r"$\mu$", "beta": r"$\beta$"}
+CONSTANT_SCALE = {"kappa": KAPPA_BGT, "mu": 1.0, "beta": 1.0}
+
+
+def fit_estimates(fit: xr.Dataset, where: Mapping, estimator: str) -> dict[str, tuple[float, float, float]]:
+    """``(value, ci_low, ci_high)`` [1] of each CEL constant of the fit's group ``where`` (e.g. ``{"k_l": 16.0,
+    "k_s": 32.0, "H_group": "pooled"}``; empty for a fit of measured topographies) by ``estimator``; the
+    interval NaN where the fit has none."""
+    sub = fit.sel({**where, "estimator": estimator})
+    out = {}
+    for c in CEL_CONSTANTS:
+        ends = [float(sub[v].sel(constant=c)) if v in sub else float("nan") for v in ("ci_low", "ci_high")]
+        out[c] = (float(sub["value"].sel(constant=c)), *ends)
+    return out
+
+
+def constant_text(name: str, estimate: tuple[float, float, float]) -> str:
+    r"""``$\mu$ = 0.54``: a constant's value for a legend, rounded to its interval (:func:`~.style.at_interval`)."""
+    scale = CONSTANT_SCALE[name]
+    return f"{CONSTANT_TEX[name]} = " + at_interval(*(v / scale for v in estimate))
+
+
+def cel_fit_label(fit: xr.Dataset, ks_list: Sequence[float], cel_kl: float, estimator: str) -> str:
+    """The legend entry of the fitted CEL curves of a figure of one panel per ``k_s`` of ``ks_list``
+    (:func:`fit_label`): the constants of the one panel, or the panels where they are not constrained."""
+    loose = [ks for ks in ks_list if not fit_constrained(fit, cel_kl, ks, estimator)]
+    one = len(ks_list) == 1
+    estimates = fit_estimates(fit, {"k_l": cel_kl, "k_s": ks_list[0], "H_group": "pooled"}, estimator) if one else None
+    return fit_label(estimator, cel_kl, estimates, not loose,
+                     where="" if one else ", ".join(lambda_label(ks, "s") for ks in loose))
+
+
+def record_panels(fig, axes, agg: xr.Dataset, stats: xr.Dataset, lists, fit, cel_kl: float, estimator: str,
+                  drew_fit: bool) -> str | None:
+    """What a figure of one panel per ``k_s`` records once drawn, and its title: its families (``lists``:
+    ``(kl_list, ks_list, h_list)``), the fitted CEL curves with their legend entry (:func:`cel_fit_label`,
+    returned; None without a fit), and the title (:func:`title_figure`; profiles leave out the asperity models)."""
+    kl_list, ks_list, h_list = lists
+    note_families(fig, [(kl, ks, h) for ks in ks_list for kl in kl_list for h in h_list if has_seeds(stats, kl, ks, h)])
+    label = None
+    if drew_fit:
+        label = cel_fit_label(fit, ks_list, cel_kl, estimator)
+        note_cel_fits(fig, axes, ks_list, cel_kl, estimator, label, fit)
+    title_figure(fig, agg, stats, NO_ASPERITY)
+    return label
+
+
+def note_cel_fits(fig, axes, ks_list: Sequence[float], cel_kl: float, estimator: str, label: str, fit,
+                  gid: str = "cel_fit") -> None:
+    """Record the fitted curves (lines tagged ``gid``) of the panels ``axes`` (one per ``k_s`` of ``ks_list``):
+    the route ``estimator``, the legend ``label``, the group each was fitted to and the fit's window."""
+    ks_of = {ax: ks for ax, ks in zip(axes, ks_list, strict=False)}
+    note_fit_curves(fig, gid, estimator, label,
+                    lambda ax: f"k_l = {cel_kl:g}, k_s = {ks_of.get(ax, float('nan')):g}, H pooled", fit)
+
+
+def fit_label(estimator: str, k_l: float, estimates=None, constrained: bool = True, where: str = "") -> str:
+    """Legend text of a fitted CEL curve: its route (:data:`~.captions.ROUTE_LEGEND`) and, when one curve is
+    drawn and the data constrain them, its constants rounded to their intervals (``estimates``:
+    :func:`fit_estimates`; else "not constrained": an interval wider than the value is no number; ``where``
+    names the panels where they are not, when there are several)."""
+    text = f"CEL fitted ({ROUTE_LEGEND[estimator]}), " + lambda_label(k_l, "l")
     if not constrained:
         return text + ": not constrained by the data" + (f" at {where}" if where else "")
-    if consts is not None:
-        text += rf": $\kappa/\sqrt{{2\pi}}$ = {consts[0] / KAPPA_BGT:.3f}, $\mu$ = {consts[1]:.2f}, " \
-                rf"$\beta$ = {consts[2]:.2f}"
+    if estimates is not None:
+        text += ": " + ", ".join(constant_text(c, estimates[c]) for c in CEL_CONSTANTS)
     return text

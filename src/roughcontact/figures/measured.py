@@ -30,7 +30,7 @@ from ..analysis.aggregate.combine import TOPOGRAPHY_DIM as _DIM
 from ..theory.laws import KAPPA_BGT, cel_area, cel_area_limit, cel_kappa
 from . import load_curves
 from .area_load import area_load_theory, area_load_theory_handles
-from .captions import PROFILES_GID
+from .captions import PROFILES_GID, ROUTE_LEGEND
 from .kappa import kappa_theory
 from .load_curves import (
     asperity_alphas,
@@ -42,6 +42,7 @@ from .load_curves import (
     reference_style,
     unconverged_handles,
 )
+from .record import note, note_series
 from .style import (
     DATA_COLOURS,
     DOUBLE_COLUMN_IN,
@@ -99,12 +100,20 @@ def _fitted(fit: xr.Dataset | None, estimator: str):
     return consts, all(constrained_constants(fit, {}, estimator, ("kappa", "mu", "beta")).values())
 
 
-def _fit_label(estimator: str, consts, constrained: bool, n: int) -> str:
-    text = f"CEL fitted to the {'single topography' if n == 1 else f'{n} topographies'} ({estimator})"
+def _fit_label(fit: xr.Dataset, estimator: str, constrained: bool, n: int) -> str:
+    """The legend entry of the pooled fit of ``n`` topographies: its route and its constants rounded to their
+    intervals (:func:`~.load_curves.constant_text`), or why there are none."""
+    text = (f"CEL fitted to the {'single topography' if n == 1 else f'{n} topographies'} "
+            f"({ROUTE_LEGEND[estimator]})")
     if not constrained:
         return text + ": no bootstrap interval" if n < 2 else text + ": not constrained by the data"
-    return text + (rf": $\kappa/\sqrt{{2\pi}}$ = {consts[0] / KAPPA_BGT:.3f}, $\mu$ = {consts[1]:.2f}, "
-                   rf"$\beta$ = {consts[2]:.2f}")
+    estimates = load_curves.fit_estimates(fit, {}, estimator)
+    return text + ": " + ", ".join(load_curves.constant_text(c, estimates[c]) for c in load_curves.CEL_CONSTANTS)
+
+
+def _note_fit(fig, fit: xr.Dataset, estimator: str, label: str) -> None:
+    """Record the pooled fit's curves (gid ``cel_fit``) with their route, legend entry and window."""
+    load_curves.note_fit_curves(fig, "cel_fit", estimator, label, lambda ax: "all topographies pooled", fit)
 
 
 def _recorded(ds: xr.Dataset) -> dict:
@@ -130,10 +139,11 @@ def grid_text(sizes: Mapping[str, tuple[int, int]]) -> str:
 
 
 def _title(fig, agg: xr.Dataset, sizes) -> None:
-    """The figure's title (:func:`_summary`); line scans' figures are tagged as profiles (their captions say which
-    references are 2-D laws: :data:`~.captions.PROFILES_NOTE`)."""
+    """The figure's title (:func:`_summary`) and its data series (the topographies); line scans' figures are
+    tagged as profiles (:func:`~.load_curves.mark_profiles`: their captions say which references are 2-D laws)."""
+    note_series(fig, _names(agg))
     if is_profiles(agg):
-        fig.set_gid(PROFILES_GID)
+        load_curves.mark_profiles(fig, load_curves.NO_ASPERITY)
         fig.suptitle("profiles (1-D, plane strain), " + _summary(agg, sizes))
         return
     fig.suptitle(_summary(agg, sizes))
@@ -217,6 +227,7 @@ def _draw_map(fig, ax, ds: xr.Dataset, utex: str, text: list[str]) -> None:
     if h.ndim != 2:
         raise ValueError(f"heights must be a 2-D map, got shape {h.shape}")
     (lx, ly), cell = _cell_label(ds, h.shape, utex)
+    note(fig, "height_maps", *(["block_averaged"] if max(h.shape) > MAP_PIXELS else []))
     im = ax.imshow(block_mean(h, MAP_PIXELS).T, origin="lower", extent=(0, lx, 0, ly), interpolation="nearest")
     # a rectangle's two sizes fill the line: its sigma goes to the next one
     lines = [cell, f"{sigma}, {slope}"] if "length_x" in ds.attrs else [f"{cell}, {sigma}", slope]
@@ -230,6 +241,7 @@ def _draw_map(fig, ax, ds: xr.Dataset, utex: str, text: list[str]) -> None:
 def _draw_profile(ax, ds: xr.Dataset, utex: str, text: list[str]) -> None:
     """One line-scan panel of :func:`fig_topographies`: h(x) [unit] on its uniform grid, its title as a map's."""
     name, sigma, slope = text
+    note(ax.figure, "line_scans")
     h = np.asarray(ds["heights"].values, dtype=float).ravel()
     length = float(ds.attrs.get("length", h.size))
     ax.plot(np.arange(h.size) * (length / h.size), h, lw=0.6, color="0.2")
@@ -273,11 +285,13 @@ def fig_topographies(surfaces: Sequence[xr.Dataset]) -> Figure:
     # Per row: the square map (~0.75 of the column) plus its three-line title, x label and colour bar.
     row = 0.75 * width / ncols + 1.3
     with matplotlib.rc_context(STYLE):
-        fig = new_figure(width, nrows * row + 0.3)
+        fig = new_figure(nrows * row + 0.3)
         axes = fig.subplots(nrows, ncols, squeeze=False)
+        names = []
         for ax, ds in zip(axes.flat, surfaces, strict=False):
             utex = unit_tex(str(ds.attrs.get("length_units", "1")))
             name = str(ds[_DIM].values.ravel()[0]) if _DIM in ds.coords else str(ds.attrs.get("source_file", ""))
+            names.append(name)
             sigma = rf"$\sigma$ = {_scalar(ds, 'rms_height'):.3g} {utex}"
             slope = rf"$h'$ = {_scalar(ds, 'rms_slope'):.3g}, $\alpha$ = {_scalar(ds, 'alpha'):.3g}"
             if "y" in ds["heights"].dims:
@@ -286,6 +300,9 @@ def fig_topographies(surfaces: Sequence[xr.Dataset]) -> Figure:
                 _draw_profile(ax, ds, utex, [name, sigma, slope])
         for ax in list(axes.flat)[len(surfaces):]:
             ax.set_visible(False)
+        note_series(fig, names)
+        if all("y" not in ds["heights"].dims for ds in surfaces):  # line scans only: profiles
+            fig.set_gid(PROFILES_GID)
         n = len(surfaces)
         # One column is too narrow for the title on one line.
         fig.suptitle(f"{n} measured topograph{'y' if n == 1 else 'ies'}" + ("\n" if ncols == 1 else "; ")
@@ -332,7 +349,7 @@ def fig_measured_area_load(agg: xr.Dataset, fit: xr.Dataset | None = None, *, es
     names, alphas, consts, constrained, used = _prepare(agg, fit, estimator, ("area_fraction", "pressure",
                                                                               "rms_slope"))
     with matplotlib.rc_context(STYLE):
-        fig = new_figure(SINGLE_COLUMN_IN + 1.3, 3.0)
+        fig = new_figure(3.0)
         ax = fig.subplots()
         bad = _unconverged(agg)
         xs, ys = _draw_area_curves(ax, agg, names, used, bad)
@@ -378,9 +395,9 @@ def _draw_area_fit(ax, grid: np.ndarray, fit: xr.Dataset, estimator: str, consts
             zorder=4.5, gid="cel_fit", **_FIT_STYLE)
     ax.axhspan(float(fit.attrs.get("window_low", np.nan)), float(fit.attrs.get("window_high", np.nan)),
                color="0.9", lw=0, zorder=0, gid="fit_window")
-    return [Line2D([], [], **_FIT_STYLE, label=_fit_label(estimator, consts, constrained,
-                                                          int(fit.get("n_topographies", used.sum())))),
-            _window_patch(fit)]
+    label = _fit_label(fit, estimator, constrained, int(fit.get("n_topographies", used.sum())))
+    _note_fit(ax.figure, fit, estimator, label)
+    return [Line2D([], [], **_FIT_STYLE, label=label), _window_patch(fit)]
 
 
 def _area_load_log_axes(ax, grid: np.ndarray, ys: np.ndarray) -> None:
@@ -420,7 +437,7 @@ def fig_measured_kappa(agg: xr.Dataset, fit: xr.Dataset | None = None, *, estima
     names, alphas, consts, constrained, used = _prepare(agg, fit, estimator, ("area_fraction", "pressure",
                                                                               "rms_slope", "kappa"))
     with matplotlib.rc_context(STYLE):
-        fig = new_figure(SINGLE_COLUMN_IN + 1.3, 3.0)
+        fig = new_figure(3.0)
         ax = fig.subplots()
         amax, ylo, yhi, bad = 0.0, KAPPA_BGT, KAPPA_BGT, _unconverged(agg)
         for i, (name, u) in enumerate(zip(names, used, strict=True)):
@@ -441,9 +458,9 @@ def fig_measured_kappa(agg: xr.Dataset, fit: xr.Dataset | None = None, *, estima
             ax.axvspan(float(fit.attrs.get("window_low", np.nan)), float(fit.attrs.get("window_high", np.nan)),
                        color="0.9", lw=0, zorder=0, gid="fit_window")
             ylo, yhi = min(ylo, consts[0]), max(yhi, consts[0])
-            handles += [Line2D([], [], **_FIT_STYLE, label=_fit_label(estimator, consts, constrained,
-                                                                      int(fit.get("n_topographies", used.sum())))),
-                        _window_patch(fit)]
+            label = _fit_label(fit, estimator, constrained, int(fit.get("n_topographies", used.sum())))
+            _note_fit(fig, fit, estimator, label)
+            handles += [Line2D([], [], **_FIT_STYLE, label=label), _window_patch(fit)]
         handles += kappa_theory(ax, amax, alphas, ylo, yhi)
         ax.set_xlim(0, amax * 1.02)
         handles += unconverged_handles(crosses[0].size, n_outside(ax, *crosses), "lines")

@@ -14,6 +14,8 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import NullFormatter
 
 from ..analysis.aggregate.seeds import scale_free_statistics
+from .captions import PROFILES_GID
+from .record import note, note_series
 from .style import (
     DATA_COLOURS,
     DOUBLE_COLUMN_IN,
@@ -41,14 +43,20 @@ def _rep_hurst(rep: xr.Dataset, hurst: float | None) -> float:
     return pick(rep["H"].values, hurst, "hurst")[0]
 
 
-def _rep_summary(rep: xr.Dataset, h: float) -> str:
-    """What a representativity figure shows: grid N, seeds, histogram bins, H, rms height."""
+def _recorded(rep: xr.Dataset) -> tuple[dict, dict]:
+    """The parameters a representativity aggregate records and their ``surface`` block (``{}`` when none)."""
     try:
         recorded = json.loads(rep.attrs.get("scene_parameters", "{}"))
     except ValueError:
         recorded = {}
     recorded = recorded if isinstance(recorded, dict) else {}
-    surface = recorded.get("surface", {}) if isinstance(recorded.get("surface"), dict) else {}
+    surface = recorded.get("surface", {})
+    return recorded, surface if isinstance(surface, dict) else {}
+
+
+def _rep_summary(rep: xr.Dataset, h: float) -> str:
+    """What a representativity figure shows: grid N, seeds, histogram bins, H, rms height."""
+    recorded, surface = _recorded(rep)
     parts = [f"$N = {int(surface['N'])}$"] if "N" in surface else []
     seeds = rep["n_seeds"].values[rep["n_seeds"].values > 0]
     if seeds.size:
@@ -165,7 +173,7 @@ def fig_representativity(rep_stats: xr.Dataset, *, hurst: float | None = None) -
     Returns
     -------
     matplotlib.figure.Figure
-        7 in wide with two or three panels (4.4 in with one), legend below.
+        7 in wide (:data:`~.style.FIGURE_WIDTH_IN`) with one to three panels, legend below.
     """
     require(rep_stats, "rep_stats", ("epsilon_mean", "epsilon_sem", "n_seeds"))
     h = _rep_hurst(rep_stats, hurst)
@@ -173,7 +181,7 @@ def fig_representativity(rep_stats: xr.Dataset, *, hurst: float | None = None) -
     kls, kss = _rep_grid(panels[-1][0])
     n = len(panels) + (len(kls) >= 2 and len(kss) >= 2)
     with matplotlib.rc_context(STYLE):
-        fig = new_figure(DOUBLE_COLUMN_IN if n > 1 else SINGLE_COLUMN_IN + 1.0, 2.9)
+        fig = new_figure(2.9)
         axes = fig.subplots(1, n, squeeze=False, width_ratios=[1.0] * len(panels) + [1.15] * (n - len(panels)))[0]
         for ax, (sub, symbol, unit, title) in zip(axes, panels, strict=False):
             _rep_curves(ax, sub, f"mean $L_2$ error {symbol} [{unit}]", title if len(panels) > 1 else "")
@@ -181,6 +189,10 @@ def fig_representativity(rep_stats: xr.Dataset, *, hurst: float | None = None) -
             _rep_map(fig, axes[-1], *panels[-1][:3])
         fig.suptitle(_rep_summary(rep_stats, h) + "; bars: s.e.m. over seeds")
         handles, labels = axes[0].get_legend_handles_labels()
+        note_series(fig, [f"k_l = {fmt(k)}" for k in _rep_grid(panels[0][0])[0]])
+        if _recorded(rep_stats)[1].get("dimension") == 1:
+            fig.set_gid(PROFILES_GID)
+            note(fig, "profiles_heights")
         fig.legend(handles, labels, loc="outside lower center", ncols=len(handles),
                    title=r"long cutoff $k_l = L/\lambda_l$")
     return fig
@@ -210,7 +222,7 @@ def fig_surface_examples(examples: Sequence[tuple[np.ndarray, str]], *, length: 
     Returns
     -------
     matplotlib.figure.Figure
-        7 in wide (3.4 in for a single example), two rows.
+        7 in wide (:data:`~.style.FIGURE_WIDTH_IN`; a single example sized for one column), two rows.
     """
     fields = _example_fields(examples, length, bins)
     n = len(fields)
@@ -219,7 +231,7 @@ def fig_surface_examples(examples: Sequence[tuple[np.ndarray, str]], *, length: 
     width = SINGLE_COLUMN_IN if n == 1 else DOUBLE_COLUMN_IN
     col_w = width / n
     with matplotlib.rc_context(STYLE):
-        fig = new_figure(width, col_w * 0.95 + 1.7)
+        fig = new_figure(col_w * 0.95 + 1.7)
         axes = fig.subplots(2, n, squeeze=False, gridspec_kw={"height_ratios": [col_w * 0.95, 1.5]})
         for j, (h, label) in enumerate(fields):
             h = h / length
@@ -228,6 +240,7 @@ def fig_surface_examples(examples: Sequence[tuple[np.ndarray, str]], *, length: 
             _example_pdf(axes[1, j], h, vmin, vmax, bins, first=j == 0)
         handles, labels = axes[1, 0].get_legend_handles_labels()
         fig.legend(handles, labels, loc="outside lower center", ncols=2)
+        note_series(fig, [label for _, label in fields])
     return fig
 
 

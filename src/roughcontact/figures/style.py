@@ -2,9 +2,11 @@
 
 Every ``fig_*`` function returns a :class:`matplotlib.figure.Figure` built without pyplot (no global
 figure registry, no GUI backend); :func:`save_figure` writes it as PNG and PDF with byte-identical
-output on every rerun. Single-column figures are 3.4 in wide, multi-panel ones 7 in; legends sit
-outside the axes; colours are the Okabe-Ito palette (distinguishable with the common colour-vision
-deficiencies).
+output on every rerun. Every figure is :data:`FIGURE_WIDTH_IN` wide and saved at :data:`PNG_DPI`, so that
+the report shows every figure's text at one size (a narrower figure, scaled up to the page, has larger text);
+legends sit outside the axes; colours are the Okabe-Ito palette (distinguishable with the common
+colour-vision deficiencies). Every axis gets readable tick labels, a log axis over a narrow range too
+(:func:`plain_log_labels`).
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ import numpy as np
 import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
-from matplotlib.ticker import FormatStrFormatter, FuncFormatter
+from matplotlib.ticker import FormatStrFormatter, Locator, LogLocator, MaxNLocator, NullFormatter
 
 from ..core.files import atomic_output
 from ..core.quantities import LENGTH_UNITS, PRESSURE_UNITS
@@ -39,11 +41,16 @@ MARKERS = ("o", "s", "^", "D", "v", "P", "X")
 LINESTYLES = ("-", "--", "-.", ":", (0, (5, 1)), (0, (1, 1)))
 
 
-#: Width of a single-column and of a two-column figure [in].
+#: Width of a single-column and of a two-column figure [in]: the column a panel is sized for.
 SINGLE_COLUMN_IN = 3.4
 
 
 DOUBLE_COLUMN_IN = 7.0
+
+
+#: Width of every figure [in] (:func:`new_figure`): one width class, so that the report shows each figure's
+#: text at one size. A figure of one narrow panel centres it (constrained layout).
+FIGURE_WIDTH_IN = DOUBLE_COLUMN_IN
 
 
 #: The package's matplotlib settings (fonts sized for a journal column, Okabe-Ito colours,
@@ -67,7 +74,9 @@ STYLE = {
 }
 
 
-_PNG_DPI = 300
+#: Pixel density of every PNG [dots per inch]: with :data:`FIGURE_WIDTH_IN`, every figure is
+#: ``FIGURE_WIDTH_IN * PNG_DPI`` pixels wide.
+PNG_DPI = 300
 
 
 #: Largest side, in pixels, of a map as drawn: larger maps are block-averaged (:func:`block_mean`; a
@@ -118,7 +127,7 @@ def save_figure(fig: Figure, path: str | os.PathLike) -> list[Path]:
     try:
         with matplotlib.rc_context({"pdf.fonttype": 42, "svg.hashsalt": "roughcontact"}):
             with atomic_output(png) as tmp:
-                fig.savefig(tmp, format="png", dpi=_PNG_DPI, metadata={"Software": None})
+                fig.savefig(tmp, format="png", dpi=PNG_DPI, metadata={"Software": None})
             with atomic_output(pdf) as tmp:
                 fig.savefig(tmp, format="pdf",
                             metadata={"CreationDate": None, "Creator": None, "Producer": None})
@@ -128,9 +137,12 @@ def save_figure(fig: Figure, path: str | os.PathLike) -> list[Path]:
 
 
 # ----------------------------------------------------------------------- helpers
-def new_figure(width: float, height: float) -> Figure:
-    """A constrained-layout figure of ``width`` x ``height`` inches, not tied to pyplot's state."""
-    return Figure(figsize=(width, height), layout="constrained")
+def new_figure(height: float) -> Figure:
+    """A constrained-layout figure :data:`FIGURE_WIDTH_IN` wide and ``height`` [in] tall, not tied to pyplot's
+    state: every figure of the package has the one width (:data:`FIGURE_WIDTH_IN`)."""
+    if not (np.isfinite(height) and height > 0):
+        raise ValueError(f"height must be a finite number of inches > 0, got {height!r}")
+    return Figure(figsize=(FIGURE_WIDTH_IN, height), layout="constrained")
 
 
 def require(ds: xr.Dataset, name: str, variables: Sequence[str]) -> None:
@@ -225,18 +237,19 @@ def legend_below(fig: Figure, handles: list, title: str) -> None:
     """A two-column legend under the panels; the figure grows by its height, the panels keep theirs."""
     rows = int(np.ceil(len(handles) / 2)) + 1
     width, height = fig.get_size_inches()
-    fig.set_size_inches(max(width, DOUBLE_COLUMN_IN), height + 0.19 * rows + 0.2)
+    fig.set_size_inches(width, height + 0.19 * rows + 0.2)
     fig.legend(handles=handles, loc="outside lower center", ncols=2, title=title)
 
 
-def panel_grid(n: int) -> tuple[int, int, float, float]:
-    """``(rows, columns, width, height)`` [in] of a figure of ``n`` square-ish panels in a journal column or two."""
+def panel_grid(n: int) -> tuple[int, int, float]:
+    """``(rows, columns, height)`` [in] of a figure of ``n`` square-ish panels (one panel sized for a journal
+    column, several for two), :data:`FIGURE_WIDTH_IN` wide."""
     ncols = 1 if n == 1 else min(n, 3)
     nrows = int(np.ceil(n / ncols))
     width = SINGLE_COLUMN_IN if n == 1 else DOUBLE_COLUMN_IN
     panel_w = (width - (1.3 if n == 1 else 1.4)) / ncols
     height = nrows * max(1.9, 0.85 * panel_w) + 0.3
-    return nrows, ncols, width + (1.3 if n == 1 else 0.0), height
+    return nrows, ncols, height
 
 
 def family_styles(k_ls: Sequence[float], hs: Sequence[float]):
@@ -255,13 +268,81 @@ def family_handles(k_ls, hs, colour, marker, style) -> list[Line2D]:
     return handles
 
 
-def plain_log_labels(axis) -> None:
-    """Plain decimals on a log axis (0.3, not 3x10^-1): the decades, and 2, 3, 5 times them
-    where the axis spans less than two decades (decided when drawn, from its limits)."""
-    def minor(v, _pos):
-        lo, hi = sorted(axis.get_view_interval())
-        mantissa = v / 10.0 ** np.floor(np.log10(v) + 1e-9)
-        return f"{v:g}" if hi / lo < 100 and any(np.isclose(mantissa, (2, 3, 5))) else ""
+#: Mantissas of the labelled ticks of a log axis, tried in turn until at least two fall in view: the decades,
+#: then 1, 2, 5 and 1, 2, 3, 5 times them, then every integer mantissa (:class:`ReadableLogLocator`).
+LOG_MANTISSAS = ((1,), (1, 2, 5), (1, 2, 3, 5), tuple(range(1, 10)))
 
+
+class ReadableLogLocator(Locator):
+    """Major ticks of a log axis, at least two in view whatever its range.
+
+    Matplotlib's log locator puts major ticks on the decades only: an axis from 0.17 to 0.28 has none, and the
+    minor ticks it labels at most one (0.2). This one takes the first set of :data:`LOG_MANTISSAS` times the
+    powers of ten that puts at least two ticks in view (``dense``: from 1, 2, 3, 5 on, when the axis spans
+    less than two decades), and for an axis narrower than two neighbouring integer mantissas (0.171 to 0.178)
+    evenly spaced round values (:class:`matplotlib.ticker.MaxNLocator`).
+    """
+
+    def __init__(self, dense: bool = True):
+        self.dense = dense
+
+    def __call__(self):
+        lo, hi = self.axis.get_view_interval()
+        return self.tick_values(lo, hi)
+
+    def tick_values(self, vmin: float, vmax: float) -> list[float]:
+        """The ticks of a log axis viewing ``[vmin, vmax]`` (either order; both > 0, else the decades)."""
+        lo, hi = sorted((float(vmin), float(vmax)))
+        if not (np.isfinite(lo) and np.isfinite(hi) and lo > 0):
+            return list(LogLocator().tick_values(vmin, vmax))
+        tries = LOG_MANTISSAS[2:] if self.dense and hi / lo < 100 else LOG_MANTISSAS
+        powers = range(int(np.floor(np.log10(lo))) - 1, int(np.ceil(np.log10(hi))) + 1)
+        for subs in tries:
+            ticks = [m * 10.0 ** p for p in powers for m in subs]
+            if sum(lo * (1 - 1e-9) <= t <= hi * (1 + 1e-9) for t in ticks) >= 2:
+                return ticks
+        return [t for t in MaxNLocator(nbins=3, steps=[1, 2, 2.5, 5, 10]).tick_values(lo, hi) if t > 0]
+
+
+def plain_log_labels(axis, dense: bool = True) -> None:
+    """Readable labels on a log axis: plain decimals (0.3, not 3x10^-1) at the ticks of
+    :class:`ReadableLogLocator` (at least two in view, whatever the range; ``dense=False`` for a small inset:
+    decades where two are in view), unlabelled minor ticks at every integer mantissa."""
+    axis.set_major_locator(ReadableLogLocator(dense))
     axis.set_major_formatter(FormatStrFormatter("%g"))
-    axis.set_minor_formatter(FuncFormatter(minor))
+    axis.set_minor_locator(LogLocator(subs=tuple(range(1, 10))))
+    axis.set_minor_formatter(NullFormatter())
+
+
+
+
+def _decimals(uncertainty: float) -> int:
+    """The decimal place an ``uncertainty`` > 0 rounds to: two significant figures when its leading digit is 1
+    or 2 (one when the second would be 0), one otherwise (the Particle Data Group's rule, simplified)."""
+    mantissa = f"{uncertainty:.1e}".split("e")[0]
+    figures = 2 if mantissa[0] in "12" and not mantissa.endswith(".0") else 1
+    return figures - 1 - int(f"{uncertainty:.{figures - 1}e}".split("e")[1])
+
+
+def at_interval(value: float, low: float | None = None, high: float | None = None) -> str:
+    """A fitted value for a legend or title, rounded to its interval ``[low, high]`` by the report's rule
+    (:mod:`roughcontact.studies.precision`): to the decimal place of the interval's half-width (:func:`_decimals`),
+    at most five significant figures of the value; a value that is not 0 but would read 0 there keeps one
+    significant figure. Without a finite interval of positive width, three significant figures; ``"—"`` for NaN.
+
+    >>> at_interval(0.537, 0.15, 0.66), at_interval(1.0612, 1.0281, 1.1642), at_interval(1.466, 1.167, 3120.0)
+    ('0.54', '1.06', '1')
+    """
+    value = float(value)
+    if not np.isfinite(value):
+        return "—"
+    ends = [float(v) for v in (low, high) if v is not None]
+    if len(ends) < 2 or not np.all(np.isfinite(ends)) or ends[1] <= ends[0]:
+        return "0" if value == 0 else f"{value:.3g}"
+    decimals = _decimals((ends[1] - ends[0]) / 2)
+    if value != 0:
+        decimals = min(decimals, 4 - int(np.floor(np.log10(abs(value)))))
+    text = f"{value:.{decimals}f}" if decimals > 0 else f"{round(value, decimals):.0f}"
+    if float(text) == 0:
+        return f"{value:.1g}" if value != 0 else text.lstrip("-")
+    return text

@@ -387,7 +387,7 @@ class Targets(ContactJobs):
         if "kappa_gap" in s:
             out += [f"results/{scene}/kappa_gap/kappa-gap.{ext}" for ext in ("nc", "md")]
         out += [f"results/{scene}/figures/{fig}.{ext}" for fig in self.scene_figures(s)
-                for ext in ("png", "pdf", "caption.rst")]
+                for ext in ("png", "pdf", "caption.rst", "record.json")]
         out += [f"results/{scene}/report/{name}.rst" for name in ("result", "summary", "figures", "run")]
         return out
 
