@@ -100,7 +100,7 @@ def test_pull_off_table_pools_the_trusted_seeds_and_counts_the_others():
 
     text = pull_off_table(_aggregate())
     # H = 0.36: both seeds, (1e-4 + 3e-4) / 2 / E* = 1e-4 +- s.d. 1.414e-4 / 2 = 7.1e-5, rounded to the s.d.'s one
-    # figure (studies.precision); H = 0.84: one of two (three figures), the other said why
+    # figure (core.precision); H = 0.84: one of two (three figures), the other said why
     assert "0.00010 ± 0.00007" in text and "2 of 2" in text
     assert "0.0001\n" in text and "1 of 2" in text and "1 adhesive zone unresolved" in text
     assert "No contact evolution law is fitted" in text

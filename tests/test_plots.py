@@ -688,20 +688,6 @@ def test_legends_give_each_fitted_constant_at_its_interval(contact):
     assert r"$\mu$ = 0.54" in label and rf"$\beta$ = {_at_interval(fit, 'beta')}" in label, label
 
 
-@pytest.mark.parametrize(("value", "low", "high"), [
-    (2.65988, 2.57646, 2.91696), (0.2113, 0.1801, 0.2399), (1.145, 1.143, 1.147), (0.21, 0.205, 0.215),
-    (1234.5, 1011.0, 1499.0), (-0.0413, -0.0611, -0.0289), (0.0003511, 0.00025, 0.00047), (5.0, 4.0, 6.0),
-    (3.14159, float("nan"), float("nan")), (3.14159, None, None), (float("nan"), 1.0, 2.0)])
-def test_a_legend_value_is_rounded_as_the_report_rounds_it(value, low, high):
-    """The figures' rounding (figures below studies in the layers: not precision.py itself) agrees with
-    roughcontact.studies.precision.estimate, on intervals whose half-width leads with 1 or 2 or is one figure."""
-    from roughcontact.figures.style import at_interval
-    from roughcontact.studies.precision import estimate
-
-    expected = estimate(value, low, high)[0]
-    assert at_interval(value, low, high) == expected
-
-
 @pytest.mark.parametrize(("value", "low", "high", "shown"), [
     (0.537, 0.15, 0.66, "0.54"), (1.0612, 1.0281, 1.1642, "1.06"), (1.466, 1.167, 3120.0, "1"),
     (0.0413, -0.5, 0.5, "0.04"), (0.0, -0.3, 0.4, "0.0"), (12345678.9, 12345670.0, 12345690.0, "12346000")])

@@ -1,10 +1,10 @@
-"""Numbers at their precision (roughcontact.studies.precision): one rule for every number the report prints."""
+"""Numbers at their precision (roughcontact.core.precision): one rule for every number the report prints."""
 import doctest
 import itertools
 
 import pytest
 
-from roughcontact.studies import precision
+from roughcontact.core import precision
 from roughcontact.theory.laws import KAPPA_BGT
 
 

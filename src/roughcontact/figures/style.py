@@ -24,6 +24,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import FormatStrFormatter, Locator, LogLocator, MaxNLocator, NullFormatter
 
+from ..core import precision
 from ..core.files import atomic_output
 from ..core.quantities import LENGTH_UNITS, PRESSURE_UNITS
 
@@ -314,35 +315,12 @@ def plain_log_labels(axis, dense: bool = True) -> None:
     axis.set_minor_formatter(NullFormatter())
 
 
-
-
-def _decimals(uncertainty: float) -> int:
-    """The decimal place an ``uncertainty`` > 0 rounds to: two significant figures when its leading digit is 1
-    or 2 (one when the second would be 0), one otherwise (the Particle Data Group's rule, simplified)."""
-    mantissa = f"{uncertainty:.1e}".split("e")[0]
-    figures = 2 if mantissa[0] in "12" and not mantissa.endswith(".0") else 1
-    return figures - 1 - int(f"{uncertainty:.{figures - 1}e}".split("e")[1])
-
-
 def at_interval(value: float, low: float | None = None, high: float | None = None) -> str:
     """A fitted value for a legend or title, rounded to its interval ``[low, high]`` by the report's rule
-    (:mod:`roughcontact.studies.precision`): to the decimal place of the interval's half-width (:func:`_decimals`),
-    at most five significant figures of the value; a value that is not 0 but would read 0 there keeps one
-    significant figure. Without a finite interval of positive width, three significant figures; ``"—"`` for NaN.
+    (:func:`roughcontact.core.precision.estimate`: the decimal place of the interval's half-width; a value that is
+    not 0 but would read 0 there keeps one significant figure; without an interval three figures, "—" for NaN).
 
     >>> at_interval(0.537, 0.15, 0.66), at_interval(1.0612, 1.0281, 1.1642), at_interval(1.466, 1.167, 3120.0)
     ('0.54', '1.06', '1')
     """
-    value = float(value)
-    if not np.isfinite(value):
-        return "—"
-    ends = [float(v) for v in (low, high) if v is not None]
-    if len(ends) < 2 or not np.all(np.isfinite(ends)) or ends[1] <= ends[0]:
-        return "0" if value == 0 else f"{value:.3g}"
-    decimals = _decimals((ends[1] - ends[0]) / 2)
-    if value != 0:
-        decimals = min(decimals, 4 - int(np.floor(np.log10(abs(value)))))
-    text = f"{value:.{decimals}f}" if decimals > 0 else f"{round(value, decimals):.0f}"
-    if float(text) == 0:
-        return f"{value:.1g}" if value != 0 else text.lstrip("-")
-    return text
+    return precision.estimate(float(value), low, high)[0]

@@ -9,7 +9,7 @@ parameters, folded), shown below them; between them, ``figures.rst`` of the ``re
 (:func:`figures_rst`: every figure embedded with its caption). None carries a timestamp, so a rerun with the
 same config, results and code writes the same bytes; the run's own record (versions, host, date, CPU time) is
 :mod:`roughcontact.studies.run_record`'s. Numbers are rounded to their uncertainty
-(:mod:`roughcontact.studies.precision`).
+(:mod:`roughcontact.core.precision`).
 
 Snakemake renders captions and the description with docutils. docutils' default HTML maths
 needs a stylesheet the report does not carry, so the Snakefile calls
@@ -34,9 +34,9 @@ import numpy as np
 from docutils.utils.math import latex2mathml
 
 from ..analysis.fit import JOINT_LOWER, JOINT_UPPER, UNCONSTRAINED_RULE, at_bound
+from ..core import precision
 from ..pipeline.provenance import flatten
 from ..theory.laws import KAPPA_BGT
-from . import precision
 from .rst import folded, heading, list_table, literal
 
 #: What the commit is called when the code is not a git checkout (or git is missing).
@@ -189,7 +189,7 @@ def constant_estimate(row: Mapping[str, str]) -> tuple[str, set[str]]:
     """One constant of a cel.csv row as the report prints it, and the footnote marks it carries.
 
     The value and its 95 % bootstrap interval ``value [low, high]``, divided by :data:`SCALES` (kappa
-    as kappa/sqrt(2 pi)) and rounded to the interval (:func:`roughcontact.studies.precision.estimate`);
+    as kappa/sqrt(2 pi)) and rounded to the interval (:func:`roughcontact.core.precision.estimate`);
     an end of the interval on a bound of the joint fit is written ``bound`` and the value on one
     ``value (on a bound)``, marked ``‡``; ``*``: not constrained by the data, as the row's ``constrained``
     flag says (:func:`roughcontact.analysis.fit.constrained_flags`, the rule :data:`FOOTNOTES` prints);

@@ -1,7 +1,7 @@
 """The report's tables of a scene's cases: the measured topographies as read and loaded, and an adhesive
 scene's pull-off per group of cases (reStructuredText, for :mod:`roughcontact.studies.report`).
 
-Their numbers are printed by :mod:`roughcontact.studies.precision` (a mean with its standard deviation rounded
+Their numbers are printed by :mod:`roughcontact.core.precision` (a mean with its standard deviation rounded
 to it, a number without one to three figures) and their symbols as maths (``:math:``)."""
 
 from __future__ import annotations
@@ -13,8 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core import precision
 from ..core.cell import sides_of
-from . import precision
 from .rst import list_table, literal
 
 #: Columns of :func:`topographies_table`, and what each row of it must give.
