@@ -234,6 +234,11 @@ def test_scene_that_is_not_a_string(shipped_config):
         # the process zone E* rho^2 / w = 1e-5 L spans 0.0026 cells of L / 256: refused, with the N it needs
         (("contact", "effects"), {"adhesion": {"law": "exponential", "work": 1e-3, "range": 1e-4}},
          "contact.effects.adhesion", "spans 0.00256 grid cells of L / N = 1 / 256, fewer than 1.5"),
+        # ... and no allowed grid resolves it (N = 150000 > 16384): the remedy is a wider zone, which works (issue 62)
+        (("contact", "effects"), {"adhesion": {"law": "exponential", "work": 1e-3, "range": 1e-4}},
+         "contact.effects.adhesion", "it needs surface.N >= 150000, beyond the largest grid a scene allows (N = "
+                                     "16384); widen the process zone E* rho^2 / w to >= 9.16e-05 instead: range >= "
+                                     "0.000303, or work <= 0.000109, or a smaller cell L"),
         (("contact", "effects"), {"adhesion": {"law": "exponential", "work": 1e-5, "range": 1e-3,
                                                "pull_off_rtol": 0}},
          "contact.effects.adhesion.pull_off_rtol", "less than or equal to the minimum"),
@@ -253,6 +258,17 @@ def test_hostile_values_are_named_before_planning(shipped_config, path, value, f
         validate_config(cfg, SCHEMA)
     msg = str(info.value)
     assert "scene 'demo'" in msg and f"field '{field}'" in msg and words in msg, msg
+
+
+@pytest.mark.parametrize("adhesion", [{"range": 3.03e-4}, {"work": 1.09e-4}])
+def test_the_remedy_for_a_zone_no_grid_resolves_works(shipped_config, adhesion):
+    """The message above names a range or a work at which N = 16384 resolves the zone: each is accepted there."""
+    cfg = _edit(_demo(shipped_config), ("contact", "effects"),
+                {"adhesion": {"law": "exponential", "work": 1e-3, "range": 1e-4, **adhesion}})
+    cfg = _edit(cfg, ("contact", "surface", "N"), 16384)
+    cfg = _edit(cfg, ("contact", "grid"), {"k_l": ["4"], "k_s": ["32"], "H": ["0.5"]})
+    cfg = _edit(cfg, ("contact", "outputs"), {})
+    validate_config(cfg, SCHEMA)
 
 
 @pytest.mark.parametrize(

@@ -32,6 +32,10 @@ from .base import Effect, register
 LAWS = {"exponential": Exponential, "maugis-dugdale": MaugisDugdale}
 
 
+#: The largest ``surface.N`` a scene's schema allows (``config.schema.yaml``): a remedy never asks for more.
+MAX_GRID_N = 16384
+
+
 @register
 class Adhesion(Effect):
     """Adhesive interaction of the surfaces.
@@ -90,8 +94,17 @@ class Adhesion(Effect):
             n, length = int(surface["N"]), float(surface["L"])
             problem = cls.unresolved(block, length, (n, n), f"L / N = {surface['L']:g} / {surface['N']}")
             if problem:
-                need = math.ceil(MIN_ZONE_CELLS * length / process_zone_length(cls.config_law(block), 1.0))
-                fail("", f"{problem} (surface.N >= {need})")
+                law = cls.config_law(block)
+                need = math.ceil(MIN_ZONE_CELLS * length / process_zone_length(law, 1.0))
+                if need <= MAX_GRID_N:
+                    fail("", f"{problem} (surface.N >= {need})")
+                # no grid a scene allows resolves it: the zone E* rho^2 / w must grow instead
+                zone = MIN_ZONE_CELLS * length / MAX_GRID_N
+                fail("", f"{problem}: it needs surface.N >= {need}, beyond the largest grid a scene allows "
+                         f"(N = {MAX_GRID_N}); widen the process zone E* rho^2 / w to >= {zone:.3g} instead: "
+                         f"range >= {1.002 * math.sqrt(zone * law.w):.3g}, or work <= {0.998 * law.rho ** 2 / zone:.3g}, "
+                         "or a "
+                         "smaller cell L")
         if block["law"] == "maugis-dugdale":
             fail(".law", "maugis-dugdale is refused in a scene: its tension jumps at g = rho, so the discrete "
                  "problem traps in many states and its pull-off does not converge with the grid (docs/solver.md, "
