@@ -150,6 +150,19 @@ def test_cli_dry_run_and_a_held_working_directory(tmp_path):
     assert res.returncode == 2 and "nosuch" in res.stderr
 
 
+def test_cli_refuses_a_target_it_cannot_write_before_copying(tmp_path):
+    """results/<scene> blocked by a file: the command says so before it checks or copies a case (issue 62)."""
+    (tmp_path / "config").mkdir()
+    (tmp_path / "config" / "config.yaml").write_text(yaml.safe_dump(CONFIG))
+    src, _ = _runs(tmp_path, CASES)
+    (tmp_path / "results" / "big").write_text("not a folder")
+    res = _cli(tmp_path, "results/small", "--scene", "big")
+    assert res.returncode == 2, res.stderr
+    assert res.stderr.startswith("error: results/big/adopted.tsv: cannot be written: results/big is a file, not a "
+                                 "folder"), res.stderr
+    assert "Traceback" not in res.stderr
+
+
 def test_cli_configfile_adds_to_the_shipped_config_as_snakemake_does(tmp_path):
     """A scene kept in its own file, written over the shipped `defaults`, is adopted into as it is run."""
     shipped = {"scene": "small", "defaults": {"contact": CONTACT, "fit": TINY["scenes"]["tiny"]["fit"]},
