@@ -10,7 +10,7 @@ from roughcontact.pipeline import params
 from roughcontact.pipeline.cases import is_adhesive
 from roughcontact.pipeline.scenes import plan_summary
 from roughcontact.pipeline.progress import write_plan
-from roughcontact.pipeline.run_end import cancel_job_rate_timers
+from roughcontact.pipeline.run_end import cancel_job_rate_timers, where_it_is
 from roughcontact.pipeline.targets import (
     WILDCARD_CONSTRAINTS,
     Targets,
@@ -50,9 +50,12 @@ onstart:
 
 
 # Snakemake's job-rate timer (profiles/default: once a minute) would hold the process up to a minute
-# after the last job (roughcontact.pipeline.run_end).
+# after the last job (roughcontact.pipeline.run_end). A run that succeeds ends saying where its result is.
 onsuccess:
     cancel_job_rate_timers()
+    if not workflow.dryrun:
+        for _line in where_it_is(Path("results", ACTIVE_SCENE), ACTIVE_SCENE):
+            logger.info(f"roughcontact: {_line}")
 
 
 onerror:
