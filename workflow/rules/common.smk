@@ -37,10 +37,17 @@ for _message in TARGETS.invalid.values():
 logger.info(plan_summary(ACTIVE_SCENE, SCENES[ACTIVE_SCENE]))
 
 
-# The plan each contact job's scene ETA is read against (python -m roughcontact.pipeline.progress).
+# The plan the scene's ETA is read against (python -m roughcontact.pipeline.progress): the jobs this run
+# will run for the active scene, from Snakemake's DAG, each with its benchmark file, log and expected size.
 onstart:
     try:
-        write_plan(Path("results", ACTIVE_SCENE), ACTIVE_SCENE, SCENES[ACTIVE_SCENE], workflow.cores)
+        _under = f"results/{ACTIVE_SCENE}/"
+        _jobs = [
+            (job.rule.name, str(job.benchmark), next(iter(job.log), None), dict(job.resources).get("runtime"))
+            for job in workflow.dag.needrun_jobs()
+            if job.benchmark is not None and str(job.benchmark).startswith(_under)
+        ]
+        write_plan(Path("results", ACTIVE_SCENE), ACTIVE_SCENE, _jobs, workflow.cores)
     except OSError as _err:  # a read-only or full results/<scene>: one line, before any job runs
         logger.error(
             f"roughcontact: {one_line(_err)}; the run writes under results/{ACTIVE_SCENE}/: make it writable "
