@@ -207,3 +207,16 @@ def test_adopted_cases_leave_every_downstream_byte_as_a_full_run_makes_it(tmp_pa
     assert run_snakemake(fresh, "-j2", "--config", "scene=big", "--", *targets).returncode == 0
     for out in outs:
         assert (wd / "results/big" / out).read_bytes() == (fresh / "results/big" / out).read_bytes(), out
+
+
+def test_a_scene_whose_contact_map_reads_surfaces_is_refused_naming_outputs_fields():
+    """Issue 62: adopting into a scene with outputs.fields said "adopted", then the next run re-solved the mapped
+    cases (their surfaces made again, newer than the adopted files)."""
+    scene = validate_config({**CONFIG, "scenes": {**CONFIG["scenes"], "big": {
+        "contact": {**CONTACT, "outputs": {"fields": [2]}}, "fit": TINY["scenes"]["tiny"]["fit"]}},
+        "scene": "big"})["scenes"]["big"]
+    with pytest.raises(adopt.AdoptError, match=r"scene 'big' stores fields \(contact.outputs.fields: \[2\]\), and its "
+                                               r"contact map reads each mapped case's surface file, .*adopt into a "
+                                               r"scene without outputs.fields, or run the scene itself"):
+        adopt.check_adoptable("big", scene)
+    adopt.check_adoptable("big", SCENES["big"])  # without fields: adoptable

@@ -54,8 +54,8 @@ def _log_groups(log, result):
         log.warning("no CEL fit for (k_l, k_s, H, estimator) = %s", group)
     loose = result["constrained"].where(result["value"].notnull(), 1).to_series()
     for group in loose[loose == 0].index:
-        log.warning("not constrained by the data (%s), flagged in cel.csv: (k_l, k_s, H, estimator, constant) = %s",
-                    fit.UNCONSTRAINED_RULE, group)
+        log.warning("not constrained by the data (bootstrap interval wider than the value), flagged in cel.csv: "
+                    "(k_l, k_s, H, estimator, constant) = %s", group)
 
 
 def _log_topographies(log, result):
@@ -74,8 +74,8 @@ def _log_topographies(log, result):
             loose = [str(c) for c in result["constant"].values
                      if not int(result["constrained"].sel(estimator=estimator, constant=c))]
             if loose:
-                log.warning("not constrained by the data (%s), flagged in cel.csv: estimator %s, constant(s) %s",
-                            fit.UNCONSTRAINED_RULE, estimator, ", ".join(loose))
+                log.warning("not constrained by the data (bootstrap interval wider than the value), flagged in "
+                            "cel.csv: estimator %s, constant(s) %s", estimator, ", ".join(loose))
 
 
 run_logged(snakemake.log[0], main)

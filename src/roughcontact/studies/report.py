@@ -14,9 +14,8 @@ same config, results and code writes the same bytes; the run's own record (versi
 Snakemake renders captions and the description with docutils. docutils' default HTML maths
 needs a stylesheet the report does not carry, so the Snakefile calls
 :func:`render_maths_as_mathml`, which points docutils at a config file that asks for MathML
-(``workflow/report/docutils.conf``), writes ``\\bar`` as U+00AF (docutils' U+02C9 is dropped by
-Chromium) and sets the subscript of an accented symbol beside the accent (``\\bar p_\\mathrm{off}``: docutils
-set "off" under the bar); current browsers render MathML natively, and :data:`MATH_CSS`, which the landing page and
+(``workflow/report/docutils.conf``) and writes ``\\bar`` as U+00AF (docutils' U+02C9 is dropped by
+Chromium); current browsers render MathML natively, and :data:`MATH_CSS`, which the landing page and
 every caption carry, gives them a font with OpenType maths so that brackets stretch.
 """
 
@@ -33,7 +32,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from docutils.utils.math import latex2mathml
 
-from ..analysis.fit import JOINT_LOWER, JOINT_UPPER, UNCONSTRAINED_RULE, at_bound
+from ..analysis.fit import JOINT_LOWER, JOINT_UPPER, at_bound
 from ..pipeline.provenance import flatten
 from ..theory.laws import KAPPA_BGT
 from . import precision
@@ -104,38 +103,16 @@ def docutils_config_path(ours: str | os.PathLike, environ: Mapping[str, str]) ->
     return os.pathsep.join([*entries, ours])
 
 
-def _script_beside_accent(handle_script):
-    """docutils' ``handle_script_or_limit`` (``handle_script``), except that the subscript of an accented
-    symbol goes beside the accent, as LaTeX sets it: ``\\bar p_\\mathrm{off}`` becomes
-    ``<msub><mover>p ¯</mover>off</msub>``, where docutils 0.22 wrote ``<munderover>``, "off" under the p."""
-
-    def handle(node, c, limits=""):
-        child = node[-1] if len(node) else None
-        if (c == "_" and not limits and isinstance(child, latex2mathml.mover)
-                and child.get("accent") == "true"):
-            new_node = latex2mathml.msub(node.pop())
-            node.append(new_node)
-            return new_node
-        return handle_script(node, c, limits)
-
-    handle.beside_accent = True
-    return handle
-
-
 def render_maths_as_mathml(config_file: str | os.PathLike) -> None:
     """Make docutils in this process read ``config_file`` (``math_output: MathML``) last.
 
     The Snakefile calls this, with ``workflow/report/docutils.conf``, before Snakemake renders
     the report's captions and landing page with docutils in the same process. It also makes docutils
     write ``\\bar`` as :data:`MACRON` (U+00AF) in ``<mover>``: its own U+02C9 is dropped by Chromium,
-    which turned the caption's mean pressure into the applied one; and set the subscript of an accented
-    symbol beside the accent, not under the symbol (:func:`_script_beside_accent`). Calling it again
-    changes nothing more.
+    which turned the caption's mean pressure into the applied one.
     """
     os.environ["DOCUTILSCONFIG"] = docutils_config_path(config_file, os.environ)
     latex2mathml.accents["bar"] = MACRON
-    if not getattr(latex2mathml.handle_script_or_limit, "beside_accent", False):
-        latex2mathml.handle_script_or_limit = _script_beside_accent(latex2mathml.handle_script_or_limit)
 
 
 def parameters_table(parameters: Mapping) -> str:
@@ -191,9 +168,8 @@ def constant_estimate(row: Mapping[str, str]) -> tuple[str, set[str]]:
     The value and its 95 % bootstrap interval ``value [low, high]``, divided by :data:`SCALES` (kappa
     as kappa/sqrt(2 pi)) and rounded to the interval (:func:`roughcontact.studies.precision.estimate`);
     an end of the interval on a bound of the joint fit is written ``bound`` and the value on one
-    ``value (on a bound)``, marked ``‡``; ``*``: not constrained by the data, as the row's ``constrained``
-    flag says (:func:`roughcontact.analysis.fit.constrained_flags`, the rule :data:`FOOTNOTES` prints);
-    ``†``: no interval (a single measured topography). No value: a dash.
+    ``value (on a bound)``, marked ``‡``; ``*``: not constrained by the data (the interval wider than
+    the value); ``†``: no interval (a single measured topography). No value: a dash.
     """
     constant, estimator = row["constant"], row["estimator"]
     value, low, high = (_number(row[k]) for k in ("value", "ci_low", "ci_high"))
@@ -225,7 +201,7 @@ def published_estimate(row: Mapping[str, str]) -> str:
 
 #: What each footnote mark of the fit table says.
 FOOTNOTES = {
-    r"\*": f"not constrained by the data: {UNCONSTRAINED_RULE}.",
+    r"\*": "not constrained by the data: the bootstrap interval is wider than the value.",
     "†": "no bootstrap interval: a single topography says nothing about the scatter between surfaces.",
     "‡": f"on a bound of the joint least-squares fit ({BOUNDS_TEXT}): the data do not bound the constant there.",
 }
@@ -237,13 +213,14 @@ def fit_table(csv_text: str) -> str:
     Groups are ``(k_l, k_s, H group)`` for a generated scene and the pooled topographies for a
     measured one. Each cell is :func:`constant_estimate` (kappa as kappa/sqrt(2 pi), rounded to its
     interval, marks for constants not constrained or on a bound), each mark explained under the
-    table; the last column counts the group's surfaces (:func:`seed_count`, or the topographies). A last
-    row, ``published``, gives the paper's values ``value ± standard error`` (:func:`published_estimate`).
-    Rows keep cel.csv's order; every column of cel.csv is in the report's table of it.
+    table. A last row, ``published``, gives the paper's values ``value ± standard error``
+    (:func:`published_estimate`). Rows keep cel.csv's order; every column of cel.csv is in the report's
+    table of it.
     """
     rows = read_fit_csv(csv_text)
     measured = is_measured_fit(rows)
-    keys = ("group", "estimator") if measured else ("k_l", "k_s", "H_group", "estimator")
+    keys, count = (("group", "estimator"), "n_topographies") if measured else \
+        (("k_l", "k_s", "H_group", "estimator"), "n_seeds")
     groups: dict[tuple[str, ...], dict[str, dict[str, str]]] = {}
     paper: dict[str, dict[str, str]] = {}
     for row in rows:
@@ -260,47 +237,17 @@ def fit_table(csv_text: str) -> str:
             cell, row_marks = constant_estimate(row) if row is not None else ("—", set())
             marks |= row_marks
             cells.append(cell)
-        first = next(iter(by_constant.values()))
-        cells.append(first["n_topographies"] if measured else seed_count(rows, first))
+        cells.append(next(iter(by_constant.values()))[count])
         body.append(cells)
     paper_cells = [published_estimate(paper[c]) if c in paper else "—" for c in CONSTANTS]
     body.append([""] * (len(keys) - 1) + ["published", *paper_cells, ""])
     header = ["surfaces", "estimator"] if measured else [":math:`k_l`", ":math:`k_s`", ":math:`H`", "estimator"]
-    header += [*CONSTANTS.values(), "topographies" if measured else "surfaces"]
+    header += [*CONSTANTS.values(), "topographies" if measured else "seeds"]
     text = list_table(header, body)
     for mark, note in FOOTNOTES.items():
         if mark in marks:
             text += f"\n{mark} {note}\n"
     return text
-
-
-def seed_count(rows: Sequence[Mapping[str, str]], row: Mapping[str, str]) -> str:
-    """The surfaces of ``row``'s group of a generated scene's cel.csv, as the report says them (RST).
-
-    cel.csv's ``n_seeds`` counts the group's surfaces: a group pooled over H holds each H's seeds, so its
-    count is read with the rows of the same ``(k_l, k_s)`` at each H: ``"3 seeds × 2 values of :math:`H`"``,
-    ``"5 seeds: 3 at :math:`H` = 0.36, 2 at :math:`H` = 0.84"`` where the H differ, ``"3 seeds"`` for a
-    group of one H (or pooled over one); ``"6 surfaces"`` where ``rows`` lack the groups by H.
-
-    Parameters
-    ----------
-    rows : sequence of mapping
-        The rows of cel.csv (:func:`read_fit_csv`), at least those of ``row``'s ``(k_l, k_s)``.
-    row : mapping
-        A row of the group.
-    """
-    n = int(row["n_seeds"])
-    if row["H_group"] != "pooled":
-        return f"{n} seed{'' if n == 1 else 's'}"
-    per_h = {r["H_group"]: int(r["n_seeds"]) for r in rows
-             if r["k_l"] == row["k_l"] and r["k_s"] == row["k_s"] and r["H_group"] != "pooled"}
-    if not per_h or sum(per_h.values()) != n:
-        return f"{n} surfaces"
-    if len(set(per_h.values())) > 1:
-        return f"{n} seeds: " + ", ".join(f"{c} at :math:`H` = {h}" for h, c in per_h.items())
-    each = next(iter(per_h.values()))
-    seeds = f"{each} seed{'' if each == 1 else 's'}"
-    return seeds if len(per_h) == 1 else f"{seeds} × {len(per_h)} values of :math:`H`"
 
 
 def csv_html(csv_text: str, title: str) -> str:
@@ -383,7 +330,7 @@ def _result_text(csv_text: str | None, pull_off: str | None) -> str:
                 "unconverged load steps, or no fit converged; the fit's log says which).\n")
     where = (f"{chosen[0]['group']}" if is_measured_fit(chosen) else
              rf":math:`\lambda_l = L/{float(chosen[0]['k_l']):g}`, :math:`\lambda_s = L/{float(chosen[0]['k_s']):g}`, "
-             rf":math:`H` {chosen[0]['H_group']}, {seed_count(rows, chosen[0])}")
+             rf":math:`H` {chosen[0]['H_group']}, {chosen[0]['n_seeds']} seeds")
     ours, marks = [], set()
     for r in chosen:
         cell, m = constant_estimate(r)

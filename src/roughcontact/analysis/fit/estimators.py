@@ -244,62 +244,18 @@ def at_bound(estimator: str, constant: str, value: float) -> bool:
                for b in (float(JOINT_LOWER[i]), float(JOINT_UPPER[i])))
 
 
-#: Distance between an end of the bootstrap interval and the estimate, relative to the larger of the two,
-#: within which the end touches the estimate. The percentile bootstrap returns the estimate itself when the
-#: fit sits on the edge of its resamples (a resample of the same seeds refits to the same number, to the
-#: rounding of a refit in another order: 1e-13 relative or less for the paper route's least squares, about
-#: the 1e-12 ``xtol`` of the joint fit), while an interval that the data bound lies a bootstrap spread,
-#: many orders above 1e-9, from its estimate.
-TOUCH_RTOL = 1e-9
-
-#: When the data do not constrain a fitted constant: the rule :func:`constrained_flags` follows, as the fit
-#: dataset's ``constrained`` variable, the fit's log and the report print it (besides a missing interval).
-UNCONSTRAINED_RULE = ("the bootstrap interval is wider than the value, does not hold the value strictly inside "
-                      f"it (an end at the value, within {TOUCH_RTOL:g} relative, or beyond it), or the value or "
-                      "an end of the interval lies on a bound of the fit")
-
-
-def _touches(end: np.ndarray, value: np.ndarray) -> np.ndarray:
-    """Whether ``end`` equals ``value`` to :data:`TOUCH_RTOL` of the larger magnitude."""
-    return np.abs(end - value) <= TOUCH_RTOL * np.maximum(np.abs(end), np.abs(value))
-
-
 def constrained_flags(value, ci_low, ci_high, estimators: Sequence[str] | None = None) -> np.ndarray:
-    """1 where the data constrain a fitted constant, else 0 (int8).
+    """1 where the bootstrap interval ``[ci_low, ci_high]`` is narrower than ``|value|``, else 0 (int8).
 
-    A constant is not constrained when the bootstrap interval is wider than the value, does not hold
-    the value strictly inside it (an end at the value, within 1e-09 relative, or beyond it), or the value or
-    an end of the interval lies on a bound of the fit; or when it has no interval (a NaN end or value).
-    Such a constant is not determined by the data and must not be reported as a number: kappa = 4.79 in
-    [3.1, 6368] (wider than itself); beta = 1.87 in [0.18, 1.87] (the percentile interval ends on the
-    estimate: the fit sits on the edge of its resamples, and the data do not bound it on that side).
-    The wording is :data:`UNCONSTRAINED_RULE`'s, with :data:`TOUCH_RTOL`; a bound is one of the joint
-    fit's (:func:`at_bound`; the paper's route has none).
-
-    Parameters
-    ----------
-    value, ci_low, ci_high : array_like
-        The fitted constants and the ends of their bootstrap intervals, of one shape.
-    estimators : sequence of str, optional
-        The estimator of each index along the second-last axis (the constants along the last, in
-        :data:`CONSTANTS` order): needed for the bounds, which are checked only where given.
-
-    Returns
-    -------
-    numpy.ndarray
-        int8 of the shape of ``value``: 1 constrained, 0 not.
-
-    Examples
-    --------
-    >>> constrained_flags([4.79, 2.87, 1.87413], [3.1, 2.80, 0.181539], [6368, 2.95, 1.87413]).tolist()
-    [0, 1, 0]
+    A constant whose 95 % interval is wider than itself (e.g. kappa = 4.79 with the
+    interval [3.1, 6368]) is not determined by the data and must not be reported as a number.
+    With ``estimators`` (the names along the second-last axis; constants along the last, in
+    :data:`CONSTANTS` order), a constant on a bound of its estimator (:func:`at_bound`) is 0 too.
     """
     value, lo, hi = (np.asarray(x, dtype=float) for x in (value, ci_low, ci_high))
     with np.errstate(invalid="ignore"):
         ok = np.isfinite(value) & np.isfinite(lo) & np.isfinite(hi) & ((hi - lo) < np.abs(value))
-        ok &= (lo < value) & (value < hi) & ~_touches(lo, value) & ~_touches(hi, value)
     if estimators is not None:
         for idx in np.ndindex(value.shape):
-            if ok[idx]:
-                ok[idx] = not any(at_bound(estimators[idx[-2]], CONSTANTS[idx[-1]], x[idx]) for x in (value, lo, hi))
+            ok[idx] &= not at_bound(estimators[idx[-2]], CONSTANTS[idx[-1]], value[idx])
     return ok.astype(np.int8)

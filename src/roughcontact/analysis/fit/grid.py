@@ -68,10 +68,7 @@ def fit_cel(agg: xr.Dataset, *, window: tuple[float, float] = (0.01, 0.11), n_bo
         (``kappa, mu, beta``). Variables, all with units "1":
         ``value``, ``stderr`` (the estimator's own), ``bootstrap_stderr``, ``ci_low``,
         ``ci_high`` (percentile interval), ``n_points(k_l, k_s, H_group, estimator, constant)``,
-        ``n_seeds(k_l, k_s, H_group)`` (the group's surfaces: for a group pooled over H, each H's seeds
-        summed), ``constrained(k_l, k_s, H_group, estimator, constant)`` (0 where the data do not
-        constrain the constant, :func:`~.estimators.constrained_flags`),
-        ``n_boot_ok(k_l, k_s, H_group, estimator)``,
+        ``n_seeds(k_l, k_s, H_group)``, ``n_boot_ok(k_l, k_s, H_group, estimator)``,
         ``alpha_power_law(k_l, k_s, H_group)`` (Nayak alpha of the ideal spectrum, a profile's
         own when ``agg`` holds profiles, :func:`~roughcontact.analysis.aggregate.is_profiles`;
         NaN when pooled), ``alpha_surfaces(k_l, k_s, H_group)`` (mean of ``agg.alpha`` over the
@@ -182,8 +179,7 @@ def _cel_dataset(agg: xr.Dataset, grid: _CelGrid, labels: list[str], methods: Se
             **estimate_vars(dims5, grid.value, grid.stderr, grid.bstd, grid.clo, grid.chi, grid.npts,
                              confidence=confidence, resampled="seeds", methods=methods,
                              points="paper route with paper_average='seeds': seed-mean points, one per H and step"),
-            "n_seeds": (dims5[:3], grid.nseeds, {**one, "long_name": "number of surfaces in the group: its seeds, "
-                                                 "summed over its values of H (for a group pooled over H)"}),
+            "n_seeds": (dims5[:3], grid.nseeds, {**one, "long_name": "number of seeds (surfaces) in the group"}),
             "n_boot_ok": (dims5[:4], grid.nboot_ok, {**one, "long_name": "bootstrap resamples that fitted"}),
             "alpha_power_law": (dims5[:3], grid.alpha, {**one, "long_name": "Nayak alpha of the ideal "
                                 "continuous power-law spectrum (NaN for pooled groups; 20-60 % low "

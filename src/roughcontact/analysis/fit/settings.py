@@ -37,7 +37,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .estimators import CONSTANTS, KAPPA_EXTRAPOLATIONS, METHODS, PAPER_CEL, UNCONSTRAINED_RULE, constrained_flags
+from .estimators import CONSTANTS, KAPPA_EXTRAPOLATIONS, METHODS, PAPER_CEL, constrained_flags
 
 
 def check_window(window) -> tuple[float, float]:
@@ -98,10 +98,10 @@ def estimate_vars(dims: tuple[str, ...], value, stderr, bstd, clo, chi, npts, *,
                              f"({resampled} resampled with replacement; times sqrt(n/(n-1)))"}),
         "ci_low": (dims, clo, {**one, "long_name": f"lower end of the {pct} bootstrap percentile interval"}),
         "ci_high": (dims, chi, {**one, "long_name": f"upper end of the {pct} bootstrap percentile interval"}),
-        "constrained": (dims, constrained_flags(value, clo, chi, methods), {
-            **one, "long_name": "1 if the data constrain the constant, 0 if not: no bootstrap interval, or "
-            f"{UNCONSTRAINED_RULE}", "flag_values": np.array([0, 1], dtype=np.int8),
-            "flag_meanings": "not_constrained constrained"}),
+        "constrained": (dims, constrained_flags(value, clo, chi, methods), {**one, "long_name": "1 if the "
+                        "bootstrap interval is narrower than the value itself, 0 if the data do not "
+                        "constrain the constant (interval wider than the value, no interval, or the "
+                        "value on a bound of the joint fit)"}),
         "n_points": (dims, npts, {**one, "long_name": f"in-window points used by the fit ({points})"}),
     }
 
