@@ -18,11 +18,15 @@ $(BIN)/python:
 # pins the versions the test suite last passed with: `pip install -c constraints.txt -e '.[test]'` for that
 # environment.
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
+	@echo "Installing roughcontact and its pipeline extra into $(VENV) (numpy, scipy, pyFFTW, xarray, netCDF4,"
+	@echo "matplotlib, Snakemake, SurfaceTopography): about 1-2 minutes on a fresh machine, once."
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[pipeline]'
 	touch $@
 
 $(VENV)/.installed-test: pyproject.toml $(VENV)/.installed
+	@echo "Installing the test extras into $(VENV) (Tamaas, ContactMechanics, MPI, Playwright, linters):"
+	@echo "about 1 minute more, once."
 	$(BIN)/python -m pip install --quiet -e '.[test]'
 	touch $@
 

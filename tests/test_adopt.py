@@ -150,6 +150,19 @@ def test_cli_dry_run_and_a_held_working_directory(tmp_path):
     assert res.returncode == 2 and "nosuch" in res.stderr
 
 
+def test_cli_refuses_a_target_it_cannot_write_before_copying(tmp_path):
+    """results/<scene> blocked by a file: the command says so before it checks or copies a case (issue 62)."""
+    (tmp_path / "config").mkdir()
+    (tmp_path / "config" / "config.yaml").write_text(yaml.safe_dump(CONFIG))
+    src, _ = _runs(tmp_path, CASES)
+    (tmp_path / "results" / "big").write_text("not a folder")
+    res = _cli(tmp_path, "results/small", "--scene", "big")
+    assert res.returncode == 2, res.stderr
+    assert res.stderr.startswith("error: results/big/adopted.tsv: cannot be written: results/big is a file, not a "
+                                 "folder"), res.stderr
+    assert "Traceback" not in res.stderr
+
+
 def test_cli_configfile_adds_to_the_shipped_config_as_snakemake_does(tmp_path):
     """A scene kept in its own file, written over the shipped `defaults`, is adopted into as it is run."""
     shipped = {"scene": "small", "defaults": {"contact": CONTACT, "fit": TINY["scenes"]["tiny"]["fit"]},
@@ -194,3 +207,16 @@ def test_adopted_cases_leave_every_downstream_byte_as_a_full_run_makes_it(tmp_pa
     assert run_snakemake(fresh, "-j2", "--config", "scene=big", "--", *targets).returncode == 0
     for out in outs:
         assert (wd / "results/big" / out).read_bytes() == (fresh / "results/big" / out).read_bytes(), out
+
+
+def test_a_scene_whose_contact_map_reads_surfaces_is_refused_naming_outputs_fields():
+    """Issue 62: adopting into a scene with outputs.fields said "adopted", then the next run re-solved the mapped
+    cases (their surfaces made again, newer than the adopted files)."""
+    scene = validate_config({**CONFIG, "scenes": {**CONFIG["scenes"], "big": {
+        "contact": {**CONTACT, "outputs": {"fields": [2]}}, "fit": TINY["scenes"]["tiny"]["fit"]}},
+        "scene": "big"})["scenes"]["big"]
+    with pytest.raises(adopt.AdoptError, match=r"scene 'big' stores fields \(contact.outputs.fields: \[2\]\), and its "
+                                               r"contact map reads each mapped case's surface file, .*adopt into a "
+                                               r"scene without outputs.fields, or run the scene itself"):
+        adopt.check_adoptable("big", scene)
+    adopt.check_adoptable("big", SCENES["big"])  # without fields: adoptable

@@ -88,6 +88,43 @@ def test_invalid_field_is_named(shipped_config, path, value, field, words):
     assert "scene 'demo'" in msg and field in msg and words in msg, msg
 
 
+def test_a_bad_value_from_defaults_says_so_and_names_a_remedy_that_works(shipped_config):
+    """A copy of `lines` without `examples` gets the defaults' 2-D examples (issue 62: the message said neither
+    where the value came from nor that `examples: []` draws none)."""
+    cfg = copy.deepcopy(shipped_config)
+    cfg["scenes"]["mine"] = copy.deepcopy(cfg["scenes"]["lines"])
+    del cfg["scenes"]["mine"]["representativity"]["examples"]
+    cfg["scene"] = "mine"
+    with pytest.raises(ConfigError, match=r"scene 'mine', field 'representativity.examples\[0\]' \(value from the "
+                                          r"'defaults' block\): \(1, 40\) is not in the grid's k_l x k_s \(4, 16 x 64, "
+                                          r"128\); pick pairs of the grid, or write examples: \[\] in the scene's "
+                                          r"representativity block to draw none"):
+        validate_config(cfg, SCHEMA)
+    cfg["scenes"]["mine"]["representativity"]["examples"] = []  # the remedy works
+    validate_config(cfg, SCHEMA)
+
+
+def test_a_generated_profile_too_short_is_refused_before_any_job(shipped_config):
+    """N = 8 points was accepted and its fit failed at the end (issue 62); measured scans under 16 are refused."""
+    cfg = copy.deepcopy(shipped_config)
+    cfg["scenes"]["lines"]["contact"]["surface"]["N"] = 8
+    cfg["scenes"]["lines"]["contact"]["grid"] = {"k_l": ["1"], "k_s": ["4"], "H": ["0.5"]}
+    cfg["scene"] = "lines"
+    with pytest.raises(ConfigError, match=r"scene 'lines', field 'contact.surface.N': a profile of 8 points is too "
+                                          r"short .* set surface.N >= 16"):
+        validate_config(cfg, SCHEMA)
+
+
+def test_an_enum_of_numbers_given_as_text_is_read_as_a_number(shipped_config):
+    """`--config` passes nested values as text: `dimension: 2` arrived as '2' and failed with "'2' is not one of
+    [1, 2]" (issue 62)."""
+    cfg = _edit(_demo(shipped_config), ("contact", "surface", "dimension"), "2")
+    assert validate_config(cfg, SCHEMA)["scenes"]["demo"]["contact"]["surface"]["dimension"] == 2
+    cfg = _edit(_demo(shipped_config), ("contact", "surface", "dimension"), "3")
+    with pytest.raises(ConfigError, match=r"field 'contact.surface.dimension': 3 is not one of \[1, 2\]"):
+        validate_config(cfg, SCHEMA)
+
+
 ADHESION = {"adhesion": {"law": "exponential", "work": 1e-5, "range": 1e-3}}
 
 

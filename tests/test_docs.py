@@ -364,9 +364,9 @@ def python_runcost(cmd, ctx):
 
 def python_progress(cmd, ctx):
     """``python -m roughcontact.pipeline.progress results/<scene>`` on a finished small scene: every planned
-    solve done."""
+    job done."""
     res = _on_finished(cmd, ctx)
-    assert re.search(r"^scene '[\w-]+': (\d+) of \1 contact solves done \(all\)$", res.stdout, re.M), (
+    assert re.search(r"^scene '[\w-]+': (\d+) of \1 jobs done \(contact (\d+) of \2\), all$", res.stdout, re.M), (
         f"`{cmd}`: the finished scene is not reported done:\n{res.stdout}")
 
 

@@ -414,3 +414,25 @@ def test_eta_from_the_recent_pace():
     # the last five steps set the pace (steps slow down as the contact grows)
     assert eta([100.0] + [2.0] * 5, 36) == "about 1 min 00 s left (30 of 36 to go)"
     assert eta([1.0] * 4, 4) == "done"
+
+
+# --------------------------------------------------------------------------------- outputs checked before the work
+def test_check_writable_names_a_folder_a_file_in_the_way_and_a_read_only_folder(tmp_path, monkeypatch):
+    from roughcontact.core.files import check_writable
+
+    assert check_writable(tmp_path / "a" / "b" / "out.nc") == tmp_path / "a" / "b" / "out.nc"
+    assert not (tmp_path / "a").exists() and list(tmp_path.iterdir()) == []  # nothing created, no probe left
+    with pytest.raises(ValueError, match=rf"^{tmp_path}: is a folder; give --out's file name"):
+        check_writable(tmp_path, "--out")
+    (tmp_path / "f").write_text("x")
+    with pytest.raises(ValueError, match=rf"{tmp_path}/f/out.nc: cannot be written: {tmp_path}/f is a file, not a "
+                                         "folder; give the output another path"):
+        check_writable(tmp_path / "f" / "out.nc")
+
+    def refused(*args, **kwargs):  # a read-only mount (permission bits do not stop root)
+        raise OSError(30, "Read-only file system")
+
+    monkeypatch.setattr(os, "open", refused)
+    with pytest.raises(ValueError, match=rf"{tmp_path}/out.nc: cannot be written \({tmp_path}: Read-only file "
+                                         r"system\); give the output a writable folder"):
+        check_writable(tmp_path / "out.nc")

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import functools
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -164,6 +165,80 @@ def test_more_ranks_than_rows_is_refused(tmp_path):
         in res.stderr
     assert res.stderr.count("error:") == 1  # rank 0 alone says it
     assert not (tmp_path / "c.nc").exists()
+
+
+#: Bad input found on one rank (the generator runs on rank 0 alone) or before the work (--out): issue 62 found
+#: each printing its error and then hanging for ever on 2 ranks. Each must end every rank in seconds.
+BAD_RUNS = {
+    "k_s beyond Nyquist": (["--generate", 64, 2, 40, 0.8, 0, "--rms-slope", 0.1], r"k_s must be <= n/2 = 32"),
+    "k_l > k_s": (["--generate", 64, 8, 2, 0.8, 0, "--rms-slope", 0.1], r"cutoffs must satisfy 0 < k_l < k_s"),
+    "H 1.5": (["--generate", 64, 2, 16, 1.5, 0, "--rms-slope", 0.1], r"hurst \(H\) must be .* got 1.5"),
+    "seed -1": (["--generate", 64, 2, 16, 0.8, -1, "--rms-slope", 0.1], r"seed must be an integer >= 0"),
+    "seed x": (["--generate", 64, 2, 16, 0.8, "x", "--rms-slope", 0.1], r"--generate SEED: 'x' is not an integer"),
+    "negative slope": (["--generate", 64, 2, 16, 0.8, 0, "--rms-slope", -0.1], r"rms_slope must be .* got -0.1"),
+    "negative length": (["--generate", 64, 2, 16, 0.8, 0, "--rms-slope", 0.1, "--length", -1],
+                        r"length \(L\) must be .* got -1"),
+    "--out a folder": (["--generate", 64, 2, 16, 0.8, 0, "--rms-slope", 0.1, "--out", "{tmp}"],
+                       r"{tmp}: is a folder; give --out's file name"),
+    "--out under a file": (["--generate", 64, 2, 16, 0.8, 0, "--rms-slope", 0.1, "--out", "{tmp}/s.nc/c.nc"],
+                           r"{tmp}/s.nc/c.nc: cannot be written: {tmp}/s.nc is a file, not a folder"),
+}
+
+
+@needs_mpi
+@pytest.mark.parametrize("case", list(BAD_RUNS))
+def test_bad_input_ends_every_rank_at_once(tmp_path, case):
+    """Status 2, one line ``error: ...`` (rank 0's), no traceback, no load step solved, nothing written; in seconds
+    (``subprocess``' cap of 60 s catches the hang: a run ends in ~2 s here)."""
+    (tmp_path / "s.nc").write_text("a file")
+    args, message = BAD_RUNS[case]
+    args = [str(a).format(tmp=tmp_path) for a in args]
+    out = tmp_path / "c.nc"
+    cmd = [MPIEXEC, "-n", "2", sys.executable, "-m", "roughcontact.solver.mpi", "--p-max", "0.005", "--steps", "2",
+           "--out", str(out), *args]
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+    assert res.returncode == 2, res.stderr
+    errors = [line for line in res.stderr.splitlines() if line.startswith("error:")]
+    assert len(errors) == 1 and re.search(message.format(tmp=tmp_path), errors[0]), res.stderr
+    assert "Traceback" not in res.stderr and "step 1:" not in res.stderr
+    assert not out.exists()
+
+
+#: A check that fails on one rank alone, outside any collective check: main must abort the run, not return while
+#: the other rank waits.
+ONE_RANK_FAILS = """
+import sys
+import roughcontact.solver.mpi.__main__ as cli
+
+def heights(args, comm):
+    if comm.rank == 1:
+        raise ValueError("rank 1 alone refuses")
+    comm.barrier()  # rank 0 would wait here for ever
+
+cli._heights = heights
+sys.exit(cli.main(["--generate", "64", "2", "16", "0.8", "0", "--rms-slope", "0.1", "--p-max", "0.005",
+                   "--out", sys.argv[1]]))
+"""
+
+
+@needs_mpi
+def test_an_error_on_one_rank_aborts_the_run(tmp_path):
+    script = tmp_path / "one_rank_fails.py"
+    script.write_text(ONE_RANK_FAILS)
+    res = subprocess.run([MPIEXEC, "-n", "2", sys.executable, str(script), str(tmp_path / "c.nc")],
+                         capture_output=True, text=True, timeout=60)
+    assert res.returncode == 2, res.stderr
+    assert "error: rank 1 alone refuses" in res.stderr and "Traceback" not in res.stderr
+
+
+def test_generator_values_name_the_value_at_fault():
+    from roughcontact.solver.mpi.__main__ import generator_values
+
+    assert generator_values(["64", "2", "16", "0.8", "3"]) == (64, 2.0, 16.0, 0.8, 3)
+    with pytest.raises(ValueError, match=r"--generate N: '6.5' is not an integer"):
+        generator_values(["6.5", "2", "16", "0.8", "3"])
+    with pytest.raises(ValueError, match=r"--generate H: 'high' is not a number"):
+        generator_values(["64", "2", "16", "high", "3"])
 
 
 @needs_mpi

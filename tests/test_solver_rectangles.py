@@ -447,7 +447,8 @@ def test_perimeter_and_clusters_on_a_rectangle():
     ("kwargs", "match"),
     [
         (dict(length=1.0), r"length: a single float means a square cell, and heights must be a 2-D square array "
-                           r"\(n, n\) for it; .*give length=\(Lx, Ly\)"),
+                           r"\(n, n\) for it; .*give length=\(Lx, Ly\), .* A 2-D array is one map: \d+ profiles of "
+                           r"\d+ points are not solved at once; solve each row as a profile \(a 1-D array\)"),
         (dict(length=(1.0,)), r"length must be a finite real number > 0 \(square cell\) or a pair \(Lx, Ly\) .* "
                               r"got 1 values"),
         (dict(length=(1.0, 2.0, 3.0)), r"length must be .* a pair \(Lx, Ly\) .*got 3 values"),

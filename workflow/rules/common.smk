@@ -10,7 +10,7 @@ from roughcontact.pipeline import params
 from roughcontact.pipeline.cases import is_adhesive
 from roughcontact.pipeline.scenes import plan_summary
 from roughcontact.pipeline.progress import write_plan
-from roughcontact.pipeline.run_end import cancel_job_rate_timers
+from roughcontact.pipeline.run_end import cancel_job_rate_timers, where_it_is
 from roughcontact.pipeline.targets import (
     WILDCARD_CONSTRAINTS,
     Targets,
@@ -37,10 +37,17 @@ for _message in TARGETS.invalid.values():
 logger.info(plan_summary(ACTIVE_SCENE, SCENES[ACTIVE_SCENE]))
 
 
-# The plan each contact job's scene ETA is read against (python -m roughcontact.pipeline.progress).
+# The plan the scene's ETA is read against (python -m roughcontact.pipeline.progress): the jobs this run
+# will run for the active scene, from Snakemake's DAG, each with its benchmark file, log and expected size.
 onstart:
     try:
-        write_plan(Path("results", ACTIVE_SCENE), ACTIVE_SCENE, SCENES[ACTIVE_SCENE], workflow.cores)
+        _under = f"results/{ACTIVE_SCENE}/"
+        _jobs = [
+            (job.rule.name, str(job.benchmark), next(iter(job.log), None), dict(job.resources).get("runtime"))
+            for job in workflow.dag.needrun_jobs()
+            if job.benchmark is not None and str(job.benchmark).startswith(_under)
+        ]
+        write_plan(Path("results", ACTIVE_SCENE), ACTIVE_SCENE, _jobs, workflow.cores)
     except OSError as _err:  # a read-only or full results/<scene>: one line, before any job runs
         logger.error(
             f"roughcontact: {one_line(_err)}; the run writes under results/{ACTIVE_SCENE}/: make it writable "
@@ -50,9 +57,12 @@ onstart:
 
 
 # Snakemake's job-rate timer (profiles/default: once a minute) would hold the process up to a minute
-# after the last job (roughcontact.pipeline.run_end).
+# after the last job (roughcontact.pipeline.run_end). A run that succeeds ends saying where its result is.
 onsuccess:
     cancel_job_rate_timers()
+    if not workflow.dryrun:
+        for _line in where_it_is(Path("results", ACTIVE_SCENE), ACTIVE_SCENE):
+            logger.info(f"roughcontact: {_line}")
 
 
 onerror:

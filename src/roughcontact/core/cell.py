@@ -199,7 +199,9 @@ class Cell:
             return cell
         if cell.square and nx != ny:
             raise ValueError(f"length: a single float means a square cell, and {name} must be a square 2-D array "
-                             f"(n, n) for it, got shape {(nx, ny)}: for a rectangular cell give length=(Lx, Ly)")
+                             f"(n, n) for it, got shape {(nx, ny)}: for a rectangular cell give length=(Lx, Ly). "
+                             f"A 2-D array is one map: {nx} profiles of {ny} points are not solved at once; solve "
+                             "each row as a profile (a 1-D array), one call each")
         if not cell.square and nx == ny and lx == ly:
             return cls(cell.shape, cell.sides, True)
         return cell

@@ -106,6 +106,50 @@ def atomic_output(path: str | os.PathLike) -> Iterator[Path]:
         raise
 
 
+def check_writable(path: str | os.PathLike, what: str = "the output") -> Path:
+    """``path`` as a :class:`~pathlib.Path` if a file can be written there, else ``ValueError`` naming it.
+
+    What a tool calls before its work, so that a bad output path fails in a second, not after an hour's
+    solve: ``path`` must not be a folder, and the folder it goes in must be writable, or creatable
+    (:func:`atomic_output` creates it) under its nearest existing ancestor. Writability is probed by
+    creating and removing a temporary file there: permission bits say nothing for root, and a read-only
+    mount shows only when written. Nothing is left behind.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     check_writable(f"{d}/new/contact.nc").name
+    'contact.nc'
+    """
+    path = Path(path)
+    if path.is_dir():
+        raise ValueError(f"{path}: is a folder; give {what}'s file name (e.g. {path / 'contact.nc'})")
+    folder = path.parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    if not folder.is_dir():
+        raise ValueError(f"{path}: cannot be written: {folder} is a file, not a folder; give {what} another path")
+    try:
+        fd, probe = _probe(folder)
+    except OSError as exc:
+        reason = exc.strerror or exc
+        raise ValueError(f"{path}: cannot be written ({folder}: {reason}); give {what} a writable folder") from None
+    os.close(fd)
+    os.unlink(probe)
+    return path
+
+
+def _probe(folder: Path) -> tuple[int, str]:
+    """A new empty file in ``folder`` (its descriptor and path), as :func:`atomic_output` would create one."""
+    while True:
+        probe = os.path.join(folder, f".write-probe.{secrets.token_hex(6)}.tmp")
+        try:
+            return os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600), probe
+        except FileExistsError:  # pragma: no cover - 48 random bits
+            continue
+
+
 def write_text_atomic(path: str | os.PathLike, text: str, *, encoding: str = "utf-8") -> Path:
     """Write ``text`` to ``path`` through :func:`atomic_output`; returns the path."""
     with atomic_output(path) as tmp, open(tmp, "w", encoding=encoding) as fh:

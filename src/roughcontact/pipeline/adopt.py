@@ -25,7 +25,8 @@ target's (in its place, so that the aggregate's bytes do not depend on which of 
 cases were adopted) and ``adopted_from`` names the source file. It is written
 atomically, and listed in ``results/{scene}/adopted.tsv`` (case file, source file and
 the sha256 of each). Snakemake then finds the output present and plans neither the job
-nor its surface (temporary or kept). The target's ``benchmarks/`` gets no file for an
+nor its surface (temporary or kept); a scene whose contact map reads its cases' surfaces
+(``outputs.fields``) is refused, as those surfaces would be made again and the cases re-solved. The target's ``benchmarks/`` gets no file for an
 adopted case: :mod:`roughcontact.pipeline.runcost` reports its cost in the source run on a row of
 its own.
 
@@ -47,7 +48,7 @@ import netCDF4
 import numpy as np
 
 from ..core.cli import input_errors
-from ..core.files import atomic_output, file_sha256, write_text_atomic
+from ..core.files import atomic_output, check_writable, file_sha256, write_text_atomic
 from ..core.values import same_value
 from ..core.version import __version__
 from . import params
@@ -205,7 +206,8 @@ def adopt(source: Path, target: Path, scene_name: str, scene: dict, *, trust_cod
 
 
 def check_adoptable(name: str, scene: dict) -> None:
-    """:class:`AdoptError` unless scene ``name`` has contact cases of generated surfaces, which adoption copies.
+    """:class:`AdoptError` unless scene ``name`` has contact cases of generated surfaces, which adoption copies,
+    and nothing downstream of them reads their surfaces (``outputs.fields``: the contact map).
 
     A generated case is fixed by its recorded parameters and the code; a measured or array case is also
     its input file's heights, whose content a contact file does not record (its reader settings name the
@@ -213,6 +215,14 @@ def check_adoptable(name: str, scene: dict) -> None:
     """
     if "contact" not in scene:
         raise AdoptError(f"scene {name!r} has no contact study, so it has no case to adopt")
+    fields = scene["contact"].get("outputs", {}).get("fields")
+    if fields:
+        # the contact map draws its cases over their surfaces: Snakemake would regenerate an adopted case's
+        # surface, and then re-solve the case, its surface being newer than its contact file
+        raise AdoptError(f"scene {name!r} stores fields (contact.outputs.fields: {list(fields)}), and its contact map "
+                         "reads each mapped case's surface file, which adoption does not copy: Snakemake would make "
+                         "the surface again and then solve the adopted case again; adopt into a scene without "
+                         f"outputs.fields, or run the scene itself (snakemake -j2 --config scene={name})")
     source = source_of(scene, name)
     if source.key is not None:
         raise AdoptError(f"scene {name!r} takes its surfaces from its {source.key} block ({source.name} files), "
@@ -241,6 +251,9 @@ def main(argv=None) -> None:
         scenes = validate_config({**config, "scene": args.scene})["scenes"]
         check_adoptable(args.scene, scenes[args.scene])
     target = Path("results") / args.scene
+    if not args.dry_run:
+        with input_errors(ap):  # before any case is checked or copied: a folder it cannot write fails now
+            check_writable(target / MANIFEST, f"the adopted cases' list of scene {args.scene}")
     if not args.dry_run and _locked(Path.cwd()):
         ap.exit(2, f"error: a Snakemake run holds {Path.cwd()}; stop it (or let it finish), adopt, then resume\n")
     with input_errors(ap):

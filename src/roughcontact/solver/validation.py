@@ -108,7 +108,8 @@ def validate_length(length, shape: tuple[int, int], name: str = "heights"):
         raise ValueError(
             f"length: a single float means a square cell, and {name} must be a 2-D square array (n, n) "
             f"for it; got length={length!r} and {name} of shape {(nx, ny)}: for a rectangular cell give "
-            f"length=(Lx, Ly), the sides along x (axis 0) and y (axis 1)")
+            f"length=(Lx, Ly), the sides along x (axis 0) and y (axis 1). A 2-D array is one map: {nx} profiles "
+            f"of {ny} points are not solved at once; solve each row as a profile (a 1-D array), one call each")
     return value
 
 

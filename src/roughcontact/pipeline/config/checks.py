@@ -9,6 +9,7 @@ import itertools
 from collections.abc import Mapping
 
 from ...solver.effects import EFFECTS
+from ...surfaces.linescan import MIN_PROFILE_POINTS
 from .files import ConfigError
 
 
@@ -23,10 +24,16 @@ def _duplicates_by_value(texts) -> list[str]:
     return dups
 
 
-def check_grid(scene: str, study: str, block: dict) -> None:
-    """Cross-field rules of a generated study's grid (k_l < k_s <= N/2, 0 < H < 1, examples, seeds)."""
+def check_grid(scene: str, study: str, block: dict, written: Mapping | None = None) -> None:
+    """Cross-field rules of a generated study's grid (k_l < k_s <= N/2, 0 < H < 1, examples, seeds, a profile's N).
+
+    ``written``: the study block as the scene writes it (before the merge over ``defaults``); a message about a
+    field it does not hold says the value came from the ``defaults`` block.
+    """
     def fail(field, msg):
-        raise ConfigError(f"scene {scene!r}, field '{study}.{field}': {msg}")
+        top = field.split("[")[0].split(".")[0]
+        origin = " (value from the 'defaults' block)" if written is not None and top not in written else ""
+        raise ConfigError(f"scene {scene!r}, field '{study}.{field}'{origin}: {msg}")
 
     n = block["surface"]["N"]
     grid = block["grid"]
@@ -49,11 +56,17 @@ def check_grid(scene: str, study: str, block: dict) -> None:
             fail("grid.k_l", f"k_l={kl} must be < k_s={ks} for every pair of the grid")
     for i, ex in enumerate(block.get("examples", [])):
         if ex["k_l"] not in grid["k_l"] or ex["k_s"] not in grid["k_s"]:
-            fail(f"examples[{i}]", f"({ex['k_l']}, {ex['k_s']}) is not in the grid's k_l x k_s")
+            fail(f"examples[{i}]", f"({ex['k_l']}, {ex['k_s']}) is not in the grid's k_l x k_s "
+                                   f"({', '.join(grid['k_l'])} x {', '.join(grid['k_s'])}); pick pairs of the grid, or "
+                                   f"write examples: [] in the scene's {study} block to draw none")
         if float(ex["k_l"]) >= float(ex["k_s"]):
             fail(f"examples[{i}]", f"k_l={ex['k_l']} must be < k_s={ex['k_s']}")
     if block["surface"].get("dimension") == 1 and block.get("examples"):
-        fail("examples", "draws maps of surfaces, and surface.dimension: 1 makes profiles; remove examples")
+        fail("examples", f"draws maps of surfaces, and surface.dimension: 1 makes profiles; write examples: [] in "
+                         f"the scene's {study} block")
+    if block["surface"].get("dimension") == 1 and n < MIN_PROFILE_POINTS:
+        fail("surface.N", f"a profile of {n} points is too short to fit or resolve (a profile needs at least "
+                          f"{MIN_PROFILE_POINTS}, as a measured line scan does); set surface.N >= {MIN_PROFILE_POINTS}")
     if study == "contact" and block["seeds"] < 2:
         fail("seeds", f"{block['seeds']} is too few: the contact study's CEL fit resamples seeds and needs "
                       "at least 2")

@@ -74,6 +74,19 @@ def _from_text(text: str, kind: str):
     return text
 
 
+def _enum_kind(values) -> str | None:
+    """The JSON type every value of an ``enum`` list has (``[1, 2]``: integer), None for text or a mix."""
+    if not values:
+        return None
+    if all(isinstance(v, bool) for v in values):
+        return "boolean"
+    if all(isinstance(v, int) and not isinstance(v, bool) for v in values):
+        return "integer"
+    if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+        return "number"
+    return None
+
+
 def _scalar_kind(schema: dict, root: dict) -> str | None:
     """The one non-text scalar type (integer, number, boolean) ``schema`` takes, itself or in one of its
     ``oneOf``/``anyOf`` alternatives (``pixel_size``: a number or a pair), when it takes no text; else None."""
@@ -81,6 +94,7 @@ def _scalar_kind(schema: dict, root: dict) -> str | None:
         return None
     kinds = {schema.get("type")} | {_resolve(sub, root).get("type") for key in ("oneOf", "anyOf")
                                       for sub in schema.get(key, ())}
+    kinds.add(_enum_kind(schema.get("enum")))  # an enum of numbers (dimension: [1, 2]) without a type of its own
     kinds &= {"integer", "number", "boolean"}
     return kinds.pop() if len(kinds) == 1 else None
 

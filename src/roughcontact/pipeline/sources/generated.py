@@ -45,7 +45,7 @@ class Generated(Source):
         out = copy.deepcopy(scene)
         for study in STUDIES:
             if study in out:
-                check_grid(name, study, out[study])
+                check_grid(name, study, out[study], ((delta or {}).get(study) or {}) if delta is not None else None)
         if "contact" in out:
             out["contact"]["solver"].setdefault("boundary", cls.default_boundary)
         return out

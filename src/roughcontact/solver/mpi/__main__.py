@@ -22,13 +22,15 @@ import argparse
 import os
 import resource
 import sys
+import traceback
 
 import numpy as np
 
 from ...core.cli import BAD_INPUT, one_line
-from ...core.files import atomic_output
+from ...core.files import atomic_output, check_writable
 from .run import MpiUnavailableError, rows_of, solve_contact_mpi, world
 from .slabs import FFT_LIBRARIES
+from .solver import CollectiveError
 
 
 def parser() -> argparse.ArgumentParser:
@@ -82,17 +84,39 @@ def read_rows(path: str, comm) -> tuple[np.ndarray, tuple[int, int], float]:
         return np.asarray(var.isel(x=slice(x0, x1)).values, dtype=np.float64), shape, float(ds.attrs.get("length", 1.0))
 
 
+#: The values of ``--generate``, in order, with the type each must have.
+GENERATE_VALUES = (("N", int), ("K_L", float), ("K_S", float), ("H", float), ("SEED", int))
+
+
+def generator_values(values) -> tuple[int, float, float, float, int]:
+    """``--generate N K_L K_S H SEED`` as numbers, else ``ValueError`` naming the value at fault."""
+    out = []
+    for (name, kind), text in zip(GENERATE_VALUES, values, strict=True):
+        try:
+            out.append(kind(text))
+        except ValueError:
+            raise ValueError(f"--generate {name}: {text!r} is not {'an integer' if kind is int else 'a number'}") \
+                from None
+    return tuple(out)
+
+
 def generated_rows(args, comm) -> tuple[np.ndarray, tuple[int, int], float]:
-    """Rank 0 generates the surface and sends each rank its rows (``Scatterv``)."""
-    n = int(args.generate[0])
+    """Rank 0 generates the surface and sends each rank its rows (``Scatterv``); a value the generator refuses
+    ends every rank (:func:`~.solver.collective`)."""
+    from .solver import collective
+
+    n, k_l, k_s, hurst, seed = generator_values(args.generate)
     length = 1.0 if args.length is None else args.length
-    full = None
-    if comm.rank == 0:
+
+    def generate():
         from ...surfaces.synthetic import generate_surface
 
-        k_l, k_s, hurst = (float(v) for v in args.generate[1:4])
-        full = generate_surface(n, k_l, k_s, hurst, int(args.generate[4]), rms_slope=args.rms_slope,
-                                rms_height=args.rms_height, length=length, plateau=args.plateau)
+        return generate_surface(n, k_l, k_s, hurst, seed, rms_slope=args.rms_slope, rms_height=args.rms_height,
+                                length=length, plateau=args.plateau)
+
+    # rank 0 alone generates: its refusal of a value (k_s beyond Nyquist, H out of range...) must reach the
+    # others, which would otherwise wait in the Scatterv below for ever
+    full = collective(comm, lambda: generate() if comm.rank == 0 else None)
     x0, x1 = rows_of((n, n), comm)
     mine = np.empty((x1 - x0, n))
     counts = comm.allgather(mine.size)
@@ -109,29 +133,41 @@ def main(argv=None) -> int:
         print(f"error: {one_line(exc)}", file=sys.stderr)
         return BAD_INPUT
     try:
-        if args.expect_ranks is not None and comm.size != args.expect_ranks:
-            raise ValueError(f"ranks: {args.expect_ranks} MPI ranks were asked for, but this process sees a world of "
-                             f"{comm.size}: the launcher started processes MPI did not join (srun without the PMI "
-                             "of the MPI library mpi4py was built with: try srun --mpi=pmi2, or build mpi4py "
-                             "against the site's MPI, docs/cluster.md)")
-        if args.steps < 1:
-            raise ValueError(f"--steps must be >= 1, got {args.steps}")
-        if args.length_y is not None and args.length is None:
-            raise ValueError("--length-y needs --length (the side along x)")
-        h, shape, length = _heights(args, comm)
-        p = np.asarray(args.loads) if args.loads is not None else args.p_max * np.arange(1, args.steps + 1) / args.steps
-        if args.length is not None:
-            length = args.length if args.length_y is None else (args.length, args.length_y)
-        options = {"tol": args.tol, "e_star": args.e_star, "length": length, "length_unit": args.length_unit,
-                   "pressure_unit": args.pressure_unit}
-        if args.max_iter is not None:
-            options["max_iter"] = args.max_iter
-        ds = solve_contact_mpi(h, shape, p, comm=comm, fft_library=args.fft_library, fields=args.fields,
-                               progress=_log_step, **options)
-    except (ValueError, OSError) as exc:
+        return _run(args, comm)
+    except CollectiveError as exc:  # raised on every rank at once: each may return
         if comm.rank == 0:
             print(f"error: {one_line(exc)}", file=sys.stderr)
         return BAD_INPUT
+    except (ValueError, OSError) as exc:
+        # raised on this rank alone: the others may wait in a collective call for ever (on a cluster, until
+        # the allocation ends), so the whole run is aborted
+        print(f"error: {one_line(exc)}", file=sys.stderr, flush=True)
+        if comm.size > 1:
+            comm.Abort(BAD_INPUT)
+        return BAD_INPUT
+    except BaseException:
+        if comm.size > 1:  # a bug: its traceback, then no rank left waiting
+            traceback.print_exc()
+            sys.stderr.flush()
+            comm.Abort(1)
+        raise
+
+
+def _run(args, comm) -> int:
+    """The command on every rank (:func:`main` without its handling of errors)."""
+    from .solver import collective
+
+    collective(comm, lambda: _check_arguments(args, comm))
+    h, shape, length = _heights(args, comm)
+    p = np.asarray(args.loads) if args.loads is not None else args.p_max * np.arange(1, args.steps + 1) / args.steps
+    if args.length is not None:
+        length = args.length if args.length_y is None else (args.length, args.length_y)
+    options = {"tol": args.tol, "e_star": args.e_star, "length": length, "length_unit": args.length_unit,
+               "pressure_unit": args.pressure_unit}
+    if args.max_iter is not None:
+        options["max_iter"] = args.max_iter
+    ds = solve_contact_mpi(h, shape, p, comm=comm, fft_library=args.fft_library, fields=args.fields,
+                           progress=_log_step, **options)
     # each rank's peak resident memory (ru_maxrss, KiB on Linux): what a run at a new size must budget
     rss = comm.gather(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20, root=0)
     if comm.rank == 0:
@@ -144,6 +180,22 @@ def main(argv=None) -> int:
               f"{float(ds.wall_time.sum()):.1f} s; peak RSS per rank [GiB]: {' '.join(f'{r:.2f}' for r in rss)}",
               file=sys.stderr)
     return 0
+
+
+def _check_arguments(args, comm) -> None:
+    """What the command line alone decides, before any work; ``--out`` on rank 0, which writes it at the end (a
+    path it cannot write fails now, not after the solve)."""
+    if args.expect_ranks is not None and comm.size != args.expect_ranks:
+        raise ValueError(f"ranks: {args.expect_ranks} MPI ranks were asked for, but this process sees a world of "
+                         f"{comm.size}: the launcher started processes MPI did not join (srun without the PMI "
+                         "of the MPI library mpi4py was built with: try srun --mpi=pmi2, or build mpi4py "
+                         "against the site's MPI, docs/cluster.md)")
+    if args.steps < 1:
+        raise ValueError(f"--steps must be >= 1, got {args.steps}")
+    if args.length_y is not None and args.length is None:
+        raise ValueError("--length-y needs --length (the side along x)")
+    if comm.rank == 0:
+        check_writable(args.out, "--out")
 
 
 def _heights(args, comm):
@@ -171,7 +223,7 @@ def _file_rows(path, comm):
 
 
 def _check_generate(args, comm):
-    n = int(args.generate[0])
+    n = generator_values(args.generate)[0]
     if (args.rms_slope is None) == (args.rms_height is None):
         raise ValueError("--generate needs exactly one of --rms-slope and --rms-height")
     if comm.size > n:

@@ -21,6 +21,7 @@ import math
 import numpy as np
 
 from ...core.backend import get_backend
+from ...core.cli import one_line
 from ...core.cell import Cell
 from ..batch_solver import BATCH_METHOD, BatchSolver
 from ..units import Units
@@ -29,20 +30,26 @@ from .kernels import MpiKernels, SlabOperator
 from .slabs import make_fft
 
 
-def collective(comm, fn):
-    """``fn()`` on every rank; a ``ValueError`` on any rank is raised on every rank (the first rank's message).
+class CollectiveError(ValueError):
+    """A ``ValueError`` raised on every rank at once by :func:`collective`: each rank may return on it, as no
+    rank is left waiting in a collective call."""
 
-    A check that fails on one rank only (its slab holds the bad value) would otherwise leave the
-    others waiting in the next collective call for ever.
+
+def collective(comm, fn):
+    """``fn()`` on every rank; a ``ValueError`` or ``OSError`` on any rank is raised on every rank as a
+    :class:`CollectiveError` (the first failing rank's message).
+
+    A check that fails on one rank only (its slab holds the bad value, or only rank 0 generates or
+    writes) would otherwise leave the others waiting in the next collective call for ever.
     """
     try:
         out, msg = fn(), None
-    except ValueError as exc:
-        out, msg = None, str(exc)
+    except (ValueError, OSError) as exc:
+        out, msg = None, one_line(exc)
     msgs = comm.allgather(msg)
     bad = [m for m in msgs if m is not None]
     if bad:
-        raise ValueError(bad[0])
+        raise CollectiveError(bad[0])
     return out
 
 
