@@ -309,7 +309,9 @@ def check_intervals(text: str, stored: Stored, where: str) -> list[str]:
                 problems.append(f"{where}: {shown!r} is rounded to {sorted(_decimals(v))} decimal places, its ends to "
                                 f"{sorted(at)}; the half-width {(high - low) / 2:.3g} asks for {sorted(allowed)}")
         touches = value in (low, high) or not low < value < high or _float(v) in {_float(e) for e in ends}
-        if touches and not on_bound and not NOT_CONSTRAINED.match(text[m.end():m.end() + 20]):
+        marked = NOT_CONSTRAINED.match(text[m.end():m.end() + 20]) or \
+            re.search(r"(?:not constrained|unconstrained)[^\[\]]{0,30}$", text[max(0, m.start() - 40):m.start()])
+        if touches and not on_bound and not marked:
             problems.append(f"{where}: {shown!r} ends at its own estimate and is not marked not constrained")
     return problems
 
@@ -651,10 +653,19 @@ def _max_side(out: Path) -> int:
     return max(sides)
 
 
+def _unresolved_flags(ds: xr.Dataset) -> list[str]:
+    """Variables of ``ds`` over the load steps that are CF flags with a meaning that says unresolved."""
+    return [v for v in ds.data_vars
+            if "step" in ds[v].dims and "unresolved" in str(ds[v].attrs.get("flag_meanings", ""))]
+
+
 def check_unresolved(out: Path, landing: str) -> list[str]:
-    """A contact of fewer than UNRESOLVED_NODES nodes at a step: flagged in its file (a CF flag over the steps whose
-    meanings name it unresolved) and said on the page."""
+    """A contact of fewer than UNRESOLVED_NODES nodes at a step: flagged in its file or the contact aggregate (a CF
+    flag over the steps with a meaning that says unresolved) and said on the page."""
     problems = []
+    aggregate = out / "aggregate" / "contact.nc"
+    with contextlib.ExitStack() as stack:
+        in_aggregate = aggregate.is_file() and bool(_unresolved_flags(stack.enter_context(xr.open_dataset(aggregate))))
     for path in _cases(out):
         with xr.open_dataset(path) as ds:
             if "area_fraction" not in ds or "step" not in ds["area_fraction"].dims:
@@ -663,10 +674,8 @@ def check_unresolved(out: Path, landing: str) -> list[str]:
             few = (nodes > 0) & (nodes < UNRESOLVED_NODES)
             if not few.any():
                 continue
-            flags = [v for v in ds.data_vars if "step" in ds[v].dims and "unresolved" in
-                     str(ds[v].attrs.get("flag_meanings", ""))]
             steps = ds["step"].values[few.reshape(-1, ds.sizes["step"]).any(axis=0)]
-            if not flags:
+            if not (_unresolved_flags(ds) or in_aggregate):
                 problems.append(f"{path.name}: the contact spans {int(nodes[few].min())} node(s) at step(s) "
                                 f"{steps.tolist()}: no flag of its file says unresolved")
             if "unresolved" not in landing:
@@ -683,10 +692,11 @@ def check_introduction(text: str, out: Path, cel_math: bool) -> list[str]:
     if cel_math and not fitted:
         problems.append("the page writes the contact evolution law (a formula with κ, μ and β) and the scene fits "
                         "none (no fit/cel.csv)")
-    stages = {"representativity": (out / "aggregate" / "representativity.nc").is_file(),
-              "contact evolution law": fitted}
+    stages = {"representativity": (out / "aggregate" / "representativity.nc").is_file()}
     for words, ran in stages.items():
-        if words in intro and not ran:
+        said = [m for m in re.finditer(re.escape(words), intro)
+                if not re.search(r"\b(?:no|not|nor|without)\b[^.;]{0,40}$", intro[:m.start()], re.IGNORECASE)]
+        if said and not ran:
             problems.append(f"the introduction names {words!r}, a stage the scene did not run")
     cases = _cases(out)
     with contextlib.ExitStack() as stack:
