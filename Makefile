@@ -49,8 +49,9 @@ dryrun: install
 test: install-test lint browser
 	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest -n $(JOBS) --dist loadgroup --durations=30
 
-# tests/test_report.py opens the report in a real browser: Debian's chromium, installed here when
-# missing and possible (root and apt-get). Never fails: without chromium that test skips, saying why.
+# tests/test_reader.py opens every scene's report in a real browser: Playwright (the test extra) drives Debian's
+# chromium, installed here when missing and possible (root and apt-get); Playwright's own browser download is
+# not used. Never fails: without chromium that test skips, saying why.
 browser:
 	@if command -v chromium >/dev/null 2>&1; then \
 		echo "chromium: $$(command -v chromium)"; \

@@ -3,30 +3,13 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from conftest import copy_workflow, run_snakemake
+from conftest import ACCURACY, run_snakemake
 from roughcontact import generate_surface
 from roughcontact.solver import solve_contact
 from roughcontact.studies import accuracy
 from roughcontact.theory.perimeter import perimeter_corrected_area
 
-ACC = {
-    "scene": "acc",
-    "scenes": {
-        "acc": {
-            "accuracy": {
-                "surface": {"L": 1.0, "rms_slope": 0.1},
-                "k_l": "2", "k_s": "8", "H": ["0.5", "0.8"],
-                "p_max": 0.02,
-                "reference": {"N": "64", "tol": "1e-10", "n_steps": "20"},
-                "defaults": {"N": "32", "tol": "1e-8", "n_steps": "20"},
-                "axes": {"N": ["16", "32"], "tol": ["1e-4"], "n_steps": ["10"]},
-                "seeds": 1,
-                "seed_axis": ["1", "3"],
-                "kappa_at": 0.15,
-            }
-        }
-    },
-}
+ACC = ACCURACY
 
 
 def test_variants_one_axis_at_a_time():
@@ -70,11 +53,9 @@ def test_relative_error_and_cost_table():
 
 
 @pytest.mark.slow
-def test_tiny_accuracy_scene_end_to_end(tmp_path):
-    wd = copy_workflow(tmp_path / "wf", ACC)
-    res = run_snakemake(wd, "-j2")
-    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
-    out = wd / "results" / "acc"
+def test_tiny_accuracy_scene_end_to_end(accuracy_run):
+    """The tiny accuracy study (the session's run, shared with test_reader)."""
+    wd, out = accuracy_run.wd, accuracy_run.out
     s = xr.open_dataset(out / "accuracy" / "summary.nc")
     assert set(s["axis"].values) == {"reference", "N", "tol", "n_steps", "defaults", "seeds"}
     ref = s.sel(variant="N64_tol1e-10_steps20")

@@ -49,11 +49,9 @@ def test_adhesive_scene_plans_no_fit(tmp_path):
 
 
 @pytest.mark.slow
-def test_adhesive_scene_draws_the_cycle_and_the_pull_off(tmp_path):
-    wd = copy_workflow(tmp_path / "run", _adhesive())
-    res = run_snakemake(wd, "-j2", "--config", "scene=tiny")
-    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
-    out = wd / "results" / "tiny"
+def test_adhesive_scene_draws_the_cycle_and_the_pull_off(adhesion_run, tmp_path):
+    """The `adhesion` scene's tiny variant (the session's run; the contact block of :func:`_adhesive`)."""
+    wd, out = adhesion_run.wd, adhesion_run.out
     for name in ("hysteresis", "pull_off"):
         assert (out / "figures" / f"{name}.png").stat().st_size > 10_000
     assert not (out / "fit").exists() and not (out / "figures" / "kappa.png").exists()
@@ -64,7 +62,7 @@ def test_adhesive_scene_draws_the_cycle_and_the_pull_off(tmp_path):
     assert "published" not in summary + result and "contact.effects.adhesion.law" in summary
     intro = (out / "report" / "intro.rst").read_text()  # the page opens with what the scene computes (issue 60)
     assert "**adhesive contact**" in intro and "evolution law" not in intro and "representativity" not in intro
-    shown = assert_scene_captions_true(wd, "tiny", wd / "config" / "config.yaml")  # no reference line promised
+    shown = assert_scene_captions_true(wd, adhesion_run.scene)  # no reference line promised
     assert shown == {"hysteresis": [], "pull_off": []}
     with xr.open_dataset(out / "aggregate" / "contact.nc") as agg:
         pull = agg["pull_off_pressure"].values

@@ -10,7 +10,7 @@ import xarray as xr
 
 from cfcheck import assert_cf_clean
 from compare_outputs import assert_text_close
-from conftest import copy_workflow, run_snakemake
+from conftest import KAPPA_GAP, run_snakemake
 from roughcontact.analysis.fit.estimators import PAPER_CEL
 from roughcontact.studies import kappa_gap
 from roughcontact.studies.kappa_gap.analysis import closes
@@ -71,34 +71,14 @@ def test_closes_follows_its_printed_rule(shift, se, verdict):
     assert closes(np.array(shift), np.array(se), gap, np.array([0.002, 0.002])) == verdict
 
 
-TINY = {
-    "scene": "kg",
-    "scenes": {"kg": {"kappa_gap": {
-        "surface": {"L": 1.0, "rms_slope": 0.1},
-        "k_l": "2", "k_s": "8", "H": ["0.5", "0.8"],
-        "variants": {
-            "baseline": {"role": "baseline", "N": "64", "seeds": 2, "p_max": 0.004},
-            "load": {"role": "load", "N": "64", "seeds": 2, "p_max": 0.03},
-            "N32": {"role": "resolution", "N": "32", "seeds": 2, "p_max": 0.004, "n_steps": 8,
-                    "schedule": "geometric"},
-            "N64": {"role": "resolution", "N": "64", "seeds": 2, "p_max": 0.004, "n_steps": 8,
-                    "schedule": "geometric"},
-            "N128": {"role": "resolution", "N": "128", "seeds": 1, "p_max": 0.004, "n_steps": 8,
-                     "schedule": "geometric"},
-            "ref": {"role": "solver", "N": "32", "seeds": 1, "p_max": 0.004},
-            "sk": {"role": "solver", "N": "32", "seeds": 1, "p_max": 0.004, "method": "stanley-kato",
-                   "tol": "1e-3"},
-        },
-    }}},
-}
+TINY = KAPPA_GAP
 
 
 @pytest.mark.slow
-def test_tiny_kappa_gap_scene_end_to_end(tmp_path):
-    wd = copy_workflow(tmp_path / "wf", TINY)
-    res = run_snakemake(wd, "-j2")
-    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
-    out = wd / "results" / "kg" / "kappa_gap"
+def test_tiny_kappa_gap_scene_end_to_end(kappa_gap_run, tmp_path):
+    """The tiny kappa-gap study (the session's run, shared with test_reader)."""
+    wd = kappa_gap_run.wd
+    out = kappa_gap_run.out / "kappa_gap"
     data = xr.open_dataset(out / "kappa-gap.nc")
     assert sorted(data.variant.values) == sorted(TINY["scenes"]["kg"]["kappa_gap"]["variants"])
     assert data.sizes["case"] == 4 and int(data["stopped"].sel(variant="baseline").sum()) == 4 * 30

@@ -1,8 +1,8 @@
-"""Line scans and generated profiles as scenes (issue 49): planning checks, and slow end-to-end runs to the report."""
+"""Line scans and generated profiles as scenes (issue 49): planning checks, and slow end-to-end runs to the report
+(the session's runs of tests/conftest.py, which test_reader opens in a browser)."""
 
 from __future__ import annotations
 
-import copy
 import re
 import shutil
 from pathlib import Path
@@ -13,13 +13,10 @@ import xarray as xr
 
 from caption_check import assert_scene_captions_true
 from cfcheck import assert_cf_clean
-from conftest import copy_workflow, run_snakemake
+from conftest import LINESCANS, SceneRun
 from roughcontact.pipeline.config import ConfigError
 from roughcontact.pipeline.scenes import validate_config
 from roughcontact.studies import report
-from test_workflow import TINY
-
-LINESCANS = Path(__file__).parent / "data" / "linescans"
 
 
 def _measured(files: dict, **contact) -> dict:
@@ -29,19 +26,6 @@ def _measured(files: dict, **contact) -> dict:
         "contact": {"load": {"n_steps": 12}, **contact},
         "fit": {"window": [0.02, 0.3], "n_boot": 20},
     }}}
-
-
-def _profiles() -> dict:
-    """TINY's contact study on profiles of 256 points (surface.dimension: 1)."""
-    cfg = copy.deepcopy(TINY)
-    del cfg["scenes"]["tiny"]["representativity"]["examples"]
-    for study in ("representativity", "contact"):
-        cfg["scenes"]["tiny"][study]["surface"].update(N=256, dimension=1)
-    cfg["scenes"]["tiny"]["contact"]["grid"] = {"k_l": ["2"], "k_s": ["32"], "H": ["0.5", "0.8"]}
-    # the last step's fields: the contact map draws the profiles (issue 49 item 4)
-    n_steps = cfg["scenes"]["tiny"]["contact"].get("load", {}).get("n_steps", 30)
-    cfg["scenes"]["tiny"]["contact"].setdefault("outputs", {})["fields"] = [n_steps]
-    return cfg
 
 
 def test_a_too_short_line_scan_is_refused_at_planning(monkeypatch):
@@ -69,10 +53,9 @@ def test_a_line_scan_scene_refuses_clusters(monkeypatch):
         validate_config(cfg)
 
 
-def _assert_ran(wd: Path, scene: str, res, figures=("area_load", "kappa")) -> Path:
-    """The run succeeded, every load step of every case converged, and the report was built."""
-    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
-    out = wd / "results" / scene
+def _assert_ran(run: SceneRun, tables: Path, figures=("area_load", "kappa")) -> Path:
+    """Every load step of every case converged, and the report was built."""
+    out = run.out
     contact = sorted((out / "contact").glob("*.nc"))
     assert contact
     for path in contact:
@@ -85,7 +68,7 @@ def _assert_ran(wd: Path, scene: str, res, figures=("area_load", "kappa")) -> Pa
     for part in ("summary", "result"):  # the report says the paper's constants are of 2-D surfaces
         assert "These cases are profiles" in (out / "report" / f"{part}.rst").read_text()
     _assert_flags_and_numbers_true(out)
-    assert_cf_clean(contact + sorted((out / "surfaces").glob("*.nc")), wd / "cf-tables")
+    assert_cf_clean(contact + sorted((out / "surfaces").glob("*.nc")), tables)
     return out
 
 
@@ -103,25 +86,22 @@ def _assert_flags_and_numbers_true(out: Path) -> None:
 
 
 @pytest.mark.slow
-def test_a_measured_scene_of_line_scans_runs_to_the_report(tmp_path, monkeypatch):
+def test_a_measured_scene_of_line_scans_runs_to_the_report(line_scans_run, tmp_path, monkeypatch):
     """SurfaceTopography's two non-uniform line scans (134 and 132 points), resampled and solved in plane strain
     on the free boundary, every step converged, the fit and the report built."""
-    wd = copy_workflow(tmp_path / "run", _measured({"scan": "nonuniform.asc", "xy": "xy-1.txt"}))
-    for name in ("nonuniform.asc", "xy-1.txt"):
-        shutil.copy(LINESCANS / name, wd / name)
-    out = _assert_ran(wd, "m", run_snakemake(wd, "-j2", "--config", "scene=m"),
-                      figures=("measured_area_load", "measured_kappa"))
+    wd = line_scans_run.wd
+    out = _assert_ran(line_scans_run, tmp_path / "cf-tables", figures=("measured_area_load", "measured_kappa"))
     assert (out / "figures" / "topographies.png").stat().st_size > 10_000
     with xr.open_dataset(out / "surfaces" / "scan.nc") as surface:
         assert '"resampled"' in surface.attrs["source"] and surface.heights.dims == ("topography", "x")
     assert (out / "fit" / "cel.nc").exists()
     monkeypatch.chdir(wd)  # the scene's paths are relative to its working directory
-    assert_scene_captions_true(wd, "m")
+    assert_scene_captions_true(wd, line_scans_run.scene)
 
 
 @pytest.mark.slow
-def test_a_generated_profile_scene_runs_to_the_report(tmp_path):
-    wd = copy_workflow(tmp_path / "run", _profiles())
-    out = _assert_ran(wd, "tiny", run_snakemake(wd, "-j2", "--config", "scene=tiny"))
+def test_a_generated_profile_scene_runs_to_the_report(lines_run, tmp_path):
+    """The `lines` scene's tiny variant (the session's run)."""
+    out = _assert_ran(lines_run, tmp_path / "cf-tables")
     assert (out / "figures" / "contact_map.png").stat().st_size > 10_000  # profiles, deformed surface, pressure
-    assert_scene_captions_true(wd, "tiny")
+    assert_scene_captions_true(lines_run.wd, lines_run.scene)

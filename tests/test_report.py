@@ -1,12 +1,11 @@
-"""The Snakemake report: its landing page (roughcontact.studies.report) and captions, and the demo's report
-in a browser."""
+"""The Snakemake report: its landing page (roughcontact.studies.report) and captions. Every shipped scene's report
+in a browser: tests/test_reader.py."""
 import base64
 import datetime
 import os
 import re
 import shutil
 import subprocess
-from html.parser import HTMLParser
 from pathlib import Path
 
 import jinja2
@@ -15,8 +14,7 @@ import pytest
 import xarray as xr
 from docutils.core import publish_parts
 
-from conftest import REPO, run_snakemake
-from roughcontact import __version__
+from conftest import REPO
 from roughcontact.analysis import fit
 from roughcontact.studies import report, run_record
 from roughcontact.studies.rst import folded
@@ -24,7 +22,6 @@ from roughcontact.studies.rst import folded
 REPORT_DIR = REPO / "workflow" / "report"
 DOCUTILS_CONF = REPORT_DIR / "docutils.conf"
 GIT = shutil.which("git")
-CHROMIUM = shutil.which("chromium")
 
 
 @pytest.fixture
@@ -99,7 +96,7 @@ def test_every_caption_renders_cleanly(caption, mathml):
     """Captions without Jinja render without docutils messages; their maths becomes MathML."""
     text = (REPORT_DIR / caption).read_text()
     if "{{" in text or "{%" in text:
-        pytest.skip("a Jinja template: rendered by the report (test_landing_page_template_renders, browser test)")
+        pytest.skip("a Jinja template: rendered by the report (test_landing_page_template_renders, test_reader)")
     html = _html(text)
     assert html.count("<math") == text.count(":math:") + text.count(".. math::")
 
@@ -460,173 +457,3 @@ def test_landing_page_leads_with_the_result_then_the_figures(tmp_path, monkeypat
         (root / name).unlink()
     html = _landing_page({"scene": "demo", "scenes": {"demo": {}}}, [("Contact", figure)])
     assert "No result of this scene yet" in html and "No record of the run yet" in html
-
-
-# --------------------------------------------------------------------------------- in a browser
-class _Visible(HTMLParser):
-    """Text and element counts of a DOM, without scripts and styles."""
-
-    def __init__(self):
-        super().__init__()
-        self.skip, self.parts, self.tags = 0, [], {}
-
-    def handle_starttag(self, tag, attrs):
-        if tag in ("script", "style"):
-            self.skip += 1
-        elif not self.skip:
-            self.tags[tag] = self.tags.get(tag, 0) + 1
-
-    def handle_endtag(self, tag):
-        if tag in ("script", "style"):
-            self.skip -= 1
-
-    def handle_data(self, data):
-        if not self.skip:
-            self.parts.append(data)
-
-    @property
-    def text(self):
-        return " ".join(" ".join(self.parts).split())
-
-
-def _plain_phrase(rst: str, n: int = 3) -> str:
-    """The first ``n`` consecutive words of ``rst`` without markup: text a reader sees as written."""
-    words = rst.split()
-    for i in range(len(words) - n + 1):
-        if all(re.fullmatch(r"[A-Za-z][A-Za-z'-]*", w) for w in words[i:i + n]):
-            return " ".join(words[i:i + n])
-    raise AssertionError(f"no plain phrase of {n} words in {rst!r}")
-
-
-#: Screenshots of the demo's report in headless Chromium (the README shows the landing page). The browser test
-#: writes them to its temporary folder, and here when ROUGHCONTACT_UPDATE_SCREENSHOTS=1: they show a run's
-#: date and CPU time, so rewriting them on every test run would leave the tree changed.
-SCREENSHOTS = {"landing": REPO / "docs" / "figures" / "report_landing.png",
-               "figure": REPO / "docs" / "figures" / "report_figure.png"}
-
-#: The figure page the browser test opens: its info panel (caption) and the figure itself (the eye icon).
-FIGURE_PAGE = "results/demo/figures/kappa.png"
-
-# Once the app has rendered: opens the page named by the body's data-show (a result's info, then the result
-# itself by its eye icon), then records where the result line lies and whether every overbar (a <mover> over
-# U+00AF, U+02C9 or a combining macron) is drawn: a box of its own above its base.
-MEASURE = """<script>
-window.addEventListener("load", () => setTimeout(() => {
-  const go = document.body.getAttribute("data-show");
-  if (go) {
-    app.showResultInfo(go);
-    setTimeout(() => {
-      const eye = [...document.querySelectorAll("a")].find(a => a.parentElement
-        && a.parentElement.textContent.trim() === go && a.textContent.trim() === "");
-      document.body.setAttribute("data-eye", eye ? "found" : "missing");
-      if (eye) eye.click();
-    }, 500);
-  }
-  setTimeout(() => {
-    const result = [...document.querySelectorAll("#app strong")].find(e => e.textContent.trim() === "Result");
-    document.body.setAttribute("data-result-top", result ? String(result.getBoundingClientRect().top) : "missing");
-    const bars = [...document.querySelectorAll("#app mover")].filter(m => m.children.length == 2
-      && ["\\u00af", "\\u02c9", "\\u0304"].includes(m.children[1].textContent.trim()));
-    const drawn = bars.filter(m => {
-      const b = m.children[0].getBoundingClientRect(), o = m.children[1].getBoundingClientRect();
-      return o.width > 0 && o.height > 0 && o.bottom <= b.top + 0.6 * b.height;
-    });
-    document.body.setAttribute("data-bars", drawn.length + "/" + bars.length);
-  }, 2500);
-}, 1500));
-</script>
-"""
-
-
-def _chromium(page: Path, profile: Path, height: int, *output: str) -> str:
-    """Headless chromium on ``page`` once its scripts ran: ``--dump-dom`` (returns the DOM) or ``--screenshot=PATH``."""
-    cmd = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-           "--disable-background-networking", "--disable-component-update", "--disable-sync", "--hide-scrollbars",
-           f"--user-data-dir={profile}", f"--window-size=1280,{height}", "--virtual-time-budget=15000", *output,
-           page.as_uri()]
-    res = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
-    assert res.returncode == 0, res.stderr[-3000:]
-    return res.stdout
-
-
-def _open(report_html: Path, tmp_path: Path, name: str, height: int, show: str | None = None):
-    """The report as a reader sees it in a window 1280 x ``height``: ``(visible text, its parser, DOM)``, and its
-    screenshot ``tmp_path/{name}.png``; ``show``: the result whose page to open (default the landing page)."""
-    head, tail = report_html.read_text().rsplit("</body>", 1)  # scripts hold "</body>" too
-    if show is not None:
-        head = head.replace("<body", f'<body data-show="{show}"', 1)
-    page = tmp_path / f"{name}.html"
-    page.write_text(head + MEASURE + "</body>" + tail)
-    dom = _chromium(page, tmp_path / f"profile-{name}", height, "--dump-dom")
-    assert "</html>" in dom
-    _chromium(page, tmp_path / f"profile-{name}", height, f"--screenshot={tmp_path / name}.png")
-    visible = _Visible()
-    visible.feed(dom)
-    return visible.text, visible, dom
-
-
-def _attribute(dom: str, name: str) -> str:
-    return dom.split(f'{name}="')[1].split('"')[0]
-
-
-def _clutter_free(text: str, where: str) -> None:
-    """No reStructuredText markup and no escaped newline on screen (issue 52: the info panel showed both)."""
-    assert ":math:" not in text and "\\n" not in text and "``" not in text, where
-    assert "System Message" not in text and "Docutils System Messages" not in text, where
-
-
-@pytest.mark.slow
-@pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (make test installs it as root with apt-get)")
-def test_demo_report_in_a_browser(demo_run, tmp_path, shipped_config):
-    """`snakemake --report` of the demo scene in a real browser: the landing page leads with the result and the
-    figures, its maths renders (p-bar with its bar), its numbers are rounded, and a figure's page is clean."""
-    report_html = tmp_path / "report.html"
-    res = run_snakemake(demo_run, "--report", str(report_html), timeout=600)
-    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
-    out = demo_run / "results" / "demo"
-    height = 1600
-    text, visible, dom = _open(report_html, tmp_path, "landing", height)
-    assert "Parameters of scene demo" in text, "the app did not render the landing page"
-    _clutter_free(text, "landing page")
-    # the result first, in the window: the fitted constants with their intervals against the paper's
-    top = _attribute(dom, "data-result-top")
-    assert top != "missing" and 0 <= float(top) < height / 2, f"the result line is at {top} px"
-    rows = report.result_group(report.read_fit_csv((out / "fit" / "cel.csv").read_text()))
-    assert [r["constant"] for r in rows] == ["kappa", "mu", "beta"]
-    for row in rows:
-        shown = f"{report.PLAIN_SYMBOLS[row['constant']]} = {report.constant_estimate(row)[0]}".replace("\\*", "*")
-        assert shown in text and f"{report.PLAIN_SYMBOLS[row['constant']]} = {report.published_estimate(row)}" in text
-    first_value = text.index("κ/√(2π) = ")
-    assert first_value < text.index("Figures") < text.index("Contact evolution law fit") < text.index(
-        "Parameters of scene demo") < text.index("contact.surface.N") < text.index("Provenance")
-    # the parameters are folded, the fit table is not; every figure embedded with its caption
-    assert "parameters (click to show)" in text and visible.tags.get("details", 0) >= 2
-    figures = sorted(p.stem for p in (out / "figures").glob("*.png"))
-    assert len(figures) >= 5 and visible.tags.get("img", 0) >= len(figures)
-    for name in figures:
-        assert f"{name}.png" in text, name
-        assert _plain_phrase((out / "figures" / f"{name}.caption.rst").read_text()) in text, name
-    assert "Drawn with the data: the BGT small-load limit" in text
-    assert "cel.html (Fit)" in text and "kappa.pdf (Contact, vector PDF)" in text  # the fit as a table, the PDFs
-    # the code and the run: version, commit (not a git checkout here), libraries, host, date, CPU time
-    for shown in (f"roughcontact version: {__version__}", "git commit: unknown", "numpy", "pyFFTW", "FFTW",
-                  "host:", "run recorded:", "total CPU time of the run's jobs:"):
-        assert shown in text, shown
-    # maths as MathML, the mean pressure's bar drawn (U+00AF: Chromium drops docutils' U+02C9)
-    assert visible.tags.get("math", 0) >= 10 and visible.tags.get("mfrac", 0) >= 1
-    assert "\u02c9" not in dom and "\u00af" in dom
-    drawn, bars = map(int, _attribute(dom, "data-bars").split("/"))
-    assert bars >= 2 and drawn == bars, f"{drawn} of {bars} overbars drawn"
-    # a figure's page: the figure, its caption beside it, and the job's parameters without the raw caption
-    text, visible, dom = _open(report_html, tmp_path, "figure", 1000, show=FIGURE_PAGE)
-    assert _attribute(dom, "data-eye") == "found"
-    _clutter_free(text, "figure page")
-    assert "Drawn with the data:" in text and "scene=demo, figure=kappa" in text
-    drawn, bars = map(int, _attribute(dom, "data-bars").split("/"))
-    assert bars >= 1 and drawn == bars, f"{drawn} of {bars} overbars drawn on the figure page"
-    for name, path in SCREENSHOTS.items():
-        shot = tmp_path / f"{name}.png"
-        assert shot.read_bytes().startswith(b"\x89PNG") and shot.stat().st_size > 50_000, name
-        if os.environ.get("ROUGHCONTACT_UPDATE_SCREENSHOTS") == "1":
-            shutil.copyfile(shot, path)
-        assert path.is_file(), f"{path} is missing: rerun with ROUGHCONTACT_UPDATE_SCREENSHOTS=1"

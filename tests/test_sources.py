@@ -4,7 +4,6 @@ import copy
 import numpy as np
 import pytest
 
-from conftest import copy_workflow, run_snakemake
 from roughcontact.pipeline.config import ConfigError
 from roughcontact.pipeline.progress import planned_solves
 from roughcontact.pipeline.scenes import plan_summary, validate_config
@@ -182,28 +181,16 @@ def test_files_of_a_scene_that_does_not_run_are_not_read(tmp_path, monkeypatch):
 
 # ------------------------------------------------------------------------------ end to end
 @pytest.mark.slow
-def test_an_array_scene_runs_through_contact_aggregate_fit_and_figures(tmp_path):
-    """The shipped `array` scene's two files (one rectangular) through every stage (~40 s)."""
+def test_an_array_scene_runs_through_contact_aggregate_fit_and_figures(array_run):
+    """The shipped `array` scene's two files (one rectangular) through every stage, 8 load steps (the session's run,
+    shared with test_reader; ~40 s)."""
     from roughcontact.pipeline.io import read_dataset
 
-    wd = copy_workflow(tmp_path / "wf")
-    cfg = {"scene": "arr", "scenes": {"arr": {
-        "array": {"files": {"a": {"path": "data/array/patch-a.npy", "pixel_size": 0.5},
-                            "b": {"path": "data/array/patch-b.npy", "pixel_size": [0.5, 0.6]}}, "unit": "um"},
-        "representativity": {"n_bins": 20},
-        "contact": {"load": {"n_steps": 8}, "solver": {"e_star": 1.0e5, "pressure_unit": "MPa"}},
-        "fit": {"window": [0.01, 0.3], "n_boot": 20},
-    }}}
-    import yaml
-
-    (wd / "arr.yaml").write_text(yaml.safe_dump(cfg))
-    res = run_snakemake(wd, "-j2", "--configfile", "arr.yaml")
-    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
-    root = wd / "results" / "arr"
+    wd, root = array_run.wd, array_run.out
     agg = read_dataset(root / "aggregate" / "contact.nc", stage="aggregate")
-    assert list(agg["topography"].values) == ["a", "b"] and agg.attrs["boundary"] == "free"
+    assert list(agg["topography"].values) == ["patch-a", "patch-b"] and agg.attrs["boundary"] == "free"
     assert bool(agg["converged"].all()) and np.all(np.isfinite(agg["kappa"].values))
-    b = read_dataset(root / "surfaces" / "b.nc", stage="surface")
+    b = read_dataset(root / "surfaces" / "patch-b.nc", stage="surface")
     assert (b.sizes["x"], b.sizes["y"]) == (96, 80) and (b.attrs["length_x"], b.attrs["length_y"]) == (48.0, 48.0)
     assert np.array_equal(b["heights"].values.squeeze(), np.load(wd / "data/array/patch-b.npy"))
     assert read_dataset(root / "aggregate" / "representativity.nc", stage="aggregate").sizes["topography"] == 2

@@ -11,39 +11,7 @@ import yaml
 
 from caption_check import assert_scene_captions_true
 from cfcheck import assert_cf_clean
-from conftest import copy_workflow, run_snakemake
-
-TINY = {
-    "scene": "tiny",
-    "scenes": {
-        "tiny": {
-            "description": "tiny end-to-end run for the tests",
-            "representativity": {
-                "surface": {"N": 32, "rms_height": 0.1},
-                "grid": {"k_l": ["1", "4"], "k_s": ["8"], "H": ["0.8"]},
-                "seeds": 2,
-                "n_bins": 20,
-                "examples": [{"k_l": "1", "k_s": "8"}, {"k_l": "4", "k_s": "8"}],
-            },
-            "contact": {
-                "surface": {"N": 32, "rms_slope": 0.1},
-                "grid": {"k_l": ["2"], "k_s": ["8"], "H": ["0.5", "0.8"]},
-                "seeds": 2,
-                "load": {"p_max": 0.01, "n_steps": 12},
-                "solver": {"tol": 1e-8},
-            },
-            "fit": {"window": [0.01, 0.3], "n_boot": 20},
-        },
-        "reponly": {
-            "representativity": {
-                "surface": {"N": 32, "rms_height": 0.1},
-                "grid": {"k_l": ["1"], "k_s": ["8"], "H": ["0.8"]},
-                "seeds": 2,
-            }
-        },
-    },
-}
-
+from conftest import TINY, copy_workflow, run_snakemake
 
 #: Jobs of `snakemake -n --forceall --config scene=paper` (each text that gives the paper DAG's size must say this).
 PAPER_JOBS = 2421
@@ -392,15 +360,13 @@ def test_contact_jobs_log_one_line_per_load_step(demo_run):
 
 
 @pytest.mark.slow  # ~1 min: make test (CI) runs it, make test-fast does not
-def test_measured_scene_runs_end_to_end(tmp_path):
-    """The shipped `measured` scene: three files in three formats through every stage, twice (~1 min)."""
+def test_measured_scene_runs_end_to_end(measured_run, tmp_path):
+    """The shipped `measured` scene: three files in three formats through every stage (the session's run, shared with
+    test_reader), then every job again (~1 min each)."""
     from roughcontact.pipeline.io import read_dataset
     from test_units import assert_all_units_parse
 
-    wd = copy_workflow(tmp_path / "wf")
-    res = run_snakemake(wd, "-j2", "--config", "scene=measured")
-    assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
-    root = wd / "results" / "measured"
+    wd, root = measured_run.wd, measured_run.out
     agg = read_dataset(root / "aggregate" / "contact.nc", stage="aggregate")
     assert list(agg["topography"].values) == ["ground-a", "ground-b", "ground-c"]
     assert agg.attrs["boundary"] == "free" and agg["pressure"].attrs["units"] == "MPa"
