@@ -47,7 +47,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 from conftest import FAMILIES, FAMILY_PARAMETER, REPO, SceneRun, run_snakemake
 from roughcontact import __version__
-from roughcontact.figures.captions import CONDITIONAL_WORDS, PROFILES_GID, REFERENCES, drawn
+from roughcontact.figures.captions import CONDITIONAL_WORDS, NOTES, PROFILES_GID, REFERENCES, drawn
 from roughcontact.figures.registry import FIGURES, scene_figures
 from roughcontact.pipeline.scenes import validate_config
 from roughcontact.pipeline.sources import source_of
@@ -384,7 +384,9 @@ WORD_GIDS = {"BGT": ("bgt_limit", "asperity_bgt_paper", "asperity_bgt_own"),
                           "asperity_greenwood_own"),
              "power law": ("dpbar_paper", "dpbar_fit"),
              "fit's window": ("fit_window",)}
-assert set(WORD_GIDS) == set(CONDITIONAL_WORDS), "a conditional word of figures.captions needs its gids here"
+assert set(WORD_GIDS) <= set(CONDITIONAL_WORDS), "a conditional word of figures.captions needs its gids here"
+#: The other conditional words (figures.captions: a lead may not use them) name a fit's route or a layout: checked
+#: against the record's fits (ROUTES) and notes (figures.captions.NOTES, :func:`check_notes`).
 
 
 def _plain_key(phrase: str) -> str:
@@ -414,6 +416,7 @@ class Drawn:
     profiles: bool  # the caption must say the cases are profiles
     profiles_allowed: bool  # it may
     from_record: bool
+    notes: tuple[str, ...] = ()  # the layout notes of figures.captions.NOTES the record holds
 
 
 def what_was_drawn(name: str, out: Path, fig, profiles: bool) -> Drawn:
@@ -422,7 +425,7 @@ def what_was_drawn(name: str, out: Path, fig, profiles: bool) -> Drawn:
     if record.is_file():
         rec = json.loads(record.read_text())
         return Drawn(set(rec.get("references", [])), list(rec.get("fits", [])), bool(rec.get("window")),
-                     bool(rec.get("profiles")), bool(rec.get("profiles")), True)
+                     bool(rec.get("profiles")), bool(rec.get("profiles")), True, tuple(rec.get("notes", ())))
     gids = set(drawn(fig))
     fits = [{"route": None, "label": None} for g in ("cel_fit", "dpbar_fit") if g in gids]
     return Drawn(gids, fits, "fit_window" in gids, fig.get_gid() == PROFILES_GID, profiles, False)
@@ -454,6 +457,8 @@ def check_caption(name: str, caption: str, what: Drawn, max_side: int, where: st
         problems.append(f"{where}: the figure draws a fitted law; the caption names no route "
                         f"({', '.join(ROUTES.values())}): figures/{name}.record.json absent, checked against the "
                         "figure drawn again")
+    if what.from_record:
+        problems += check_notes(caption, what.notes, where)
     says_profiles = bool(re.search(r"\bprofiles?\b|\b1-D\b", caption))
     if says_profiles and not what.profiles_allowed:
         problems.append(f"{where}: the caption speaks of profiles (1-D); the figure is of 2-D surfaces")
@@ -462,6 +467,19 @@ def check_caption(name: str, caption: str, what: Drawn, max_side: int, where: st
     if "block-averag" in caption and max_side <= 512:
         problems.append(f"{where}: the caption speaks of block averaging; no surface of the scene has over 512 points"
                         f" a side (at most {max_side})")
+    return problems
+
+
+def check_notes(caption: str, notes, where: str) -> list[str]:
+    """Each layout note of figures.captions.NOTES (its first plain words) in the caption iff the record holds it."""
+    problems = []
+    for key, text in NOTES.items():
+        plain = re.split(r":math:`[^`]*`", text)[0]
+        plain = plain.split("{pixels}", 1)[-1]  # "Maps of more than {pixels} points a side are drawn/shown ..."
+        words = " ".join(plain.split()[:5])
+        if (words in caption) != (key in notes):
+            problems.append(f"{where}: the caption {'omits' if key in notes else 'says'} {words!r} (note {key!r}), "
+                            f"{'recorded' if key in notes else 'which the record does not hold'}")
     return problems
 
 
