@@ -1,0 +1,136 @@
+"""Contact patches of a load step (statistics.patches): node counts, the largest patch, the resolution rule,
+the slab merge of the MPI solver, and the per-step variables every solver writes."""
+import numpy as np
+import pytest
+import xarray as xr
+
+from roughcontact.statistics.clusters import cluster_statistics
+from roughcontact.statistics.patches import (
+    MIN_PATCH_SPAN,
+    contact_patches,
+    merge_slabs,
+    min_patch_nodes,
+    patch_sizes,
+    resolved,
+    resolved_variable,
+    slab_patches,
+)
+
+B = bool
+
+
+def runs(bits: str) -> np.ndarray:
+    """A profile's mask from a string of 0 and 1."""
+    return np.array([c == "1" for c in bits], dtype=B)
+
+
+# ------------------------------------------------------------------------------------------ profiles
+@pytest.mark.parametrize("bits, periodic, sizes", [
+    ("0110100111", True, [3, 2, 1]),     # node 9 is in contact, node 0 is not: no run wraps
+    ("1100100111", True, [5, 1]),        # the runs at both ends are one across the period
+    ("1100100111", False, [3, 2, 1]),    # a free profile: its ends do not touch
+    ("1111111111", True, [10]),
+    ("1111111111", False, [10]),
+    ("0000000000", True, []),
+    ("1010101010", True, [1, 1, 1, 1, 1]),
+])
+def test_runs_of_a_profile(bits, periodic, sizes):
+    m = runs(bits)
+    assert patch_sizes(m, periodic).tolist() == sizes
+    assert patch_sizes(m[:, None], periodic).tolist() == sizes  # the solver's (n, 1) grid of a profile
+    assert contact_patches(m, periodic) == (int(m.sum()), sizes[0] if sizes else 0)
+
+
+# ------------------------------------------------------------------------------------------ maps
+def test_a_map_patch_joins_across_both_edges_only_when_periodic():
+    m = np.zeros((6, 5), B)
+    m[0, 0] = m[-1, 0] = m[0, -1] = True     # three corners, neighbours around the torus
+    m[3, 2] = True
+    assert patch_sizes(m, True).tolist() == [3, 1]
+    assert patch_sizes(m, False).tolist() == [1, 1, 1, 1]
+
+
+def test_corner_neighbours_are_separate_patches():
+    m = np.eye(5, dtype=B)
+    assert patch_sizes(m, False).tolist() == [1] * 5
+
+
+@pytest.mark.parametrize("periodic", [True, False])
+@pytest.mark.parametrize("shape", [(16, 16), (12, 7), (9, 1)])
+def test_maps_agree_with_the_cluster_labels(periodic, shape):
+    rng = np.random.default_rng(sum(shape))
+    for fill in (0.1, 0.4, 0.6):
+        m = rng.random(shape) < fill
+        st = cluster_statistics(m, (1.0, shape[1] / shape[0]), periodic)
+        assert patch_sizes(m, periodic).tolist() == st["areas_pixels"].tolist()
+
+
+def test_a_bad_mask_is_refused():
+    with pytest.raises(ValueError, match="dtype bool"):
+        patch_sizes(np.ones(4))
+    with pytest.raises(ValueError, match="profile"):
+        patch_sizes(np.ones((2, 2, 2), B))
+
+
+# ------------------------------------------------------------------------------------------ the rule
+def test_the_threshold_is_a_span_of_four_nodes():
+    assert MIN_PATCH_SPAN == 4
+    assert min_patch_nodes(1) == 4
+    assert min_patch_nodes(2) == 13       # a disc 4 nodes across: pi 4^2 / 4 = 12.6 nodes
+    with pytest.raises(ValueError, match="dimension"):
+        min_patch_nodes(3)
+    assert resolved([0, 1, 3, 4, 40], 1).tolist() == [False, False, False, True, True]
+    assert resolved([9, 12, 13], 2).tolist() == [False, False, True]
+
+
+def test_many_small_patches_are_unresolved_however_many_nodes_they_hold():
+    m = runs("110" * 30)                   # 60 contact nodes, every patch 2 nodes
+    nodes, largest = contact_patches(m, False)
+    assert (nodes, largest) == (60, 2) and not resolved(largest, 1)
+    m[:5] = True                           # one patch of 5 beside them: resolved
+    assert contact_patches(m, False)[1] == 5 and resolved(5, 1)
+
+
+def test_few_contact_nodes_in_all_are_unresolved():
+    # the contact is held by two nodes: no patch can span four (the line scans' flat steps)
+    assert contact_patches(runs("0" * 40 + "11" + "0" * 34), False) == (2, 2)
+    assert not resolved(2, 1)
+
+
+def test_a_map_of_many_spots_with_one_large_one_is_resolved():
+    m = np.zeros((32, 32), B)
+    m[::3, ::3] = True                     # 121 one-node spots
+    assert contact_patches(m, True)[1] == 1 and not resolved(1, 2)
+    yy, xx = np.mgrid[:32, :32]
+    m |= (xx - 16.0) ** 2 + (yy - 16.0) ** 2 <= 4.0   # a disc of radius 2: 13 nodes, one spot among them
+    largest = contact_patches(m, True)[1]
+    assert largest >= 13 and resolved(largest, 2)
+
+
+def test_the_flag_variable_is_a_cf_flag_that_states_its_rule():
+    da = resolved_variable(xr.DataArray(np.array([2, 3, 4, 9]), dims=("step",)), 1)
+    assert da.dtype == bool and da.values.tolist() == [False, False, True, True]
+    assert da.attrs["flag_values"].tolist() == [0, 1] and da.attrs["flag_meanings"] == "unresolved resolved"
+    assert da.attrs["units"] == "1" and "4 nodes" in da.attrs["long_name"] and da.attrs["min_patch_nodes"] == 4
+    assert resolved_variable(xr.DataArray(np.array([12, 13]), dims=("step",)), 2).values.tolist() == [False, True]
+
+
+# ------------------------------------------------------------------------------------------ slabs
+@pytest.mark.parametrize("periodic", [True, False])
+@pytest.mark.parametrize("ranks", [1, 2, 3, 5])
+def test_the_slab_merge_is_the_whole_grids_largest_patch(periodic, ranks):
+    rng = np.random.default_rng(ranks)
+    for fill in (0.05, 0.3, 0.55, 0.7, 1.0):
+        m = rng.random((23, 11)) < fill
+        m[:, 4] |= fill > 0.5              # a band along x through every slab
+        cuts = np.linspace(0, m.shape[0], ranks + 1).astype(int)
+        parts = [slab_patches(m[a:b], periodic) for a, b in zip(cuts[:-1], cuts[1:])]
+        assert merge_slabs(parts, periodic) == contact_patches(m, periodic), (fill, ranks)
+
+
+def test_a_patch_across_every_slab_boundary_is_one_patch():
+    m = np.zeros((12, 4), B)
+    m[:, 1] = True                         # a line along x through three slabs, around the period
+    parts = [slab_patches(m[a:a + 4]) for a in (0, 4, 8)]
+    assert merge_slabs(parts, True) == (12, 12)
+    assert merge_slabs([slab_patches(m[a:a + 4], False) for a in (0, 4, 8)], False) == (12, 12)
