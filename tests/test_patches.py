@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from roughcontact.solver import solve_contact
 from roughcontact.statistics.clusters import cluster_statistics
 from roughcontact.statistics.patches import (
     MIN_PATCH_SPAN,
@@ -134,3 +135,37 @@ def test_a_patch_across_every_slab_boundary_is_one_patch():
     parts = [slab_patches(m[a:a + 4]) for a in (0, 4, 8)]
     assert merge_slabs(parts, True) == (12, 12)
     assert merge_slabs([slab_patches(m[a:a + 4], False) for a in (0, 4, 8)], False) == (12, 12)
+
+
+# ------------------------------------------------------------------------------------------ the solvers
+def _masks(ds) -> np.ndarray:
+    return ds.contact_pressure.values > 0
+
+
+@pytest.mark.parametrize("boundary", ["periodic", "free"])
+@pytest.mark.parametrize("dimension", [1, 2])
+def test_every_step_of_a_solve_reports_its_patches(boundary, dimension):
+    from roughcontact.surfaces.synthetic import generate_profile, generate_surface
+
+    make = generate_profile if dimension == 1 else generate_surface
+    h = make(256 if dimension == 1 else 32, 2, 16, 0.8, 1, rms_slope=0.1)
+    ds = solve_contact(h, [0.0005, 0.002, 0.008], boundary=boundary, store_fields=True)
+    for name in ("contact_nodes", "largest_patch_nodes"):
+        assert ds[name].dtype == np.int64 and ds[name].dims == ("step",) and ds[name].attrs["units"] == "1"
+    expected = [contact_patches(m, boundary == "periodic") for m in _masks(ds)]
+    assert list(zip(ds.contact_nodes.values.tolist(), ds.largest_patch_nodes.values.tolist())) == expected
+    np.testing.assert_array_equal(ds.contact_nodes.values, np.round(ds.area_fraction.values * h.size))
+
+
+def test_a_batch_reports_each_cases_patches_as_its_single_solve():
+    from roughcontact.solver.batch import solve_contact_batch
+    from roughcontact.surfaces.synthetic import generate_surface
+
+    hs = np.stack([generate_surface(32, 2, 16, 0.8, s, rms_slope=0.1) for s in range(2)])
+    loads = [0.001, 0.004]
+    batch = solve_contact_batch(hs, loads)
+    for b in range(2):
+        single = solve_contact(hs[b], loads, store_fields=True)
+        expected = [contact_patches(m) for m in _masks(single)]
+        got = list(zip(batch.contact_nodes.values[b].tolist(), batch.largest_patch_nodes.values[b].tolist()))
+        assert got == expected
