@@ -125,7 +125,7 @@ def test_the_slab_merge_is_the_whole_grids_largest_patch(periodic, ranks):
         m = rng.random((23, 11)) < fill
         m[:, 4] |= fill > 0.5              # a band along x through every slab
         cuts = np.linspace(0, m.shape[0], ranks + 1).astype(int)
-        parts = [slab_patches(m[a:b], periodic) for a, b in zip(cuts[:-1], cuts[1:])]
+        parts = [slab_patches(m[a:b], periodic) for a, b in zip(cuts[:-1], cuts[1:], strict=True)]
         assert merge_slabs(parts, periodic) == contact_patches(m, periodic), (fill, ranks)
 
 
@@ -153,7 +153,7 @@ def test_every_step_of_a_solve_reports_its_patches(boundary, dimension):
     for name in ("contact_nodes", "largest_patch_nodes"):
         assert ds[name].dtype == np.int64 and ds[name].dims == ("step",) and ds[name].attrs["units"] == "1"
     expected = [contact_patches(m, boundary == "periodic") for m in _masks(ds)]
-    assert list(zip(ds.contact_nodes.values.tolist(), ds.largest_patch_nodes.values.tolist())) == expected
+    assert list(zip(ds.contact_nodes.values.tolist(), ds.largest_patch_nodes.values.tolist(), strict=True)) == expected
     np.testing.assert_array_equal(ds.contact_nodes.values, np.round(ds.area_fraction.values * h.size))
 
 
@@ -167,5 +167,6 @@ def test_a_batch_reports_each_cases_patches_as_its_single_solve():
     for b in range(2):
         single = solve_contact(hs[b], loads, store_fields=True)
         expected = [contact_patches(m) for m in _masks(single)]
-        got = list(zip(batch.contact_nodes.values[b].tolist(), batch.largest_patch_nodes.values[b].tolist()))
+        got = list(zip(batch.contact_nodes.values[b].tolist(), batch.largest_patch_nodes.values[b].tolist(),
+                       strict=True))
         assert got == expected

@@ -100,8 +100,8 @@ def solve_contact_batch(heights, pressures, settings: SolverSettings | None = No
         :func:`~.solve.solve_contact`'s dataset with a leading dimension ``case`` (0..B-1) on the
         per-case variables (``area_fraction``, ``mean_contact_pressure``, ``mean_gap``,
         ``contact_perimeter``, ``iterations``, ``residual``, ``converged``, ``solver_path``, ``contact_nodes``,
-        ``largest_patch_nodes``: dims ``case, step``); ``pressure`` and ``wall_time`` (the whole batch's step) over ``step``;
-        attributes as there, plus ``batch_size`` and ``check_every``.
+        ``largest_patch_nodes``: dims ``case, step``); ``pressure`` and ``wall_time`` (the whole batch's step)
+        over ``step``; attributes as there, plus ``batch_size`` and ``check_every``.
 
     Raises
     ------

@@ -202,8 +202,8 @@ def to_dataset(p, cols, iters, conv, fields, store_fields, shape, attrs: dict, e
     ``attrs`` (:meth:`roughcontact.core.cell.Cell.solver_attrs`): the stored fields' ``x`` and ``y`` coordinates step by
     ``dx = Lx / nx`` and ``dy = Ly / ny``. ``p`` the loads, shape (n_steps,); ``cols``
     per-step float columns by name (including each effect's) and the int columns ``contact_nodes`` and
-    ``largest_patch_nodes`` (:func:`roughcontact.statistics.patches.contact_patches`); ``iters``, ``conv`` per-step iterations and
-    flags; ``fields`` a ``(pressures, gaps, step numbers)`` triple of the
+    ``largest_patch_nodes`` (:func:`roughcontact.statistics.patches.contact_patches`); ``iters``, ``conv``
+    per-step iterations and flags; ``fields`` a ``(pressures, gaps, step numbers)`` triple of the
     stored fields; ``attrs`` the solver's global attributes; ``effects`` add
     their variables and attributes; ``paths`` the per-step codes into
     :data:`~.workspace.SOLVER_PATHS` (int8, shape (n_steps,)) of the iteration that ended each step

@@ -3,9 +3,9 @@
 What is gathered, and why: every per-step output (A/A0, mean pressure, mean gap, perimeter,
 residual, iterations, converged, contact nodes) is a collective reduction, so every rank holds it already and
 rank 0 builds the dataset from its own copy: nothing is gathered for them. The largest contact patch is
-merged on rank 0 from each slab's patches on its two edge rows and its largest inner one
-(:func:`~roughcontact.statistics.patches.slab_patches`: two rows of ids a rank, not its field) and broadcast. Fields are gathered to
-rank 0 only on request (``fields=True``: the last step's pressure and gap, ``Gatherv`` of the
+joined on rank 0 from each slab's patches on its two edge rows and its largest inner one
+(:func:`~roughcontact.statistics.patches.slab_patches`: two rows of ids a rank, not its field) and broadcast.
+Fields are gathered to rank 0 only on request (``fields=True``: the last step's pressure and gap, ``Gatherv`` of the
 slabs' rows), because a whole field is what the split exists to avoid holding on one process:
 8 bytes a node, 0.5 GB at N = 8192 per field, 34 GB at N = 65536.
 """
