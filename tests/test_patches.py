@@ -1,5 +1,8 @@
 """Contact patches of a load step (statistics.patches): node counts, the largest patch, the resolution rule,
 the slab merge of the MPI solver, and the per-step variables every solver writes."""
+import functools
+from pathlib import Path
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -170,3 +173,63 @@ def test_a_batch_reports_each_cases_patches_as_its_single_solve():
         got = list(zip(batch.contact_nodes.values[b].tolist(), batch.largest_patch_nodes.values[b].tolist(),
                        strict=True))
         assert got == expected
+
+
+# ------------------------------------------------------------------------------------------ the contact file
+LINESCANS = Path(__file__).parent / "data" / "linescans"
+
+
+@functools.cache
+def _line_scan_case(name: str = "xy-1.txt", steps: int = 30):
+    """A real line scan (SurfaceTopography's non-uniform ``xy-1.txt``, 132 points) solved as a measured scene
+    solves it (free boundary, plane strain, loads to p0/(E* h') = 0.05): its contact dataset."""
+    from roughcontact.pipeline.datasets import contact_dataset
+    from roughcontact.surfaces.synthetic import profile_moments
+    from roughcontact.surfaces.topography import read_topography
+
+    s = read_topography(LINESCANS / name, unit="um", file_unit="um", detrend="height")
+    stats = profile_moments(s.heights, s.lengths[0])
+    loads = 0.05 * stats["rms_slope"] * np.arange(1, steps + 1) / steps
+    result = solve_contact(s.heights, loads, length=s.length, boundary="free", store_fields=True,
+                           length_unit="um", pressure_unit="MPa")
+    return contact_dataset(result, rms_slope=stats["rms_slope"], alpha=stats["alpha"], e_star=1.0,
+                           topography=name.split(".")[0])
+
+
+def test_a_real_line_scans_flat_steps_are_unresolved_in_its_contact_file():
+    ds = _line_scan_case().squeeze("topography")
+    flag, largest = ds.contact_resolved.values, ds.largest_patch_nodes.values
+    a = ds.area_fraction.values
+    # the first six steps: A/A0 flat at 3 of 132 nodes while the load rises six-fold, one patch of 3 nodes
+    assert np.all(a[:6] == 3 / 132) and ds.contact_nodes.values[:6].tolist() == [3] * 6
+    assert largest[:6].tolist() == [3] * 6 and not flag[:6].any()
+    # from the seventh on a patch of 5 nodes or more: resolved
+    assert largest[6] == 5 and flag[6:].all() and np.all(largest[6:] >= 4)
+    assert flag.tolist() == resolved(largest, 1).tolist()
+    assert ds.contact_resolved.attrs["min_patch_nodes"] == 4 and ds.contact_resolved.attrs["flag_values"].tolist() \
+        == [0, 1]
+
+
+def test_the_contact_file_is_cf_clean_and_the_flag_survives_a_round_trip(tmp_path):
+    from cfcheck import assert_cf_clean
+    from roughcontact.pipeline.io import read_dataset, write_dataset
+
+    ds = _line_scan_case().drop_vars(["contact_pressure", "gap"])
+    path = write_dataset(ds, tmp_path / "xy.nc", stage="contact", scene="t", scene_parameters={})
+    back = read_dataset(path, stage="contact")
+    assert back.contact_resolved.dtype == bool
+    assert back.contact_resolved.values.tolist() == ds.contact_resolved.values.tolist()
+    assert_cf_clean([path], tmp_path / "cf")
+
+
+def test_the_aggregate_counts_the_unresolved_steps_of_each_case():
+    from roughcontact.analysis.aggregate import add_derived, combine_topographies
+
+    parts = [_line_scan_case("xy-1.txt"), _line_scan_case("nonuniform.asc")]
+    parts = [p.drop_vars(["contact_pressure", "gap", "x"]) for p in parts]
+    agg = add_derived(combine_topographies(parts, ["xy", "nu"], expected=["xy-1", "nonuniform"]))
+    assert agg.contact_resolved.dims == ("topography", "step") and agg.contact_resolved.dtype == bool
+    assert agg.n_unresolved.sel(topography="xy-1").item() == 6
+    # nonuniform.asc: patches of at most 3 nodes over its first 19 steps (A/A0 flat at 7 nodes over ten of them)
+    assert agg.n_unresolved.sel(topography="nonuniform").item() == 19
+    assert agg.n_unresolved.attrs["units"] == "1" and "unresolved" in agg.n_unresolved.attrs["long_name"]
