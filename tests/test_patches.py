@@ -233,3 +233,33 @@ def test_the_aggregate_counts_the_unresolved_steps_of_each_case():
     # nonuniform.asc: patches of at most 3 nodes over its first 19 steps (A/A0 flat at 7 nodes over ten of them)
     assert agg.n_unresolved.sel(topography="nonuniform").item() == 19
     assert agg.n_unresolved.attrs["units"] == "1" and "unresolved" in agg.n_unresolved.attrs["long_name"]
+
+
+def _line_scans_aggregate():
+    from roughcontact.analysis.aggregate import add_derived, combine_topographies
+
+    parts = [p.drop_vars(["contact_pressure", "gap", "x"]) for p in
+             (_line_scan_case("xy-1.txt"), _line_scan_case("nonuniform.asc"))]
+    return add_derived(combine_topographies(parts, ["xy", "nu"], expected=["xy-1", "nonuniform"]))
+
+
+def test_the_fit_leaves_the_unresolved_steps_out_and_counts_them():
+    from roughcontact.analysis.fit import fit_topographies, unresolved_in_window, usable_steps
+
+    agg, window = _line_scans_aggregate(), (0.02, 0.3)
+    a, flag = agg.area_fraction, agg.contact_resolved
+    inside = (a >= window[0]) & (a <= window[1])
+    n_out = unresolved_in_window(agg, window)
+    assert n_out == int((inside & ~flag).sum()) > 0
+    assert usable_steps(agg).values.tolist() == (agg.converged & flag).values.tolist()
+    kw = dict(window=window, n_boot=10, min_points=3, methods=["paper"], paper_average="none")  # every point
+    fitted = fit_topographies(agg, **kw)
+    # exactly the fit of the same steps with the unresolved ones marked unconverged
+    older = agg.drop_vars(["contact_resolved", "n_unresolved"])
+    as_unconverged = fit_topographies(older.assign(converged=agg.converged & flag), **kw)
+    xr.testing.assert_identical(fitted.value, as_unconverged.value)
+    xr.testing.assert_identical(fitted.n_points, as_unconverged.n_points)
+    # with the plateaus in (an older file's, without the flag), d pbar/d p0 = 1/(A/A0) on them bends the
+    # log-log line past the CEL's range: mu > 1, no fit
+    unflagged = fit_topographies(older, **kw)
+    assert np.isfinite(fitted.value.sel(estimator="paper")).all() and unflagged.value.isnull().all()
