@@ -263,3 +263,82 @@ def test_the_fit_leaves_the_unresolved_steps_out_and_counts_them():
     # log-log line past the CEL's range: mu > 1, no fit
     unflagged = fit_topographies(older, **kw)
     assert np.isfinite(fitted.value.sel(estimator="paper")).all() and unflagged.value.isnull().all()
+
+
+# ------------------------------------------------------------------------------------------ the figures
+def _marks(fig):
+    from roughcontact.figures.unresolved import UNRESOLVED_GID
+
+    return [line for ax in fig.axes for line in ax.get_lines() if line.get_gid() == UNRESOLVED_GID]
+
+
+def _legend(fig):
+    return [t.get_text() for leg in fig.legends for t in leg.get_texts() if "unresolved" in t.get_text()]
+
+
+@pytest.mark.parametrize("name", ["measured_area_load", "measured_kappa"])
+def test_the_measured_figures_mark_a_real_line_scans_unresolved_steps_and_say_so(name):
+    """xy-1.txt's six flat steps (one patch of 3 nodes) and nonuniform.asc's nineteen (patches of 1 to 3 nodes)
+    are circled, counted in the legend and named with their node counts in the caption; without the flag (a file
+    of an older version) nothing is."""
+    from caption_check import lead_of
+    from roughcontact.figures.captions import caption
+    from roughcontact.figures.measured import fig_measured_area_load, fig_measured_kappa
+
+    draw = {"measured_area_load": fig_measured_area_load, "measured_kappa": fig_measured_kappa}[name]
+    agg = _line_scans_aggregate()
+    fig = draw(agg)
+    (line,) = _marks(fig)
+    bad = ~agg.contact_resolved
+    assert len(line.get_xdata()) == int(bad.sum()) == 25
+    assert sorted(line.patch_nodes.tolist()) == sorted(agg.largest_patch_nodes.values[bad.values].tolist())
+    assert _legend(fig) == ["25 unresolved load steps: largest contact patch 1 to 3 nodes, under 4"]
+    text = caption(lead_of(name), fig)
+    assert ("Hollow black circles: 25 load steps whose contact the grid does not resolve, the largest contact patch "
+            "holding 1 to 3 nodes, fewer than the 4 nodes a patch must span along a profile.") in text
+    one = draw(agg.sel(topography=["xy-1"]))   # one scan: one patch of 3 nodes, six times
+    assert "6 load steps whose contact the grid does not resolve, the largest contact patch holding 3 nodes" in \
+        caption(lead_of(name), one)
+    older = draw(agg.drop_vars(["contact_resolved", "n_unresolved"]))
+    assert not _marks(older) and not _legend(older) and "resolve" not in caption(lead_of(name), older)
+
+
+def _with_unresolved(agg, family=(16.0, 32.0, 0.84), seeds=(0, 1), steps=(1, 2, 3)):
+    """A synthetic aggregate (no solver) with per-step patch variables: every step resolved (40 nodes in its
+    largest patch) but ``steps`` of ``seeds`` of ``family``, whose largest patch holds 2 nodes (a map's rule)."""
+    from roughcontact.analysis.aggregate.derived import add_derived
+    from roughcontact.statistics.patches import resolved_variable
+
+    largest = xr.full_like(agg["area_fraction"], 40.0)
+    largest.loc[dict(zip(("k_l", "k_s", "H"), family, strict=True), seed=list(seeds), step=list(steps))] = 2.0
+    out = agg.drop_vars(["kappa", "dpbar_dp0", "n_unconverged"]).assign(largest_patch_nodes=largest)
+    out["contact_resolved"] = resolved_variable(largest, 2) | ~out["case_present"]
+    return add_derived(out)
+
+
+@pytest.mark.parametrize("name", ["area_load", "kappa"])
+def test_the_generated_figures_mark_each_unresolved_case_step_in_its_panel(name):
+    from caption_check import lead_of
+    from cel_synthetic import simulate_cel_cases
+    from roughcontact.analysis.aggregate import aggregate_contact, seed_statistics
+    from roughcontact.figures.area_load import fig_area_load
+    from roughcontact.figures.captions import caption
+    from roughcontact.figures.kappa import fig_kappa
+
+    dss, names = simulate_cel_cases(k_l=(4.0, 16.0), k_s=(32.0, 128.0), hurst=(0.36, 0.84), seeds=range(3),
+                                    point_noise=1e-4, seed_scatter=0.01, rng_seed=5)
+    plain = aggregate_contact(dss, names)
+    agg = _with_unresolved(plain)
+    draw = {"area_load": fig_area_load, "kappa": fig_kappa}[name]
+    fig = draw(agg, seed_statistics(agg))
+    (line,) = _marks(fig)
+    assert line.axes is fig.axes[0]        # the k_s = 32 panel, not the k_s = 128 one
+    case = agg.sel(k_l=16.0, k_s=32.0, H=0.84, seed=[0, 1], step=[1, 2, 3])
+    y = case["area_fraction" if name == "area_load" else "kappa"].values.ravel()
+    np.testing.assert_allclose(np.sort(line.get_ydata()), np.sort(y))
+    assert _legend(fig) == ["6 unresolved load steps: largest contact patch 2 nodes, under 13"]
+    assert "6 load steps whose contact the grid does not resolve, the largest contact patch holding 2 nodes, fewer " \
+           "than the 13 nodes of a disc 4 nodes across" in caption(lead_of(name), fig)
+    for data in (_with_unresolved(plain, steps=()), plain):   # all resolved; no flag
+        fig = draw(data, seed_statistics(data))
+        assert not _marks(fig) and not _legend(fig)

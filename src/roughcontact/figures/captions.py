@@ -17,6 +17,8 @@ from collections.abc import Iterable
 import numpy as np
 from matplotlib.figure import Figure
 
+from .unresolved import unresolved_note
+
 #: Styles of the reference lines (matplotlib keyword arguments), one per kind, all distinct and above
 #: the data bands (zorder 2) and the data lines (2.5). The asperity models' colour depends on the
 #: bandwidth (:func:`roughcontact.figures.load_curves.asperity_alphas`); their style on the model.
@@ -102,7 +104,7 @@ def caption(lead: str, fig: Figure) -> str:
     """The caption of ``fig``: its ``lead`` (reStructuredText), then one sentence naming the reference lines
     it shows (:func:`drawn`), or none when it shows none; a figure of profiles (gid :data:`PROFILES_GID`)
     also :data:`PROFILES_NOTE`."""
-    lead = lead.rstrip() + "\n" + (PROFILES_NOTE if fig.get_gid() == PROFILES_GID else "")
+    lead = lead.rstrip() + "\n" + (PROFILES_NOTE if fig.get_gid() == PROFILES_GID else "") + unresolved_note(fig)
     gids = drawn(fig)
     if not gids:
         return lead
