@@ -10,10 +10,9 @@ import xarray as xr
 from roughcontact.solver import solve_contact
 from roughcontact.statistics.clusters import cluster_statistics
 from roughcontact.statistics.patches import (
-    MIN_PATCH_SPAN,
+    MIN_PATCH_NODES,
     contact_patches,
     merge_slabs,
-    min_patch_nodes,
     patch_sizes,
     resolved,
     resolved_variable,
@@ -77,46 +76,45 @@ def test_a_bad_mask_is_refused():
 
 
 # ------------------------------------------------------------------------------------------ the rule
-def test_the_threshold_is_a_span_of_four_nodes():
-    assert MIN_PATCH_SPAN == 4
-    assert min_patch_nodes(1) == 4
-    assert min_patch_nodes(2) == 13       # a disc 4 nodes across: pi 4^2 / 4 = 12.6 nodes
-    with pytest.raises(ValueError, match="dimension"):
-        min_patch_nodes(3)
-    assert resolved([0, 1, 3, 4, 40], 1).tolist() == [False, False, False, True, True]
-    assert resolved([9, 12, 13], 2).tolist() == [False, False, True]
+def test_the_threshold_is_four_nodes_in_the_largest_patch():
+    assert MIN_PATCH_NODES == 4
+    assert resolved([0, 1, 3, 4, 40]).tolist() == [False, False, False, True, True]
+    assert resolved(np.array([[3, 4], [12, 2]])).tolist() == [[False, True], [True, False]]
 
 
 def test_many_small_patches_are_unresolved_however_many_nodes_they_hold():
     m = runs("110" * 30)                   # 60 contact nodes, every patch 2 nodes
     nodes, largest = contact_patches(m, False)
-    assert (nodes, largest) == (60, 2) and not resolved(largest, 1)
+    assert (nodes, largest) == (60, 2) and not resolved(largest)
     m[:5] = True                           # one patch of 5 beside them: resolved
-    assert contact_patches(m, False)[1] == 5 and resolved(5, 1)
+    assert contact_patches(m, False)[1] == 5 and resolved(5)
 
 
 def test_few_contact_nodes_in_all_are_unresolved():
     # the contact is held by two nodes: no patch can span four (the line scans' flat steps)
     assert contact_patches(runs("0" * 40 + "11" + "0" * 34), False) == (2, 2)
-    assert not resolved(2, 1)
+    assert not resolved(2)
 
 
-def test_a_map_of_many_spots_with_one_large_one_is_resolved():
-    m = np.zeros((32, 32), B)
-    m[::3, ::3] = True                     # 121 one-node spots
-    assert contact_patches(m, True)[1] == 1 and not resolved(1, 2)
-    yy, xx = np.mgrid[:32, :32]
-    m |= (xx - 16.0) ** 2 + (yy - 16.0) ** 2 <= 4.0   # a disc of radius 2: 13 nodes, one spot among them
-    largest = contact_patches(m, True)[1]
-    assert largest >= 13 and resolved(largest, 2)
+def test_a_map_of_many_specks_is_unresolved_until_one_spot_holds_four_nodes():
+    m = np.zeros((33, 33), B)
+    m[::3, ::3] = True                     # 121 one-node specks
+    m[0::6, 1::6] = True                   # 36 of them two nodes
+    nodes, largest = contact_patches(m, True)
+    assert (nodes, largest) == (157, 2) and not resolved(largest)
+    m[10, 10:12] = True                    # one L of 3 nodes
+    m[11, 10] = True
+    assert contact_patches(m, True)[1] == 3 and not resolved(3)
+    m[10:13, 13] = True                    # 2 x 2 beside the L: a spot of 4 nodes and more
+    m[12, 12] = True
+    assert contact_patches(m, True)[1] >= 4 and resolved(contact_patches(m, True)[1])
 
 
 def test_the_flag_variable_is_a_cf_flag_that_states_its_rule():
-    da = resolved_variable(xr.DataArray(np.array([2, 3, 4, 9]), dims=("step",)), 1)
+    da = resolved_variable(xr.DataArray(np.array([2, 3, 4, 9]), dims=("step",)))
     assert da.dtype == bool and da.values.tolist() == [False, False, True, True]
     assert da.attrs["flag_values"].tolist() == [0, 1] and da.attrs["flag_meanings"] == "unresolved resolved"
-    assert da.attrs["units"] == "1" and "4 nodes" in da.attrs["long_name"] and da.attrs["min_patch_nodes"] == 4
-    assert resolved_variable(xr.DataArray(np.array([12, 13]), dims=("step",)), 2).values.tolist() == [False, True]
+    assert da.attrs["units"] == "1" and "at least 4 nodes" in da.attrs["long_name"] and da.attrs["min_patch_nodes"] == 4
 
 
 # ------------------------------------------------------------------------------------------ slabs
@@ -205,7 +203,7 @@ def test_a_real_line_scans_flat_steps_are_unresolved_in_its_contact_file():
     assert largest[:6].tolist() == [3] * 6 and not flag[:6].any()
     # from the seventh on a patch of 5 nodes or more: resolved
     assert largest[6] == 5 and flag[6:].all() and np.all(largest[6:] >= 4)
-    assert flag.tolist() == resolved(largest, 1).tolist()
+    assert flag.tolist() == resolved(largest).tolist()
     assert ds.contact_resolved.attrs["min_patch_nodes"] == 4 and ds.contact_resolved.attrs["flag_values"].tolist() \
         == [0, 1]
 
@@ -295,7 +293,7 @@ def test_the_measured_figures_mark_a_real_line_scans_unresolved_steps_and_say_so
     assert _legend(fig) == ["25 unresolved load steps: largest contact patch 1 to 3 nodes, under 4"]
     text = caption(lead_of(name), fig)
     assert ("Hollow black circles: 25 load steps whose contact the grid does not resolve, the largest contact patch "
-            "holding 1 to 3 nodes, fewer than the 4 nodes a patch must span along a profile.") in text
+            "holding 1 to 3 nodes, fewer than 4.") in text
     one = draw(agg.sel(topography=["xy-1"]))   # one scan: one patch of 3 nodes, six times
     assert "6 load steps whose contact the grid does not resolve, the largest contact patch holding 3 nodes" in \
         caption(lead_of(name), one)
@@ -305,14 +303,14 @@ def test_the_measured_figures_mark_a_real_line_scans_unresolved_steps_and_say_so
 
 def _with_unresolved(agg, family=(16.0, 32.0, 0.84), seeds=(0, 1), steps=(1, 2, 3)):
     """A synthetic aggregate (no solver) with per-step patch variables: every step resolved (40 nodes in its
-    largest patch) but ``steps`` of ``seeds`` of ``family``, whose largest patch holds 2 nodes (a map's rule)."""
+    largest patch) but ``steps`` of ``seeds`` of ``family``, whose largest patch holds 2 nodes."""
     from roughcontact.analysis.aggregate.derived import add_derived
     from roughcontact.statistics.patches import resolved_variable
 
     largest = xr.full_like(agg["area_fraction"], 40.0)
     largest.loc[dict(zip(("k_l", "k_s", "H"), family, strict=True), seed=list(seeds), step=list(steps))] = 2.0
     out = agg.drop_vars(["kappa", "dpbar_dp0", "n_unconverged"]).assign(largest_patch_nodes=largest)
-    out["contact_resolved"] = resolved_variable(largest, 2) | ~out["case_present"]
+    out["contact_resolved"] = resolved_variable(largest) | ~out["case_present"]
     return add_derived(out)
 
 
@@ -336,9 +334,9 @@ def test_the_generated_figures_mark_each_unresolved_case_step_in_its_panel(name)
     case = agg.sel(k_l=16.0, k_s=32.0, H=0.84, seed=[0, 1], step=[1, 2, 3])
     y = case["area_fraction" if name == "area_load" else "kappa"].values.ravel()
     np.testing.assert_allclose(np.sort(line.get_ydata()), np.sort(y))
-    assert _legend(fig) == ["6 unresolved load steps: largest contact patch 2 nodes, under 13"]
+    assert _legend(fig) == ["6 unresolved load steps: largest contact patch 2 nodes, under 4"]
     assert "6 load steps whose contact the grid does not resolve, the largest contact patch holding 2 nodes, fewer " \
-           "than the 13 nodes of a disc 4 nodes across" in caption(lead_of(name), fig)
+           "than 4." in caption(lead_of(name), fig)
     for data in (_with_unresolved(plain, steps=()), plain):   # all resolved; no flag
         fig = draw(data, seed_statistics(data))
         assert not _marks(fig) and not _legend(fig)

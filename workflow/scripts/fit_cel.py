@@ -26,7 +26,7 @@ def main(log):
     unresolved = fit.unresolved_in_window(agg, tuple(cfg["window"]))
     if unresolved:
         log.warning("leaving %d load step(s) in the fit's window out of the fit: their contact is unresolved (largest "
-                    "patch under 4 nodes across, contact_resolved in the aggregate): A/A0 there is the grid's",
+                    "patch under 4 nodes, contact_resolved in the aggregate): A/A0 there is the grid's",
                     unresolved)
     # One group that cannot be fitted (too few points in the window, a joint fit that does not
     # converge on a non-representative case) must not sink the others: it is reported as NaN.

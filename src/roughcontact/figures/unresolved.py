@@ -1,7 +1,7 @@
 """Load steps whose contact the grid does not resolve, marked on the load-curve figures.
 
-A step is *unresolved* when its largest contact patch spans fewer than 4 nodes across (the contact file's
-``contact_resolved``, :mod:`roughcontact.statistics.patches`): its A/A0 is the grid's, flat while the load rises.
+A step is *unresolved* when its largest contact patch holds fewer than 4 nodes (the contact file's
+``contact_resolved``, :mod:`roughcontact.statistics.patches`): its A/A0 is the grid's, in stairs as the load rises.
 The area-load and kappa figures (generated and measured) draw each such step of each case, where its case's
 point is, as a hollow black circle above the data (:func:`mark_unresolved`, one call a panel); the legend counts
 them (:func:`unresolved_handles`) and the caption says what they are, with their largest patch's node counts
@@ -18,7 +18,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from ..statistics.patches import MIN_PATCH_SPAN, min_patch_nodes
+from ..statistics.patches import MIN_PATCH_NODES
 
 #: The gid of the marks (one line of markers a panel).
 UNRESOLVED_GID = "unresolved_steps"
@@ -42,8 +42,8 @@ def mark_unresolved(ax, agg: xr.Dataset, x: xr.DataArray, y: xr.DataArray,
     ``x``, ``y``: the panel's variables over ``agg``'s case dims and ``step`` (e.g. ``pressure / e_star``
     and ``area_fraction``); ``where``: a selection of the cases the panel draws (``{"k_s": 32.0, "k_l": [4.0,
     16.0], "H": [0.36]}``), all of them by default. The line (gid :data:`UNRESOLVED_GID`) keeps each mark's
-    ``largest_patch_nodes`` and the surfaces' dimension (1: profiles) in its attributes ``patch_nodes`` and
-    ``surface_dimension``, for :func:`unresolved_note`; None where nothing is unresolved.
+    ``largest_patch_nodes`` in its attribute ``patch_nodes``, for :func:`unresolved_note`; None where nothing is
+    unresolved.
     """
     bad = unresolved_steps(agg)
     if bad is None:
@@ -56,14 +56,12 @@ def mark_unresolved(ax, agg: xr.Dataset, x: xr.DataArray, y: xr.DataArray,
     (line,) = ax.plot(x.values[mask].astype(float), y.values[mask].astype(float), gid=UNRESOLVED_GID,
                       **UNRESOLVED_STYLE)
     line.patch_nodes = nodes.values[mask].astype(np.int64)
-    line.surface_dimension = int(agg.attrs.get("surface_dimension", 2))
     return line
 
 
-def _shown(fig: Figure) -> tuple[np.ndarray, int]:
-    """The node counts of the marks ``fig`` shows inside its axes' limits, and the surfaces' dimension (1: profiles,
-    2: maps; 0 when it shows none)."""
-    nodes, dimension = [], 0
+def _shown(fig: Figure) -> np.ndarray:
+    """The node counts of the marks ``fig`` shows inside its axes' limits, int64 (n,)."""
+    nodes = [np.zeros(0, np.int64)]
     for ax in fig.axes:
         if not ax.get_visible():
             continue
@@ -75,9 +73,7 @@ def _shown(fig: Figure) -> tuple[np.ndarray, int]:
             inside = np.isfinite(xy).all(axis=1) & (xy[:, 0] >= x0) & (xy[:, 0] <= x1) & (xy[:, 1] >= y0) \
                 & (xy[:, 1] <= y1)
             nodes.append(line.patch_nodes[inside])
-            dimension = line.surface_dimension
-    nodes = np.concatenate(nodes) if nodes else np.zeros(0, np.int64)
-    return nodes, dimension if nodes.size else 0
+    return np.concatenate(nodes)
 
 
 def _nodes_text(nodes: np.ndarray) -> str:
@@ -87,28 +83,26 @@ def _nodes_text(nodes: np.ndarray) -> str:
 
 def unresolved_handles(fig: Figure) -> list[Line2D]:
     """The legend entry of the unresolved steps ``fig`` shows (none when it shows none)."""
-    nodes, dimension = _shown(fig)
+    nodes = _shown(fig)
     if not nodes.size:
         return []
     n = nodes.size
     return [Line2D([], [], **{k: v for k, v in UNRESOLVED_STYLE.items() if k != "zorder"},
                    label=f"{n} unresolved load step{'s' if n != 1 else ''}: largest contact patch "
-                         f"{_nodes_text(nodes)}, under {min_patch_nodes(dimension)}")]
+                         f"{_nodes_text(nodes)}, under {MIN_PATCH_NODES}")]
 
 
 def unresolved_note(fig: Figure) -> str:
     """The caption's sentence on the unresolved steps ``fig`` shows, with their largest patch's node counts
     (reStructuredText); empty when it shows none."""
-    nodes, dimension = _shown(fig)
+    nodes = _shown(fig)
     if not nodes.size:
         return ""
-    n_min = min_patch_nodes(dimension)
-    need = (f"the {n_min} nodes a patch must span along a profile" if dimension == 1
-            else f"the {n_min} nodes of a disc {MIN_PATCH_SPAN} nodes across, the least a patch must span")
     steps = "one load step" if nodes.size == 1 else f"{nodes.size} load steps"
     return (f"\nHollow black circles: {steps} whose contact the grid does not resolve, the largest contact patch "
-            f"holding {_nodes_text(nodes)}, fewer than {need}. There A/A0 is set by the grid, not by the load (it "
-            "stays flat until the next node touches); the contact files flag these steps (contact_resolved).\n")
+            f"holding {_nodes_text(nodes)}, fewer than {MIN_PATCH_NODES}. Such a patch grows by a third of itself "
+            "or more with each node that touches, so A/A0 there is the grid's: it climbs in stairs as the load "
+            "rises. The contact files flag these steps (contact_resolved).\n")
 
 
 def shown_cases(families) -> dict:

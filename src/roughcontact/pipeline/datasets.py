@@ -201,11 +201,10 @@ def contact_dataset(result: xr.Dataset, *, rms_slope: float, alpha: float, e_sta
     (``surface_dimension`` 1) gets no ``area_fraction_corrected``: Yastrebov et al.'s (2017)
     perimeter correction is derived for a map's pixel boundaries, not a profile's interval ends.
     ``contact_resolved`` flags each step whose largest contact patch (the solver's ``largest_patch_nodes``)
-    spans at least 4 nodes across (:mod:`roughcontact.statistics.patches`: 4 nodes along a profile, 13 on a
-    map); an unresolved step's A/A0 is set by the grid, not by the load.
+    holds at least 4 nodes (:mod:`roughcontact.statistics.patches`); an unresolved step's A/A0 is the grid's.
     """
     ds = result.drop_vars("wall_time", errors="ignore")
-    ds["contact_resolved"] = resolved_variable(ds["largest_patch_nodes"], int(result.attrs.get("surface_dimension", 2)))
+    ds["contact_resolved"] = resolved_variable(ds["largest_patch_nodes"])
     if result.attrs.get("surface_dimension") != 1:  # the perimeter correction is derived for maps' pixels only
         _add_corrected_area(ds, Cell.from_attrs(result.attrs, (int(result.attrs["nx"]), int(result.attrs["ny"]))))
     ds["kappa"] = (e_star * rms_slope / ds["mean_contact_pressure"]).assign_attrs(

@@ -64,7 +64,7 @@ def add_derived(ds: xr.Dataset, *, kappa_rtol: float = 1e-6, derivative_order: i
     if "contact_resolved" in ds:
         out["n_unresolved"] = _n_false(ds["contact_resolved"].astype(bool), present)
         out["n_unresolved"].attrs = {"units": "1", "long_name": "number of load steps whose contact is unresolved "
-                                     "(largest patch under 4 nodes across; NaN: no such case)"}
+                                     "(largest patch under 4 nodes; NaN: no such case)"}
     return out
 
 

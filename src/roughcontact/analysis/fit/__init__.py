@@ -6,7 +6,7 @@ scene per ``(k_l, k_s, H)``, :mod:`.topographies` that of a measured scene, :mod
 and steps enter, :mod:`.settings` the checked settings and shared output variables, :mod:`.table` the CSV table.
 
 Steps: a fit takes the converged steps whose contact the grid resolves (:func:`.cases.usable_steps`). A step
-whose largest contact patch spans fewer than 4 nodes across (``contact_resolved`` False,
+whose largest contact patch holds fewer than 4 nodes (``contact_resolved`` False,
 :mod:`roughcontact.statistics.patches`) is left out as an unconverged one is: its A/A0 is the grid's, flat while
 the load rises, not the surface's; the fit job logs how many it left out of the window and the figures mark them.
 """

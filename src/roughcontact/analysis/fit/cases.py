@@ -1,15 +1,15 @@
 """Which cases and steps enter a fit: cases with an unconverged load step are marked absent; of the others, the
 steps that converged and whose contact the grid resolves (:func:`usable_steps`).
 
-An *unresolved* step (``contact_resolved`` False: its largest contact patch spans fewer than 4 nodes across,
+An *unresolved* step (``contact_resolved`` False: its largest contact patch holds fewer than 4 nodes,
 :mod:`roughcontact.statistics.patches`) is a solved step, but its A/A0 is set by the grid, not by the load: it
-stays flat while the load rises until the next node touches, so that ``d pbar / d p0 = 1/(A/A0)`` there and
-kappa rises with the load along the plateau. It is left out of the fit like an unconverged step (whose values
-are not the solution), step by step: the case's resolved steps still enter. It is not left out silently: the fit
-job logs how many steps in the window it left out (:func:`unresolved_in_window`) and the load-curve figures draw
-them. At the paper's resolution no step is unresolved (the largest patch holds 79 nodes or more at A/A0 ~ 0.005,
-N = 1024), so the paper's fit is unchanged; files of older versions carry no flag, and all their converged steps
-enter.
+climbs in stairs, flat while the load rises until the next node touches, so that ``d pbar / d p0 = 1/(A/A0)`` there
+and kappa = E* h' A/(A0 p0) falls as 1/p0 along the plateau. It is left out of the fit like an unconverged step
+(whose values are not the solution), step by step: the case's resolved steps still enter. It is not left out
+silently: the fit job logs how many steps in the window it left out (:func:`unresolved_in_window`) and the
+load-curve figures draw them. At the paper's resolution no step is unresolved (at A/A0 ~ 0.005 the largest patch
+holds 79 to 134 nodes in three of its cases at N = 1024), nor in the demo, so their fits are unchanged; files of
+older versions carry no flag, and all their converged steps enter.
 """
 
 from __future__ import annotations
