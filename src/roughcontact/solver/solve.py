@@ -195,7 +195,10 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
     xarray.Dataset
         Dimension ``step`` (1..n_steps): ``pressure``, ``area_fraction``, ``mean_contact_pressure``, ``mean_gap``,
         ``contact_perimeter``, ``iterations``, ``residual``, ``converged``, ``wall_time``, ``solver_path`` (a CF
-        flag: the iteration that ended the step), each effect's variables; fields and ``x``/``y`` when stored.
+        flag: the iteration that ended the step), ``contact_nodes`` and ``largest_patch_nodes`` (the contact's
+        nodes and its largest patch's, periodic where the half-space is:
+        :func:`~roughcontact.statistics.patches.contact_patches`), each effect's variables; fields and ``x``/``y``
+        when stored.
         CF ``units`` and ``long_name`` on each; global attributes: the settings, the cell
         (:meth:`~.core.cell.Cell.solver_attrs`), ``boundary``, ``elastic_method``. ``converged``: the final check
         of the package docstring passed on a freshly recomputed displacement.
