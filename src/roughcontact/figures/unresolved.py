@@ -100,9 +100,9 @@ def unresolved_note(fig: Figure) -> str:
         return ""
     steps = "one load step" if nodes.size == 1 else f"{nodes.size} load steps"
     return (f"\nHollow black circles: {steps} whose contact the grid does not resolve, the largest contact patch "
-            f"holding {_nodes_text(nodes)}, fewer than {MIN_PATCH_NODES}. Such a patch grows by a third of itself "
-            "or more with each node that touches, so A/A0 there is the grid's: it climbs in stairs as the load "
-            "rises. The contact files flag these steps (contact_resolved).\n")
+            f"holding {_nodes_text(nodes)}, fewer than {MIN_PATCH_NODES}. Such a patch's size is known to a node "
+            "only, a third of it or more, so A/A0 there is the grid's (held by few nodes, it climbs in stairs as the "
+            "load rises). The contact files flag these steps (contact_resolved).\n")
 
 
 def shown_cases(families) -> dict:
