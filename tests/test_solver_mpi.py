@@ -28,6 +28,7 @@ import xarray as xr
 
 from cfcheck import assert_cf_clean
 from roughcontact.solver import solve_contact
+from roughcontact.statistics.patches import contact_patches
 from roughcontact.surfaces.synthetic import generate_surface
 from roughcontact.theory.full_contact import full_contact_load, full_contact_pressure
 from test_solver_exact import westergaard_heights, westergaard_pressure
@@ -101,6 +102,9 @@ def test_same_answers_as_the_single_solve(tmp_path, ranks, k):
     np.testing.assert_allclose(ds.contact_perimeter.values, ref.contact_perimeter.values, rtol=1e-3)
     assert np.max(np.abs(ds.iterations.values - ref.iterations.values)) <= 2
     assert np.all(ds.residual.values <= 1e-8)
+    # the contact's nodes, and its largest patch joined across the slabs (to a node or two, as A/A0)
+    np.testing.assert_array_equal(ds.contact_nodes.values, np.round(ds.area_fraction.values * N**2))
+    assert np.max(np.abs(ds.largest_patch_nodes.values - ref.largest_patch_nodes.values)) <= 2
     # the dataset of solve_contact: the same variables, units and long names
     for name in ref.data_vars:
         for key in ("units", "long_name"):
@@ -120,6 +124,7 @@ def test_odd_split_three_ranks_and_gathered_fields(tmp_path):
     assert np.max(np.abs(ds.area_fraction.values - ref.area_fraction.values)) <= 2.0 / 129**2
     p, p_ref = ds.contact_pressure.values[0], ref.contact_pressure.values[0]
     assert np.abs(p - p_ref).max() <= 1e-3 * p_ref.max()
+    assert (int(ds.contact_nodes[-1]), int(ds.largest_patch_nodes[-1])) == contact_patches(p > 0)
     assert abs(p.mean() - P_MAX) <= 1e-10 * P_MAX
 
 
@@ -153,6 +158,9 @@ def test_westergaard_on_two_ranks(tmp_path):
     assert np.linalg.norm(profile - p_exact) / (p_exact.max() * np.sqrt(n)) <= 0.01
     g_exact = delta * ((1 - s) + s * np.log(s))
     assert abs(float(ds.mean_gap[0]) - g_exact) <= 1e-3 * g_exact
+    # one strip of contact around x = 0, across the boundary between the last rank's rows and the first's
+    strip = contact_patches(ds.contact_pressure.values[0] > 0)[1]
+    assert int(ds.largest_patch_nodes[0]) == int(ds.contact_nodes[0]) == strip
 
 
 @needs_mpi

@@ -2,6 +2,7 @@
 from roughcontact.pipeline import provenance
 from roughcontact.pipeline.io import read_dataset, run_logged, write_dataset
 from roughcontact.pipeline.sources import for_dims
+from roughcontact.statistics.patches import MIN_PATCH_NODES
 
 UNLOADING_DIMS = ["unload_step"]
 REQUIRED = ["pressure", "area_fraction", "mean_contact_pressure", "kappa", "converged", "rms_slope"]
@@ -27,6 +28,11 @@ def main(log):
     if int(bad.sum()):
         log.warning("%d case(s) have unconverged load steps (see n_unconverged); fits exclude them "
                     "unless the scene's fit.include_unconverged is true", int((bad > 0).sum()))
+    if "n_unresolved" in ds and int(ds["n_unresolved"].sum()):
+        log.warning("%d load step(s) of %d case(s) have a contact the grid does not resolve (largest patch under %d "
+                    "nodes: see contact_resolved and largest_patch_nodes); the figures mark them and the CEL fit, "
+                    "where the scene has one, leaves them out", int(ds["n_unresolved"].sum()),
+                    int((ds["n_unresolved"] > 0).sum()), MIN_PATCH_NODES)
     write_dataset(ds, snakemake.output[0], stage="aggregate", scene=snakemake.wildcards.scene,
                   scene_parameters=common)
     log.info("aggregated %d contact cases into %s", len(paths), snakemake.output[0])

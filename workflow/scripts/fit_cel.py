@@ -23,6 +23,11 @@ def main(log):
         if excluded:
             log.warning("excluding %d case(s) with unconverged steps from the fit: %s = %s",
                         len(excluded), cases, "; ".join(str(c) for c in excluded))
+    unresolved = fit.unresolved_in_window(agg, tuple(cfg["window"]))
+    if unresolved:
+        log.warning("leaving %d load step(s) in the fit's window out of the fit: their contact is unresolved (largest "
+                    "patch under 4 nodes, contact_resolved in the aggregate): A/A0 there is the grid's",
+                    unresolved)
     # One group that cannot be fitted (too few points in the window, a joint fit that does not
     # converge on a non-representative case) must not sink the others: it is reported as NaN.
     fitter = fit.fit_topographies if measured else fit.fit_cel

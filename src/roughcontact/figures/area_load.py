@@ -44,6 +44,7 @@ from .load_curves import (
     unconverged_steps,
 )
 from .style import STYLE, family_handles, lambda_label, legend_below, plain_log_labels, require
+from .unresolved import mark_unresolved, shown_cases, unresolved_handles
 
 
 def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None, *,
@@ -99,7 +100,7 @@ def fig_area_load(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = N
         xmax, ymax, sdmax = (float(v) for v in extent)
         drew_fit = _area_load_theory_panels(axes, ks_list, fit, cel_kl, estimator, xmax, ymax, e_star, hp, alphas)
         handles = family_handles(kl_list, h_list, colour, marker, style) + area_load_theory_handles(sdmax)
-        handles += asperity_handles(alphas) + _area_load_cross_handles(axes, crosses)
+        handles += asperity_handles(alphas) + _area_load_cross_handles(axes, crosses) + unresolved_handles(fig)
         label = record_panels(fig, axes.flat, agg, stats, (kl_list, ks_list, h_list), fit, cel_kl, estimator, drew_fit)
         if label is not None:
             handles.append(Line2D([], [], **reference_style("cel_fit"), label=label))
@@ -176,6 +177,7 @@ def _area_load_panel(ax, agg, stats, bad, families, e_star: float, colour, marke
         crosses.append((p / e_star, a))
     x, y = (np.concatenate(v) for v in zip(*crosses, strict=True))
     draw_unconverged(ax, x, y)
+    mark_unresolved(ax, agg, agg["pressure"] / e_star, agg["area_fraction"], shown_cases(families))
     return extent, (x, y)
 
 

@@ -22,6 +22,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from .style import MAP_PIXELS
+from .unresolved import unresolved_note
 
 #: Styles of the reference lines (matplotlib keyword arguments), one per kind, all distinct and above
 #: the data bands (zorder 2) and the data lines (2.5). The asperity models' colour depends on the
@@ -206,7 +207,8 @@ def caption(lead: str, record: Mapping) -> str:
     """The caption of a figure from its ``lead`` (reStructuredText) and its ``record``
     (:func:`roughcontact.figures.record.figure_record`): the lead, then the notes that hold for it
     (:data:`NOTES`), what profiles mean for its references (:func:`profiles_note`) and what it leaves out
-    (:data:`LEFT_OUT`), one sentence naming the reference lines it shows (none when it shows none), and the
+    (:data:`LEFT_OUT`), the load steps it marks unresolved (:func:`~.unresolved.unresolved_note`), one sentence
+    naming the reference lines it shows (none when it shows none), and the
     route of its fit (:func:`fit_sentence`)."""
     out = lead.rstrip() + "\n"
     for key in record.get("notes", ()):
@@ -214,6 +216,7 @@ def caption(lead: str, record: Mapping) -> str:
     profile = " ".join(t for t in [profiles_note(record), *(LEFT_OUT[k] for k in record.get("left_out", ()))] if t)
     if profile:
         out += "\n" + profile + "\n"
+    out += unresolved_note(record.get("unresolved", ()))
     gids = [g for g in REFERENCES if g in record.get("references", ())]
     if gids:
         out += "\nDrawn with the data: " + _listed([REFERENCES[g] for g in gids]) + ".\n"

@@ -39,6 +39,7 @@ from .load_curves import (
     unconverged_steps,
 )
 from .style import STYLE, family_handles, lambda_label, legend_below, require
+from .unresolved import mark_unresolved, shown_cases, unresolved_handles
 
 
 def kappa_theory(ax, amax: float, alphas, ylo: float, yhi: float) -> list:
@@ -86,6 +87,7 @@ def _kappa_panel(ax, agg, stats, bad, families, colour, marker, style):
         crosses.append(family_unconverged(agg, bad, family, "area_fraction", "kappa"))
     x, y = (np.concatenate(v) for v in zip(*crosses, strict=True))
     draw_unconverged(ax, x, y)
+    mark_unresolved(ax, agg, agg["area_fraction"], agg["kappa"], shown_cases(families))
     return amax, ylo, yhi, (x, y)
 
 
@@ -151,7 +153,7 @@ def fig_kappa(agg: xr.Dataset, stats: xr.Dataset, fit: xr.Dataset | None = None,
         for ax in list(axes.flat)[len(ks_list):]:
             ax.set_visible(False)
         handles = family_handles(kl_list, h_list, colour, marker, style) + theory
-        handles += unconverged_handles(n_bad, n_off)
+        handles += unconverged_handles(n_bad, n_off) + unresolved_handles(fig)
         label = record_panels(fig, axes.flat, agg, stats, (kl_list, ks_list, h_list), fit, cel_kl, estimator, drew_fit)
         if label is not None:
             handles += _kappa_fit_handles(fit, label)

@@ -57,6 +57,7 @@ from .style import (
     require,
     unit_tex,
 )
+from .unresolved import mark_unresolved, unresolved_handles
 
 #: Style of the fitted CEL (as in :mod:`roughcontact.figures`: thick translucent grey).
 _FIT_STYLE = reference_style("cel_fit")
@@ -187,11 +188,14 @@ def _curve(agg: xr.Dataset, name: str, bad: xr.DataArray) -> tuple[np.ndarray, n
     return x[ok], a[ok]
 
 
-def _draw_unconverged(ax, x: xr.DataArray, y: xr.DataArray, bad: xr.DataArray) -> tuple[np.ndarray, np.ndarray]:
-    """The unconverged steps as crosses at ``(x, y)`` (dims ``(topography, step)``); returns their
-    ``(x, y)``, shape ``(n,)`` each, to count those outside the axes once the limits are set."""
+def _draw_unconverged(ax, x: xr.DataArray, y: xr.DataArray, bad: xr.DataArray,
+                      agg: xr.Dataset) -> tuple[np.ndarray, np.ndarray]:
+    """The unconverged steps as crosses at ``(x, y)`` (dims ``(topography, step)``), and ``agg``'s unresolved
+    steps circled (:func:`~.unresolved.mark_unresolved`); returns the crosses' ``(x, y)``, shape ``(n,)`` each,
+    to count those outside the axes once the limits are set."""
     points = masked_points(x, y, bad)
     load_curves.draw_unconverged(ax, *points)
+    mark_unresolved(ax, agg, x, y)
     return points
 
 
@@ -353,7 +357,7 @@ def fig_measured_area_load(agg: xr.Dataset, fit: xr.Dataset | None = None, *, es
         ax = fig.subplots()
         bad = _unconverged(agg)
         xs, ys = _draw_area_curves(ax, agg, names, used, bad)
-        crosses = _draw_unconverged(ax, _load(agg), agg["area_fraction"], bad)
+        crosses = _draw_unconverged(ax, _load(agg), agg["area_fraction"], bad, agg)
         grid = np.geomspace(xs.min() / 1.2, xs.max() * 1.2, 200)
         # Loads normalised by E* h': the theory takes p0 = x with E* = h' = 1.
         cut = area_load_theory(ax, grid, 1.0, 1.0, alphas)
@@ -364,7 +368,7 @@ def fig_measured_area_load(agg: xr.Dataset, fit: xr.Dataset | None = None, *, es
         if consts is not None:
             handles += _draw_area_fit(ax, grid, fit, estimator, consts, constrained, used)
         _area_load_log_axes(ax, grid, ys)
-        handles += unconverged_handles(crosses[0].size, n_outside(ax, *crosses), "lines")
+        handles += unconverged_handles(crosses[0].size, n_outside(ax, *crosses), "lines") + unresolved_handles(fig)
         _title(fig, agg, sizes)
         legend_below(fig, handles, r"each topography's load over its own $E^* h'$")
     return fig
@@ -449,7 +453,7 @@ def fig_measured_kappa(agg: xr.Dataset, fit: xr.Dataset | None = None, *, estima
                 amax, ylo, yhi = max(amax, a[ok].max()), min(ylo, k[ok].min()), max(yhi, k[ok].max())
         if amax == 0.0:
             raise ValueError("agg has no converged step with a positive contact area")
-        crosses = _draw_unconverged(ax, agg["area_fraction"], agg["kappa"], bad)
+        crosses = _draw_unconverged(ax, agg["area_fraction"], agg["kappa"], bad, agg)
         handles = _topography_handles(names, used, "-")
         if consts is not None:
             a = np.linspace(0.0, min(amax, 0.99 * cel_area_limit(consts[1], consts[2])), 200)
@@ -463,7 +467,7 @@ def fig_measured_kappa(agg: xr.Dataset, fit: xr.Dataset | None = None, *, estima
             handles += [Line2D([], [], **_FIT_STYLE, label=label), _window_patch(fit)]
         handles += kappa_theory(ax, amax, alphas, ylo, yhi)
         ax.set_xlim(0, amax * 1.02)
-        handles += unconverged_handles(crosses[0].size, n_outside(ax, *crosses), "lines")
+        handles += unconverged_handles(crosses[0].size, n_outside(ax, *crosses), "lines") + unresolved_handles(fig)
         ax.set_xlabel(r"$A/A_0$ [1]")
         ax.set_ylabel(r"$\kappa = E^* h'/\bar p$ [1]")
         _title(fig, agg, sizes)

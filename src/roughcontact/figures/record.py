@@ -14,8 +14,9 @@ The record's keys: ``figure`` (its registered name), ``title``, ``references`` (
 lines in view, in :data:`~.captions.REFERENCES`' order), ``fits`` (``{"route", "label", "where"}`` of each fitted
 curve in view: ``route`` a key of :data:`~.captions.ROUTES`, ``label`` its legend entry), ``window`` (the fit's
 window ``[low, high]`` of ``A/A0`` where a fit is drawn, else null), ``series`` (the data series drawn, by name),
-``profiles`` (whether the cases are profiles), ``notes`` (keys of :data:`~.captions.NOTES`) and ``left_out``
-(keys of :data:`~.captions.LEFT_OUT`).
+``profiles`` (whether the cases are profiles), ``notes`` (keys of :data:`~.captions.NOTES`), ``left_out``
+(keys of :data:`~.captions.LEFT_OUT`) and ``unresolved`` (the largest patch's node count of each load step the
+figure marks unresolved, sorted: :mod:`~.unresolved`).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from .captions import LEFT_OUT, NOTES, PROFILES_GID, ROUTES, drawn, in_view
+from .unresolved import shown_nodes
 
 #: What each figure has noted so far (no strong reference: a figure closed is forgotten).
 _NOTES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
@@ -96,6 +98,7 @@ def figure_record(name: str, fig: Figure) -> dict:
         "profiles": fig.get_gid() == PROFILES_GID,
         "notes": [k for k in NOTES if k in noted["notes"]],
         "left_out": [k for k in LEFT_OUT if k in noted["left_out"]],
+        "unresolved": sorted(int(n) for n in shown_nodes(fig)),
     }
 
 

@@ -18,6 +18,7 @@ import xarray as xr
 from ..analysis.aggregate.combine import CASE_DIMS, TOPOGRAPHY_DIM
 from ..core.cell import Cell
 from ..core.quantities import cf_unit
+from ..statistics.patches import resolved_variable
 from ..statistics.pressure import PressureDistribution, pressure_bins
 from ..statistics.representativity import epsilon_attrs
 from ..surfaces.synthetic import (
@@ -199,8 +200,11 @@ def contact_dataset(result: xr.Dataset, *, rms_slope: float, alpha: float, e_sta
     ``e_star`` in its ``pressure_units``); what this adds is dimensionless. A profile's solve
     (``surface_dimension`` 1) gets no ``area_fraction_corrected``: Yastrebov et al.'s (2017)
     perimeter correction is derived for a map's pixel boundaries, not a profile's interval ends.
+    ``contact_resolved`` flags each step whose largest contact patch (the solver's ``largest_patch_nodes``)
+    holds at least 4 nodes (:mod:`roughcontact.statistics.patches`); an unresolved step's A/A0 is the grid's.
     """
     ds = result.drop_vars("wall_time", errors="ignore")
+    ds["contact_resolved"] = resolved_variable(ds["largest_patch_nodes"])
     if result.attrs.get("surface_dimension") != 1:  # the perimeter correction is derived for maps' pixels only
         _add_corrected_area(ds, Cell.from_attrs(result.attrs, (int(result.attrs["nx"]), int(result.attrs["ny"]))))
     ds["kappa"] = (e_star * rms_slope / ds["mean_contact_pressure"]).assign_attrs(

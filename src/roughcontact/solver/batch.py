@@ -47,6 +47,7 @@ import time
 import numpy as np
 import xarray as xr
 
+from ..statistics.patches import PATCH_LONG_NAMES
 from .batch_solver import BATCH_METHOD, CHECK_EVERY, BatchSolver, per_case
 from .results import periodic_elastic_attrs, to_dataset
 from .settings import SolverSettings
@@ -56,7 +57,7 @@ __all__ = ["BATCH_METHOD", "CHECK_EVERY", "PER_CASE", "BatchSolver", "solve_cont
 
 #: Per-case variables of the batched dataset (dims ``case, step``).
 PER_CASE = ("area_fraction", "mean_contact_pressure", "mean_gap", "contact_perimeter", "iterations",
-            "residual", "converged", "solver_path")
+            "residual", "converged", "solver_path", *PATCH_LONG_NAMES)
 
 
 def validate_batch(heights) -> np.ndarray:
@@ -98,9 +99,9 @@ def solve_contact_batch(heights, pressures, settings: SolverSettings | None = No
     xarray.Dataset
         :func:`~.solve.solve_contact`'s dataset with a leading dimension ``case`` (0..B-1) on the
         per-case variables (``area_fraction``, ``mean_contact_pressure``, ``mean_gap``,
-        ``contact_perimeter``, ``iterations``, ``residual``, ``converged``, ``solver_path``:
-        dims ``case, step``); ``pressure`` and ``wall_time`` (the whole batch's step) over ``step``;
-        attributes as there, plus ``batch_size`` and ``check_every``.
+        ``contact_perimeter``, ``iterations``, ``residual``, ``converged``, ``solver_path``, ``contact_nodes``,
+        ``largest_patch_nodes``: dims ``case, step``); ``pressure`` and ``wall_time`` (the whole batch's step)
+        over ``step``; attributes as there, plus ``batch_size`` and ``check_every``.
 
     Raises
     ------
@@ -133,6 +134,7 @@ def _run_steps(solver: BatchSolver, p: np.ndarray, progress):
     B, n_steps = solver.batch, p.size
     cols = {k: np.empty((B, n_steps)) for k in ("area_fraction", "mean_contact_pressure", "mean_gap",
                                                  "contact_perimeter", "residual")}
+    cols.update({k: np.empty((B, n_steps), dtype=np.int64) for k in PATCH_LONG_NAMES})
     iters = np.empty((B, n_steps), dtype=np.int64)
     conv = np.empty((B, n_steps), dtype=bool)
     paths = np.empty((B, n_steps), dtype=np.int8)

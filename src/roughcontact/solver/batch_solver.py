@@ -9,6 +9,7 @@ import numpy as np
 
 from ..core.backend import get_backend
 from ..core.cell import Cell
+from ..statistics.patches import contact_patches
 from .batch_cuda import fused_kernels
 from .batch_iteration import BatchIteration
 from .batch_kernels import ArrayKernels, BatchOperator
@@ -220,6 +221,12 @@ class BatchSolver:
         ex, ey = (self.be.to_host(v).astype(np.float64) for v in (ex, ey))
         return self.cell.perimeter_per_area(ex, ey)
 
+    def largest_patches(self) -> np.ndarray:
+        """Nodes of the largest contact patch of every case (periodic;
+        :func:`~roughcontact.statistics.patches.contact_patches`), host (B,) int64."""
+        masks = self.be.to_host(self.P > 0.0)
+        return np.array(per_case(lambda b: contact_patches(masks[b])[1], self.batch, self.size), dtype=np.int64)
+
     def solve(self, p0: float):
         """Solve one load step of every case; per-case host columns."""
         B = self.batch
@@ -250,7 +257,8 @@ class BatchSolver:
             raise ValueError(f"pressures: the gap at p0={p0!r} overflows float64 in the units of heights; reduce "
                              "p0 * length / e_star or the heights")
         return {"area_fraction": area, "mean_contact_pressure": p0 / area, "mean_gap": mean_gap,
-                "contact_perimeter": self.perimeter(), "residual": residual, "iterations": its,
+                "contact_perimeter": self.perimeter(), "contact_nodes": nf,
+                "largest_patch_nodes": self.largest_patches(), "residual": residual, "iterations": its,
                 "converged": ok, "solver_path": np.array([SOLVER_PATHS.index(p) for p in paths], dtype=np.int8),
                 "rounds": it.rounds}
 

@@ -16,6 +16,7 @@ import xarray as xr
 
 from ..core.cell import Cell, sides_of
 from ..core.quantities import cf_unit
+from ..statistics.patches import patch_variables
 from .workspace import SOLVER_PATHS
 
 #: ``units`` attribute of dimensionless fractions, counts and flags.
@@ -200,8 +201,9 @@ def to_dataset(p, cols, iters, conv, fields, store_fields, shape, attrs: dict, e
     ``shape`` the grid ``(nx, ny)`` (an int ``n``: ``(n, n)``), the cell's sides being in
     ``attrs`` (:meth:`roughcontact.core.cell.Cell.solver_attrs`): the stored fields' ``x`` and ``y`` coordinates step by
     ``dx = Lx / nx`` and ``dy = Ly / ny``. ``p`` the loads, shape (n_steps,); ``cols``
-    per-step float columns by name (including each effect's); ``iters``, ``conv`` per-step iterations and
-    flags; ``fields`` a ``(pressures, gaps, step numbers)`` triple of the
+    per-step float columns by name (including each effect's) and the int columns ``contact_nodes`` and
+    ``largest_patch_nodes`` (:func:`roughcontact.statistics.patches.contact_patches`); ``iters``, ``conv``
+    per-step iterations and flags; ``fields`` a ``(pressures, gaps, step numbers)`` triple of the
     stored fields; ``attrs`` the solver's global attributes; ``effects`` add
     their variables and attributes; ``paths`` the per-step codes into
     :data:`~.workspace.SOLVER_PATHS` (int8, shape (n_steps,)) of the iteration that ended each step
@@ -257,6 +259,7 @@ def _step_meta(p, cols, iters, conv, pressure_units, length_units, inverse_lengt
                       "residual <= tol, mean(p) = p0 to 1e-10 and 0 <= p (<= hardness) on a freshly "
                       "recomputed displacement"),
         "wall_time": (cols["wall_time"], "s", "wall-clock time of the load step"),
+        **patch_variables(cols["contact_nodes"], cols["largest_patch_nodes"]),
     }
 
 

@@ -16,6 +16,7 @@ import numpy as np
 import xarray as xr
 
 from ..core.cell import Cell
+from ..statistics.patches import PATCH_LONG_NAMES, contact_patches
 from .adhesive import ADHESIVE_SOLVER_DESCRIPTION, ADHESIVE_SOLVER_NAME, AdhesiveSolver
 from .contact import ContactSolver
 from .results import SOLVER_NAME, StepResult, solver_description, to_dataset
@@ -192,9 +193,10 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
     Returns
     -------
     xarray.Dataset
-        Dimension ``step`` (1..n_steps): ``pressure``, ``area_fraction``, ``mean_contact_pressure``, ``mean_gap``,
+        Dimension ``step``: ``pressure``, ``area_fraction``, ``mean_contact_pressure``, ``mean_gap``,
         ``contact_perimeter``, ``iterations``, ``residual``, ``converged``, ``wall_time``, ``solver_path`` (a CF
-        flag: the iteration that ended the step), each effect's variables; fields and ``x``/``y`` when stored.
+        flag: the iteration that ended the step), ``contact_nodes`` and ``largest_patch_nodes``
+        (:func:`~roughcontact.statistics.patches.contact_patches`), each effect's variables; stored fields.
         CF ``units`` and ``long_name`` on each; global attributes: the settings, the cell
         (:meth:`~.core.cell.Cell.solver_attrs`), ``boundary``, ``elastic_method``. ``converged``: the final check
         of the package docstring passed on a freshly recomputed displacement.
@@ -295,6 +297,7 @@ def _run_steps(solver: ContactSolver | AdhesiveSolver, p: np.ndarray, store: set
     names = ["area_fraction", "mean_contact_pressure", "mean_gap", "contact_perimeter", "residual",
              "wall_time"] + [v for e in solver.effects for v in e.variables()]
     cols = {k: np.empty(n_steps) for k in names}
+    cols.update({k: np.empty(n_steps, dtype=np.int64) for k in PATCH_LONG_NAMES})
     iters = np.empty(n_steps, dtype=np.int64)
     conv = np.empty(n_steps, dtype=bool)
     paths = np.empty(n_steps, dtype=np.int8)
@@ -314,6 +317,7 @@ def _run_steps(solver: ContactSolver | AdhesiveSolver, p: np.ndarray, store: set
         cols["mean_gap"][k] = st.mean_gap
         cols["contact_perimeter"][k] = st.perimeter
         cols["residual"][k] = st.residual
+        cols["contact_nodes"][k], cols["largest_patch_nodes"][k] = contact_patches(st.mask, solver.periodic)
         for name, value in st.effect_columns.items():
             cols[name][k] = value
         iters[k] = st.iterations

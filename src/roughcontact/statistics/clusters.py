@@ -33,18 +33,14 @@ from collections.abc import Iterable
 import numpy as np
 import xarray as xr
 from scipy import ndimage
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from ..core.cell import Cell, check_length
 from ..core.quantities import cf_unit
+from .patches import EDGE_NEIGHBOURS, merge_across_edges
 from .wrapping import CONNECTIVITIES, wrapping_variable
 
 #: ``units`` attribute of dimensionless quantities (fractions of A0, counts).
 DIMENSIONLESS_UNITS = "1"
-
-#: Edge-neighbour (4-connectivity) structuring element; see the module docstring.
-_CROSS = ndimage.generate_binary_structure(2, 1)
 
 #: Number of logarithmic bins of the default histogram.
 DEFAULT_N_BINS = 24
@@ -158,27 +154,11 @@ def label_clusters(mask: np.ndarray, periodic: bool = True, *, square: bool = Tr
         array of dtype bool.
     """
     mask = _check_mask(mask, square)
-    raw, n_raw = ndimage.label(mask, structure=_CROSS)
+    raw, n_raw = ndimage.label(mask, structure=EDGE_NEIGHBOURS)
     if n_raw == 0:
         return np.zeros(mask.shape, dtype=np.int32), 0
-    n_comp, comp = _merge_across_edges(raw, n_raw, periodic)
+    n_comp, comp = merge_across_edges(raw, n_raw, periodic, periodic)
     return _number_by_first_node(raw, n_raw, n_comp, comp)
-
-
-def _merge_across_edges(raw: np.ndarray, n_raw: int, periodic: bool) -> tuple[int, np.ndarray]:
-    """``(n_comp, comp)``: components of the raw labels ``0..n_raw`` (``comp``, shape ``(n_raw + 1,)``)
-    once labels facing each other across the x (axis 0) and y (axis 1) edges, neighbours on the torus,
-    are joined (none with ``periodic=False``); vertex 0 (background) stays isolated."""
-    a = np.concatenate([raw[0, :], raw[:, 0]])
-    b = np.concatenate([raw[-1, :], raw[:, -1]])
-    both = (a > 0) & (b > 0)
-    if not periodic:
-        both[:] = False
-    a, b = a[both], b[both]
-    # The graph is tiny (<= nx + ny edges) but csgraph keeps the merge O(n_raw)
-    # without a Python loop over all labels.
-    graph = coo_matrix((np.ones(a.size, dtype=np.int8), (a, b)), shape=(n_raw + 1, n_raw + 1))
-    return connected_components(graph, directed=False)
 
 
 def _number_by_first_node(raw: np.ndarray, n_raw: int, n_comp: int, comp: np.ndarray) -> tuple[np.ndarray, int]:

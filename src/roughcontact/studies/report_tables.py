@@ -101,8 +101,8 @@ def pull_off_table(agg) -> str:
             r"(:math:`\rho` the range of the interaction, :math:`w` the work of adhesion; at least 1.5 cells), the "
             "last load step converged, the surfaces separated, the steps beside the minimum converged and the "
             "attraction dies out inside the cell (else its periodic images pull too); other cases are left out, "
-            "counted by reason, and none of their unloading steps is flagged converged. No contact evolution law is fitted to an adhesive scene: the law and its "
-            "theories describe contact without adhesion.\n\n")
+            "counted by reason, and none of their unloading steps is flagged converged. No contact evolution law "
+            "is fitted to an adhesive scene: the law and its theories describe contact without adhesion.\n\n")
     return lead + list_table(list(PULL_OFF_COLUMNS), rows)
 
 

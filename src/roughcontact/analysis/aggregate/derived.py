@@ -1,4 +1,4 @@
-"""Quantities derived from a combined contact dataset: ``kappa``, ``dpbar_dp0``, ``n_unconverged``.
+"""Quantities derived from a combined contact dataset: ``kappa``, ``dpbar_dp0``, ``n_unconverged``, ``n_unresolved``.
 
 ``pressure`` and ``mean_contact_pressure`` share the unit of the global attribute ``e_star`` (its
 ``pressure_units`` where recorded, e.g. ``"MPa"``), so that ``kappa = E* h' / pbar``
@@ -18,7 +18,7 @@ from .derivatives import load_derivative
 
 def add_derived(ds: xr.Dataset, *, kappa_rtol: float = 1e-6, derivative_order: int = 2,
                 derivative_variable: str = "log_p0") -> xr.Dataset:
-    """Add ``kappa``, ``dpbar_dp0`` and ``n_unconverged`` to a combined contact dataset.
+    """Add ``kappa``, ``dpbar_dp0``, ``n_unconverged`` (and ``n_unresolved``) to a combined contact dataset.
 
     - ``kappa = E* h' / pbar`` [1], recomputed from ``e_star`` (global attr),
       ``rms_slope`` and ``mean_contact_pressure``. If the input already has ``kappa``,
@@ -30,6 +30,9 @@ def add_derived(ds: xr.Dataset, *, kappa_rtol: float = 1e-6, derivative_order: i
       curve has no other value there); the fits drop the unconverged steps themselves.
     - ``n_unconverged(k_l, k_s, H, seed)``: number of steps with ``converged == False``;
       float64 so that grid holes (``case_present == False``) can be NaN.
+    - ``n_unresolved(k_l, k_s, H, seed)``, where the cases carry ``contact_resolved``
+      (:mod:`roughcontact.statistics.patches`; files of older versions do not): number of steps whose
+      contact the grid does not resolve, float64 as ``n_unconverged``.
 
     Parameters
     ----------
@@ -45,7 +48,7 @@ def add_derived(ds: xr.Dataset, *, kappa_rtol: float = 1e-6, derivative_order: i
     Returns
     -------
     xarray.Dataset
-        A copy of ``ds`` with the three variables added (``kappa`` replaced by the
+        A copy of ``ds`` with those variables added (``kappa`` replaced by the
         recomputed values).
     """
     e_star = _check_derived_inputs(ds, kappa_rtol)
@@ -56,8 +59,12 @@ def add_derived(ds: xr.Dataset, *, kappa_rtol: float = 1e-6, derivative_order: i
     out["kappa"] = _checked_kappa(ds, e_star, converged, present, kappa_rtol)
     out["kappa"].attrs = {"units": "1", "long_name": "kappa = E* h' / pbar (normalised inverse mean contact pressure)"}
     out["dpbar_dp0"] = _dpbar_dp0(ds, present, derivative_order, derivative_variable)
-    out["n_unconverged"] = _n_unconverged(converged, present)
+    out["n_unconverged"] = _n_false(converged, present)
     out["n_unconverged"].attrs = {"units": "1", "long_name": "number of unconverged load steps (NaN: no such case)"}
+    if "contact_resolved" in ds:
+        out["n_unresolved"] = _n_false(ds["contact_resolved"].astype(bool), present)
+        out["n_unresolved"].attrs = {"units": "1", "long_name": "number of load steps whose contact is unresolved "
+                                     "(largest patch under 4 nodes; NaN: no such case)"}
     return out
 
 
@@ -135,9 +142,10 @@ def _dpbar_dp0(ds: xr.Dataset, present: xr.DataArray, order: int, variable: str)
         "stencil": f"order-{order} Fornberg differences in {variable}"})
 
 
-def _n_unconverged(converged: xr.DataArray, present: xr.DataArray) -> xr.DataArray:
-    """Unconverged steps per case (float64; NaN where ``present`` is False), case dims in canonical order."""
-    n_unc = (~converged).sum("step").where(present).astype(np.float64)
+def _n_false(flag: xr.DataArray, present: xr.DataArray) -> xr.DataArray:
+    """Steps per case where ``flag`` is False (float64; NaN where ``present`` is False), case dims in canonical
+    order."""
+    n_unc = (~flag).sum("step").where(present).astype(np.float64)
     return n_unc.transpose(*[d for d in (*CASE_DIMS, TOPOGRAPHY_DIM) if d in n_unc.dims])
 
 

@@ -4,7 +4,7 @@ The CEL (Yastrebov, Anciaux & Molinari 2012, Eq. 2) is
 ``a = A/A0 = (beta + [kappa p0 / (h' E*)]^(mu-1))^(1/(mu-1))``; it integrates
 ``d pbar / d p0 = beta a^(-mu)`` from the linear law ``a = kappa p0 / (h' E*)``.
 Two estimators are offered, both restricted to a window of contact fraction
-(the paper's ``a in [0.01, 0.11]``) and to converged load steps:
+(the paper's ``a in [0.01, 0.11]``) and to converged load steps whose contact the grid resolves (:mod:`.cases`):
 
 ``"paper"`` (the paper's route; by default on the seed-mean curve of each H)
     1. ``mu`` and ``beta`` from an ordinary least-squares line through

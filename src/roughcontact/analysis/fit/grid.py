@@ -12,6 +12,7 @@ from ...theory.spectra import power_law_alpha
 from ..aggregate.combine import CASE_DIMS, is_profiles
 from ..aggregate.derived import add_derived
 from .bootstrap import GroupFit, check_schedules, fit_group, group_rng, shared_schedule
+from .cases import usable_steps
 from .estimators import CONSTANTS, METHODS, POOLED, Curves
 from .settings import check_settings, estimate_vars, estimator_coords, h_label, paper_vars, settings_attrs
 
@@ -25,7 +26,7 @@ def _group_curves(agg: xr.Dataset, k_l: float, k_s: float, hs: Sequence[float],
         for s in np.flatnonzero(present):
             case = sub.isel(seed=s)
             a = case["area_fraction"].transpose("step").values.astype(float)
-            conv = case["converged"].transpose("step").values.astype(bool)
+            conv = usable_steps(case).transpose("step").values
             row = (a,
                    case["pressure"].transpose("step").values.astype(float),
                    float(case["rms_slope"].values),

@@ -15,7 +15,7 @@ import xarray as xr
 from ..aggregate.combine import CASE_DIMS, TOPOGRAPHY_DIM
 from ..aggregate.derived import add_derived
 from .bootstrap import GroupFit, check_schedules, fit_group, group_rng, shared_schedule
-from .cases import is_topography_layout
+from .cases import is_topography_layout, usable_steps
 from .estimators import METHODS, Curves
 from .settings import check_settings, check_window, estimate_vars, estimator_coords, paper_vars, settings_attrs
 
@@ -46,7 +46,7 @@ def _topography_curves(agg: xr.Dataset, window: tuple[float, float]) -> tuple[Cu
         return agg[name].broadcast_like(agg["area_fraction"]).transpose(*dims).values.astype(dtype)[present]
 
     a = steps("area_fraction")
-    valid = steps("converged", bool) & np.isfinite(a)
+    valid = usable_steps(agg).broadcast_like(agg["area_fraction"]).transpose(*dims).values[present] & np.isfinite(a)
     hp = agg["rms_slope"].transpose(TOPOGRAPHY_DIM).values.astype(float)[present]
     curves = Curves(a, steps("pressure"), hp, steps("kappa"), steps("dpbar_dp0"), valid,
                      np.zeros(a.shape[0], dtype=int), window)

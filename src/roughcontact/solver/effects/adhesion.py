@@ -102,8 +102,8 @@ class Adhesion(Effect):
                 zone = MIN_ZONE_CELLS * length / MAX_GRID_N
                 fail("", f"{problem}: it needs surface.N >= {need}, beyond the largest grid a scene allows "
                          f"(N = {MAX_GRID_N}); widen the process zone E* rho^2 / w to >= {zone:.3g} instead: "
-                         f"range >= {1.002 * math.sqrt(zone * law.w):.3g}, or work <= {0.998 * law.rho ** 2 / zone:.3g}, "
-                         "or a "
+                         f"range >= {1.002 * math.sqrt(zone * law.w):.3g}, "
+                         f"or work <= {0.998 * law.rho ** 2 / zone:.3g}, or a "
                          "smaller cell L")
         if block["law"] == "maugis-dugdale":
             fail(".law", "maugis-dugdale is refused in a scene: its tension jumps at g = rho, so the discrete "

@@ -1,9 +1,11 @@
 """The MPI solve of one case: :func:`solve_contact_mpi`, the step loop and rank 0's dataset.
 
 What is gathered, and why: every per-step output (A/A0, mean pressure, mean gap, perimeter,
-residual, iterations, converged) is a collective reduction, so every rank holds it already and
-rank 0 builds the dataset from its own copy: nothing is gathered for them. Fields are gathered to
-rank 0 only on request (``fields=True``: the last step's pressure and gap, ``Gatherv`` of the
+residual, iterations, converged, contact nodes) is a collective reduction, so every rank holds it already and
+rank 0 builds the dataset from its own copy: nothing is gathered for them. The largest contact patch is
+joined on rank 0 from each slab's patches on its two edge rows and its largest inner one
+(:func:`~roughcontact.statistics.patches.slab_patches`: two rows of ids a rank, not its field) and broadcast.
+Fields are gathered to rank 0 only on request (``fields=True``: the last step's pressure and gap, ``Gatherv`` of the
 slabs' rows), because a whole field is what the split exists to avoid holding on one process:
 8 bytes a node, 0.5 GB at N = 8192 per field, 34 GB at N = 65536.
 """
@@ -15,6 +17,7 @@ import time
 import numpy as np
 import xarray as xr
 
+from ...statistics.patches import PATCH_LONG_NAMES
 from ..batch_solver import BATCH_METHOD
 from ..results import periodic_elastic_attrs, to_dataset
 from ..settings import SolverSettings
@@ -138,6 +141,7 @@ def _run_steps(solver: MpiSolver, p: np.ndarray, progress):
     n = p.size
     names = ("area_fraction", "mean_contact_pressure", "mean_gap", "contact_perimeter", "residual", "wall_time")
     cols = {k: np.empty(n) for k in names}
+    cols.update({k: np.empty(n, dtype=np.int64) for k in PATCH_LONG_NAMES})
     iters = np.empty(n, dtype=np.int64)
     conv = np.empty(n, dtype=bool)
     paths = np.empty(n, dtype=np.int8)
@@ -145,7 +149,7 @@ def _run_steps(solver: MpiSolver, p: np.ndarray, progress):
         t0 = time.perf_counter()
         out = solver.solve(float(p0))
         cols["wall_time"][k] = max(solver.comm.allgather(time.perf_counter() - t0))
-        for name in names[:-1]:
+        for name in (*names[:-1], *PATCH_LONG_NAMES):
             cols[name][k] = out[name][0]
         iters[k], conv[k], paths[k] = out["iterations"][0], out["converged"][0], out["solver_path"][0]
         if progress is not None:

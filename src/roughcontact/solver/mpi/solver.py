@@ -21,8 +21,9 @@ import math
 import numpy as np
 
 from ...core.backend import get_backend
-from ...core.cli import one_line
 from ...core.cell import Cell
+from ...core.cli import one_line
+from ...statistics.patches import merge_slabs, slab_patches
 from ..batch_solver import BATCH_METHOD, BatchSolver
 from ..units import Units
 from ..workspace import SOLVER_PATHS
@@ -142,6 +143,17 @@ class MpiSolver(BatchSolver):
         ey = int(np.count_nonzero(m != np.roll(m, 1, axis=1)))
         ex, ey = (sum(comm.allgather(v)) for v in (ex, ey))
         return self.cell.perimeter_per_area(np.array([float(ex)]), np.array([float(ey)]))
+
+    def largest_patches(self) -> np.ndarray:
+        """Nodes of the largest contact patch (periodic), the patches across slab boundaries joined; (1,) int64.
+
+        Each rank labels its rows (:func:`~roughcontact.statistics.patches.slab_patches`: the patch ids of its
+        first and last rows and its largest patch touching neither); rank 0 joins them
+        (:func:`~roughcontact.statistics.patches.merge_slabs`) and broadcasts the count.
+        """
+        parts = self.comm.gather(slab_patches(self.P[0] > 0.0), root=0)
+        largest = merge_slabs(parts)[1] if self.comm.rank == 0 else None
+        return np.array([self.comm.bcast(largest, root=0)], dtype=np.int64)
 
     def fields(self) -> tuple[np.ndarray, np.ndarray]:
         """The rank's rows of the last step's pressure [pressure] and gap ``w - gbar`` [length]."""
