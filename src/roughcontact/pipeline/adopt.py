@@ -27,8 +27,8 @@ atomically, and listed in ``results/{scene}/adopted.tsv`` (case file, source fil
 the sha256 of each). Snakemake then finds the output present and plans neither the job
 nor its surface (temporary or kept); a scene whose contact map reads its cases' surfaces
 (``outputs.fields``) is refused, as those surfaces would be made again and the cases re-solved. The
-target's ``benchmarks/`` gets no file for an adopted case: :mod:`roughcontact.pipeline.runcost` reports its cost in the source run on a row of
-its own.
+target's ``benchmarks/`` gets no file for an adopted case: :mod:`roughcontact.pipeline.runcost` reports its
+cost in the source run on a row of its own.
 
 Refuses while a Snakemake run holds the working directory: the jobs that run had
 planned would overwrite the copies.
