@@ -150,6 +150,23 @@ def test_modes_of_one_wavenumber_count_together(rule, expected):
                                persson_mean_gap(p0, Q3, C3, e_star=1.0, rule=rule), rtol=1e-13)
 
 
+@pytest.mark.parametrize("rule", ["shell", "midpoint"])
+def test_a_shell_is_one_term_even_where_its_wavenumbers_differ_by_round_off(rule):
+    """|k| = 5 is (3, 4) and (5, 0): hypot may round them apart; they are still one shell (issue 61)."""
+    q, c = mode_spectrum(256, 4, 40, 0.5, rms_slope=0.1)
+    k2 = np.rint((q / (2 * math.pi)) ** 2)
+    a, w = mode_weights(q, c, rule)
+    assert w.size == np.unique(k2).size < np.unique(q).size + 1
+    shells, inverse = np.unique(k2, return_inverse=True)
+    power = np.bincount(inverse, q * q * c)
+    below = np.cumsum(power) - (0.5 * power if rule == "midpoint" else 0.0)
+    np.testing.assert_allclose(w, (0.5 * below) ** -0.5, rtol=1e-12)
+    np.testing.assert_allclose(a, np.bincount(inverse, q * c) * w, rtol=1e-12)
+    _, wm = mode_weights(q * (1 + 1e-13 * (np.arange(q.size) % 3)), c, "mode")  # ties keep their given order
+    order = np.lexsort((np.arange(q.size), k2))
+    np.testing.assert_allclose(wm, (0.5 * np.cumsum((q * q * c)[order])) ** -0.5, rtol=1e-11)
+
+
 def test_mode_by_mode_weights_follow_the_given_order_of_ties():
     a, w = mode_weights([2.0, 1.0, 2.0], [1.0, 1.0, 3.0], "mode")
     np.testing.assert_allclose(w, [(0.5 * 1.0) ** -0.5, (0.5 * 5.0) ** -0.5, (0.5 * 17.0) ** -0.5], rtol=1e-15)

@@ -38,6 +38,10 @@ _S_TABLE = (1e-2, 6.0)
 #: Modes x pressures evaluated at once by the mean gap and the stiffness (bounds the memory).
 _CHUNK = 1 << 22
 
+#: Relative difference below which two wavenumbers are one shell (round-off; lattice shells at
+#: N = 8192 differ by > 1e-8 relative).
+_SAME_Q = 1e-12
+
 
 # ------------------------------------------------------------------------ spectrum
 def mode_spectrum(n: int, k_l: float, k_s: float, hurst: float, *, rms_slope: float | None = None,
@@ -229,8 +233,10 @@ def mode_weights(q, c, rule: str = "midpoint") -> tuple[np.ndarray, np.ndarray]:
     - ``"shell"``: each shell at its top, with all of its own power, ``W = (sum_{q_j <= q} q_j^2 c_j /
       2)^(-1/2)``. The lowest shells then carry a finite ``W`` where the continuum's is infinite, and
       with few modes between q0 and q1 the mean gap comes out several percent too small.
-    - ``"mode"``: mode by mode in ascending ``q`` (ties in their given order), each with the power up
-      to and including itself: per shell, the average of ``W`` over its own power.
+    - ``"mode"``: mode by mode in ascending ``q`` (a shell's modes in their given order), each with the
+      power up to and including itself: per shell, the average of ``W`` over its own power.
+
+    Wavenumbers within a relative 1e-12 of each other are one shell (round-off).
 
     Parameters
     ----------
@@ -254,13 +260,17 @@ def mode_weights(q, c, rule: str = "midpoint") -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(f"rule must be one of {W_RULES}, got {rule!r}")
     keep = ca > 0  # modes without power add nothing, and would give 0 * inf where they come first
     qa, ca = qa[keep], ca[keep]
+    # A shell: the modes of one |q|, equal up to round-off (hypot(3, 4) and hypot(5, 0) may differ in the last bit).
     order = np.argsort(qa, kind="stable")
-    qa, ca = qa[order], ca[order]
+    shell = np.empty(qa.size, dtype=np.int64)
+    shell[order] = np.cumsum(np.r_[True, qa[order][1:] > qa[order][:-1] * (1.0 + _SAME_Q)]) - 1
+    order = np.lexsort((np.arange(qa.size), shell))  # by shell, the modes of a shell in their given order
+    qa, ca, shell = qa[order], ca[order], shell[order]
     if rule == "mode":
         w = (0.5 * np.cumsum(qa * qa * ca)) ** -0.5
         return qa * ca * w, w
     # Modes of one |q| share W: summing them first shortens every later sum (~10x on a square grid).
-    starts = np.flatnonzero(np.r_[True, qa[1:] > qa[:-1]])
+    starts = np.flatnonzero(np.r_[True, shell[1:] > shell[:-1]])
     qc, q2c = np.add.reduceat(qa * ca, starts), np.add.reduceat(qa * qa * ca, starts)
     below = np.cumsum(q2c) - (0.5 * q2c if rule == "midpoint" else 0.0)
     w = (0.5 * below) ** -0.5
