@@ -228,6 +228,20 @@ def test_discrete_sum_equals_spectrum_of_a_deterministic_surface():
             assert got[key] == pytest.approx(want[key], rel=1e-10), (n, k_l, k_s, key)
 
 
+@pytest.mark.parametrize("n, k_l, k_s", [(256, 3, 20.5), (257, 1, 100), (64, 2, 29)])
+def test_discrete_moments_are_the_sums_over_every_mode_of_the_full_grid(n, k_l, k_s):
+    # the function sums over a smaller grid when the band allows it (issue 61): the same modes
+    m = np.fft.fftfreq(n, 1.0 / n)
+    kx, ky = m[:, None], m[None, :]
+    k = np.hypot(kx, ky)
+    c = np.where((k >= k_l) & (k <= k_s), np.where(k > 0, k, 1.0) ** (-2 * 1.7), 0.0)
+    q2x, q2y = (2 * np.pi * kx) ** 2, (2 * np.pi * ky) ** 2
+    m0, m2, m4 = c.sum(), 0.5 * ((q2x + q2y) * c).sum(), 0.5 * ((q2x**2 + q2y**2) * c).sum()
+    got = discrete_power_law_moments(n, k_l, k_s, 0.7)
+    assert got["alpha"] == pytest.approx(m0 * m4 / m2**2, rel=1e-12)
+    assert got["m4"] / got["m0"] == pytest.approx(m4 / m0, rel=1e-12)
+
+
 @pytest.mark.parametrize("n", [64, 1024])
 @pytest.mark.parametrize("h", [0.2, 0.5, 0.8])
 def test_closed_form_vs_discrete_modes_narrow_band(n, h):

@@ -74,11 +74,16 @@ from .perimeter import (
     perimeter_corrected_area,
 )
 from .persson import (
+    W_RULES,
     mode_spectrum,
+    mode_weights,
     persson_j,
     persson_mean_gap,
+    persson_mean_gap_terms,
     persson_pressure_distribution,
     persson_stiffness,
+    persson_stiffness_terms,
+    power_law_terms,
 )
 from .spectra import (
     areal_moments,
@@ -134,4 +139,9 @@ __all__ = [
     "persson_j",
     "persson_mean_gap",
     "persson_stiffness",
+    "W_RULES",
+    "mode_weights",
+    "power_law_terms",
+    "persson_mean_gap_terms",
+    "persson_stiffness_terms",
 ]

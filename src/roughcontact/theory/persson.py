@@ -11,6 +11,8 @@ continuous isotropic PSD ``C(q)`` maps onto it by ``2 pi int q C(q) dq -> sum_k 
 - :func:`persson_mean_gap`: the mean interfacial separation ``u(p0)`` of Yang & Persson (2008),
   J. Phys.: Condens. Matter 20, 215214, and Persson (2007), PRL 99, 125502.
 - :func:`persson_stiffness`: the normal contact stiffness ``K = -d p0 / d u`` of that ``u(p0)``.
+- :func:`mode_weights`, :func:`power_law_terms`: the terms of those sums, on a discrete spectrum (where
+  a shell's ``w(q)`` is read: :data:`W_RULES`) or as the continuum integral over an ideal power law.
 
 Units: pressures and ``E*`` share one pressure unit, heights and lengths one length unit.
 """
@@ -35,6 +37,10 @@ _S_TABLE = (1e-2, 6.0)
 
 #: Modes x pressures evaluated at once by the mean gap and the stiffness (bounds the memory).
 _CHUNK = 1 << 22
+
+#: Relative difference below which two wavenumbers are one shell (round-off; lattice shells at
+#: N = 8192 differ by > 1e-8 relative).
+_SAME_Q = 1e-12
 
 
 # ------------------------------------------------------------------------ spectrum
@@ -210,23 +216,113 @@ def _gamma(gamma) -> float:
 
 
 # ------------------------------------------------------------ mean gap, stiffness
-def mode_weights(q, c) -> tuple[np.ndarray, np.ndarray]:
-    """``(a, W)`` per distinct ``q`` with power, ascending: ``W = (sum_{q_j <= q} q_j^2 c_j / 2)^(-1/2)`` [-]
-    (Persson's ``w(q)``) and ``a = W sum_{q_k = q} q_k c_k`` [length], the modes of one ``q`` together."""
+#: How :func:`mode_weights` places Persson's ``w(q)`` on a discrete spectrum (its ``rule``).
+W_RULES = ("midpoint", "shell", "mode")
+
+
+def mode_weights(q, c, rule: str = "midpoint") -> tuple[np.ndarray, np.ndarray]:
+    """Terms ``(a, W)`` of Persson's sum over a discrete spectrum: ``u = (1 / (2 sqrt pi)) sum a J(W p0 / E*)``.
+
+    Persson's ``w(q) = (pi int_q0^q q'^3 C dq')^(-1/2)`` holds the power below ``q``: infinite at the
+    lowest wavenumber, ``sqrt(2) / h'`` at the highest. On a discrete spectrum the modes come in shells
+    of one ``|q|``, and where inside its own shell a term's ``W`` is read is a choice (``rule``):
+
+    - ``"midpoint"`` (default): each shell at the middle of its own power, ``W = (sum_{q_j < q} q_j^2
+      c_j / 2 + sum_{q_j = q} q_j^2 c_j / 4)^(-1/2)``: the midpoint rule of the continuum integral
+      across the shell, so the sum tends to the continuum one shell by shell (issue 61).
+    - ``"shell"``: each shell at its top, with all of its own power, ``W = (sum_{q_j <= q} q_j^2 c_j /
+      2)^(-1/2)``. The lowest shells then carry a finite ``W`` where the continuum's is infinite, and
+      with few modes between q0 and q1 the mean gap comes out several percent too small.
+    - ``"mode"``: mode by mode in ascending ``q`` (a shell's modes in their given order), each with the
+      power up to and including itself: per shell, the average of ``W`` over its own power.
+
+    Wavenumbers within a relative 1e-12 of each other are one shell (round-off).
+
+    Parameters
+    ----------
+    q, c : array_like, shape (m,)
+        Wavenumbers (> 0) [rad / length] and powers (>= 0, not all 0) [length^2] of the modes.
+    rule : {"midpoint", "shell", "mode"}
+        Where a shell's ``W`` is read (above).
+
+    Returns
+    -------
+    (a, W) : numpy.ndarray, shapes (k,)
+        One term per shell (per mode with ``"mode"``), ascending in ``q``: ``W`` [-] and ``a = W sum
+        q_k c_k`` over the term's modes [length].
+    """
     qa, ca = np.asarray(q, dtype=float), np.asarray(c, dtype=float)
     if qa.ndim != 1 or qa.size == 0 or not np.all(np.isfinite(qa)) or np.any(qa <= 0):
         raise ValueError(f"q must be a non-empty 1-D array of finite wavenumbers > 0, got shape {qa.shape}")
     if ca.shape != qa.shape or not np.all(np.isfinite(ca)) or np.any(ca < 0) or not np.any(ca > 0):
         raise ValueError(f"c must be a 1-D array of finite powers >= 0, not all 0, of the shape of q {qa.shape}")
+    if rule not in W_RULES:
+        raise ValueError(f"rule must be one of {W_RULES}, got {rule!r}")
     keep = ca > 0  # modes without power add nothing, and would give 0 * inf where they come first
     qa, ca = qa[keep], ca[keep]
+    # A shell: the modes of one |q|, equal up to round-off (hypot(3, 4) and hypot(5, 0) may differ in the last bit).
     order = np.argsort(qa, kind="stable")
-    qa, ca = qa[order], ca[order]
+    shell = np.empty(qa.size, dtype=np.int64)
+    shell[order] = np.cumsum(np.r_[True, qa[order][1:] > qa[order][:-1] * (1.0 + _SAME_Q)]) - 1
+    order = np.lexsort((np.arange(qa.size), shell))  # by shell, the modes of a shell in their given order
+    qa, ca, shell = qa[order], ca[order], shell[order]
+    if rule == "mode":
+        w = (0.5 * np.cumsum(qa * qa * ca)) ** -0.5
+        return qa * ca * w, w
     # Modes of one |q| share W: summing them first shortens every later sum (~10x on a square grid).
-    starts = np.flatnonzero(np.r_[True, qa[1:] > qa[:-1]])
+    starts = np.flatnonzero(np.r_[True, shell[1:] > shell[:-1]])
     qc, q2c = np.add.reduceat(qa * ca, starts), np.add.reduceat(qa * qa * ca, starts)
-    w = (0.5 * np.cumsum(q2c)) ** -0.5
+    below = np.cumsum(q2c) - (0.5 * q2c if rule == "midpoint" else 0.0)
+    w = (0.5 * below) ** -0.5
     return qc * w, w
+
+
+def power_law_terms(k_l: float, k_s: float, hurst: float, *, rms_slope: float, length: float = 1.0,
+                    nodes: int = 2048) -> tuple[np.ndarray, np.ndarray]:
+    """Terms ``(a, W)`` of Persson's continuum integral over the ideal power-law spectrum (quadrature).
+
+    ``C(q) = C0 q^(-2(1+H))`` for ``q_l <= q <= q_s`` (``q = 2 pi k / L``), normalised so that
+    ``2 pi int q^3 C dq = rms_slope^2``; ``w(q) = (pi int_q_l^q q'^3 C dq')^(-1/2)`` in closed form.
+    ``u = sqrt(pi) int q^2 C w J(w p0 / E*) dq`` is taken by Gauss-Legendre in ``t`` with
+    ``q = q_l + (q_s - q_l) t^2`` (``w`` diverges as ``(q - q_l)^(-1/2)`` at ``q_l``): ``a = 2 pi q^2 C
+    w dq`` at the nodes, so that :func:`persson_mean_gap_terms` sums it like a discrete spectrum.
+
+    Parameters
+    ----------
+    k_l, k_s : float
+        Cutoff mode numbers (cycles per ``L``), ``0 < k_l < k_s``.
+    hurst : float
+        Hurst exponent H in [0, 1].
+    rms_slope : float
+        ``h'`` (> 0) [-].
+    length : float
+        Side ``L`` (> 0) [length].
+    nodes : int
+        Quadrature nodes (>= 16); 2048 give the mean gap to ~1e-6 relative.
+
+    Returns
+    -------
+    (a, W) : numpy.ndarray, shapes (nodes,)
+        ``a`` [length] and ``W`` [-] at the nodes, ascending in ``q``.
+    """
+    kl, ks, h = check_band(k_l, k_s, hurst)
+    if isinstance(nodes, (bool, np.bool_)) or not isinstance(nodes, (int, np.integer)) or nodes < 16:
+        raise ValueError(f"nodes must be an integer >= 16, got {nodes!r}")
+    L = positive_number("length", length)
+    slope = positive_number("rms_slope", rms_slope)
+    ql, qs = 2.0 * math.pi * kl / L, 2.0 * math.pi * ks / L
+    x, wt = roots_legendre(int(nodes))
+    t, wt = 0.5 * (x + 1.0), 0.5 * wt
+    q = ql + (qs - ql) * t * t
+    dq = 2.0 * (qs - ql) * t * wt
+
+    def moment3(t):  # int_ql^q(t) x^3 x^(-2(1+H)) dx, the logarithm at H = 1; no cancellation at q -> ql
+        p, lg = 2.0 - 2.0 * h, np.log1p((qs - ql) / ql * t * t)
+        return lg if abs(p) < 1e-12 else ql**p * np.expm1(p * lg) / p
+
+    c0 = slope**2 / (2.0 * math.pi * float(moment3(1.0)))
+    w = (math.pi * c0 * moment3(t)) ** -0.5
+    return 2.0 * math.pi * q * q * c0 * q ** (-2.0 * (1.0 + h)) * w * dq, w
 
 
 def _pressures(p0, *, positive: bool) -> np.ndarray:
@@ -247,16 +343,42 @@ def _mode_sum(values: np.ndarray, a: np.ndarray, w: np.ndarray, e_star: float, t
     return out
 
 
-def persson_mean_gap(p0, q, c, *, e_star: float, gamma: float = 0.45) -> np.ndarray:
+def persson_mean_gap_terms(p0, a, w, *, e_star: float, gamma: float = 0.45) -> np.ndarray:
+    """Persson's mean gap ``u = (1 / (2 sqrt pi)) sum_k a_k J(W_k p0 / E*)`` from its terms ``(a, W)``.
+
+    The terms of a discrete spectrum come from :func:`mode_weights`, those of the continuum power
+    law from :func:`power_law_terms`; :func:`persson_mean_gap` documents the theory and units.
+    """
+    values = _pressures(p0, positive=True)
+    g, es = _gamma(gamma), positive_number("e_star", e_star)
+    total = _mode_sum(values.ravel(), np.asarray(a, float), np.asarray(w, float), es, lambda s: persson_j(s, g))
+    return (total / (2.0 * math.sqrt(math.pi))).reshape(values.shape)
+
+
+def persson_stiffness_terms(p0, a, w, *, e_star: float, gamma: float = 0.45) -> np.ndarray:
+    """``K = -d p0 / d u`` of :func:`persson_mean_gap_terms` (:func:`persson_stiffness` documents it)."""
+    values = _pressures(p0, positive=False)
+    g, es = _gamma(gamma), positive_number("e_star", e_star)
+    total = _mode_sum(values.ravel(), np.asarray(a, float), np.asarray(w, float), es,
+                      lambda s: _f(s, g)) / (2.0 * math.sqrt(math.pi))
+    flat = values.ravel()
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k = np.where(flat > 0, flat / total, 0.0 if g > 0 else math.inf)
+    return k.reshape(values.shape)
+
+
+def persson_mean_gap(p0, q, c, *, e_star: float, gamma: float = 0.45, rule: str = "midpoint") -> np.ndarray:
     """Persson's mean interfacial separation ``u(p0)`` (Yang & Persson 2008; Persson 2007).
 
     ``u = sqrt(pi) int dq q^2 C(q) w(q) int_p0^inf dp'/p' [gamma + 3 (1 - gamma) P(q, p')^2]
     exp(-(w(q) p' / E*)^2)`` with ``w(q) = (pi int_q0^q q'^3 C dq')^(-1/2)`` and
     ``P(q, p) = erf(w(q) p / E*)``. For the discrete spectrum (``2 pi q C dq -> c_k``) it reads
-    ``u = (1 / (2 sqrt(pi))) sum_k q_k c_k W_k J(W_k p0 / E*)`` with ``W_k`` the ``w`` of the modes up
-    to ``q_k`` (:func:`persson_j`). At the largest ``q``, ``W = sqrt(2) / h'``, so that
-    ``P = erf(sqrt(2) p0 / (E* h'))`` is :func:`~roughcontact.theory.laws.persson_area`. At small
-    ``p0``, ``u ~ -(gamma / (2 sqrt(pi))) sum_k q_k c_k W_k ln p0``.
+    ``u = (1 / (2 sqrt(pi))) sum_k q_k c_k W_k J(W_k p0 / E*)`` (:func:`persson_j`), with ``W_k`` the
+    ``w`` of shell ``k`` read by ``rule`` (:func:`mode_weights`: by default at the middle of the
+    shell's own power, the continuum-consistent choice). The total power's ``w`` is ``sqrt(2) / h'``,
+    so that ``P = erf(sqrt(2) p0 / (E* h'))`` at the top of the spectrum is
+    :func:`~roughcontact.theory.laws.persson_area`. At small ``p0``, ``u ~ -(gamma / (2 sqrt(pi)))
+    sum_k q_k c_k W_k ln p0``.
 
     Parameters
     ----------
@@ -271,26 +393,25 @@ def persson_mean_gap(p0, q, c, *, e_star: float, gamma: float = 0.45) -> np.ndar
     gamma : float
         Persson's correction for the elastic energy stored in the non-contact area, in [0, 1]
         (0.4 to 0.5 in Yang & Persson 2008) [-].
+    rule : {"midpoint", "shell", "mode"}
+        Where each shell's ``w`` is read (:func:`mode_weights`).
 
     Returns
     -------
     numpy.ndarray, shape of ``p0``
         Mean gap ``u`` [length] (from the mean plane of the deformed body to that of the surface).
     """
-    values = _pressures(p0, positive=True)
-    g, es = _gamma(gamma), positive_number("e_star", e_star)
-    a, w = mode_weights(q, c)
-    total = _mode_sum(values.ravel(), a, w, es, lambda s: persson_j(s, g))
-    return (total / (2.0 * math.sqrt(math.pi))).reshape(values.shape)
+    a, w = mode_weights(q, c, rule)
+    return persson_mean_gap_terms(p0, a, w, e_star=e_star, gamma=gamma)
 
 
-def persson_stiffness(p0, q, c, *, e_star: float, gamma: float = 0.45) -> np.ndarray:
+def persson_stiffness(p0, q, c, *, e_star: float, gamma: float = 0.45, rule: str = "midpoint") -> np.ndarray:
     """Normal contact stiffness per unit nominal area ``K = -d p0 / d u`` of :func:`persson_mean_gap`.
 
     Since ``dJ/ds0 = -f(s0) / s0`` with ``f(s) = [gamma + 3 (1 - gamma) erf(s)^2] exp(-s^2)``,
     ``du/dp0 = -(1 / (2 sqrt(pi) p0)) sum_k q_k c_k W_k f(W_k p0 / E*)``, in closed form:
     ``K = p0 / [(1 / (2 sqrt(pi))) sum_k q_k c_k W_k f(W_k p0 / E*)]``, linear in ``p0`` at small load
-(``gamma > 0``).
+    (``gamma > 0``).
 
     Parameters
     ----------
@@ -302,18 +423,13 @@ def persson_stiffness(p0, q, c, *, e_star: float, gamma: float = 0.45) -> np.nda
         Contact modulus ``E*`` (> 0) [pressure unit].
     gamma : float
         Persson's ``gamma`` in [0, 1] [-]; with ``gamma = 0``, ``K ~ 1 / p0`` at small load.
+    rule : {"midpoint", "shell", "mode"}
+        Where each shell's ``w`` is read (:func:`mode_weights`).
 
     Returns
     -------
     numpy.ndarray, shape of ``p0``
         ``K`` [pressure unit / length]; at ``p0 = 0``, 0 when ``gamma > 0`` and inf when ``gamma = 0``.
     """
-    values = _pressures(p0, positive=False)
-    g, es = _gamma(gamma), positive_number("e_star", e_star)
-    a, w = mode_weights(q, c)
-    total = _mode_sum(values.ravel(), a, w, es, lambda s: _f(s, g)) / (2.0 * math.sqrt(math.pi))
-    flat = values.ravel()
-    with np.errstate(divide="ignore", invalid="ignore"):
-        k = np.where(flat > 0, flat / total, 0.0 if g > 0 else math.inf)
-    return k.reshape(values.shape)
-
+    a, w = mode_weights(q, c, rule)
+    return persson_stiffness_terms(p0, a, w, e_star=e_star, gamma=gamma)

@@ -12,15 +12,18 @@ import numpy as np
 import xarray as xr
 from scipy.special import erfc
 
-from ...statistics.wrapping import WRAPS_X, WRAPS_Y, first_wrapping
+from ...statistics.wrapping import WRAPS_BOTH, WRAPS_X, WRAPS_Y, first_wrapping
 from ...surfaces.synthetic import generate_surface
 from ...theory import (
     cel_area,
     mode_spectrum,
     persson_area,
     persson_mean_gap,
+    persson_mean_gap_terms,
     persson_pressure_distribution,
     persson_stiffness,
+    persson_stiffness_terms,
+    power_law_terms,
 )
 
 #: Area fractions at which the curves are compared with the theories (interpolated in ln pbar).
@@ -34,6 +37,12 @@ GAMMAS = (0.4, 0.45, 0.5)
 
 #: Persson's input spectra: the generator's expected one, or each surface's own (its FFT).
 SPECTRA = ("expected", "measured")
+
+#: The sensitivity of Persson's gap and stiffness to how w(q) is discretised (at :data:`GAMMA`, expected
+#: spectrum), beside the main line's midpoint rule: the whole shell and per-mode rules
+#: (:func:`~roughcontact.theory.mode_weights`) and the continuum integral over the ideal power law
+#: (:func:`~roughcontact.theory.power_law_terms`).
+W_SENSITIVITY = ("shell", "mode", "continuum")
 
 
 def one_pair(ds: xr.Dataset) -> xr.Dataset:
@@ -215,13 +224,15 @@ def measured_spectrum(ds: xr.Dataset, hurst: float, seed: int) -> tuple[np.ndarr
     return q[keep][order], power[keep][order]
 
 
-def gap_and_stiffness(ds: xr.Dataset, hurst: float, gammas=GAMMAS, spectra=SPECTRA) -> dict:
+def gap_and_stiffness(ds: xr.Dataset, hurst: float, gammas=GAMMAS, spectra=SPECTRA, rules=W_SENSITIVITY) -> dict:
     """Seed means of the mean gap and stiffness at one H, and Persson's at the same loads.
 
-    Persson's ``gap_persson`` and ``stiffness_persson`` use :data:`GAMMA` and the expected
-    spectrum; ``persson[(spectrum, gamma)]`` holds ``(gap, stiffness)`` for every spectrum of
-    :data:`SPECTRA` and gamma of ``gammas``: ``expected`` at the seed-mean loads, ``measured`` each
-    surface's at its own loads, then averaged over seeds.
+    Persson's ``gap_persson`` and ``stiffness_persson`` use :data:`GAMMA`, the expected spectrum and
+    ``w(q)`` at the middle of each shell's power (the main line); ``persson[(spectrum, gamma)]`` holds
+    ``(gap, stiffness)`` for every spectrum of :data:`SPECTRA` and gamma of ``gammas``: ``expected`` at
+    the seed-mean loads, ``measured`` each surface's at its own loads, then averaged over seeds;
+    ``persson["rule", r]`` the same at :data:`GAMMA` with the expected spectrum for each discretisation
+    ``r`` of ``rules`` (:data:`W_SENSITIVITY`). ``gap_sem`` is the seed standard error of the gap.
     """
     sub = ds.sel(H=hurst)
     e_star = float(ds.attrs["e_star"])
@@ -241,6 +252,16 @@ def gap_and_stiffness(ds: xr.Dataset, hurst: float, gammas=GAMMAS, spectra=SPECT
                          persson_stiffness(sub["pressure"].sel(seed=s).values, *own[s], e_star=e_star, gamma=g))
                         for s in sub["seed"].values]
             persson["measured", g] = tuple(np.mean([v[i] for v in per_seed], axis=0) for i in (0, 1))
+    for rule in rules:
+        if rule == "continuum":
+            params = scene_surface(ds)
+            a, w = power_law_terms(float(ds["k_l"]), float(ds["k_s"]), hurst, rms_slope=params["rms_slope"],
+                                   length=params["L"])
+            persson["rule", rule] = (persson_mean_gap_terms(p0, a, w, e_star=e_star, gamma=GAMMA),
+                                     persson_stiffness_terms(p0, a, w, e_star=e_star, gamma=GAMMA))
+        else:
+            persson["rule", rule] = (persson_mean_gap(p0, q, c, e_star=e_star, gamma=GAMMA, rule=rule),
+                                     persson_stiffness(p0, q, c, e_star=e_star, gamma=GAMMA, rule=rule))
     return {"pbar": reduced_load(sub).mean("seed").values, "area": sub["area_fraction"].mean("seed").values,
             "gap": gap.values, "gap_sem": gap_sem.values, "h_rms": float(np.sqrt(c.sum())),
             "gap_persson": persson_mean_gap(p0, q, c, e_star=e_star, gamma=GAMMA),
@@ -250,12 +271,20 @@ def gap_and_stiffness(ds: xr.Dataset, hurst: float, gammas=GAMMAS, spectra=SPECT
 
 def persson_ratio_band(curve: dict, key: str, spectrum: str, area: float, gammas=GAMMAS) -> tuple[float, ...]:
     """Measured over Persson's ``key`` (``gap`` or ``stiffness``) at ``area``, one ratio per gamma of ``gammas``."""
-    index = {"gap": 0, "stiffness": 1}[key]
-    out = []
-    for g in gammas:
-        ratio = curve[key] / curve["persson"][spectrum, g][index]
-        out.append(at_areas(curve["area"], ratio, curve["pbar"], (area,))[area][1])
-    return tuple(out)
+    return tuple(persson_ratio(curve, key, (spectrum, g), area) for g in gammas)
+
+
+def persson_ratio(curve: dict, key: str, which: tuple, area: float) -> float:
+    """Measured over Persson's ``key`` at ``area`` for one of ``curve["persson"]``'s entries ``which``."""
+    ratio = curve[key] / curve["persson"][which][{"gap": 0, "stiffness": 1}[key]]
+    return at_areas(curve["area"], ratio, curve["pbar"], (area,))[area][1]
+
+
+def relative_sem(curve: dict, key: str, area: float) -> float:
+    """The seed standard error of the measured ``key`` over its mean at ``area`` (interpolated as the ratios)."""
+    with np.errstate(divide="ignore", invalid="ignore"):  # no gap at full contact
+        rel = curve[f"{key}_sem"] / curve[key]
+    return at_areas(curve["area"], rel, curve["pbar"], (area,))[area][1]
 
 
 def stiffness_exponent(curve: dict, window=(0.01, 0.1)) -> tuple[float, float]:
@@ -338,6 +367,41 @@ def percolation_threshold(brackets: dict) -> dict:
             "u": float(np.nanmax([sem, half])), "n": int(mid.size),
             "below": (float(lo[ok].min()), float(lo[ok].max())), "at": (float(hi[ok].min()), float(hi[ok].max())),
             "below_mean": float(lo[ok].mean()), "at_mean": float(hi[ok].mean()), "method": brackets["method"]}
+
+
+#: The definitions of "the contact percolates" the wrapping data hold: label and wrapping bits
+#: (:mod:`roughcontact.statistics.wrapping`): a cluster wraps the cell in x or in y, in x, in y, or one
+#: cluster in both directions (two independent winding vectors).
+WRAPPING_DEFINITIONS = {"either": ("x or y", WRAPS_ANY), "x": ("in x", WRAPS_X), "y": ("in y", WRAPS_Y),
+                        "both": ("both directions", WRAPS_BOTH)}
+
+
+def percolation_definitions(ds: xr.Dataset, connectivity: int = 4) -> dict:
+    """The threshold by each definition of :data:`WRAPPING_DEFINITIONS`, and the one-direction threshold ± u.
+
+    Dapp et al. (2012) place the threshold where the leakage across the cell stops: the contact then
+    blocks the flow in one direction, i.e. a cluster wraps the cell in the other. The compared
+    threshold is therefore the one-direction one, the mean of the ``x`` and ``y`` thresholds (the
+    surfaces are isotropic: two estimates of one number). ``u`` is the largest of half the range of
+    the four definitions' thresholds (``half_range``: how much the definition alone moves it), the
+    larger standard error over surfaces of the two and half the widest bracket. ``definitions`` holds
+    :func:`percolation_threshold` of each; ``dual``: the one-direction threshold of 8-connected
+    clusters (the contact's dual of a 4-connected gap).
+    """
+    if "cluster_wrapping" not in ds:
+        raise ValueError("percolation_definitions needs cluster_wrapping (the percolation scenes)")
+    defs = {k: percolation_threshold(percolation_brackets(ds, connectivity=connectivity, bit=bit))
+            for k, (_, bit) in WRAPPING_DEFINITIONS.items()}
+    dual = [percolation_threshold(percolation_brackets(ds, connectivity=8, bit=WRAPPING_DEFINITIONS[k][1]))
+            for k in ("x", "y")]
+    one = (defs["x"], defs["y"])
+    values = [d["threshold"] for d in defs.values()]
+    sem = max(d["sem"] for d in one)
+    half = max(d["half_step"] for d in one)
+    half_range = 0.5 * (max(values) - min(values))
+    return {"threshold": 0.5 * (one[0]["threshold"] + one[1]["threshold"]), "sem": sem, "half_step": half,
+            "half_range": half_range, "u": max(sem, half, half_range), "n": min(d["n"] for d in one),
+            "definitions": defs, "dual": 0.5 * (dual[0]["threshold"] + dual[1]["threshold"]), "method": "wrapping"}
 
 
 def cluster_counts(ds: xr.Dataset) -> dict:

@@ -44,8 +44,9 @@ def _tail(comparison: str, measured: str) -> str:
 
 def _ratio_bands(comparison: str, measured: str) -> str:
     bands = floats_matching(rf"({NUMBER}) \[({NUMBER}), ({NUMBER})\] \(H=({NUMBER})\)", measured)
+    rules = floats_matching(rf"({NUMBER}) / ({NUMBER}) / ({NUMBER}) \(H=", measured)
     central = [0.9 <= r <= 1.1 for r, _, _, _ in bands]
-    whole = [0.9 <= lo and hi <= 1.1 for _, lo, hi, _ in bands]
+    whole = [0.9 <= lo and hi <= 1.1 for _, lo, hi, _ in bands] + [0.9 <= v <= 1.1 for r in rules for v in r]
     if all(whole) and "pending" not in measured:
         return "yes"
     return "partly" if np.mean(central) >= 0.5 else "no"
@@ -62,12 +63,20 @@ def _percolation(comparison: str, measured: str) -> str:
     return "yes" if off <= 2 * u and u <= 0.01 else "partly" if off <= max(2 * u, 0.05) else "no"
 
 
-def _slope_range(comparison: str, measured: str) -> str:
-    slopes = floats_matching(rf"slope = ({NUMBER}) ± ({NUMBER})", measured)
-    curvatures = floats_matching(rf"curvature = ({NUMBER}) ± ({NUMBER})", measured)
-    verdicts = {"no" if abs(m) <= 3 * e else "yes" if abs(c) <= 2 * ce else "partly"
-                for (m, e), (c, ce) in zip(slopes, curvatures, strict=True)}
-    return verdicts.pop() if len(verdicts) == 1 else "partly"  # the area's definition flips it: partly
+def _bend(comparison: str, measured: str) -> str:
+    whole = floats_matching(rf"all {NUMBER} points[^:]*: slope = ({NUMBER}) ± ({NUMBER}), curvature = ({NUMBER}) ± "
+                            rf"({NUMBER})", measured)
+    above = floats_matching(rf"α ≥ {NUMBER} \({NUMBER} points\): slope = ({NUMBER}) ± ({NUMBER}), curvature = "
+                            rf"({NUMBER}) ± ({NUMBER})", measured)
+
+    def one(fit, upper):
+        (m, e, c, ce), (um, ue, uc, uce) = fit, upper
+        if abs(m) > 3 * e and abs(c) <= 2 * ce:
+            return "yes"
+        return "partly" if abs(m) > 3 * e and abs(um) > 3 * ue and abs(uc) <= 2 * uce else "no"
+
+    verdicts = {one(f, u) for f, u in zip(whole, above, strict=True)}
+    return verdicts.pop() if len(verdicts) == 1 else "partly"  # a sensitivity flips it: partly
 
 
 def _slope(comparison: str, measured: str) -> str:
@@ -104,11 +113,14 @@ _SLOPE_RULE = ("weighted least-squares slope of the seed-mean κ(0.05)/√2π ag
 
 _PERSSON_BANDS = (
     "at A/A0 = 0.01 and 0.1 per H, as a [low, high] band over Persson's γ = 0.4, 0.45, 0.5 beside the γ = 0.45 "
-    "value, with the generator's expected spectrum and with each surface's own (measured) one; the mode-count "
-    "cells k_l = 4 and 8 (k_s = 2 k_l, 32 px per λ_s: scenes persson-modes-256 and -512) at A/A0 = 0.01, "
-    "expected spectrum; yes when every band printed lies within [0.9, 1.1] and no mode-count cell is pending, "
-    "partly when at least half of the γ = 0.45 values are within (the γ band, the spectrum or the mode count "
-    "flips the verdict), no otherwise")
+    "value, with the generator's expected spectrum and with each surface's own (measured) one, Persson's w(q) read "
+    "at the middle of each shell's power (the continuum's midpoint rule); the mode-count cells k_l = 4 and 8 (k_s = "
+    "2 k_l, 32 px per λ_s: scenes persson-modes-256 and -512) at A/A0 = 0.01, expected spectrum, with the seed "
+    "standard error of the measured value; the discretisation's sensitivity at γ = 0.45, expected spectrum, A/A0 = "
+    "0.01: w(q) with the whole shell's power, mode by mode, and the continuum integral over the ideal power law; yes "
+    "when every band and every sensitivity printed lies within [0.9, 1.1] and no mode-count cell is pending, partly "
+    "when at least half of the γ = 0.45 values are within (the γ band, the spectrum, the mode count or the "
+    "discretisation flips the verdict), no otherwise")
 
 RULES: dict[str, Rule] = {
     "Q1a: the CEL holds toward full contact": Rule(
@@ -136,12 +148,15 @@ RULES: dict[str, Rule] = {
         "L1 distance Σ abs(P − P_Persson) Δp / Σ P Δp of the pooled distribution at the steps nearest A/A0 = 0.01, "
         "0.1, 0.5, 0.9; yes when ≤ 0.1 at every load, partly at at least half, no otherwise", _distance),
     "Q4d: the contact area percolates at A/A0 ≈ 0.42": Rule(
-        "per surface, the A/A0 bracket of the two load steps between which the contact first percolates: the "
-        "first step where a 4-connected cluster wraps the periodic cell (cluster_wrapping) when the data hold it, "
-        "else where the largest cluster's share of the contact last crosses half (a proxy); threshold = mean of "
-        "the bracket midpoints ± u, u the larger of their standard error over surfaces (the seed spread) and half "
-        "the widest bracket (the step spacing); yes when abs(threshold − 0.42) ≤ 2u with u ≤ 0.01, partly when "
-        "abs(threshold − 0.42) ≤ max(2u, 0.05), no otherwise", _percolation),
+        "per surface and definition, the A/A0 bracket of the two load steps between which the contact first "
+        "percolates: the first step where a 4-connected cluster wraps the periodic cell (cluster_wrapping) in x or "
+        "y, in x, in y, or one cluster in both directions; a definition's threshold is the mean of its bracket "
+        "midpoints; the threshold compared is the one-direction one of Dapp et al. (the leakage across the cell "
+        "stops), the mean of the in-x and in-y thresholds, ± u, u the largest of half the range of the four "
+        "definitions' thresholds, the standard error of the midpoints over surfaces (the seed spread) and half the "
+        "widest bracket (the step spacing); without wrapping data, where the largest cluster's share of the contact "
+        "last crosses half (a proxy; u without the definitions); yes when abs(threshold − 0.42) ≤ 2u with u ≤ 0.01, "
+        "partly when abs(threshold − 0.42) ≤ max(2u, 0.05), no otherwise", _percolation),
     "Q2a: κ depends on α at fixed resolution (pixel-counted area)": Rule(_SLOPE_RULE, _slope),
     "Q2b: κ depends on α at fixed resolution (perimeter-corrected area)": Rule(_SLOPE_RULE, _slope),
     "Q2c: BGT and Greenwood give κ at the surfaces' own α": Rule(
@@ -153,14 +168,18 @@ RULES: dict[str, Rule] = {
         "(κ − line) / √(sem² + s²) with s those points' scatter about the line; yes when abs(z) ≤ 2 for every "
         "point (the trend is α, not the cells' representativity), partly for at least half, no otherwise",
         _on_trend),
-    "Q2e: κ(α) over the whole range, N = 1024 to 4096 at 32 px per λ_s": Rule(
-        "weighted least-squares fit of the seed-mean κ(0.05)/√2π (pixel-counted) against ln α and (ln α)² over "
-        "every (k_l, k_s, H) point at 32 pixels per λ_s (paper grid k_s = 32, kappa-alpha k_s = 64, kappa-alpha-"
-        "4096 k_s = 128), standard errors scaled by the root of the reduced χ² when that exceeds 1; slope from the "
-        "linear fit, curvature the (ln α)² coefficient; yes when abs(slope) > 3 standard errors and abs(curvature) "
-        "≤ 2 standard errors (a fall linear in ln α), partly when the slope is significant but the curvature is "
-        "not zero (it bends or saturates), no otherwise; the same fit of the perimeter-corrected κ is the "
-        "sensitivity: the verdict when both areas give it, partly when they differ", _slope_range),
+    "Q2e: κ falls linearly in ln α over the whole range, N = 1024 to 4096 at 32 px per λ_s": Rule(
+        "weighted least-squares fits of the seed-mean κ(0.05)/√2π against ln α (slope) and against ln α and (ln α)² "
+        "(curvature: the (ln α)² coefficient) over every (k_l, k_s, H) point at 32 pixels per λ_s (paper grid k_s = "
+        "32, kappa-alpha k_s = 64, kappa-alpha-4096 k_s = 128), and again over the points below and above α = 3 "
+        "(none lies between 2.8 and 3.7), standard errors scaled by the root of the reduced χ² when that exceeds 1; "
+        "α is each point's seed mean of its surfaces' measured α = m0 m4 / m2²; the α ≥ 3 line is compared with the "
+        "point at the largest α by z = (κ − line) / √(s² + σ_line²), s the point's seed error scaled as the fit's; "
+        "yes when over all points abs(slope) > 3 standard errors and abs(curvature) ≤ 2 (a fall linear in ln α "
+        "throughout), partly when all points bend (abs(curvature) > 2 standard errors) but above α = 3 abs(slope) > "
+        "3 and abs(curvature) ≤ 2 standard errors (the bend lies below α = 3, the fall is linear in ln α above it), "
+        "no otherwise; sensitivities, the same fits of the perimeter-corrected κ and with the α of the generator's "
+        "expected lattice spectrum: the verdict when all three give it, partly when they differ", _bend),
     "Q3a: κ is the same on L and 2L cells": Rule(
         "z = (κ_2L − κ_L) / √(s_L² + s_2L²) of the seed means (s: standard errors) at A/A0 = 0.01, 0.05, 0.1 per "
         "H; yes when abs(z) ≤ 2 at every point, partly at at least half, no otherwise", _same_kappa),

@@ -97,11 +97,13 @@ def cluster_figure(clusters: dict) -> Figure:
 
 def alpha_figure(pixel: dict, corrected: dict, pixel_2048: dict | None = None,
                  corrected_2048: dict | None = None, pixel_4096: dict | None = None,
-                 corrected_4096: dict | None = None) -> Figure:
+                 corrected_4096: dict | None = None, bends: tuple | None = None) -> Figure:
     """κ(0.05)/√2π against α at λ_s = 32 Δx, (a) pixel-counted, (b) perimeter-corrected, with BGT and Greenwood.
 
     The paper grid's points (N = 1024) are dots by λ_l; the kappa-alpha scene's (N = 2048), when
     given, open squares; the kappa-alpha-4096 scene's (N = 4096, λ_s = L/128), when given, open diamonds.
+    α is each point's seed mean of its surfaces' measured α. ``bends``, when given, holds
+    :func:`.kappa.bend` of each panel's points: its straight lines below and above the split are drawn.
     """
     fig, axes = _figure(1, 2, 3.2)
     every = np.concatenate([pixel["alpha"]] + ([pixel_4096["alpha"]] if pixel_4096 is not None else []))
@@ -129,7 +131,16 @@ def alpha_figure(pixel: dict, corrected: dict, pixel_2048: dict | None = None,
         for model, style in (("bgt", ":"), ("greenwood", "--")):
             ax.semilogx(alpha[order], np.concatenate([p[model] for p in every_pts])[order], style, color="k",
                         label=model.upper() if model == "bgt" else "Greenwood")
-        ax.set(xscale="log", xlabel=r"Nayak's $\alpha$", ylabel=r"$\kappa(A/A_0 = 0.05)/\sqrt{2\pi}$", title=title,
+        if bends is not None:
+            fit = bends[0 if ax is axes[0] else 1]
+            for part, style in (("below", "-."), ("above", "-")):
+                lo, hi, a, b = fit["lines"][part]
+                x = np.geomspace(lo, hi, 30)
+                ax.semilogx(x, a + b * np.log(x), style, color="0.5", lw=1,
+                            label=rf"lines in $\ln\alpha$ below and above $\alpha$ = {fit['split']:g}"
+                            if part == "above" else None)
+        ax.set(xscale="log", xlabel=r"Nayak's $\alpha$ (measured, seed mean)",
+               ylabel=r"$\kappa(A/A_0 = 0.05)/\sqrt{2\pi}$", title=title,
                xlim=(line[0] / 1.2, line[-1] * 1.2), ylim=(floor, 1.05))
         ax.xaxis.set_major_formatter(ScalarFormatter())
         ax.xaxis.set_minor_formatter(NullFormatter())

@@ -98,10 +98,10 @@ def full_contact_rows(ds, cel) -> list[dict]:
     return rows
 
 
-def _bands(curves: dict, key: str, spectrum: str) -> str:
-    """``value [low, high] (H=h)`` of measured over Persson's ``key`` at A/A0 = 0.01 and 0.1: γ = 0.45 and its band."""
+def _bands(curves: dict, key: str, spectrum: str, areas=(0.01, 0.1)) -> str:
+    """``value [low, high] (H=h)`` of measured over Persson's ``key`` at each of ``areas``: γ = 0.45 and its band."""
     parts = []
-    for a in (0.01, 0.1):
+    for a in areas:
         items = []
         for h, c in curves.items():
             band = an.persson_ratio_band(c, key, spectrum, a)
@@ -111,36 +111,69 @@ def _bands(curves: dict, key: str, spectrum: str) -> str:
 
 
 def _mode_count(modes: dict, key: str) -> str:
-    """The mode-count cells' bands at A/A0 = 0.01 (expected spectrum), or what is pending."""
+    """The mode-count cells' bands at A/A0 = 0.01 (expected spectrum) and their seed errors, or what is pending."""
     missing = [f"k_l = {kl} (scene {name[:-3]})" for name, kl in MODE_CELLS.items() if name not in modes]
-    done = [f"k_l = {MODE_CELLS[name]}, k_s = {2 * MODE_CELLS[name]}: " + "; ".join(
-        _bands(curves, key, "expected").split("; ")[:1]) for name, curves in modes.items()]
+    done = [f"k_l = {MODE_CELLS[name]}, k_s = {2 * MODE_CELLS[name]}: " + _bands(curves, key, "expected", (0.01,))
+            + ", seed standard error of the measured value " + ", ".join(
+                f"{100 * an.relative_sem(c, key, 0.01):.1f} %" for c in curves.values())
+            for name, curves in modes.items()]
     text = "mode count (32 px per λ_s, expected spectrum): k_l = 16, k_s = 32 above"
     text += "".join(f"; {d}" for d in done)
     return text + (f"; pending: {', '.join(missing)}" if missing else "")
 
 
+def _discretisation(curves: dict, modes: dict, key: str) -> str:
+    """The ratios at γ = 0.45, expected spectrum, A/A0 = 0.01, with each w(q) of :data:`analysis.W_SENSITIVITY`."""
+    cells = {16: curves} | {MODE_CELLS[name]: c for name, c in modes.items()}
+    names = {"shell": "whole shell", "mode": "per mode", "continuum": "continuum power law"}
+    parts = [f"k_l = {kl}: " + ", ".join(" / ".join(f"{an.persson_ratio(c, key, ('rule', r), 0.01):.3f}"
+                                                     for r in an.W_SENSITIVITY) + f" (H={h:g})"
+                                         for h, c in cs.items()) for kl, cs in cells.items()]
+    return (f"w(q) discretisation at γ = 0.45, expected spectrum, A/A0 = 0.01 "
+            f"({' / '.join(names[r] for r in an.W_SENSITIVITY)}): " + "; ".join(parts))
+
+
+def percolation_text(perc: dict) -> str:
+    """The definitions' thresholds of :func:`analysis.percolation_definitions`, as the row prints them."""
+    d = perc["definitions"]
+    return ", ".join(f"{an.WRAPPING_DEFINITIONS[k][0]} {d[k]['threshold']:.4f}" for k in an.WRAPPING_DEFINITIONS)
+
+
 def users_rows(ds, curves: dict, perc: dict, perc_fine: dict | None = None, modes: dict | None = None) -> list[dict]:
     """Q4's rows: mean gap, stiffness, P(p) and clusters against Persson and Dapp et al.
 
-    ``perc``: :func:`analysis.percolation_threshold` of the percolation data (the ``percolation``
-    scene's wrapping, else the full-contact scene's largest-cluster proxy); ``perc_fine`` that of the
-    N = 2048 cells; ``modes``: the mode-count cells' curves by data file.
+    ``perc``: :func:`analysis.percolation_definitions` of the percolation data (the ``percolation``
+    scene's wrapping), or :func:`analysis.percolation_threshold` of the full-contact scene's
+    largest-cluster proxy; ``perc_fine`` the definitions of the N = 2048 cells; ``modes``: the
+    mode-count cells' curves by data file.
     """
     modes = modes or {}
 
     def persson(key: str) -> str:
-        return (f"{'ū/ū_P' if key == 'gap' else 'K/K_P'} as γ = 0.45 [γ band 0.4–0.5]: expected spectrum "
-                + _bands(curves, key, "expected") + "; measured spectra " + _bands(curves, key, "measured")
-                + "; " + _mode_count(modes, key))
+        return (f"{'ū/ū_P' if key == 'gap' else 'K/K_P'} as γ = 0.45 [γ band 0.4–0.5], w(q) at the middle of each "
+                "shell's power: expected spectrum " + _bands(curves, key, "expected") + "; measured spectra "
+                + _bands(curves, key, "measured") + "; " + _mode_count(modes, key) + "; "
+                + _discretisation(curves, modes, key))
 
     exps = [an.stiffness_exponent(c) for c in curves.values()]
     dists = an.pressure_distributions(ds)
     counts = an.cluster_counts(ds)
-    how = ("first wrapping of a 4-connected cluster (cluster_wrapping)" if perc["method"] == "wrapping" else
-           "largest-cluster share crossing half (proxy; no wrapping data yet)")
-    fine = ("" if perc_fine is None else f"; at N = 2048 (λ_s = 64 Δx): {perc_fine['threshold']:.3f}, bracket "
-            f"{perc_fine['below_mean']:.3f} → {perc_fine['at_mean']:.3f}, {perc_fine['n']} surfaces")
+    if "definitions" in perc:
+        one = perc["definitions"]["either"]
+        fine = ("" if perc_fine is None else f"; at N = 2048 (λ_s = 64 Δx, {perc_fine['n']} surfaces): one direction "
+                f"{perc_fine['threshold']:.3f}, " + percolation_text(perc_fine))
+        wraps = (f"first wrapping of a 4-connected cluster (cluster_wrapping), per surface: in x or y between the "
+                 f"steps at A/A0 = {one['below_mean']:.3f} → {one['at_mean']:.3f} (means; {one['below'][0]:.3f}–"
+                 f"{one['below'][1]:.3f} → {one['at'][0]:.3f}–{one['at'][1]:.3f}); threshold by definition: "
+                 f"{percolation_text(perc)}; threshold A/A0 = {perc['threshold']:.3f} ± {perc['u']:.3f} (one "
+                 f"direction, as Dapp et al.: mean of in x and in y; 8-connected: {perc['dual']:.4f}; {perc['n']} "
+                 f"surfaces; u the largest of the definitions' half-range {perc['half_range']:.4f}, half the widest "
+                 f"bracket {perc['half_step']:.4f}, seed standard error {perc['sem']:.4f}){fine}")
+    else:
+        wraps = (f"largest-cluster share crossing half (proxy; no wrapping data yet): per surface between the steps at "
+                 f"A/A0 = {perc['below_mean']:.3f} → {perc['at_mean']:.3f}; threshold A/A0 = {perc['threshold']:.3f} ± "
+                 f"{perc['u']:.3f} ({perc['n']} surfaces; half the widest bracket {perc['half_step']:.3f}, seed "
+                 f"standard error {perc['sem']:.3f})")
     return [
         row("Q4a: Persson's mean gap", "Persson (2007), Yang & Persson (2008)", persson("gap")),
         row("Q4b: Persson's contact stiffness", "K = −dp0/dū of Persson's ū(p0)",
@@ -148,12 +181,8 @@ def users_rows(ds, curves: dict, perc: dict, perc_fine: dict | None = None, mode
             + ", ".join(f"{e:.3f}" for e, _ in exps) + ", Persson " + ", ".join(f"{p:.3f}" for _, p in exps)),
         row("Q4c: Persson's P(p)", "Persson (2001), diffusion in p with magnification",
             "L1 distance " + ", ".join(f"at A/A0 = {d['area']:.3g}: {d['distance']:.3f}" for d in dists)),
-        row("Q4d: the contact area percolates at A/A0 ≈ 0.42", "Dapp et al. (2012): 0.42; later work ≈ 0.415",
-            f"{how}: per surface between the steps at A/A0 = {perc['below_mean']:.3f} → {perc['at_mean']:.3f} "
-            f"(means; {perc['below'][0]:.3f}–{perc['below'][1]:.3f} → {perc['at'][0]:.3f}–{perc['at'][1]:.3f}); "
-            f"threshold A/A0 = {perc['threshold']:.3f} ± {perc['u']:.3f} ({perc['n']} surfaces; half the widest "
-            f"bracket {perc['half_step']:.3f}, seed standard error {perc['sem']:.3f}){fine}; most clusters at "
-            f"A/A0 = {counts['count_peak_area']:.3g}"),
+        row("Q4d: the contact area percolates at A/A0 ≈ 0.42", "Dapp et al. (2012): 0.42, one direction (where the "
+            "leakage stops); later work ≈ 0.415", f"{wraps}; most clusters at A/A0 = {counts['count_peak_area']:.3g}"),
     ]
 
 
@@ -175,30 +204,58 @@ def trend_row(grid, extra) -> dict:
     return row(question, "the line through the 20 points at N = 1024", f"{points}; scatter s = {test['scatter']:.4f}")
 
 
-def range_row(grid, extra, big) -> dict:
-    """Q2e: κ(0.05) against ln α over every point at 32 px per λ_s, the N = 4096 cells (k_s = 128) included."""
-    question = "Q2e: κ(α) over the whole range, N = 1024 to 4096 at 32 px per λ_s"
-    if big is None:
-        return _pending(question, "kappa-alpha-4096 (75 cases at N = 4096, 11.8 CPU-hours measured)")
-    def points(area):
-        return kp.merged_points(kp.alpha_points(area(grid), 32.0),
-                                *([kp.alpha_points(area(extra), 64.0)] if extra is not None else []),
-                                kp.alpha_points(area(big), 128.0))
+#: Q2e's question: is κ's fall linear in ln α over every point at 32 px per λ_s?
+RANGE_QUESTION = "Q2e: κ falls linearly in ln α over the whole range, N = 1024 to 4096 at 32 px per λ_s"
 
-    pixel = points(lambda con: con)
-    fits = []
-    for label, pts in (("pixel-counted", pixel), ("perimeter-corrected", points(kp.corrected))):
-        m, e = kp.log_slope(pts["alpha"], pts["kappa"], pts["sem"])
-        c, ce = kp.log_curvature(pts["alpha"], pts["kappa"], pts["sem"])
-        fits.append(f"{label}: slope = {m:.4f} ± {e:.4f}, curvature = {c:.4f} ± {ce:.4f}")
+
+def bend_text(label: str, fit: dict) -> str:
+    """One set of :func:`kappa.bend` fits as the Q2e row prints it."""
+    m, e, c, ce, n = fit["all"]
+    bm, be, bn = fit["below"]
+    am, ae, ac, ace, an_ = fit["above"]
+    s = fit["split"]
+    return (f"{label}: all {n} points (α = {fit['range'][0]:.3g} to {fit['range'][1]:.3g}): slope = {m:.4f} ± "
+            f"{e:.4f}, curvature = {c:.4f} ± {ce:.4f}; α < {s:g} ({bn} points): slope = {bm:.3f} ± {be:.3f}; "
+            f"α ≥ {s:g} ({an_} points): slope = {am:.4f} ± {ae:.4f}, curvature = {ac:.4f} ± {ace:.4f}")
+
+
+def _range_points(grid, extra, big, area=lambda con: con) -> dict:
+    """Every point at 32 px per λ_s (:func:`kappa.alpha_points`) of ``area`` (the pixel-counted or corrected κ)."""
+    return kp.merged_points(kp.alpha_points(area(grid), 32.0),
+                            *([kp.alpha_points(area(extra), 64.0)] if extra is not None else []),
+                            kp.alpha_points(area(big), 128.0))
+
+
+def _bends(grid, extra, big) -> tuple | None:
+    """:func:`kappa.bend` of the pixel-counted and the corrected points (Q2e's figure lines), None without N = 4096."""
+    return None if big is None else tuple(kp.bend(_range_points(grid, extra, big, area))
+                                          for area in (lambda con: con, kp.corrected))
+
+
+def range_row(grid, extra, big) -> dict:
+    """Q2e: κ(0.05) against ln α over every point at 32 px per λ_s, the N = 4096 cells (k_s = 128) included.
+
+    The fits over all points, below and above :data:`kappa.BEND_SPLIT` (:func:`kappa.bend`), with
+    each point's measured α (the main line), the perimeter-corrected κ and the expected lattice
+    spectrum's α (the sensitivities).
+    """
+    if big is None:
+        return _pending(RANGE_QUESTION, "kappa-alpha-4096 (75 cases at N = 4096, 11.8 CPU-hours measured)")
+
+    pixel = _range_points(grid, extra, big)
+    main = kp.bend(pixel)
+    a_top, line, line_se, measured, z = main["line_top"]
+    fits = [bend_text("pixel-counted, measured α", main),
+            f"the α ≥ {main['split']:g} line at α = {a_top:.3g}: {line:.3f} ± {line_se:.3f}, measured {measured:.3f}, "
+            f"z = {z:+.2f}",
+            bend_text("perimeter-corrected, measured α", kp.bend(_range_points(grid, extra, big, kp.corrected))),
+            bend_text("pixel-counted, expected lattice α", kp.bend(pixel, "alpha_lattice"))]
     models = ", ".join(f"{name} {kp.log_slope(pixel['alpha'], pixel[key])[0]:.3f}"
                        for name, key in (("BGT", "bgt"), ("Greenwood", "greenwood")))
     top = int(np.argmax(pixel["alpha"]))
-    return row(question, f"asperity models over the same α: {models}",
-               f"{'; '.join(fits)} (√2π per e-fold of α) over {pixel['alpha'].size} points, α = "
-               f"{pixel['alpha'].min():.3g} to {pixel['alpha'].max():.3g}; at the largest α κ/√2π = "
-               f"{pixel['kappa'][top]:.3f} (pixel-counted), BGT {pixel['bgt'][top]:.3f}, Greenwood "
-               f"{pixel['greenwood'][top]:.3f}")
+    return row(RANGE_QUESTION, f"asperity models over the same α: {models}",
+               f"{'; '.join(fits)} (√2π per e-fold of α); at the largest α κ/√2π = {pixel['kappa'][top]:.3f} "
+               f"(pixel-counted), BGT {pixel['bgt'][top]:.3f}, Greenwood {pixel['greenwood'][top]:.3f}")
 
 
 def alpha_rows(grid) -> list[dict]:
@@ -293,8 +350,9 @@ def regenerate(out: Path, docs: Path | None = None) -> None:
             modes[name] = {float(h): an.gap_and_stiffness(cells, float(h), spectra=("expected",))
                            for h in cells["H"].values}
     wrap, wrap_fine = (_optional(data, name) for name in ("percolation.nc", "percolation-2048.nc"))
-    perc = an.percolation_threshold(an.percolation_brackets(wrap if wrap is not None else ds))
-    perc_fine = an.percolation_threshold(an.percolation_brackets(wrap_fine)) if wrap_fine is not None else None
+    perc = (an.percolation_definitions(wrap) if wrap is not None else
+            an.percolation_threshold(an.percolation_brackets(ds)))
+    perc_fine = an.percolation_definitions(wrap_fine) if wrap_fine is not None else None
     save_figure(fg.area_figure(curve, an.cel_validity(curve, an.cel_constants(cel)), an.full_contact_onset(ds)),
                 figs / "full_contact.png")
     save_figure(fg.gap_stiffness_figure(curves), figs / "gap_stiffness.png")
@@ -304,7 +362,8 @@ def regenerate(out: Path, docs: Path | None = None) -> None:
                                 *((kp.alpha_points(extra, 64.0), kp.alpha_points(kp.corrected(extra), 64.0))
                                   if extra is not None else (None, None)),
                                 *((kp.alpha_points(big, 128.0), kp.alpha_points(kp.corrected(big), 128.0))
-                                  if big is not None else ())), figs / "kappa_alpha.png")
+                                  if big is not None else (None, None)), bends=_bends(rep["grid"], extra, big)),
+                figs / "kappa_alpha.png")
     if large is not None:
         save_figure(fg.cell_figure(rep["small"], large), figs / "cell_size.png")
     rows = (full_contact_rows(ds, cel) + alpha_rows(rep["grid"]) + [trend_row(rep["grid"], extra),
