@@ -98,3 +98,15 @@ def test_published_values_keep_the_figures_of_their_error():
     assert precision.plus_minus(0.21, float("nan")) == "0.21"
     with pytest.raises(ValueError, match="finite and > 0"):
         precision.decimals_for(0.0)
+
+
+@pytest.mark.parametrize(("value", "low", "high", "shown"), [
+    (0.78, 0.1, 0.84, ("0.78", "0.10", "0.84")),   # rule 2 alone: 0.8 [0.1, 0.8], which reads as touching
+    (0.2, 0.19996, 0.5, ("0.20000", "0.19996", "0.50000")),  # as many places as it takes, up to MAX_FIGURES
+    (1.87, 0.18, 1.87, ("1.9", "0.2", "1.9")),      # it does touch: left as it is (and marked by the report)
+    (1.466, 1.167, 3120.0, ("1", "1", "3100")),     # a value under its half-width: rule 3, not rule 4
+])
+def test_a_value_inside_its_interval_is_not_printed_equal_to_an_end(value, low, high, shown):
+    """Issue 60's demo: 0.8 [0.1, 0.8] for a value strictly inside; a reader takes it for an interval that ends at
+    its estimate."""
+    assert precision.estimate(value, low, high) == shown

@@ -47,7 +47,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 
 from conftest import FAMILIES, FAMILY_PARAMETER, REPO, SceneRun, run_snakemake
 from roughcontact import __version__
-from roughcontact.figures.captions import CONDITIONAL_WORDS, NOTES, PROFILES_GID, REFERENCES, drawn
+from roughcontact.figures.captions import CONDITIONAL_WORDS, LEFT_OUT, NOTES, PROFILES_GID, REFERENCES, drawn
 from roughcontact.figures.registry import FIGURES, scene_figures
 from roughcontact.pipeline.scenes import validate_config
 from roughcontact.pipeline.sources import source_of
@@ -300,7 +300,22 @@ def check_intervals(text: str, stored: Stored, where: str) -> list[str]:
             problems.append(f"{where}: {shown!r} prints as 0 the {constant} of cel.csv, {value:.4g}")
         if math.isfinite(low) and math.isfinite(high) and high > low and not on_bound:
             allowed = _capped(rule_decimals((high - low) / 2), value)
-            at = set.intersection(*(_decimals(e) for e in ends)) if ends else allowed
+            if abs(value) >= (high - low) / 2 and value not in (low, high):
+                # the rule's 4th point: a value inside its interval gets more places until it differs from both ends
+                d = min(allowed)
+                while d < 12 and round(value, d) in (round(low, d), round(high, d)):
+                    d += 1
+                allowed = allowed | set(range(min(allowed), d + 1))
+
+            def one_figure(x):  # a number that is not 0 but would read 0 at the common place keeps one figure
+                if x == 0 or abs(x) >= 0.5 * 10 ** -min(allowed):
+                    return set()
+                first = -math.floor(math.log10(abs(x)))
+                return {first, first - 1}
+
+            kept = [_decimals(e) for e, x in zip((lo, hi), (low, high), strict=True)
+                    if e != "bound" and not _decimals(e) & one_figure(x)]
+            at = set.intersection(*kept) if kept else allowed
             small = set()  # a value smaller than its interval's half-width may keep one significant figure
             if value and abs(value) < (high - low) / 2:
                 first = -math.floor(math.log10(abs(value)))
@@ -308,6 +323,8 @@ def check_intervals(text: str, stored: Stored, where: str) -> list[str]:
             if not at & allowed or not _decimals(v) & (at & allowed | small):
                 problems.append(f"{where}: {shown!r} is rounded to {sorted(_decimals(v))} decimal places, its ends to "
                                 f"{sorted(at)}; the half-width {(high - low) / 2:.3g} asks for {sorted(allowed)}")
+        # printed equal to an end: the rule prints that only for an interval that does end at its estimate (or one
+        # wider than twice the value, marked not constrained anyway)
         touches = value in (low, high) or not low < value < high or _float(v) in {_float(e) for e in ends}
         marked = NOT_CONSTRAINED.match(text[m.end():m.end() + 20]) or \
             re.search(r"(?:not constrained|unconstrained)[^\[\]]{0,30}$", text[max(0, m.start() - 40):m.start()])
@@ -417,6 +434,7 @@ class Drawn:
     profiles_allowed: bool  # it may
     from_record: bool
     notes: tuple[str, ...] = ()  # the layout notes of figures.captions.NOTES the record holds
+    left_out: tuple[str, ...] = ()  # what it says it leaves out (figures.captions.LEFT_OUT)
 
 
 def what_was_drawn(name: str, out: Path, fig, profiles: bool) -> Drawn:
@@ -425,7 +443,8 @@ def what_was_drawn(name: str, out: Path, fig, profiles: bool) -> Drawn:
     if record.is_file():
         rec = json.loads(record.read_text())
         return Drawn(set(rec.get("references", [])), list(rec.get("fits", [])), bool(rec.get("window")),
-                     bool(rec.get("profiles")), bool(rec.get("profiles")), True, tuple(rec.get("notes", ())))
+                     bool(rec.get("profiles")), bool(rec.get("profiles")), True, tuple(rec.get("notes", ())),
+                     tuple(rec.get("left_out", ())))
     gids = set(drawn(fig))
     fits = [{"route": None, "label": None} for g in ("cel_fit", "dpbar_fit") if g in gids]
     return Drawn(gids, fits, "fit_window" in gids, fig.get_gid() == PROFILES_GID, profiles, False)
@@ -439,6 +458,11 @@ def check_caption(name: str, caption: str, what: Drawn, max_side: int, where: st
         if (_plain_key(phrase) in caption) != shown:
             problems.append(f"{where}: the caption {'omits' if shown else 'names'} {_plain_key(phrase)!r}, which the "
                             f"figure {'drew' if shown else 'did not draw'} ({gid})")
+    for key in what.left_out:  # "The asperity models are not drawn: ...": a word said of what was left out
+        sentence = LEFT_OUT[key].split(":")[0]
+        if sentence not in caption:
+            problems.append(f"{where}: the record leaves out {key!r}; the caption does not say so")
+        caption = caption.replace(sentence, "")
     for word, gids in WORD_GIDS.items():
         implied = set(gids) & what.references or (word == "evolution law" and what.fits) or \
             (word == "fit's window" and what.window)
@@ -707,9 +731,13 @@ def check_introduction(text: str, out: Path, cel_math: bool) -> list[str]:
     problems = []
     intro = text.split("Result", 1)[0]
     fitted = (out / "fit" / "cel.csv").is_file()
+    summary = out / "accuracy" / "summary.nc"
+    if not fitted and summary.is_file():  # the accuracy study fits the law per setting: its errors of the constants
+        with xr.open_dataset(summary) as ds:
+            fitted = {"err_cel_kappa", "err_cel_mu", "err_cel_beta"} <= set(ds.variables)
     if cel_math and not fitted:
         problems.append("the page writes the contact evolution law (a formula with κ, μ and β) and the scene fits "
-                        "none (no fit/cel.csv)")
+                        "none (no fit/cel.csv, no accuracy summary of the law's constants)")
     stages = {"representativity": (out / "aggregate" / "representativity.nc").is_file()}
     for words, ran in stages.items():
         said = [m for m in re.finditer(re.escape(words), intro)

@@ -14,6 +14,11 @@ support. Every number the report prints with an uncertainty follows one rule:
    exponent). A value smaller than its interval's width thus reads ``1 [0.0003, 3100]``, not
    ``0 [0, 3100]``; a number that is 0 is printed as 0 at the common place.
 
+4. A value at least as large as its interval's half-width that differs from both ends of the interval is not
+   printed equal to either: where rule 2 would print
+   ``0.8 [0.1, 0.8]`` for 0.78 in [0.1, 0.84], each gets one more place until they differ (``0.78 [0.10,
+   0.84]``); a printed ``v [l, v]`` thus always means an interval that ends at its estimate.
+
 So ``2.65988 [2.57646, 2.91696]`` (half-width 0.17) reads ``2.66 [2.58, 2.92]`` and
 ``1.0612 [1.0281, 1.1642]`` (half-width 0.068) ``1.06 [1.03, 1.16]``. A value without an interval keeps
 :data:`BARE_FIGURES` significant figures; NaN is a dash.
@@ -128,11 +133,18 @@ def estimate(value: float, low: float | None = None, high: float | None = None) 
     (('-0.004', '-0.3', '0.4'), ('0.0', '-0.3', '0.4'))
     >>> estimate(3.14159)
     ('3.14', '', '')
+    >>> estimate(0.78, 0.1, 0.84), estimate(1.87, 0.18, 1.87)  # rule 4; an end at the estimate stays
+    (('0.78', '0.10', '0.84'), ('1.9', '0.2', '1.9'))
     """
     ends = [v for v in (low, high) if v is not None and math.isfinite(v)]
     if not math.isfinite(value) or len(ends) < 2 or high <= low:
         return bare(value), *("" if v is None or not math.isfinite(v) else bare(v) for v in (low, high))
     d = _capped(value, decimals_for((high - low) / 2))
+    # rule 4: a value inside its interval is not printed equal to an end (a reader would take it for an interval
+    # that ends at its estimate, which the report marks not constrained): one more place until they differ
+    if abs(value) >= (high - low) / 2:  # not where rule 3 already keeps one figure of a value smaller than that
+        while value not in (low, high) and _at(value, d) in (_at(low, d), _at(high, d)) and d < _capped(value, 99):
+            d += 1
     return _at(value, d), _at(low, d), _at(high, d)
 
 

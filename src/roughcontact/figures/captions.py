@@ -97,7 +97,8 @@ NOTES = {
                    r"study's length unit), its sides and grid size in its title.",
     "block_averaged": "Maps of more than {pixels} points a side are shown block-averaged: each pixel is the mean "
                       "of a square block of points.",
-    "line_scans": r"A line scan is drawn as its heights :math:`h(x)` along its length, its length :math:`L` and "
+    "line_scans": r"A line scan (a profile: a 1-D surface) is drawn as its heights :math:`h(x)` along its length, "
+                  r"its length :math:`L` and "
                   r"number of points :math:`n` in its title.",
     "profiles_contact": r"These cases are profiles (1-D surfaces in plane strain; :math:`A/A_0` is the contact "
                         r"length fraction, :math:`h'` the profile's rms slope).",
