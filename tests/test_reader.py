@@ -307,7 +307,7 @@ def check_intervals(text: str, stored: Stored, where: str) -> list[str]:
                     d += 1
                 allowed = allowed | set(range(min(allowed), d + 1))
 
-            def one_figure(x):  # a number that is not 0 but would read 0 at the common place keeps one figure
+            def one_figure(x, allowed=allowed):  # not 0 but would read 0 at the common place: one figure kept
                 if x == 0 or abs(x) >= 0.5 * 10 ** -min(allowed):
                     return set()
                 first = -math.floor(math.log10(abs(x)))
