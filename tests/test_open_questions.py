@@ -438,3 +438,17 @@ def test_the_q4a_check_finds_the_table_s_ratios():
                 if target == 0.01:
                     printed_sensitivity = _floats(rf"({N}) / ({N}) / ({N})", sensitivity)
                     np.testing.assert_allclose([c[3:] for c in checked], printed_sensitivity, atol=1.5e-3)
+
+
+@pytest.mark.skipif(not (PUBLISHED / "data").is_dir(), reason="docs/open-questions not published")
+def test_regenerate_refuses_an_output_it_cannot_write_before_any_analysis(tmp_path, capsys):
+    """claims.md a folder, or figures/ a file: one line, exit 2, before the data are read (issue 62)."""
+    out = tmp_path / "open-questions"
+    shutil.copytree(PUBLISHED / "data", out / "data")
+    (out / "figures").write_text("not a folder")
+    with pytest.raises(SystemExit) as stop:
+        page.main(["regenerate", str(out), "--docs", str(DOCS)])
+    assert stop.value.code == 2
+    assert f"error: {out}/figures/full_contact.png: cannot be written: {out}/figures is a file, not a folder" in \
+        capsys.readouterr().err
+    assert not (out / "claims.md").exists()

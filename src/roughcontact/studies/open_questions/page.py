@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core.cli import input_errors, require_files, require_folder
-from ...core.files import write_text_atomic
+from ...core.files import check_writable, write_text_atomic
 from ...figures.style import save_figure
 from ...pipeline.io import read_dataset
 from . import analysis as an, figures as fg, kappa as kp
@@ -334,6 +334,9 @@ def regenerate(out: Path, docs: Path | None = None) -> None:
                   "OUT/data (publish a run there first)")
     require_files(docs, list(REPRODUCTION.values()), "Q2 and Q3 read the reproduction's published aggregates "
                   "(--docs: the folder holding reproduction/)")
+    # what it writes, checked before the analysis (issue 62: a late failure after the work)
+    for target in (out / "claims.md", figs / "full_contact.png"):
+        check_writable(target, "regenerate's output")
     rep = _reproduction(docs)
     figs.mkdir(parents=True, exist_ok=True)
     large = _optional(data, "representative-2L.nc")
