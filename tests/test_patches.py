@@ -293,11 +293,11 @@ def test_the_measured_figures_mark_a_real_line_scans_unresolved_steps_and_say_so
     assert sorted(line.patch_nodes.tolist()) == sorted(agg.largest_patch_nodes.values[bad.values].tolist())
     assert _legend(fig) == ["25 unresolved load steps: largest contact patch 1 to 3 nodes, under 4"]
     text = caption(lead_of(name), figure_record(name, fig))
-    assert ("Hollow black circles: 25 load steps whose contact the grid does not resolve, the largest contact patch "
-            "holding 1 to 3 nodes, fewer than 4.") in text
+    assert ("Hollow black circles: 25 load steps whose contact is unresolved: the grid does not resolve it, the "
+            "largest contact patch holding 1 to 3 nodes, fewer than 4.") in text
     one = draw(agg.sel(topography=["xy-1"]))   # one scan: one patch of 3 nodes, six times
-    assert "6 load steps whose contact the grid does not resolve, the largest contact patch holding 3 nodes" in \
-        caption(lead_of(name), figure_record(name, one))
+    assert ("6 load steps whose contact is unresolved: the grid does not resolve it, the largest contact patch "
+            "holding 3 nodes") in caption(lead_of(name), figure_record(name, one))
     older = draw(agg.drop_vars(["contact_resolved", "n_unresolved"]))
     assert not _marks(older) and not _legend(older)
     assert "resolve" not in caption(lead_of(name), figure_record(name, older))
@@ -338,8 +338,8 @@ def test_the_generated_figures_mark_each_unresolved_case_step_in_its_panel(name)
     y = case["area_fraction" if name == "area_load" else "kappa"].values.ravel()
     np.testing.assert_allclose(np.sort(line.get_ydata()), np.sort(y))
     assert _legend(fig) == ["6 unresolved load steps: largest contact patch 2 nodes, under 4"]
-    assert "6 load steps whose contact the grid does not resolve, the largest contact patch holding 2 nodes, fewer " \
-           "than 4." in caption(lead_of(name), figure_record(name, fig))
+    assert ("6 load steps whose contact is unresolved: the grid does not resolve it, the largest contact patch "
+            "holding 2 nodes, fewer than 4.") in caption(lead_of(name), figure_record(name, fig))
     for data in (_with_unresolved(plain, steps=()), plain):   # all resolved; no flag
         fig = draw(data, seed_statistics(data))
         assert not _marks(fig) and not _legend(fig)

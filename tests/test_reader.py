@@ -290,8 +290,11 @@ def check_intervals(text: str, stored: Stored, where: str) -> list[str]:
             problems.append(f"{where}: {shown!r} mixes positional and scientific notation")
         if lo != "bound" and _float(v) < _float(lo) or hi != "bound" and _float(v) > _float(hi):
             problems.append(f"{where}: {shown!r}: the interval does not contain its estimate")
-        match = next((s for s in stored.intervals if _close(v, s[1], _decimals(v))
-                      and all(e == "bound" or _close(e, x, _decimals(e)) for e, x in ((lo, s[2]), (hi, s[3])))), None)
+        candidates = [s for s in stored.intervals if _close(v, s[1], _decimals(v))
+                      and all(e == "bound" or _close(e, x, _decimals(e)) for e, x in ((lo, s[2]), (hi, s[3])))]
+        # a number printed with few places matches several intervals: the nearest is the one printed
+        match = min(candidates, key=lambda s: abs(_float(v) - s[1]) + sum(
+            abs(_float(e) - x) for e, x in ((lo, s[2]), (hi, s[3])) if e != "bound"), default=None)
         if match is None:
             problems.append(f"{where}: {shown!r} is no interval of the stored fit (cel.csv) as printed")
             continue

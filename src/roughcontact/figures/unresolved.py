@@ -99,8 +99,9 @@ def unresolved_note(nodes) -> str:
     if not nodes.size:
         return ""
     steps = "one load step" if nodes.size == 1 else f"{nodes.size} load steps"
-    return (f"\nHollow black circles: {steps} whose contact the grid does not resolve, the largest contact patch "
-            f"holding {_nodes_text(nodes)}, fewer than {MIN_PATCH_NODES}. Such a patch's size is known to a node "
+    return (f"\nHollow black circles: {steps} whose contact is unresolved: the grid does not resolve it, the "
+            f"largest contact patch holding {_nodes_text(nodes)}, fewer than {MIN_PATCH_NODES}. Such a patch's size "
+            "is known to a node "
             "only, a third of it or more, so A/A0 there is the grid's (held by few nodes, it climbs in stairs as the "
             "load rises). The contact files flag these steps (contact_resolved).\n")
 
