@@ -35,8 +35,9 @@ POINTS = (0.2, 0.5, 0.8)
 
 
 def copy_workflow(dest: Path, scene: str, batch: int | None) -> Path:
-    """A copy of the workflow (Snakefile, rules, scripts, config, profiles) with ``scene`` the default."""
-    for name in ("Snakefile", "workflow", "config", "profiles", "data"):
+    """A copy of the workflow (Snakefile, rules, scripts, config, profiles, data, envs) with ``scene`` the default."""
+    dest.mkdir(parents=True)
+    for name in ("Snakefile", "workflow", "config", "profiles", "data", "envs"):
         src = REPO / name
         if src.is_dir():
             shutil.copytree(src, dest / name)
@@ -44,8 +45,10 @@ def copy_workflow(dest: Path, scene: str, batch: int | None) -> Path:
             shutil.copy(src, dest / name)
     config = yaml.safe_load((dest / "config" / "config.yaml").read_text())
     config["scene"] = scene
-    if batch:
-        config["scenes"][scene].setdefault("contact", {}).setdefault("solver", {})["batch"] = batch
+    if batch:  # a batch stores no fields: the scene's outputs.fields go
+        contact = config["scenes"][scene].setdefault("contact", {})
+        contact.setdefault("solver", {})["batch"] = batch
+        contact.get("outputs", {}).pop("fields", None)
     (dest / "config" / "config.yaml").write_text(yaml.safe_dump(config, sort_keys=False))
     return dest
 
@@ -55,8 +58,8 @@ def sample_run(workdir: Path, scene: str, cores: int, every: float) -> tuple[flo
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO / "src"), os.environ.get("PYTHONPATH", "")])}
     snakemake = Path(sys.executable).parent / "snakemake"
     start = time.time()
-    proc = subprocess.Popen([str(snakemake), f"-j{cores}"], cwd=workdir, env=env, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE, text=True)
+    log = open(workdir / "run.log", "w")  # a file, not a pipe: an unread pipe fills and stops the run
+    proc = subprocess.Popen([str(snakemake), f"-j{cores}"], cwd=workdir, env=env, stdout=log, stderr=log, text=True)
     samples = []
     while proc.poll() is None:
         time.sleep(every)
@@ -71,9 +74,9 @@ def sample_run(workdir: Path, scene: str, cores: int, every: float) -> tuple[flo
         if got is not None and got[1].left is not None:
             samples.append((time.time(), got[1].left))
     end = time.time()  # the command has returned (to within one sampling interval): what a user waits for
-    err = proc.stderr.read()
+    log.close()
     if proc.returncode != 0:
-        raise SystemExit(f"the run failed:\n{err[-3000:]}")
+        raise SystemExit(f"the run failed:\n{(workdir / 'run.log').read_text()[-3000:]}")
     return start, end, samples
 
 

@@ -47,15 +47,19 @@ def test_left_is_each_rules_pace_times_its_jobs_to_do_over_the_cores(tmp_path):
     plan = _plan([("contact", f"b/c{i}.tsv", 2.0) for i in range(6)] + [("surface", f"b/s{i}.tsv", 1.0)
                                                                          for i in range(2)]
                  + [("figure", "b/f.tsv", 1.0)])
-    started = time.time() - 100
+    started = time.time() - 14.0  # the finished jobs' 28 s over 2 cores: no overhead measured
     for i, s in enumerate([10.0, 14.0]):  # two contact jobs of weight 2: 6 s per unit
         _bench(tmp_path / f"b/c{i}.tsv", s)
     for i in range(2):
         _bench(tmp_path / f"b/s{i}.tsv", 2.0)
-    got = estimate(plan, started, time.time(), tmp_path)
+    now = started + 14.0
+    got = estimate(plan, started, now, tmp_path)
     assert (got.planned, got.done, got.contact_planned, got.contact_done) == (9, 4, 6, 2)
     pace_all = (10 + 14 + 2 + 2) / (2 + 2 + 1 + 1)
     assert got.left == pytest.approx((4 * 2 * 6.0 + 1 * pace_all) / 2)
+    # a run whose wall time so far is 1.5 times its finished jobs' time over the cores: the rest is too
+    assert estimate(plan, started, started + 21.0, tmp_path).left == pytest.approx(1.5 * got.left)
+    assert estimate(plan, started, started + 100.0, tmp_path).left == pytest.approx(3 * got.left)  # held to 3
     assert got.unpaced == ("figure",)
     text = got.text("demo")
     assert text.startswith("scene 'demo': 4 of 9 jobs done (contact 2 of 6): about ")

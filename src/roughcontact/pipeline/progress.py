@@ -8,7 +8,10 @@ Snakemake writes when the job ends, is newer than the plan; the file's ``s`` col
 :func:`scene_progress` estimates what is left per rule: the planned jobs still to do, weighted by their
 expected size, at the measured seconds per unit of size of the rule's finished jobs (a rule with none finished
 yet: at the pace of all finished jobs); a running job counts with the time it has already had taken off. The
-sum is spread over the cores, and is never less than the longest job left. Every kind of job is counted:
+sum is spread over the cores, and is never less than the longest job left; it is then scaled by the run's
+measured overhead, its wall time so far over its finished jobs' time spread over the cores (Snakemake's
+scheduling, what a job spends outside its benchmark, cores idle while a chain of single jobs runs; between 1 and
+3). Every kind of job is counted:
 contact cases, contact batches (``contact.solver.batch``) and cases over MPI ranks (``solver.ranks``), the
 surfaces, aggregates, fits, figures and the report.
 
@@ -201,9 +204,25 @@ def estimate(plan: dict, started: float, now: float, base: Path = Path(".")) -> 
             pace = pace_all
             unpaced.add(rule)
         lefts.append(max(weight * pace - ran, 0.0))
-    left = max(sum(lefts) / plan["cores"], max(lefts, default=0.0))
+    left = max(sum(lefts) / plan["cores"], max(lefts, default=0.0)) * _overhead(finished, plan["cores"],
+                                                                                 now - started)
     return Progress(len(plan["jobs"]), done, contact_planned, contact_done, left, plan["cores"], unknown,
                     tuple(sorted(unpaced)))
+
+
+#: Finished jobs before :func:`_overhead` is measured, and the range it is held to.
+OVERHEAD_JOBS, OVERHEAD_RANGE = 3, (1.0, 3.0)
+
+
+def _overhead(finished: dict[str, list[tuple[float, float]]], cores: int, elapsed: float) -> float:
+    """The run's wall time so far over its finished jobs' own time spread over the cores: what scheduling, job
+    start-up outside the benchmark and idle cores (a chain of single jobs) add, as measured; 1 until
+    :data:`OVERHEAD_JOBS` jobs have finished, held to :data:`OVERHEAD_RANGE`."""
+    seconds = [s for jobs in finished.values() for _, s in jobs]
+    if len(seconds) < OVERHEAD_JOBS or sum(seconds) <= 0:
+        return 1.0
+    low, high = OVERHEAD_RANGE
+    return min(max(elapsed / (sum(seconds) / cores), low), high)
 
 
 def _pace(jobs: list[tuple[float, float]]) -> float | None:
