@@ -254,7 +254,8 @@ def test_per_file_settings_are_no_surprise():
     ("{bad", "not valid JSON at line 1"),
     ("[]", "holds a JSON list"),
     ('{"total": -5}', "'scene' is None, not a str"),
-    ('{"scene": "x", "solves": -5, "cores": 1}', "solves = -5"),
+    ('{"scene": "x", "cores": 0, "jobs": []}', "cores = 0 must be >= 1"),
+    ('{"scene": "x", "cores": 2, "jobs": [{"rule": "contact"}]}', "jobs[0] is {'rule': 'contact'}, not a job"),
 ])
 def test_progress_on_a_corrupt_plan_says_so_in_one_line(tmp_path, capsys, text, words):
     (tmp_path / "logs").mkdir()

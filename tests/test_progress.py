@@ -10,6 +10,7 @@ from roughcontact.pipeline.progress import (
     estimate,
     log_started,
     main,
+    planned_solves,
     read_log_solves,
     read_log_steps,
     scene_progress,
@@ -120,3 +121,9 @@ def test_scene_progress_reads_the_plan_the_workflow_writes(tmp_path, capsys, mon
     with pytest.raises(SystemExit) as stop:
         main(["results/demo"])
     assert stop.value.code == 2 and "jobs[0] is {'rule': 1}, not a job" in capsys.readouterr().err
+
+
+def test_planned_solves_counts_a_scenes_load_steps():
+    scene = {"contact": {"grid": {"k_l": ["1"], "k_s": ["8"], "H": ["0.5", "0.7"]}, "seeds": 3,
+                         "load": {"n_steps": 4}}}
+    assert planned_solves(scene) == 2 * 3 * 4 and planned_solves({"representativity": {}}) == 0

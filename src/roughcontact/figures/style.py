@@ -271,7 +271,7 @@ def family_handles(k_ls, hs, colour, marker, style) -> list[Line2D]:
 
 #: Mantissas of the labelled ticks of a log axis, tried in turn until at least two fall in view: the decades,
 #: then 1, 2, 5 and 1, 2, 3, 5 times them, then every integer mantissa (:class:`ReadableLogLocator`).
-LOG_MANTISSAS = ((1,), (1, 2, 5), (1, 2, 3, 5), tuple(range(1, 10)))
+LOG_MANTISSAS = ((1,), (1, 3), (1, 2, 5), (1, 2, 3, 5), tuple(range(1, 10)))
 
 
 class ReadableLogLocator(Locator):
@@ -279,7 +279,8 @@ class ReadableLogLocator(Locator):
 
     Matplotlib's log locator puts major ticks on the decades only: an axis from 0.17 to 0.28 has none, and the
     minor ticks it labels at most one (0.2). This one takes the first set of :data:`LOG_MANTISSAS` times the
-    powers of ten that puts at least two ticks in view (``dense``: from 1, 2, 3, 5 on, when the axis spans
+    powers of ten that puts at least two ticks in view (the decades, then 1 and 3 per decade, ...; ``dense``: from
+    1, 2, 3, 5 on, when the axis spans
     less than two decades), and for an axis narrower than two neighbouring integer mantissas (0.171 to 0.178)
     evenly spaced round values (:class:`matplotlib.ticker.MaxNLocator`).
     """
@@ -296,7 +297,7 @@ class ReadableLogLocator(Locator):
         lo, hi = sorted((float(vmin), float(vmax)))
         if not (np.isfinite(lo) and np.isfinite(hi) and lo > 0):
             return list(LogLocator().tick_values(vmin, vmax))
-        tries = LOG_MANTISSAS[2:] if self.dense and hi / lo < 100 else LOG_MANTISSAS
+        tries = LOG_MANTISSAS[3:] if self.dense and hi / lo < 100 else LOG_MANTISSAS
         powers = range(int(np.floor(np.log10(lo))) - 1, int(np.ceil(np.log10(hi))) + 1)
         for subs in tries:
             ticks = [m * 10.0 ** p for p in powers for m in subs]

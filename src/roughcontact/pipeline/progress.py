@@ -31,13 +31,14 @@ import datetime
 import json
 import re
 import time
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..core.cli import input_errors, read_json_object, require_folder
 from ..core.files import write_text_atomic
 from .io import duration_text
+from .sources import source_of
 
 #: The per-step line of a contact job's log (workflow/scripts/contact.py), or of a batch's (``B cases``).
 STEP_LINE = re.compile(r"step (\d+)/(\d+): .*?, (?:(\d+) cases, )?\d+ iterations, ([0-9.]+) s")
@@ -46,6 +47,13 @@ PLAN_FILE = "plan.json"
 CONTACT_RULES = ("contact", "contact_batch", "contact_mpi", "contact_topography")
 #: The time stamp that begins each line of a job's log (roughcontact.pipeline.io.run_logged).
 LOG_TIME = re.compile(r"^(\d{4}-\d\d-\d\d \d\d:\d\d:\d\d),(\d{3}) ")
+
+
+def planned_solves(scene: Mapping) -> int:
+    """Load steps the contact study of a validated scene solves: its source's cases x ``n_steps``; 0 without one."""
+    if "contact" not in scene:
+        return 0
+    return len(source_of(scene).cases(scene, "contact")) * scene["contact"]["load"]["n_steps"]
 
 
 def write_plan(scene_dir: str | Path, scene_name: str, jobs: Iterable[tuple[str, str, str | None, float | None]],
