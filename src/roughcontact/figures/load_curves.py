@@ -340,10 +340,10 @@ BAND_ALPHA, BAND_EDGE_ALPHA, BAND_EDGE_LW = 0.3, 0.8, 0.6
 
 def constrained_constants(fit: xr.Dataset, where: Mapping, estimator: str,
                            constants: Sequence[str]) -> dict[str, bool]:
-    """Per constant, whether the data constrain it: the fit's ``constrained`` flag (95 % interval
-    narrower than the value, :func:`roughcontact.analysis.fit.constrained_flags`; True for files without
-    the flag) and not sitting on a bound of the fit (:func:`roughcontact.analysis.fit.at_bound`; the flag
-    of fits made before that check was part of it does not say so).
+    """Per constant, whether the data constrain it: the fit's ``constrained`` flag (its rule is
+    :data:`roughcontact.analysis.fit.UNCONSTRAINED_RULE`, :func:`roughcontact.analysis.fit.constrained_flags`; True
+    for files without the flag) and not sitting on a bound of the fit (:func:`roughcontact.analysis.fit.at_bound`;
+    the flag of fits made before that check was part of it does not say so).
 
     ``where``: the fit's group, e.g. ``{"k_l": 16.0, "k_s": 32.0, "H_group": "pooled"}`` (empty
     for a fit of measured topographies).

@@ -270,7 +270,7 @@ def family_handles(k_ls, hs, colour, marker, style) -> list[Line2D]:
 
 
 #: Mantissas of the labelled ticks of a log axis, tried in turn until at least two fall in view: the decades,
-#: then 1, 2, 5 and 1, 2, 3, 5 times them, then every integer mantissa (:class:`ReadableLogLocator`).
+#: then 1, 3; 1, 2, 5 and 1, 2, 3, 5 times them, then every integer mantissa (:class:`ReadableLogLocator`).
 LOG_MANTISSAS = ((1,), (1, 3), (1, 2, 5), (1, 2, 3, 5), tuple(range(1, 10)))
 
 

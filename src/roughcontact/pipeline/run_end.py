@@ -87,9 +87,9 @@ def where_it_is(results: str | Path, scene: str) -> list[str]:
     results = Path(results)
     result_file = results / "report" / "result.rst"
     if result_file.is_file():
-        first = result_file.read_text(encoding="utf-8").strip().split("\n\n")[0]
-        result = plain_text(first)
-        if "list-table" in result_file.read_text(encoding="utf-8"):  # an adhesive scene's pull-off table
+        text = result_file.read_text(encoding="utf-8")
+        result = plain_text(text.strip().split("\n\n")[0])
+        if "list-table" in text:  # an adhesive scene's pull-off table
             result = result.rstrip(".") + ": its table is in the report."
     else:
         result = f"Result: not made by this run (the whole scene makes it: snakemake -j2 --config scene={scene})"
