@@ -185,7 +185,7 @@ class _FFTWProduct:
             self.out = pyfftw.empty_aligned(prod.shape, dtype=prod.dtype)
             self.out_flat = self.out.reshape(-1)
         self.last = None  # out of place: the last load's positions (True: dense)
-        with _fft._shipped_wisdom_only():
+        with _fft.shipped_wisdom_only():
             self.fwd = pyfftw.FFTW(self.input, self.spec, axes=(0, 1), direction="FFTW_FORWARD",
                                    flags=_fft.PLANNER_FLAGS, threads=threads)
             self.bwd = pyfftw.FFTW(self.spec, self.out, axes=(0, 1), direction="FFTW_BACKWARD",

@@ -111,6 +111,11 @@ def shipped_wisdom() -> tuple[bytes, bytes, bytes] | None:
     return tuple(chosen[k].encode("ascii") for k in _PRECISIONS)
 
 
+def has_pyfftw() -> bool:
+    """Whether pyFFTW imports here (else the transforms are numpy's or SciPy's)."""
+    return _HAVE_PYFFTW
+
+
 def has_shipped_plans(shape) -> bool:
     """Whether the shipped wisdom holds measured plans for ``shape`` (square, :data:`WISDOM_SIZES`)."""
     n0, n1 = (int(n) for n in shape)
@@ -118,7 +123,7 @@ def has_shipped_plans(shape) -> bool:
 
 
 @contextlib.contextmanager
-def _shipped_wisdom_only():
+def shipped_wisdom_only():
     """Plan inside this block with the shipped wisdom alone (module docstring).
 
     FFTW reuses wisdom from a more patient planner: a plan timed with FFTW_MEASURE
@@ -281,7 +286,7 @@ class RealFFT2:
             self._spec_in = pyfftw.empty_aligned(self.spectral_shape, dtype=cdtype)
             self._real_out = pyfftw.empty_aligned(self.shape, dtype=self.dtype)
             flags = tuple(PLANNER_FLAGS)
-            with _shipped_wisdom_only():
+            with shipped_wisdom_only():
                 self._fwd = pyfftw.FFTW(
                     self._real, self._spec, axes=(0, 1), direction="FFTW_FORWARD",
                     flags=flags, threads=self.threads,

@@ -181,8 +181,11 @@ class CupyKernels(ArrayKernels):
     def dot(self, a, b):
         return self._reduce(self._dot, a, b)
 
-    def to32(self, x, scale):
-        return self._to32(x, scale)
+    def to32(self, x, scale, out=None, F=None):
+        if out is None:
+            return self._to32(x, scale)
+        self._to32(x, scale, out)
+        return out
 
     def quadratic(self, spec, weights):
         return self._reduce(self._quad, spec.real, spec.imag, weights)
@@ -201,7 +204,7 @@ class CupyKernels(ArrayKernels):
     def join_gap(self, w, gbar, F, go):
         return self._join(w, gbar, F, go)
 
-    def descent_dot(self, g, t, beta, a):
+    def descent_dot(self, g, t, beta, a, F=None):
         return self._reduce(self._ddot, g, t, beta, a)
 
     def new_direction(self, t, a, g, beta, keep, go, g_prev):
@@ -213,8 +216,8 @@ class CupyKernels(ArrayKernels):
     def pos_sum(self, P, t, tau):
         return self._reduce(self._psum, P, t, tau)
 
-    def project(self, P, t, tau, go, scale, inv_sigma):
-        d32 = self.cp.empty(P.shape, dtype=np.float32)
+    def project(self, P, t, tau, go, scale, inv_sigma, out=None, F=None):
+        d32 = self.cp.empty(P.shape, dtype=np.float32) if out is None else out
         self._project(t, tau, go, scale, inv_sigma, P, d32)
         return d32
 

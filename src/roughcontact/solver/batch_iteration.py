@@ -55,6 +55,10 @@ class BatchIteration:
         self.go = xp.zeros((B, 1, 1), dtype=bool)  # the cases that move in this round (measure)
         self.max_iter_d = xp.asarray(np.asarray(max_iter, dtype=np.int64).reshape(B, 1, 1))
         self.rounds = 0
+        # on the host the per-case flags cost nothing to read: a step that projects no case moves w by
+        # K of -tau t from t's spectrum, already made for the step length (one forward transform less);
+        # on a GPU that read would be a synchronisation a round
+        self.host = solver.be.name == "numpy"
 
     def run(self, check_every: int) -> tuple[np.ndarray, np.ndarray]:
         """Iterate every case to convergence or a stop; ``(iterations, converged)`` per case (host).
@@ -126,8 +130,9 @@ class BatchIteration:
         """
         k, s = self.k, self.s
         # gap on F (zero mean there: gbar is -d), sign violations off F (min of w), complementarity
-        self.gbar = gbar = k.gbar(k.masked_sum(s.w, self.F), self.nF)
-        k.decide(k.orth(s.P, s.w, gbar, self.F), k.rmin(s.w), gbar, self.inv_norm, self.scale, self.tol,
+        w_on_f, wmin = k.gap_stats(s.w, self.F)
+        self.gbar = gbar = k.gbar(w_on_f, self.nF)
+        k.decide(k.orth(s.P, s.w, gbar, self.F), wmin, gbar, self.inv_norm, self.scale, self.tol,
                  STALL_WINDOW, math.inf, self.it, self.max_iter_d, self.fresh, self.next_sync, self.best, self.at,
                  self.done, self.waiting, self.converged, self.go)
 
@@ -137,42 +142,74 @@ class BatchIteration:
         go = self.go
         self.it += go
         # join: violating nodes (w < gbar off F) enter F; their p, t and g_prev are 0 there already
-        F, g = k.join_gap(s.w, self.gbar, self.F, go)
-        nF_new = k.rcount(F)
-        c, nf = k.join_fix(nF_new, self.nF, k.rsum(g), go, self.done)  # go, done in place
+        F, g, nF_new, gsum = k.join_stats(s.w, self.gbar, self.F, go)
+        c, nf = k.join_fix(nF_new, self.nF, gsum, go, self.done)  # go, done in place
         self.F, self.nF = F, nF_new
         k.sub_masked(g, c, F)  # re-centred on the enlarged F where nodes joined (shifts d only)
-        self._direction(g, go, nf)
-        self._step(g, go)
+        spec, gt = self._direction(g, go, nf)
+        self._step(go, spec, gt)
 
-    def _direction(self, g, go, nf) -> None:
-        """``t = z + beta t`` (``t = z`` at a restart or where that is no descent); a breakdown stops the case."""
-        k, op = self.k, self.op
-        R = op.inverse32(op.spectrum32(g, self.inv_sigma), op.mmult32)  # M g / sigma
-        a = k.scaled_into(R, self.sigma, self.F)
-        k.sub_masked(a, k.rsum(a) / nf, self.F)  # zero mean on F
-        G = k.dot(g, a)
-        beta, restart = k.beta(G, k.dot(self.g_prev, a), self.g_old, self.delta, self.gprev_ok, go, self.done)
-        keep = k.direction_done(k.descent_dot(g, self.t, beta, a), restart, G, go, self.gprev_ok, self.g_old,
-                                self.delta)
-        k.new_direction(self.t, a, g, beta, keep, go, self.g_prev)
+    def _direction(self, g, go, nf):
+        """``t = z + beta t`` (``t = z`` at a restart or where that is no descent); a breakdown stops the case.
 
-    def _step(self, g, go) -> None:
-        """Exact line search along ``-t``, the projection onto ``p >= 0``, ``w`` moved by ``K`` of the change."""
+        Returns the new direction's float32 spectrum (of ``t / sigma``) and ``g . t`` per case.
+        """
+        k, op, F = self.k, self.op, self.F
+        # g, t, g_prev and a are zero off F (or not read there): the kernels may touch F's nodes only
+        R = op.inverse32(op.spectrum32(g, self.inv_sigma, F), op.mmult32)  # M g / sigma
+        a, a_sum = k.scaled_sum(R, self.sigma, F)
+        # zero mean on F; g . a, g_prev . a and g . t (the last for the descent test of beta t + a)
+        G, gpa, gt_old = k.center_dots(a, a_sum / nf, F, g, self.g_prev, self.t)
+        beta, restart = k.beta(G, gpa, self.g_old, self.delta, self.gprev_ok, go, self.done)
+        keep = k.direction_done(beta * gt_old + G, restart, G, go, self.gprev_ok, self.g_old, self.delta)
+        t32, gt = k.new_direction_input(self.t, a, g, beta, keep, go, self.g_prev, F, self.inv_sigma,
+                                        out=op.input32)
+        return op.transform32(t32), gt
+
+    def _step_host(self, spec, tau, proj, pscale) -> None:
+        """The move of :meth:`_step` where the per-case flags are on the host (numpy).
+
+        A case that does not project moves ``p`` by ``-tau t`` and ``w`` by ``-tau K t``, ``K t`` from
+        ``t``'s spectrum, already made for the step length: one inverse transform, as the single
+        solve's step. A projected case transforms its change (:meth:`_step`). Each case's arithmetic
+        is its own whatever the others do, so that a case's result does not depend on its batch.
+        """
+        k, op, s = self.k, self.op, self.s
+        t, F, go = self.t, self.F, self.go
+        pj = self.s.be.to_host(proj).reshape(-1)
+        if not pj.any():
+            k.step_on(s.P, t, tau, go, F)
+            k.add_scaled(s.w, op.inverse32(spec, op.kmult32), -tau * self.sigma)
+            return
+        kept = spec[~pj].copy() if not pj.all() else None  # the spectrum's buffer is the next transform's
+        d32 = k.project(s.P, t, tau, go, pscale, self.inv_sigma, out=op.input32, F=F)
+        mixed = op.fft.rfft2(d32)
+        factor = self.sigma
+        if kept is not None:
+            mixed[~pj] = kept
+            factor = self.xp.where(proj, self.sigma, -tau * self.sigma)
+        k.add_scaled(s.w, op.inverse32(mixed, op.kmult32), factor)
+
+    def _step(self, go, spec, gt) -> None:
+        """Exact line search along ``-t``, the projection onto ``p >= 0``, ``w`` moved by ``K`` of the change.
+
+        ``spec``: the float32 spectrum of ``t / sigma``; ``gt``: ``g . t`` per case.
+        """
         k, op, s = self.k, self.op, self.s
         t, F = self.t, self.F
-        spec = op.spectrum32(t, self.inv_sigma)
-        tau = k.step_length(op.quadratic32(spec), self.sigma, k.dot(g, t), math.nan, go, self.done)
-        total = k.pos_sum(s.P, t, tau)
-        proj, pscale = k.projection_scale(k.proj_any(s.P, t, tau, F), total, self.target, go, self.done, tau)
-        d32 = k.project(s.P, t, tau, go, pscale, self.inv_sigma)
-        # w <- w + K (p_new - p): one forward and one inverse float32 transform (every case)
-        R = op.inverse32(op.fft.rfft2(d32), op.kmult32)
-        k.add_scaled(s.w, R, self.sigma)
+        tau = k.step_length(op.quadratic32(spec), self.sigma, gt, math.nan, go, self.done)
+        total, pany = k.trial_stats(s.P, t, tau, F)
+        proj, pscale = k.projection_scale(pany, total, self.target, go, self.done, tau)
+        if not self.host:
+            # w <- w + K (p_new - p): one forward and one inverse float32 transform (every case)
+            d32 = k.project(s.P, t, tau, go, pscale, self.inv_sigma, out=op.input32, F=F)
+            k.add_scaled(s.w, op.inverse32(op.fft.rfft2(d32), op.kmult32), self.sigma)
+        else:
+            self._step_host(spec, tau, proj, pscale)
         nF_old = self.nF
-        k.shrink(s.P, F, t, self.g_prev)  # a projected case's F loses the nodes at p = 0
-        self.nF = k.rcount(F)
+        # a projected case's F loses the nodes at p = 0; |F| and sum(t) on what is left
+        self.nF, t_sum = k.shrink_stats(s.P, F, t, self.g_prev)
         # Polak-Ribiere's history off after a projection that took a large part of F away; zero mean
         # of t on the reduced F
-        c = k.shrink_fix(nF_old, self.nF, k.rsum(t), FR_AFTER_LOSS, proj, go, self.gprev_ok, self.fresh)
+        c = k.shrink_fix(nF_old, self.nF, t_sum, FR_AFTER_LOSS, proj, go, self.gprev_ok, self.fresh)
         k.sub_masked(t, c, F)

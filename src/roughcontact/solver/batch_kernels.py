@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core import fft as fft_module
 from .halfspace import elastic_kernel
 from .units import internal_length
 
@@ -18,16 +19,21 @@ from .units import internal_length
 class _BatchFFT:
     """Real 2-D transforms over the last two axes of a ``(B, nx, ny)`` batch.
 
-    numpy backend: :mod:`scipy.fft` (``workers`` threads); CuPy: :mod:`cupyx.scipy.fft` (cuFFT,
-    plans from CuPy's plan cache: the batch keeps one shape, so one plan per precision and
-    direction serves the whole solve); a stand-in CuPy without ``cupyx`` (tests): the array
-    module's ``fft``. The inverse is unnormalised (``norm="forward"``): the ``1 / (nx ny)`` sits in
-    the multipliers.
+    numpy backend: the float32 pair with pyFFTW's plans on buffers of their own (:attr:`input32`,
+    where the kernels write a transform's input; the spectrum; the output), as the single solve's
+    :class:`~roughcontact.core.backend.SpectralProduct` (planned with the package's shipped wisdom
+    only, :func:`~roughcontact.core.fft.shipped_wisdom_only`: the same plan whatever else the process
+    planned), and :mod:`scipy.fft` for the rest (the float64 refreshes, other shapes) or where pyFFTW
+    is missing; CuPy: :mod:`cupyx.scipy.fft` (cuFFT, plans from CuPy's plan cache: the batch keeps one
+    shape, so one plan per precision and direction serves the whole solve); a stand-in CuPy without
+    ``cupyx`` (tests): the array module's ``fft``. The inverse is unnormalised (``norm="forward"``):
+    the ``1 / (nx ny)`` sits in the multipliers.
     """
 
-    def __init__(self, be, shape, threads: int = 1):
+    def __init__(self, be, shape, threads: int = 1, batch: int | None = None):
         self.shape = tuple(shape)
         self.kw, self.ikw = {}, {}
+        self.input32 = None
         mod = be.xp.fft  # no SciPy; the tests' stand-in CuPy (numpy's fft under CuPy's name)
         try:
             if be.name == "numpy":
@@ -42,11 +48,34 @@ class _BatchFFT:
         except ImportError:
             mod = be.xp.fft
         self.mod = mod
+        if be.name == "numpy" and batch is not None and fft_module.has_pyfftw():
+            self._plan32(batch, threads)
+
+    def _plan32(self, batch: int, threads: int) -> None:
+        import pyfftw
+
+        nx, ny = self.shape
+        self.input32 = pyfftw.empty_aligned((batch, nx, ny), dtype=np.float32)
+        self.spec32 = pyfftw.empty_aligned((batch, nx, ny // 2 + 1), dtype=np.complex64)
+        self.output32 = pyfftw.empty_aligned((batch, nx, ny), dtype=np.float32)
+        with fft_module.shipped_wisdom_only():
+            self.fwd32 = pyfftw.FFTW(self.input32, self.spec32, axes=(1, 2), direction="FFTW_FORWARD",
+                                     flags=fft_module.PLANNER_FLAGS, threads=threads)
+            self.bwd32 = pyfftw.FFTW(self.spec32, self.output32, axes=(1, 2), direction="FFTW_BACKWARD",
+                                     flags=fft_module.PLANNER_FLAGS, threads=threads)
 
     def rfft2(self, x):
+        if self.input32 is not None and x.dtype == np.float32 and x.shape == self.input32.shape:
+            if x is not self.input32:
+                self.input32[...] = x
+            self.fwd32.execute()
+            return self.spec32
         return self.mod.rfft2(x, axes=(-2, -1), **self.kw)
 
     def irfft2(self, spec):
+        if self.input32 is not None and spec is self.spec32:
+            self.bwd32.execute()  # destroys the spectrum, as the c2r elsewhere may (overwrite_x)
+            return self.output32
         return self.mod.irfft2(spec, s=self.shape, axes=(-2, -1), norm="forward", **self.ikw)
 
 
@@ -63,18 +92,41 @@ class ArrayKernels:
     def __init__(self, xp):
         self.xp = xp
 
+    # -- where a field is split over processes (MPI ranks), their per-case parts combined --------
+    # Every reduction below goes through exactly one of these; here each process holds whole fields.
+
+    def allsum(self, local):
+        """Per-case sums ``(B, 1, 1)`` of this process's part of the fields, added over the processes."""
+        return local
+
+    def allcount(self, local):
+        """Per-case counts, added over the processes."""
+        return local
+
+    def allmin(self, local):
+        """Per-case minima, the least over the processes."""
+        return local
+
+    def allany(self, local):
+        """Per-case flags, true where any process's is."""
+        return local
+
     def rsum(self, x):
-        return self.xp.sum(x, axis=(-2, -1), keepdims=True, dtype=np.float64)
+        return self.allsum(self.xp.sum(x, axis=(-2, -1), keepdims=True, dtype=np.float64))
 
     def rcount(self, m):
-        return self.xp.sum(m, axis=(-2, -1), keepdims=True, dtype=np.int64)
+        return self.allcount(self.xp.sum(m, axis=(-2, -1), keepdims=True, dtype=np.int64))
 
     def rmin(self, x):
-        return self.xp.min(x, axis=(-2, -1), keepdims=True)
+        return self.allmin(self.xp.min(x, axis=(-2, -1), keepdims=True))
 
     def masked_sum(self, x, mask):
         """``sum(x where mask)`` per case."""
         return self.rsum(x * mask)
+
+    def gap_stats(self, w, F):
+        """``(sum of w on F, min of w)`` per case (the measure's two reductions of the gap)."""
+        return self.masked_sum(w, F), self.rmin(w)
 
     def orth(self, P, w, gbar, F):
         """``sum_F p |w - gbar|`` per case (complementarity, unnormalised)."""
@@ -83,9 +135,20 @@ class ArrayKernels:
     def dot(self, a, b):
         return self.rsum(a * b)
 
-    def to32(self, x, scale):
-        """``float32(x * scale)``: the product in float64, rounded once (as ``SpectralProduct.load``)."""
-        return (x * scale).astype(np.float32)
+    def dot_on(self, a, b, F):
+        """``a . b`` per case, both zero off ``F`` (a kernel may read ``F``'s nodes only)."""
+        return self.dot(a, b)
+
+    def to32(self, x, scale, out=None, F=None):
+        """``float32(x * scale)``: the product in float64, rounded once (as ``SpectralProduct.load``).
+
+        Into ``out`` where given (a transform's input buffer); ``F``: ``x`` is zero off it (a kernel
+        may skip those nodes' values).
+        """
+        if out is None:
+            return (x * scale).astype(np.float32)
+        self.xp.multiply(x, scale, out=out, casting="unsafe")
+        return out
 
     def quadratic(self, spec, weights):
         """``sum(weights |spec|^2)`` per case over the half spectrum (float32 terms, float64 sum)."""
@@ -95,6 +158,11 @@ class ArrayKernels:
     def scaled_into(self, R, factor, F):
         """``R * factor`` on ``F``, 0 off it, float64 (``R`` a float32 product)."""
         return R * factor * F
+
+    def scaled_sum(self, R, factor, F):
+        """:meth:`scaled_into` and its sum per case."""
+        a = self.scaled_into(R, factor, F)
+        return a, self.rsum(a)
 
     def add_scaled(self, w, R, factor):
         """``w += R * factor`` in place (``R`` float32, ``w`` float64)."""
@@ -111,8 +179,16 @@ class ArrayKernels:
         Fn = self.xp.where(go, F | (w < gbar), F)
         return Fn, (w - gbar) * Fn
 
-    def descent_dot(self, g, t, beta, a):
-        """``g . (beta t + a)`` per case."""
+    def join_stats(self, w, gbar, F, go):
+        """:meth:`join_gap` with, per case, the new ``|F|`` and the gap's sum: ``(F, g, n, sum)``.
+
+        ``F`` may be updated in place (and is returned).
+        """
+        Fn, g = self.join_gap(w, gbar, F, go)
+        return Fn, g, self.rcount(Fn), self.rsum(g)
+
+    def descent_dot(self, g, t, beta, a, F=None):
+        """``g . (beta t + a)`` per case (``F``: all three are zero off it)."""
         return self.rsum(g * (t * beta + a))
 
     def new_direction(self, t, a, g, beta, keep, go, g_prev):
@@ -121,15 +197,36 @@ class ArrayKernels:
         t[...] = xp.where(keep, t * beta + a, xp.where(go, a, t))
         g_prev[...] = xp.where(go, g, g_prev)
 
+    def center_dots(self, a, c, F, g, g_prev, t):
+        """``a -= c`` on ``F`` (in place), then per case ``(g . a, g_prev . a, g . t)`` (all zero off ``F``)."""
+        self.sub_masked(a, c, F)
+        return self.dot_on(g, a, F), self.dot_on(g_prev, a, F), self.dot_on(g, t, F)
+
+    def new_direction_input(self, t, a, g, beta, keep, go, g_prev, F, inv_sigma, out=None):
+        """:meth:`new_direction` (all zero off ``F``), then the new ``t``'s transform input and ``g . t``.
+
+        Returns ``(to32(t, inv_sigma), g . t)``, the first into ``out`` where given.
+        """
+        self.new_direction(t, a, g, beta, keep, go, g_prev)
+        return self.to32(t, inv_sigma, out, F), self.dot_on(g, t, F)
+
     def proj_any(self, P, t, tau, F):
         """Whether ``p - tau t <= 0`` at a node of ``F``, per case."""
-        return self.xp.any(F & (P - tau * t <= 0.0), axis=(-2, -1), keepdims=True)
+        return self.allany(self.xp.any(F & (P - tau * t <= 0.0), axis=(-2, -1), keepdims=True))
 
     def pos_sum(self, P, t, tau):
         """``sum(max(p - tau t, 0))`` per case."""
         return self.rsum(self.xp.maximum(P - tau * t, 0.0))
 
-    def project(self, P, t, tau, go, scale, inv_sigma):
+    def trial_stats(self, P, t, tau, F):
+        """``(pos_sum, proj_any)`` of the trial ``p - tau t`` (``P`` and ``t`` zero off ``F``)."""
+        return self.pos_sum(P, t, tau), self.proj_any(P, t, tau, F)
+
+    def step_on(self, P, t, tau, go, F):
+        """In place: ``P -= tau t`` where ``go``, for a step that leaves ``p > 0`` on ``F`` (no projection)."""
+        P[...] = self.xp.where(go, P - tau * t, P)
+
+    def project(self, P, t, tau, go, scale, inv_sigma, out=None, F=None):
         """The step where ``go``: ``P`` (in place) becomes ``scale max(p - tau t, 0)``; returns the change, float32.
 
         ``scale`` is ``target / sum(max(trial, 0))`` for projected cases and 1 for the others. The
@@ -143,7 +240,7 @@ class ArrayKernels:
         change = (tp - trial) + (scale - 1.0) * tp - tau * t
         change *= go
         P[...] = xp.where(go, tp * scale, P)
-        return (change * inv_sigma).astype(np.float32)
+        return self.to32(change, inv_sigma, out)
 
     def shrink(self, P, F, t, g_prev):
         """In place: nodes of ``F`` whose pressure is 0 leave it; ``t`` and ``g_prev`` are 0 off ``F``."""
@@ -152,6 +249,10 @@ class ArrayKernels:
         t *= keep
         g_prev *= keep
 
+    def shrink_stats(self, P, F, t, g_prev):
+        """:meth:`shrink`, then per case the new ``|F|`` and ``sum(t)``."""
+        self.shrink(P, F, t, g_prev)
+        return self.rcount(F), self.rsum(t)
 
     # -- per-case decisions: (B, 1, 1) arrays; the state arguments are updated in place --------
 
@@ -266,10 +367,10 @@ class BatchOperator:
     height, ``(B, 1, 1)``) before the cast, as the single solve's products.
     """
 
-    def __init__(self, be, shape, aspect: float, threads: int, kernels: ArrayKernels):
+    def __init__(self, be, shape, aspect: float, threads: int, kernels: ArrayKernels, batch: int | None = None):
         self.be, self.xp, self.k = be, be.xp, kernels
         nx, ny = self.shape = tuple(shape)
-        self.fft = _BatchFFT(be, shape, threads)
+        self.fft = _BatchFFT(be, shape, threads, batch)
         if be.name == "cupy":
             # one plan per shape, precision and direction: the batch's and the float64 refreshes'
             # power-of-two subsets (<= 2 log2(B) + 6 plans) stay in CuPy's plan cache (default 16)
@@ -291,9 +392,21 @@ class BatchOperator:
         self.mmult32 = be.asarray((minv * norm).astype(np.float32))
         self.kquad32 = be.asarray((kern * herm[None, :] * norm).astype(np.float32))
 
-    def spectrum32(self, x, inv_sigma):
-        """float32 spectrum of ``x * inv_sigma`` (one batched forward transform)."""
-        return self.fft.rfft2(self.k.to32(x, inv_sigma))
+    def transform32(self, x32):
+        """float32 spectrum of a float32 field (:meth:`input32` or any ``(B, nx, ny)``), unscaled."""
+        return self.fft.rfft2(x32)
+
+    def spectrum32(self, x, inv_sigma, F=None):
+        """float32 spectrum of ``x * inv_sigma`` (one batched forward transform; ``x`` zero off ``F`` if given).
+
+        The spectrum may be a buffer of the transforms, valid until the next transform.
+        """
+        return self.fft.rfft2(self.k.to32(x, inv_sigma, out=self.input32, F=F))
+
+    @property
+    def input32(self):
+        """The forward float32 transform's own input buffer ``(B, nx, ny)`` (a kernel writes there), or None."""
+        return getattr(self.fft, "input32", None)
 
     def quadratic32(self, spec):
         """``x . (K x) / sigma^2`` per case from :meth:`spectrum32`'s spectrum, ``(B, 1, 1)`` float64."""

@@ -12,7 +12,8 @@ from ..core.cell import Cell
 from ..statistics.patches import contact_patches
 from .batch_cuda import fused_kernels
 from .batch_iteration import BatchIteration
-from .batch_kernels import ArrayKernels, BatchOperator
+from .batch_cpu import FusedCpuKernels
+from .batch_kernels import BatchOperator
 from .box import box_solve
 from .check import MEAN_RTOL
 from .elastic import pk_solve
@@ -65,8 +66,8 @@ class BatchSolver:
         rms = np.array(per_case(lambda b: rms_about_mean(self.units[b].heights)[1], B, h[0].size))
         self.h_rms = xp.asarray(rms.reshape(B, 1, 1))
         self.h_rms_host = rms
-        self.kernels = fused_kernels(xp) if self.be.name == "cupy" else ArrayKernels(xp)
-        self.op = BatchOperator(self.be, self.shape, self.cell.aspect, self.threads, self.kernels)
+        self.kernels = fused_kernels(xp) if self.be.name == "cupy" else FusedCpuKernels()
+        self.op = BatchOperator(self.be, self.shape, self.cell.aspect, self.threads, self.kernels, B)
         self.h = self.be.asarray(hin)
         self.h_host = hin
         self.P = xp.zeros(h.shape)

@@ -1,10 +1,10 @@
 """The batched iteration's kernels and operator over MPI ranks: collective reductions, slab transforms.
 
-:class:`MpiKernels` are :class:`~roughcontact.solver.batch_kernels.ArrayKernels` whose per-case
-reductions add the ranks' partial results: every reduction of the iteration (sums, dots, the
-complementarity, the masked sums, the quadratic form over the half spectrum, the projection's
-positive part) goes through :meth:`MpiKernels.rsum`, plus :meth:`~MpiKernels.rcount`,
-:meth:`~MpiKernels.rmin` and :meth:`~MpiKernels.proj_any`. Each gathers the ranks' local results
+:class:`MpiKernels` are the fused CPU kernels (:class:`~roughcontact.solver.batch_cpu.FusedCpuKernels`)
+whose per-case reductions add the ranks' partial results: every reduction of the iteration (sums,
+dots, the complementarity, the masked sums, the quadratic form over the half spectrum, the
+projection's positive part) goes through :meth:`MpiKernels.allsum`, :meth:`~MpiKernels.allcount`,
+:meth:`~MpiKernels.allmin` or :meth:`~MpiKernels.allany`. Each gathers the ranks' local results
 (``Allgather``, a few bytes per case) and combines them in rank order on every rank, instead of
 ``Allreduce``: the MPI standard does not promise the same floating-point sum on every rank, and the
 iteration's decisions (converge, join, stop) must be the same on all of them or the ranks would
@@ -22,15 +22,20 @@ from __future__ import annotations
 import numpy as np
 
 from ...core.fft import rfft_weights, wavenumbers
-from ..batch_kernels import ArrayKernels, BatchOperator
+from ..batch_cpu import FusedCpuKernels
+from ..batch_kernels import BatchOperator
 from ..units import internal_length
 
 
-class MpiKernels(ArrayKernels):
-    """:class:`ArrayKernels` on the host whose reductions run over the ranks of ``comm`` (numpy only)."""
+class MpiKernels(FusedCpuKernels):
+    """:class:`~roughcontact.solver.batch_cpu.FusedCpuKernels` whose per-case reductions combine the ranks' parts.
+
+    Each reduction of the iteration computes the rank's part in one fused pass over its slab, then
+    goes through one of :meth:`allsum`, :meth:`allcount`, :meth:`allmin` or :meth:`allany`.
+    """
 
     def __init__(self, comm):
-        super().__init__(np)
+        super().__init__()
         self.comm = comm
 
     def _gather(self, local):
@@ -40,23 +45,23 @@ class MpiKernels(ArrayKernels):
         self.comm.Allgather(local, out)
         return out
 
-    def rsum(self, x):
-        """Sum over every rank's slab per case ``(B, 1, 1)`` float64, added in rank order."""
-        parts = self._gather(super().rsum(x))
+    def allsum(self, local):
+        """Sum over every rank's part per case ``(B, 1, 1)`` float64, added in rank order."""
+        parts = self._gather(local)
         total = parts[0].copy()
         for part in parts[1:]:
             total += part
         return total
 
-    def rcount(self, m):
-        return self._gather(super().rcount(m)).sum(axis=0)
+    def allcount(self, local):
+        return self._gather(local).sum(axis=0)
 
-    def rmin(self, x):
+    def allmin(self, local):
         # np.min over the ranks: a NaN on any rank is a NaN on all (MPI's MIN leaves that unsaid)
-        return self._gather(super().rmin(x)).min(axis=0)
+        return self._gather(local).min(axis=0)
 
-    def proj_any(self, P, t, tau, F):
-        return self._gather(super().proj_any(P, t, tau, F)).any(axis=0)
+    def allany(self, local):
+        return self._gather(local).any(axis=0)
 
 
 class _SlabTransforms:
