@@ -36,24 +36,10 @@ def _fields(*arrays):
     return tuple(a.reshape(a.shape[0], -1) for a in arrays)
 
 
-def _blocks(F):
-    """``(F (B, n) bool, its flags of eight nodes at a time (B, n // 8) uint64)``: views, no copy."""
-    f = F.reshape(F.shape[0], -1)
-    m = f.shape[1] // 8 * 8
-    return f, f[:, :m].view(np.uint64)
-
-
 def _cases(x, B: int, dtype=np.float64):
     """A per-case value as a contiguous ``(B,)`` array (``(B, 1, 1)`` arrays and scalars alike)."""
     a = np.asarray(x, dtype=dtype).reshape(-1)
     return np.ascontiguousarray(np.broadcast_to(a, (B,)) if a.size == 1 else a)
-
-
-@njit(**_JIT)
-def _span(j, n):
-    """The nodes ``[lo, hi)`` of block ``j`` (the last block may be short)."""
-    lo = 8 * j
-    return lo, min(lo + 8, n)
 
 
 @njit(**_JIT)
@@ -103,58 +89,41 @@ def _min(x):
 
 
 @njit(**_JIT)
-def _gap_stats(w, f):
-    """Per case the sum of ``w`` on ``F`` and the least ``w`` (NaN if any): one pass over ``w``."""
-    B, n = w.shape
-    sums = np.zeros(B)
-    mins = np.empty(B)
+def _index(f, idx):
+    """The flat indices of each case's nodes in ``F`` into ``idx`` (ascending); their counts."""
+    B, n = f.shape
+    counts = np.zeros(B, dtype=np.int64)
     for b in range(B):
-        s, m = 0.0, w[b, 0]
+        c = 0
         for i in range(n):
-            v = w[b, i]
             if f[b, i]:
-                s += v
-            if v < m or v != v:
-                m = v if m == m else m
-        sums[b] = s
-        mins[b] = m
-    return sums, mins
+                idx[b, c] = i
+                c += 1
+        counts[b] = c
+    return counts
 
 
 @njit(**_JIT)
-def _masked_sum(x, f, f8):
-    B, n = x.shape
-    nb = (n + 7) // 8
-    full = f8.shape[1]
+def _masked_sum(x, idx, cnt):
+    B = x.shape[0]
     out = np.zeros(B)
     for b in range(B):
         s = 0.0
-        for j in range(nb):
-            if j < full and f8[b, j] == 0:
-                continue
-            lo, hi = _span(j, n)
-            for i in range(lo, hi):
-                if f[b, i]:
-                    s += x[b, i]
+        for k in range(cnt[b]):
+            s += x[b, idx[b, k]]
         out[b] = s
     return out
 
 
 @njit(**_JIT)
-def _orth(p, w, gbar, f, f8):
-    B, n = p.shape
-    nb = (n + 7) // 8
-    full = f8.shape[1]
+def _orth(p, w, gbar, idx, cnt):
+    B = p.shape[0]
     out = np.zeros(B)
     for b in range(B):
         s, gb = 0.0, gbar[b]
-        for j in range(nb):
-            if j < full and f8[b, j] == 0:
-                continue
-            lo, hi = _span(j, n)
-            for i in range(lo, hi):
-                if f[b, i]:
-                    s += p[b, i] * abs(w[b, i] - gb)
+        for k in range(cnt[b]):
+            i = idx[b, k]
+            s += p[b, i] * abs(w[b, i] - gb)
         out[b] = s
     return out
 
@@ -176,20 +145,14 @@ def _dot(u, v):
 
 
 @njit(**_JIT)
-def _dot_on(u, v, f, f8):
-    B, n = u.shape
-    nb = (n + 7) // 8
-    full = f8.shape[1]
+def _dot_on(u, v, idx, cnt):
+    B = u.shape[0]
     out = np.zeros(B)
     for b in range(B):
         s = 0.0
-        for j in range(nb):
-            if j < full and f8[b, j] == 0:
-                continue
-            lo, hi = _span(j, n)
-            for i in range(lo, hi):
-                if f[b, i]:
-                    s += u[b, i] * v[b, i]
+        for k in range(cnt[b]):
+            i = idx[b, k]
+            s += u[b, i] * v[b, i]
         out[b] = s
     return out
 
@@ -204,21 +167,21 @@ def _to32(x, scale, out):
 
 
 @njit(**_JIT)
-def _to32_on(x, scale, f, f8, out):
-    B, n = x.shape
-    nb = (n + 7) // 8
-    full = f8.shape[1]
+def _clear(out, written, wcnt):
+    """Zero the nodes of ``out`` that the last sparse write set (``written``, ``wcnt`` per case)."""
     zero = np.float32(0.0)
-    for b in range(B):
+    for b in range(out.shape[0]):
+        for k in range(wcnt[b]):
+            out[b, written[b, k]] = zero
+
+
+@njit(**_JIT)
+def _to32_on(x, scale, idx, cnt, out):
+    for b in range(x.shape[0]):
         s = scale[b]
-        for j in range(nb):
-            lo, hi = _span(j, n)
-            if j < full and f8[b, j] == 0:
-                for i in range(lo, hi):
-                    out[b, i] = zero
-                continue
-            for i in range(lo, hi):
-                out[b, i] = np.float32(x[b, i] * s) if f[b, i] else zero
+        for k in range(cnt[b]):
+            i = idx[b, k]
+            out[b, i] = np.float32(x[b, i] * s)
 
 
 @njit(**_JIT)
@@ -242,23 +205,17 @@ def _quadratic(re_im, weights):
 
 
 @njit(**_JIT)
-def _scaled_on(r, c, f, f8, out):
+def _scaled_on(r, c, idx, cnt, out):
     """``out = r c`` on F (undefined off it) and its sum per case."""
-    B, n = r.shape
-    nb = (n + 7) // 8
-    full = f8.shape[1]
+    B = r.shape[0]
     sums = np.zeros(B)
     for b in range(B):
         cb, s = c[b], 0.0
-        for j in range(nb):
-            if j < full and f8[b, j] == 0:
-                continue
-            lo, hi = _span(j, n)
-            for i in range(lo, hi):
-                if f[b, i]:
-                    v = np.float64(r[b, i]) * cb
-                    out[b, i] = v
-                    s += v
+        for k in range(cnt[b]):
+            i = idx[b, k]
+            v = np.float64(r[b, i]) * cb
+            out[b, i] = v
+            s += v
         sums[b] = s
     return sums
 
@@ -275,69 +232,57 @@ def _add_scaled(w, r, c):
 
 
 @njit(**_JIT)
-def _sub_on(x, c, f, f8):
-    B, n = x.shape
-    nb = (n + 7) // 8
-    full = f8.shape[1]
-    for b in range(B):
+def _sub_on(x, c, idx, cnt):
+    for b in range(x.shape[0]):
         cb = c[b]
         if cb == 0.0:
             continue
-        for j in range(nb):
-            if j < full and f8[b, j] == 0:
-                continue
-            lo, hi = _span(j, n)
-            for i in range(lo, hi):
-                if f[b, i]:
-                    x[b, i] -= cb
+        for k in range(cnt[b]):
+            x[b, idx[b, k]] -= cb
 
 
 @njit(**_JIT)
-def _join(w, gbar, f, go, g):
-    """``F |= w < gbar`` where ``go``, ``g = w - gbar`` on the new F (undefined off it), ``|F|`` and ``sum(g)``."""
+def _join(w, gbar, f, idx, cnt, go, g):
+    """Nodes off F with ``w < gbar`` join it where ``go`` (appended to ``idx``); ``g = w - gbar`` on the
+    new F (undefined off it); per case ``|F|`` and ``sum(g)``. ``cnt`` is updated in place."""
     B, n = w.shape
-    counts = np.zeros(B, dtype=np.int64)
     sums = np.zeros(B)
     for b in range(B):
-        gb, c, s, moving = gbar[b], 0, 0.0, go[b]
-        for i in range(n):
-            fi = f[b, i]
-            if not fi and moving and w[b, i] < gb:
-                fi = True
-                f[b, i] = True
-            if fi:
-                v = w[b, i] - gb
-                g[b, i] = v
-                s += v
-                c += 1
-        counts[b] = c
+        gb, c = gbar[b], cnt[b]
+        if go[b]:
+            for i in range(n):
+                if w[b, i] < gb and not f[b, i]:
+                    f[b, i] = True
+                    idx[b, c] = i
+                    c += 1
+            cnt[b] = c
+        s = 0.0
+        for k in range(c):
+            i = idx[b, k]
+            v = w[b, i] - gb
+            g[b, i] = v
+            s += v
         sums[b] = s
-    return counts, sums
+    return sums
 
 
 @njit(**_JIT)
-def _center_dots(a, c, f, f8, g, g_prev, t):
+def _center_dots(a, c, idx, cnt, g, g_prev, t):
     """``a -= c`` on F, then per case ``g . a``, ``g_prev . a`` and ``g . t``, one pass over F's nodes."""
-    B, n = a.shape
-    nb = (n + 7) // 8
-    full = f8.shape[1]
+    B = a.shape[0]
     ga = np.zeros(B)
     pa = np.zeros(B)
     gt = np.zeros(B)
     for b in range(B):
         cb, s0, s1, s2 = c[b], 0.0, 0.0, 0.0
-        for j in range(nb):
-            if j < full and f8[b, j] == 0:
-                continue
-            lo, hi = _span(j, n)
-            for i in range(lo, hi):
-                if f[b, i]:
-                    v = a[b, i] - cb
-                    a[b, i] = v
-                    gi = g[b, i]
-                    s0 += gi * v
-                    s1 += g_prev[b, i] * v
-                    s2 += gi * t[b, i]
+        for k in range(cnt[b]):
+            i = idx[b, k]
+            v = a[b, i] - cb
+            a[b, i] = v
+            gi = g[b, i]
+            s0 += gi * v
+            s1 += g_prev[b, i] * v
+            s2 += gi * t[b, i]
         ga[b] = s0
         pa[b] = s1
         gt[b] = s2
@@ -345,131 +290,139 @@ def _center_dots(a, c, f, f8, g, g_prev, t):
 
 
 @njit(**_JIT)
-def _new_direction(t, a, g, beta, keep, go, g_prev, f, f8, scale, out):
+def _new_direction(t, a, g, beta, keep, go, g_prev, idx, cnt, scale, out):
     """``t = beta t + a`` where kept, else ``a`` (cases that move), ``g_prev = g``, on F; ``out =
-    float32(t scale)`` (0 off F) for the transform; per case ``g . t``."""
-    B, n = t.shape
-    nb = (n + 7) // 8
-    full = f8.shape[1]
-    zero = np.float32(0.0)
+    float32(t scale)`` on F (the caller zeroed the rest); per case ``g . t``."""
+    B = t.shape[0]
     gts = np.zeros(B)
     for b in range(B):
-        be, k, moving, sc, s = beta[b], keep[b], go[b], scale[b], 0.0
-        for j in range(nb):
-            lo, hi = _span(j, n)
-            if j < full and f8[b, j] == 0:
-                for i in range(lo, hi):
-                    out[b, i] = zero
-                continue
-            for i in range(lo, hi):
-                if not f[b, i]:
-                    out[b, i] = zero
-                    continue
-                if moving:
-                    t[b, i] = t[b, i] * be + a[b, i] if k else a[b, i]
-                    g_prev[b, i] = g[b, i]
-                ti = t[b, i]
-                out[b, i] = np.float32(ti * sc)
-                s += g[b, i] * ti
+        be, kp, moving, sc, s = beta[b], keep[b], go[b], scale[b], 0.0
+        for k in range(cnt[b]):
+            i = idx[b, k]
+            if moving:
+                t[b, i] = t[b, i] * be + a[b, i] if kp else a[b, i]
+                g_prev[b, i] = g[b, i]
+            ti = t[b, i]
+            out[b, i] = np.float32(ti * sc)
+            s += g[b, i] * ti
         gts[b] = s
     return gts
 
 
 @njit(**_JIT)
-def _trial_stats(p, t, tau, f, f8):
-    """``(sum(max(p - tau t, 0)), any(F & p - tau t <= 0))`` per case; both zero off F (p = t = 0 there)."""
-    B, n = p.shape
-    nb = (n + 7) // 8
-    full = f8.shape[1]
+def _trial_stats(p, t, tau, idx, cnt):
+    """``(sum(max(p - tau t, 0)), any(p - tau t <= 0))`` over F per case (p = t = 0 off F)."""
+    B = p.shape[0]
     sums = np.zeros(B)
     anys = np.zeros(B, dtype=np.bool_)
     for b in range(B):
         s, ta, hit = 0.0, tau[b], False
-        for j in range(nb):
-            if j < full and f8[b, j] == 0:
-                continue
-            lo, hi = _span(j, n)
-            for i in range(lo, hi):
-                if f[b, i]:
-                    tr = p[b, i] - ta * t[b, i]
-                    if tr > 0.0:
-                        s += tr
-                    else:
-                        hit = True
+        for k in range(cnt[b]):
+            i = idx[b, k]
+            tr = p[b, i] - ta * t[b, i]
+            if tr > 0.0:
+                s += tr
+            else:
+                hit = True
         sums[b] = s
         anys[b] = hit
     return sums, anys
 
 
 @njit(**_JIT)
-def _project(p, t, tau, go, scale, inv_sigma, f, f8, out):
-    # off F p = t = 0: the change is 0 there
-    B, n = p.shape
-    nb = (n + 7) // 8
-    full = f8.shape[1]
-    zero = np.float32(0.0)
-    for b in range(B):
-        ta, sc, isg, moving = tau[b], scale[b], inv_sigma[b], go[b]
-        for j in range(nb):
-            lo, hi = _span(j, n)
-            if not moving or (j < full and f8[b, j] == 0):
-                for i in range(lo, hi):
-                    out[b, i] = zero
-                continue
-            for i in range(lo, hi):
-                if not f[b, i]:
-                    out[b, i] = zero
-                    continue
-                trial = p[b, i] - ta * t[b, i]
-                tp = trial if trial > 0.0 else 0.0
-                d = (tp - trial) + (sc - 1.0) * tp - ta * t[b, i]
-                out[b, i] = np.float32(d * isg)
-                p[b, i] = tp * sc
-
-
-@njit(**_JIT)
-def _step_on(p, t, tau, go, f, f8):
-    B, n = p.shape
-    nb = (n + 7) // 8
-    full = f8.shape[1]
+def _project(p, t, tau, go, scale, inv_sigma, idx, cnt, out):
+    """The projected step on F where ``go`` (p = t = 0 off F: the change is 0 there; the caller zeroed
+    ``out``); returns how many nodes each case wrote."""
+    B = p.shape[0]
+    wrote = np.zeros(B, dtype=np.int64)
     for b in range(B):
         if not go[b]:
             continue
-        ta = tau[b]
-        for j in range(nb):
-            if j < full and f8[b, j] == 0:
-                continue
-            lo, hi = _span(j, n)
-            for i in range(lo, hi):
-                if f[b, i]:
-                    p[b, i] = p[b, i] - ta * t[b, i]
+        ta, sc, isg = tau[b], scale[b], inv_sigma[b]
+        for k in range(cnt[b]):
+            i = idx[b, k]
+            trial = p[b, i] - ta * t[b, i]
+            tp = trial if trial > 0.0 else 0.0
+            d = (tp - trial) + (sc - 1.0) * tp - ta * t[b, i]
+            out[b, i] = np.float32(d * isg)
+            p[b, i] = tp * sc
+        wrote[b] = cnt[b]
+    return wrote
 
 
 @njit(**_JIT)
-def _shrink(p, f, f8, t, g_prev):
-    B, n = p.shape
-    nb = (n + 7) // 8
-    full = f8.shape[1]
-    counts = np.zeros(B, dtype=np.int64)
+def _step_on(p, t, tau, go, idx, cnt):
+    for b in range(p.shape[0]):
+        if not go[b]:
+            continue
+        ta = tau[b]
+        for k in range(cnt[b]):
+            i = idx[b, k]
+            p[b, i] = p[b, i] - ta * t[b, i]
+
+
+@njit(**_JIT)
+def _shrink(p, f, idx, cnt, t, g_prev):
+    """Nodes of F at ``p <= 0`` leave it (``t``, ``g_prev`` zeroed there; ``idx`` compacted, ``cnt`` updated
+    in place); per case ``sum(t)`` over what is left."""
+    B = p.shape[0]
     sums = np.zeros(B)
     for b in range(B):
         c, s = 0, 0.0
-        for j in range(nb):
-            if j < full and f8[b, j] == 0:
-                continue
-            lo, hi = _span(j, n)
-            for i in range(lo, hi):
-                if f[b, i]:
-                    if p[b, i] > 0.0:
-                        c += 1
-                        s += t[b, i]
-                    else:
-                        f[b, i] = False
-                        t[b, i] = 0.0
-                        g_prev[b, i] = 0.0
-        counts[b] = c
+        for k in range(cnt[b]):
+            i = idx[b, k]
+            if p[b, i] > 0.0:
+                idx[b, c] = i
+                c += 1
+                s += t[b, i]
+            else:
+                f[b, i] = False
+                t[b, i] = 0.0
+                g_prev[b, i] = 0.0
+        cnt[b] = c
         sums[b] = s
-    return counts, sums
+    return sums
+
+
+class FreeSet:
+    """The free set ``F`` of every case of a batch: its mask and each case's node indices.
+
+    The compressed form of the single solve's index sets, kept beside the mask: a pass over ``F``
+    costs ``|F|`` reads, not the grid's. Made by :meth:`FusedCpuKernels.free_set`; the kernels
+    update both forms together (the join appends to the indices, the shrink compacts them).
+
+    Attributes
+    ----------
+    mask : numpy.ndarray
+        ``(B, nx, ny)`` bool.
+    idx : numpy.ndarray
+        ``(B, nx ny)`` int32 (int64 beyond 2**31 nodes); the first ``count[b]`` of row ``b`` are
+        case ``b``'s nodes (flat indices), in no particular order after a join.
+    count : numpy.ndarray
+        ``(B,)`` int64.
+    """
+
+    def __init__(self, mask: np.ndarray):
+        self.mask = mask
+        f = mask.reshape(mask.shape[0], -1)
+        self.idx = np.empty(f.shape, dtype=np.int32 if f.shape[1] < 2**31 else np.int64)
+        self.count = _index(f, self.idx)
+
+    @property
+    def shape(self):
+        return self.mask.shape
+
+    def flat(self):
+        """``(mask (B, n), idx, count)``: the arguments of the compiled loops."""
+        return self.mask.reshape(self.mask.shape[0], -1), self.idx, self.count
+
+
+class _Written:
+    """Which nodes of a float32 transform input the last sparse write set, per case (None: unknown)."""
+
+    def __init__(self, shape, itype):
+        self.idx = np.empty(shape, dtype=itype)
+        self.count = None
 
 
 class FusedCpuKernels(ArrayKernels):
@@ -477,14 +430,20 @@ class FusedCpuKernels(ArrayKernels):
 
     The same results as the plain expressions up to the order of summation (module docstring),
     except where marked: the gradient of :meth:`join_stats` and the field of :meth:`scaled_sum` are
-    defined on ``F`` only. Outputs that the plain kernels allocate are written into buffers kept per
-    shape and reused: a result is valid until the same kernel is called again (the iteration uses
-    each before that). :meth:`join_stats` updates ``F`` in place and returns it.
+    defined on ``F`` only. Where a kernel takes the free set ``F``, it may be a :class:`FreeSet`
+    (:meth:`free_set`, the iteration's: updated in place by :meth:`join_stats` and
+    :meth:`shrink_stats`) or a plain mask (indexed for the call). Outputs that the plain kernels
+    allocate are written into buffers kept per shape and reused: a result is valid until the same
+    kernel is called again (the iteration uses each before that). A float32 transform input written
+    on ``F`` (``to32`` with ``F``, :meth:`new_direction_input`, :meth:`project`) zeroes only the nodes
+    that the buffer's last such write set: the buffer must not be written by anything else
+    in between (a dense write through these kernels is noted, and the next sparse one zeroes it all).
     """
 
     def __init__(self):
         super().__init__(np)
         self._buffers = {}
+        self._written = {}
 
     def buffer(self, name: str, shape, dtype) -> np.ndarray:
         """A scratch array ``name`` of ``shape`` and ``dtype``, made once and reused."""
@@ -493,6 +452,33 @@ class FusedCpuKernels(ArrayKernels):
         if out is None:
             out = self._buffers[key] = np.zeros(shape, dtype=dtype)
         return out
+
+    def free_set(self, mask):
+        return FreeSet(mask)
+
+    @staticmethod
+    def _set(F):
+        return F if isinstance(F, FreeSet) else FreeSet(np.ascontiguousarray(F))
+
+    def _sparse_out(self, out, shape):
+        """``(out, its written record)`` with ``out``'s last sparse write undone (all of it if unknown)."""
+        out = self.buffer("to32", shape, np.float32) if out is None else out
+        rec = self._written.get(id(out))
+        if rec is None or rec.idx.shape != out.reshape(out.shape[0], -1).shape:
+            flat = out.reshape(out.shape[0], -1).shape
+            rec = self._written[id(out)] = _Written(flat, np.int32 if flat[1] < 2**31 else np.int64)
+        if rec.count is None:
+            out.fill(0.0)
+        else:
+            _clear(*_fields(out), rec.idx, rec.count)
+        return out, rec
+
+    @staticmethod
+    def _record(rec, fs, count=None):
+        """``fs``'s nodes are those written (``count`` per case where fewer)."""
+        n = fs.count if count is None else count
+        rec.idx[:, : int(n.max(initial=0))] = fs.idx[:, : int(n.max(initial=0))]
+        rec.count = n.copy()
 
     @staticmethod
     def _col(v):
@@ -506,27 +492,31 @@ class FusedCpuKernels(ArrayKernels):
         return self.allsum(self._col(_sum(*_fields(np.ascontiguousarray(x)))))
 
     def rcount(self, m):
+        if isinstance(m, FreeSet):
+            return self.allcount(self._col(m.count.copy()))
         return self.allcount(self._col(_count(*_fields(np.ascontiguousarray(m)))))
 
     def rmin(self, x):
-        return self.allmin(self._col(_min(*_fields(np.ascontiguousarray(x)))))
+        # numpy's SIMD minimum (NaN if any): no loop of ours does it faster
+        return self.allmin(np.min(x, axis=(-2, -1), keepdims=True))
 
     def masked_sum(self, x, mask):
-        return self.allsum(self._col(_masked_sum(*_fields(x), *_blocks(mask))))
+        fs = self._set(mask)
+        return self.allsum(self._col(_masked_sum(*_fields(x), fs.idx, fs.count)))
 
     def gap_stats(self, w, F):
-        sums, mins = _gap_stats(*_fields(w, F))
-        return self.allsum(self._col(sums)), self.allmin(self._col(mins))
+        return self.masked_sum(w, F), self.rmin(w)
 
     def orth(self, P, w, gbar, F):
-        B = P.shape[0]
-        return self.allsum(self._col(_orth(*_fields(P, w), _cases(gbar, B), *_blocks(F))))
+        fs = self._set(F)
+        return self.allsum(self._col(_orth(*_fields(P, w), _cases(gbar, P.shape[0]), fs.idx, fs.count)))
 
     def dot(self, a, b):
         return self.allsum(self._col(_dot(*_fields(a, b))))
 
     def dot_on(self, a, b, F):
-        return self.allsum(self._col(_dot_on(*_fields(a, b), *_blocks(F))))
+        fs = self._set(F)
+        return self.allsum(self._col(_dot_on(*_fields(a, b), fs.idx, fs.count)))
 
     def quadratic(self, spec, weights):
         B = spec.shape[0]
@@ -535,33 +525,39 @@ class FusedCpuKernels(ArrayKernels):
         return self.allsum(self._col(_quadratic(ri, wq)))
 
     def trial_stats(self, P, t, tau, F):
-        B = P.shape[0]
-        sums, anys = _trial_stats(*_fields(P, t), _cases(tau, B), *_blocks(F))
+        fs = self._set(F)
+        sums, anys = _trial_stats(*_fields(P, t), _cases(tau, P.shape[0]), fs.idx, fs.count)
         return self.allsum(self._col(sums)), self.allany(self._col(anys))
 
     def proj_any(self, P, t, tau, F):
         return self.trial_stats(P, t, tau, F)[1]
 
     def center_dots(self, a, c, F, g, g_prev, t):
-        B = a.shape[0]
-        ga, pa, gt = _center_dots(*_fields(a), _cases(c, B), *_blocks(F), *_fields(g, g_prev, t))
+        fs = self._set(F)
+        ga, pa, gt = _center_dots(*_fields(a), _cases(c, a.shape[0]), fs.idx, fs.count, *_fields(g, g_prev, t))
         return self.allsum(self._col(ga)), self.allsum(self._col(pa)), self.allsum(self._col(gt))
 
     # -- element-wise passes --------------------------------------------------------------------
 
     def to32(self, x, scale, out=None, F=None):
         B = x.shape[0]
-        out = self.buffer("to32", x.shape, np.float32) if out is None else out
         if F is None:
+            out = self.buffer("to32", x.shape, np.float32) if out is None else out
             _to32(*_fields(x), _cases(scale, B), *_fields(out))
-        else:
-            _to32_on(*_fields(x), _cases(scale, B), *_blocks(F), *_fields(out))
+            rec = self._written.get(id(out))
+            if rec is not None:
+                rec.count = None  # dense now: the next sparse write zeroes it all
+            return out
+        fs = self._set(F)
+        out, rec = self._sparse_out(out, x.shape)
+        _to32_on(*_fields(x), _cases(scale, B), fs.idx, fs.count, *_fields(out))
+        self._record(rec, fs)
         return out
 
     def scaled_sum(self, R, factor, F):
-        B = R.shape[0]
+        fs = self._set(F)
         a = self.buffer("scaled", R.shape, np.float64)
-        sums = _scaled_on(*_fields(R), _cases(factor, B), *_blocks(F), *_fields(a))
+        sums = _scaled_on(*_fields(R), _cases(factor, R.shape[0]), fs.idx, fs.count, *_fields(a))
         return a, self.allsum(self._col(sums))
 
     def add_scaled(self, w, R, factor):
@@ -569,38 +565,48 @@ class FusedCpuKernels(ArrayKernels):
         return w
 
     def sub_masked(self, x, c, F):
-        _sub_on(*_fields(x), _cases(c, x.shape[0]), *_blocks(F))
+        fs = self._set(F)
+        _sub_on(*_fields(x), _cases(c, x.shape[0]), fs.idx, fs.count)
         return x
 
     def join_stats(self, w, gbar, F, go):
+        fs = self._set(F)
         B = w.shape[0]
         g = self.buffer("gap", w.shape, np.float64)
-        counts, sums = _join(*_fields(w), _cases(gbar, B), *_fields(F), _cases(go, B, np.bool_), *_fields(g))
-        return F, g, self.allcount(self._col(counts)), self.allsum(self._col(sums))
+        f, idx, cnt = fs.flat()
+        sums = _join(*_fields(w), _cases(gbar, B), f, idx, cnt, _cases(go, B, np.bool_), *_fields(g))
+        return fs, g, self.allcount(self._col(cnt.copy())), self.allsum(self._col(sums))
 
     def new_direction_input(self, t, a, g, beta, keep, go, g_prev, F, inv_sigma, out=None):
+        fs = self._set(F)
         B = t.shape[0]
-        out = self.buffer("to32", t.shape, np.float32) if out is None else out
+        out, rec = self._sparse_out(out, t.shape)
         gt = _new_direction(*_fields(t, a, g), _cases(beta, B), _cases(keep, B, np.bool_), _cases(go, B, np.bool_),
-                            *_fields(g_prev), *_blocks(F), _cases(inv_sigma, B), *_fields(out))
+                            *_fields(g_prev), fs.idx, fs.count, _cases(inv_sigma, B), *_fields(out))
+        self._record(rec, fs)
         return out, self.allsum(self._col(gt))
 
     def project(self, P, t, tau, go, scale, inv_sigma, out=None, F=None):
-        if F is None:  # the loop below skips the nodes off F
+        if F is None:  # the loop below visits F's nodes only
             return super().project(P, t, tau, go, scale, inv_sigma, out)
+        fs = self._set(F)
         B = P.shape[0]
-        out = self.buffer("project", P.shape, np.float32) if out is None else out
-        _project(*_fields(P, t), _cases(tau, B), _cases(go, B, np.bool_), _cases(scale, B), _cases(inv_sigma, B),
-                 *_blocks(F), *_fields(out))
+        out, rec = self._sparse_out(out, P.shape)
+        wrote = _project(*_fields(P, t), _cases(tau, B), _cases(go, B, np.bool_), _cases(scale, B),
+                         _cases(inv_sigma, B), fs.idx, fs.count, *_fields(out))
+        self._record(rec, fs, wrote)
         return out
 
     def step_on(self, P, t, tau, go, F):
-        B = P.shape[0]
-        _step_on(*_fields(P, t), _cases(tau, B), _cases(go, B, np.bool_), *_blocks(F))
+        fs = self._set(F)
+        _step_on(*_fields(P, t), _cases(tau, P.shape[0]), _cases(go, P.shape[0], np.bool_), fs.idx, fs.count)
 
     def shrink(self, P, F, t, g_prev):
         self.shrink_stats(P, F, t, g_prev)
 
     def shrink_stats(self, P, F, t, g_prev):
-        counts, sums = _shrink(*_fields(P), *_blocks(F), *_fields(t, g_prev))
-        return self.allcount(self._col(counts)), self.allsum(self._col(sums))
+        if not isinstance(F, FreeSet):  # a plain mask: the plain expressions (nothing to keep indexed)
+            return super().shrink_stats(P, F, t, g_prev)
+        f, idx, cnt = F.flat()
+        sums = _shrink(*_fields(P), f, idx, cnt, *_fields(t, g_prev))
+        return self.allcount(self._col(cnt.copy())), self.allsum(self._col(sums))

@@ -38,7 +38,7 @@ class BatchIteration:
         if must.size:
             solver.refresh(must)
         self.fresh = xp.asarray((fresh0 >= 0).reshape(B, 1, 1))  # refreshed ones are fresh now
-        self.F = solver.P > 0.0
+        self.F = self.k.free_set(solver.P > 0.0)
         self.nF = self.k.rcount(self.F)
         self.t = xp.zeros_like(solver.P)
         self.g_prev = xp.zeros_like(solver.P)

@@ -111,6 +111,11 @@ class ArrayKernels:
         """Per-case flags, true where any process's is."""
         return local
 
+    def free_set(self, mask):
+        """The iteration's free set made from ``mask`` (``(B, nx, ny)`` bool): the mask itself here;
+        :meth:`.batch_cpu.FusedCpuKernels.free_set` keeps each case's node indices beside it."""
+        return mask
+
     def rsum(self, x):
         return self.allsum(self.xp.sum(x, axis=(-2, -1), keepdims=True, dtype=np.float64))
 
