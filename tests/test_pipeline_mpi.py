@@ -15,7 +15,10 @@ import importlib.util
 import json
 import logging
 import re
+import runpy
+import subprocess
 import sys
+import tracemalloc
 from dataclasses import replace
 from pathlib import Path
 from types import SimpleNamespace
@@ -25,18 +28,20 @@ import pytest
 import xarray as xr
 from snakemake.exceptions import WorkflowError
 
-from conftest import copy_workflow, edited_contact, run_snakemake
+from conftest import REPO, copy_workflow, edited_contact, run_snakemake
 from roughcontact.figures.registry import FIGURES
-from roughcontact.pipeline import params
+from roughcontact.pipeline import case as case_module, params
 from roughcontact.pipeline.case import ContactCase, mpi_command, run_case, run_case_on_ranks
 from roughcontact.pipeline.config import ConfigError
 from roughcontact.pipeline.contact_jobs import contact_mpi_mem_mb, contact_mpi_runtime_min, contact_runtime_min
+from roughcontact.pipeline.datasets import SAMPLE_ROWS, surface_grid, surface_heights
+from roughcontact.pipeline.io import lazy_dataset, read_dataset
 from roughcontact.pipeline.loading import LoadSchedule
 from roughcontact.pipeline.scenes import validate_config
 from roughcontact.pipeline.targets import Targets
 from roughcontact.studies.accuracy import variants
 from roughcontact.surfaces.synthetic import generate_surface
-from test_solver_mpi import MPIEXEC, needs_mpi
+from test_solver_mpi import CAP, MPIEXEC, heights_reads, needs_mpi
 from test_workflow import TINY
 
 #: The tiny scene (contact only, N = 64) split over 2 ranks, and the same scene in one process.
@@ -217,6 +222,91 @@ def test_processes_the_launcher_started_but_mpi_did_not_join_are_refused(tmp_pat
     fake.write_text("#!/bin/sh\nexit 0\n")  # a wrapper that runs nothing and says all is well
     with pytest.raises(RuntimeError, match="ended with status 0 but wrote no file"):
         run_case_on_ranks(path, case, shape=h.shape, length=1.0, rms_slope=0.1, launcher=str(fake))
+
+
+# ------------------------------------------------------------------------------ the contact_mpi job's reads
+def _run_job(script: str, tmp_path: Path, block, surface_file: Path, out: Path | None = None) -> Path:
+    """``workflow/scripts/<script>`` run in this process as Snakemake runs it (its ``snakemake`` object), for case
+    kl2_ks8_H0.5_s0 of the validated contact block ``block``; its log file."""
+    log = tmp_path / f"{script}.log"
+    job = SimpleNamespace(wildcards=_w(), input=[str(surface_file)], output=[str(out or surface_file)], log=[str(log)],
+                          params=SimpleNamespace(settings=params.contact(block), surface=params.surface(block)),
+                          resources=SimpleNamespace(mpi="mpiexec"))
+    try:
+        runpy.run_path(str(REPO / "workflow" / "scripts" / script), init_globals={"snakemake": job})
+    finally:  # run_logged's handlers: closed, so that the next job logs to its own file only
+        for handler in logging.getLogger("roughcontact").handlers:
+            handler.close()
+        logging.getLogger("roughcontact").handlers.clear()
+    return log
+
+
+class _Launched(Exception):
+    """Where the stand-in for run_case_on_ranks stops the job: what the job checked is all it read."""
+
+
+def test_the_mpi_jobs_check_reads_the_header_and_a_sample_of_rows(tmp_path, monkeypatch):
+    """The contact_mpi job (its script, run here) reads SAMPLE_ROWS rows of a 1024² surface from the file, one read
+    each, and nothing else of the heights (xarray's netCDF4 reads counted), its peak memory far below the field's
+    8 MiB (tracemalloc), and passes on the grid, the cell and the rms slope the whole field gives."""
+    block = _contact(**{"surface.N": 1024})
+    surface = tmp_path / "surface.nc"
+    _run_job("generate_surface.py", tmp_path, block, surface)
+    launched = {}
+
+    def stand_in(path, case, **kw):
+        launched.update(kw, path=path, ranks=case.ranks)
+        raise _Launched
+
+    monkeypatch.setattr(case_module, "run_case_on_ranks", stand_in)
+    reads = heights_reads(monkeypatch)
+    tracemalloc.start()
+    try:
+        with pytest.raises(_Launched):
+            _run_job("contact_mpi.py", tmp_path, block, surface, out=tmp_path / "contact.nc")
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert reads == [1024] * SAMPLE_ROWS, reads
+    assert peak < 8 * 1024**2 / 4, peak
+    whole = read_dataset(surface, stage="surface")
+    heights, length = surface_heights(whole, surface)
+    assert {k: launched[k] for k in ("path", "ranks", "shape", "length", "rms_slope")} == {
+        "path": str(surface), "ranks": 2, "shape": heights.shape, "length": length,
+        "rms_slope": float(whole.rms_slope.squeeze())}
+
+
+@needs_mpi
+def test_a_nan_outside_the_checked_rows_ends_every_rank_naming_the_file(tmp_path):
+    """A NaN in rank 1's rows that the job's sample misses: the check passes, the ranks refuse the file in one line
+    naming it, its rows and the remedy (exit status 2 within the cap, no traceback, no step), and the job logs that
+    line and ends with status 1, writing nothing."""
+    block = _contact()
+    surface = tmp_path / "surface.nc"
+    _run_job("generate_surface.py", tmp_path, block, surface)
+    with xr.open_dataset(surface) as ds:
+        spoilt = ds.load()
+    spoilt["heights"][..., 40, 5] = np.nan  # N = 64 on 2 ranks: rank 1's rows 32..63; sampled: 0, 9, .., 36, 45, ..
+    spoilt.to_netcdf(tmp_path / "spoilt.nc")
+    surface = tmp_path / "spoilt.nc"
+    with lazy_dataset(surface, stage="surface") as ds:
+        assert surface_grid(ds, surface) == ((64, 64), 1.0)
+    message = (f"{surface}: 'heights' holds 1 NaN or infinite value(s) in rows 32..63 (rank 1's); every height must "
+               "be finite: remake the file (a pipeline's surface file: remove it, or rerun with -f), or fill those "
+               "points")
+    out = tmp_path / "c.nc"
+    res = subprocess.run([MPIEXEC, "-n", "2", sys.executable, "-m", "roughcontact.solver.mpi", "--surface",
+                          str(surface), "--p-max", "0.005", "--steps", "2", "--out", str(out)],
+                         capture_output=True, text=True, timeout=CAP)
+    assert res.returncode == 2, res.stderr
+    assert [line for line in res.stderr.splitlines() if "error" in line.lower()] == [f"error: {message}"], res.stderr
+    assert "Traceback" not in res.stderr and "step 1:" not in res.stderr and not out.exists()
+    out = tmp_path / "contact.nc"
+    with pytest.raises(SystemExit) as end:
+        _run_job("contact_mpi.py", tmp_path, block, surface, out=out)
+    assert end.value.code == 1 and not out.exists()
+    errors = [line for line in (tmp_path / "contact_mpi.py.log").read_text().splitlines() if " ERROR " in line]
+    assert len(errors) == 1 and errors[0].endswith(f"ERROR {message}"), errors
 
 
 # ------------------------------------------------------------------------------ the workflow

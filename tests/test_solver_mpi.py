@@ -55,6 +55,25 @@ needs_mpi = pytest.mark.skipif(MPIEXEC is None, reason="mpi4py or mpiexec not in
                                "'roughcontact[mpi]'; the test extra brings it)")
 
 
+def heights_reads(monkeypatch, name: str = "heights") -> list[int]:
+    """The number of values of each read of variable ``name`` from a NetCDF file from now on, in order (filled in
+    as they happen): every read of a variable's values through xarray's netCDF4 backend, lazy ones included,
+    passes ``NetCDF4ArrayWrapper.__getitem__`` with the part asked for (a hyperslab) and returns it."""
+    from xarray.backends.netCDF4_ import NetCDF4ArrayWrapper
+
+    sizes: list[int] = []
+    real = NetCDF4ArrayWrapper.__getitem__
+
+    def spy(self, key):
+        out = real(self, key)
+        if self.variable_name == name:
+            sizes.append(int(np.size(out)))
+        return out
+
+    monkeypatch.setattr(NetCDF4ArrayWrapper, "__getitem__", spy)
+    return sizes
+
+
 def write_surface(path: Path, h: np.ndarray) -> Path:
     xr.Dataset({"heights": (("x", "y"), h)}, attrs={"length": 1.0}).to_netcdf(path)
     return path
@@ -173,6 +192,51 @@ def test_more_ranks_than_rows_is_refused(tmp_path):
         in res.stderr
     assert res.stderr.count("error:") == 1  # rank 0 alone says it
     assert not (tmp_path / "c.nc").exists()
+
+
+def test_each_rank_reads_its_rows_and_nothing_else(tmp_path, monkeypatch):
+    """``read_rows`` (no MPI needed: a stand-in communicator) reads a rank's rows in one hyperslab read, the values
+    bit for bit those of the whole variable loaded, its peak memory (tracemalloc: numpy's buffers) about twice its
+    rows' (xarray's decoding copies them once), far below the field's 8 MiB."""
+    import tracemalloc
+    from types import SimpleNamespace
+
+    from roughcontact.solver.mpi.__main__ import read_rows
+
+    n = 1024
+    h = np.random.default_rng(0).standard_normal((n, n))
+    path = tmp_path / "s.nc"
+    # a leading dimension of length 1, as the pipeline's surface files have (their case)
+    xr.Dataset({"heights": (("seed", "x", "y"), h[None])}, attrs={"length": 2.0}).to_netcdf(path)
+    whole = xr.load_dataset(path).heights.values[0]
+    reads = heights_reads(monkeypatch)
+    for rank in (0, 3, 7):
+        reads.clear()
+        tracemalloc.start()
+        try:
+            rows, shape, length = read_rows(str(path), SimpleNamespace(size=8, rank=rank))
+            peak = tracemalloc.get_traced_memory()[1]
+        finally:
+            tracemalloc.stop()
+        x0 = rank * n // 8
+        assert shape == (n, n) and length == 2.0 and rows.shape == (n // 8, n)
+        assert rows.tobytes() == whole[x0:x0 + n // 8].tobytes(), rank
+        assert reads == [rows.size], reads
+        assert peak < 3 * rows.nbytes < h.nbytes, (rank, peak)
+
+
+def test_a_nan_in_a_ranks_rows_is_named_with_its_file_and_rows(tmp_path):
+    from types import SimpleNamespace
+
+    from roughcontact.solver.mpi.__main__ import read_rows
+
+    h = generate_surface(16, 1, 4, 0.8, 0, rms_slope=0.1)
+    h[9, 3] = np.inf
+    path = write_surface(tmp_path / "s.nc", h)
+    assert read_rows(str(path), SimpleNamespace(size=2, rank=0))[0].shape == (8, 16)  # rows 0..7 are fine
+    with pytest.raises(ValueError, match=rf"^{re.escape(str(path))}: 'heights' holds 1 NaN or infinite value\(s\) in "
+                                         r"rows 8..15 \(rank 1's\); every height must be finite: remake the file"):
+        read_rows(str(path), SimpleNamespace(size=2, rank=1))
 
 
 #: Bad input found on one rank (the generator runs on rank 0 alone) or before the work (--out): issue 62 found

@@ -1,8 +1,9 @@
-"""A surface file with bad heights or attributes is named, never a raw KeyError or a NaN solve."""
+"""A surface file with bad heights or attributes is named, never a raw KeyError or a NaN solve; the check of a file
+from its header and a sample of rows (``surface_grid``, the MPI job's) gives the same messages."""
 import numpy as np
 import pytest
 
-from roughcontact.pipeline.datasets import surface_dataset, surface_heights
+from roughcontact.pipeline.datasets import surface_dataset, surface_grid, surface_heights
 
 
 def _surface(n=8):
@@ -36,9 +37,23 @@ def test_rectangular_surface_gives_both_sides():
         (lambda ds: ds.drop_attrs(deep=False), "global attribute 'length' (side of the cell) is missing"),
         (lambda ds: ds.assign_attrs(length="wide"), "is missing or not a number: 'wide'"),
         (lambda ds: ds.assign_attrs(length=-1.0), "must be a finite number > 0, got -1.0"),
+        (lambda ds: ds.assign(heights=ds.heights.astype(str)), "'heights' must hold real numbers, got the type <U"),
     ],
 )
-def test_bad_surface_file_is_named(spoil, words):
+# on 8 x 8 points the sample is every row: surface_grid sees every fault surface_heights sees
+@pytest.mark.parametrize("check", [surface_heights, surface_grid])
+def test_bad_surface_file_is_named(spoil, words, check):
     with pytest.raises(ValueError) as info:
-        surface_heights(spoil(_surface()), "results/x/surfaces/s.nc")
+        check(spoil(_surface()), "results/x/surfaces/s.nc")
     assert str(info.value).startswith("results/x/surfaces/s.nc: ") and words in str(info.value), str(info.value)
+
+
+def test_the_sample_is_spread_rows_and_gives_the_grid():
+    ds = _surface(64)
+    assert surface_grid(ds, "s.nc") == ((64, 64), 1.0)
+    # rows 0, 9, 18, 27, 36, 45, 54, 63: a NaN in row 40 is left to the ranks that read it
+    assert surface_grid(ds.assign(heights=ds.heights.where(ds.x != ds.x[40])), "s.nc") == ((64, 64), 1.0)
+    with pytest.raises(ValueError, match=r"^s.nc: 'heights' holds 64 NaN or infinite value\(s\) in the 8 rows "
+                                         r"checked \(x = 0, 9, 18, 27, 36, 45, 54, 63\); every height must be finite$"):
+        surface_grid(ds.assign(heights=ds.heights.where(ds.x != ds.x[45])), "s.nc")
+    assert surface_grid(ds, "s.nc", sample_rows=100) == ((64, 64), 1.0)  # at most every row

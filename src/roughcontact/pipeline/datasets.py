@@ -297,9 +297,64 @@ def surface_heights(ds: xr.Dataset, source):
     profile's (global attribute ``surface_dimension`` 1) ``(n,)`` heights and its length ``L``.
 
     ``source`` names the file in messages. Raises ``ValueError`` when the heights are
-    missing, not a 2-D field of at least 4 x 4 points over ``x, y``, or not all
+    missing, not a 2-D field of at least 4 x 4 points over ``x, y``, not real numbers, or not all
     finite, or when the cell's sides (:meth:`~.core.cell.Cell.from_attrs`) are missing or not positive numbers.
+    Reads the whole field; :func:`surface_grid` checks a file without it.
     """
+    da = heights_field(ds, source)
+    heights = np.asarray(da.values, dtype=float)
+    _require_finite(heights, source)
+    return heights, Cell.from_attrs(ds.attrs, heights.shape, source).length
+
+
+#: Rows of heights (points of a profile) that :func:`surface_grid` reads to check their values, spread evenly
+#: over x from the first row to the last: 8 rows are 4 MiB at ny = 65536, against 34 GB for the field.
+SAMPLE_ROWS = 8
+
+
+def surface_grid(ds: xr.Dataset, source, sample_rows: int = SAMPLE_ROWS):
+    """The grid ``(nx, ny)`` (a profile's ``(n,)``) and the solver's ``length`` of a surface dataset, checked from
+    its header and a sample of its heights: :func:`surface_heights` without reading the whole field.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A surface file's dataset, best opened lazily (:func:`~.io.lazy_dataset`): then only the rows sampled are
+        read from the file, each as one hyperslab of ``ny`` values.
+    source : str or path
+        The file, named in messages.
+    sample_rows : int
+        How many rows along x (``x`` indices ``round(linspace(0, nx - 1, sample_rows))``, the first and the last
+        included) must hold finite heights: ``sample_rows * ny`` values read, 8 bytes each.
+
+    Returns
+    -------
+    shape : tuple of int
+        ``(nx, ny)``, or ``(n,)`` for a profile.
+    length : float or (float, float)
+        ``L``, or ``(Lx, Ly)`` for a rectangular cell [the file's length unit].
+
+    Raises
+    ------
+    ValueError
+        Naming ``source``, with :func:`surface_heights`' messages for what the header shows (the variable
+        missing, its dimensions or shape, a type that is not real numbers, the cell's sides) and for a NaN or
+        infinite height in the rows sampled. A NaN or infinite height in another row is not seen here: the MPI
+        ranks find it, each checking the rows it reads (``python -m roughcontact.solver.mpi --surface``, its
+        ``read_rows``), and every rank ends with one line naming the file and its rows (exit status 2).
+    """
+    da = heights_field(ds, source)
+    rows = np.unique(np.round(np.linspace(0, da.shape[0] - 1, max(1, min(sample_rows, da.shape[0])))).astype(int))
+    # one row at a time: each a hyperslab read of its own, whatever the backend makes of a list of indices
+    sample = np.stack([np.asarray(da.isel(x=int(i)).values, dtype=float) for i in rows])
+    _require_finite(sample, source, f" in the {rows.size} rows checked (x = {', '.join(map(str, rows))})")
+    return tuple(da.shape), Cell.from_attrs(ds.attrs, da.shape, source).length
+
+
+def heights_field(ds: xr.Dataset, source) -> xr.DataArray:
+    """The heights of a surface dataset without its length-1 case dimensions, checked from the header alone (no
+    value read): a 2-D field over ``(x, y)`` of at least 4 x 4 points (a profile: over ``(x,)``, at least 4), of
+    real numbers. ``ValueError`` naming ``source`` otherwise."""
     if "heights" not in ds:
         raise ValueError(f"{source}: lacks the variable 'heights'")
     da = ds["heights"].squeeze([d for d in (*CASE_DIMS, TOPOGRAPHY_DIM) if d in ds["heights"].dims])
@@ -310,11 +365,17 @@ def surface_heights(ds: xr.Dataset, source):
     elif da.dims != ("x", "y") or min(da.shape) < 4:
         raise ValueError(f"{source}: 'heights' must be a 2-D field over (x, y) of at least 4 x 4 points, "
                          f"got dims {da.dims} and shape {da.shape}")
-    heights = np.asarray(da.values, dtype=float)
+    if da.dtype.kind not in "iuf":
+        raise ValueError(f"{source}: 'heights' must hold real numbers, got the type {da.dtype}; remove the file "
+                         "(or rerun with -f) to remake it")
+    return da
+
+
+def _require_finite(heights: np.ndarray, source, where: str = "") -> None:
+    """``ValueError`` naming ``source`` if ``heights`` (all of them, or those read ``where``) hold NaN or inf."""
     if not np.all(np.isfinite(heights)):
         raise ValueError(f"{source}: 'heights' holds {int(np.sum(~np.isfinite(heights)))} NaN or infinite "
-                         "value(s); every height must be finite")
-    return heights, Cell.from_attrs(ds.attrs, heights.shape, source).length
+                         f"value(s){where}; every height must be finite")
 
 
 def representativity_batch(surface: dict, *, k_l: str, k_s: Sequence[str], hurst: str, seeds: int,

@@ -29,7 +29,8 @@ import os
 import re
 import resource
 import sys
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -206,9 +207,45 @@ def read_dataset(path: str | os.PathLike, *, stage: str,
     ``group``: one group of a file of :func:`write_groups` (listed in its root's ``groups``), whose own
     attributes are checked. Raises :class:`InputFileError` naming the file and what is wrong: missing,
     not NetCDF (e.g. truncated), written by something else, of another stage, lacking the group or a
-    required variable. The data are loaded into memory and the file closed.
+    required variable. The data are loaded into memory and the file closed; :func:`lazy_dataset` reads
+    only what is used.
     """
-    path = Path(path)
+    with lazy_dataset(path, stage=stage, variables=variables, group=group) as handle:
+        try:
+            return handle.load()
+        except Exception as exc:  # a header that reads but data that do not (a file cut short)
+            raise InputFileError(_unreadable(Path(path), exc)) from None
+
+
+@contextmanager
+def lazy_dataset(path: str | os.PathLike, *, stage: str,
+                 variables: Iterable[str] = (), group: str | None = None) -> Iterator[xr.Dataset]:
+    """A file this package wrote, opened without reading its data and checked as :func:`read_dataset` checks it.
+
+    Opening reads the file's header only: dimensions, global and variable attributes, each variable's
+    name, dimensions and type, and the dimension coordinates (1-D: N values each). A data variable is
+    read when its values are used, and only the part selected first: ``ds["heights"].isel(x=slice(a, b))``
+    reads rows ``a .. b-1`` from the file (one hyperslab read of ``(b - a) ny`` values), so a check of
+    a surface of 65536² (34 GB) reads what it looks at, not the field
+    (:func:`roughcontact.pipeline.datasets.surface_grid`). Values read are decoded as :func:`read_dataset`
+    decodes them (the same numbers, bit for bit).
+
+    Use it as a context manager: the file is closed when the ``with`` block ends, so read what is needed
+    inside it. Raises :class:`InputFileError` on opening as :func:`read_dataset` does (the same messages).
+    """
+    handle = _open_checked(Path(path), stage, variables, group)
+    try:
+        yield handle
+    finally:
+        handle.close()
+
+
+def _unreadable(path: Path, exc: Exception) -> str:
+    return f"{path}: not a readable NetCDF file (truncated or foreign?): {exc}"
+
+
+def _open_checked(path: Path, stage: str, variables: Iterable[str], group: str | None) -> xr.Dataset:
+    """The file opened lazily, its stage, group and required variables checked (closed again if refused)."""
     if path.is_dir():
         raise InputFileError(f"{path}: is a directory, not a file")
     if not path.is_file():
@@ -219,24 +256,25 @@ def read_dataset(path: str | os.PathLike, *, stage: str,
                 if group not in root.attrs.get("groups", "").split():
                     raise InputFileError(f"{path}: holds no group {group!r}; its groups: "
                                          f"{root.attrs.get('groups') or 'none'}")
-        with xr.open_dataset(path, engine="netcdf4", group=group) as handle:
-            ds = handle.load()
+        handle = xr.open_dataset(path, engine="netcdf4", group=group)
     except InputFileError:
         raise
     except Exception as exc:  # netCDF4 raises OSError, RuntimeError or ValueError
-        raise InputFileError(
-            f"{path}: not a readable NetCDF file (truncated or foreign?): {exc}"
-        ) from None
-    found = ds.attrs.get("roughcontact_stage")
-    if found is None:
-        raise InputFileError(f"{path}: not written by roughcontact (no 'roughcontact_stage' attribute)")
-    if found != stage:
-        raise InputFileError(f"{path}{'' if group is None else f' (group {group})'}: holds stage {found!r}, "
-                             f"expected {stage!r}")
-    lacking = [v for v in variables if v not in ds.variables]
-    if lacking:
-        raise InputFileError(f"{path}: lacks required variable(s) {', '.join(lacking)}")
-    return ds
+        raise InputFileError(_unreadable(path, exc)) from None
+    try:
+        found = handle.attrs.get("roughcontact_stage")
+        if found is None:
+            raise InputFileError(f"{path}: not written by roughcontact (no 'roughcontact_stage' attribute)")
+        if found != stage:
+            raise InputFileError(f"{path}{'' if group is None else f' (group {group})'}: holds stage {found!r}, "
+                                 f"expected {stage!r}")
+        lacking = [v for v in variables if v not in handle.variables]
+        if lacking:
+            raise InputFileError(f"{path}: lacks required variable(s) {', '.join(lacking)}")
+    except InputFileError:
+        handle.close()
+        raise
+    return handle
 
 
 #: The last line :func:`run_logged` writes to a finished job's log: the job process's exact

@@ -67,7 +67,15 @@ def parser() -> argparse.ArgumentParser:
 
 
 def read_rows(path: str, comm) -> tuple[np.ndarray, tuple[int, int], float]:
-    """This rank's rows of the file's heights, the grid and the file's ``length`` attribute (1 without)."""
+    """This rank's rows of the file's heights, the grid and the file's ``length`` attribute (1 without).
+
+    Reads the header, then the rank's rows ``[x0, x1)`` (:func:`~.run.rows_of`) and nothing else: one hyperslab
+    read of ``(x1 - x0) ny`` values (xarray's lazy ``isel``), decoded as xarray decodes the whole variable (a
+    ``_FillValue`` becomes NaN), so no rank holds the whole field (34 GB at 65536²). The rows are checked to be
+    finite here, where they are read: the job that starts the ranks checks only a sample of rows
+    (:func:`roughcontact.pipeline.datasets.surface_grid`). Raises ``ValueError`` naming the file, the rows and the
+    remedy; run under :func:`~.solver.collective` (as :func:`main` does), every rank then ends with it.
+    """
     import xarray as xr
 
     with xr.open_dataset(path) as ds:
@@ -81,7 +89,13 @@ def read_rows(path: str, comm) -> tuple[np.ndarray, tuple[int, int], float]:
         var = var.isel({d: 0 for d in extra}).transpose("x", "y")
         shape = (var.sizes["x"], var.sizes["y"])
         x0, x1 = rows_of(shape, comm)
-        return np.asarray(var.isel(x=slice(x0, x1)).values, dtype=np.float64), shape, float(ds.attrs.get("length", 1.0))
+        rows = np.asarray(var.isel(x=slice(x0, x1)).values, dtype=np.float64)
+        bad = rows.size - int(np.count_nonzero(np.isfinite(rows)))
+        if bad:
+            raise ValueError(f"{path}: 'heights' holds {bad} NaN or infinite value(s) in rows {x0}..{x1 - 1} (rank "
+                             f"{comm.rank}'s); every height must be finite: remake the file (a pipeline's surface "
+                             "file: remove it, or rerun with -f), or fill those points")
+        return rows, shape, float(ds.attrs.get("length", 1.0))
 
 
 #: The values of ``--generate``, in order, with the type each must have.
