@@ -39,7 +39,7 @@ def _fields(*arrays):
 def _cases(x, B: int, dtype=np.float64):
     """A per-case value as a contiguous ``(B,)`` array (``(B, 1, 1)`` arrays and scalars alike)."""
     a = np.asarray(x, dtype=dtype).reshape(-1)
-    return np.ascontiguousarray(np.broadcast_to(a, (B,)) if a.size == 1 else a)
+    return a if a.size == B else np.full(B, a[0], dtype=dtype)
 
 
 @njit(**_JIT)

@@ -48,6 +48,7 @@ class _BatchFFT:
         except ImportError:
             mod = be.xp.fft
         self.mod = mod
+        self.batch, self.threads, self.spec64 = batch, threads, None
         if be.name == "numpy" and batch is not None and fft_module.has_pyfftw():
             self._plan32(batch, threads)
 
@@ -64,18 +65,47 @@ class _BatchFFT:
             self.bwd32 = pyfftw.FFTW(self.spec32, self.output32, axes=(1, 2), direction="FFTW_BACKWARD",
                                      flags=fft_module.PLANNER_FLAGS, threads=threads)
 
+    def _plan64(self) -> None:
+        """The float64 pair of one case (the refreshes, case by case), in place: one complex buffer, made at
+        first use. One case at a time whatever the batch, so that a case's refresh is the same
+        arithmetic whichever cases are refreshed with it."""
+        import pyfftw
+
+        nx, ny = self.shape
+        self.spec64 = pyfftw.empty_aligned((1, nx, ny // 2 + 1), dtype=np.complex128)
+        self.real64 = self.spec64.view(np.float64)[:, :, :ny]  # rows padded to 2 (ny // 2 + 1) reals
+        with fft_module.shipped_wisdom_only():
+            self.fwd64 = pyfftw.FFTW(self.real64, self.spec64, axes=(1, 2), direction="FFTW_FORWARD",
+                                     flags=fft_module.PLANNER_FLAGS, threads=self.threads)
+            self.bwd64 = pyfftw.FFTW(self.spec64, self.real64, axes=(1, 2), direction="FFTW_BACKWARD",
+                                     flags=fft_module.PLANNER_FLAGS, threads=self.threads)
+
     def rfft2(self, x):
-        if self.input32 is not None and x.dtype == np.float32 and x.shape == self.input32.shape:
-            if x is not self.input32:
-                self.input32[...] = x
-            self.fwd32.execute()
-            return self.spec32
+        """The spectrum of ``x`` over its last two axes; a buffer of the plans where they hold ``x``'s shape
+        (valid until the next transform of that precision)."""
+        if self.input32 is not None:
+            if x.dtype == np.float32 and x.shape == self.input32.shape:
+                if x is not self.input32:
+                    self.input32[...] = x
+                self.fwd32.execute()
+                return self.spec32
+            if x.dtype == np.float64 and x.shape == (1, *self.shape):
+                if self.spec64 is None:
+                    self._plan64()
+                self.real64[...] = x
+                self.fwd64.execute()
+                return self.spec64
         return self.mod.rfft2(x, axes=(-2, -1), **self.kw)
 
     def irfft2(self, spec):
-        if self.input32 is not None and spec is self.spec32:
-            self.bwd32.execute()  # destroys the spectrum, as the c2r elsewhere may (overwrite_x)
-            return self.output32
+        """The unnormalised inverse; the spectrum is destroyed. A plan's buffer where ``spec`` is one."""
+        if self.input32 is not None:
+            if spec is self.spec32:
+                self.bwd32.execute()  # destroys the spectrum, as the c2r elsewhere may (overwrite_x)
+                return self.output32
+            if spec is self.spec64:
+                self.bwd64.execute()
+                return self.real64
         return self.mod.irfft2(spec, s=self.shape, axes=(-2, -1), norm="forward", **self.ikw)
 
 

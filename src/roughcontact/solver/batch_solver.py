@@ -90,10 +90,18 @@ class BatchSolver:
         """``w = K P - h`` in float64 for ``cases`` (host ints): a gather of those cases, one product, a scatter.
 
         The gathered batch is padded to a power of two (repeating the first case) so that the
-        transforms see at most ``log2(B) + 1`` shapes, whose plans the backend caches.
+        transforms see at most ``log2(B) + 1`` shapes, whose plans the backend caches. On the host,
+        case by case instead.
         """
         xp = self.xp
         m = cases.size
+        if self.be.name == "numpy":
+            # on the host one case at a time (the same transform whichever cases are refreshed together,
+            # so that a case's result does not depend on its batch-mates' progress)
+            for b in cases:
+                self.w[b] = self.op.apply64(self.P[b:b + 1])[0]
+                self.w[b] -= self.h[b]
+            return
         if m == self.batch:
             self.w[...] = self.op.apply64(self.P)
             self.w -= self.h
