@@ -100,6 +100,34 @@ def test_bad_ranks_values_are_named(value):
         _contact(**{"solver.ranks": value})
 
 
+def test_a_grid_beyond_one_process_only_over_ranks():
+    """N above 16384 (one process's largest map, ~50 GB) plans only as contact maps split over ranks (issue 63's
+    cmc-32768 scene); anything that holds a whole surface in one process is refused naming surface.N."""
+    assert _contact(**{"surface.N": 32768})["surface"]["N"] == 32768  # ranks: 2
+    assert _contact(**{"surface.N": 65536})["surface"]["N"] == 65536
+    with pytest.raises(ConfigError, match=r"field 'contact.surface.N': 32768 is above 16384, the largest map one "
+                                          r"process solves .*contact.solver.ranks, or lower surface.N"):
+        _contact(SINGLE, **{"surface.N": 32768})
+    with pytest.raises(ConfigError, match=r"field 'contact.surface.N': 32768 is above 16384, the most points of a "
+                                          r"profile"):
+        _contact(**{"surface.N": 32768, "surface.dimension": 1})
+    with pytest.raises(ConfigError, match=r"field 'contact.surface.N': .*maximum of 65536"):
+        _contact(**{"surface.N": 65537})
+    cfg = copy.deepcopy(TINY)
+    cfg["scenes"]["tiny"]["representativity"]["surface"]["N"] = 32768
+    with pytest.raises(ConfigError, match=r"field 'representativity.surface.N': 32768 is above 16384: the "
+                                          r"representativity study makes and analyses each whole surface in one"):
+        validate_config(cfg)
+
+
+def test_the_adhesion_remedy_stays_within_one_process():
+    """An adhesive case is never split over ranks, so its remedy's largest grid is one process's."""
+    from roughcontact.pipeline.config.checks import MAX_ONE_PROCESS_N
+    from roughcontact.solver.effects.adhesion import MAX_GRID_N
+
+    assert MAX_GRID_N == MAX_ONE_PROCESS_N == 16384
+
+
 def test_ranks_one_is_dropped_so_it_changes_no_job():
     assert "ranks" not in _contact(SINGLE, **{"solver.ranks": 1})["solver"]
     assert params.contact(_contact(SINGLE, **{"solver.ranks": 1})) == params.contact(_contact(SINGLE))

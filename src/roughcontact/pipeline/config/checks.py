@@ -24,8 +24,14 @@ def _duplicates_by_value(texts) -> list[str]:
     return dups
 
 
+#: The largest ``surface.N`` one process makes and solves: about 50 GB of one process's solver work at N = 16384
+#: (docs/cluster.md). The schema allows N up to 65536 for contact cases split over ``contact.solver.ranks``.
+MAX_ONE_PROCESS_N = 16384
+
+
 def check_grid(scene: str, study: str, block: dict, written: Mapping | None = None) -> None:
-    """Cross-field rules of a generated study's grid (k_l < k_s <= N/2, 0 < H < 1, examples, seeds, a profile's N).
+    """Cross-field rules of a generated study's grid (k_l < k_s <= N/2, 0 < H < 1, examples, seeds, a profile's N,
+    N above :data:`MAX_ONE_PROCESS_N` only for contact maps split over MPI ranks).
 
     ``written``: the study block as the scene writes it (before the merge over ``defaults``); a message about a
     field it does not hold says the value came from the ``defaults`` block.
@@ -36,6 +42,8 @@ def check_grid(scene: str, study: str, block: dict, written: Mapping | None = No
         raise ConfigError(f"scene {scene!r}, field '{study}.{field}'{origin}: {msg}")
 
     n = block["surface"]["N"]
+    if n > MAX_ONE_PROCESS_N:
+        _check_beyond_one_process(fail, study, block)
     grid = block["grid"]
     for key in ("k_l", "k_s", "H"):
         for text in grid[key]:
@@ -70,6 +78,21 @@ def check_grid(scene: str, study: str, block: dict, written: Mapping | None = No
     if study == "contact" and block["seeds"] < 2:
         fail("seeds", f"{block['seeds']} is too few: the contact study's CEL fit resamples seeds and needs "
                       "at least 2")
+
+
+def _check_beyond_one_process(fail, study: str, block: Mapping) -> None:
+    """``surface.N`` above :data:`MAX_ONE_PROCESS_N`: allowed only for a contact study's maps over ranks > 1 (each rank
+    holds its slab of rows: :mod:`roughcontact.solver.mpi`); whatever else holds a whole surface is refused."""
+    n, most = block["surface"]["N"], MAX_ONE_PROCESS_N
+    if block["surface"].get("dimension") == 1:
+        fail("surface.N", f"{n} is above {most}, the most points of a profile (one process solves it); lower surface.N")
+    if study != "contact":
+        fail("surface.N", f"{n} is above {most}: the {study} study makes and analyses each whole surface in one "
+                          f"process (about 50 GB of work at N = {most}); lower surface.N")
+    if block["solver"].get("ranks", 1) == 1:
+        fail("surface.N", f"{n} is above {most}, the largest map one process solves (about 50 GB of solver work at "
+                          f"N = {most}, docs/cluster.md); split each case over MPI ranks with contact.solver.ranks, "
+                          "or lower surface.N")
 
 
 def check_contact(scene: str, block: dict) -> None:

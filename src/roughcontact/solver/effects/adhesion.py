@@ -32,7 +32,8 @@ from .base import Effect, register
 LAWS = {"exponential": Exponential, "maugis-dugdale": MaugisDugdale}
 
 
-#: The largest ``surface.N`` a scene's schema allows (``config.schema.yaml``): a remedy never asks for more.
+#: The largest ``surface.N`` an adhesive scene allows (one process solves it; the pipeline's config checks'
+#: ``MAX_ONE_PROCESS_N``: only elastic cases over MPI ranks go beyond): a remedy never asks for more.
 MAX_GRID_N = 16384
 
 
