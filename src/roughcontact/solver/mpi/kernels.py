@@ -69,6 +69,7 @@ class _SlabTransforms:
 
     def __init__(self, fft):
         self.impl = fft
+        self.input32 = getattr(fft, "input32", None)  # where the kernels write a forward transform's input
 
     def rfft2(self, x):
         return self.impl.forward(x)
@@ -111,6 +112,9 @@ class SlabOperator(BatchOperator):
         np.divide(1.0, kern, out=minv, where=kern > 0)
         norm = 1.0 / (nx * ny)
         herm = rfft_weights(ny)[:, slabs.c0:slabs.c1]
+        herm = np.broadcast_to(herm, kern.shape)
+        if getattr(fft, "transposed", False):  # the spectrum held (c1 - c0, nx): .slabs.FftwSlabFFT
+            kern, minv, herm = (np.ascontiguousarray(a.T) for a in (kern, minv, herm))
         self.kmult64 = kern * norm
         self.kmult32 = (kern * norm).astype(np.float32)
         self.mmult32 = (minv * norm).astype(np.float32)

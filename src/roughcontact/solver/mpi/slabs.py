@@ -11,8 +11,9 @@ multipliers).
 
 Two implementations of that one layout (:data:`FFT_LIBRARIES`):
 
-- ``"slab"`` (:class:`SlabFFT`, the default): scipy.fft's 1-D transforms and mpi4py's
-  ``Alltoallv``, pip-installable with the ``mpi`` extra;
+- ``"slab"`` (the default): pyFFTW's planned 1-D transforms (:class:`FftwSlabFFT`; scipy.fft's,
+  :class:`SlabFFT`, where pyFFTW is missing) and mpi4py's ``Alltoallv``, pip-installable with the
+  ``mpi`` extra;
 - ``"mpi4py-fft"`` (:class:`MpiFFTPlan`): mpi4py-fft's ``PFFT`` on FFTW, which has no wheel on
   PyPI and builds only where FFTW's headers and libraries are installed (``libfftw3-dev``):
   measured against the first in ``benchmarks/README.md`` ("The solver over MPI ranks").
@@ -124,6 +125,130 @@ class SlabFFT:
         return self.sp.irfft(a, n=self.shape[1], axis=-1, norm="forward", workers=self.workers)
 
 
+class _SlabPlans:
+    """pyFFTW's plans and buffers of :class:`FftwSlabFFT` for one precision and batch ``B``.
+
+    One rank: the 2-D pair over the whole grid, as the batched solver's (planned with the shipped
+    wisdom). More: the real transforms along y of the rank's rows ``(B, rows, ny) <-> (B, rows,
+    ny // 2 + 1)`` and the complex ones along x of its columns, held transposed ``(B, cols, nx)`` so
+    that each column is contiguous (a transform striding along x is ~3x slower at 2048², and FFTW's
+    estimating planner does not reorder it): the exchange packs each block transposed.
+    """
+
+    def __init__(self, slabs: Slabs, B: int, real, threads: int):
+        import pyfftw
+
+        from ...core import fft as fft_module
+
+        cplx = np.result_type(real, np.complex64)
+        rows, ny = slabs.local_shape
+        nx, cols = slabs.spectrum_shape
+        nc = ny // 2 + 1
+        self.real_in = pyfftw.empty_aligned((B, rows, ny), dtype=real)
+        self.row_spec = pyfftw.empty_aligned((B, rows, nc), dtype=cplx)
+        self.real_out = pyfftw.empty_aligned((B, rows, ny), dtype=real)
+        kw = {"flags": fft_module.PLANNER_FLAGS, "threads": threads}
+        with fft_module.shipped_wisdom_only():
+            if slabs.size == 1:
+                self.col_spec = self.row_spec
+                self.fwd = pyfftw.FFTW(self.real_in, self.row_spec, axes=(1, 2), direction="FFTW_FORWARD", **kw)
+                self.bwd = pyfftw.FFTW(self.row_spec, self.real_out, axes=(1, 2), direction="FFTW_BACKWARD", **kw)
+                return
+            self.col_spec = pyfftw.empty_aligned((B, cols, nx), dtype=cplx)
+            # a forward sends the rank's rows of the half spectrum and receives its columns; a backward the reverse
+            size = B * max(rows * nc, cols * nx)
+            self.send = np.empty(size, dtype=cplx)
+            self.recv = np.empty(size, dtype=cplx)
+            self.rfft = pyfftw.FFTW(self.real_in, self.row_spec, axes=(2,), direction="FFTW_FORWARD", **kw)
+            self.cfft = pyfftw.FFTW(self.col_spec, self.col_spec, axes=(2,), direction="FFTW_FORWARD", **kw)
+            self.icfft = pyfftw.FFTW(self.col_spec, self.col_spec, axes=(2,), direction="FFTW_BACKWARD", **kw)
+            self.irfft = pyfftw.FFTW(self.row_spec, self.real_out, axes=(2,), direction="FFTW_BACKWARD", **kw)
+
+
+class FftwSlabFFT(SlabFFT):
+    """:class:`SlabFFT` with pyFFTW's planned transforms on buffers of their own (the default where pyFFTW
+    imports): on one rank the single solve's 2-D transform; on more, the spectrum held transposed,
+    ``(B, c1 - c0, nx)`` (:attr:`transposed`; :class:`~.kernels.SlabOperator` makes its multipliers so).
+
+    :attr:`input32` is the float32 forward transform's input buffer (B = 1), where the kernels write;
+    :meth:`forward` returns the spectrum's buffer and :meth:`backward` the real output's, valid until
+    the next transform of that precision (a caller keeps a copy of what it needs).
+    """
+
+    def __init__(self, comm, slabs: Slabs, threads: int = 1):
+        super().__init__(comm, slabs, threads)
+        self._plans = {}
+        self.transposed = slabs.size > 1
+        self.input32 = self.plans(1, np.float32).real_in
+
+    def plans(self, B: int, real) -> _SlabPlans:
+        """The plans of ``B`` cases in precision ``real`` (float32 or float64), made at first use."""
+        key = (int(B), np.dtype(real))
+        if key not in self._plans:
+            self._plans[key] = _SlabPlans(self.slabs, B, real, self.workers)
+        return self._plans[key]
+
+    def _alltoall(self, p: _SlabPlans, send_counts, recv_counts) -> None:
+        from mpi4py import MPI
+
+        mt = MPI.C_FLOAT_COMPLEX if p.send.dtype == np.complex64 else MPI.C_DOUBLE_COMPLEX
+        self.comm.Alltoallv([p.send, (send_counts, np.cumsum([0] + send_counts[:-1])), mt],
+                            [p.recv, (recv_counts, np.cumsum([0] + recv_counts[:-1])), mt])
+
+    def forward(self, x):
+        p = self.plans(x.shape[0], x.dtype)
+        if x is not p.real_in:
+            p.real_in[...] = x
+        s = self.slabs
+        if s.size == 1:
+            p.fwd.execute()
+            return p.row_spec
+        p.rfft.execute()
+        B, rows = x.shape[0], s.x1 - s.x0
+        counts, at = [], 0
+        for c0, c1 in s.cols:  # to rank r: this rank's rows of r's columns, transposed (B, c1 - c0, rows)
+            n = B * (c1 - c0) * rows
+            np.copyto(p.send[at:at + n].reshape(B, c1 - c0, rows), p.row_spec[:, :, c0:c1].transpose(0, 2, 1))
+            counts.append(n)
+            at += n
+        cols = s.c1 - s.c0
+        recv_counts = [B * cols * (x1 - x0) for x0, x1 in s.rows]
+        self._alltoall(p, counts, recv_counts)
+        at = 0
+        for (x0, x1), n in zip(s.rows, recv_counts, strict=True):
+            p.col_spec[:, :, x0:x1] = p.recv[at:at + n].reshape(B, cols, x1 - x0)
+            at += n
+        p.cfft.execute()
+        return p.col_spec
+
+    def backward(self, spec):
+        real = np.float32 if spec.dtype == np.complex64 else np.float64
+        p = self.plans(spec.shape[0], real)
+        if spec is not p.col_spec:
+            p.col_spec[...] = spec
+        s = self.slabs
+        if s.size == 1:
+            p.bwd.execute()  # destroys the spectrum
+            return p.real_out
+        p.icfft.execute()
+        B, cols = spec.shape[0], s.c1 - s.c0
+        counts, at = [], 0
+        for x0, x1 in s.rows:  # to rank r: its rows of this rank's columns, transposed (B, x1 - x0, cols)
+            n = B * (x1 - x0) * cols
+            np.copyto(p.send[at:at + n].reshape(B, x1 - x0, cols), p.col_spec[:, :, x0:x1].transpose(0, 2, 1))
+            counts.append(n)
+            at += n
+        rows = s.x1 - s.x0
+        recv_counts = [B * rows * (c1 - c0) for c0, c1 in s.cols]
+        self._alltoall(p, counts, recv_counts)
+        at = 0
+        for (c0, c1), n in zip(s.cols, recv_counts, strict=True):
+            p.row_spec[:, :, c0:c1] = p.recv[at:at + n].reshape(B, rows, c1 - c0)
+            at += n
+        p.irfft.execute()  # destroys row_spec
+        return p.real_out
+
+
 class MpiFFTPlan:
     """The same transforms by mpi4py-fft's ``PFFT`` (FFTW), one plan per precision, on one case (B = 1).
 
@@ -165,4 +290,8 @@ def make_fft(library: str, comm, slabs: Slabs, threads: int = 1):
     """The distributed FFT named ``library`` (:data:`FFT_LIBRARIES`) on ``slabs``."""
     if library not in FFT_LIBRARIES:
         raise ValueError(f"fft_library must be one of {FFT_LIBRARIES}, got {library!r}")
-    return SlabFFT(comm, slabs, threads) if library == "slab" else MpiFFTPlan(comm, slabs, threads)
+    if library == "mpi4py-fft":
+        return MpiFFTPlan(comm, slabs, threads)
+    from ...core import fft as fft_module
+
+    return FftwSlabFFT(comm, slabs, threads) if fft_module.has_pyfftw() else SlabFFT(comm, slabs, threads)
