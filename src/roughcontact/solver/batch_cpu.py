@@ -384,6 +384,60 @@ def _shrink(p, f, idx, cnt, t, g_prev):
     return sums
 
 
+@njit(**_JIT)
+def _scale_start(P, w, h, s, plain):
+    B, n = P.shape
+    for b in range(B):
+        if not plain[b]:
+            continue
+        sb = s[b]
+        for i in range(n):
+            w[b, i] = w[b, i] * sb + (sb - 1.0) * h[b, i]
+            P[b, i] = P[b, i] * sb
+
+
+@njit(**_JIT)
+def _extrapolate(P, w, Pl, Po, wl, wo, c, ext, lin, inv_sigma, out):
+    B, n = P.shape
+    tot = np.zeros(B)
+    zero = np.float32(0.0)
+    for b in range(B):
+        if not ext[b]:
+            for i in range(n):
+                out[b, i] = zero
+            continue
+        cb, isg, ln, s = c[b], inv_sigma[b], lin[b], 0.0
+        for i in range(n):
+            pe = (Pl[b, i] - Po[b, i]) * cb + Pl[b, i]
+            cl = pe if pe > 0.0 else 0.0
+            P[b, i] = cl
+            s += cl
+            out[b, i] = np.float32((cl - pe) * isg) if ln else zero
+            if ln:
+                w[b, i] = (wl[b, i] - wo[b, i]) * cb + wl[b, i]
+        tot[b] = s
+    return tot
+
+
+@njit(**_JIT)
+def _finish_start(P, w, h, R, sigma, sc, loaded, ext, lin, p_fill, has_r):
+    B, n = P.shape
+    for b in range(B):
+        if not ext[b]:
+            continue
+        scb = sc[b]
+        if has_r and lin[b]:
+            sg = sigma[b]
+            for i in range(n):
+                w[b, i] = (w[b, i] + np.float64(R[b, i]) * sg) * scb + (scb - 1.0) * h[b, i]
+        if loaded[b]:
+            for i in range(n):
+                P[b, i] = P[b, i] * scb
+        else:
+            for i in range(n):
+                P[b, i] = p_fill[b]
+
+
 class FreeSet:
     """The free set ``F`` of every case of a batch: its mask and each case's node indices.
 
@@ -610,3 +664,25 @@ class FusedCpuKernels(ArrayKernels):
         f, idx, cnt = F.flat()
         sums = _shrink(*_fields(P), f, idx, cnt, *_fields(t, g_prev))
         return self.allcount(self._col(cnt.copy())), self.allsum(self._col(sums))
+
+    # -- the warm start of a load step --------------------------------------------------------
+
+    def scale_start(self, P, w, h, s, plain):
+        B = P.shape[0]
+        _scale_start(*_fields(P, w, h), _cases(s, B), _cases(plain, B, np.bool_))
+
+    def extrapolate(self, P, w, P_last, P_older, w_last, w_older, c, ext, lin, inv_sigma, out=None):
+        B = P.shape[0]
+        out = self.buffer("to32", P.shape, np.float32) if out is None else out
+        tot = _extrapolate(*_fields(P, w, P_last, P_older, w_last, w_older), _cases(c, B), _cases(ext, B, np.bool_),
+                           _cases(lin, B, np.bool_), _cases(inv_sigma, B), *_fields(out))
+        rec = self._written.get(id(out))
+        if rec is not None:
+            rec.count = None  # dense now: the next sparse write zeroes it all
+        return self.allsum(self._col(tot)), out
+
+    def finish_start(self, P, w, h, R, sigma, sc, loaded, ext, lin, p_fill):
+        B = P.shape[0]
+        _finish_start(*_fields(P, w, h), *_fields(P if R is None else R), _cases(sigma, B), _cases(sc, B),
+                      _cases(loaded, B, np.bool_), _cases(ext, B, np.bool_), _cases(lin, B, np.bool_),
+                      _cases(p_fill, B), R is not None)

@@ -106,6 +106,14 @@ class BatchIteration:
     def resync(self, cases: np.ndarray) -> None:
         """Pressure brought to the exact mean and ``w`` recomputed in float64 for ``cases`` (host ints)."""
         s = self.s
+        if self.host:  # in place, case by case (a gather and scatter of whole fields costs more)
+            target = s.be.to_host(self.target).reshape(-1)
+            for b in cases:
+                tot = float(self.k.rsum(s.P[b:b + 1]).reshape(()))
+                if tot > 0:
+                    s.P[b] *= target[b] / tot
+            s.refresh(cases)
+            return
         idx = s.xp.asarray(cases)
         P = s.P[idx]
         tot = self.k.rsum(P)

@@ -289,6 +289,37 @@ class ArrayKernels:
         self.shrink(P, F, t, g_prev)
         return self.rcount(F), self.rsum(t)
 
+    # -- the warm start of a load step (:meth:`.batch_solver.BatchSolver.start`), in place --------
+
+    def scale_start(self, P, w, h, s, plain):
+        """Where ``plain``: ``P *= s`` and ``w = s w + (s - 1) h`` (``K P`` scales with ``P``)."""
+        xp = self.xp
+        w[...] = xp.where(plain, w * s + (s - 1.0) * h, w)
+        P[...] = xp.where(plain, P * s, P)
+
+    def extrapolate(self, P, w, P_last, P_older, w_last, w_older, c, ext, lin, inv_sigma, out=None):
+        """The extrapolated start through the last two solutions, before its rescale.
+
+        Where ``ext``: ``P = max(P_e, 0)`` with ``P_e = P_last + c (P_last - P_older)``; where ``lin``
+        also ``w = w_last + c (w_last - w_older)``. Returns ``(sum of the new P per case, the
+        transform input float32((max(P_e, 0) - P_e) inv_sigma))``, the second 0 where not ``lin``.
+        """
+        xp = self.xp
+        Pe = (P_last - P_older) * c + P_last
+        clipped = xp.maximum(Pe, 0.0)
+        x32 = self.to32((clipped - Pe) * lin, inv_sigma, out)
+        w[...] = xp.where(lin, (w_last - w_older) * c + w_last, w)
+        P[...] = xp.where(ext, clipped, P)
+        return self.rsum(clipped * ext), x32
+
+    def finish_start(self, P, w, h, R, sigma, sc, loaded, ext, lin, p_fill):
+        """After :meth:`extrapolate`: where ``lin`` ``w = (w + R sigma) sc + (sc - 1) h``; where ``ext``
+        ``P = P sc`` (``loaded``) or ``p_fill`` (no pressure left)."""
+        xp = self.xp
+        if R is not None:
+            w[...] = xp.where(lin, (w + R * sigma) * sc + (sc - 1.0) * h, w)
+        P[...] = xp.where(ext, xp.where(loaded, P * sc, p_fill), P)
+
     # -- per-case decisions: (B, 1, 1) arrays; the state arguments are updated in place --------
 
     def gbar(self, s, n):

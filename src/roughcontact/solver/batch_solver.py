@@ -136,35 +136,22 @@ class BatchSolver:
             c = np.where((op0 != self.prev) & (cc > 0.0) & (cc <= 2.0), cc, 0.0)
         lin = (c > 0) & self._last[2] & self._older[3] if self._older is not None else np.zeros(B, bool)
         extra = (c > 0) & ~lin
-        sd = xp.asarray(s.reshape(B, 1, 1))
+        k = self.kernels
         # the scaled start (c = 0): p and u = K p scale together, so w follows without a transform
-        plain = xp.asarray((c == 0).reshape(B, 1, 1))
-        w_scaled = self.w * sd + (sd - 1.0) * self.h
-        self.w[...] = xp.where(plain, w_scaled, self.w)
-        self.P[...] = xp.where(plain, self.P * sd, self.P)
+        k.scale_start(self.P, self.w, self.h, xp.asarray(s.reshape(B, 1, 1)), xp.asarray((c == 0).reshape(B, 1, 1)))
         fresh[c == 0] = 1
         if (c > 0).any():
-            cd = xp.asarray(c.reshape(B, 1, 1))
-            Pl, wl = self._last[0], self._last[1]
-            Po, wo = self._older[1], self._older[2]
-            P = (Pl - Po) * cd + Pl
-            clipped = xp.maximum(P, 0.0)
-            ext = xp.asarray((c > 0).reshape(B, 1, 1))
-            if lin.any():
-                # w = (1 + c) w_last - c w_older exactly, plus K of the clipped part (float32)
-                wlin = (wl - wo) * cd + wl
-                x = clipped - P
-                R = self.op.inverse32(self.op.spectrum32(x, 1.0 / self.h_rms), self.op.kmult32)
-                wlin = self.kernels.add_scaled(wlin, R, self.h_rms)
-                tot = self.kernels.rsum(clipped)
-                sc = xp.asarray(target.reshape(B, 1, 1)) / tot
-                ld = xp.asarray(lin.reshape(B, 1, 1))
-                self.w[...] = xp.where(ld, wlin * sc + (sc - 1.0) * self.h, self.w)
-                fresh[lin] = -1
-            tot = self.kernels.rsum(clipped)
+            ext, ld = xp.asarray((c > 0).reshape(B, 1, 1)), xp.asarray(lin.reshape(B, 1, 1))
+            # p = max((1 + c) p_last - c p_older, 0) (unscaled yet); where lin, w = (1 + c) w_last - c w_older
+            # exactly, plus K of the clipped part (float32, from the transform input x32)
+            tot, x32 = k.extrapolate(self.P, self.w, self._last[0], self._older[1], self._last[1], self._older[2],
+                                     xp.asarray(c.reshape(B, 1, 1)), ext, ld, 1.0 / self.h_rms,
+                                     out=self.op.input32)
+            R = self.op.inverse32(self.op.transform32(x32), self.op.kmult32) if lin.any() else None
             sc = xp.asarray(target.reshape(B, 1, 1)) / xp.where(tot > 0, tot, 1.0)
-            newP = xp.where(tot > 0, clipped * sc, xp.asarray(p_int.reshape(B, 1, 1)))
-            self.P[...] = xp.where(ext, newP, self.P)
+            k.finish_start(self.P, self.w, self.h, R, self.h_rms, sc, tot > 0, ext, ld,
+                           xp.asarray(p_int.reshape(B, 1, 1)))
+            fresh[lin] = -1
             fresh[extra] = 0
         return fresh
 
