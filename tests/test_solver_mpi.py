@@ -401,3 +401,43 @@ def test_slabs_split_rows_and_spectral_columns():
         Slabs((4, 16), 5, 0)
     with pytest.raises(ValueError, match=r"ranks: 4 MPI ranks for 3 columns of the half spectrum \(ny = 4\)"):
         Slabs((8, 4), 4, 0)
+
+
+#: A 2-rank solve whose float32 iteration stalls at once (its stall window set to 0), so that every step
+#: goes on with the float64 fallback over the ranks; rank 0 prints the per-step columns as JSON.
+_STALLED_RUN = """
+import json, sys
+import numpy as np
+from mpi4py import MPI
+import roughcontact.solver.batch_iteration as bi
+from roughcontact.solver.mpi import rows_of, solve_contact_mpi
+bi.STALL_WINDOW = 0
+h = np.load(sys.argv[1])
+x0, x1 = rows_of(h.shape, MPI.COMM_WORLD)
+ds = solve_contact_mpi(np.ascontiguousarray(h[x0:x1]), h.shape, json.loads(sys.argv[2]))
+if MPI.COMM_WORLD.rank == 0:
+    print(json.dumps({k: ds[k].values.tolist() for k in ("area_fraction", "mean_gap", "converged", "solver_path",
+                                                         "residual")}))
+"""
+
+
+@needs_mpi
+def test_a_stalled_step_goes_on_in_float64_over_the_ranks(tmp_path):
+    """The single solve's first fallback over 2 ranks: the iteration with float64 products (``pk-fourier``)
+    from where the float32 one stalled, converging to the single solve's answer."""
+    import json
+
+    from roughcontact.solver import SOLVER_PATHS
+
+    h = _surface(0)
+    np.save(tmp_path / "h.npy", h)
+    loads = _loads()[:3].tolist()
+    res = subprocess.run([MPIEXEC, "-n", "2", sys.executable, "-c", _STALLED_RUN, str(tmp_path / "h.npy"),
+                          json.dumps(loads)], capture_output=True, text=True, timeout=CAP)
+    assert res.returncode == 0, res.stderr
+    got = json.loads(res.stdout.strip().splitlines()[-1])
+    ref = solve_contact(h, loads)
+    assert all(got["converged"]) and max(got["residual"]) <= 1e-8
+    assert set(got["solver_path"]) == {SOLVER_PATHS.index("pk-fourier")}
+    assert np.max(np.abs(np.array(got["area_fraction"]) - ref.area_fraction.values)) <= 2.0 / N**2
+    np.testing.assert_allclose(got["mean_gap"], ref.mean_gap.values, rtol=1e-6)

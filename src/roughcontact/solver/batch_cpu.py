@@ -163,13 +163,13 @@ def _to32(x, scale, out):
     for b in range(B):
         s = scale[b]
         for i in range(n):
-            out[b, i] = np.float32(x[b, i] * s)
+            out[b, i] = x[b, i] * s  # rounded once to out's precision
 
 
 @njit(**_JIT)
 def _clear(out, written, wcnt):
     """Zero the nodes of ``out`` that the last sparse write set (``written``, ``wcnt`` per case)."""
-    zero = np.float32(0.0)
+    zero = 0.0
     for b in range(out.shape[0]):
         for k in range(wcnt[b]):
             out[b, written[b, k]] = zero
@@ -181,12 +181,12 @@ def _to32_on(x, scale, idx, cnt, out):
         s = scale[b]
         for k in range(cnt[b]):
             i = idx[b, k]
-            out[b, i] = np.float32(x[b, i] * s)
+            out[b, i] = x[b, i] * s  # rounded once to out's precision
 
 
 @njit(**_JIT)
 def _quadratic(re_im, weights):
-    # re_im: (B, m, 2) float32 view of the complex64 half spectrum; weights (m,) float32
+    # re_im: (B, m, 2) real view of the half spectrum (complex64: float32 terms; complex128: float64)
     B, m = re_im.shape[0], re_im.shape[1]
     out = np.zeros(B)
     for b in range(B):
@@ -194,12 +194,12 @@ def _quadratic(re_im, weights):
         k = m - m % 2
         for i in range(0, k, 2):
             r, q = re_im[b, i, 0], re_im[b, i, 1]
-            s0 += np.float64(weights[i] * (r * r + q * q))
+            s0 += weights[i] * (r * r + q * q)
             r, q = re_im[b, i + 1, 0], re_im[b, i + 1, 1]
-            s1 += np.float64(weights[i + 1] * (r * r + q * q))
+            s1 += weights[i + 1] * (r * r + q * q)
         if k < m:
             r, q = re_im[b, m - 1, 0], re_im[b, m - 1, 1]
-            s0 += np.float64(weights[m - 1] * (r * r + q * q))
+            s0 += weights[m - 1] * (r * r + q * q)
         out[b] = s0 + s1
     return out
 
@@ -303,7 +303,7 @@ def _new_direction(t, a, g, beta, keep, go, g_prev, idx, cnt, scale, out):
                 t[b, i] = t[b, i] * be + a[b, i] if kp else a[b, i]
                 g_prev[b, i] = g[b, i]
             ti = t[b, i]
-            out[b, i] = np.float32(ti * sc)
+            out[b, i] = ti * sc
             s += g[b, i] * ti
         gts[b] = s
     return gts
@@ -344,7 +344,7 @@ def _project(p, t, tau, go, scale, inv_sigma, idx, cnt, out):
             trial = p[b, i] - ta * t[b, i]
             tp = trial if trial > 0.0 else 0.0
             d = (tp - trial) + (sc - 1.0) * tp - ta * t[b, i]
-            out[b, i] = np.float32(d * isg)
+            out[b, i] = d * isg
             p[b, i] = tp * sc
         wrote[b] = cnt[b]
     return wrote
@@ -400,7 +400,7 @@ def _scale_start(P, w, h, s, plain):
 def _extrapolate(P, w, Pl, Po, wl, wo, c, ext, lin, inv_sigma, out):
     B, n = P.shape
     tot = np.zeros(B)
-    zero = np.float32(0.0)
+    zero = 0.0
     for b in range(B):
         if not ext[b]:
             for i in range(n):
@@ -412,7 +412,7 @@ def _extrapolate(P, w, Pl, Po, wl, wo, c, ext, lin, inv_sigma, out):
             cl = pe if pe > 0.0 else 0.0
             P[b, i] = cl
             s += cl
-            out[b, i] = np.float32((cl - pe) * isg) if ln else zero
+            out[b, i] = (cl - pe) * isg if ln else zero
             if ln:
                 w[b, i] = (wl[b, i] - wo[b, i]) * cb + wl[b, i]
         tot[b] = s
@@ -472,7 +472,7 @@ class FreeSet:
 
 
 class _Written:
-    """Which nodes of a float32 transform input the last sparse write set, per case (None: unknown)."""
+    """Which nodes of a transform input the last sparse write set, per case (None: unknown)."""
 
     def __init__(self, shape, itype):
         self.idx = np.empty(shape, dtype=itype)
@@ -488,7 +488,7 @@ class FusedCpuKernels(ArrayKernels):
     (:meth:`free_set`, the iteration's: updated in place by :meth:`join_stats` and
     :meth:`shrink_stats`) or a plain mask (indexed for the call). Outputs that the plain kernels
     allocate are written into buffers kept per shape and reused: a result is valid until the same
-    kernel is called again (the iteration uses each before that). A float32 transform input written
+    kernel is called again (the iteration uses each before that). A transform input written
     on ``F`` (``to32`` with ``F``, :meth:`new_direction_input`, :meth:`project`) zeroes only the nodes
     that the buffer's last such write set: the buffer must not be written by anything else
     in between (a dense write through these kernels is noted, and the next sparse one zeroes it all).
@@ -574,8 +574,9 @@ class FusedCpuKernels(ArrayKernels):
 
     def quadratic(self, spec, weights):
         B = spec.shape[0]
-        ri = np.ascontiguousarray(spec).view(np.float32).reshape(B, -1, 2)
-        wq = np.ascontiguousarray(np.broadcast_to(weights, spec.shape[1:]).reshape(-1), dtype=np.float32)
+        real = np.float32 if spec.dtype == np.complex64 else np.float64
+        ri = np.ascontiguousarray(spec).view(real).reshape(B, -1, 2)
+        wq = np.ascontiguousarray(np.broadcast_to(weights, spec.shape[1:]).reshape(-1), dtype=real)
         return self.allsum(self._col(_quadratic(ri, wq)))
 
     def trial_stats(self, P, t, tau, F):

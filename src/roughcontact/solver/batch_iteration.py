@@ -23,9 +23,12 @@ class BatchIteration:
     (recomputed first), -1 None.
     """
 
-    def __init__(self, solver, p_int, fresh0, max_iter):
+    def __init__(self, solver, p_int, fresh0, max_iter, op=None, stall: int | None = None):
         self.s, xp = solver, solver.xp
-        self.xp, self.k, self.op = xp, solver.kernels, solver.op
+        self.xp, self.k = xp, solver.kernels
+        # the products (float32: the solver's operator; float64: its Float64Products, a fallback's)
+        self.op = solver.op if op is None else op
+        self.stall = STALL_WINDOW if stall is None else int(stall)
         B = solver.batch
         self.tol = solver.tol
         self.p_int = p_int  # (B, 1, 1) float64 on the device
@@ -141,7 +144,7 @@ class BatchIteration:
         w_on_f, wmin = k.gap_stats(s.w, self.F)
         self.gbar = gbar = k.gbar(w_on_f, self.nF)
         k.decide(k.orth(s.P, s.w, gbar, self.F), wmin, gbar, self.inv_norm, self.scale, self.tol,
-                 STALL_WINDOW, math.inf, self.it, self.max_iter_d, self.fresh, self.next_sync, self.best, self.at,
+                 self.stall, math.inf, self.it, self.max_iter_d, self.fresh, self.next_sync, self.best, self.at,
                  self.done, self.waiting, self.converged, self.go)
 
     def act(self) -> None:

@@ -436,6 +436,7 @@ class BatchOperator:
     def __init__(self, be, shape, aspect: float, threads: int, kernels: ArrayKernels, batch: int | None = None):
         self.be, self.xp, self.k = be, be.xp, kernels
         nx, ny = self.shape = tuple(shape)
+        self.input_shape = (batch or 1, nx, ny)
         self.fft = _BatchFFT(be, shape, threads, batch)
         if be.name == "cupy":
             # one plan per shape, precision and direction: the batch's and the float64 refreshes'
@@ -457,6 +458,9 @@ class BatchOperator:
         self.kmult32 = be.asarray((kern * norm).astype(np.float32))
         self.mmult32 = be.asarray((minv * norm).astype(np.float32))
         self.kquad32 = be.asarray((kern * herm[None, :] * norm).astype(np.float32))
+        self.mmult64 = be.asarray(minv * norm)
+        self.kquad64 = be.asarray(kern * herm[None, :] * norm)
+        self._input64 = None
 
     def transform32(self, x32):
         """float32 spectrum of a float32 field (:meth:`input32` or any ``(B, nx, ny)``), unscaled."""
@@ -474,6 +478,16 @@ class BatchOperator:
         """The forward float32 transform's own input buffer ``(B, nx, ny)`` (a kernel writes there), or None."""
         return getattr(self.fft, "input32", None)
 
+    def float64_input(self):
+        """A float64 transform input ``(B, nx, ny)`` for :class:`Float64Products` (made once)."""
+        if self._input64 is None:
+            self._input64 = self.xp.zeros(self.input_shape, dtype=np.float64)
+        return self._input64
+
+    def float64_products(self):
+        """This operator with its iteration's products in float64: :class:`Float64Products` (a fallback's)."""
+        return Float64Products(self)
+
     def quadratic32(self, spec):
         """``x . (K x) / sigma^2`` per case from :meth:`spectrum32`'s spectrum, ``(B, 1, 1)`` float64."""
         return self.k.quadratic(spec, self.kquad32)
@@ -488,3 +502,41 @@ class BatchOperator:
         spec = self.fft.rfft2(P)
         spec *= self.kmult64
         return self.fft.irfft2(spec)
+
+
+class Float64Products:
+    """An operator's products of the iteration (``spectrum32``, ``inverse32``, ``quadratic32``,
+    ``transform32``, ``kmult32``, ``mmult32``, ``input32``: the names the iteration calls) in float64.
+
+    The float32 iteration with float64 products is the single solve's ``pk-fourier``: the first
+    fallback of a step that the float32 one leaves stalled (:data:`~.workspace.FALLBACKS`). The
+    transform input is a float64 buffer of the shape the iteration writes (the operator's float64
+    transforms' own where they have one).
+
+    Parameters
+    ----------
+    op : BatchOperator
+        The operator (or :class:`~.mpi.kernels.SlabOperator`); its float64 multipliers are used.
+    """
+
+    def __init__(self, op):
+        self.op, self.k, self.xp, self.fft = op, op.k, op.xp, op.fft
+        self.kmult32, self.mmult32, self.kquad = op.kmult64, op.mmult64, op.kquad64
+        self.kmult64 = op.kmult64
+        self.input32 = op.float64_input()
+
+    def spectrum32(self, x, inv_sigma, F=None):
+        return self.fft.rfft2(self.k.to32(x, inv_sigma, out=self.input32, F=F))
+
+    def transform32(self, x):
+        return self.fft.rfft2(x)
+
+    def quadratic32(self, spec):
+        return self.k.quadratic(spec, self.kquad)
+
+    def inverse32(self, spec, mult):
+        spec *= mult
+        return self.fft.irfft2(spec)
+
+    def apply64(self, P):
+        return self.op.apply64(P)

@@ -11,7 +11,8 @@ to the tolerance, for any number of ranks (tests/test_solver_mpi.py).
 
 Runs the periodic elastic problem with the default method ``"pk-fourier-f32"``; the free boundary
 (its zero-padded ``2n x 2n`` grid), effects, other methods and the GPU backend are refused with a
-``ValueError``, and a stalled step ends unconverged (no fallback over ranks: :mod:`.solver`).
+``ValueError``, and a stalled step goes on with float64 products over the ranks (the single solve's first
+fallback; not the box fallback after it: :mod:`.solver`).
 mpi4py and an MPI runtime come with ``pip install 'roughcontact[mpi]'``; importing this package
 needs neither (:class:`.run.MpiUnavailableError` is raised when a solve asks for MPI).
 """

@@ -119,3 +119,14 @@ class SlabOperator(BatchOperator):
         self.kmult32 = (kern * norm).astype(np.float32)
         self.mmult32 = (minv * norm).astype(np.float32)
         self.kquad32 = (kern * herm * norm).astype(np.float32)
+        self.mmult64 = minv * norm
+        self.kquad64 = kern * herm * norm
+        self.input_shape = (1, *slabs.local_shape)
+        self._input64 = None
+
+    def float64_input(self):
+        """The float64 forward transform's own input buffer where the transforms have one (no copy)."""
+        plans = getattr(self.fft.impl, "plans", None)
+        if plans is not None:
+            return plans(1, np.float64).real_in
+        return super().float64_input()

@@ -8,10 +8,11 @@ collective (:func:`moments`), and so is the contact perimeter, whose edges along
 boundaries (:meth:`MpiSolver.perimeter` exchanges one row with each neighbour). Nothing else in the
 iteration indexes a whole field: its only index operations select cases along the leading axis.
 
-Not distributed: the single solve's fallbacks after a stalled iteration (a
-:class:`~roughcontact.solver.workspace.Workspace` holds a whole field); a step whose iteration stalls
-ends ``converged = False`` (its ``solver_path`` the batched iteration's), as one that reaches
-``max_iter``.
+A step whose float32 iteration stalls goes on with the single solve's first fallback, over the
+ranks: the same iteration with float64 products (``pk-fourier``, :meth:`MpiSolver.fallback`). Not
+distributed: the box fallback after that (a :class:`~roughcontact.solver.workspace.Workspace` holds a
+whole field); a step whose float64 iteration stalls too ends ``converged = False``, as one that
+reaches ``max_iter``.
 """
 
 from __future__ import annotations
@@ -26,9 +27,15 @@ from ...core.cli import one_line
 from ...statistics.patches import merge_slabs, slab_patches
 from ..batch_solver import BATCH_METHOD, BatchSolver
 from ..units import Units
-from ..workspace import SOLVER_PATHS
+from ..batch_iteration import BatchIteration
+from ..workspace import FALLBACKS, SOLVER_PATHS
+from ..workspace import STALL_WINDOW as SINGLE_STALL_WINDOW
 from .kernels import MpiKernels, SlabOperator
 from .slabs import make_fft
+
+
+#: The fallback a stalled step gets over the ranks: the float32 iteration's first (float64 products).
+FLOAT64_FALLBACK = FALLBACKS[BATCH_METHOD][0]
 
 
 class CollectiveError(ValueError):
@@ -122,6 +129,7 @@ class MpiSolver(BatchSolver):
         self._older = None
         self._last = None
         self._ws = {}
+        self._op64 = None
         self.paths = SOLVER_PATHS
 
     @property
@@ -129,8 +137,21 @@ class MpiSolver(BatchSolver):
         return f"mpi-{self.fft.name}"
 
     def fallback(self, b: int, p_int: float, its: int) -> tuple[int, str, bool]:
-        """No fallback over ranks (module docstring): the stalled step ends unconverged where it stopped."""
-        return its, BATCH_METHOD, False
+        """The single solve's first fallback over the ranks: ``pk-fourier``, the same iteration with float64
+        products (:class:`~roughcontact.solver.batch_kernels.Float64Products`), from the stalled pressure
+        with ``w`` recomputed, for the iterations left, with the single solve's stall guard.
+
+        Returns ``(iterations in all, path, converged)``; the box fallback does not run over ranks
+        (module docstring).
+        """
+        if its >= self.max_iter:
+            return its, BATCH_METHOD, False
+        if self._op64 is None:
+            self._op64 = self.op.float64_products()
+        it = BatchIteration(self, np.full((1, 1, 1), p_int), np.zeros(1, dtype=np.int8),
+                            np.array([self.max_iter - its]), op=self._op64, stall=SINGLE_STALL_WINDOW)
+        more, conv = it.run(1)
+        return its + int(more[0]), FLOAT64_FALLBACK, bool(conv[0])
 
     def perimeter(self) -> np.ndarray:
         """Contact perimeter per unit area (periodic), the edges along x across slab boundaries included; (1,)."""
