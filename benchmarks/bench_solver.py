@@ -448,7 +448,7 @@ def _method_solves(h, loads, tol, methods, repeats: int) -> dict:
 
 # --------------------------------------------------------------------------- worker: Tamaas
 @contextlib.contextmanager
-def _capture_fds():
+def capture_fds():
     """Capture C-level stdout/stderr (Tamaas logs from C++) into a string buffer."""
     buf = io.StringIO()
     sys.stdout.flush()
@@ -473,7 +473,7 @@ def _capture_fds():
 _ITER_LINE = re.compile(r"^\s*(\d+)\s+[-+0-9.eE]+\s+[-+0-9.eE]+\s*$")
 
 
-def _run_tamaas(h, loads, tol):
+def run_tamaas(h, loads, tol):
     """Tamaas' PolonskyKeerRey over ``loads``: times, iterations, A/A0; None if not importable."""
     try:
         import tamaas as tm
@@ -490,7 +490,7 @@ def _run_tamaas(h, loads, tol):
     w0, c0 = time.perf_counter(), time.process_time()
     for p0 in loads:
         t = time.perf_counter()
-        with _capture_fds() as log:
+        with capture_fds() as log:
             solver.solve(float(p0))
         times.append(time.perf_counter() - t)
         lines = [m.group(1) for m in map(_ITER_LINE.match, log.getvalue().splitlines()) if m]
@@ -511,7 +511,7 @@ def _host_measures(h, loads, tol, extras: dict, method_repeats: int) -> dict:
     """Everything after the main solve on the numpy backend (items 3-7)."""
     n = h.shape[0]
     k = extras["tamaas_steps"]
-    tamaas = _run_tamaas(h, loads[:k], tol) if k else None
+    tamaas = run_tamaas(h, loads[:k], tol) if k else None
     note = "" if tamaas else ("not installed" if k else "not run")
     return {
         **_time_fft_pairs(n, measure=extras["measure_pair"]),

@@ -10,6 +10,12 @@ Method rows include the transform rows indented below them. The timers add a few
 call; compare shares, not the solve's total with the benchmark's.
 
     python benchmarks/profile_iteration.py [--n 1024]
+
+``--batched plain|fused`` profiles the batched iteration on the same case (B = 1) instead: each kernel
+method of its kernels (``plain``: :class:`roughcontact.solver.batch_kernels.ArrayKernels`, numpy
+expressions; ``fused``: :class:`roughcontact.solver.batch_cpu.FusedCpuKernels`, numba loops over the free
+set's indices), the batched transforms and the warm start, so that the options compare side by side
+(benchmarks/README.md, "One iteration code"). A kernel that calls another is counted in both.
 """
 
 from __future__ import annotations
@@ -72,21 +78,63 @@ def instrument(acc: collections.Counter, calls: collections.Counter) -> None:
     wrap(hs.PeriodicHalfSpace, "apply", "  float64 product")
 
 
+def instrument_batched(acc: collections.Counter, calls: collections.Counter, kernels: str) -> None:
+    """Timers on the batched iteration's kernels (``kernels``: "plain" or "fused"), transforms and start."""
+    import roughcontact.solver.batch_kernels as bk
+    import roughcontact.solver.batch_solver as bs
+    from roughcontact.solver.batch_cpu import FusedCpuKernels
+
+    cls = FusedCpuKernels if kernels == "fused" else bk.ArrayKernels
+    if kernels == "plain":
+        bs.FusedCpuKernels = lambda: bk.ArrayKernels(np)  # the solver's kernels on the host: the plain ones
+
+    def wrap(owner, name, key):
+        f = getattr(owner, name)
+
+        def timed(*a, **k):
+            t = CPU()
+            out = f(*a, **k)
+            acc[key] += CPU() - t
+            calls[key] += 1
+            return out
+        setattr(owner, name, timed)
+
+    for name in sorted({n for c in cls.__mro__ if c is not object for n in vars(c)}):
+        if not name.startswith("_") and callable(getattr(cls, name)) and name not in ("buffer", "free_set"):
+            wrap(cls, name, "  " + name)
+    wrap(bk.BatchFFT, "rfft2", "forward transform")
+    wrap(bk.BatchFFT, "irfft2", "inverse transform")
+    wrap(bs.BatchSolver, "start", "warm start")
+    wrap(bs.BatchSolver, "refresh", "float64 refresh")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=1024)
+    ap.add_argument("--batched", choices=("plain", "fused"), default=None,
+                    help="profile the batched iteration (B = 1) with these kernels instead of the single solve")
     args = ap.parse_args()
-    from roughcontact.solver import solve_contact
+    from roughcontact.solver import solve_contact, solve_contact_batch
     from roughcontact.surfaces.synthetic import generate_surface
 
     acc, calls = collections.Counter(), collections.Counter()
-    instrument(acc, calls)
     h = generate_surface(args.n, 16, 32, 0.8, 0, rms_slope=0.1)
-    t = CPU()
-    ds = solve_contact(h, np.linspace(0.005 / 30, 0.005, 30), tol=1e-8)
+    loads = np.linspace(0.005 / 30, 0.005, 30)
+    if args.batched:
+        instrument_batched(acc, calls, args.batched)
+        solve_contact_batch(h[None], loads[:2], tol=1e-8)  # warm-up: the kernels' cache, the plans
+        acc.clear()
+        calls.clear()
+        t = CPU()
+        ds = solve_contact_batch(h[None], loads, tol=1e-8)
+    else:
+        instrument(acc, calls)
+        t = CPU()
+        ds = solve_contact(h, loads, tol=1e-8)
     cpu = CPU() - t
     its = int(ds["iterations"].values.sum())
-    print(f"N = {args.n}: solve CPU {cpu:.2f} s, {its} iterations, {1e3 * cpu / its:.2f} ms an iteration, "
+    what = f"batched iteration ({args.batched} kernels)" if args.batched else "single solve"
+    print(f"N = {args.n}, {what}: solve CPU {cpu:.2f} s, {its} iterations, {1e3 * cpu / its:.2f} ms an iteration, "
           f"load {os.getloadavg()[0]:.2f}")
     for key in sorted(acc, key=lambda k: -acc[k]):
         print(f"{key:20s} {acc[key]:7.2f} s {100 * acc[key] / cpu:5.1f} %  calls {calls[key]:6d}  "

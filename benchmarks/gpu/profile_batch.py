@@ -84,7 +84,7 @@ def main():
 
     totals, counts = collections.defaultdict(float), collections.Counter()
     classes = [(batch_kernels.ArrayKernels, "k"), (batch_kernels.BatchOperator, "op"),
-               (batch_kernels._BatchFFT, "fft")]
+               (batch_kernels.BatchFFT, "fft")]
     if hasattr(batch_cuda, "CupyKernels"):
         classes.append((batch_cuda.CupyKernels, "cuk"))
     for cls, name in classes:

@@ -1,7 +1,7 @@
 """Transforms and kernels of the batched solve (:mod:`.batch`): plain array expressions and fused CUDA ones.
 
 :class:`BatchOperator` holds the periodic half-space's products on a ``(B, nx, ny)`` batch, batched
-``rfft2`` / ``irfft2`` over the last two axes (:class:`_BatchFFT`: scipy.fft on the host, cuFFT
+``rfft2`` / ``irfft2`` over the last two axes (:class:`BatchFFT`: scipy.fft on the host, cuFFT
 through ``cupyx.scipy.fft`` with CuPy's plan cache on a GPU). :class:`ArrayKernels` are the element-wise
 passes and per-case reductions of a round as array expressions (any backend); the fused CUDA
 kernels that replace them on a GPU are in :mod:`.batch_cuda`.
@@ -16,7 +16,7 @@ from .halfspace import elastic_kernel
 from .units import internal_length
 
 
-class _BatchFFT:
+class BatchFFT:
     """Real 2-D transforms over the last two axes of a ``(B, nx, ny)`` batch.
 
     numpy backend: the float32 pair with pyFFTW's plans on buffers of their own (:attr:`input32`,
@@ -437,7 +437,7 @@ class BatchOperator:
         self.be, self.xp, self.k = be, be.xp, kernels
         nx, ny = self.shape = tuple(shape)
         self.input_shape = (batch or 1, nx, ny)
-        self.fft = _BatchFFT(be, shape, threads, batch)
+        self.fft = BatchFFT(be, shape, threads, batch)
         if be.name == "cupy":
             # one plan per shape, precision and direction: the batch's and the float64 refreshes'
             # power-of-two subsets (<= 2 log2(B) + 6 plans) stay in CuPy's plan cache (default 16)

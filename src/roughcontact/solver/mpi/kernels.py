@@ -65,7 +65,7 @@ class MpiKernels(FusedCpuKernels):
 
 
 class _SlabTransforms:
-    """The ``rfft2`` / ``irfft2`` pair of :class:`SlabOperator` (the interface of the batched ``_BatchFFT``)."""
+    """The ``rfft2`` / ``irfft2`` pair of :class:`SlabOperator` (the interface of the batched ``BatchFFT``)."""
 
     def __init__(self, fft):
         self.impl = fft
@@ -125,8 +125,6 @@ class SlabOperator(BatchOperator):
         self._input64 = None
 
     def float64_input(self):
-        """The float64 forward transform's own input buffer where the transforms have one (no copy)."""
-        plans = getattr(self.fft.impl, "plans", None)
-        if plans is not None:
-            return plans(1, np.float64).real_in
+        """A float64 transform input of the rank's slab, made once: not the float64 transforms' own, which
+        their output overwrites (the kernels zero only the nodes they wrote last)."""
         return super().float64_input()

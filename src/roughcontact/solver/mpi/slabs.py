@@ -135,7 +135,7 @@ class _SlabPlans:
     estimating planner does not reorder it): the exchange packs each block transposed.
     """
 
-    def __init__(self, slabs: Slabs, B: int, real, threads: int):
+    def __init__(self, slabs: Slabs, B: int, real, threads: int, exchange=None):
         import pyfftw
 
         from ...core import fft as fft_module
@@ -146,7 +146,9 @@ class _SlabPlans:
         nc = ny // 2 + 1
         self.real_in = pyfftw.empty_aligned((B, rows, ny), dtype=real)
         self.row_spec = pyfftw.empty_aligned((B, rows, nc), dtype=cplx)
-        self.real_out = pyfftw.empty_aligned((B, rows, ny), dtype=real)
+        # float32: the input stays the kernels' (they zero only what they wrote last); float64 (the
+        # refreshes: a product's input is not needed once transformed) writes its output over its input
+        self.real_out = pyfftw.empty_aligned((B, rows, ny), dtype=real) if real == np.float32 else self.real_in
         kw = {"flags": fft_module.PLANNER_FLAGS, "threads": threads}
         with fft_module.shipped_wisdom_only():
             if slabs.size == 1:
@@ -155,10 +157,13 @@ class _SlabPlans:
                 self.bwd = pyfftw.FFTW(self.row_spec, self.real_out, axes=(1, 2), direction="FFTW_BACKWARD", **kw)
                 return
             self.col_spec = pyfftw.empty_aligned((B, cols, nx), dtype=cplx)
-            # a forward sends the rank's rows of the half spectrum and receives its columns; a backward the reverse
-            size = B * max(rows * nc, cols * nx)
-            self.send = np.empty(size, dtype=cplx)
-            self.recv = np.empty(size, dtype=cplx)
+            # a forward sends the rank's rows of the half spectrum and receives its columns; a backward the
+            # reverse. One pair of byte buffers serves both precisions (``exchange``: the other's, viewed)
+            size = B * max(rows * nc, cols * nx) * np.dtype(cplx).itemsize
+            if exchange is None or exchange[0].nbytes < size:
+                exchange = (np.empty(size, dtype=np.uint8), np.empty(size, dtype=np.uint8))
+            self.exchange = exchange
+            self.send, self.recv = (b[:size].view(cplx) for b in exchange)
             self.rfft = pyfftw.FFTW(self.real_in, self.row_spec, axes=(2,), direction="FFTW_FORWARD", **kw)
             self.cfft = pyfftw.FFTW(self.col_spec, self.col_spec, axes=(2,), direction="FFTW_FORWARD", **kw)
             self.icfft = pyfftw.FFTW(self.col_spec, self.col_spec, axes=(2,), direction="FFTW_BACKWARD", **kw)
@@ -185,7 +190,12 @@ class FftwSlabFFT(SlabFFT):
         """The plans of ``B`` cases in precision ``real`` (float32 or float64), made at first use."""
         key = (int(B), np.dtype(real))
         if key not in self._plans:
-            self._plans[key] = _SlabPlans(self.slabs, B, real, self.workers)
+            shared = next((p.exchange for p in self._plans.values() if hasattr(p, "exchange")), None)
+            self._plans[key] = _SlabPlans(self.slabs, B, real, self.workers, shared)
+            if shared is not None and self._plans[key].exchange is not shared:  # larger now: every plan uses it
+                for p in self._plans.values():
+                    p.exchange = self._plans[key].exchange
+                    p.send, p.recv = (b[:p.send.nbytes].view(p.send.dtype) for b in p.exchange)
         return self._plans[key]
 
     def _alltoall(self, p: _SlabPlans, send_counts, recv_counts) -> None:
@@ -204,19 +214,22 @@ class FftwSlabFFT(SlabFFT):
             p.fwd.execute()
             return p.row_spec
         p.rfft.execute()
-        B, rows = x.shape[0], s.x1 - s.x0
+        B, rows, me = x.shape[0], s.x1 - s.x0, s.rank
         counts, at = [], 0
-        for c0, c1 in s.cols:  # to rank r: this rank's rows of r's columns, transposed (B, c1 - c0, rows)
-            n = B * (c1 - c0) * rows
-            np.copyto(p.send[at:at + n].reshape(B, c1 - c0, rows), p.row_spec[:, :, c0:c1].transpose(0, 2, 1))
+        for r, (c0, c1) in enumerate(s.cols):  # to rank r: this rank's rows of r's columns, transposed
+            n = 0 if r == me else B * (c1 - c0) * rows  # its own block: no message (below)
+            if n:
+                np.copyto(p.send[at:at + n].reshape(B, c1 - c0, rows), p.row_spec[:, :, c0:c1].transpose(0, 2, 1))
             counts.append(n)
             at += n
         cols = s.c1 - s.c0
-        recv_counts = [B * cols * (x1 - x0) for x0, x1 in s.rows]
+        np.copyto(p.col_spec[:, :, s.x0:s.x1], p.row_spec[:, :, s.c0:s.c1].transpose(0, 2, 1))
+        recv_counts = [0 if r == me else B * cols * (x1 - x0) for r, (x0, x1) in enumerate(s.rows)]
         self._alltoall(p, counts, recv_counts)
         at = 0
         for (x0, x1), n in zip(s.rows, recv_counts, strict=True):
-            p.col_spec[:, :, x0:x1] = p.recv[at:at + n].reshape(B, cols, x1 - x0)
+            if n:
+                p.col_spec[:, :, x0:x1] = p.recv[at:at + n].reshape(B, cols, x1 - x0)
             at += n
         p.cfft.execute()
         return p.col_spec
@@ -231,19 +244,22 @@ class FftwSlabFFT(SlabFFT):
             p.bwd.execute()  # destroys the spectrum
             return p.real_out
         p.icfft.execute()
-        B, cols = spec.shape[0], s.c1 - s.c0
+        B, cols, me = spec.shape[0], s.c1 - s.c0, s.rank
         counts, at = [], 0
-        for x0, x1 in s.rows:  # to rank r: its rows of this rank's columns, transposed (B, x1 - x0, cols)
-            n = B * (x1 - x0) * cols
-            np.copyto(p.send[at:at + n].reshape(B, x1 - x0, cols), p.col_spec[:, :, x0:x1].transpose(0, 2, 1))
+        for r, (x0, x1) in enumerate(s.rows):  # to rank r: its rows of this rank's columns, transposed
+            n = 0 if r == me else B * (x1 - x0) * cols
+            if n:
+                np.copyto(p.send[at:at + n].reshape(B, x1 - x0, cols), p.col_spec[:, :, x0:x1].transpose(0, 2, 1))
             counts.append(n)
             at += n
         rows = s.x1 - s.x0
-        recv_counts = [B * rows * (c1 - c0) for c0, c1 in s.cols]
+        np.copyto(p.row_spec[:, :, s.c0:s.c1], p.col_spec[:, :, s.x0:s.x1].transpose(0, 2, 1))
+        recv_counts = [0 if r == me else B * rows * (c1 - c0) for r, (c0, c1) in enumerate(s.cols)]
         self._alltoall(p, counts, recv_counts)
         at = 0
         for (c0, c1), n in zip(s.cols, recv_counts, strict=True):
-            p.row_spec[:, :, c0:c1] = p.recv[at:at + n].reshape(B, rows, c1 - c0)
+            if n:
+                p.row_spec[:, :, c0:c1] = p.recv[at:at + n].reshape(B, rows, c1 - c0)
             at += n
         p.irfft.execute()  # destroys row_spec
         return p.real_out
