@@ -67,7 +67,7 @@ def main(argv=None) -> int:
             runs[name].append(timed(fn))
     tamaas = None if a.no_tamaas else run_tamaas(h, loads, 1e-8)
     load1 = os.getloadavg()
-    print(f"bench_one_iteration {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC, N = {a.n}, "
+    print(f"bench_one_iteration {datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M} UTC, N = {a.n}, "
           f"{a.steps} steps to {a.p_max}, repeats {a.repeats}, load {load0[0]:.2f} -> {load1[0]:.2f}")
     rows = []
     for name, rs in runs.items():

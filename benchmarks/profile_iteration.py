@@ -81,6 +81,7 @@ def instrument(acc: collections.Counter, calls: collections.Counter) -> None:
 def instrument_batched(acc: collections.Counter, calls: collections.Counter, kernels: str) -> None:
     """Timers on the batched iteration's kernels (``kernels``: "plain" or "fused"), transforms and start."""
     import roughcontact.solver.batch_kernels as bk
+    import roughcontact.solver.batch_operator as bo
     import roughcontact.solver.batch_solver as bs
     from roughcontact.solver.batch_cpu import FusedCpuKernels
 
@@ -102,8 +103,8 @@ def instrument_batched(acc: collections.Counter, calls: collections.Counter, ker
     for name in sorted({n for c in cls.__mro__ if c is not object for n in vars(c)}):
         if not name.startswith("_") and callable(getattr(cls, name)) and name not in ("buffer", "free_set"):
             wrap(cls, name, "  " + name)
-    wrap(bk.BatchFFT, "rfft2", "forward transform")
-    wrap(bk.BatchFFT, "irfft2", "inverse transform")
+    wrap(bo.BatchFFT, "rfft2", "forward transform")
+    wrap(bo.BatchFFT, "irfft2", "inverse transform")
     wrap(bs.BatchSolver, "start", "warm start")
     wrap(bs.BatchSolver, "refresh", "float64 refresh")
 

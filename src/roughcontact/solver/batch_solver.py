@@ -10,10 +10,10 @@ import numpy as np
 from ..core.backend import get_backend
 from ..core.cell import Cell
 from ..statistics.patches import contact_patches
+from .batch_cpu import FusedCpuKernels
 from .batch_cuda import fused_kernels
 from .batch_iteration import BatchIteration
-from .batch_cpu import FusedCpuKernels
-from .batch_kernels import BatchOperator
+from .batch_operator import BatchOperator
 from .box import box_solve
 from .check import MEAN_RTOL
 from .elastic import pk_solve

@@ -12,7 +12,7 @@ take different branches and wait on each other for ever. The element-wise passes
 decisions are the batched ones unchanged: they act on the rank's slab and on per-case numbers that
 are equal on every rank.
 
-:class:`SlabOperator` is :class:`~roughcontact.solver.batch_kernels.BatchOperator` with the
+:class:`SlabOperator` is :class:`~roughcontact.solver.batch_operator.BatchOperator` with the
 transforms of :mod:`.slabs`: multipliers for the rank's columns of the half spectrum only, so no
 rank ever holds a whole field.
 """
@@ -23,7 +23,7 @@ import numpy as np
 
 from ...core.fft import rfft_weights, wavenumbers
 from ..batch_cpu import FusedCpuKernels
-from ..batch_kernels import BatchOperator
+from ..batch_operator import BatchOperator
 from ..units import internal_length
 
 
@@ -81,7 +81,7 @@ class _SlabTransforms:
 class SlabOperator(BatchOperator):
     """The periodic half-space's products on the rank's slab (internal units, ``E* = Lx = 1``).
 
-    :class:`~roughcontact.solver.batch_kernels.BatchOperator`'s products (its methods, which
+    :class:`~roughcontact.solver.batch_operator.BatchOperator`'s products (its methods, which
     :class:`~roughcontact.solver.batch_iteration.BatchIteration` calls), with the distributed
     transforms and the multipliers ``K``, ``M = |q| E* / 2`` and Parseval's weights on the rank's
     spectral columns ``[c0, c1)`` (shape ``(nx, c1 - c0)``), computed there alone.

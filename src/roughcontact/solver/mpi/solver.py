@@ -25,14 +25,12 @@ from ...core.backend import get_backend
 from ...core.cell import Cell
 from ...core.cli import one_line
 from ...statistics.patches import merge_slabs, slab_patches
+from ..batch_iteration import BatchIteration
 from ..batch_solver import BATCH_METHOD, BatchSolver
 from ..units import Units
-from ..batch_iteration import BatchIteration
-from ..workspace import FALLBACKS, SOLVER_PATHS
-from ..workspace import STALL_WINDOW as SINGLE_STALL_WINDOW
+from ..workspace import FALLBACKS, SOLVER_PATHS, STALL_WINDOW as SINGLE_STALL_WINDOW
 from .kernels import MpiKernels, SlabOperator
 from .slabs import make_fft
-
 
 #: The fallback a stalled step gets over the ranks: the float32 iteration's first (float64 products).
 FLOAT64_FALLBACK = FALLBACKS[BATCH_METHOD][0]
@@ -138,7 +136,7 @@ class MpiSolver(BatchSolver):
 
     def fallback(self, b: int, p_int: float, its: int) -> tuple[int, str, bool]:
         """The single solve's first fallback over the ranks: ``pk-fourier``, the same iteration with float64
-        products (:class:`~roughcontact.solver.batch_kernels.Float64Products`), from the stalled pressure
+        products (:class:`~roughcontact.solver.batch_operator.Float64Products`), from the stalled pressure
         with ``w`` recomputed, for the iterations left, with the single solve's stall guard.
 
         Returns ``(iterations in all, path, converged)``; the box fallback does not run over ranks
