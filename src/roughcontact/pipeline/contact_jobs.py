@@ -67,14 +67,16 @@ def ranks_of(block: Mapping) -> int:
 
 def contact_mpi_mem_mb(n: int, ranks: int) -> int:
     """Peak memory of one contact case over ``ranks`` MPI processes [MB], all ranks together: an interpreter per
-    rank and :func:`contact_mem_mb`'s solver work, split (measured at N = 8192 on 2 ranks: 9.8 GiB in all, ~20
-    doubles a node: benchmarks/README.md)."""
+    rank and 40 doubles a node of solver work, split (a margin: measured at N = 8192 on 2 ranks, 206 B a node and
+    0.25 GiB a rank since the fused kernels of 2026-12-02, 152 B before: benchmarks/README.md)."""
     return int(300 * ranks + 40 * 8 * n * n / 2**20)
 
 
 def contact_mpi_runtime_min(n: int, n_steps: int, ranks: int) -> int:
-    """Wall-time request of one contact case over ``ranks`` processes [min]: :func:`contact_runtime_min` x 4 (the
-    distributed iteration's CPU per iteration, 3.6-4.1x the single solve's), shared by the ranks."""
+    """Wall-time request of one contact case over ``ranks`` processes [min]: :func:`contact_runtime_min` x 4, shared
+    by the ranks (a margin: the distributed iteration's CPU per iteration was 3.6-4.1x the single solve's before the
+    fused kernels of 2026-12-02, 1.14x on one rank and 0.70x a rank on two since; the transposes of many ranks and
+    a cluster's shared memory bandwidth are not measured here)."""
     return max(5, math.ceil(4 * contact_runtime_min(n, n_steps) / ranks))
 
 
