@@ -1,17 +1,35 @@
-"""benchmarks/profile_iteration.py: a tiny run in its own process (it rewraps solver classes)."""
+"""benchmarks/profile_iteration.py: tiny runs in their own processes (it rewraps solver classes)."""
 import re
 import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "profile_iteration.py"
 
 
-def test_a_tiny_profile_names_every_part_with_its_share():
-    out = subprocess.run([sys.executable, str(SCRIPT), "--n", "64"], capture_output=True, text=True, timeout=300)
+def _profile(*args) -> tuple[str, dict]:
+    out = subprocess.run([sys.executable, str(SCRIPT), "--n", "64", *args], capture_output=True, text=True,
+                         timeout=300)
     assert out.returncode == 0, out.stderr[-2000:]
     lines = out.stdout.splitlines()
-    assert re.match(r"N = 64: solve CPU [\d.]+ s, \d+ iterations", lines[0]), lines[0]
     rows = {m[1].strip(): float(m[2]) for m in (re.match(r"(.+?)\s+[\d.]+ s\s+([\d.]+) %", x) for x in lines[1:]) if m}
-    assert {"_direction", "_step_single", "f32 forward", "f32 backward", "Parseval sum"} <= set(rows), rows
     assert all(0.0 <= share <= 100.0 for share in rows.values()), rows
+    return lines[0], rows
+
+
+def test_a_tiny_profile_names_every_part_with_its_share():
+    head, rows = _profile()
+    assert re.match(r"N = 64, single solve: solve CPU [\d.]+ s, \d+ iterations", head), head
+    assert {"_direction", "_step_single", "f32 forward", "f32 backward", "Parseval sum"} <= set(rows), rows
+
+
+@pytest.mark.parametrize("kernels", ["fused", "plain"])
+def test_the_batched_iteration_profiles_with_either_kernels(kernels):
+    """``--batched fused|plain``: the batched iteration's kernels, transforms and start, each with its share."""
+    head, rows = _profile("--batched", kernels)
+    assert re.match(rf"N = 64, batched iteration \({kernels} kernels\): solve CPU [\d.]+ s, \d+ iterations",
+                    head), head
+    assert {"forward transform", "inverse transform", "warm start", "join_stats", "new_direction_input",
+            "trial_stats", "shrink_stats"} <= set(rows), rows
