@@ -33,22 +33,28 @@ CPU = time.process_time
 METHODS = ("_measure", "_direction", "_step_single", "_project_single", "_join", "_resync", "_finish", "_project")
 
 
+def timer(acc: collections.Counter, calls: collections.Counter, owner, name: str, key: str) -> None:
+    """Replace ``owner.name`` by the same callable adding its CPU seconds into ``acc[key]`` and its calls into
+    ``calls[key]``."""
+    f = getattr(owner, name)
+
+    def timed(*a, **k):
+        t = CPU()
+        out = f(*a, **k)
+        acc[key] += CPU() - t
+        calls[key] += 1
+        return out
+    setattr(owner, name, timed)
+
+
 def instrument(acc: collections.Counter, calls: collections.Counter) -> None:
     """Wrap the iteration's methods and the transforms with CPU timers adding into ``acc``."""
     import roughcontact.core.backend as be
     import roughcontact.solver.elastic as el
     import roughcontact.solver.halfspace as hs
 
-    def wrap(cls, name, key):
-        f = getattr(cls, name)
-
-        def timed(*a, **k):
-            t = CPU()
-            out = f(*a, **k)
-            acc[key] += CPU() - t
-            calls[key] += 1
-            return out
-        setattr(cls, name, timed)
+    def wrap(owner, name, key):
+        timer(acc, calls, owner, name, key)
 
     for name in METHODS:
         wrap(el.PKIteration, name, name)
@@ -90,15 +96,7 @@ def instrument_batched(acc: collections.Counter, calls: collections.Counter, ker
         bs.FusedCpuKernels = lambda: bk.ArrayKernels(np)  # the solver's kernels on the host: the plain ones
 
     def wrap(owner, name, key):
-        f = getattr(owner, name)
-
-        def timed(*a, **k):
-            t = CPU()
-            out = f(*a, **k)
-            acc[key] += CPU() - t
-            calls[key] += 1
-            return out
-        setattr(owner, name, timed)
+        timer(acc, calls, owner, name, key)
 
     for name in sorted({n for c in cls.__mro__ if c is not object for n in vars(c)}):
         if not name.startswith("_") and callable(getattr(cls, name)) and name not in ("buffer", "free_set"):

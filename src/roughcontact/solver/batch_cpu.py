@@ -73,22 +73,6 @@ def _count(f):
 
 
 @njit(**_JIT)
-def _min(x):
-    B, n = x.shape
-    out = np.empty(B)
-    for b in range(B):
-        m = x[b, 0]
-        for i in range(1, n):
-            v = x[b, i]
-            if v < m or v != v:
-                m = v
-                if v != v:
-                    break
-        out[b] = m
-    return out
-
-
-@njit(**_JIT)
 def _index(f, idx):
     """The flat indices of each case's nodes in ``F`` into ``idx`` (ascending); their counts."""
     B, n = f.shape
@@ -129,22 +113,6 @@ def _orth(p, w, gbar, idx, cnt):
 
 
 @njit(**_JIT)
-def _dot(u, v):
-    B, n = u.shape
-    out = np.zeros(B)
-    for b in range(B):
-        s0 = s1 = 0.0
-        m = n - n % 2
-        for i in range(0, m, 2):
-            s0 += u[b, i] * v[b, i]
-            s1 += u[b, i + 1] * v[b, i + 1]
-        if m < n:
-            s0 += u[b, n - 1] * v[b, n - 1]
-        out[b] = s0 + s1
-    return out
-
-
-@njit(**_JIT)
 def _dot_on(u, v, idx, cnt):
     B = u.shape[0]
     out = np.zeros(B)
@@ -155,15 +123,6 @@ def _dot_on(u, v, idx, cnt):
             s += u[b, i] * v[b, i]
         out[b] = s
     return out
-
-
-@njit(**_JIT)
-def _to32(x, scale, out):
-    B, n = x.shape
-    for b in range(B):
-        s = scale[b]
-        for i in range(n):
-            out[b, i] = x[b, i] * s  # rounded once to out's precision
 
 
 @njit(**_JIT)
@@ -518,8 +477,8 @@ class FusedCpuKernels(ArrayKernels):
         """``(out, its written record)`` with ``out``'s last sparse write undone (all of it if unknown)."""
         out = self.buffer("to32", shape, np.float32) if out is None else out
         rec = self._written.get(id(out))
-        if rec is None or rec.idx.shape != out.reshape(out.shape[0], -1).shape:
-            flat = out.reshape(out.shape[0], -1).shape
+        flat = out.reshape(out.shape[0], -1).shape
+        if rec is None or rec.idx.shape != flat:
             rec = self._written[id(out)] = _Written(flat, np.int32 if flat[1] < 2**31 else np.int64)
         if rec.count is None:
             out.fill(0.0)
@@ -531,8 +490,15 @@ class FusedCpuKernels(ArrayKernels):
     def _record(rec, fs, count=None):
         """``fs``'s nodes are those written (``count`` per case where fewer)."""
         n = fs.count if count is None else count
-        rec.idx[:, : int(n.max(initial=0))] = fs.idx[:, : int(n.max(initial=0))]
+        m = int(n.max(initial=0))
+        rec.idx[:, :m] = fs.idx[:, :m]
         rec.count = n.copy()
+
+    def _dense(self, out) -> None:
+        """``out`` was written whole: the next sparse write zeroes all of it."""
+        rec = self._written.get(id(out))
+        if rec is not None:
+            rec.count = None
 
     @staticmethod
     def _col(v):
@@ -558,15 +524,9 @@ class FusedCpuKernels(ArrayKernels):
         fs = self._set(mask)
         return self.allsum(self._col(_masked_sum(*_fields(x), fs.idx, fs.count)))
 
-    def gap_stats(self, w, F):
-        return self.masked_sum(w, F), self.rmin(w)
-
     def orth(self, P, w, gbar, F):
         fs = self._set(F)
         return self.allsum(self._col(_orth(*_fields(P, w), _cases(gbar, P.shape[0]), fs.idx, fs.count)))
-
-    def dot(self, a, b):
-        return self.allsum(self._col(_dot(*_fields(a, b))))
 
     def dot_on(self, a, b, F):
         fs = self._set(F)
@@ -596,12 +556,9 @@ class FusedCpuKernels(ArrayKernels):
 
     def to32(self, x, scale, out=None, F=None):
         B = x.shape[0]
-        if F is None:
-            out = self.buffer("to32", x.shape, np.float32) if out is None else out
-            _to32(*_fields(x), _cases(scale, B), *_fields(out))
-            rec = self._written.get(id(out))
-            if rec is not None:
-                rec.count = None  # dense now: the next sparse write zeroes it all
+        if F is None:  # numpy's one pass, the product rounded once into out
+            out = super().to32(x, scale, self.buffer("to32", x.shape, np.float32) if out is None else out)
+            self._dense(out)
             return out
         fs = self._set(F)
         out, rec = self._sparse_out(out, x.shape)
@@ -657,7 +614,10 @@ class FusedCpuKernels(ArrayKernels):
         _step_on(*_fields(P, t), _cases(tau, P.shape[0]), _cases(go, P.shape[0], np.bool_), fs.idx, fs.count)
 
     def shrink(self, P, F, t, g_prev):
-        self.shrink_stats(P, F, t, g_prev)
+        if isinstance(F, FreeSet):
+            self.shrink_stats(P, F, t, g_prev)
+        else:  # a plain mask: the plain expressions (shrink_stats of a mask calls this)
+            super().shrink(P, F, t, g_prev)
 
     def shrink_stats(self, P, F, t, g_prev):
         if not isinstance(F, FreeSet):  # a plain mask: the plain expressions (nothing to keep indexed)
@@ -677,9 +637,7 @@ class FusedCpuKernels(ArrayKernels):
         out = self.buffer("to32", P.shape, np.float32) if out is None else out
         tot = _extrapolate(*_fields(P, w, P_last, P_older, w_last, w_older), _cases(c, B), _cases(ext, B, np.bool_),
                            _cases(lin, B, np.bool_), _cases(inv_sigma, B), *_fields(out))
-        rec = self._written.get(id(out))
-        if rec is not None:
-            rec.count = None  # dense now: the next sparse write zeroes it all
+        self._dense(out)
         return self.allsum(self._col(tot)), out
 
     def finish_start(self, P, w, h, R, sigma, sc, loaded, ext, lin, p_fill):

@@ -205,6 +205,32 @@ class FftwSlabFFT(SlabFFT):
         self.comm.Alltoallv([p.send, (send_counts, np.cumsum([0] + send_counts[:-1])), mt],
                             [p.recv, (recv_counts, np.cumsum([0] + recv_counts[:-1])), mt])
 
+    def _transpose(self, p: _SlabPlans, src, dst, src_parts, dst_parts) -> None:
+        """The all-to-all transpose between the rows' and the columns' layouts, either way.
+
+        ``src`` and ``dst`` are ``(B, m, k)`` with this rank's share of the other axis first: rank ``r``
+        gets ``src[:, :, a0:a1]`` transposed (``(a0, a1) = src_parts[r]``), and what rank ``r`` sends lands
+        in ``dst[:, :, d0:d1]`` (``(d0, d1) = dst_parts[r]``). The rank's own block is copied across
+        directly, not sent.
+        """
+        B, me, m = src.shape[0], self.slabs.rank, dst.shape[1]
+        counts, at = [], 0
+        for r, (a0, a1) in enumerate(src_parts):
+            n = 0 if r == me else B * (a1 - a0) * src.shape[1]
+            if n:
+                np.copyto(p.send[at:at + n].reshape(B, a1 - a0, src.shape[1]), src[:, :, a0:a1].transpose(0, 2, 1))
+            counts.append(n)
+            at += n
+        (a0, a1), (d0, d1) = src_parts[me], dst_parts[me]
+        np.copyto(dst[:, :, d0:d1], src[:, :, a0:a1].transpose(0, 2, 1))
+        recv_counts = [0 if r == me else B * m * (d1 - d0) for r, (d0, d1) in enumerate(dst_parts)]
+        self._alltoall(p, counts, recv_counts)
+        at = 0
+        for (d0, d1), n in zip(dst_parts, recv_counts, strict=True):
+            if n:
+                dst[:, :, d0:d1] = p.recv[at:at + n].reshape(B, m, d1 - d0)
+            at += n
+
     def forward(self, x):
         p = self.plans(x.shape[0], x.dtype)
         if x is not p.real_in:
@@ -214,23 +240,8 @@ class FftwSlabFFT(SlabFFT):
             p.fwd.execute()
             return p.row_spec
         p.rfft.execute()
-        B, rows, me = x.shape[0], s.x1 - s.x0, s.rank
-        counts, at = [], 0
-        for r, (c0, c1) in enumerate(s.cols):  # to rank r: this rank's rows of r's columns, transposed
-            n = 0 if r == me else B * (c1 - c0) * rows  # its own block: no message (below)
-            if n:
-                np.copyto(p.send[at:at + n].reshape(B, c1 - c0, rows), p.row_spec[:, :, c0:c1].transpose(0, 2, 1))
-            counts.append(n)
-            at += n
-        cols = s.c1 - s.c0
-        np.copyto(p.col_spec[:, :, s.x0:s.x1], p.row_spec[:, :, s.c0:s.c1].transpose(0, 2, 1))
-        recv_counts = [0 if r == me else B * cols * (x1 - x0) for r, (x0, x1) in enumerate(s.rows)]
-        self._alltoall(p, counts, recv_counts)
-        at = 0
-        for (x0, x1), n in zip(s.rows, recv_counts, strict=True):
-            if n:
-                p.col_spec[:, :, x0:x1] = p.recv[at:at + n].reshape(B, cols, x1 - x0)
-            at += n
+        # to rank r: this rank's rows of r's spectral columns, transposed
+        self._transpose(p, p.row_spec, p.col_spec, s.cols, s.rows)
         p.cfft.execute()
         return p.col_spec
 
@@ -244,23 +255,8 @@ class FftwSlabFFT(SlabFFT):
             p.bwd.execute()  # destroys the spectrum
             return p.real_out
         p.icfft.execute()
-        B, cols, me = spec.shape[0], s.c1 - s.c0, s.rank
-        counts, at = [], 0
-        for r, (x0, x1) in enumerate(s.rows):  # to rank r: its rows of this rank's columns, transposed
-            n = 0 if r == me else B * (x1 - x0) * cols
-            if n:
-                np.copyto(p.send[at:at + n].reshape(B, x1 - x0, cols), p.col_spec[:, :, x0:x1].transpose(0, 2, 1))
-            counts.append(n)
-            at += n
-        rows = s.x1 - s.x0
-        np.copyto(p.row_spec[:, :, s.c0:s.c1], p.col_spec[:, :, s.x0:s.x1].transpose(0, 2, 1))
-        recv_counts = [0 if r == me else B * rows * (c1 - c0) for r, (c0, c1) in enumerate(s.cols)]
-        self._alltoall(p, counts, recv_counts)
-        at = 0
-        for (c0, c1), n in zip(s.cols, recv_counts, strict=True):
-            if n:
-                p.row_spec[:, :, c0:c1] = p.recv[at:at + n].reshape(B, rows, c1 - c0)
-            at += n
+        # to rank r: its rows of this rank's spectral columns, transposed
+        self._transpose(p, p.col_spec, p.row_spec, s.rows, s.cols)
         p.irfft.execute()  # destroys row_spec
         return p.real_out
 
