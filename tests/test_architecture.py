@@ -5,10 +5,10 @@ those inside functions too); nothing is imported. Importing ``a.b.c`` runs the p
 first, so an import of a module counts as an import of each package above it too (those above the
 importer itself excepted: they are already running), and a cycle through a package's ``__init__`` is found.
 
-Layers, bottom to top (:data:`LAYERS`): the foundation
-``core``; physics (``surfaces``, ``solver``, ``theory``, ``statistics``); ``analysis``; ``pipeline`` and
-``figures``; ``studies``; the package's face ``roughcontact/__init__.py`` on top. A module may import its
-own layer and the layers below, never one above.
+Layers, bottom to top (:data:`LAYERS`): the foundation ``core``; physics (``surfaces``, ``solver``, ``theory``,
+``statistics``); ``analysis``; ``case`` (a contact case as a library object); ``pipeline`` and ``figures``;
+``studies``; the package's face ``roughcontact/__init__.py`` on top. A module may import its own layer and the
+layers below, never one above.
 """
 
 from __future__ import annotations
@@ -29,9 +29,10 @@ LAYERS = {
     "theory": 1,
     "statistics": 1,
     "analysis": 2,
-    "pipeline": 3,
-    "figures": 3,
-    "studies": 4,
+    "case": 3,
+    "pipeline": 4,
+    "figures": 4,
+    "studies": 5,
 }
 #: The package's face (``roughcontact/__init__.py``: the public API) sits above every layer.
 FACE_RANK = max(LAYERS.values()) + 1

@@ -1,4 +1,5 @@
-"""One way to run a contact case: ContactCase, LoadSchedule and run_case (roughcontact.pipeline.case)."""
+"""A contact case as a library object: ContactCase, LoadSchedule and run_case (roughcontact.case), and the scene's
+contact block made one (roughcontact.pipeline.case.contact_case)."""
 import ast
 import doctest
 from pathlib import Path
@@ -6,10 +7,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import roughcontact.pipeline.case as case_module
-from roughcontact.pipeline.case import ContactCase, run_case
-from roughcontact.pipeline.loading import LoadSchedule
-from roughcontact.solver import solve_contact, solve_step
+import roughcontact.case as case_package
+import roughcontact.case.run as case_module
+from roughcontact.case import ContactCase, LoadSchedule, run_case
+from roughcontact.pipeline.case import contact_case, load_schedule
+from roughcontact.solver import SolverSettings, solve_contact, solve_step
 from roughcontact.statistics.clusters import ClusterObserver
 from roughcontact.surfaces.synthetic import generate_surface
 
@@ -23,6 +25,7 @@ def surface():
 
 def test_the_module_examples_run():
     assert doctest.testmod(case_module).failed == 0
+    assert doctest.testmod(case_package).failed == 0
 
 
 def test_a_block_runs_as_the_solver_with_its_settings(surface):
@@ -30,10 +33,10 @@ def test_a_block_runs_as_the_solver_with_its_settings(surface):
              "solver": {"e_star": 2.0, "tol": 1e-9, "max_iter": 5000, "boundary": "periodic", "pressure_unit": "MPa"},
              "effects": {"plasticity": {"hardness": 0.5}},
              "outputs": {"fields": [6], "clusters": True, "stiffness": True}}
-    case = ContactCase.from_block(block, length_unit="um")
+    case = contact_case(block, length_unit="um")
     ds = run_case(surface, case, length=1.0, rms_slope=0.1)
     loads = np.geomspace(0.05 * 2.0 * 0.1 / 6, 0.05 * 2.0 * 0.1, 6)
-    ref = solve_contact(surface, LoadSchedule.from_block(block).pressures(2.0, 0.1), e_star=2.0, tol=1e-9,
+    ref = solve_contact(surface, load_schedule(block).pressures(2.0, 0.1), e_star=2.0, tol=1e-9,
                         max_iter=5000, hardness=1.0, store_fields=[6], length_unit="um", pressure_unit="MPa",
                         observers=[ClusterObserver(1.0, length_unit="um")])
     np.testing.assert_allclose(ds["pressure"].values, loads, rtol=1e-12)
@@ -46,7 +49,7 @@ def test_a_block_runs_as_the_solver_with_its_settings(surface):
 
 
 def test_a_target_area_is_searched_on_the_case_surface(surface):
-    case = ContactCase(LoadSchedule(4, target_area=0.05), tol=1e-10)
+    case = ContactCase(LoadSchedule(4, target_area=0.05), SolverSettings(tol=1e-10))
     ds = run_case(surface, case, length=1.0, rms_slope=0.1)
     assert abs(float(ds.area_fraction[-1]) - 0.05) <= max(0.01 * 0.05, 1.5 / surface.size) + 1 / surface.size
     assert ds.attrs["load_probes"] >= 1 and "load_p_max" not in ds.attrs
@@ -105,4 +108,4 @@ def _solver_callers() -> set[str]:
 
 
 def test_one_module_outside_the_solver_runs_a_case():
-    assert _solver_callers() == {"src/roughcontact/pipeline/case.py"}
+    assert _solver_callers() == {"src/roughcontact/case/run.py"}

@@ -3,15 +3,15 @@ import copy
 
 import pytest
 
+from roughcontact.pipeline.case import load_schedule
 from roughcontact.pipeline.config.files import ConfigError
 from roughcontact.pipeline.config.schema import load_schema
-from roughcontact.pipeline.loading import LoadSchedule
 from roughcontact.pipeline.scenes import cases, validate_config
 
 
 def load_steps(block):
     """A contact block's loads (relative to E*)."""
-    return LoadSchedule.from_block(block).pressures(block["solver"]["e_star"])
+    return load_schedule(block).pressures(block["solver"]["e_star"])
 
 SCHEMA = load_schema()
 

@@ -22,8 +22,8 @@ import yaml
 from conftest import REPO, copy_workflow, run_snakemake
 from roughcontact.figures.registry import scene_figures
 from roughcontact.pipeline import params, progress
+from roughcontact.pipeline.case import load_schedule
 from roughcontact.pipeline.config import ConfigError
-from roughcontact.pipeline.loading import LoadSchedule
 from roughcontact.pipeline.scenes import plan_summary, validate_config
 from roughcontact.pipeline.sources import source_of
 from roughcontact.studies.accuracy import variants as accuracy_variants
@@ -194,7 +194,7 @@ def _plans(name, scene):
         if "surface" in block:
             params.surface(block)
         if "target_area" not in block["load"]:
-            loads = LoadSchedule.from_block(block).pressures(block["solver"]["e_star"], rms_slope=0.1)
+            loads = load_schedule(block).pressures(block["solver"]["e_star"], rms_slope=0.1)
             assert len(loads) == block["load"]["n_steps"] and loads[-1] > 0
         assert progress.planned_solves(scene) > 0
         params.fit(scene)

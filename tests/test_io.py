@@ -408,7 +408,7 @@ def test_names_of_unequal_lengths_are_written_whole(tmp_path, names):
 
 
 def test_eta_from_the_recent_pace():
-    from roughcontact.pipeline.io import eta
+    from roughcontact.case.progress import eta
 
     assert eta([1.0, 1.0], 5) == "about 3 s left (3 of 5 to go)"
     # the last five steps set the pace (steps slow down as the contact grows)

@@ -1,6 +1,6 @@
 """The library stands alone: its layers import without snakemake and without matplotlib.
 
-``core``, ``surfaces``, ``solver``, ``theory``, ``statistics`` and ``analysis`` are the solver library; the
+``core``, ``surfaces``, ``solver``, ``theory``, ``statistics``, ``analysis`` and ``case`` are the solver library; the
 pipeline (Snakemake) and the figures (matplotlib) sit above them (tests/test_architecture.py). A fresh
 interpreter in which both are made unimportable (a :data:`sys.meta_path` finder raising ImportError, as
 if they were not installed) imports every module of those layers.
@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 SRC = Path(__file__).resolve().parents[1] / "src"
-LIBRARY_LAYERS = ("core", "surfaces", "solver", "theory", "statistics", "analysis")
+LIBRARY_LAYERS = ("core", "surfaces", "solver", "theory", "statistics", "analysis", "case")
 BLOCKED = ("snakemake", "matplotlib")
 
 #: Run in a subprocess: block BLOCKED, import each module named on the command line, print what failed.

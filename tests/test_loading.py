@@ -4,7 +4,8 @@ import math
 import numpy as np
 import pytest
 
-from roughcontact.pipeline.loading import AREA_RTOL, LoadSchedule, pressure_for_area, schedule
+from roughcontact.case.loading import AREA_RTOL, pressure_for_area, schedule
+from roughcontact.pipeline.case import load_schedule
 from roughcontact.solver import solve_contact
 from roughcontact.surfaces.synthetic import generate_surface
 
@@ -14,12 +15,12 @@ def _block(**load):
 
 
 def load_steps(block, rms_slope=None):
-    return LoadSchedule.from_block(block).pressures(block["solver"]["e_star"], rms_slope)
+    return load_schedule(block).pressures(block["solver"]["e_star"], rms_slope)
 
 
 def case_loads(block, rms_slope, n_nodes, solve, log=None, name=None):
     """The case's loads as the case runner resolves them, ``solve(loads)`` the surface's solver."""
-    return LoadSchedule.from_block(block).resolve(block["solver"]["e_star"], rms_slope, n_nodes,
+    return load_schedule(block).resolve(block["solver"]["e_star"], rms_slope, n_nodes,
                                                   lambda p: float(solve([p]).area_fraction[-1]), log, name)
 
 

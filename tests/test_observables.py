@@ -10,7 +10,8 @@ import xarray as xr
 
 from cfcheck import own_checks
 from roughcontact.analysis.stiffness import contact_stiffness, stiffness_variable
-from roughcontact.pipeline.datasets import contact_dataset, contact_observers, full_contact_variable
+from roughcontact.case.outputs import contact_observers, full_contact_variable
+from roughcontact.pipeline.datasets import contact_dataset
 from roughcontact.pipeline.io import write_dataset
 from roughcontact.pipeline.sources.generated import Generated
 from roughcontact.solver import solve_contact

@@ -18,16 +18,17 @@ from snakemake.exceptions import WorkflowError
 
 from cfcheck import assert_cf_clean
 from conftest import copy_workflow, edited_contact, run_snakemake
+from roughcontact.case import ContactCase, run_case
+from roughcontact.case.loading import LoadSchedule
 from roughcontact.figures.registry import FIGURES
 from roughcontact.pipeline import params
-from roughcontact.pipeline.case import ContactCase, run_case
 from roughcontact.pipeline.cases import ContactBatch, batch_index, batch_seeds, batch_size, contact_batches
 from roughcontact.pipeline.config import ConfigError
 from roughcontact.pipeline.io import InputFileError, read_dataset, write_groups
-from roughcontact.pipeline.loading import LoadSchedule
 from roughcontact.pipeline.progress import read_log_solves
 from roughcontact.pipeline.scenes import validate_config
 from roughcontact.pipeline.targets import Targets
+from roughcontact.solver import PlasticityCap, SolverSettings
 from roughcontact.studies.accuracy import variants
 from roughcontact.surfaces.synthetic import generate_surface
 from test_workflow import TINY, _jobs
@@ -137,7 +138,7 @@ def surfaces():
                      generate_surface(32, 2, 16, 0.2, seed=2, rms_slope=0.05)])
 
 
-CASE = ContactCase(LoadSchedule(6, p_max=0.01), tol=1e-9,
+CASE = ContactCase(LoadSchedule(6, p_max=0.01), SolverSettings(tol=1e-9),
                    outputs={"fields": [], "clusters": False, "stiffness": True, "full_contact_load": True})
 
 
@@ -166,7 +167,7 @@ def test_run_case_on_a_batch_is_each_case_alone(surfaces):
     (ContactCase(LoadSchedule(3, p_max=0.01), outputs={"fields": [], "clusters": False,
                                                        "pressure_distribution": {"bins": 4, "max": 5}}),
      "outputs['pressure_distribution']"),
-    (ContactCase(LoadSchedule(3, p_max=0.01), effects={"plasticity": {"hardness": 0.5}}), "effects (plasticity)"),
+    (ContactCase(LoadSchedule(3, p_max=0.01), SolverSettings(effects=(PlasticityCap(0.5),))), "effects (plasticity)"),
     (ContactCase(LoadSchedule(3, target_area=0.2)), "schedule.target_area"),
     (ContactCase(LoadSchedule(3, p_max=0.01), warm_start="scaled"), "warm_start='scaled'"),
 ])

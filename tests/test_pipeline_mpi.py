@@ -1,8 +1,8 @@
 """One case over MPI ranks in the pipeline (issue 50, item 2): ``contact.solver.ranks`` from the config to the file.
 
 The config's refusals (each named, before any job), MPI asked for but not installed, ``ranks: 1`` dropped,
-the rules' functions and resources, the launcher (:func:`~roughcontact.pipeline.case.mpi_command`),
-:func:`~roughcontact.pipeline.case.run_case_on_ranks` against :func:`~roughcontact.pipeline.case.run_case`
+the rules' functions and resources, the launcher (:func:`~roughcontact.case.mpi_command`),
+:func:`~roughcontact.case.run_case_on_ranks` against :func:`~roughcontact.case.run_case`
 on the same surface file, the MPI solver's own refusal passed on as one line, a dry run under the SLURM
 profile (an MPI job: ``mpi=srun``, ``tasks`` = ranks) and (slow) a tiny scene with ``ranks: 2`` against
 the same scene in one process, file by file. The runs skip, saying why, where mpi4py or ``mpiexec`` is
@@ -28,17 +28,19 @@ import pytest
 import xarray as xr
 from snakemake.exceptions import WorkflowError
 
+import roughcontact.case as case_module
 from conftest import REPO, copy_workflow, edited_contact, run_snakemake
+from roughcontact.case import ContactCase, mpi_command, run_case, run_case_on_ranks
+from roughcontact.case.loading import LoadSchedule
 from roughcontact.figures.registry import FIGURES
-from roughcontact.pipeline import case as case_module, params
-from roughcontact.pipeline.case import ContactCase, mpi_command, run_case, run_case_on_ranks
+from roughcontact.pipeline import params
 from roughcontact.pipeline.config import ConfigError
 from roughcontact.pipeline.contact_jobs import contact_mpi_mem_mb, contact_mpi_runtime_min, contact_runtime_min
 from roughcontact.pipeline.datasets import SAMPLE_ROWS, surface_grid, surface_heights
 from roughcontact.pipeline.io import lazy_dataset, read_dataset
-from roughcontact.pipeline.loading import LoadSchedule
 from roughcontact.pipeline.scenes import validate_config
 from roughcontact.pipeline.targets import Targets
+from roughcontact.solver import PlasticityCap, SolverSettings
 from roughcontact.studies.accuracy import variants
 from roughcontact.surfaces.synthetic import generate_surface
 from test_solver_mpi import CAP, MPIEXEC, heights_reads, needs_mpi
@@ -195,8 +197,8 @@ def test_run_case_asks_for_the_file_and_the_runner_refuses_what_ranks_cannot_com
     with pytest.raises(ValueError, match="run_case_on_ranks"):
         run_case(h, case, length=1.0, rms_slope=0.1)
     for changed, named in ((dict(outputs={"fields": [4], "clusters": False}), "outputs['fields']"),
-                           (dict(boundary="free"), "boundary='free'"),
-                           (dict(effects={"plasticity": {"hardness": 0.5}}), "effects (plasticity)"),
+                           (dict(settings=SolverSettings(boundary="free")), "boundary='free'"),
+                           (dict(settings=SolverSettings(effects=(PlasticityCap(0.5),))), "effects (plasticity)"),
                            (dict(schedule=LoadSchedule(4, target_area=0.1)), "target_area")):
         bad = replace(case, **changed)
         with pytest.raises(ValueError, match=re.escape(named)):
@@ -206,8 +208,8 @@ def test_run_case_asks_for_the_file_and_the_runner_refuses_what_ranks_cannot_com
 @needs_mpi
 def test_run_case_on_ranks_gives_run_cases_answers(tmp_path, caplog):
     path, h = _surface_file(tmp_path / "s.nc")
-    case = ContactCase(LoadSchedule(6, p_max=0.005), outputs={"fields": [], "clusters": False, "stiffness": True},
-                       length_unit="um", pressure_unit="MPa")
+    case = ContactCase(LoadSchedule(6, p_max=0.005), SolverSettings(length_unit="um", pressure_unit="MPa"),
+                       outputs={"fields": [], "clusters": False, "stiffness": True})
     log = logging.getLogger("test_pipeline_mpi")
     with caplog.at_level(logging.INFO, logger="test_pipeline_mpi"):
         got = run_case_on_ranks(path, replace(case, ranks=2), length=(1.0, 1.0),

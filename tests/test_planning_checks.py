@@ -16,9 +16,10 @@ from cel_synthetic import simulate_cel_cases
 from conftest import REPO
 from roughcontact.analysis.aggregate.derived import aggregate_contact
 from roughcontact.analysis.fit.grid import fit_cel
+from roughcontact.case.loading import pressure_for_area
 from roughcontact.pipeline import adopt, progress, runcost
+from roughcontact.pipeline.case import load_schedule
 from roughcontact.pipeline.config import ConfigError
-from roughcontact.pipeline.loading import LoadSchedule, pressure_for_area
 from roughcontact.pipeline.scenes import validate_config
 from roughcontact.pipeline.sources import SOURCES
 
@@ -140,8 +141,8 @@ def test_hardness_below_a_cases_final_load_names_the_field_before_any_solve():
     # a surface normalised by rms height has its slope measured in its job: the loads are checked there
     block = {"load": {"relative_to": "rms_slope", "p_max": 0.05, "n_steps": 3},
              "solver": {"e_star": 1.0}, "effects": {"plasticity": {"hardness": 0.004}}}
-    with pytest.raises(ValueError, match=r"contact.effects.plasticity.hardness: 0.004 must exceed this case's final"):
-        LoadSchedule.from_block(block).resolve(1.0, rms_slope=0.1, n_nodes=1024, area_at=None)
+    with pytest.raises(ValueError, match=r"hardness: 0.004 E\* must exceed this case's final"):
+        load_schedule(block).resolve(1.0, rms_slope=0.1, n_nodes=1024, area_at=None, cap=0.004)
 
 
 def test_target_area_search_stays_below_the_hardness():

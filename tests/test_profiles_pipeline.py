@@ -13,7 +13,8 @@ import xarray as xr
 from cfcheck import own_checks
 from profile_solves import profile_solve
 from roughcontact.analysis import fit
-from roughcontact.pipeline.case import ContactCase, run_case
+from roughcontact.case import ContactCase, run_case
+from roughcontact.case.loading import LoadSchedule
 from roughcontact.pipeline.config import ConfigError
 from roughcontact.pipeline.config.checks import check_contact, check_profile_contact
 from roughcontact.pipeline.contact_jobs import contact_mem_mb, contact_runtime_min, map_side
@@ -25,9 +26,9 @@ from roughcontact.pipeline.datasets import (
     surface_heights,
 )
 from roughcontact.pipeline.io import read_dataset, write_dataset
-from roughcontact.pipeline.loading import LoadSchedule
 from roughcontact.pipeline.params import surface as surface_params
 from roughcontact.pipeline.sources import SOURCES
+from roughcontact.solver import SolverSettings
 from roughcontact.surfaces.synthetic import generate_profile, profile_spectral_moments
 from roughcontact.surfaces.topography import read_topography
 from roughcontact.theory.profiles import full_contact_load_profile
@@ -95,8 +96,8 @@ def test_run_case_on_a_profile_loads_relative_to_its_slope():
     h = generate_profile(512, 4, 32, 0.8, 0, rms_slope=0.1)
     slope = profile_spectral_moments(h)["rms_slope"]
     schedule = LoadSchedule(10, p_max=0.05, relative_to="rms_slope")
-    contact = ContactCase(schedule, e_star=2.0, outputs={"fields": [10], "clusters": False, "stiffness": True,
-                                                         "full_contact_load": True})
+    contact = ContactCase(schedule, SolverSettings(e_star=2.0),
+                          outputs={"fields": [10], "clusters": False, "stiffness": True, "full_contact_load": True})
     result = run_case(h, contact, length=1.0, rms_slope=slope)
     assert result.attrs["load_pbar_max"] == pytest.approx(0.05) and bool(result.converged.all())
     assert result.attrs["load_p0_max"] == pytest.approx(0.05 * 2.0 * slope)

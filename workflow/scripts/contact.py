@@ -5,7 +5,8 @@ from pathlib import Path
 
 import numpy as np
 
-from roughcontact.pipeline.case import ContactCase, run_case
+from roughcontact.case import run_case
+from roughcontact.pipeline.case import contact_case
 from roughcontact.pipeline.datasets import contact_dataset, surface_heights
 from roughcontact.pipeline.io import read_dataset, run_logged, write_dataset
 from roughcontact.pipeline.params import recorded, require_made_for
@@ -24,11 +25,11 @@ def main(log):
     require_made_for(surf, snakemake.input[0], case, **{for_case(case).record_key: snakemake.params.surface})
     heights, length = surface_heights(surf, snakemake.input[0])
     # both a generator block and a reader's settings name the study's length unit
-    contact = ContactCase.from_block(settings, length_unit=snakemake.params.surface["unit"], threads=snakemake.threads)
+    contact = contact_case(settings, length_unit=snakemake.params.surface["unit"], threads=snakemake.threads)
     rms_slope = float(surf.rms_slope.squeeze())
     result = run_case(heights, contact, length=length, rms_slope=rms_slope, log=log,
                       name=Path(snakemake.output[0]).stem)
-    ds = contact_dataset(result, rms_slope=rms_slope, alpha=float(surf.alpha.squeeze()), e_star=contact.e_star,
+    ds = contact_dataset(result, rms_slope=rms_slope, alpha=float(surf.alpha.squeeze()), e_star=contact.settings.e_star,
                          **{"hurst" if key == "H" else key: value for key, value in case.items()})
     write_dataset(ds, snakemake.output[0], stage="contact", scene=w.scene,
                   scene_parameters={**recorded(surf), **settings})

@@ -3,7 +3,8 @@ from pathlib import Path
 
 import numpy as np
 
-from roughcontact.pipeline.case import ContactCase, run_case
+from roughcontact.case import run_case
+from roughcontact.pipeline.case import contact_case
 from roughcontact.pipeline.cases import Case
 from roughcontact.pipeline.datasets import contact_dataset, surface_heights
 from roughcontact.pipeline.io import read_dataset, run_logged, write_groups
@@ -22,12 +23,13 @@ def main(log):
         h, length = surface_heights(surf, path)
         surfs.append(surf)
         heights.append(h)
-    contact = ContactCase.from_block(settings, length_unit=snakemake.params.surface["unit"], threads=snakemake.threads)
+    contact = contact_case(settings, length_unit=snakemake.params.surface["unit"], threads=snakemake.threads)
+    e_star = contact.settings.e_star
     slopes = [float(surf.rms_slope.squeeze()) for surf in surfs]
     results = run_case(np.stack(heights), contact, length=length, rms_slope=slopes, log=log,
                        name=[case.stem for case in cases])
     members = {
-        case.stem: (contact_dataset(result, rms_slope=slope, alpha=float(surf.alpha.squeeze()), e_star=contact.e_star,
+        case.stem: (contact_dataset(result, rms_slope=slope, alpha=float(surf.alpha.squeeze()), e_star=e_star,
                                     k_l=w.k_l, k_s=w.k_s, hurst=w.H, seed=case.seed),
                     {**recorded(surf), **settings})
         for case, result, surf, slope in zip(cases, results, surfs, slopes, strict=True)

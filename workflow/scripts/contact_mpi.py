@@ -4,7 +4,8 @@ copies the file (workflow/scripts/contact.py).
 
 This process never holds the surface (34 GB at 65536²): it checks the file from its header and a sample of
 rows (roughcontact.pipeline.datasets.surface_grid), and each rank reads and checks its own rows."""
-from roughcontact.pipeline.case import ContactCase, run_case_on_ranks
+from roughcontact.case import run_case_on_ranks
+from roughcontact.pipeline.case import contact_case
 from roughcontact.pipeline.datasets import contact_dataset, surface_grid
 from roughcontact.pipeline.io import lazy_dataset, run_logged, write_dataset
 from roughcontact.pipeline.params import recorded, require_made_for
@@ -18,10 +19,10 @@ def main(log):
         require_made_for(surf, path, case, surface=snakemake.params.surface)
         shape, length = surface_grid(surf, path)  # a NaN in rows it does not sample: the ranks name it
         rms_slope, alpha, made_with = float(surf.rms_slope.squeeze()), float(surf.alpha.squeeze()), recorded(surf)
-    contact = ContactCase.from_block(settings, length_unit=snakemake.params.surface["unit"])
+    contact = contact_case(settings, length_unit=snakemake.params.surface["unit"])
     result = run_case_on_ranks(path, contact, length=length, rms_slope=rms_slope, shape=shape,
                                launcher=snakemake.resources.mpi, log=log, name=f"kl{w.k_l}_ks{w.k_s}_H{w.H}_s{w.seed}")
-    ds = contact_dataset(result, rms_slope=rms_slope, alpha=alpha, e_star=contact.e_star,
+    ds = contact_dataset(result, rms_slope=rms_slope, alpha=alpha, e_star=contact.settings.e_star,
                          k_l=w.k_l, k_s=w.k_s, hurst=w.H, seed=w.seed)
     write_dataset(ds, snakemake.output[0], stage="contact", scene=w.scene,
                   scene_parameters={**made_with, **settings})

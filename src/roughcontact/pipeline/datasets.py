@@ -19,7 +19,6 @@ from ..analysis.aggregate.combine import CASE_DIMS, TOPOGRAPHY_DIM
 from ..core.cell import Cell
 from ..core.quantities import cf_unit
 from ..statistics.patches import resolved_variable
-from ..statistics.pressure import PressureDistribution, pressure_bins
 from ..statistics.representativity import epsilon_attrs
 from ..surfaces.synthetic import (
     finite_difference_rms_slope,
@@ -30,9 +29,7 @@ from ..surfaces.synthetic import (
     profile_spectral_moments,
     spectral_moments,
 )
-from ..theory.full_contact import full_contact_load
 from ..theory.perimeter import PERIMETER_C, perimeter_corrected_area
-from ..theory.profiles import full_contact_load_profile
 
 _CASE_COORD_ATTRS = {
     "k_l": {"units": "1", "long_name": "long-wavelength cutoff L/lambda_l"},
@@ -227,24 +224,6 @@ def _add_corrected_area(ds: xr.Dataset, cell: Cell) -> None:
                "long_name": f"perimeter-corrected contact area fraction A_pix/A0 - c P dx, c = {PERIMETER_C:.4f}, "
                             "dx = sqrt(dx dy) the pixel side"},
     )
-
-
-def contact_observers(outputs: dict, scale: float) -> list:
-    """The solve's observers a contact block's ``outputs`` asks for (``scale`` = E* h' [pressure])."""
-    spec = outputs.get("pressure_distribution")
-    if not spec:
-        return []
-    return [PressureDistribution(pressure_bins(spec["bins"], spec["max"]), scale)]
-
-
-def full_contact_variable(heights, length, e_star: float, pressure_units: str) -> xr.DataArray:
-    """``full_contact_pressure``: the exact mean pressure of full contact of the periodic ``heights`` (a map, or a
-    profile (n,) of period ``length``: :func:`roughcontact.theory.profiles.full_contact_load_profile`)."""
-    load = full_contact_load_profile if np.ndim(heights) == 1 else full_contact_load
-    return xr.DataArray(load(heights, e_star, length), attrs={
-        "units": pressure_units,
-        "long_name": "mean pressure at which the periodic surface is in full contact (exact: "
-                     "-min (E*/2) F^-1[|q| h_hat])"})
 
 
 def measured_surface_dataset(measured, *, name: str) -> xr.Dataset:

@@ -29,7 +29,7 @@ import os
 import re
 import resource
 import sys
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -79,28 +79,6 @@ def provenance_attrs(stage: str, scene: str, scene_parameters: Mapping) -> dict:
         "Conventions": "CF-1.8",
         "reference": "Yastrebov, Anciaux & Molinari, Phys. Rev. E 86, 035601 (2012)",
     }
-
-
-def eta(seconds: Sequence[float], total: int) -> str:
-    """What is left of a job of ``total`` equal parts after those timed in ``seconds``, as log text.
-
-    The pace is that of the last (up to) five parts: load steps slow down as the contact grows,
-    so the recent pace predicts better than the mean. ``"done"`` when nothing is left.
-    """
-    left = total - len(seconds)
-    if left <= 0:
-        return "done"
-    recent = list(seconds)[-5:]
-    return f"about {duration_text(left * sum(recent) / len(recent))} left ({left} of {total} to go)"
-
-
-def duration_text(seconds: float) -> str:
-    """A duration [s] as log text: ``"42 s"``, ``"3 min 05 s"``, ``"1 h 23 min"``."""
-    minutes, secs = divmod(round(seconds), 60)
-    hours, minutes = divmod(minutes, 60)
-    if hours:
-        return f"{hours} h {minutes:02d} min"
-    return f"{minutes} min {secs:02d} s" if minutes else f"{secs} s"
 
 
 def _string_names(ds: xr.Dataset) -> list[str]:

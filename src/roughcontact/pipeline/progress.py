@@ -35,9 +35,9 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..case.progress import duration_text
 from ..core.cli import input_errors, read_json_object, require_folder
 from ..core.files import write_text_atomic
-from .io import duration_text
 from .sources import source_of
 
 #: The per-step line of a contact job's log (workflow/scripts/contact.py), or of a batch's (``B cases``).

@@ -186,7 +186,7 @@ def _check_structure(config) -> dict:
 
 
 def _load_summary(load: Mapping) -> str:
-    """The final load in words: what a case receives (:mod:`roughcontact.pipeline.loading`)."""
+    """The final load in words: what a case receives (:mod:`roughcontact.case.loading`)."""
     if "target_area" in load:
         return (f"final load: the p0 giving A/A0 = {load['target_area']:g} on each case, found first "
                 f"(a few extra solves a case)")

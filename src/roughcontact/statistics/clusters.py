@@ -368,7 +368,7 @@ class ClusterObserver:
 
     Keeps each step's contact mask (a copy: ``nx * ny`` bools a step) and, when the solve ends,
     labels them with :func:`cluster_dataset`. Pass it to :func:`roughcontact.solver.solve_contact`
-    (``observers=[...]``); :func:`roughcontact.pipeline.case.run_case` adds one when a case's
+    (``observers=[...]``); :func:`roughcontact.case.run_case` adds one when a case's
     outputs ask for ``clusters``.
 
     Parameters

@@ -179,7 +179,7 @@ def check_batch(scene: str, block: dict, source: str | None) -> None:
 def check_ranks(scene: str, block: dict, source: str | None) -> None:
     """``solver.ranks`` of a contact block: what a case over MPI ranks cannot do, refused before any job is planned.
 
-    A case over ranks (:func:`roughcontact.pipeline.case.run_case_on_ranks`) is solved by
+    A case over ranks (:func:`roughcontact.case.run_case_on_ranks`) is solved by
     :mod:`roughcontact.solver.mpi`: a generated map (``source`` None) split in slabs of rows along x, the periodic
     elastic iteration on numpy, per-step columns only. So a block with ``ranks`` > 1 has no batch, effects, free
     boundary, CuPy, stored fields, clusters, P(p), full-contact load or ``target_area``, and at most one rank per
@@ -235,7 +235,7 @@ def check_mpi(scene: str, contact: Mapping) -> None:
     """``solver.ranks`` > 1 on a Python that cannot import mpi4py: refused before any job (the scene that runs).
 
     Only the import is checked here (the launcher, ``mpiexec`` or ``srun``, is found by the job:
-    :func:`roughcontact.pipeline.case.mpi_command`).
+    :func:`roughcontact.case.mpi_command`).
     """
     ranks = contact["solver"].get("ranks", 1)
     if ranks > 1 and importlib.util.find_spec("mpi4py") is None:
@@ -287,7 +287,7 @@ def _check_target_area(fail, load: dict) -> None:
 
 
 #: Fewest contact nodes a ``load.target_area`` may ask for: the search stops within 1.5 nodes
-#: (:func:`roughcontact.pipeline.loading.pressure_for_area`), 10 % of 15 nodes.
+#: (:func:`roughcontact.case.loading.pressure_for_area`), 10 % of 15 nodes.
 MIN_TARGET_NODES = 15
 
 

@@ -6,7 +6,7 @@ generated (``--generate N K_L K_S H SEED`` with ``--rms-slope`` or ``--rms-heigh
 it and sends each rank its rows; ``--plateau`` keeps the spectrum flat below ``K_L``: a roll-off).
 The loads are ``--steps`` equal steps up to ``--p-max`` [pressure] (``p0 = p_max k / steps``,
 ``k = 1..steps``), or the mean pressures listed by ``--loads`` (the pipeline's resolved schedule,
-:class:`roughcontact.pipeline.loading.LoadSchedule`, as ``repr`` strings: exact). Rank 0 writes the contact NetCDF file
+:class:`roughcontact.case.loading.LoadSchedule`, as ``repr`` strings: exact). Rank 0 writes the contact NetCDF file
 (``--out``), :func:`~roughcontact.solver.solve_contact`'s dataset, and logs each step to stderr.
 Bad input ends in one line ``error: ...`` on rank 0 and exit status 2 on every rank.
 

@@ -9,9 +9,8 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import xarray as xr
 
-from ...pipeline.case import ContactCase, run_case
-from ...pipeline.loading import LoadSchedule
-from ...solver import contact_perimeter
+from ...case import ContactCase, LoadSchedule, run_case
+from ...solver import SolverSettings, contact_perimeter
 from ...solver.stanley_kato import StanleyKato
 from ...surfaces.synthetic import finite_difference_rms_slope, generate_surface, spectral_moments
 from ...theory.perimeter import PERIMETER_C, perimeter_corrected_area
@@ -63,7 +62,7 @@ def _areas(pressure: np.ndarray, gap: np.ndarray, scale: float, thresholds: Sequ
 
 
 class _Areas:
-    """Observer of a solve (:func:`roughcontact.pipeline.case.run_case`): every area definition of each step."""
+    """Observer of a solve (:func:`roughcontact.case.run_case`): every area definition of each step."""
 
     needs_gap = True
 
@@ -83,7 +82,7 @@ class _Areas:
 def _bem_rows(h, schedule: LoadSchedule, *, length, tol, scale, thresholds) -> list[dict]:
     """The main solver through the case runner, each step started from the last pressure scaled to its load."""
     areas = _Areas(scale, thresholds, length)
-    case = ContactCase(schedule, tol=tol, warm_start="scaled")
+    case = ContactCase(schedule, SolverSettings(tol=tol), warm_start="scaled")
     run_case(h, case, length=length, rms_slope=float(spectral_moments(h, length)["rms_slope"]), observers=[areas])
     return areas.rows
 

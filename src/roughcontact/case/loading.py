@@ -1,6 +1,6 @@
-"""The load steps a contact case receives: applied mean pressures p0, from a scene's ``load`` block.
+"""The load steps a contact case receives: applied mean pressures p0 (:class:`LoadSchedule`).
 
-A scene gives the final load in one of three ways (``config/README.md``, ``contact.load``):
+The final load is given in one of three ways (a scene's ``contact.load``, ``config/README.md``):
 
 - ``p_max`` with ``relative_to: e_star`` (generated scenes' default): ``p0 = p_max E*``, the
   same for every case;
@@ -20,7 +20,7 @@ the accuracy study and the κ-gap study alike).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass
 
 #: A/A0 ~ kappa p0 / (E* h') at small loads (kappa about 2 on the paper's surfaces): the first
@@ -69,8 +69,6 @@ class LoadSchedule:
         ``p0 = p_max E*`` or ``p0 = p_max E* h'`` (module docstring).
     target_area : float or None
         The final load is the one whose A/A0 is this (:func:`pressure_for_area`).
-    hardness : float or None
-        The plasticity effect's hardness over ``E*``: every load stays below it.
 
     Examples
     --------
@@ -84,16 +82,6 @@ class LoadSchedule:
     p_min: float | None = None
     relative_to: str = "e_star"
     target_area: float | None = None
-    hardness: float | None = None
-
-    @classmethod
-    def from_block(cls, block: Mapping) -> LoadSchedule:
-        """The schedule of a validated contact block (its ``load`` and the plasticity hardness)."""
-        load = block["load"]
-        hardness = (block.get("effects") or {}).get("plasticity", {}).get("hardness")
-        return cls(int(load["n_steps"]), load.get("schedule", "uniform"),
-                   None if "target_area" in load else load["p_max"], load.get("p_min"),
-                   load.get("relative_to", "e_star"), load.get("target_area"), hardness)
 
     def scale(self, e_star: float, rms_slope: float | None = None) -> float:
         """What ``p_max`` and ``p_min`` are in units of [pressure]: ``E*`` or ``E* h'``.
@@ -120,33 +108,36 @@ class LoadSchedule:
         return schedule(p_max, self.n_steps, self.kind, p_min)
 
     def resolve(self, e_star: float, rms_slope: float, n_nodes: int, area_at: Callable[[float], float] | None,
-                log=None, name: str | None = None) -> tuple[list[float], dict]:
+                log=None, name: str | None = None, cap: float | None = None) -> tuple[list[float], dict]:
         """The load steps of one case and what to record of them: ``(loads, attrs)``.
 
         ``area_at(p0)`` solves the case's surface at one load and returns its A/A0, used only with
         ``target_area`` (:func:`pressure_for_area`). ``name`` (the case's) starts the warning of a
-        target A/A0 that no probe met: jobs run side by side and their lines meet in one console.
+        target A/A0 that no probe met: jobs run side by side and their lines meet in one console. ``cap``
+        [pressure] (the settings' pressure cap, :attr:`roughcontact.solver.SolverSettings.hardness`): every
+        load stays below it (a final load at or above it is a ``ValueError``; a ``target_area`` search stays
+        under it).
         ``attrs`` (netCDF global attributes): ``load_relative_to`` and ``load_p_max`` as the scene gave
         them, or ``load_target_area``, ``load_target_area_reached`` (the probe's A/A0) and
         ``load_probes``; always ``load_p0_max``, the final p0 [pressure], and ``load_pbar_max`` =
         p0 / (E* h') of the last step.
         """
         if self.target_area is not None:
-            loads, attrs = self._target_loads(e_star, rms_slope, n_nodes, area_at, log, name)
+            loads, attrs = self._target_loads(e_star, rms_slope, n_nodes, area_at, log, name, cap)
         else:
             loads = self.pressures(e_star, rms_slope)
             attrs = {"load_relative_to": self.relative_to, "load_p_max": float(self.p_max)}
-            self._check_hardness(loads[-1], e_star, rms_slope)
+            self._check_cap(loads[-1], e_star, rms_slope, cap)
         attrs.update(load_p0_max=float(loads[-1]), load_pbar_max=float(loads[-1] / (e_star * rms_slope)))
         if log is not None:
             log.info("loads: p0 from %.6g to %.6g (p0/E* up to %.4g, p0/(E* h') up to %.4g) in %d steps", loads[0],
                      loads[-1], loads[-1] / e_star, attrs["load_pbar_max"], len(loads))
         return loads, attrs
 
-    def _target_loads(self, e_star, rms_slope, n_nodes, area_at, log, name) -> tuple[list[float], dict]:
+    def _target_loads(self, e_star, rms_slope, n_nodes, area_at, log, name, cap) -> tuple[list[float], dict]:
         """The steps up to the load whose A/A0 is ``target_area``, found by probing the surface."""
         found = pressure_for_area(area_at, self.target_area, e_star=e_star, rms_slope=rms_slope, n_nodes=n_nodes,
-                                  p_cap=None if self.hardness is None else self.hardness * e_star)
+                                  p_cap=cap)
         if log is not None:
             log.log(20 if found["reached"] else 30, "%starget A/A0 = %g: p0 = %.6g gives A/A0 = %.6g after %d solves%s",
                     f"{name}: " if name else "", self.target_area, found["pressure"], found["area"], found["probes"],
@@ -155,14 +146,13 @@ class LoadSchedule:
         return loads, {"load_target_area": float(self.target_area), "load_target_area_reached": found["area"],
                        "load_probes": int(found["probes"])}
 
-    def _check_hardness(self, p_last: float, e_star: float, rms_slope: float) -> None:
-        """A final load the hardness cannot carry, refused naming the field (before any solve)."""
-        if self.hardness is not None and not p_last < self.hardness * e_star:
+    def _check_cap(self, p_last: float, e_star: float, rms_slope: float, cap: float | None) -> None:
+        """A final load the pressure cap cannot carry, refused naming the load and the cap (before any solve)."""
+        if cap is not None and not p_last < cap:
             raise ValueError(
-                f"contact.effects.plasticity.hardness: {self.hardness:g} must exceed this case's final load p0/E* = "
-                f"{p_last / e_star:.6g} (load.p_max {self.p_max:g} relative to {self.relative_to}, "
-                f"rms slope {rms_slope:.6g}): a pressure capped at the hardness cannot carry a mean load p0 >= "
-                "hardness; raise the hardness or lower load.p_max")
+                f"hardness: {cap / e_star:g} E* must exceed this case's final load p0/E* = {p_last / e_star:.6g} "
+                f"(load p_max {self.p_max:g} relative to {self.relative_to}, rms slope {rms_slope:.6g}): a pressure "
+                "capped at the hardness cannot carry a mean load p0 >= hardness; raise the hardness or lower p_max")
 
 
 def pressure_for_area(area_at: Callable[[float], float], target: float, *, e_star: float, rms_slope: float,
