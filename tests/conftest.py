@@ -85,19 +85,17 @@ def run_snakemake(workdir, *args, timeout=SNAKEMAKE_TIMEOUT_S, env=None):
     return subprocess.CompletedProcess(proc.args, proc.returncode, stdout, stderr)
 
 
-def copy_workflow(dest: Path, config: dict | None = None) -> Path:
-    """Copy Snakefile, workflow/, profiles/, config/, envs/ and data/ into ``dest``; optionally replace the config.
+def copy_workflow(dest: Path, config: dict | None = None, source: Path = REPO) -> Path:
+    """Copy Snakefile, workflow/, profiles/, config/, envs/ and data/ of ``source`` (this repository) into ``dest``;
+    optionally replace the config.
 
     ``profiles/default`` comes along: Snakemake reads it in every run from the copy, as it does in the
     repository (the default workflow profile), so the tests run what a user's ``snakemake`` runs.
     """
     dest.mkdir(parents=True, exist_ok=True)
-    shutil.copy(REPO / "Snakefile", dest / "Snakefile")
-    shutil.copytree(REPO / "workflow", dest / "workflow", dirs_exist_ok=True)
-    shutil.copytree(REPO / "profiles", dest / "profiles", dirs_exist_ok=True)
-    shutil.copytree(REPO / "data", dest / "data", dirs_exist_ok=True)
-    shutil.copytree(REPO / "config", dest / "config", dirs_exist_ok=True)
-    shutil.copytree(REPO / "envs", dest / "envs", dirs_exist_ok=True)
+    shutil.copy(source / "Snakefile", dest / "Snakefile")
+    for name in ("workflow", "profiles", "data", "config", "envs"):
+        shutil.copytree(source / name, dest / name, dirs_exist_ok=True)
     if config is not None:
         with open(dest / "config" / "config.yaml", "w") as fh:
             yaml.safe_dump(config, fh, sort_keys=False)

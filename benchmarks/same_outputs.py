@@ -1,0 +1,176 @@
+"""Prove that a refactoring left the pipeline's outputs unchanged: run the scene families with one commit's code,
+then compare two such runs file by file.
+
+Usage::
+
+    python benchmarks/same_outputs.py run --repo /path/to/checkout --out DIR [--families demo lines ...]
+    python benchmarks/same_outputs.py compare DIR_A DIR_B [--families ...]
+
+``run`` copies the workflow of the checkout ``--repo`` (as ``tests/conftest.py``'s ``copy_workflow`` does) into
+``DIR/<family>/wd``, writes the family's config there and runs ``snakemake -j2 --config scene=<scene>`` with
+``PYTHONPATH=<repo>/src``, so that the code of ``--repo`` runs. The configs are this checkout's tests' own
+(``conftest.FAMILIES`` and the two below): both sides of a comparison get the same inputs; a family whose config is
+None (``demo``) runs the shipped config of ``--repo`` as it is.
+
+``compare`` compares every ``*.nc`` and ``*.csv`` under each family's ``results/`` byte by byte. Two runs of one commit
+on one machine write the same bytes (tests/test_workflow.py's rerun; measured with this tool on f89aa95: two runs of
+``adhesion``, ``ranks2``, ``batched`` and ``measured``, every file identical, no variable or attribute that changes from
+run to run: the solver's ``wall_time`` is not written), so nothing is excluded. The files of ``ranks2`` and any file
+that differs are also opened with xarray (every group) and the largest relative difference of each variable reported;
+``ranks2`` passes within :data:`MPI_RTOL`. The exit status is 0 only when every other file is byte-identical.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+ROOT = Path(__file__).resolve().parents[1]  # this checkout: its tests' configs and helpers
+sys.path.insert(0, str(ROOT / "tests"))
+from conftest import FAMILIES, TINY, copy_workflow, edited_contact, run_snakemake  # noqa: E402
+
+#: The agreement of the MPI solve with the single solve asked by the tests: the mean gap to ``rtol=1e-6``
+#: (tests/test_solver_mpi.py, test_same_answers_as_the_single_solve; tests/test_pipeline_mpi.py,
+#: test_ranks_2_equals_the_run_in_one_process), the strictest of their tolerances (A/A0 to 2 nodes, kappa and the
+#: stiffness to 1e-4, the perimeter to 1e-3). Here applied to every variable, relative to its largest magnitude.
+MPI_RTOL = 1e-6
+
+#: The families run by default: the tests' (conftest.FAMILIES, under short names), then two of this tool's own.
+NAMES = {"demo": "paper-like", "lines": "profiles", "adhesion": "adhesion", "measured": "measured", "array": "array"}
+#: The tiny scene in batches of 2 (tests/test_pipeline_batch.py's BATCHED has 5 seeds in batches of 4: a full and
+#: a short batch; here 3 seeds in batches of 2) and over 2 MPI ranks (tests/test_pipeline_mpi.py's SPLIT).
+EXTRA = {"batched": lambda: edited_contact(TINY, **{"seeds": 3, "solver.batch": 2}),
+         "ranks2": lambda: edited_contact(TINY, **{"solver.ranks": 2})}
+ALL = [*NAMES, *EXTRA]
+
+
+def family_config(name: str) -> tuple[str, dict | None, dict]:
+    """Family ``name``'s scene, config (None: the shipped one) and files to copy (``{destination: source}``)."""
+    if name in EXTRA:
+        return "tiny", EXTRA[name](), {}
+    family = FAMILIES[NAMES[name]]
+    return family.scene, family.config(), dict(family.files)
+
+
+def run(repo: Path, out: Path, families: list[str]) -> None:
+    """Run each family with the code of ``repo`` in ``out/<family>/wd``; stop at the first failing run."""
+    env = {**os.environ, "PYTHONPATH": str(repo / "src")}
+    found = subprocess.run([sys.executable, "-c", "import roughcontact; print(roughcontact.__file__)"], env=env,
+                           capture_output=True, text=True, check=True).stdout.strip()
+    if not Path(found).is_relative_to(repo / "src"):
+        sys.exit(f"with PYTHONPATH={repo / 'src'} roughcontact is imported from {found}, not from --repo")
+    for name in families:
+        wd = out / name / "wd"
+        if wd.exists():
+            sys.exit(f"{wd} exists: remove it or choose another --out")
+        scene, config, files = family_config(name)
+        copy_workflow(wd, config, source=repo)
+        for dest, source in files.items():
+            (wd / dest).write_bytes(Path(source).read_bytes())
+        start = time.monotonic()
+        res = run_snakemake(wd, "-j2", "--config", f"scene={scene}", env=env)
+        wall = time.monotonic() - start
+        (out / name / "snakemake.log").write_text(res.stdout + res.stderr)
+        if res.returncode != 0:
+            sys.exit(f"{name}: snakemake failed (exit {res.returncode}) after {wall:.0f} s; "
+                     f"{out / name / 'snakemake.log'}:\n{res.stderr[-3000:]}")
+        print(f"{name} ({scene}): {wall:.0f} s, {len(result_files(wd / 'results'))} files", flush=True)
+
+
+def result_files(root: Path) -> set[Path]:
+    """The ``*.nc`` and ``*.csv`` files under ``root``, relative to it."""
+    return {p.relative_to(root) for p in root.rglob("*") if p.suffix in (".nc", ".csv") and p.is_file()}
+
+
+def columns(path: Path) -> dict[str, np.ndarray]:
+    """Every variable of every group of a NetCDF file (``group/name``; a group's attributes as ``group/:attrs``),
+    or every column of a CSV file."""
+    if path.suffix == ".csv":
+        table = pd.read_csv(path)
+        return {name: table[name].to_numpy() for name in table.columns}
+    out = {}
+    with xr.open_datatree(path) as tree:
+        for node in tree.subtree:
+            group = node.path.strip("/")
+            out[f"{group}/:attrs".lstrip("/")] = np.array(repr(sorted(node.attrs.items())))
+            out.update({f"{group}/{name}".lstrip("/"): var.values for name, var in node.dataset.variables.items()})
+    return out
+
+
+def largest_differences(a: Path, b: Path) -> dict[str, float]:
+    """Per variable (column) of two NetCDF (CSV) files: max |a - b| / max |b|; inf where the shapes differ or a
+    variable is in one file only, and where non-numbers (attributes, labels) differ."""
+    ca, cb = columns(a), columns(b)
+    out = {}
+    for key in ca.keys() | cb.keys():
+        x, y = ca.get(key), cb.get(key)
+        if x is None or y is None or x.shape != y.shape:
+            out[key] = float("inf")
+        elif np.issubdtype(y.dtype, np.number) and np.issubdtype(x.dtype, np.number):
+            x, y = x.astype(float), y.astype(float)
+            diff = np.max(np.abs(x - y), initial=0.0, where=~(np.isnan(x) & np.isnan(y)))
+            scale = np.max(np.abs(y), initial=0.0, where=~np.isnan(y))
+            out[key] = float(diff / scale) if scale > 0 else (0.0 if diff == 0 else float("inf"))
+        else:
+            out[key] = 0.0 if np.array_equal(x, y) else float("inf")
+    return out
+
+
+def compare(dir_a: Path, dir_b: Path, families: list[str] | None = None) -> bool:
+    """Print one line per family (files, identical, differing) and the differences; True when all pass.
+
+    ``families``: those compared (None: every family run in either folder)."""
+    ok = True
+    found = {p.name for d in (dir_a, dir_b) for p in d.iterdir() if (p / "wd").is_dir()}
+    for name in families or sorted(found):
+        ra, rb = dir_a / name / "wd" / "results", dir_b / name / "wd" / "results"
+        fa, fb = result_files(ra) if ra.is_dir() else set(), result_files(rb) if rb.is_dir() else set()
+        missing = sorted(fa ^ fb)
+        differ = sorted(p for p in fa & fb if (ra / p).read_bytes() != (rb / p).read_bytes())
+        print(f"{name}: {len(fa | fb)} files, {len(fa & fb) - len(differ)} identical, {len(differ)} differing"
+              + "".join(f"\n  differs: {p}" for p in differ)
+              + "".join(f"\n  only in {dir_a if p in fa else dir_b}: {p}" for p in missing if fa and fb)
+              + "".join(f"\n  no results in {d}" for d, files in ((dir_a, fa), (dir_b, fb)) if not files))
+        family_ok = not missing and not differ and bool(fa | fb)
+        worst = {}
+        for p in sorted(fa & fb) if name == "ranks2" else differ:
+            for var, rel in largest_differences(ra / p, rb / p).items():
+                worst[var] = max(worst.get(var, 0.0), rel)
+        for var, rel in sorted(worst.items()):
+            if rel > 0:
+                print(f"  {var}: largest relative difference {rel:.3g}")
+        if name == "ranks2" and fa and not missing:
+            family_ok = all(rel <= MPI_RTOL for rel in worst.values())
+            print(f"  ranks2 within rtol {MPI_RTOL:g} (the MPI solve's tolerance): {'yes' if family_ok else 'NO'}")
+        ok &= family_ok
+    return ok
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    r = sub.add_parser("run", help="run the families with the code of --repo")
+    r.add_argument("--repo", type=Path, required=True, help="the checkout whose workflow and src/ run")
+    r.add_argument("--out", type=Path, required=True, help="folder of the runs (DIR/<family>/wd)")
+    r.add_argument("--families", nargs="+", choices=ALL, default=ALL, metavar="FAMILY",
+                   help=f"families to run (default: all of {' '.join(ALL)})")
+    c = sub.add_parser("compare", help="compare two run folders file by file")
+    c.add_argument("dirs", type=Path, nargs=2, metavar="DIR")
+    c.add_argument("--families", nargs="+", choices=ALL, metavar="FAMILY",
+                   help="families to compare (default: every family run in either folder)")
+    args = parser.parse_args(argv)
+    if args.command == "run":
+        run(args.repo.resolve(), args.out.resolve(), args.families)
+        return 0
+    return 0 if compare(*args.dirs, args.families) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
