@@ -17,7 +17,7 @@ import xarray as xr
 
 from ..core.cell import Cell
 from ..statistics.patches import PATCH_LONG_NAMES, contact_patches
-from .adhesive import ADHESIVE_SOLVER_DESCRIPTION, ADHESIVE_SOLVER_NAME, AdhesiveSolver
+from .adhesion.solver import ADHESIVE_SOLVER_DESCRIPTION, ADHESIVE_SOLVER_NAME, AdhesiveSolver
 from .contact import ContactSolver
 from .results import SOLVER_NAME, StepResult, solver_description, to_dataset
 from .settings import SolverSettings
@@ -29,7 +29,7 @@ def prepare(heights, loads: np.ndarray, name: str, settings: SolverSettings | No
     """The validated solver of ``heights`` for ``settings`` with ``options`` replacing its fields.
 
     The iteration follows from what the effects supply: an interaction energy (``functional``)
-    needs the gap iteration (:class:`~.adhesive.AdhesiveSolver`), anything else the pressure
+    needs the gap iteration (:class:`~.adhesion.solver.AdhesiveSolver`), anything else the pressure
     iterations (:class:`~.contact.ContactSolver`). ``loads`` (already validated numbers) are
     checked against the effects and float64's range, the error naming the argument ``name``.
     A profile (1-D ``heights``, :meth:`~roughcontact.core.cell.Cell.profile`) is solved as its one-row
