@@ -12,7 +12,7 @@ import xarray as xr
 from ...pipeline.case import ContactCase, run_case
 from ...pipeline.loading import LoadSchedule
 from ...solver import contact_perimeter
-from ...solver.stanley_kato import StanleyKato
+from ...solver.reference.stanley_kato import StanleyKato
 from ...surfaces.synthetic import finite_difference_rms_slope, generate_surface, spectral_moments
 from ...theory.perimeter import PERIMETER_C, perimeter_corrected_area
 
