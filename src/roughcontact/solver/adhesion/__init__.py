@@ -8,7 +8,7 @@ effects import this package, so it is not re-exported here).
 
 Problem
 -------
-The conventions of :mod:`roughcontact.solver`: a rigid surface of heights ``h`` [length]
+The conventions of the contact solver (docs/solver.md, "Problem"): a rigid surface of heights ``h`` [length]
 (highest points touch first) on a periodic elastic half-space of plane-strain modulus
 ``E*`` [pressure], cell ``Lx x Ly`` on ``nx x ny`` nodes (``length`` a float ``L`` means a
 square cell; ``ny = 1`` is a plane-strain 1-D problem, ``h`` independent of y). ``p`` is
