@@ -18,61 +18,31 @@ and its solver (Rey, Anciaux & Molinari 2017); :mod:`.batch` many surfaces of on
 (issue 48); :mod:`.mpi` one case split over MPI ranks (issue 50); :mod:`.reference` methods of other
 kinds that studies run beside ours (Stanley & Kato's iteration, for the κ-gap study).
 
+A name that another module needs is imported from the module that defines it and documents it
+(``from roughcontact.solver.workspace import SOLVER_PATHS``); this package exports the public API only.
+
 The FFT plans and buffers are shared per grid size within a process, so two solves of the same size
 must not run concurrently in threads of one process (separate processes, as under Snakemake, are fine).
 """
 
-from ..core.backend import ARRAY_BACKENDS
 from .batch import solve_contact_batch
-from .check import MEAN_RTOL
-from .contact import ContactSolver
 from .effects import EFFECTS, Adhesion, Effect, PlasticityCap, effects_from_config
-from .halfspace import FreeHalfSpace, PeriodicHalfSpace, displacement, elastic_kernel, free_influence
 from .options import get_options, set_options
-from .results import (
-                      FRACTION_UNITS,
-                      SOLVER_DESCRIPTION,
-                      SOLVER_NAME,
-                      StepResult,
-                      contact_perimeter,
-                      step_notes,
-)
-from .settings import DEFAULT_MAX_ITER, SolverSettings
+from .results import StepResult, contact_perimeter, step_notes
+from .settings import SolverSettings
 from .solve import solve_contact, solve_step
-from .units import LOAD_RANGE, gap_scale
-from .validation import BOUNDARIES
-from .workspace import ELASTIC_METHODS, FALLBACKS, SOLVER_PATHS, STALL_WINDOW
 
 __all__ = [
-    "ARRAY_BACKENDS",
-    "BOUNDARIES",
-    "Adhesion",
-    "DEFAULT_MAX_ITER",
     "EFFECTS",
-    "ELASTIC_METHODS",
-    "FALLBACKS",
-    "FRACTION_UNITS",
-    "LOAD_RANGE",
-    "MEAN_RTOL",
-    "SOLVER_DESCRIPTION",
-    "SOLVER_NAME",
-    "SOLVER_PATHS",
-    "STALL_WINDOW",
-    "ContactSolver",
+    "Adhesion",
     "Effect",
-    "FreeHalfSpace",
-    "PeriodicHalfSpace",
     "PlasticityCap",
     "SolverSettings",
     "StepResult",
     "contact_perimeter",
+    "effects_from_config",
     "get_options",
     "set_options",
-    "displacement",
-    "effects_from_config",
-    "elastic_kernel",
-    "free_influence",
-    "gap_scale",
     "solve_contact",
     "solve_contact_batch",
     "solve_step",
