@@ -4,7 +4,7 @@
 A rigid sphere ``h = -(x^2 + y^2) / 2R`` (R = 1, E* = 1) on an ``N x N`` periodic cell of side ``L``,
 exponential law with work ``w`` and range ``rho = w^(2/3) R^(1/3) / mu_T`` (Tabor parameter ``mu_T``),
 is pressed by a tiny load and unloaded by the adhesion effect's own refined unloading
-(:meth:`roughcontact.solver.adhesive.AdhesiveSolver.unload`). Printed per case: the process zone's
+(:meth:`roughcontact.solver.adhesion.solver.AdhesiveSolver.unload`). Printed per case: the process zone's
 cells ``E* rho^2 / w / dx``, the pull-off force over ``pi w R`` (measured with the resolution check
 switched off, so that unresolved grids show what they would report), the attraction across the cell
 at the pull-off (``attraction_across_cell``: for the centred sphere the tension at the cell's edge over
@@ -27,7 +27,7 @@ import warnings
 
 import numpy as np
 
-import roughcontact.solver.adhesive as adhesive
+import roughcontact.solver.adhesion.solver as adhesive
 from roughcontact.solver import Adhesion, solve_contact
 from roughcontact.solver.adhesion import MAX_ATTRACTION_ACROSS_CELL, MIN_ZONE_CELLS, PULL_OFF_STATUS
 

@@ -6,7 +6,7 @@ equal loads to p0/E* = ``--p-max``, tol 1e-8), single-threaded (``OMP_NUM_THREAD
 
 - ``single``: :func:`roughcontact.solver.solve_contact` on the map (``PKIteration``, compressed sets);
 - ``batched``: :func:`roughcontact.solver.solve_contact_batch` on ``h[None]`` (the batched iteration with the
-  fused CPU kernels of ``solver/batch_cpu.py``, B = 1): the iteration the MPI solver runs on each rank;
+  fused CPU kernels of ``solver/batch/cpu.py``, B = 1): the iteration the MPI solver runs on each rank;
 - ``tamaas``: Tamaas' ``PolonskyKeerRey`` (``bench_solver.run_tamaas``), once (its cold start costs it most).
 
 Ours run ``--repeats`` times each, interleaved (``single, batched, single, ...``) after one warm-up each (the

@@ -26,7 +26,8 @@ FILES = (("frt-2.frt", "crop"), ("mi-1.mi", None), ("opd-1.opd", "crop"), ("sur-
 
 def solve_file(path: Path, crop: str | None) -> str:
     """One file's line: grid, converged steps, iterations, paths, CPU [s], final A/A0."""
-    from roughcontact.solver import SOLVER_PATHS, solve_contact
+    from roughcontact.solver import solve_contact
+    from roughcontact.solver.workspace import SOLVER_PATHS
     from roughcontact.surfaces.topography import read_topography
 
     kw = {"non_square": crop} if crop else {}

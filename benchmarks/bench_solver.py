@@ -32,7 +32,7 @@ memory and FFT plans of one size do not leak into the next) it:
 5. ``--plan-repeats`` (default "auto": 2 for N <= 1024, 0 above): solves again with
    ``FFTW_ESTIMATE`` plans, ``FFTW_MEASURE`` plans and ``numpy.fft`` in turn, several times;
 6. ``--methods`` (default "auto": ``pk,pk-fourier,pk-fourier-f32`` for N <= 1024, none
-   above): solves with each elastic iteration of :data:`roughcontact.solver.ELASTIC_METHODS`
+   above): solves with each elastic iteration of :data:`roughcontact.solver.workspace.ELASTIC_METHODS`
    (``"pk"`` is the reference) in ``--method-repeats`` interleaved rounds; with two or more
    ``--n`` the output ends with the exponent ``a`` of ``iterations ~ N**a`` per method;
 7. runs Tamaas' ``PolonskyKeerRey`` (pressure primal and constraint, one thread, the same

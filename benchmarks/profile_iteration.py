@@ -12,8 +12,8 @@ call; compare shares, not the solve's total with the benchmark's.
     python benchmarks/profile_iteration.py [--n 1024]
 
 ``--batched plain|fused`` profiles the batched iteration on the same case (B = 1) instead: each kernel
-method of its kernels (``plain``: :class:`roughcontact.solver.batch_kernels.ArrayKernels`, numpy
-expressions; ``fused``: :class:`roughcontact.solver.batch_cpu.FusedCpuKernels`, numba loops over the free
+method of its kernels (``plain``: :class:`roughcontact.solver.batch.kernels.ArrayKernels`, numpy
+expressions; ``fused``: :class:`roughcontact.solver.batch.cpu.FusedCpuKernels`, numba loops over the free
 set's indices), the batched transforms and the warm start, so that the options compare side by side
 (benchmarks/README.md, "One iteration code"). A kernel that calls another is counted in both.
 """
@@ -86,10 +86,10 @@ def instrument(acc: collections.Counter, calls: collections.Counter) -> None:
 
 def instrument_batched(acc: collections.Counter, calls: collections.Counter, kernels: str) -> None:
     """Timers on the batched iteration's kernels (``kernels``: "plain" or "fused"), transforms and start."""
-    import roughcontact.solver.batch_kernels as bk
-    import roughcontact.solver.batch_operator as bo
-    import roughcontact.solver.batch_solver as bs
-    from roughcontact.solver.batch_cpu import FusedCpuKernels
+    import roughcontact.solver.batch.halfspace as bo
+    import roughcontact.solver.batch.kernels as bk
+    import roughcontact.solver.batch.solver as bs
+    from roughcontact.solver.batch.cpu import FusedCpuKernels
 
     cls = FusedCpuKernels if kernels == "fused" else bk.ArrayKernels
     if kernels == "plain":

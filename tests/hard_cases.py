@@ -67,7 +67,7 @@ MEASURED = Path(__file__).resolve().parent / "data" / "surfacetopography"
 SOLVER_TOL = 1e-10
 
 #: Iteration guard of a partial-contact step: no step of a case may take more. Measured: at most
-#: 63 (N = 256, k_s = N/2); the stall window (``roughcontact.solver.STALL_WINDOW`` = 300) is where a
+#: 63 (N = 256, k_s = N/2); the stall window (``roughcontact.solver.workspace.STALL_WINDOW`` = 300) is where a
 #: fallback starts, so a step near it is one window from a stall.
 MAX_ITERATIONS = 150
 
@@ -97,7 +97,7 @@ def full_contact_bound(p: np.ndarray, p0: float, s: float, tol: float, e_star: f
                        length: Length = 1.0, mean_rtol: float = 1e-10) -> float:
     """Bound on ``max |p - p_exact|`` that a converged step at full contact guarantees.
 
-    Derivation (criterion of :mod:`roughcontact.solver`): at full contact every node is in ``F``,
+    Derivation (criterion of docs/solver.md): at full contact every node is in ``F``,
     so ``e_orth = sum(p |g|) / (N p0 s) <= tol`` gives ``mean |g| <= tol s p0 / min p``. As ``K p =
     h + g + const`` and ``K p_exact = h + const``, ``p - p_exact = M g + (mean(p) - p0)`` with
     ``M = (E*/2)|q|``; each DFT coefficient obeys ``|g_hat(q)| <= mean |g|``, so
@@ -350,7 +350,7 @@ BETA_SQUARE = 0.3667874 / (2 / (math.pi * math.sqrt(math.pi)))
 class HardCase:
     """One hard case. ``tol`` is the comparison tolerance of ``reference`` (its meaning is the
     reference's, see the module docstring), ``why`` its one-line reason; ``max_iterations`` the
-    iteration guard of every step; ``paths`` the iterations (``roughcontact.solver.SOLVER_PATHS``)
+    iteration guard of every step; ``paths`` the iterations (``roughcontact.solver.workspace.SOLVER_PATHS``)
     the case is known to end its steps on, when not the default one alone (a case that needs a
     fallback); ``xfail`` a reason naming what fails, for a strict xfail."""
 

@@ -23,9 +23,9 @@ result must satisfy whatever the surface, so that every test solve exercises it:
   ``surface_dimension = 1``), the perimeter as interval ends per unit length, and the gap against
   a plain ``numpy.fft`` 1-D product (periodic) or a direct sum with the strip's influence by
   quadrature (free: :func:`direct_free_profile_displacement`);
-- on every converged step, the solver's convergence criterion (module docstring of
-  :mod:`roughcontact.solver`) recomputed here from the fields, with ``s`` the same
-  gap scale (:func:`roughcontact.solver.gap_scale`): ``gap >= -tol * s`` wherever
+- on every converged step, the solver's convergence criterion (docs/solver.md,
+  "Convergence criterion") recomputed here from the fields, with ``s`` the same
+  gap scale (:func:`roughcontact.solver.units.gap_scale`): ``gap >= -tol * s`` wherever
   ``p`` is below the cap, ``gap <= tol * s`` wherever it is at the cap, the gap has
   zero mean on the elastic contact set ``F = {0 < p < hardness}`` (the offset
   convention) and ``sum_F(p |gap|) / (nx ny p0 s) <= tol`` (gap ~ 0 on ``F``).
@@ -38,7 +38,9 @@ import math
 
 import numpy as np
 
-from roughcontact.solver import contact_perimeter, elastic_kernel, gap_scale
+from roughcontact.solver import contact_perimeter
+from roughcontact.solver.halfspace import elastic_kernel
+from roughcontact.solver.units import gap_scale
 
 STEP_VARS = (
     "pressure", "area_fraction", "mean_contact_pressure", "mean_gap", "contact_perimeter",

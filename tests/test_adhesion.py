@@ -12,8 +12,9 @@ import math
 import numpy as np
 import pytest
 
-from roughcontact.solver import elastic_kernel, solve_contact
+from roughcontact.solver import solve_contact
 from roughcontact.solver.adhesion import MIN_ZONE_CELLS, Exponential, MaugisDugdale, solve_adhesive, zone_cells
+from roughcontact.solver.halfspace import elastic_kernel
 from roughcontact.surfaces.synthetic import generate_surface
 from roughcontact.theory import adhesion as th
 

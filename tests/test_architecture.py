@@ -46,7 +46,7 @@ LONG_MODULES: dict[str, str] = {
     "roughcontact.surfaces.topography": "one concept, an instrument's file read into a height map (format, channel, "
                                         "units, undefined points, each failure's message), SurfaceTopography "
                                         "imported on first use (it imports matplotlib)",
-    "roughcontact.solver.batch_cpu": "one concept, the batched iteration's fused host kernels: each compiled loop "
+    "roughcontact.solver.batch.cpu": "one concept, the batched iteration's fused host kernels: each compiled loop "
                                      "beside the method that calls it, the free set's indices they share",
 }
 

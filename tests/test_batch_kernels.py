@@ -1,6 +1,6 @@
 """The fused CUDA kernels of the batched solve, run on the host: their C code compiled by a C++ compiler.
 
-CI has no GPU, and the CuPy kernels of :mod:`roughcontact.solver.batch_cuda` are C code that
+CI has no GPU, and the CuPy kernels of :mod:`roughcontact.solver.batch.cuda` are C code that
 only CuPy compiles. Here a stand-in CuPy builds ``ElementwiseKernel`` and ``ReductionKernel`` as
 CuPy does in spirit (the parameters declared per element, outputs by reference, the reduction's
 ``a``/``b`` accumulators, broadcasting of per-case inputs) around the very same code strings,
@@ -27,8 +27,7 @@ import numpy as np
 import pytest
 
 from roughcontact.core.backend import get_backend
-from roughcontact.solver import batch_cuda, batch_kernels
-from roughcontact.solver.batch import solve_contact_batch
+from roughcontact.solver.batch import cuda as batch_cuda, kernels as batch_kernels, solve_contact_batch
 from roughcontact.surfaces.synthetic import generate_surface
 
 CXX = shutil.which("g++") or shutil.which("c++")

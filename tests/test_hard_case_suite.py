@@ -35,7 +35,11 @@ from hard_cases import (
     lengths,
     sneddon_load_and_approach,
 )
-from roughcontact.solver import SOLVER_PATHS, displacement, gap_scale, solve_contact, step_notes
+from roughcontact.solver import solve_contact, step_notes
+from roughcontact.solver.halfspace import displacement
+from roughcontact.solver.units import gap_scale
+from roughcontact.solver.validation import BOUNDARIES
+from roughcontact.solver.workspace import SOLVER_PATHS
 from roughcontact.surfaces.synthetic import generate_surface
 from roughcontact.theory.full_contact import full_contact_load, full_contact_pressure
 from solver_invariants import check_solution
@@ -52,7 +56,7 @@ CM_TOL = 1e-12
 #: discretisation error O((dx / a)^2) (measured -6.4e-4, -2.1e-4, -6.6e-5 at a = 6, 10, 16 dx).
 SNEDDON_APPROACH_RTOL = 1e-3
 #: Scale invariance: gaps within this many ``tol * s`` (each solution's gap is within ~6 tol s of the
-#: exact one, package docstring; measured 2.7), iterations within this many (float32 rounding of the
+#: exact one, docs/solver.md; measured 2.7), iterations within this many (float32 rounding of the
 #: late directions differs; measured <= 3 over 15 surfaces x 7-9 loads x factors 1e-6 and 1e3).
 SCALE_GAP_TOLS, SCALE_ITERATIONS = 12.0, 5
 #: Against the grid of half the nodes per side: A/A0 relative (first order in dx: measured 1.1-1.9 %
@@ -307,7 +311,7 @@ def test_entries_are_well_formed():
     for case in CASES:
         assert case.reference in REFERENCES, case.name
         assert case.why and (case.tol is None) == (case.reference in ("full-contact", "invariants")), case.name
-        assert case.boundary in solver_mod.BOUNDARIES, case.name
+        assert case.boundary in BOUNDARIES, case.name
         if not case.slow and not isinstance(case.recipe.base, Measured):
             h = case.heights()
             assert h.shape == case.shape, case.name

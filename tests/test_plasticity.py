@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from roughcontact import solver as solver_mod
-from roughcontact.solver import MEAN_RTOL, check, contact, projection, solve_contact, solve_step, validation
+from roughcontact.solver import check, contact, projection, solve_contact, solve_step, validation
+from roughcontact.solver.check import MEAN_RTOL
 from roughcontact.surfaces.synthetic import generate_surface
 from solver_invariants import check_solution
 
@@ -208,7 +209,7 @@ def test_wrong_mean_fails_the_check(issue_surface):
     # A pressure field that is right but for its mean (1e-9 relative) is refused.
     h = validation.validate_heights(issue_surface)
     settings = solver_mod.SolverSettings(max_iter=1000, effects=(solver_mod.PlasticityCap(0.01),)).checked(h.shape)
-    s = solver_mod.ContactSolver(h, settings)
+    s = contact.ContactSolver(h, settings)
     st, _ = s.solve(0.004)
     assert st.converged
     p_int = s.units.to_internal(0.004)

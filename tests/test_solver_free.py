@@ -36,18 +36,16 @@ import math
 import numpy as np
 import pytest
 
-import roughcontact.solver as solver_mod
 from roughcontact.core.fft import wavenumbers
-from roughcontact.solver import (
-    ELASTIC_METHODS,
+from roughcontact.solver import contact_perimeter, solve_contact, solve_step
+from roughcontact.solver.halfspace import (
     FreeHalfSpace,
-    contact_perimeter,
+    PeriodicHalfSpace,
     displacement,
     free_influence,
-    solve_contact,
-    solve_step,
+    preconditioner_shape,
 )
-from roughcontact.solver.halfspace import preconditioner_shape
+from roughcontact.solver.workspace import ELASTIC_METHODS
 from roughcontact.statistics.clusters import ClusterObserver, cluster_statistics
 from roughcontact.surfaces.synthetic import generate_surface
 from solver_invariants import check_solution, direct_free_displacement, quadrature_influence
@@ -125,14 +123,14 @@ def test_free_product_is_the_direct_convolution(n, backend, monkeypatch):
     ref_m = np.fft.irfft2(np.fft.rfft2(big) * (math.pi * np.hypot(kx, ky)), s=(m, m))[:n, :n]
     np.testing.assert_allclose(op.apply_inverse(p), ref_m, rtol=0, atol=1e-13 * np.abs(p).sum())
     if m == n:
-        np.testing.assert_allclose(op.apply_inverse(p), solver_mod.PeriodicHalfSpace(n).apply_inverse(p), rtol=0,
+        np.testing.assert_allclose(op.apply_inverse(p), PeriodicHalfSpace(n).apply_inverse(p), rtol=0,
                                    atol=1e-14 * np.abs(p).sum())
     # the preconditioner's cell: every product is cut to the patch, float32 as float64; K scales with
     # the cell's side, m / n patch lengths (float32: 1e-5 of the largest value, as above)
-    cell = solver_mod.PeriodicHalfSpace(m, patch=n)
+    cell = PeriodicHalfSpace(m, patch=n)
     cell.single(0.25)
     k64 = cell.apply(p).copy()
-    np.testing.assert_allclose(k64, (m / n) * solver_mod.PeriodicHalfSpace(m).apply(big)[:n, :n], rtol=0,
+    np.testing.assert_allclose(k64, (m / n) * PeriodicHalfSpace(m).apply(big)[:n, :n], rtol=0,
                                atol=1e-13 * np.abs(k64).max())
     k32 = cell.apply32(p).astype(np.float64) * 0.25
     assert k32.shape == (n, n) and np.abs(k32 - k64).max() <= 1e-5 * np.abs(k64).max()

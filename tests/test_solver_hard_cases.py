@@ -13,17 +13,10 @@ import pytest
 import xarray as xr
 
 from roughcontact import solver as solver_mod
-from roughcontact.solver import (
-    DEFAULT_MAX_ITER,
-    FALLBACKS,
-    FRACTION_UNITS,
-    SOLVER_PATHS,
-    STALL_WINDOW,
-    contact_perimeter,
-    solve_contact,
-    solve_step,
-    step_notes,
-)
+from roughcontact.solver import contact_perimeter, solve_contact, solve_step, step_notes
+from roughcontact.solver.results import FRACTION_UNITS
+from roughcontact.solver.settings import DEFAULT_MAX_ITER
+from roughcontact.solver.workspace import FALLBACKS, SOLVER_PATHS, STALL_WINDOW
 from roughcontact.surfaces.synthetic import generate_surface
 from solver_invariants import check_solution
 
@@ -376,7 +369,7 @@ def test_flat_surface_any_load_is_exact():
 
 
 def test_displacement_overflow_is_refused():
-    from roughcontact.solver import displacement
+    from roughcontact.solver.halfspace import displacement
 
     p = np.zeros((8, 8))
     p[0, 0] = 1e300

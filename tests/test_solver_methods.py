@@ -8,7 +8,8 @@ import pytest
 
 from roughcontact import solver as solver_mod
 from roughcontact.core.fft import get_fft
-from roughcontact.solver import ELASTIC_METHODS, solve_contact
+from roughcontact.solver import solve_contact
+from roughcontact.solver.workspace import ELASTIC_METHODS
 from roughcontact.surfaces.synthetic import generate_surface
 from solver_invariants import check_solution
 

@@ -409,7 +409,7 @@ _STALLED_RUN = """
 import json, sys
 import numpy as np
 from mpi4py import MPI
-import roughcontact.solver.batch_iteration as bi
+import roughcontact.solver.batch.iteration as bi
 from roughcontact.solver.mpi import rows_of, solve_contact_mpi
 bi.STALL_WINDOW = 0
 h = np.load(sys.argv[1])
@@ -427,7 +427,7 @@ def test_a_stalled_step_goes_on_in_float64_over_the_ranks(tmp_path):
     from where the float32 one stalled, converging to the single solve's answer."""
     import json
 
-    from roughcontact.solver import SOLVER_PATHS
+    from roughcontact.solver.workspace import SOLVER_PATHS
 
     h = _surface(0)
     np.save(tmp_path / "h.npy", h)

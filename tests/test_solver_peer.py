@@ -19,7 +19,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from roughcontact.solver import elastic_kernel, gap_scale, solve_contact
+from roughcontact.solver import solve_contact
+from roughcontact.solver.halfspace import elastic_kernel
+from roughcontact.solver.units import gap_scale
 from roughcontact.surfaces.synthetic import generate_surface
 from solver_invariants import check_solution
 

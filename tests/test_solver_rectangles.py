@@ -30,16 +30,15 @@ import numpy as np
 import pytest
 
 from roughcontact.core.fft import wavenumbers
-from roughcontact.solver import (
-    ELASTIC_METHODS,
+from roughcontact.solver import contact_perimeter, solve_contact, solve_step
+from roughcontact.solver.halfspace import (
     FreeHalfSpace,
-    contact_perimeter,
     displacement,
     free_influence,
-    solve_contact,
-    solve_step,
+    pixel_influence_rect,
+    pixel_influence_square,
 )
-from roughcontact.solver.halfspace import pixel_influence_rect, pixel_influence_square
+from roughcontact.solver.workspace import ELASTIC_METHODS
 from roughcontact.statistics.clusters import ClusterObserver, cluster_dataset, cluster_statistics, label_clusters
 from roughcontact.surfaces.synthetic import generate_surface
 from solver_invariants import check_solution, direct_free_displacement, pixel_integral

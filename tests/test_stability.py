@@ -25,7 +25,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from roughcontact import generate_surface
-from roughcontact.solver import elastic_kernel, solve_contact
+from roughcontact.solver import solve_contact
+from roughcontact.solver.halfspace import elastic_kernel
 from roughcontact.surfaces.synthetic import spectral_moments
 from solver_invariants import check_solution
 

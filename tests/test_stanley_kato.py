@@ -5,7 +5,7 @@ import pytest
 from roughcontact import generate_surface
 from roughcontact.core.fft import wavenumbers
 from roughcontact.solver import solve_step
-from roughcontact.solver.stanley_kato import StanleyKato, solve_stanley_kato
+from roughcontact.solver.reference.stanley_kato import StanleyKato, solve_stanley_kato
 
 
 def test_full_contact_is_the_exact_periodic_answer():

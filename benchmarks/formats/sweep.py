@@ -105,7 +105,8 @@ def solve_one(path: Path, p_max: float, steps: int = 30, hardness: float | None 
     ``peer``: the last load solved again, from scratch, by ContactMechanics' free-boundary CG
     (:func:`peer_area`); the line ends with its A/A0 and ``|A_ours - A_peer| / A_peer``.
     """
-    from roughcontact.solver import SOLVER_PATHS, solve_contact
+    from roughcontact.solver import solve_contact
+    from roughcontact.solver.workspace import SOLVER_PATHS
     from roughcontact.surfaces.synthetic import nonperiodic_moments
 
     with warnings.catch_warnings():

@@ -80,11 +80,16 @@ def main():
               f"{1e3 * wall / rounds / b:.3f} ms a case-round, converged {ok}", flush=True)
     if args.no_wrap:
         return
-    from roughcontact.solver import batch_cuda, batch_iteration, batch_kernels, batch_operator
+    from roughcontact.solver.batch import (
+        cuda as batch_cuda,
+        halfspace as batch_halfspace,
+        iteration as batch_iteration,
+        kernels as batch_kernels,
+    )
 
     totals, counts = collections.defaultdict(float), collections.Counter()
-    classes = [(batch_kernels.ArrayKernels, "k"), (batch_operator.BatchOperator, "op"),
-               (batch_operator.BatchFFT, "fft")]
+    classes = [(batch_kernels.ArrayKernels, "k"), (batch_halfspace.BatchOperator, "op"),
+               (batch_halfspace.BatchFFT, "fft")]
     if hasattr(batch_cuda, "CupyKernels"):
         classes.append((batch_cuda.CupyKernels, "cuk"))
     for cls, name in classes:

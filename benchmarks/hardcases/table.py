@@ -23,7 +23,7 @@ import xarray as xr
 
 from roughcontact.pipeline.datasets import surface_heights
 from roughcontact.pipeline.runcost import read_job
-from roughcontact.solver import SOLVER_PATHS
+from roughcontact.solver.workspace import SOLVER_PATHS
 
 
 def peer_area(h: np.ndarray, length, e_star: float, p0: float, tol: float, maxiter: int):

@@ -34,7 +34,7 @@ E_STAR, P_MAX, STEPS = 1e5, 500.0, 30
 
 
 def line(name: str, solver: str, ds, cpu: float) -> str:
-    from roughcontact.solver import SOLVER_PATHS
+    from roughcontact.solver.workspace import SOLVER_PATHS
 
     conv = np.asarray(ds["converged"]).reshape(-1)
     paths = dict(collections.Counter(SOLVER_PATHS[x] for x in np.asarray(ds["solver_path"]).reshape(-1)))

@@ -47,7 +47,7 @@ import xarray as xr
 from ..analysis.stiffness import stiffness_variable
 from ..core.cell import Cell
 from ..solver import SolverSettings, solve_contact, step_notes
-from ..solver.batch_solver import BATCH_METHOD
+from ..solver.batch.solver import BATCH_METHOD
 from ..statistics.clusters import ClusterObserver
 from .loading import LoadSchedule
 from .outputs import contact_observers, full_contact_variable

@@ -1,7 +1,7 @@
 """The capped iteration: gradient projection / CG on ``{0 <= p <= H, mean(p) = p0}``.
 
 Used when an effect bounds the pressure from above (:class:`~.effects.PlasticityCap`);
-package docstring, "With a hardness".
+docs/solver.md, "Algorithm" (*With a hardness*).
 """
 
 from __future__ import annotations

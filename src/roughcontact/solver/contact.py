@@ -1,8 +1,8 @@
 """The contact solver of one surface: units, effects, warm starts and the step loop.
 
 Public entry points :func:`solve_contact` and :func:`solve_step` (re-exported
-by :mod:`roughcontact.solver`, whose docstring states the problem, the units,
-the algorithms and the convergence criterion).
+by :mod:`roughcontact.solver`); docs/solver.md states the problem, the units,
+the algorithms and the convergence criterion.
 """
 
 from __future__ import annotations
@@ -185,7 +185,7 @@ class ContactSolver:
 
         ``u = K p`` is no longer uniform under a uniform pressure, so the
         problem is solved, once, at unit load in units ``E* = Lx = 1`` with the
-        gap scale ``p0 Lx / E*`` (:func:`gap_scale` of a flat surface) as unit;
+        gap scale ``p0 Lx / E*`` (:func:`~.units.gap_scale` of a flat surface) as unit;
         without a cap it is linear in ``p0``, so every step is that solution
         scaled (``iterations`` counts the solve at the first step, 0 after).
         """

@@ -2,7 +2,7 @@
 
 :func:`pk_solve` solves one load step of the unilateral problem
 ``{p >= 0, g >= 0, p g = 0, mean(p) = p0}`` on a :class:`~.workspace.Workspace`
-(package docstring, "Algorithm").
+(docs/solver.md, "Algorithm").
 """
 
 from __future__ import annotations

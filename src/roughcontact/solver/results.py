@@ -22,7 +22,10 @@ from .workspace import SOLVER_PATHS
 #: ``units`` attribute of dimensionless fractions, counts and flags.
 FRACTION_UNITS = "1"
 
+#: ``solver`` attribute of a pressure-iteration solve's output (a fixed provenance name, kept as
+#: written by every earlier version; the adhesive solve writes its own, ``adhesion.solver``).
 SOLVER_NAME = "roughcontact.solver.pk_pressure"
+#: ``solver_description`` attribute of a pressure-iteration solve's output (periodic half-space).
 SOLVER_DESCRIPTION = (
     "Pressure-controlled constrained conjugate gradient (Polonsky & Keer 1999) on a "
     "periodic FFT-BEM elastic half-space, u(q) = 2 p(q) / (E* |q|), Fourier-preconditioned "

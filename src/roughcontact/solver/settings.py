@@ -30,7 +30,7 @@ class SolverSettings:
         finite and > 0; pixels ``dx = Lx / nx`` and ``dy = Ly / ny``. ``(L, L)`` on an
         ``n x n`` grid is the float ``L``, bit for bit.
     tol : float
-        Convergence tolerance in (0, 1) on the scale-free residual of :mod:`roughcontact.solver`.
+        Convergence tolerance in (0, 1) on the scale-free residual (docs/solver.md, "Convergence criterion").
     max_iter : int
         Iteration cap per load step, >= 1.
     threads : int

@@ -2,8 +2,7 @@
 
 Both take the surface, the loads and a :class:`~.settings.SolverSettings` (or its fields as
 keyword options), validate them once (:func:`prepare`) and run a :class:`~.contact.ContactSolver`.
-The package docstring (:mod:`roughcontact.solver`) states the problem, units, algorithms and
-convergence criterion.
+docs/solver.md states the problem, units, algorithms and convergence criterion.
 """
 
 from __future__ import annotations
@@ -17,7 +16,7 @@ import xarray as xr
 
 from ..core.cell import Cell
 from ..statistics.patches import PATCH_LONG_NAMES, contact_patches
-from .adhesive import ADHESIVE_SOLVER_DESCRIPTION, ADHESIVE_SOLVER_NAME, AdhesiveSolver
+from .adhesion.solver import ADHESIVE_SOLVER_DESCRIPTION, ADHESIVE_SOLVER_NAME, AdhesiveSolver
 from .contact import ContactSolver
 from .results import SOLVER_NAME, StepResult, solver_description, to_dataset
 from .settings import SolverSettings
@@ -29,7 +28,7 @@ def prepare(heights, loads: np.ndarray, name: str, settings: SolverSettings | No
     """The validated solver of ``heights`` for ``settings`` with ``options`` replacing its fields.
 
     The iteration follows from what the effects supply: an interaction energy (``functional``)
-    needs the gap iteration (:class:`~.adhesive.AdhesiveSolver`), anything else the pressure
+    needs the gap iteration (:class:`~.adhesion.solver.AdhesiveSolver`), anything else the pressure
     iterations (:class:`~.contact.ContactSolver`). ``loads`` (already validated numbers) are
     checked against the effects and float64's range, the error naming the argument ``name``.
     A profile (1-D ``heights``, :meth:`~roughcontact.core.cell.Cell.profile`) is solved as its one-row
@@ -78,7 +77,7 @@ def solve_step(heights, p0: float, settings: SolverSettings | None = None, *, in
     p0 : float
         Applied mean pressure [pressure]: ``0 < p0``, ``p0 < hardness`` if a
         hardness is given, and ``p0 * L / (e_star * s)`` in
-        :data:`LOAD_RANGE` (``s`` the rms height, ``L`` the float ``length`` or ``Lx``).
+        :data:`~.units.LOAD_RANGE` (``s`` the rms height, ``L`` the float ``length`` or ``Lx``).
     settings : SolverSettings, optional
         The half-space, iteration and effects (defaults when omitted).
     initial_pressure : array_like, same shape as ``heights``, optional
@@ -170,7 +169,7 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
         fields ``x`` only, global attribute ``surface_dimension = 1``.
     pressures : sequence of float, shape (n_steps,)
         Applied mean pressures ``p0 > 0`` [pressure, ``e_star``'s unit], ``p0 L / (e_star s)`` in
-        :data:`LOAD_RANGE` (``s`` the rms height, ``L`` or ``Lx``), below any cap; increasing is best.
+        :data:`~.units.LOAD_RANGE` (``s`` the rms height, ``L`` or ``Lx``), below any cap; increasing is best.
     settings : SolverSettings, optional
         The half-space, the iteration, the effects and the unit labels; defaults when omitted.
     store_fields : bool or iterable of int
@@ -199,7 +198,7 @@ def solve_contact(heights, pressures, settings: SolverSettings | None = None, *,
         (:func:`~roughcontact.statistics.patches.contact_patches`), each effect's variables; stored fields.
         CF ``units`` and ``long_name`` on each; global attributes: the settings, the cell
         (:meth:`~.core.cell.Cell.solver_attrs`), ``boundary``, ``elastic_method``. ``converged``: the final check
-        of the package docstring passed on a freshly recomputed displacement.
+        of docs/solver.md ("Convergence criterion") passed on a freshly recomputed displacement.
 
     Raises
     ------

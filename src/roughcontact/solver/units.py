@@ -1,4 +1,4 @@
-"""Internal units of one surface (package docstring, "Units") and the range of loads.
+"""Internal units of one surface (docs/solver.md, "Units") and the range of loads.
 
 A cell's ``length`` is a float ``L`` (square cell) or a pair ``(Lx, Ly)`` (rectangle, as
 validated by :func:`.validation.validate_length`); the internal length unit of the operators is

@@ -11,7 +11,7 @@ from ..core.cell import Cell
 from .halfspace import half_space
 from .units import rms_about_mean
 
-#: Iterations of the elastic path (package docstring): ``"pk"``, Polonsky & Keer's
+#: Iterations of the elastic path (docs/solver.md, "Algorithm"): ``"pk"``, Polonsky & Keer's
 #: CG as in Tamaas' ``PolonskyKeerRey`` (the reference); ``"pk-fourier"``, the same
 #: iteration with the Fourier preconditioner and an extrapolated warm start;
 #: ``"pk-fourier-f32"``, the latter with single-precision transforms in the loop.

@@ -1,8 +1,14 @@
 """Adhesive normal contact: interaction laws and a gap-based FFT-BEM solver.
 
+:mod:`.laws` the interaction laws and what a grid must resolve, :mod:`.iteration` the gap iteration
+(:func:`solve_adhesive`), :mod:`.solver` the solver of one surface that
+:func:`~roughcontact.solver.solve.solve_contact` runs when an effect supplies an interaction energy
+(:class:`~.solver.AdhesiveSolver`, imported from its module: it needs the solver's settings, whose
+effects import this package, so it is not re-exported here).
+
 Problem
 -------
-The conventions of :mod:`roughcontact.solver`: a rigid surface of heights ``h`` [length]
+The conventions of the contact solver (docs/solver.md, "Problem"): a rigid surface of heights ``h`` [length]
 (highest points touch first) on a periodic elastic half-space of plane-strain modulus
 ``E*`` [pressure], cell ``Lx x Ly`` on ``nx x ny`` nodes (``length`` a float ``L`` means a
 square cell; ``ny = 1`` is a plane-strain 1-D problem, ``h`` independent of y). ``p`` is

@@ -1,6 +1,6 @@
 """The gap iteration of adhesive contact: :func:`solve_adhesive` and its :class:`AdhesiveIteration`.
 
-Polonsky & Keer's constrained conjugate gradient on the gap (package docstring, "Algorithm"),
+Polonsky & Keer's constrained conjugate gradient on the gap (:mod:`roughcontact.solver.adhesion`, "Algorithm"),
 under displacement control, wrapped by :func:`pressure_control` for an imposed mean pressure.
 """
 

@@ -2,7 +2,7 @@
 
 Each law is an energy ``phi(g)`` per unit area of the gap ``g >= 0`` with ``phi(0) = -w``
 (``w`` the work of adhesion [pressure x length]) and range ``rho`` [length]; its tension
-``d phi / d g >= 0`` pulls the surfaces together (package docstring). :func:`zone_cells` says
+``d phi / d g >= 0`` pulls the surfaces together (:mod:`roughcontact.solver.adhesion`). :func:`zone_cells` says
 whether a grid resolves the law's process zone ``E* rho^2 / w``.
 """
 

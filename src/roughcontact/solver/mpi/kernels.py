@@ -1,6 +1,6 @@
 """The batched iteration's kernels and operator over MPI ranks: collective reductions, slab transforms.
 
-:class:`MpiKernels` are the fused CPU kernels (:class:`~roughcontact.solver.batch_cpu.FusedCpuKernels`)
+:class:`MpiKernels` are the fused CPU kernels (:class:`~roughcontact.solver.batch.cpu.FusedCpuKernels`)
 whose per-case reductions add the ranks' partial results: every reduction of the iteration (sums,
 dots, the complementarity, the masked sums, the quadratic form over the half spectrum, the
 projection's positive part) goes through :meth:`MpiKernels.allsum`, :meth:`~MpiKernels.allcount`,
@@ -12,7 +12,7 @@ take different branches and wait on each other for ever. The element-wise passes
 decisions are the batched ones unchanged: they act on the rank's slab and on per-case numbers that
 are equal on every rank.
 
-:class:`SlabOperator` is :class:`~roughcontact.solver.batch_operator.BatchOperator` with the
+:class:`SlabOperator` is :class:`~roughcontact.solver.batch.halfspace.BatchOperator` with the
 transforms of :mod:`.slabs`: multipliers for the rank's columns of the half spectrum only, so no
 rank ever holds a whole field.
 """
@@ -22,13 +22,13 @@ from __future__ import annotations
 import numpy as np
 
 from ...core.fft import rfft_weights, wavenumbers
-from ..batch_cpu import FusedCpuKernels
-from ..batch_operator import BatchOperator
+from ..batch.cpu import FusedCpuKernels
+from ..batch.halfspace import BatchOperator
 from ..units import internal_length
 
 
 class MpiKernels(FusedCpuKernels):
-    """:class:`~roughcontact.solver.batch_cpu.FusedCpuKernels` whose per-case reductions combine the ranks' parts.
+    """:class:`~roughcontact.solver.batch.cpu.FusedCpuKernels` whose per-case reductions combine the ranks' parts.
 
     Each reduction of the iteration computes the rank's part in one fused pass over its slab, then
     goes through one of :meth:`allsum`, :meth:`allcount`, :meth:`allmin` or :meth:`allany`.
@@ -81,8 +81,8 @@ class _SlabTransforms:
 class SlabOperator(BatchOperator):
     """The periodic half-space's products on the rank's slab (internal units, ``E* = Lx = 1``).
 
-    :class:`~roughcontact.solver.batch_operator.BatchOperator`'s products (its methods, which
-    :class:`~roughcontact.solver.batch_iteration.BatchIteration` calls), with the distributed
+    :class:`~roughcontact.solver.batch.halfspace.BatchOperator`'s products (its methods, which
+    :class:`~roughcontact.solver.batch.iteration.BatchIteration` calls), with the distributed
     transforms and the multipliers ``K``, ``M = |q| E* / 2`` and Parseval's weights on the rank's
     spectral columns ``[c0, c1)`` (shape ``(nx, c1 - c0)``), computed there alone.
 

@@ -18,7 +18,7 @@ import numpy as np
 import xarray as xr
 
 from ...statistics.patches import PATCH_LONG_NAMES
-from ..batch_solver import BATCH_METHOD
+from ..batch.solver import BATCH_METHOD
 from ..results import periodic_elastic_attrs, to_dataset
 from ..settings import SolverSettings
 from ..validation import finite_float64, validate_pressures

@@ -6,7 +6,7 @@ one more). The spectrum of the real transform (``nx x (ny // 2 + 1)``) is split 
 axis: rank ``r`` holds every row and the columns ``[c0, c1)`` of the half spectrum. A forward
 transform is a real FFT along y on the slab, one all-to-all exchange (the transpose) and a complex
 FFT along x; the inverse runs backwards. The inverse is unnormalised, as the batched solver's
-(:class:`~roughcontact.solver.batch_operator.BatchOperator` keeps the ``1 / (nx ny)`` in its
+(:class:`~roughcontact.solver.batch.halfspace.BatchOperator` keeps the ``1 / (nx ny)`` in its
 multipliers).
 
 Two implementations of that one layout (:data:`FFT_LIBRARIES`):

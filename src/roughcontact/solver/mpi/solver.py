@@ -1,6 +1,6 @@
 """One case split over MPI ranks: :class:`MpiSolver`, the batched solver (B = 1) on the rank's slab.
 
-The iteration is :class:`~roughcontact.solver.batch_iteration.BatchIteration` unchanged, with
+The iteration is :class:`~roughcontact.solver.batch.iteration.BatchIteration` unchanged, with
 :class:`~.kernels.MpiKernels` (collective reductions) and :class:`~.kernels.SlabOperator` (the
 distributed transforms). What the batched solver does on a whole field is made rank-aware here:
 the surface's moments (the internal units, the rms height of the convergence criterion) are
@@ -25,8 +25,8 @@ from ...core.backend import get_backend
 from ...core.cell import Cell
 from ...core.cli import one_line
 from ...statistics.patches import merge_slabs, slab_patches
-from ..batch_iteration import BatchIteration
-from ..batch_solver import BATCH_METHOD, BatchSolver
+from ..batch.iteration import BatchIteration
+from ..batch.solver import BATCH_METHOD, BatchSolver
 from ..units import Units
 from ..workspace import FALLBACKS, SOLVER_PATHS, STALL_WINDOW as SINGLE_STALL_WINDOW
 from .kernels import MpiKernels, SlabOperator
@@ -136,7 +136,7 @@ class MpiSolver(BatchSolver):
 
     def fallback(self, b: int, p_int: float, its: int) -> tuple[int, str, bool]:
         """The single solve's first fallback over the ranks: ``pk-fourier``, the same iteration with float64
-        products (:class:`~roughcontact.solver.batch_operator.Float64Products`), from the stalled pressure
+        products (:class:`~roughcontact.solver.batch.halfspace.Float64Products`), from the stalled pressure
         with ``w`` recomputed, for the iterations left, with the single solve's stall guard.
 
         Returns ``(iterations in all, path, converged)``; the box fallback does not run over ranks

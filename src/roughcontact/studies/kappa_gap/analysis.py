@@ -6,7 +6,7 @@ to κ(A/A0) = E* h' A / (A0 p0) at A/A0 = 0.01, 0.02, 0.05, 0.1 (:data:`TARGET_A
 to a one-constant CEL fit (μ, β held at the paper's values, :func:`fit_kappa`):
 
 1. the solver: Stanley & Kato's displacement iteration stopped by a rule of its kind
-   (:mod:`roughcontact.solver.stanley_kato`) against ours, on the same surfaces and loads;
+   (:mod:`roughcontact.solver.reference.stanley_kato`) against ours, on the same surfaces and loads;
 2. what counts as contact: ``p > 0`` (ours), ``gap < t s`` (``s`` the rms height) for each
    threshold ``t``, and the perimeter-corrected area A_pix − c P Δx
    (:func:`roughcontact.theory.perimeter.perimeter_corrected_area`);

@@ -11,7 +11,7 @@ import xarray as xr
 
 from ...case import ContactCase, LoadSchedule, run_case
 from ...solver import SolverSettings, contact_perimeter
-from ...solver.stanley_kato import StanleyKato
+from ...solver.reference.stanley_kato import StanleyKato
 from ...surfaces.synthetic import finite_difference_rms_slope, generate_surface, spectral_moments
 from ...theory.perimeter import PERIMETER_C, perimeter_corrected_area
 

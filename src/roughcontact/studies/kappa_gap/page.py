@@ -175,7 +175,7 @@ def markdown(summary: dict) -> str:
         "is toward the paper.", "",
         *_candidates_table(s), "", CLOSES_RULE + ".", "",
         "### 1. The paper's solver", "",
-        "Stanley & Kato's (1997) displacement iteration (`roughcontact.solver.stanley_kato`: a projected "
+        "Stanley & Kato's (1997) displacement iteration (`roughcontact.solver.reference.stanley_kato`: a projected "
         "gradient on the displacement, relaxation 1, stopped when the carried load and the displacement "
         "change are both within the tolerance), each load step warm-started like ours, against our solver "
         f"on the same surfaces and loads, at N = {', '.join(map(str, sk_n))}: its iteration count grows with "

@@ -1,4 +1,4 @@
-"""The batched elastic iteration of one load step (:mod:`.batch`): :class:`BatchIteration`."""
+"""The batched elastic iteration of one load step (:mod:`roughcontact.solver.batch`): :class:`BatchIteration`."""
 
 from __future__ import annotations
 
@@ -6,12 +6,12 @@ import math
 
 import numpy as np
 
-from .elastic import FR_AFTER_LOSS
-from .workspace import STALL_WINDOW
+from ..elastic import FR_AFTER_LOSS
+from ..workspace import STALL_WINDOW
 
 
 class BatchIteration:
-    """:class:`~.elastic.PKIteration` (``pk-fourier-f32``) on ``B`` cases at once, with masks.
+    """:class:`~roughcontact.solver.elastic.PKIteration` (``pk-fourier-f32``) on ``B`` cases at once, with masks.
 
     State per case (fields ``(B, nx, ny)``, numbers ``(B, 1, 1)``): ``P`` (the solver's, zero off
     ``F``) and ``w = K P - h`` (the solver's, updated in place), ``F`` the free set, ``t`` the
@@ -133,7 +133,7 @@ class BatchIteration:
             self.fresh[self.s.xp.asarray(stale)] = True
 
     def measure(self) -> None:
-        """The first half of :meth:`~.elastic.PKIteration.run`'s loop for every case: residual and decisions.
+        """The first half of the single solve's loop (``PKIteration.run``) for every case: residual and decisions.
 
         Converged, waiting and stopped cases are flagged; ``self.go`` says which iterate in
         :meth:`act`. Measuring again a case whose state has not changed decides the same (the stall

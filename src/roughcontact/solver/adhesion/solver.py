@@ -1,10 +1,10 @@
 """The solver of one surface when an effect supplies an interaction energy: the gap iteration.
 
-:class:`AdhesiveSolver` has :class:`~.contact.ContactSolver`'s interface (``solve``,
-``check_loads``, ``paths``, ``settings``, ...), so :func:`~.solve.solve_contact` runs either
-without knowing which; :func:`~.solve.prepare` picks this one when an effect's ``functional``
-is set. Each load step is solved under pressure control by :mod:`.adhesion`'s iteration on the
-gap, warm-started from the previous step's gap; :meth:`AdhesiveSolver.unload` traces the
+:class:`AdhesiveSolver` has :class:`~roughcontact.solver.contact.ContactSolver`'s interface (``solve``,
+``check_loads``, ``paths``, ``settings``, ...), so :func:`~roughcontact.solver.solve.solve_contact` runs
+either without knowing which; :func:`~roughcontact.solver.solve.prepare` picks this one when an effect's
+``functional`` is set. Each load step is solved under pressure control by the gap iteration
+(:mod:`.iteration`), warm-started from the previous step's gap; :meth:`AdhesiveSolver.unload` traces the
 unloading under displacement control and finds the pull-off pressure with its status
 (:class:`Unloading`).
 
@@ -23,8 +23,8 @@ Steps whose final check fails are kept in the trace, flagged, and excluded from 
 The pull-off is NaN, with the reason in :data:`PULL_OFF_STATUS`, unless the grid resolves the
 process zone, the last load step converged, the surfaces separated, the steps on both sides of
 the minimum converged, the refinement met ``rtol`` and, at the pull-off, the attraction dies out
-inside the cell (:func:`~.adhesion.attraction_across_cell` below
-:data:`~.adhesion.MAX_ATTRACTION_ACROSS_CELL`: else the cell's edge cuts the body's attraction off
+inside the cell (:func:`~.laws.attraction_across_cell` below
+:data:`~.laws.MAX_ATTRACTION_ACROSS_CELL`: else the cell's edge cuts the body's attraction off
 and the periodic images pull). When it is NaN no step of the trace is reported converged
 (:class:`Unloading`).
 """
@@ -37,20 +37,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .adhesion import (
+from ..results import StepRecord, contact_perimeter
+from ..settings import SolverSettings
+from ..units import Units, check_loads
+from .iteration import AdhesiveIteration, pressure_control
+from .laws import (
     MAX_ATTRACTION_ACROSS_CELL,
     MIN_ZONE_CELLS,
     PULL_OFF_REASONS,
     WARN_ZONE_CELLS,
-    AdhesiveIteration,
     attraction_across_cell,
-    pressure_control,
     unresolved_zone_message,
     zone_cells,
 )
-from .results import StepRecord, contact_perimeter
-from .settings import SolverSettings
-from .units import Units, check_loads
 
 #: The iterations an adhesive step can end on (the ``solver_path`` flag).
 ADHESIVE_PATHS = ("adhesive",)
@@ -93,7 +92,7 @@ class Unloading:
     rtol : float
         The refinement's tolerance on the pull-off.
     across_cell : float
-        :func:`~.adhesion.attraction_across_cell` at the most tensile step that passed its check
+        :func:`~.laws.attraction_across_cell` at the most tensile step that passed its check
         (the pull-off's step when trusted), NaN without one [-].
     """
 
@@ -112,7 +111,7 @@ class Unloading:
         """Each step converged: its own check passed *and* the pull-off is trusted (bool, shape (k,)).
 
         Whatever makes the pull-off untrusted leaves no step of the trace standing as a converged
-        point of the unloading curve (:data:`~.adhesion.UNTRUSTED_TRACE_STEPS` says why); a step that
+        point of the unloading curve (:data:`~.laws.UNTRUSTED_TRACE_STEPS` says why); a step that
         met its own residual keeps its finite ``mean_pressure`` (``checked``).
         """
         return self.checked & (self.status == "trusted")

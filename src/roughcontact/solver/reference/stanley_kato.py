@@ -1,7 +1,7 @@
 """A reference iteration of the kind Yastrebov et al. (2012) used: Stanley & Kato's (1997).
 
 Not the default solver, and not used by any pipeline stage but the κ-gap study
-(:mod:`roughcontact.kappa_gap`): it answers one question, whether a solver of the paper's
+(:mod:`roughcontact.studies.kappa_gap`): it answers one question, whether a solver of the paper's
 family, stopped by a rule of its kind, gives a different contact area from ours.
 
 The method (H. M. Stanley and T. Kato, "An FFT-based method for rough surface contact",
@@ -44,7 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.fft import get_fft, wavenumbers
+from ...core.fft import get_fft, wavenumbers
 
 #: Default relaxation factor omega (plain projected gradient).
 OMEGA = 1.0

@@ -1,6 +1,6 @@
-"""The fused CUDA kernels of the batched solve (:mod:`.batch`), made only when CuPy is importable.
+"""The fused CUDA kernels of the batched solve (:mod:`roughcontact.solver.batch`), made only when CuPy is importable.
 
-:class:`CupyKernels` replaces each method of :class:`~.batch_kernels.ArrayKernels` by one
+:class:`CupyKernels` replaces each method of :class:`~.kernels.ArrayKernels` by one
 ``cupy.ElementwiseKernel`` or ``cupy.ReductionKernel`` (specs :data:`REDUCTIONS` and
 :data:`ELEMENTWISE`, module constants so that tests/test_batch_kernels.py can run the same C code
 on the host); :func:`fused_kernels` builds them and checks each once against the plain expression,
@@ -14,7 +14,7 @@ import warnings
 
 import numpy as np
 
-from .batch_kernels import ArrayKernels
+from .kernels import ArrayKernels
 
 
 @functools.cache

@@ -1,9 +1,9 @@
-"""The element-wise passes and per-case reductions of the batched solve (:mod:`.batch`): :class:`ArrayKernels`.
+"""The batched solve's element-wise passes and per-case reductions: :class:`ArrayKernels`.
 
 :class:`ArrayKernels` are the passes of a round as plain array expressions (any backend); the fused kernels
-that replace them are :class:`.batch_cpu.FusedCpuKernels` on the host (numba) and
-:class:`.batch_cuda.CupyKernels` on a GPU. The transforms and multipliers they work with are
-:mod:`.batch_operator`'s.
+that replace them are :class:`.cpu.FusedCpuKernels` on the host (numba) and
+:class:`.cuda.CupyKernels` on a GPU. The transforms and multipliers they work with are
+:mod:`.halfspace`'s.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ class ArrayKernels:
 
     Every argument is an array of the backend: fields ``(B, nx, ny)``, per-case numbers
     ``(B, 1, 1)``. Results of reductions are ``(B, 1, 1)`` float64 (or int64 for counts).
-    :class:`.batch_cuda.CupyKernels` replaces them by fused CUDA kernels (one pass over the fields each) with
+    :class:`.cuda.CupyKernels` replaces them by fused CUDA kernels (one pass over the fields each) with
     the same results up to the order of summation; the methods named "in place" must update their
     field arguments in place in both.
     """
@@ -45,7 +45,7 @@ class ArrayKernels:
 
     def free_set(self, mask):
         """The iteration's free set made from ``mask`` (``(B, nx, ny)`` bool): the mask itself here;
-        :meth:`.batch_cpu.FusedCpuKernels.free_set` keeps each case's node indices beside it."""
+        :meth:`.cpu.FusedCpuKernels.free_set` keeps each case's node indices beside it."""
         return mask
 
     def rsum(self, x):
@@ -168,7 +168,7 @@ class ArrayKernels:
 
         ``scale`` is ``target / sum(max(trial, 0))`` for projected cases and 1 for the others. The
         change is ``max(-trial, 0) + (scale - 1) max(trial, 0) - tau t`` (the single solve's
-        ``x - tau t`` of :meth:`~.elastic.PKIteration._project_single`; ``-tau t`` unprojected), 0
+        ``x - tau t`` of :meth:`~roughcontact.solver.elastic.PKIteration._project_single`; ``-tau t`` unprojected), 0
         where not ``go``, times ``inv_sigma`` and rounded to float32 for the transform.
         """
         xp = self.xp
@@ -191,7 +191,7 @@ class ArrayKernels:
         self.shrink(P, F, t, g_prev)
         return self.rcount(F), self.rsum(t)
 
-    # -- the warm start of a load step (:meth:`.batch_solver.BatchSolver.start`), in place --------
+    # -- the warm start of a load step (:meth:`.solver.BatchSolver.start`), in place --------
 
     def scale_start(self, P, w, h, s, plain):
         """Where ``plain``: ``P *= s`` and ``w = s w + (s - 1) h`` (``K P`` scales with ``P``)."""
@@ -231,7 +231,7 @@ class ArrayKernels:
 
     def decide(self, orth, wmin, gbar, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
                next_sync, best, at, done, waiting, converged, go):
-        """The measure's decisions (:meth:`.batch_iteration.BatchIteration.measure`), in place.
+        """The measure's decisions (:meth:`.iteration.BatchIteration.measure`), in place.
 
         Residual ``r = max(orth inv_norm, max(gbar - wmin, 0) / scale, 0)`` (``big`` where not
         finite); converged where fresh and ``r <= tol``; waiting for a float64 recomputation where

@@ -1,9 +1,9 @@
-"""Fused CPU kernels of the batched iteration (:mod:`.batch`): each pass over the fields is one loop.
+"""Fused CPU kernels of the batched iteration (:mod:`roughcontact.solver.batch`): each pass over the fields is one loop.
 
-:class:`FusedCpuKernels` replaces the field passes of :class:`~.batch_kernels.ArrayKernels` (plain
+:class:`FusedCpuKernels` replaces the field passes of :class:`~.kernels.ArrayKernels` (plain
 array expressions: two to six passes and as many temporaries each) by loops compiled with numba
 (``@njit(cache=True)``, no ``fastmath``, no ``parallel``: the results do not depend on the machine's
-load or core count), as :class:`~.batch_cuda.CupyKernels` does with CUDA kernels on a GPU. Chosen by
+load or core count), as :class:`~.cuda.CupyKernels` does with CUDA kernels on a GPU. Chosen by
 measurement (benchmarks/profile_iteration.py ``--batched``, benchmarks/README.md): at 1024² the
 plain expressions cost ~80 ms of CPU an iteration, the fused loops ~10.
 
@@ -16,9 +16,9 @@ float32 transforms' inputs are dense. Passes that follow each other are fused wh
 allows (:meth:`FusedCpuKernels.center_dots`, :meth:`FusedCpuKernels.new_direction_on`).
 
 Sums are accumulated in index order per case (deterministic; not numpy's pairwise order, so a sum
-differs from :class:`~.batch_kernels.ArrayKernels`' in the last bits). Per-case partial results
-go through :meth:`~.batch_kernels.ArrayKernels.allsum` (and its siblings) so that
-:class:`~.mpi.kernels.MpiKernels` adds the ranks' parts.
+differs from :class:`~.kernels.ArrayKernels`' in the last bits). Per-case partial results
+go through :meth:`~.kernels.ArrayKernels.allsum` (and its siblings) so that
+:class:`~roughcontact.solver.mpi.kernels.MpiKernels` adds the ranks' parts.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .batch_kernels import ArrayKernels
+from .kernels import ArrayKernels
 
 _JIT = {"cache": True, "nogil": True}
 
@@ -439,7 +439,7 @@ class _Written:
 
 
 class FusedCpuKernels(ArrayKernels):
-    """:class:`~.batch_kernels.ArrayKernels` on the host with each field pass one compiled loop.
+    """:class:`~.kernels.ArrayKernels` on the host with each field pass one compiled loop.
 
     The same results as the plain expressions up to the order of summation (module docstring),
     except where marked: the gradient of :meth:`join_stats` and the field of :meth:`scaled_sum` are

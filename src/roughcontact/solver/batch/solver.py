@@ -1,4 +1,4 @@
-"""The solver of a batch of surfaces (:mod:`.batch`): units per case, fields, warm starts, steps."""
+"""The solver of a batch of surfaces (:mod:`roughcontact.solver.batch`): units per case, fields, warm starts, steps."""
 
 from __future__ import annotations
 
@@ -7,19 +7,19 @@ import os
 
 import numpy as np
 
-from ..core.backend import get_backend
-from ..core.cell import Cell
-from ..statistics.patches import contact_patches
-from .batch_cpu import FusedCpuKernels
-from .batch_cuda import fused_kernels
-from .batch_iteration import BatchIteration
-from .batch_operator import BatchOperator
-from .box import box_solve
-from .check import MEAN_RTOL
-from .elastic import pk_solve
-from .settings import SolverSettings
-from .units import Units, check_loads, rms_about_mean
-from .workspace import FALLBACKS, SOLVER_PATHS, Workspace
+from ...core.backend import get_backend
+from ...core.cell import Cell
+from ...statistics.patches import contact_patches
+from ..box import box_solve
+from ..check import MEAN_RTOL
+from ..elastic import pk_solve
+from ..settings import SolverSettings
+from ..units import Units, check_loads, rms_about_mean
+from ..workspace import FALLBACKS, SOLVER_PATHS, Workspace
+from .cpu import FusedCpuKernels
+from .cuda import fused_kernels
+from .halfspace import BatchOperator
+from .iteration import BatchIteration
 
 #: The only elastic iteration a batch runs (the package default).
 BATCH_METHOD = "pk-fourier-f32"
@@ -116,7 +116,7 @@ class BatchSolver:
     def start(self, p_int: np.ndarray) -> np.ndarray:
         """The starting pressure (and ``w``) of every case for internal loads ``p_int`` (B,); per-case ``fresh``.
 
-        As :meth:`~.contact.ContactSolver.start` for the float32 iteration without a cap: the uniform
+        As :meth:`~roughcontact.solver.contact.ContactSolver.start` for the float32 iteration without a cap: the uniform
         load at the first step; the scaled last solution (``w`` scaled with it: fresh) while there is
         one; from the third step the extrapolation through the last two, clipped at 0, with ``w``
         from their gaps and one float32 product of the clipped part (fresh = -1: not recomputed).
@@ -185,7 +185,7 @@ class BatchSolver:
         return its, path, ok
 
     def final_check(self, p_int: np.ndarray):
-        """The single solve's :func:`~.check.final_check` per case (no cap).
+        """The single solve's :func:`~roughcontact.solver.check.final_check` per case (no cap).
 
         Host arrays (B,): ``(ok, residual, gbar, w_sum, nf)``.
         """
@@ -209,7 +209,10 @@ class BatchSolver:
         return ok, residual, gbar, w_sum, nf.astype(np.int64)
 
     def perimeter(self) -> np.ndarray:
-        """Contact perimeter per unit area of every case (periodic; :func:`~.results.contact_perimeter`), host (B,)."""
+        """Contact perimeter per unit area of every case, host (B,).
+
+        Periodic; :func:`~roughcontact.solver.results.contact_perimeter`.
+        """
         xp = self.xp
         m = self.P > 0.0
         ex = xp.sum(m != xp.roll(m, 1, axis=1), axis=(1, 2), dtype=np.int64)

@@ -1,19 +1,19 @@
-"""The periodic half-space's products on a batch (:mod:`.batch`): transforms and multipliers.
+"""The periodic half-space's products on a batch (:mod:`roughcontact.solver.batch`): transforms and multipliers.
 
 :class:`BatchFFT` holds the batched real transforms over the last two axes of ``(B, nx, ny)`` (pyFFTW's
 plans on the host, cuFFT through ``cupyx.scipy.fft`` on a GPU); :class:`BatchOperator` the multipliers ``K``
 and ``M`` and the products the iteration calls; :class:`Float64Products` the same products in float64 (a
-fallback's). The element-wise passes are :mod:`.batch_kernels`'.
+fallback's). The element-wise passes are :mod:`.kernels`'.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..core import fft as fft_module
-from .batch_kernels import ArrayKernels
-from .halfspace import elastic_kernel
-from .units import internal_length
+from ...core import fft as fft_module
+from ..halfspace import elastic_kernel
+from ..units import internal_length
+from .kernels import ArrayKernels
 
 
 class BatchFFT:
@@ -194,14 +194,14 @@ class Float64Products:
     ``transform32``, ``kmult32``, ``mmult32``, ``input32``: the names the iteration calls) in float64.
 
     The float32 iteration with float64 products is the single solve's ``pk-fourier``: the first
-    fallback of a step that the float32 one leaves stalled (:data:`~.workspace.FALLBACKS`). The
+    fallback of a step that the float32 one leaves stalled (:data:`~roughcontact.solver.workspace.FALLBACKS`). The
     transform input is a float64 buffer of the shape the iteration writes, of its own (the
     transforms' output may overwrite theirs).
 
     Parameters
     ----------
     op : BatchOperator
-        The operator (or :class:`~.mpi.kernels.SlabOperator`); its float64 multipliers are used.
+        The operator (or :class:`~roughcontact.solver.mpi.kernels.SlabOperator`); its float64 multipliers are used.
     """
 
     def __init__(self, op):
