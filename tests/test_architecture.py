@@ -237,7 +237,107 @@ def test_only_the_cell_asks_a_length_its_form(sources):
     assert found == {}
 
 
+# ------------------------------------------------------------------------------ effects are asked, not named
+#: Python outside the package that the same rules cover: the workflow's job scripts.
+SCRIPTS = SRC.parent / "workflow" / "scripts"
+#: Snakemake's rule files (not Python: searched as text).
+RULES = [SRC.parent / "Snakefile", *sorted((SRC.parent / "workflow" / "rules").glob("*.smk"))]
+#: The library's layers: below the pipeline, they know no scene's vocabulary.
+LIBRARY_LAYERS = ("core", "surfaces", "solver", "theory", "statistics", "analysis", "case")
+#: Keys of a scene's blocks the library never looks up (an effect's ``from_config`` reads its own block's keys).
+SCENE_KEYS = frozenset({"load", "p_max", "relative_to", "target_area", "n_steps", "solver", "outputs", "effects",
+                        "grid", "seeds", "surface"})
+#: The name that asked a contact block whether it was adhesive (issue 64.3: the effects declare it).
+RETIRED_NAMES = frozenset({"is_adhesive"})
+
+
+def script_sources() -> dict[str, tuple[str, bool]]:
+    return {f"workflow.scripts.{p.stem}": (p.read_text(encoding="utf-8"), False) for p in sorted(SCRIPTS.glob("*.py"))}
+
+
+def effect_modules() -> dict[str, str]:
+    """Each registered effect's name -> the module that defines it (``roughcontact.solver.effects.<module>``)."""
+    from roughcontact.solver.effects import EFFECTS
+
+    return {name: effect.__module__ for name, effect in EFFECTS.items()}
+
+
+def names_used(source: str, names) -> list[int]:
+    """Lines that define, import or use one of ``names`` (a name, an attribute, a def, an import alias)."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        used = (node.id if isinstance(node, ast.Name) else node.attr if isinstance(node, ast.Attribute)
+                else node.name if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)) else None)
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            used = next((a.name.split(".")[-1] for a in node.names if a.name.split(".")[-1] in names), None)
+        if used in names:
+            found.append(node.lineno)
+    return sorted(found)
+
+
+def string_literals(source: str, values) -> list[tuple[int, str]]:
+    """``(line, value)`` of every string constant equal to one of ``values`` (f-strings' constant parts too)."""
+    return sorted((node.lineno, node.value) for node in ast.walk(ast.parse(source))
+                  if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in values)
+
+
+def key_lookups(source: str, keys) -> list[tuple[int, str]]:
+    """``(line, key)`` of every lookup of one of ``keys`` by a constant: ``x["key"]``, ``x.get("key", ...)``
+    (``pop`` and ``setdefault`` too)."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        key = None
+        if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant):
+            key = node.slice.value
+        elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.args
+              and node.func.attr in {"get", "pop", "setdefault"} and isinstance(node.args[0], ast.Constant)):
+            key = node.args[0].value
+        if isinstance(key, str) and key in keys:
+            found.append((node.lineno, key))
+    return sorted(found)
+
+
+def test_no_module_asks_whether_a_block_is_adhesive(sources):
+    # the pipeline asks the effects what they need and give (Effect.keeps_elastic_law, .figures, ...)
+    found = {m: lines for m, (src, _) in {**sources, **script_sources()}.items()
+             if (lines := names_used(src, RETIRED_NAMES))}
+    found |= {p.name: [i for i, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1)
+                       if any(name in line for name in RETIRED_NAMES)] for p in RULES}
+    assert {m: lines for m, lines in found.items() if lines} == {}
+
+
+def test_effect_names_are_written_only_in_their_own_module(sources):
+    # an effect's name is the scene's data (a key of contact.effects), never a literal the code tests for: a new
+    # effect declares what it needs and gives, and no planner, rule, figure or report module names it
+    owners = effect_modules()
+    assert {"adhesion", "plasticity"} <= set(owners)
+    found = {}
+    for module, (src, _) in {**sources, **script_sources()}.items():
+        hits = [(line, value) for line, value in string_literals(src, set(owners)) if owners[value] != module]
+        if hits:
+            found[module] = hits
+    assert found == {}
+
+
+def test_the_library_looks_up_no_scene_key(sources):
+    # the scene's vocabulary (load, p_max, relative_to, solver, effects, ...) stops at the pipeline
+    # (roughcontact.pipeline.case.contact_case, contact_effects): effects and rules below it take numbers
+    found = {m: hits for m, (src, _) in sources.items()
+             if m.split(".")[1:2] and m.split(".")[1] in LIBRARY_LAYERS and (hits := key_lookups(src, SCENE_KEYS))}
+    assert found == {}
+
+
 # ------------------------------------------------------------------------------ the checker can fail
+def test_checker_finds_effect_names_and_scene_keys():
+    source = ('from .cases import is_adhesive\nif is_adhesive(b): pass\nx = cases.is_adhesive\n'
+              'def is_adhesive(b): return "adhesion" in b["effects"]\n'
+              'y = f"effects.{n}" + "plasticity"\nz = c.get("load", {}).pop("p_max")\nw = d["hardness"]\n'
+              'v = "adhesive contact"\nu = {"load": 1}\n')
+    assert names_used(source, RETIRED_NAMES) == [1, 2, 3, 4]
+    assert string_literals(source, {"adhesion", "plasticity"}) == [(4, "adhesion"), (5, "plasticity")]
+    assert key_lookups(source, SCENE_KEYS) == [(4, "effects"), (6, "load"), (6, "p_max")]
+
+
 def test_checker_finds_a_length_form_branch():
     source = ("a = np.ndim(length) == 0\nb = numpy.ndim(s.length)\nc = isinstance(length, tuple)\n"
               "d = len(self.length)\ne = np.ndim(shape)\nf = cell.square\ng = len(lengths)\n")

@@ -123,11 +123,15 @@ def test_a_grid_beyond_one_process_only_over_ranks():
 
 
 def test_the_adhesion_remedy_stays_within_one_process():
-    """An adhesive case is never split over ranks, so its remedy's largest grid is one process's."""
+    """An adhesive case is never split over ranks, so its remedy's largest grid is one process's: the planner gives
+    the effect's rule MAX_ONE_PROCESS_N, the one copy of that limit."""
     from roughcontact.pipeline.config.checks import MAX_ONE_PROCESS_N
-    from roughcontact.solver.effects.adhesion import MAX_GRID_N
 
-    assert MAX_GRID_N == MAX_ONE_PROCESS_N == 16384
+    assert MAX_ONE_PROCESS_N == 16384
+    # the zone E* rho^2 / w = 1e-5 L needs N = 150000: beyond one process, the remedy widens the zone instead
+    adhesive = {"law": "exponential", "work": 1e-3, "range": 1e-4}
+    with pytest.raises(ConfigError, match=rf"beyond the largest grid a scene allows \(N = {MAX_ONE_PROCESS_N}\)"):
+        _contact(SINGLE, effects={"adhesion": adhesive})
 
 
 def test_ranks_one_is_dropped_so_it_changes_no_job():

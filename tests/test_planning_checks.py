@@ -16,9 +16,10 @@ from cel_synthetic import simulate_cel_cases
 from conftest import REPO
 from roughcontact.analysis.aggregate.derived import aggregate_contact
 from roughcontact.analysis.fit.grid import fit_cel
+from roughcontact.case import run_case
 from roughcontact.case.loading import pressure_for_area
 from roughcontact.pipeline import adopt, progress, runcost
-from roughcontact.pipeline.case import load_schedule
+from roughcontact.pipeline.case import check_case_loads, contact_case, load_schedule
 from roughcontact.pipeline.config import ConfigError
 from roughcontact.pipeline.scenes import validate_config
 from roughcontact.pipeline.sources import SOURCES
@@ -140,9 +141,19 @@ def test_hardness_below_a_files_final_load_is_refused_before_any_job(shipped_con
 def test_hardness_below_a_cases_final_load_names_the_field_before_any_solve():
     # a surface normalised by rms height has its slope measured in its job: the loads are checked there
     block = {"load": {"relative_to": "rms_slope", "p_max": 0.05, "n_steps": 3},
-             "solver": {"e_star": 1.0}, "effects": {"plasticity": {"hardness": 0.004}}}
-    with pytest.raises(ValueError, match=r"hardness: 0.004 E\* must exceed this case's final"):
-        load_schedule(block).resolve(1.0, rms_slope=0.1, n_nodes=1024, area_at=None, cap=0.004)
+             "solver": {"e_star": 1.0, "tol": 1e-8, "max_iter": 100, "boundary": "periodic", "pressure_unit": "1"},
+             "effects": {"plasticity": {"hardness": 0.004}}, "outputs": {"fields": [], "clusters": False}}
+    case = contact_case(block)
+    # the contact job's check, naming the config field and the remedy
+    with pytest.raises(ValueError, match=r"contact.effects.plasticity.hardness: 0.004 must exceed this case's final "
+                                         r"load p0/E\* = 0.005 .*raise it or lower load.p_max"):
+        check_case_loads(case, rms_slope=0.1)
+    check_case_loads(case, rms_slope=0.07)
+    # the library's own guard (run_case before any solve): the same rule, named by the effect
+    with pytest.raises(ValueError, match=r"plasticity.hardness/E\*: 0.004 must exceed this case's final"):
+        run_case(np.zeros((8, 8)), case, length=1.0, rms_slope=0.1)
+    with pytest.raises(ValueError, match=r"plasticity.hardness/E\*: 0.004 must exceed this case's final"):
+        load_schedule(block).check_final_load(case.settings.effects, 1.0, 0.1)
 
 
 def test_target_area_search_stays_below_the_hardness():

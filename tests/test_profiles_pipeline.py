@@ -146,7 +146,8 @@ def test_profile_scenes_refuse_what_the_1d_solver_cannot_do():
     with pytest.raises(ConfigError, match=r"scene 's', field 'contact.outputs.clusters': labels a map's contact "
                                           r"clusters; .* \(surface.dimension: 1 makes profiles\); remove it"):
         check_profile_contact("s", block, "surface.dimension: 1 makes profiles")
-    block = {"outputs": {"fields": []}, "effects": {"adhesion": {}}, "solver": {}}
+    block = {"outputs": {"fields": []}, "effects": {"adhesion": {"law": "exponential", "work": 1e-5, "range": 1e-3}},
+             "solver": {"e_star": 1.0}}
     with pytest.raises(ConfigError, match="field 'contact.effects.adhesion': the gap iteration"):
         check_profile_contact("s", block, "x")
     with pytest.raises(ConfigError, match="field 'contact.solver.batch': a batch of surfaces solves maps only"):

@@ -21,15 +21,18 @@ rule report_summary:
     input:
         fit=lambda w: (
             [f"results/{w.scene}/fit/cel.csv"]
-            if "contact" in scene_of(w.scene) and not is_adhesive(scene_of(w.scene)["contact"])
+            if "contact" in scene_of(w.scene)
+            and all(e.keeps_elastic_law for e in contact_effects(scene_of(w.scene)["contact"]))
             else []
         ),
         # a patch source's table of its files (measured, array, ...): each surface, and the loads they received
         surfaces=lambda w: [f"results/{w.scene}/surfaces/{name}.nc" for name in patch_names(w.scene)],
-        # a patch source's table, and an adhesive scene's pull-off table, read the contact aggregate
+        # a patch source's table, and the tables an effect brings (an adhesive scene's pull-off), read the
+        # contact aggregate
         contact=lambda w: (
             [f"results/{w.scene}/aggregate/contact.nc"]
-            if "contact" in scene_of(w.scene) and (patch_names(w.scene) or is_adhesive(scene_of(w.scene)["contact"]))
+            if "contact" in scene_of(w.scene)
+            and (patch_names(w.scene) or any(e.tables for e in contact_effects(scene_of(w.scene)["contact"])))
             else []
         ),
     output:

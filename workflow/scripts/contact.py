@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 
 from roughcontact.case import run_case
-from roughcontact.pipeline.case import contact_case
+from roughcontact.pipeline.case import check_case_loads, contact_case
 from roughcontact.pipeline.datasets import contact_dataset, surface_heights
 from roughcontact.pipeline.io import read_dataset, run_logged, write_dataset
 from roughcontact.pipeline.params import recorded, require_made_for
@@ -27,6 +27,7 @@ def main(log):
     # both a generator block and a reader's settings name the study's length unit
     contact = contact_case(settings, length_unit=snakemake.params.surface["unit"], threads=snakemake.threads)
     rms_slope = float(surf.rms_slope.squeeze())
+    check_case_loads(contact, rms_slope)  # a final load its effects cannot carry, named by its config field
     result = run_case(heights, contact, length=length, rms_slope=rms_slope, log=log,
                       name=Path(snakemake.output[0]).stem)
     ds = contact_dataset(result, rms_slope=rms_slope, alpha=float(surf.alpha.squeeze()), e_star=contact.settings.e_star,

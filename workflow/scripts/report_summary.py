@@ -2,6 +2,7 @@
 from pathlib import Path
 
 from roughcontact.core.files import write_text_atomic
+from roughcontact.pipeline.case import contact_effects
 from roughcontact.pipeline.io import read_dataset, run_logged
 from roughcontact.studies import report, report_intro, report_tables
 
@@ -22,9 +23,9 @@ def topographies():
 
 
 def pull_off():
-    """An adhesive scene's pull-off table (report_tables.pull_off_table), or None."""
-    effects = snakemake.params.parameters.get("contact", {}).get("effects", {})
-    if "adhesion" not in effects:
+    """The pull-off table (report_tables.pull_off_table) where an effect brings it (adhesion), or None."""
+    contact = snakemake.params.parameters.get("contact")
+    if contact is None or not any("pull_off" in e.tables for e in contact_effects(contact)):
         return None
     agg = read_dataset(snakemake.input.contact[0], stage="aggregate", variables=["pull_off_pressure"])
     return report_tables.pull_off_table(agg)

@@ -19,8 +19,9 @@ the accuracy study and the κ-gap study alike).
 
 from __future__ import annotations
 
+import functools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 #: A/A0 ~ kappa p0 / (E* h') at small loads (kappa about 2 on the paper's surfaces): the first
@@ -114,9 +115,8 @@ class LoadSchedule:
         ``area_at(p0)`` solves the case's surface at one load and returns its A/A0, used only with
         ``target_area`` (:func:`pressure_for_area`). ``name`` (the case's) starts the warning of a
         target A/A0 that no probe met: jobs run side by side and their lines meet in one console. ``cap``
-        [pressure] (the settings' pressure cap, :attr:`roughcontact.solver.SolverSettings.hardness`): every
-        load stays below it (a final load at or above it is a ``ValueError``; a ``target_area`` search stays
-        under it).
+        [pressure] (the settings' pressure cap, :attr:`roughcontact.solver.SolverSettings.hardness`): a
+        ``target_area`` search stays under it (a final ``p_max`` the effects cannot carry: :meth:`check_final_load`).
         ``attrs`` (netCDF global attributes): ``load_relative_to`` and ``load_p_max`` as the scene gave
         them, or ``load_target_area``, ``load_target_area_reached`` (the probe's A/A0) and
         ``load_probes``; always ``load_p0_max``, the final p0 [pressure], and ``load_pbar_max`` =
@@ -127,7 +127,6 @@ class LoadSchedule:
         else:
             loads = self.pressures(e_star, rms_slope)
             attrs = {"load_relative_to": self.relative_to, "load_p_max": float(self.p_max)}
-            self._check_cap(loads[-1], e_star, rms_slope, cap)
         attrs.update(load_p0_max=float(loads[-1]), load_pbar_max=float(loads[-1] / (e_star * rms_slope)))
         if log is not None:
             log.info("loads: p0 from %.6g to %.6g (p0/E* up to %.4g, p0/(E* h') up to %.4g) in %d steps", loads[0],
@@ -146,13 +145,25 @@ class LoadSchedule:
         return loads, {"load_target_area": float(self.target_area), "load_target_area_reached": found["area"],
                        "load_probes": int(found["probes"])}
 
-    def _check_cap(self, p_last: float, e_star: float, rms_slope: float, cap: float | None) -> None:
-        """A final load the pressure cap cannot carry, refused naming the load and the cap (before any solve)."""
-        if cap is not None and not p_last < cap:
-            raise ValueError(
-                f"hardness: {cap / e_star:g} E* must exceed this case's final load p0/E* = {p_last / e_star:.6g} "
-                f"(load p_max {self.p_max:g} relative to {self.relative_to}, rms slope {rms_slope:.6g}): a pressure "
-                "capped at the hardness cannot carry a mean load p0 >= hardness; raise the hardness or lower p_max")
+    def check_final_load(self, effects: Sequence, e_star: float, rms_slope: float | None, fail=None) -> None:
+        """Refuse, before any solve, a final load one of ``effects`` cannot carry: each effect's own rule
+        (:meth:`roughcontact.solver.effects.Effect.check_final_load`, e.g. a hardness above the load).
+
+        ``fail(effect_name, field, message)`` reports one (default: a ``ValueError`` naming ``<name><field>``
+        over E*). Nothing to check with ``target_area``: its search stays below a pressure cap (:meth:`resolve`).
+        """
+        if not effects or self.target_area is not None:
+            return
+        p_last = self.pressures(e_star, rms_slope)[-1]
+        slope = "unknown" if rms_slope is None else f"{rms_slope:.6g}"
+        load = (f"this case's final load p0/E* = {p_last / e_star:.6g} (load.p_max {self.p_max:g} relative to "
+                f"{self.relative_to}, rms slope {slope})")
+        for effect in effects:
+            effect.check_final_load(p_last, e_star, load, functools.partial(fail or _refuse, effect.name))
+
+
+def _refuse(name: str, field: str, message: str) -> None:
+    raise ValueError(f"{name}{field}/E*: {message}")
 
 
 def pressure_for_area(area_at: Callable[[float], float], target: float, *, e_star: float, rms_slope: float,

@@ -141,6 +141,7 @@ def run_case(heights: np.ndarray, case: ContactCase, *, length, rms_slope, log=N
     def area_at(p0: float) -> float:  # a target_area probe: the surface at one load
         return float(solve_contact(heights, [p0], settings).area_fraction[-1])
 
+    case.schedule.check_final_load(settings.effects, settings.e_star, rms_slope)
     loads, load_info = case.schedule.resolve(settings.e_star, rms_slope, heights.size, area_at, log, name,
                                              cap=settings.hardness)
     outputs = case.outputs

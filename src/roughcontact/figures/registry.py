@@ -22,7 +22,8 @@ from pathlib import Path
 import xarray as xr
 from matplotlib.figure import Figure
 
-from ..pipeline.cases import CASE_STEM, cases as grid_cases, is_adhesive
+from ..pipeline.case import contact_effects
+from ..pipeline.cases import CASE_STEM, cases as grid_cases
 from ..pipeline.io import read_dataset
 from ..pipeline.sources import source_of
 from . import measured as plots_measured
@@ -221,16 +222,23 @@ def _patch_scene_stores_fields(scene: Mapping) -> bool:
     return "contact" in scene and _stores_fields(scene["contact"])
 
 
-def _adhesive_scene(scene: Mapping) -> bool:
-    return "contact" in scene and is_adhesive(scene["contact"])
+def _brought(figure: str):
+    """``wanted`` of a figure a contact block's effects bring (:attr:`roughcontact.solver.effects.Effect.figures`)."""
+    return lambda block: any(figure in effect.figures for effect in contact_effects(block))
+
+
+def _brought_to_scene(figure: str):
+    """``wanted`` of a patch scene's figure its contact study's effects bring."""
+    return lambda scene: "contact" in scene and _brought(figure)(scene["contact"])
+
+
+def _elastic_law(block: Mapping) -> bool:
+    """Whether contact follows the contact evolution law: every effect keeps it (none adhesive)."""
+    return all(effect.keeps_elastic_law for effect in contact_effects(block))
 
 
 def _elastic_scene(scene: Mapping) -> bool:
-    return "contact" in scene and not is_adhesive(scene["contact"])
-
-
-def _not_adhesive(block: Mapping) -> bool:
-    return not is_adhesive(block)
+    return "contact" in scene and _elastic_law(scene["contact"])
 
 
 FIGURES: dict[str, FigureSpec] = {
@@ -240,17 +248,18 @@ FIGURES: dict[str, FigureSpec] = {
     "surface_examples": FigureSpec(
         "representativity", _example_inputs, _render_surface_examples, "Representativity",
         "surface_examples.rst", wanted=lambda block: bool(block["examples"])),
-    # the CEL and the theories of Fig. 2 describe contact without adhesion: not for an adhesive scene
+    # the CEL and the theories of Fig. 2 describe contact without adhesion: only where the effects keep the law
     "area_load": FigureSpec(
-        "contact", _contact_inputs, _contact_figure(fig_area_load), "Contact", "area_load.rst", wanted=_not_adhesive),
+        "contact", _contact_inputs, _contact_figure(fig_area_load), "Contact", "area_load.rst", wanted=_elastic_law),
     "kappa": FigureSpec("contact", _contact_inputs, _contact_figure(fig_kappa), "Contact", "kappa.rst",
-                        wanted=_not_adhesive),
+                        wanted=_elastic_law),
     "dpbar": FigureSpec("contact", _contact_inputs, _contact_figure(fig_dpbar), "Contact", "dpbar.rst",
-                        wanted=_not_adhesive),
+                        wanted=_elastic_law),
+    # the figures an effect brings (Effect.figures: an adhesive scene's load cycle and pull-off)
     "hysteresis": FigureSpec("contact", _hysteresis_inputs, _render_hysteresis, "Adhesion", "hysteresis.rst",
-                             wanted=is_adhesive),
+                             wanted=_brought("hysteresis")),
     "pull_off": FigureSpec("contact", lambda block: {"agg": "aggregate/contact.nc"}, _render_pull_off, "Adhesion",
-                           "pull_off.rst", wanted=is_adhesive),
+                           "pull_off.rst", wanted=_brought("pull_off")),
     # only where the scene stores fields (outputs.fields): the maps of a few cases at those steps
     "contact_map": FigureSpec("contact", _contact_map_inputs, _render_contact_maps, "Contact", "contact_map.rst",
                               wanted=_stores_fields),
@@ -271,10 +280,10 @@ FIGURES: dict[str, FigureSpec] = {
         wanted=_patch_scene_stores_fields, cases="patches"),
     "measured_hysteresis": FigureSpec(
         "contact", _patch_hysteresis_inputs, _render_hysteresis, "Adhesion", "hysteresis.rst",
-        wanted=_adhesive_scene, cases="patches"),
+        wanted=_brought_to_scene("hysteresis"), cases="patches"),
     "measured_pull_off": FigureSpec(
         "contact", lambda scene: {"agg": "aggregate/contact.nc"}, _render_pull_off, "Adhesion", "pull_off.rst",
-        wanted=_adhesive_scene, cases="patches"),
+        wanted=_brought_to_scene("pull_off"), cases="patches"),
 }
 
 

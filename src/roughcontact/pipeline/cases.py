@@ -121,11 +121,3 @@ def contact_batches(block: dict) -> list[ContactBatch]:
         for index in range(-(-n_seeds // size))
     ]
 
-
-def is_adhesive(block: dict) -> bool:
-    """Whether a validated contact block asks for adhesion (``effects.adhesion``).
-
-    An adhesive study draws the load cycle and the pull-off instead of the contact evolution law:
-    its fit and the non-adhesive theory curves are neither run nor drawn (``figures.adhesion``).
-    """
-    return "adhesion" in block.get("effects", {})

@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping
 
-from .cases import is_adhesive
+from .case import contact_effects
 
 
 def canonical(obj):
@@ -97,13 +97,14 @@ def kappa_gap_summary(block: Mapping) -> dict:
 
 
 def summary(scene: Mapping) -> dict:
-    """The report's summary of a scene: its study blocks and, with a non-adhesive contact study, its fit.
+    """The report's summary of a scene: its study blocks and, with a contact study whose effects keep the contact
+    evolution law (none adhesive), its fit.
 
     Not its description (free text), nor ``keep_surfaces`` (whether surface files are kept,
     which changes no result).
     """
     blocks = {key: scene[key] for key in ("representativity", "contact", "accuracy", "kappa_gap") if key in scene}
-    if "contact" in scene and not is_adhesive(scene["contact"]):  # an adhesive scene runs no fit
+    if "contact" in scene and all(e.keeps_elastic_law for e in contact_effects(scene["contact"])):  # else no fit
         blocks["fit"] = scene["fit"]
     return canonical({
         key: {k: v for k, v in block.items() if k != "keep_surfaces"} for key, block in blocks.items()

@@ -86,10 +86,11 @@ class SolverSettings:
             hint = ("; cluster statistics come from an observer: observers=[roughcontact.statistics.clusters."
                     "ClusterObserver(length)]") if "clusters" in unknown else ""
             raise TypeError(f"unexpected keyword argument(s) {unknown}; solver settings are {sorted(fields)}{hint}")
+        settings = dataclasses.replace(base, **options)
         if hardness is not None:
             check_positive("hardness", hardness)
-            options["effects"] = (*options.get("effects", base.effects), PlasticityCap(hardness))
-        return dataclasses.replace(base, **options)
+            settings = dataclasses.replace(settings, effects=(*settings.effects, PlasticityCap(hardness)))
+        return settings
 
     def checked(self, shape) -> SolverSettings:
         """These settings validated for heights of ``shape``, the method resolved.

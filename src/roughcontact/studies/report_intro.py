@@ -5,27 +5,34 @@ The landing page (``workflow/report/workflow.rst``) opens with this fragment, ``
 which the ``report_summary`` rule writes: :func:`intro_facts` reduces a validated scene to what the introduction
 says of it (JSON-able, the rule's params: a change of the scene's description or grid plans nothing), and
 :func:`intro_rst` writes it. A scene's stages (:func:`scene_stages`) are those its blocks ask for: its surfaces
-(generated, 1-D profiles, or a patch source's files), their representativity, elastic or adhesive contact, the
-fit of the contact evolution law (a non-adhesive contact study), the accuracy study, the kappa-gap study.
+(generated, 1-D profiles, or a patch source's files), their representativity, contact (elastic, or as an effect
+names it: adhesive contact), the fit of the contact evolution law (a contact study whose effects keep the law), the
+accuracy study, the kappa-gap study. What an effect makes of contact (its stage's title and words) is the effect's
+own (:class:`roughcontact.solver.effects.Effect` ``contact_name``, ``intro_fact``, ``intro_text``).
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 
-from ..pipeline.cases import is_adhesive
+from ..pipeline.case import contact_effects
 from ..pipeline.sources import source_of
+from ..solver.effects import EFFECTS
 
 #: The paper the package reproduces, as the introduction cites it.
 PAPER = ('Yastrebov, Anciaux & Molinari, "Contact between representative rough surfaces", '
          "Phys. Rev. E 86, 035601 (2012)")
+
+#: The effects that name contact their own way (:attr:`~roughcontact.solver.effects.Effect.contact_name`), by
+#: their registered names: each is a stage of its own, in place of "contact".
+CONTACT_EFFECTS = {name: effect for name, effect in EFFECTS.items() if effect.contact_name}
 
 #: Each stage's name as the introduction writes it (bold, at the head of its item), in the order given.
 STAGE_TITLES = {
     "surfaces": "surfaces",
     "representativity": "representativity",
     "contact": "contact",
-    "adhesion": "adhesive contact",
+    **{name: effect.contact_name for name, effect in CONTACT_EFFECTS.items()},
     "fit": "contact evolution law",
     "accuracy": "accuracy",
     "kappa_gap": "κ gap",
@@ -56,19 +63,21 @@ def _dimension(scene: Mapping) -> int:
 def intro_facts(scene: Mapping) -> dict:
     """What the introduction says of a validated scene (:func:`roughcontact.pipeline.scenes.validate_config`):
     its surface source, the number of files of a patch source, the generated surfaces' dimension, whether it
-    computes representativity, its contact study (adhesion law and stored outputs), the fit's window of
+    computes representativity, its contact study (what an effect that names contact keeps of its parameters, by
+    the effect's name: the adhesion law; and the stored outputs), the fit's window of
     ``A/A0`` (None without a fit), and whether it runs the accuracy and kappa-gap studies. JSON-able."""
     source = source_of(scene) if ("contact" in scene or "representativity" in scene) else None
     contact = None
     if "contact" in scene:
         block = scene["contact"]
-        outputs = block.get("outputs", {})
+        outputs, effects = block.get("outputs", {}), contact_effects(block)
         contact = {
-            "adhesion": block["effects"]["adhesion"].get("law", "") if is_adhesive(block) else None,
+            **dict.fromkeys(CONTACT_EFFECTS),
+            **{effect.name: effect.intro_fact for effect in effects if effect.name in CONTACT_EFFECTS},
             "outputs": [k for k in OUTPUTS if outputs.get(k)],
             "fields": [int(s) for s in outputs.get("fields", [])],
         }
-    fits = "contact" in scene and not is_adhesive(scene["contact"])
+    fits = "contact" in scene and all(effect.keeps_elastic_law for effect in contact_effects(scene["contact"]))
     return {
         "source": None if source is None else source.name,
         "files": 0 if source is None else len(source.names(scene)),
@@ -87,11 +96,16 @@ def scene_stages(facts: Mapping) -> list[str]:
     stages = ["surfaces"] if facts.get("source") else []
     stages += ["representativity"] if facts.get("representativity") else []
     if contact is not None:
-        stages.append("adhesion" if contact.get("adhesion") else "contact")
+        stages.append(_contact_stage(contact))
     stages += ["fit"] if facts.get("fit") else []
     stages += ["accuracy"] if facts.get("accuracy") else []
     stages += ["kappa_gap"] if facts.get("kappa_gap") else []
     return stages
+
+
+def _contact_stage(contact: Mapping) -> str:
+    """The contact study's stage: an effect's that names contact (:data:`CONTACT_EFFECTS`), else ``contact``."""
+    return next((name for name in CONTACT_EFFECTS if contact.get(name)), "contact")
 
 
 def _surfaces(facts: Mapping) -> str:
@@ -116,9 +130,9 @@ def _contact(contact: Mapping) -> str:
         stored.append(OUTPUTS[key].format(s="s" if len(steps) != 1 else "", steps=", ".join(map(str, steps))))
     also = ("; it also stores " + ", ".join(stored[:-1]) + (" and " if len(stored) > 1 else "") + stored[-1]
             if stored else "")
-    if contact.get("adhesion"):
-        return (f"with the {contact['adhesion']} adhesion law, loaded in steps under pressure control, then unloaded "
-                f"under displacement control to the pull-off pressure{also}")
+    stage = _contact_stage(contact)
+    if stage != "contact":
+        return CONTACT_EFFECTS[stage].intro_text(contact[stage]) + also
     return f"frictionless elastic contact with a rigid flat, the load applied in steps{also}"
 
 
@@ -129,7 +143,7 @@ def _stage_text(stage: str, facts: Mapping) -> str:
     if stage == "representativity":
         return ("how Gaussian the heights are: the :math:`L_2` error between their distribution and a Gaussian,"
                 + (" per pair of cutoffs, over seeds" if facts.get("source") == "generated" else " per file"))
-    if stage in ("contact", "adhesion"):
+    if stage == "contact" or stage in CONTACT_EFFECTS:
         return _contact(facts["contact"])
     if stage == "fit":
         low, high = facts["fit"]

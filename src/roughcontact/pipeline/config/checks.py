@@ -8,8 +8,8 @@ import importlib.util
 import itertools
 from collections.abc import Mapping
 
-from ...solver.effects import EFFECTS
 from ...surfaces.linescan import MIN_PROFILE_POINTS
+from ..case import contact_effects
 from .files import ConfigError
 
 
@@ -104,9 +104,9 @@ def check_contact(scene: str, block: dict) -> None:
     bad = [s for s in block["outputs"]["fields"] if s > steps]
     if bad:
         fail("outputs.fields", f"steps {bad} exceed load.n_steps = {steps} (allowed 1..{steps})")
-    for name in block["effects"]:  # each effect's own cross-field rules (schema-checked names)
-        EFFECTS[name].check_config(block, functools.partial(_fail_effect, fail, name))
-    _check_outputs(fail, block)
+    effects = contact_effects(block)
+    _check_effects(fail, block, effects)
+    _check_outputs(fail, block, effects)
     if block.get("surface", {}).get("dimension") == 1:
         check_profile_contact(scene, block, "surface.dimension: 1 makes profiles")
     backend = block["solver"].get("array_backend", "numpy")
@@ -116,7 +116,7 @@ def check_contact(scene: str, block: dict) -> None:
     load = block["load"]
     if "p_min" in load and load["schedule"] != "geometric":
         fail("load.p_min", f"only used by load.schedule: geometric (here {load['schedule']!r}); remove it")
-    _check_hardness_relative(fail, block)
+    _check_final_load(fail, block, effects)
     if "target_area" in load:
         _check_target_area(fail, load)
         if "surface" in block:  # the generator's N x N grid, or N points of a profile
@@ -254,25 +254,43 @@ def check_profile_contact(scene: str, block: Mapping, why: str) -> None:
     if block["outputs"].get("clusters"):
         fail("outputs.clusters", "labels a map's contact clusters; a profile's contact spots are intervals, counted by "
                                  "contact_perimeter (interval ends per length)")
-    if "adhesion" in block["effects"]:
-        fail("effects.adhesion", "the gap iteration of adhesive contact solves maps only")
+    for effect in contact_effects(block):
+        if effect.needs_gap_iteration:
+            fail(f"effects.{effect.name}", f"the gap iteration of {effect.contact_name or effect.name} solves maps "
+                                           "only")
     if block["solver"].get("batch", 1) != 1:
         fail("solver.batch", "a batch of surfaces solves maps only")
 
 
-def _check_outputs(fail, block: dict) -> None:
+def _check_effects(fail, block: dict, effects) -> None:
+    """Each effect's own rules (:class:`~roughcontact.solver.effects.Effect`): against the other effects and the
+    boundary, and against a generated scene's grid (known before any job; a file's grid: its patch source)."""
+    names = [effect.name for effect in effects]
+    boundary = block["solver"].get("boundary", "periodic")
+    surface = block.get("surface", {})
+    for effect in effects:
+        effect_fail = functools.partial(_fail_effect, fail, effect.name)
+        effect.check_config(effect_fail, others=[n for n in names if n != effect.name], boundary=boundary)
+        if "N" in surface and "L" in surface:  # a generated surface: its N x N grid on L
+            n, length = int(surface["N"]), float(surface["L"])
+            effect.check_grid(block["solver"]["e_star"], length, (n, n), f"L / N = {surface['L']:g} / {surface['N']}",
+                              effect_fail, n_field="surface.N", most_n=MAX_ONE_PROCESS_N)
+
+
+def _check_outputs(fail, block: dict, effects) -> None:
     """The observables that hold only for some problems: P(p) for compressive contact, the exact full contact."""
-    outputs, effects = block["outputs"], block["effects"]
-    if "pressure_distribution" in outputs and "adhesion" in effects:
-        fail("outputs.pressure_distribution", "bins compressive pressures only, and adhesion adds tension; "
-                                              "remove it or effects.adhesion")
+    outputs = block["outputs"]
+    tensile = [effect.name for effect in effects if effect.adds_tension]
+    if "pressure_distribution" in outputs and tensile:
+        fail("outputs.pressure_distribution", f"bins compressive pressures only, and {tensile[0]} adds tension; "
+                                              f"remove it or effects.{tensile[0]}")
     if outputs.get("full_contact_load"):
         if block["solver"]["boundary"] != "periodic":
             fail("outputs.full_contact_load", "the exact full-contact load is that of a periodic cell; "
                                               "remove it or set solver.boundary: periodic")
         if effects:
             fail("outputs.full_contact_load", f"is the elastic solution's, not with effects "
-                                              f"({', '.join(effects)}); remove it or the effects")
+                                              f"({', '.join(block['effects'])}); remove it or the effects")
 
 
 def _fail_effect(fail, name: str, field: str, msg: str) -> None:
@@ -323,17 +341,24 @@ def check_backend(scene: str, contact: Mapping) -> None:
                           "runs the jobs), or remove array_backend (numpy)")
 
 
-def _check_hardness_relative(fail, block: dict) -> None:
-    """The hardness against the final p0/E* when that is known before any job: p_max x the generator's rms slope."""
-    load, effects = block["load"], block["effects"]
-    slope = block.get("surface", {}).get("rms_slope")
-    if "plasticity" not in effects or load.get("relative_to") != "rms_slope" or slope is None or "target_area" in load:
+def _check_final_load(fail, block: dict, effects) -> None:
+    """The final load against each effect's rule (:meth:`~roughcontact.solver.effects.Effect.check_final_load`)
+    where it is known before any job: ``load.p_max`` relative to E*, or times the generator's rms slope."""
+    load = block["load"]
+    if not effects or "target_area" in load:
         return
-    final, hardness = load["p_max"] * slope, effects["plasticity"]["hardness"]
-    if not hardness > final:
-        fail("effects.plasticity.hardness", f"{hardness:g} must exceed the final load p0/E* = load.p_max x "
-             f"surface.rms_slope = {load['p_max']:g} x {slope:g} = {final:g} (load.relative_to: rms_slope): a pressure "
-             "capped at the hardness cannot carry a mean load p0 >= hardness; raise it or lower load.p_max")
+    p_max, e_star = load["p_max"], block["solver"]["e_star"]
+    if load.get("relative_to", "e_star") == "e_star":
+        final, words = p_max, f"load.p_max = {p_max:g}"
+    else:  # relative to the rms slope: the generator's, when it sets one (a file's: its patch source; else the job)
+        slope = block.get("surface", {}).get("rms_slope")
+        if slope is None:
+            return
+        final = p_max * slope
+        words = (f"the final load p0/E* = load.p_max x surface.rms_slope = {p_max:g} x {slope:g} = {final:g} "
+                 "(load.relative_to: rms_slope)")
+    for effect in effects:
+        effect.check_final_load(final * e_star, e_star, words, functools.partial(_fail_effect, fail, effect.name))
 
 
 #: A measured scene's final load when it says nothing: p0 / (E* h') = 0.05, the paper's regime

@@ -25,8 +25,8 @@ import numpy as np
 
 from ...analysis.aggregate import TOPOGRAPHY_DIM, add_derived, combine_topographies
 from ...analysis.aggregate.combine import GRID_RTOL
-from ...solver.effects import Adhesion
 from ...surfaces.synthetic import nonperiodic_moments
+from ..case import contact_effects
 from ..config.checks import check_profile_contact, check_target_nodes
 from ..config.files import ConfigError
 from ..measured import MeasuredConfigError, drop_generator_keys
@@ -63,11 +63,13 @@ class PatchSource(Source):
     @classmethod
     def check_contact_files(cls, name: str, scene: Mapping) -> None:
         """What the files allow the validated contact block, before any job (the scene that runs): see
-        :meth:`_check_profiles`, :meth:`_check_shapes`, :meth:`_check_hardness` and :meth:`_check_adhesive_zone`."""
+        :meth:`_check_profiles`, :meth:`_check_shapes`, and each effect's rules on every file's final load and grid
+        (:meth:`_check_final_loads`, :meth:`_check_effect_grids`)."""
         cls._check_profiles(name, scene)
         cls._check_shapes(name, scene)
-        cls._check_hardness(name, scene)
-        cls._check_adhesive_zone(name, scene)
+        effects = contact_effects(scene["contact"])
+        cls._check_final_loads(name, scene, effects)
+        cls._check_effect_grids(name, scene, effects)
 
     @classmethod
     def _check_profiles(cls, name: str, scene: Mapping) -> None:
@@ -86,17 +88,24 @@ class PatchSource(Source):
         check_profile_contact(name, scene["contact"], f"{cls.what}s {', '.join(lines)} are line scans")
 
     @classmethod
-    def _check_adhesive_zone(cls, name: str, scene: Mapping) -> None:
-        """With adhesion, each map's grid resolves the process zone ``E* rho^2 / w`` = ``range^2 / work`` (lengths
-        in the scene's unit; :func:`roughcontact.solver.adhesion.zone_cells`), from the files' headers."""
-        block = scene["contact"]["effects"].get("adhesion")
-        if block is None:
+    def _check_effect_grids(cls, name: str, scene: Mapping, effects) -> None:
+        """Each map's grid against each effect's rule (:meth:`~roughcontact.solver.effects.Effect.check_grid`; with
+        adhesion the process zone ``E* rho^2 / w``, lengths in the scene's unit), from the files' headers."""
+        if not effects:
             return
+        e_star, unit = scene["contact"]["solver"]["e_star"], scene[cls.key]["unit"]
         for case, ((nx, ny), (dx, dy)) in cls.grids(name, scene).items():
-            problem = Adhesion.unresolved(block, (nx * dx, ny * dy), (nx, ny),
-                                          f"{dx:.4g} x {dy:.4g} {scene[cls.key]['unit']}")
-            if problem:
-                raise ConfigError(f"scene {name!r}, field 'contact.effects.adhesion': {cls.what} {case!r}: {problem}")
+            for effect in effects:
+                effect.check_grid(e_star, (nx * dx, ny * dy), (nx, ny), f"{dx:.4g} x {dy:.4g} {unit}",
+                                  cls._effect_failure(name, effect, f"{cls.what} {case!r}: "))
+
+    @staticmethod
+    def _effect_failure(name: str, effect, where: str):
+        """``fail(field, message)`` of ``effect``'s rules on one file (``where`` starts the message)."""
+        def fail(field, msg):
+            raise ConfigError(f"scene {name!r}, field 'contact.effects.{effect.name}{field}': {where}{msg}")
+
+        return fail
 
     @classmethod
     def _check_shapes(cls, name: str, scene: Mapping) -> None:
@@ -121,25 +130,25 @@ class PatchSource(Source):
                                   "grid: remove outputs.fields, or give files of one grid (a scene each)")
 
     @classmethod
-    def _check_hardness(cls, name: str, scene: Mapping) -> None:
-        """A hardness above every file's final load p0/E* = p_max h' (``relative_to: rms_slope``): each file is
-        read as its surface job reads it, and its rms slope measured as that job measures it."""
-        contact = scene["contact"]
-        load, hardness = contact["load"], contact["effects"].get("plasticity", {}).get("hardness")
-        if hardness is None or "target_area" in load or load["relative_to"] != "rms_slope":
+    def _check_final_loads(cls, name: str, scene: Mapping, effects) -> None:
+        """Every file's final load p0/E* = p_max h' (``relative_to: rms_slope``) against each effect's rule
+        (:meth:`~roughcontact.solver.effects.Effect.check_final_load`), when an effect caps the pressure (the one
+        bound on a final load): each file is read as its surface job reads it, its rms slope measured as there."""
+        load, e_star = scene["contact"]["load"], scene["contact"]["solver"]["e_star"]
+        if not any(e.pressure_cap is not None for e in effects) or "target_area" in load or \
+                load["relative_to"] != "rms_slope":
             return
+        p_max = load["p_max"]
         for case in cls.names(scene):
             try:
                 surface = cls.read(cls.reader_settings(scene, case))
             except ValueError as err:
                 raise ConfigError(f"scene {name!r}, field '{cls.key}.files.{case}': {err}") from None
             slope = nonperiodic_moments(surface.heights, surface.length)["rms_slope"]
-            if not hardness > load["p_max"] * slope:
-                raise ConfigError(
-                    f"scene {name!r}, field 'contact.effects.plasticity.hardness': {hardness:g} must exceed every "
-                    f"case's final load p0/E* = load.p_max x its rms slope; {cls.what} {case!r}: {load['p_max']:g} x "
-                    f"{slope:.4g} = {load['p_max'] * slope:.4g} (a pressure capped at the hardness cannot carry a "
-                    "mean load p0 >= hardness); raise it or lower load.p_max")
+            words = (f"every case's final load p0/E* = load.p_max x its rms slope; {cls.what} {case!r}: "
+                     f"{p_max:g} x {slope:.4g} = {p_max * slope:.4g}")
+            for effect in effects:
+                effect.check_final_load(p_max * slope * e_star, e_star, words, cls._effect_failure(name, effect, ""))
 
     @classmethod
     def grids(cls, name: str, scene: Mapping) -> dict[str, tuple]:

@@ -3,7 +3,9 @@
 Adding an effect: one module in this package with an :class:`Effect` subclass decorated with
 :func:`register` (every module here is imported below, so the registry finds it), its config
 keys in the schema (``contact.effects.<name>``) and a row in config/README.md. :mod:`.base`
-states what an effect supplies.
+states what an effect supplies, what it declares to the pipeline (the gap iteration, tension, whether
+the contact evolution law still applies, the report's figures and tables) and its cross-field rules:
+the pipeline asks those, and never tests an effect's name.
 """
 
 import importlib

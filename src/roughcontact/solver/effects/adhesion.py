@@ -32,10 +32,6 @@ from .base import Effect, register
 LAWS = {"exponential": Exponential, "maugis-dugdale": MaugisDugdale}
 
 
-#: The largest ``surface.N`` an adhesive scene allows (one process solves it; the pipeline's config checks'
-#: ``MAX_ONE_PROCESS_N``: only elastic cases over MPI ranks go beyond): a remedy never asks for more.
-MAX_GRID_N = 16384
-
 
 @register
 class Adhesion(Effect):
@@ -66,6 +62,12 @@ class Adhesion(Effect):
     """
 
     name = "adhesion"
+    #: an adhesive scene draws the load cycle and the pull-off, not the contact evolution law
+    keeps_elastic_law = False
+    adds_tension = True
+    figures = ("hysteresis", "pull_off")
+    tables = ("pull_off",)
+    contact_name = "adhesive contact"
     #: Fraction of the largest tension above which a node out of contact counts in ``adhesive_area_fraction``.
     ZONE_FRACTION = 0.5
 
@@ -79,58 +81,60 @@ class Adhesion(Effect):
             raise ValueError(f"pull_off_rtol must be a number in (0, 1), got {pull_off_rtol!r}")
         self.pull_off_rtol = float(pull_off_rtol)
 
-    @classmethod
-    def check_config(cls, contact: dict, fail) -> None:
-        """The gap iteration runs on the periodic half-space, with no other effect."""
-        others = sorted(set(contact["effects"]) - {cls.name})
+    def check_config(self, fail, *, others=(), boundary: str = "periodic") -> None:
+        """The gap iteration runs on the periodic half-space, with no other effect; a scene's law is exponential."""
         if others:
-            fail("", f"cannot be combined with effects.{others[0]} (one effect on the gap iteration at a time); "
-                 "remove one of them")
-        boundary = contact["solver"].get("boundary", "periodic")
+            fail("", f"cannot be combined with effects.{sorted(others)[0]} (one effect on the gap iteration at a "
+                     "time); remove one of them")
         if boundary != "periodic":
             fail("", f"needs solver.boundary: periodic (the adhesive iteration is periodic), got {boundary!r}")
-        block = contact["effects"][cls.name]
-        surface = contact.get("surface", {})
-        if "N" in surface and "L" in surface:  # a generated surface: its grid is known before any job
-            n, length = int(surface["N"]), float(surface["L"])
-            problem = cls.unresolved(block, length, (n, n), f"L / N = {surface['L']:g} / {surface['N']}")
-            if problem:
-                law = cls.config_law(block)
-                need = math.ceil(MIN_ZONE_CELLS * length / process_zone_length(law, 1.0))
-                if need <= MAX_GRID_N:
-                    fail("", f"{problem} (surface.N >= {need})")
-                # no grid a scene allows resolves it: the zone E* rho^2 / w must grow instead
-                zone = MIN_ZONE_CELLS * length / MAX_GRID_N
-                fail("", f"{problem}: it needs surface.N >= {need}, beyond the largest grid a scene allows "
-                         f"(N = {MAX_GRID_N}); widen the process zone E* rho^2 / w to >= {zone:.3g} instead: "
-                         f"range >= {1.002 * math.sqrt(zone * law.w):.3g}, "
-                         f"or work <= {0.998 * law.rho ** 2 / zone:.3g}, or a "
-                         "smaller cell L")
-        if block["law"] == "maugis-dugdale":
+        if self.law == "maugis-dugdale":
             fail(".law", "maugis-dugdale is refused in a scene: its tension jumps at g = rho, so the discrete "
                  "problem traps in many states and its pull-off does not converge with the grid (docs/solver.md, "
                  "'Adhesion'); use law: exponential (the library's MaugisDugdale stays for studies of that trap)")
 
-    @staticmethod
-    def config_law(block: dict) -> Exponential:
-        """The law of a config block with E* = 1 (``work`` is w / E*), for checks of lengths alone."""
-        return Exponential(block["work"], block["range"])
+    def check_grid(self, e_star: float, length, shape, pixel: str, fail, *, n_field: str | None = None,
+                   most_n: int | None = None) -> None:
+        """The grid resolves the process zone ``E* rho^2 / w`` (:data:`~..adhesion.MIN_ZONE_CELLS` cells of ``pixel``).
 
-    @classmethod
-    def unresolved(cls, block: dict, length, shape, where: str) -> str | None:
-        """Why a grid of ``shape`` on a cell of ``length`` cannot resolve a config block's process zone, or None.
-
-        ``length`` (L or (Lx, Ly)) in the surface's unit, the block's ``range`` too; ``where`` names the pixel.
+        ``length`` (L or (Lx, Ly)) in the range's unit. With ``n_field`` (the field that sets a square grid's N,
+        ``length`` its side L) the remedy names the N it needs, or, beyond ``most_n``, how far the zone must widen.
+        Work and zone are read relative to ``e_star`` (a scene's ``work`` is w / E*).
         """
-        law = cls.config_law(block)
+        law = LAWS[self.law](self.functional.w / e_star, self.functional.rho)  # E* = 1: a scene's own numbers
         cells = zone_cells(law, 1.0, length, shape)
-        return None if cells >= MIN_ZONE_CELLS else unresolved_zone_message(cells, law, 1.0, where)
+        if cells >= MIN_ZONE_CELLS:
+            return
+        problem = unresolved_zone_message(cells, law, 1.0, pixel)
+        if n_field is None:
+            fail("", problem)
+            return
+        need = math.ceil(MIN_ZONE_CELLS * length / process_zone_length(law, 1.0))
+        if most_n is None or need <= most_n:
+            fail("", f"{problem} ({n_field} >= {need})")
+            return
+        # no grid a scene allows resolves it: the zone E* rho^2 / w must grow instead
+        zone = MIN_ZONE_CELLS * length / most_n
+        fail("", f"{problem}: it needs {n_field} >= {need}, beyond the largest grid a scene allows (N = {most_n}); "
+                 f"widen the process zone E* rho^2 / w to >= {zone:.3g} instead: "
+                 f"range >= {1.002 * math.sqrt(zone * law.w):.3g}, or work <= {0.998 * law.rho ** 2 / zone:.3g}, "
+                 "or a smaller cell L")
 
     @classmethod
     def from_config(cls, block: dict, *, e_star: float) -> Adhesion:
         """``contact.effects.adhesion``: ``work`` relative to ``E*`` (a length), ``range`` a length."""
         return cls(block["law"], block["work"] * e_star, block["range"], block.get("unloading", True),
                    block.get("pull_off_rtol", 1e-3))
+
+    @property
+    def intro_fact(self) -> str:
+        """The law's name."""
+        return self.law
+
+    @classmethod
+    def intro_text(cls, fact) -> str:
+        return (f"with the {fact} adhesion law, loaded in steps under pressure control, then unloaded under "
+                "displacement control to the pull-off pressure")
 
     def finish(self, p: np.ndarray, p_int, p0: float, gap: np.ndarray | None = None) -> dict:
         """The attractive traction of the law out of contact, and the area where it is strong.

@@ -22,10 +22,39 @@ The solver asks every effect it is given for
   load steps (name -> :class:`xarray.Variable` with CF ``units`` or flags and ``long_name``), e.g. a
   pull-off force and the unloading branch;
 * ``from_config(block, e_star=...)``: the effect from its config block (``contact.effects.<name>``,
-  already schema-checked), ``e_star`` the modulus its relative parameters scale with;
-* ``check_config(contact, fail)``: the cross-field rules a schema cannot express, given the whole
-  schema-checked ``contact`` block; ``fail(field, message)`` reports one (``field`` after the
-  effect's name: ``".hardness"``, or ``""`` for the effect itself).
+  already schema-checked), ``e_star`` the modulus its relative parameters scale with; the only
+  method that reads a config block, and only the effect's own.
+
+What the pipeline asks of an effect instead of its name (declared here, so that a new effect
+changes no planner, rule or report module to say what it needs and gives):
+
+* ``needs_gap_iteration``: it supplies an interaction energy of the gap (``functional``), so the
+  solver runs the gap iteration, which solves maps only and one such effect at a time;
+* ``adds_tension``: its pressures can be tensile (an attractive traction), so an observable of
+  compressive pressures alone (the pressure distribution P(p)) does not describe it;
+* ``keeps_elastic_law``: contact with it still follows the contact evolution law of non-adhesive
+  elastic contact, so the CEL fit, kappa and the non-adhesive theories apply (False: the
+  pipeline runs no fit and draws none of its figures);
+* ``figures`` and ``tables``: the report's figures (names of the figures registry,
+  :data:`roughcontact.figures.registry.FIGURES` less a patch source's ``measured_`` prefix) and
+  tables (``pull_off``) it brings;
+* ``contact_name``, ``intro_fact`` and ``intro_text(fact)``: what the report calls contact with the
+  effect ("adhesive contact"; "" leaves it "contact"), the JSON-able fact its introduction keeps
+  of the parameters and the sentence it writes of that fact.
+
+The cross-field rules a schema cannot express, each written once here and called by the planner
+(:mod:`roughcontact.pipeline.config.checks`, a patch source's files), by the contact job and by
+:meth:`roughcontact.case.LoadSchedule.check_final_load`, from numbers, never a scene's mapping;
+``fail(field, message)`` reports one (``field`` after the effect's name: ``".hardness"``, or ``""``
+for the effect itself):
+
+* ``check_config(fail, others=..., boundary=...)``: what a scene may not ask of the effect, given
+  the other effects' names and the half-space's boundary;
+* ``check_grid(e_star, length, shape, pixel, fail, n_field=None, most_n=None)``: a grid of
+  ``shape`` on a cell of ``length`` the effect cannot resolve (``n_field``: the config field that
+  sets a square grid's N, when the remedy may name the N it needs, at most ``most_n``);
+* ``check_final_load(p0, e_star, load, fail)``: a final mean load ``p0`` [pressure] the effect
+  cannot carry, ``load`` saying where it came from.
 """
 
 from __future__ import annotations
@@ -82,9 +111,41 @@ class Effect:
         """Variables of the whole solve, after its load steps: name -> :class:`xarray.Variable`."""
         return {}
 
+    #: contact with the effect follows the contact evolution law of non-adhesive elastic contact
+    keeps_elastic_law = True
+    #: its pressures can be tensile (an attractive traction)
+    adds_tension = False
+    #: the report's figures it brings (the figures registry's names)
+    figures: tuple[str, ...] = ()
+    #: the report's tables it brings
+    tables: tuple[str, ...] = ()
+    #: what the report calls contact with the effect ("" leaves it "contact")
+    contact_name = ""
+
+    @property
+    def needs_gap_iteration(self) -> bool:
+        """Whether the effect supplies an interaction energy of the gap: the solver runs the gap iteration."""
+        return self.functional is not None
+
+    @property
+    def intro_fact(self):
+        """What the report's introduction keeps of the parameters (JSON-able), or None."""
+        return None
+
     @classmethod
-    def check_config(cls, contact: dict, fail) -> None:
-        """Refuse a ``contact`` block the effect cannot act on (before any job is planned)."""
+    def intro_text(cls, fact) -> str:
+        """The introduction's words on contact with the effect ("with ..."), from its :attr:`intro_fact`."""
+        return ""
+
+    def check_config(self, fail, *, others=(), boundary: str = "periodic") -> None:
+        """Refuse what a scene may not ask of the effect, given the other effects' names and the boundary."""
+
+    def check_grid(self, e_star: float, length, shape, pixel: str, fail, *, n_field: str | None = None,
+                   most_n: int | None = None) -> None:
+        """Refuse a grid of ``shape`` on a cell of ``length`` (``pixel`` names its pixel) the effect cannot resolve."""
+
+    def check_final_load(self, p0: float, e_star: float, load: str, fail) -> None:
+        """Refuse a final mean load ``p0`` [pressure] the effect cannot carry (``load``: where it came from)."""
 
     @classmethod
     def from_config(cls, block: dict, *, e_star: float) -> Effect:

@@ -36,17 +36,16 @@ class PlasticityCap(Effect):
         """``contact.effects.plasticity``: ``hardness`` relative to ``E*``."""
         return cls(block["hardness"] * e_star)
 
-    @classmethod
-    def check_config(cls, contact: dict, fail) -> None:
-        """The hardness must exceed ``load.p_max`` (when both are relative to E*)."""
-        load, hardness = contact["load"], contact["effects"][cls.name]["hardness"]
-        # relative to the rms slope, or with a target area, p_max is compared with the hardness
-        # when each case's load is known
-        if "target_area" in load or load.get("relative_to", "e_star") != "e_star":
-            return
-        if not hardness > load["p_max"]:
-            fail(".hardness", f"{hardness:g} must exceed load.p_max = {load['p_max']:g}: a pressure capped at "
-                 "the hardness cannot carry a mean load p0 >= hardness")
+    def check_final_load(self, p0: float, e_star: float, load: str, fail) -> None:
+        """The hardness must exceed the final load ``p0`` [pressure] (``load``: where it came from, p0/E* in its words).
+
+        The one statement of the rule: the planner calls it with ``load.p_max`` (relative to E*, or times the
+        generator's or each file's rms slope), a case with its own resolved final load
+        (:meth:`roughcontact.case.LoadSchedule.check_final_load`).
+        """
+        if not p0 < self.hardness:
+            fail(".hardness", f"{self.hardness / e_star:g} must exceed {load}: a pressure capped at the hardness "
+                              "cannot carry a mean load p0 >= hardness; raise it or lower load.p_max")
 
     def check_surface(self, units: Units, periodic: bool) -> None:
         if units.flat and not periodic:
