@@ -1,9 +1,9 @@
 """Adhesion: an interaction energy of the gap (exponential or Maugis-Dugdale law).
 
 The effect supplies its law as the ``functional`` (:mod:`..adhesion`), which makes the solver
-use the gap iteration (:class:`~..adhesive.AdhesiveSolver`, Rey, Anciaux & Molinari 2017); it
+use the gap iteration (:class:`~..adhesion.solver.AdhesiveSolver`, Rey, Anciaux & Molinari 2017); it
 reports the adhesive share of each step and, after the load steps, the unloading branch under
-displacement control and the pull-off pressure with its status (:mod:`..adhesive`).
+displacement control and the pull-off pressure with its status (:mod:`..adhesion.solver`).
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ class Adhesion(Effect):
         Range ``rho`` of the law [length], > 0.
     unloading : bool
         Trace the unloading after the last load step under displacement control: the unloading
-        branch and the pull-off pressure with its status (:meth:`~..adhesive.AdhesiveSolver.unload`).
+        branch and the pull-off pressure with its status (:meth:`~..adhesion.solver.AdhesiveSolver.unload`).
     pull_off_rtol : float
         Tolerance on the pull-off's change when the unloading step near the minimum is refined, relative.
 
