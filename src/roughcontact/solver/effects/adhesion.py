@@ -181,11 +181,11 @@ class Adhesion(Effect):
 
 
 def unloading_variables(un, length_units: str, pressure_units: str) -> dict:
-    """The unloading branch and the pull-off of :class:`~..adhesive.Unloading` ``un`` as CF variables.
+    """The unloading branch and the pull-off of :class:`~..adhesion.solver.Unloading` ``un`` as CF variables.
 
     Along ``unload_step``: ``unload_mean_gap`` [length], ``unload_mean_pressure`` [pressure],
     ``unload_area_fraction``, ``unload_converged`` (a flag: 0 on every step unless the pull-off is
-    trusted, :attr:`~..adhesive.Unloading.converged`); scalars ``unload_unconverged_steps``,
+    trusted, :attr:`~..adhesion.solver.Unloading.converged`); scalars ``unload_unconverged_steps``,
     ``pull_off_pressure`` (NaN unless trusted; its ``comment`` says how it was found, or why it is
     NaN), ``pull_off_status`` (a CF flag over :data:`PULL_OFF_STATUS`) and ``attraction_across_cell``.
     """
