@@ -209,6 +209,10 @@ def test_result_line_gives_the_representative_group_against_the_paper(mathml):
     assert r"\lambda_l = L/4`, :math:`\lambda_s = L/32`, :math:`H` pooled" in report.result_rst(four)
     assert "no constant of the contact evolution law was fitted" in report.result_rst(csv_text.splitlines()[0])
     assert "no contact study" in report.result_rst(None)
+    # an adhesive scene without unloading: no fit, no pull-off table, and a contact study all the same
+    unloaded = report.result_rst(None, unfitted="adhesive contact")
+    assert "no contact study" not in unloaded and "computes adhesive contact" in unloaded
+    assert "aggregate/contact.nc" in unloaded
     assert report.result_rst(csv_text, pull_off="TABLE").endswith("TABLE")
 
 
@@ -345,6 +349,9 @@ def test_figures_are_embedded_with_their_captions(mathml):
     assert "The caption" in html and max(len(line) for line in rst.splitlines()) < 200
     with pytest.raises(ValueError, match="not a PNG"):
         report.figures_rst([("kappa", b"GIF89a", "")])
+    # a scene that draws no figure (an adhesive scene without unloading) says so, promising none
+    none = report.figures_rst([])
+    assert "draws no figure" in none and "Each figure" not in none
 
 
 def test_bar_is_a_macron_that_chromium_draws(mathml):

@@ -1,6 +1,8 @@
 """The report's introduction (roughcontact.studies.report_intro): it names exactly the stages each shipped scene runs
 and gives the contact evolution law only where the scene fits it (issue 60: the adhesion page opened with the CEL
 formula and "their representativity", though the scene has neither)."""
+import copy
+
 import pytest
 from docutils.core import publish_parts
 
@@ -63,6 +65,11 @@ def test_the_adhesion_scene_names_adhesion_and_neither_representativity_nor_the_
     text = intro_rst("adhesion", intro_facts(scenes["adhesion"]))
     assert "**adhesive contact**" in text and "pull-off" in text and "exponential adhesion law" in text
     assert "representativity" not in text and "evolution law" not in text and ".. math::" not in text
+    # without unloading it says so, and promises no pull-off
+    block = copy.deepcopy(scenes["adhesion"])
+    block["contact"]["effects"]["adhesion"]["unloading"] = False
+    loaded_only = intro_rst("adhesion", intro_facts(block))
+    assert "not unloaded: no pull-off is computed" in loaded_only and "to the pull-off pressure" not in loaded_only
 
 
 def test_the_intro_says_what_each_scene_is_made_of(shipped):

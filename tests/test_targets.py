@@ -95,6 +95,20 @@ def test_scene_targets_are_what_the_blocks_ask(targets):
     assert "results/accuracy/accuracy/summary.md" in targets.scene_targets("accuracy")
 
 
+def test_an_adhesive_scene_without_unloading_asks_for_no_pull_off(targets, repo, shipped_config):
+    """The hysteresis and pull-off figures and the pull-off table read the unloading branch's variables, which a
+    scene with ``unloading: false`` does not compute: it asks for none of them (and still for no CEL fit)."""
+    cfg = copy.deepcopy(shipped_config)
+    cfg["scenes"]["adhesion"]["contact"]["effects"]["adhesion"]["unloading"] = False
+    with pytest.MonkeyPatch.context() as mp:
+        mp.chdir(repo)
+        unloaded = Targets.from_config(cfg, variants, FIGURES)
+    shipped, without = targets, unloaded
+    assert {"hysteresis", "pull_off"} <= set(shipped.scene_figures(shipped.scenes["adhesion"]))
+    assert not {"hysteresis", "pull_off"} & set(without.scene_figures(without.scenes["adhesion"]))
+    assert not any("/fit/" in p for p in without.scene_targets("adhesion"))
+
+
 def test_a_case_in_the_grid_passes(targets, case):
     block = targets.check_case(wildcards(**case), "contact")
     assert block is targets.scenes["demo"]["contact"]

@@ -86,11 +86,17 @@ rule report_figures:
         "../scripts/report_figures.py"
 
 
+# run.rst is a report item as well (category Run): every scene's report then has one, from which the landing page
+# finds the scene's fragments (workflow/report/workflow.rst), a scene that draws no figure included.
 rule report_run:
     input:
         run_record_inputs,
     output:
-        "results/{scene}/report/run.rst",
+        report(
+            "results/{scene}/report/run.rst",
+            caption="../report/run_record.rst",
+            category="Run",
+        ),
     log:
         "results/{scene}/logs/report_run.log",
     benchmark:

@@ -31,6 +31,15 @@ def pull_off():
     return report_tables.pull_off_table(agg)
 
 
+def unfitted():
+    """The contact the scene computes where its effects keep no contact evolution law (e.g. "adhesive contact"), for
+    the result line of a scene with neither a fit nor a table of its own; None otherwise."""
+    contact = snakemake.params.parameters.get("contact")
+    names = [] if contact is None else [e.contact_name for e in contact_effects(contact)
+                                        if not e.keeps_elastic_law and e.contact_name]
+    return " and ".join(names) or None
+
+
 def profiles():
     """Whether the scene's cases are profiles (1-D surfaces): generated with surface.dimension 1, or line scans (the
     contact aggregate of a patch scene, which this job reads, has surface_dimension 1)."""
@@ -47,7 +56,8 @@ def main(log):
     fit = snakemake.input.fit
     fit_csv = Path(fit[0]).read_text(encoding="utf-8") if fit else None
     lines = profiles()
-    write_text_atomic(snakemake.output.result, report.result_rst(fit_csv, pull_off=pull_off(), profiles=lines))
+    write_text_atomic(snakemake.output.result, report.result_rst(fit_csv, pull_off=pull_off(), profiles=lines,
+                                                                  unfitted=unfitted()))
     text = report.summary_rst(snakemake.wildcards.scene, snakemake.params.parameters, fit_csv=fit_csv,
                               topographies=topographies(), profiles=lines)
     write_text_atomic(snakemake.output.summary, text)

@@ -358,23 +358,31 @@ PROFILES_TEXT = ("These cases are profiles (1-D surfaces in plane strain: :math:
                  "says why).\n")
 
 
-def result_rst(csv_text: str | None, *, pull_off: str | None = None, profiles: bool = False) -> str:
+def result_rst(csv_text: str | None, *, pull_off: str | None = None, profiles: bool = False,
+               unfitted: str | None = None) -> str:
     """The result a reader looks for first, as RST: one paragraph headed **Result**.
 
     With a fit (``csv_text``, cel.csv): the fitted kappa/sqrt(2 pi), mu and beta of :func:`result_group`
     with their 95 % bootstrap intervals (:func:`constant_estimate`) against the paper's values. An
     adhesive scene (``pull_off``, :func:`~roughcontact.studies.report_tables.pull_off_table`) leads with its
-    pull-off table; a scene without a contact study says where its result is. With ``profiles`` (the cases
-    are 1-D surfaces) the result is followed by :data:`PROFILES_TEXT`.
+    pull-off table; ``unfitted`` names the contact of a scene whose effects the law does not describe and
+    that brings no result table (an adhesive scene without unloading): its result line says so and where its
+    per-step results are; a scene without a contact study says where its result is. With ``profiles`` (the
+    cases are 1-D surfaces) the result is followed by :data:`PROFILES_TEXT`.
     """
-    text = _result_text(csv_text, pull_off)
+    text = _result_text(csv_text, pull_off, unfitted)
     return text + "\n" + PROFILES_TEXT if profiles and csv_text is not None else text
 
 
-def _result_text(csv_text: str | None, pull_off: str | None) -> str:
+def _result_text(csv_text: str | None, pull_off: str | None, unfitted: str | None = None) -> str:
     """:func:`result_rst` without the profiles' note."""
     if pull_off is not None:
         return "**Result**: the pull-off pressure of each group of cases.\n\n" + pull_off
+    if csv_text is None and unfitted:
+        return (f"**Result**: this scene computes {unfitted}, which the contact evolution law does not describe, so "
+                "no law is fitted, and it asks for no table of its own (such as a pull-off, which needs the unloading "
+                "branch); its per-step results (A/A0, the mean gap and the effects' columns) are in "
+                "``aggregate/contact.nc``.\n")
     if csv_text is None:
         return "**Result**: this scene has no contact study; its result is the figures below.\n"
     rows = list(csv.DictReader(io.StringIO(csv_text)))
@@ -406,8 +414,10 @@ URI_LINE = 100
 def figures_rst(figures: Sequence[tuple[str, bytes, str]]) -> str:
     """The landing page's figures as RST: a ``Figures`` section with, for each ``(name, png, caption)``, a
     link to the report's item ``{name}.png``, the image embedded (a data URI: the report is one file) and its
-    caption (RST, as the figure rule wrote it).
+    caption (RST, as the figure rule wrote it). A scene that draws none says so.
     """
+    if not figures:
+        return "\n".join([heading("Figures"), "This scene draws no figure.\n"])
     parts = [heading("Figures"), "Each figure with its caption; its name opens it in the report, with its PDF "
              "beside it in the results folder.\n"]
     for name, png, caption in figures:

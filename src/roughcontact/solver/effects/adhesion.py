@@ -65,8 +65,6 @@ class Adhesion(Effect):
     #: an adhesive scene draws the load cycle and the pull-off, not the contact evolution law
     keeps_elastic_law = False
     adds_tension = True
-    figures = ("hysteresis", "pull_off")
-    tables = ("pull_off",)
     contact_name = "adhesive contact"
     #: Fraction of the largest tension above which a node out of contact counts in ``adhesive_area_fraction``.
     ZONE_FRACTION = 0.5
@@ -120,6 +118,16 @@ class Adhesion(Effect):
                  f"range >= {1.002 * math.sqrt(zone * law.w):.3g}, or work <= {0.998 * law.rho ** 2 / zone:.3g}, "
                  "or a smaller cell L")
 
+    @property
+    def figures(self) -> tuple[str, ...]:
+        """The load cycle and the pull-off, drawn from the unloading branch: none without ``unloading``."""
+        return ("hysteresis", "pull_off") if self.unloading else ()
+
+    @property
+    def tables(self) -> tuple[str, ...]:
+        """The pull-off table, from the unloading branch: none without ``unloading``."""
+        return ("pull_off",) if self.unloading else ()
+
     @classmethod
     def from_config(cls, block: dict, *, e_star: float) -> Adhesion:
         """``contact.effects.adhesion``: ``work`` relative to ``E*`` (a length), ``range`` a length."""
@@ -127,14 +135,16 @@ class Adhesion(Effect):
                    block.get("pull_off_rtol", 1e-3))
 
     @property
-    def intro_fact(self) -> str:
-        """The law's name."""
-        return self.law
+    def intro_fact(self) -> dict:
+        """The law's name and whether the solve unloads (``{"law": str, "unloading": bool}``)."""
+        return {"law": self.law, "unloading": self.unloading}
 
     @classmethod
     def intro_text(cls, fact) -> str:
-        return (f"with the {fact} adhesion law, loaded in steps under pressure control, then unloaded under "
-                "displacement control to the pull-off pressure")
+        loaded = f"with the {fact['law']} adhesion law, loaded in steps under pressure control"
+        if not fact["unloading"]:
+            return loaded + " (not unloaded: no pull-off is computed)"
+        return loaded + ", then unloaded under displacement control to the pull-off pressure"
 
     def finish(self, p: np.ndarray, p_int, p0: float, gap: np.ndarray | None = None) -> dict:
         """The attractive traction of the law out of contact, and the area where it is strong.
