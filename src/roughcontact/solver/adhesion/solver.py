@@ -38,7 +38,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..results import StepRecord, contact_perimeter
-from ..settings import SolverSettings
 from ..units import Units, check_loads
 from .iteration import AdhesiveIteration, pressure_control
 from .laws import (
@@ -162,7 +161,9 @@ class AdhesiveSolver:
     paths = ADHESIVE_PATHS
     long_names = LONG_NAMES
 
-    def __init__(self, h: np.ndarray, settings: SolverSettings):
+    # settings: a SolverSettings, not imported (nor annotated): the settings import the effects, which import this
+    # package, and the solver would stand above them
+    def __init__(self, h: np.ndarray, settings):
         laws = [e for e in settings.effects if e.functional is not None]
         if len(laws) != 1 or any(e.pressure_cap is not None for e in settings.effects):
             raise ValueError("effects: one interaction law at a time, and not with a pressure cap "
