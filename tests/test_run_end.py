@@ -47,7 +47,7 @@ def test_a_run_returns_after_its_last_job_whether_it_succeeds_or_fails(tmp_path)
         "roughcontact: Result: not made by this run (the whole scene makes it: snakemake -j2 --config scene=tiny)",
         "roughcontact: Figures: none yet under results/tiny/figures/",
         "roughcontact: Report: snakemake --report report.html --config scene=tiny (one HTML file: the result, every "
-        "figure with its caption, the fit table, the run's provenance)"], res.stderr[-3000:]
+        "figure with its caption, the scene's tables, the run's provenance)"], res.stderr[-3000:]
     # a job that fails: the case's surface file replaced by one it cannot read (newer, so not remade)
     (wd / SURFACE).write_text("not a NetCDF file")
     res = run_snakemake(wd, "-j1", *HOUR_LIMIT, "results/tiny/contact/kl2_ks8_H0.5_s1.nc", timeout=600)
@@ -71,3 +71,7 @@ def test_where_it_is_gives_the_result_line_the_figures_and_the_report(tmp_path):
     assert figures == f"Figures: {out / 'figures'}/ (2 figures, each as PNG and PDF with its caption)"
     assert report.startswith("Report: snakemake --report report.html --config scene=demo")
     assert plain_text(":math:`\\bar{p}_\\mathrm{off}/E^*`") == "p_off/E^*"
+    # a scene that draws no figure (an adhesive scene without unloading) says so; an unfinished one, "none yet"
+    empty = tmp_path / "results" / "bare"
+    assert where_it_is(empty, "bare", drawn=0)[1] == "Figures: none (this scene draws no figure)"
+    assert where_it_is(empty, "bare", drawn=3)[1].startswith("Figures: none yet under")

@@ -61,7 +61,11 @@ onstart:
 onsuccess:
     cancel_job_rate_timers()
     if not workflow.dryrun:
-        for _line in where_it_is(Path("results", ACTIVE_SCENE), ACTIVE_SCENE):
+        for _line in where_it_is(
+            Path("results", ACTIVE_SCENE),
+            ACTIVE_SCENE,
+            drawn=len(TARGETS.scene_figures(SCENES[ACTIVE_SCENE])),
+        ):
             logger.info(f"roughcontact: {_line}")
 
 

@@ -71,13 +71,15 @@ def plain_text(rst: str) -> str:
     return " ".join(text.split())
 
 
-def where_it_is(results: str | Path, scene: str) -> list[str]:
+def where_it_is(results: str | Path, scene: str, drawn: int | None = None) -> list[str]:
     """What a finished run tells its user last: the result, where the figures are, how to build the report.
 
     ``results`` is the scene's output folder (``results/{scene}``). Three lines: the report's result line
     (the first paragraph of ``report/result.rst``, :func:`plain_text`; an adhesive scene's says its pull-off
     table is in the report), the figures folder with its count of figures, and the ``snakemake --report``
     command. A line whose file the run has not made yet (a run that made one file) says so instead.
+    ``drawn`` is the number of figures the scene draws (``None``: unknown): a scene that draws none says so,
+    not that its figures are yet to come.
 
     Examples
     --------
@@ -94,8 +96,12 @@ def where_it_is(results: str | Path, scene: str) -> list[str]:
     else:
         result = f"Result: not made by this run (the whole scene makes it: snakemake -j2 --config scene={scene})"
     figures = sorted((results / "figures").glob("*.png")) if (results / "figures").is_dir() else []
-    where = (f"Figures: {results / 'figures'}/ ({len(figures)} figures, each as PNG and PDF with its caption)"
-             if figures else f"Figures: none yet under {results / 'figures'}/")
+    if figures:
+        where = f"Figures: {results / 'figures'}/ ({len(figures)} figures, each as PNG and PDF with its caption)"
+    elif drawn == 0:
+        where = "Figures: none (this scene draws no figure)"
+    else:
+        where = f"Figures: none yet under {results / 'figures'}/"
     report = (f"Report: snakemake --report report.html --config scene={scene} (one HTML file: the result, every "
-              "figure with its caption, the fit table, the run's provenance)")
+              "figure with its caption, the scene's tables, the run's provenance)")
     return [result, where, report]
