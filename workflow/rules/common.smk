@@ -7,7 +7,7 @@ from pathlib import Path
 from roughcontact.core.cli import one_line
 from roughcontact.figures.registry import FIGURES
 from roughcontact.pipeline import params
-from roughcontact.pipeline.case import contact_effects
+from roughcontact.pipeline.case import contact_effects, follows_elastic_law
 from roughcontact.pipeline.scenes import plan_summary
 from roughcontact.pipeline.progress import write_plan
 from roughcontact.pipeline.run_end import cancel_job_rate_timers, where_it_is

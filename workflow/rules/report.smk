@@ -22,7 +22,7 @@ rule report_summary:
         fit=lambda w: (
             [f"results/{w.scene}/fit/cel.csv"]
             if "contact" in scene_of(w.scene)
-            and all(e.keeps_elastic_law for e in contact_effects(scene_of(w.scene)["contact"]))
+            and follows_elastic_law(scene_of(w.scene)["contact"])
             else []
         ),
         # a patch source's table of its files (measured, array, ...): each surface, and the loads they received

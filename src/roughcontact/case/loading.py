@@ -52,8 +52,8 @@ def schedule(p_max: float, n_steps: int, kind: str = "uniform", p_min: float | N
 class LoadSchedule:
     """The load steps of a contact case: the one implementation of every schedule the package runs.
 
-    A scene's ``load`` block (:meth:`from_block`), the accuracy study's uniform steps and the κ-gap
-    study's geometric ones (:mod:`roughcontact.studies`) are all this. Pressures are resolved per
+    A scene's ``load`` block (the pipeline's ``load_schedule``), the accuracy study's uniform steps and the
+    κ-gap study's geometric ones (:mod:`roughcontact.studies`) are all this. Pressures are resolved per
     case, because ``relative_to: rms_slope`` scales with the case's own rms slope and
     ``target_area`` searches the case's own surface (:meth:`resolve`).
 

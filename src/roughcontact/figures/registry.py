@@ -22,7 +22,7 @@ from pathlib import Path
 import xarray as xr
 from matplotlib.figure import Figure
 
-from ..pipeline.case import contact_effects
+from ..pipeline.case import contact_effects, follows_elastic_law
 from ..pipeline.cases import CASE_STEM, cases as grid_cases
 from ..pipeline.io import read_dataset
 from ..pipeline.sources import source_of
@@ -232,13 +232,8 @@ def _brought_to_scene(figure: str):
     return lambda scene: "contact" in scene and _brought(figure)(scene["contact"])
 
 
-def _elastic_law(block: Mapping) -> bool:
-    """Whether contact follows the contact evolution law: every effect keeps it (none adhesive)."""
-    return all(effect.keeps_elastic_law for effect in contact_effects(block))
-
-
 def _elastic_scene(scene: Mapping) -> bool:
-    return "contact" in scene and _elastic_law(scene["contact"])
+    return "contact" in scene and follows_elastic_law(scene["contact"])
 
 
 FIGURES: dict[str, FigureSpec] = {
@@ -250,11 +245,12 @@ FIGURES: dict[str, FigureSpec] = {
         "surface_examples.rst", wanted=lambda block: bool(block["examples"])),
     # the CEL and the theories of Fig. 2 describe contact without adhesion: only where the effects keep the law
     "area_load": FigureSpec(
-        "contact", _contact_inputs, _contact_figure(fig_area_load), "Contact", "area_load.rst", wanted=_elastic_law),
+        "contact", _contact_inputs, _contact_figure(fig_area_load), "Contact", "area_load.rst",
+        wanted=follows_elastic_law),
     "kappa": FigureSpec("contact", _contact_inputs, _contact_figure(fig_kappa), "Contact", "kappa.rst",
-                        wanted=_elastic_law),
+                        wanted=follows_elastic_law),
     "dpbar": FigureSpec("contact", _contact_inputs, _contact_figure(fig_dpbar), "Contact", "dpbar.rst",
-                        wanted=_elastic_law),
+                        wanted=follows_elastic_law),
     # the figures an effect brings (Effect.figures: an adhesive scene's load cycle and pull-off)
     "hysteresis": FigureSpec("contact", _hysteresis_inputs, _render_hysteresis, "Adhesion", "hysteresis.rst",
                              wanted=_brought("hysteresis")),

@@ -30,6 +30,13 @@ def contact_effects(block: Mapping) -> tuple[Effect, ...]:
     return effects_from_config(blocks, e_star=block["solver"]["e_star"]) if blocks else ()
 
 
+def follows_elastic_law(block: Mapping) -> bool:
+    """Whether contact in a validated ``contact`` block follows the contact evolution law: every effect keeps it
+    (:attr:`~roughcontact.solver.effects.Effect.keeps_elastic_law`; none adhesive), so the law is fitted and its
+    figures and theories drawn."""
+    return all(effect.keeps_elastic_law for effect in contact_effects(block))
+
+
 def effect_field_error(name: str, field: str, message: str) -> None:
     """Raise an effect's refusal (``fail`` of :meth:`~roughcontact.case.LoadSchedule.check_final_load`) as a
     ``ValueError`` naming its config field, ``contact.effects.<name><field>``."""

@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping
 
-from .case import contact_effects
+from .case import follows_elastic_law
 
 
 def canonical(obj):
@@ -104,7 +104,7 @@ def summary(scene: Mapping) -> dict:
     which changes no result).
     """
     blocks = {key: scene[key] for key in ("representativity", "contact", "accuracy", "kappa_gap") if key in scene}
-    if "contact" in scene and all(e.keeps_elastic_law for e in contact_effects(scene["contact"])):  # else no fit
+    if "contact" in scene and follows_elastic_law(scene["contact"]):  # else no fit
         blocks["fit"] = scene["fit"]
     return canonical({
         key: {k: v for k, v in block.items() if k != "keep_surfaces"} for key, block in blocks.items()

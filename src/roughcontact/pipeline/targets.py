@@ -26,7 +26,7 @@ from pathlib import Path
 
 from snakemake.exceptions import WorkflowError
 
-from .case import contact_effects
+from .case import follows_elastic_law
 from .cases import BATCH_STEM, CASE_STEM
 from .config import ConfigError, load_schema
 from .contact_jobs import (  # noqa: F401 (the rules' resource formulas)
@@ -381,7 +381,7 @@ class Targets(ContactJobs):
             out += [f"results/{scene}/aggregate/representativity.nc"]
         if "contact" in s:
             out += [f"results/{scene}/aggregate/contact.nc"]
-            if all(e.keeps_elastic_law for e in contact_effects(s["contact"])):  # the CEL: contact without adhesion
+            if follows_elastic_law(s["contact"]):  # the CEL: contact without adhesion
                 out += [f"results/{scene}/fit/cel.{ext}" for ext in ("nc", "csv", "html")]
         if "accuracy" in s:
             out += [f"results/{scene}/accuracy/summary.{ext}" for ext in ("nc", "csv", "md")]

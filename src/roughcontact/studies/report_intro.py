@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from ..pipeline.case import contact_effects
+from ..pipeline.case import contact_effects, follows_elastic_law
 from ..pipeline.sources import source_of
 from ..solver.effects import EFFECTS
 
@@ -77,7 +77,7 @@ def intro_facts(scene: Mapping) -> dict:
             "outputs": [k for k in OUTPUTS if outputs.get(k)],
             "fields": [int(s) for s in outputs.get("fields", [])],
         }
-    fits = "contact" in scene and all(effect.keeps_elastic_law for effect in contact_effects(scene["contact"]))
+    fits = "contact" in scene and follows_elastic_law(scene["contact"])
     return {
         "source": None if source is None else source.name,
         "files": 0 if source is None else len(source.names(scene)),
