@@ -21,8 +21,7 @@ rule report_summary:
     input:
         fit=lambda w: (
             [f"results/{w.scene}/fit/cel.csv"]
-            if "contact" in scene_of(w.scene)
-            and follows_elastic_law(scene_of(w.scene)["contact"])
+            if "contact" in scene_of(w.scene) and follows_elastic_law(scene_of(w.scene)["contact"])
             else []
         ),
         # a patch source's table of its files (measured, array, ...): each surface, and the loads they received
