@@ -172,3 +172,90 @@ def test_cupy_kernel_cache_on_disk_by_default(monkeypatch):
         assert os.environ["CUPY_CACHE_DIR"] == "/cache-home/roughcontact/cupy" == backend_mod.default_cupy_cache()
     finally:
         backend_mod.get_backend.cache_clear()
+
+
+def _padded(shape, extra, dtype=np.float32):
+    """A ``(B, nx, ny)`` view with rows of ``ny + extra`` values in one buffer (an in-place transform's layout),
+    its padding set to a value no kernel may read."""
+    B, nx, ny = shape
+    buf = np.full((B, nx, ny + extra), 7.0, dtype=dtype)
+    return buf[:, :, :ny], buf
+
+
+@pytest.mark.parametrize("ny", [8, 6], ids=["power-of-two", "other"])
+def test_fused_kernels_read_and_write_padded_rows_as_contiguous_ones(ny):
+    """Every fused kernel that writes a transform's input or reads its output gives the same values whether
+    that buffer is contiguous or has padded rows (the in-place plans of one case), padding left untouched."""
+    from roughcontact.solver.batch.cpu import FusedCpuKernels
+
+    rng = np.random.default_rng(3)
+    B, nx = 2, 5
+    shape = (B, nx, ny)
+    mask = rng.random(shape) < 0.4
+    P = np.where(mask, rng.random(shape), 0.0)
+    t = np.where(mask, rng.standard_normal(shape), 0.0)
+    g, a, g_prev = (np.where(mask, rng.standard_normal(shape), 0.0) for _ in range(3))
+    R = rng.standard_normal(shape).astype(np.float32)
+    col = lambda *v: np.array(v, dtype=float).reshape(B, 1, 1)  # noqa: E731
+    tau, scale, inv_sigma = col(0.3, 0.7), col(1.1, 0.9), col(2.0, 0.5)
+    go, keep, beta = np.array([True, True]).reshape(B, 1, 1), np.array([True, False]).reshape(B, 1, 1), col(0.4, 0.2)
+
+    def run(out, rin):
+        k = FusedCpuKernels()
+        got = {}
+        k.to32(P, inv_sigma, out=out, F=mask)
+        got["to32"] = out.copy()
+        k.overwritten(out)  # as after an in-place transform: the next sparse write zeroes it whole
+        out[...] = 5.0
+        tt, gp = t.copy(), g_prev.copy()
+        _, gt = k.new_direction_input(tt, a, g, beta, keep, go, gp, mask, inv_sigma, out=out)
+        got["direction"], got["t"], got["gt"] = out.copy(), tt, gt
+        PP = P.copy()
+        k.project(PP, t, tau, go, scale, inv_sigma, out=out, F=mask)
+        got["project"], got["P"] = out.copy(), PP
+        rin[...] = R
+        sc, s = k.scaled_sum(rin, col(1.5, 2.5), mask)
+        got["scaled"], got["scaled_sum"] = np.where(mask, sc, 0.0), s
+        w = g.copy()
+        k.add_scaled(w, rin, col(0.25, -1.0))
+        got["w"] = w
+        P2, w2 = P.copy(), g.copy()
+        tot, x32 = k.extrapolate(P2, w2, P, 0.5 * P, g, a, col(0.5, 1.0), go, keep, inv_sigma, out=out)
+        got["extrapolate"], got["tot"], got["P2"], got["w2"] = x32.copy(), tot, P2.copy(), w2.copy()
+        k.finish_start(P2, w2, g, rin, col(1.0, 2.0), col(0.9, 1.1), col(1.0, 0.0) > 0, go, keep, col(0.1, 0.2))
+        got["finish_P"], got["finish_w"] = P2, w2
+        return got
+
+    flat = run(np.zeros(shape, np.float32), np.zeros(shape, np.float32))
+    out, buf = _padded(shape, 2)
+    rin, rbuf = _padded(shape, 3)
+    padded = run(out, rin)
+    for name, value in flat.items():
+        np.testing.assert_array_equal(padded[name], value, err_msg=name)
+    assert np.all(buf[:, :, ny:] == 7.0) and np.all(rbuf[:, :, ny:] == 7.0)
+
+
+def test_one_case_transforms_in_place_with_the_out_of_place_results(monkeypatch):
+    """B = 1 on a grid with shipped plans: both float32 transforms in the spectrum's buffer (padded rows),
+    as the single solve's; the results those of the out-of-place plans up to the transforms' rounding."""
+    from roughcontact.solver.batch import halfspace
+
+    h = _surface(0)[None]
+    inplace = solve_contact_batch(h, LOADS)
+    monkeypatch.setattr(halfspace.fft_module, "has_shipped_plans", lambda shape: False)
+    apart = solve_contact_batch(h, LOADS)
+    assert bool(inplace.converged.values.all()) and bool(apart.converged.values.all())
+    assert np.max(np.abs(inplace.area_fraction.values - apart.area_fraction.values)) <= 2.0 / N**2
+    np.testing.assert_allclose(inplace.mean_gap.values, apart.mean_gap.values, rtol=1e-6)
+    assert np.max(np.abs(inplace.iterations.values - apart.iterations.values)) <= 1
+
+
+def test_the_in_place_plans_are_those_of_one_case_with_shipped_plans():
+    from roughcontact.core.backend import get_backend
+    from roughcontact.solver.batch.halfspace import BatchFFT
+
+    be = get_backend("numpy")
+    one, many, odd = BatchFFT(be, (64, 64), 1, 1), BatchFFT(be, (64, 64), 1, 3), BatchFFT(be, (60, 60), 1, 1)
+    assert one.in_place and not many.in_place and not odd.in_place
+    assert one.input32.base is not None and not one.input32.flags.c_contiguous
+    assert np.shares_memory(one.input32, one.spec32) and not np.shares_memory(many.input32, many.spec32)

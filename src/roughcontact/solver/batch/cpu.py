@@ -36,6 +36,43 @@ def _fields(*arrays):
     return tuple(a.reshape(a.shape[0], -1) for a in arrays)
 
 
+def _rows(a):
+    """``(flat, ny, shift, extra)`` of a ``(B, nx, ny)`` field that a kernel reads or writes at grid nodes.
+
+    ``flat`` is a ``(B, m)`` view of the field's memory, in which node ``i`` (flat index on the
+    ``nx x ny`` grid) sits at :func:`_at` ``(i, ny, shift, extra)``: ``i`` itself for a C-contiguous
+    field (``extra = 0``), ``i + (i // ny) extra`` for the padded rows of an in-place transform's
+    buffer (:class:`~.halfspace.BatchFFT`, rows of ``ny + extra`` values). ``shift`` is ``log2(ny)``
+    where ``ny`` is a power of two (the division becomes a shift), else -1.
+    """
+    B, nx, ny = a.shape
+    shift = ny.bit_length() - 1 if ny & (ny - 1) == 0 else -1
+    if a.flags.c_contiguous:
+        return a.reshape(B, -1), ny, shift, 0
+    it = a.itemsize
+    row = a.strides[1] // it if a.strides[1] % it == 0 else 0
+    base = a
+    while isinstance(base.base, np.ndarray):
+        base = base.base
+    start = a.__array_interface__["data"][0]
+    if (a.strides[2] != it or row < ny or a.strides[0] != nx * a.strides[1]
+            or start + B * nx * row * it > base.__array_interface__["data"][0] + base.nbytes):
+        raise ValueError(f"a kernel's field must be C-contiguous or have padded rows in one buffer; got shape "
+                         f"{a.shape}, strides {a.strides}")
+    flat = np.lib.stride_tricks.as_strided(a, shape=(B, nx * row), strides=(a.strides[0], it))
+    return flat, ny, shift, row - ny
+
+
+@njit(inline="always")
+def _at(i, ny, shift, extra):
+    """Where node ``i`` sits in a :func:`_rows` view."""
+    if extra == 0:
+        return i
+    if shift >= 0:
+        return i + (i >> shift) * extra
+    return i + (i // ny) * extra
+
+
 def _cases(x, B: int, dtype=np.float64):
     """A per-case value as a contiguous ``(B,)`` array (``(B, 1, 1)`` arrays and scalars alike)."""
     a = np.asarray(x, dtype=dtype).reshape(-1)
@@ -126,21 +163,22 @@ def _dot_on(u, v, idx, cnt):
 
 
 @njit(**_JIT)
-def _clear(out, written, wcnt):
-    """Zero the nodes of ``out`` that the last sparse write set (``written``, ``wcnt`` per case)."""
+def _clear(out, ny, shift, extra, written, wcnt):
+    """Zero the nodes of ``out`` (a :func:`_rows` view) that the last sparse write set (``written``, ``wcnt``
+    per case)."""
     zero = 0.0
     for b in range(out.shape[0]):
         for k in range(wcnt[b]):
-            out[b, written[b, k]] = zero
+            out[b, _at(written[b, k], ny, shift, extra)] = zero
 
 
 @njit(**_JIT)
-def _to32_on(x, scale, idx, cnt, out):
+def _to32_on(x, scale, idx, cnt, out, ny, shift, extra):
     for b in range(x.shape[0]):
         s = scale[b]
         for k in range(cnt[b]):
             i = idx[b, k]
-            out[b, i] = x[b, i] * s  # rounded once to out's precision
+            out[b, _at(i, ny, shift, extra)] = x[b, i] * s  # rounded once to out's precision
 
 
 @njit(**_JIT)
@@ -164,15 +202,15 @@ def _quadratic(re_im, weights):
 
 
 @njit(**_JIT)
-def _scaled_on(r, c, idx, cnt, out):
-    """``out = r c`` on F (undefined off it) and its sum per case."""
-    B = r.shape[0]
+def _scaled_on(r, ny, shift, extra, c, idx, cnt, out):
+    """``out = r c`` on F (undefined off it; ``r`` a :func:`_rows` view) and its sum per case."""
+    B = out.shape[0]
     sums = np.zeros(B)
     for b in range(B):
         cb, s = c[b], 0.0
         for k in range(cnt[b]):
             i = idx[b, k]
-            v = np.float64(r[b, i]) * cb
+            v = np.float64(r[b, _at(i, ny, shift, extra)]) * cb
             out[b, i] = v
             s += v
         sums[b] = s
@@ -180,14 +218,18 @@ def _scaled_on(r, c, idx, cnt, out):
 
 
 @njit(**_JIT)
-def _add_scaled(w, r, c):
+def _add_scaled(w, r, ny, extra, c):
+    """``w += r c`` (``r`` a :func:`_rows` view with rows of ``ny + extra``), row by row."""
     B, n = w.shape
+    row = ny + extra
     for b in range(B):
         cb = c[b]
         if cb == 0.0:
             continue
-        for i in range(n):
-            w[b, i] += np.float64(r[b, i]) * cb
+        for y in range(n // ny):
+            i0, j0 = y * ny, y * row
+            for x in range(ny):
+                w[b, i0 + x] += np.float64(r[b, j0 + x]) * cb
 
 
 @njit(**_JIT)
@@ -201,19 +243,50 @@ def _sub_on(x, c, idx, cnt):
 
 
 @njit(**_JIT)
-def _join(w, gbar, f, idx, cnt, go, g):
+def _scan(w, gbar, f, cand):
+    """One pass over the gap: per case its minimum (NaN if any is) and the nodes off F with ``w < gbar``
+    (ascending, into ``cand``) and their count."""
+    B, n = w.shape
+    mins = np.empty(B)
+    counts = np.zeros(B, dtype=np.int64)
+    for b in range(B):
+        gb, m, c, bad = gbar[b], np.inf, 0, False
+        for i in range(n):
+            v = w[b, i]
+            bad |= v != v
+            if v < m:
+                m = v
+            if v < gb and not f[b, i]:
+                cand[b, c] = i
+                c += 1
+        mins[b] = np.nan if bad else m
+        counts[b] = c
+    return mins, counts
+
+
+@njit(**_JIT)
+def _join(w, gbar, f, idx, cnt, go, g, cand, ncand, listed):
     """Nodes off F with ``w < gbar`` join it where ``go`` (appended to ``idx``); ``g = w - gbar`` on the
-    new F (undefined off it); per case ``|F|`` and ``sum(g)``. ``cnt`` is updated in place."""
+    new F (undefined off it); per case ``|F|`` and ``sum(g)``. ``cnt`` is updated in place. ``listed``:
+    those nodes are the first ``ncand`` of ``cand`` (from :func:`_scan` with this ``w`` and ``gbar``);
+    otherwise they are found by a pass over the grid."""
     B, n = w.shape
     sums = np.zeros(B)
     for b in range(B):
         gb, c = gbar[b], cnt[b]
         if go[b]:
-            for i in range(n):
-                if w[b, i] < gb and not f[b, i]:
+            if listed:
+                for k in range(ncand[b]):
+                    i = cand[b, k]
                     f[b, i] = True
                     idx[b, c] = i
                     c += 1
+            else:
+                for i in range(n):
+                    if w[b, i] < gb and not f[b, i]:
+                        f[b, i] = True
+                        idx[b, c] = i
+                        c += 1
             cnt[b] = c
         s = 0.0
         for k in range(c):
@@ -249,9 +322,9 @@ def _center_dots(a, c, idx, cnt, g, g_prev, t):
 
 
 @njit(**_JIT)
-def _new_direction(t, a, g, beta, keep, go, g_prev, idx, cnt, scale, out):
+def _new_direction(t, a, g, beta, keep, go, g_prev, idx, cnt, scale, out, ny, shift, extra):
     """``t = beta t + a`` where kept, else ``a`` (cases that move), ``g_prev = g``, on F; ``out =
-    float32(t scale)`` on F (the caller zeroed the rest); per case ``g . t``."""
+    float32(t scale)`` on F (a :func:`_rows` view; the caller zeroed the rest); per case ``g . t``."""
     B = t.shape[0]
     gts = np.zeros(B)
     for b in range(B):
@@ -262,7 +335,7 @@ def _new_direction(t, a, g, beta, keep, go, g_prev, idx, cnt, scale, out):
                 t[b, i] = t[b, i] * be + a[b, i] if kp else a[b, i]
                 g_prev[b, i] = g[b, i]
             ti = t[b, i]
-            out[b, i] = ti * sc
+            out[b, _at(i, ny, shift, extra)] = ti * sc
             s += g[b, i] * ti
         gts[b] = s
     return gts
@@ -289,9 +362,9 @@ def _trial_stats(p, t, tau, idx, cnt):
 
 
 @njit(**_JIT)
-def _project(p, t, tau, go, scale, inv_sigma, idx, cnt, out):
+def _project(p, t, tau, go, scale, inv_sigma, idx, cnt, out, ny, shift, extra):
     """The projected step on F where ``go`` (p = t = 0 off F: the change is 0 there; the caller zeroed
-    ``out``); returns how many nodes each case wrote."""
+    ``out``, a :func:`_rows` view); returns how many nodes each case wrote."""
     B = p.shape[0]
     wrote = np.zeros(B, dtype=np.int64)
     for b in range(B):
@@ -303,7 +376,7 @@ def _project(p, t, tau, go, scale, inv_sigma, idx, cnt, out):
             trial = p[b, i] - ta * t[b, i]
             tp = trial if trial > 0.0 else 0.0
             d = (tp - trial) + (sc - 1.0) * tp - ta * t[b, i]
-            out[b, i] = d * isg
+            out[b, _at(i, ny, shift, extra)] = d * isg
             p[b, i] = tp * sc
         wrote[b] = cnt[b]
     return wrote
@@ -356,14 +429,14 @@ def _scale_start(P, w, h, s, plain):
 
 
 @njit(**_JIT)
-def _extrapolate(P, w, Pl, Po, wl, wo, c, ext, lin, inv_sigma, out):
+def _extrapolate(P, w, Pl, Po, wl, wo, c, ext, lin, inv_sigma, out, ny, shift, extra):
     B, n = P.shape
     tot = np.zeros(B)
     zero = 0.0
     for b in range(B):
         if not ext[b]:
             for i in range(n):
-                out[b, i] = zero
+                out[b, _at(i, ny, shift, extra)] = zero
             continue
         cb, isg, ln, s = c[b], inv_sigma[b], lin[b], 0.0
         for i in range(n):
@@ -371,7 +444,7 @@ def _extrapolate(P, w, Pl, Po, wl, wo, c, ext, lin, inv_sigma, out):
             cl = pe if pe > 0.0 else 0.0
             P[b, i] = cl
             s += cl
-            out[b, i] = (cl - pe) * isg if ln else zero
+            out[b, _at(i, ny, shift, extra)] = (cl - pe) * isg if ln else zero
             if ln:
                 w[b, i] = (wl[b, i] - wo[b, i]) * cb + wl[b, i]
         tot[b] = s
@@ -379,7 +452,7 @@ def _extrapolate(P, w, Pl, Po, wl, wo, c, ext, lin, inv_sigma, out):
 
 
 @njit(**_JIT)
-def _finish_start(P, w, h, R, sigma, sc, loaded, ext, lin, p_fill, has_r):
+def _finish_start(P, w, h, R, ny, shift, extra, sigma, sc, loaded, ext, lin, p_fill, has_r):
     B, n = P.shape
     for b in range(B):
         if not ext[b]:
@@ -388,7 +461,8 @@ def _finish_start(P, w, h, R, sigma, sc, loaded, ext, lin, p_fill, has_r):
         if has_r and lin[b]:
             sg = sigma[b]
             for i in range(n):
-                w[b, i] = (w[b, i] + np.float64(R[b, i]) * sg) * scb + (scb - 1.0) * h[b, i]
+                r = np.float64(R[b, _at(i, ny, shift, extra)])
+                w[b, i] = (w[b, i] + r * sg) * scb + (scb - 1.0) * h[b, i]
         if loaded[b]:
             for i in range(n):
                 P[b, i] = P[b, i] * scb
@@ -408,6 +482,10 @@ class FreeSet:
     ----------
     mask : numpy.ndarray
         ``(B, nx, ny)`` bool.
+    pending : tuple or None
+        ``(gbar, nodes, counts)``: the nodes off ``F`` below ``gbar`` that the last measure found
+        (:meth:`FusedCpuKernels.measure_gap`), which the next join with that same ``gbar`` appends
+        without a pass over the grid; None otherwise.
     idx : numpy.ndarray
         ``(B, nx ny)`` int32 (int64 beyond 2**31 nodes); the first ``count[b]`` of row ``b`` are
         case ``b``'s nodes (flat indices), in no particular order after a join.
@@ -420,6 +498,16 @@ class FreeSet:
         f = mask.reshape(mask.shape[0], -1)
         self.idx = np.empty(f.shape, dtype=np.int32 if f.shape[1] < 2**31 else np.int64)
         self.count = _index(f, self.idx)
+        # the nodes that the last measure found off F below its gbar (FusedCpuKernels.measure_gap), for
+        # the join to append without a second pass over the grid: (gbar, nodes, counts) or None
+        self.pending = None
+        self._cand = None
+
+    def candidates(self) -> np.ndarray:
+        """The buffer of :attr:`pending`'s nodes, ``idx``'s shape (made at first use)."""
+        if self._cand is None:
+            self._cand = np.empty_like(self.idx)
+        return self._cand
 
     @property
     def shape(self):
@@ -450,7 +538,9 @@ class FusedCpuKernels(ArrayKernels):
     kernel is called again (the iteration uses each before that). A transform input written
     on ``F`` (``to32`` with ``F``, :meth:`new_direction_input`, :meth:`project`) zeroes only the nodes
     that the buffer's last such write set: the buffer must not be written by anything else
-    in between (a dense write through these kernels is noted, and the next sparse one zeroes it all).
+    in between (a dense write through these kernels is noted, as is an in-place transform's through
+    :meth:`overwritten`, and the next sparse one zeroes it all). A transform's buffers may have padded
+    rows (:func:`_rows`): the kernels that write its input or read its output take them as they are.
     """
 
     def __init__(self):
@@ -477,13 +567,13 @@ class FusedCpuKernels(ArrayKernels):
         """``(out, its written record)`` with ``out``'s last sparse write undone (all of it if unknown)."""
         out = self.buffer("to32", shape, np.float32) if out is None else out
         rec = self._written.get(id(out))
-        flat = out.reshape(out.shape[0], -1).shape
+        flat = (out.shape[0], out.shape[1] * out.shape[2])
         if rec is None or rec.idx.shape != flat:
             rec = self._written[id(out)] = _Written(flat, np.int32 if flat[1] < 2**31 else np.int64)
         if rec.count is None:
             out.fill(0.0)
         else:
-            _clear(*_fields(out), rec.idx, rec.count)
+            _clear(*_rows(out), rec.idx, rec.count)
         return out, rec
 
     @staticmethod
@@ -499,6 +589,9 @@ class FusedCpuKernels(ArrayKernels):
         rec = self._written.get(id(out))
         if rec is not None:
             rec.count = None
+
+    def overwritten(self, out) -> None:
+        self._dense(out)
 
     @staticmethod
     def _col(v):
@@ -562,18 +655,19 @@ class FusedCpuKernels(ArrayKernels):
             return out
         fs = self._set(F)
         out, rec = self._sparse_out(out, x.shape)
-        _to32_on(*_fields(x), _cases(scale, B), fs.idx, fs.count, *_fields(out))
+        _to32_on(*_fields(x), _cases(scale, B), fs.idx, fs.count, *_rows(out))
         self._record(rec, fs)
         return out
 
     def scaled_sum(self, R, factor, F):
         fs = self._set(F)
         a = self.buffer("scaled", R.shape, np.float64)
-        sums = _scaled_on(*_fields(R), _cases(factor, R.shape[0]), fs.idx, fs.count, *_fields(a))
+        sums = _scaled_on(*_rows(R), _cases(factor, R.shape[0]), fs.idx, fs.count, *_fields(a))
         return a, self.allsum(self._col(sums))
 
     def add_scaled(self, w, R, factor):
-        _add_scaled(*_fields(w, R), _cases(factor, w.shape[0]))
+        r, ny, _, extra = _rows(R)
+        _add_scaled(*_fields(w), r, ny, extra, _cases(factor, w.shape[0]))
         return w
 
     def sub_masked(self, x, c, F):
@@ -581,12 +675,29 @@ class FusedCpuKernels(ArrayKernels):
         _sub_on(*_fields(x), _cases(c, x.shape[0]), fs.idx, fs.count)
         return x
 
+    def measure_gap(self, w, F, nF):
+        """:meth:`~.kernels.ArrayKernels.measure_gap` with one pass over the grid, not two: the minimum of
+        ``w`` and the nodes that would join ``F`` (kept in the :class:`FreeSet` for :meth:`join_stats`)."""
+        if not isinstance(F, FreeSet):
+            return super().measure_gap(w, F, nF)
+        B = w.shape[0]
+        gbar = self.gbar(self.masked_sum(w, F), nF)
+        f, _, _ = F.flat()
+        cand = F.candidates()
+        mins, counts = _scan(*_fields(w), _cases(gbar, B), f, cand)
+        F.pending = (gbar, cand, counts)
+        return gbar, self.allmin(self._col(mins))
+
     def join_stats(self, w, gbar, F, go):
         fs = self._set(F)
         B = w.shape[0]
         g = self.buffer("gap", w.shape, np.float64)
         f, idx, cnt = fs.flat()
-        sums = _join(*_fields(w), _cases(gbar, B), f, idx, cnt, _cases(go, B, np.bool_), *_fields(g))
+        listed = fs.pending is not None and fs.pending[0] is gbar
+        cand, ncand = (fs.pending[1], fs.pending[2]) if listed else (idx, cnt)  # not read unless listed
+        fs.pending = None
+        sums = _join(*_fields(w), _cases(gbar, B), f, idx, cnt, _cases(go, B, np.bool_), *_fields(g), cand, ncand,
+                     listed)
         return fs, g, self.allcount(self._col(cnt.copy())), self.allsum(self._col(sums))
 
     def new_direction_input(self, t, a, g, beta, keep, go, g_prev, F, inv_sigma, out=None):
@@ -594,7 +705,7 @@ class FusedCpuKernels(ArrayKernels):
         B = t.shape[0]
         out, rec = self._sparse_out(out, t.shape)
         gt = _new_direction(*_fields(t, a, g), _cases(beta, B), _cases(keep, B, np.bool_), _cases(go, B, np.bool_),
-                            *_fields(g_prev), fs.idx, fs.count, _cases(inv_sigma, B), *_fields(out))
+                            *_fields(g_prev), fs.idx, fs.count, _cases(inv_sigma, B), *_rows(out))
         self._record(rec, fs)
         return out, self.allsum(self._col(gt))
 
@@ -605,7 +716,7 @@ class FusedCpuKernels(ArrayKernels):
         B = P.shape[0]
         out, rec = self._sparse_out(out, P.shape)
         wrote = _project(*_fields(P, t), _cases(tau, B), _cases(go, B, np.bool_), _cases(scale, B),
-                         _cases(inv_sigma, B), fs.idx, fs.count, *_fields(out))
+                         _cases(inv_sigma, B), fs.idx, fs.count, *_rows(out))
         self._record(rec, fs, wrote)
         return out
 
@@ -623,6 +734,7 @@ class FusedCpuKernels(ArrayKernels):
         if not isinstance(F, FreeSet):  # a plain mask: the plain expressions (nothing to keep indexed)
             return super().shrink_stats(P, F, t, g_prev)
         f, idx, cnt = F.flat()
+        F.pending = None
         sums = _shrink(*_fields(P), f, idx, cnt, *_fields(t, g_prev))
         return self.allcount(self._col(cnt.copy())), self.allsum(self._col(sums))
 
@@ -636,12 +748,12 @@ class FusedCpuKernels(ArrayKernels):
         B = P.shape[0]
         out = self.buffer("to32", P.shape, np.float32) if out is None else out
         tot = _extrapolate(*_fields(P, w, P_last, P_older, w_last, w_older), _cases(c, B), _cases(ext, B, np.bool_),
-                           _cases(lin, B, np.bool_), _cases(inv_sigma, B), *_fields(out))
+                           _cases(lin, B, np.bool_), _cases(inv_sigma, B), *_rows(out))
         self._dense(out)
         return self.allsum(self._col(tot)), out
 
     def finish_start(self, P, w, h, R, sigma, sc, loaded, ext, lin, p_fill):
         B = P.shape[0]
-        _finish_start(*_fields(P, w, h), *_fields(P if R is None else R), _cases(sigma, B), _cases(sc, B),
+        _finish_start(*_fields(P, w, h), *_rows(P if R is None else R), _cases(sigma, B), _cases(sc, B),
                       _cases(loaded, B, np.bool_), _cases(ext, B, np.bool_), _cases(lin, B, np.bool_),
                       _cases(p_fill, B), R is not None)

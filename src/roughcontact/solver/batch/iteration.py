@@ -141,8 +141,8 @@ class BatchIteration:
         """
         k, s = self.k, self.s
         # gap on F (zero mean there: gbar is -d), sign violations off F (min of w), complementarity
-        w_on_f, wmin = k.gap_stats(s.w, self.F)
-        self.gbar = gbar = k.gbar(w_on_f, self.nF)
+        gbar, wmin = k.measure_gap(s.w, self.F, self.nF)
+        self.gbar = gbar  # the join's (fused kernels: it appends the nodes this measure found below gbar)
         k.decide(k.orth(s.P, s.w, gbar, self.F), wmin, gbar, self.inv_norm, self.scale, self.tol,
                  self.stall, math.inf, self.it, self.max_iter_d, self.fresh, self.next_sync, self.best, self.at,
                  self.done, self.waiting, self.converged, self.go)
@@ -194,7 +194,7 @@ class BatchIteration:
             return
         kept = spec[~pj].copy() if not pj.all() else None  # the spectrum's buffer is the next transform's
         d32 = k.project(s.P, t, tau, go, pscale, self.inv_sigma, out=op.input32, F=F)
-        mixed = op.fft.rfft2(d32)
+        mixed = op.transform32(d32)
         factor = self.sigma
         if kept is not None:
             mixed[~pj] = kept
@@ -214,7 +214,7 @@ class BatchIteration:
         if not self.host:
             # w <- w + K (p_new - p): one forward and one inverse float32 transform (every case)
             d32 = k.project(s.P, t, tau, go, pscale, self.inv_sigma, out=op.input32, F=F)
-            k.add_scaled(s.w, op.inverse32(op.fft.rfft2(d32), op.kmult32), self.sigma)
+            k.add_scaled(s.w, op.inverse32(op.transform32(d32), op.kmult32), self.sigma)
         else:
             self._step_host(spec, tau, proj, pscale)
         nF_old = self.nF

@@ -43,6 +43,10 @@ class ArrayKernels:
         """Per-case flags, true where any process's is."""
         return local
 
+    def overwritten(self, out) -> None:
+        """A transform has written over the buffer ``out`` (an in-place transform's input): nothing to do
+        here; :class:`.cpu.FusedCpuKernels`' next sparse write there then zeroes all of it."""
+
     def free_set(self, mask):
         """The iteration's free set made from ``mask`` (``(B, nx, ny)`` bool): the mask itself here;
         :meth:`.cpu.FusedCpuKernels.free_set` keeps each case's node indices beside it."""
@@ -64,6 +68,12 @@ class ArrayKernels:
     def gap_stats(self, w, F):
         """``(sum of w on F, min of w)`` per case (the measure's two reductions of the gap)."""
         return self.masked_sum(w, F), self.rmin(w)
+
+    def measure_gap(self, w, F, nF):
+        """``(gbar, min of w)`` per case: the gap's mean on ``F`` (``|F| = nF``) and its least value (the
+        measure's reductions of the gap, :meth:`gap_stats`)."""
+        w_on_f, wmin = self.gap_stats(w, F)
+        return self.gbar(w_on_f, nF), wmin
 
     def orth(self, P, w, gbar, F):
         """``sum_F p |w - gbar|`` per case (complementarity, unnormalised)."""
