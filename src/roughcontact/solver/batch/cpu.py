@@ -243,50 +243,19 @@ def _sub_on(x, c, idx, cnt):
 
 
 @njit(**_JIT)
-def _scan(w, gbar, f, cand):
-    """One pass over the gap: per case its minimum (NaN if any is) and the nodes off F with ``w < gbar``
-    (ascending, into ``cand``) and their count."""
-    B, n = w.shape
-    mins = np.empty(B)
-    counts = np.zeros(B, dtype=np.int64)
-    for b in range(B):
-        gb, m, c, bad = gbar[b], np.inf, 0, False
-        for i in range(n):
-            v = w[b, i]
-            bad |= v != v
-            if v < m:
-                m = v
-            if v < gb and not f[b, i]:
-                cand[b, c] = i
-                c += 1
-        mins[b] = np.nan if bad else m
-        counts[b] = c
-    return mins, counts
-
-
-@njit(**_JIT)
-def _join(w, gbar, f, idx, cnt, go, g, cand, ncand, listed):
+def _join(w, gbar, f, idx, cnt, go, g):
     """Nodes off F with ``w < gbar`` join it where ``go`` (appended to ``idx``); ``g = w - gbar`` on the
-    new F (undefined off it); per case ``|F|`` and ``sum(g)``. ``cnt`` is updated in place. ``listed``:
-    those nodes are the first ``ncand`` of ``cand`` (from :func:`_scan` with this ``w`` and ``gbar``);
-    otherwise they are found by a pass over the grid."""
+    new F (undefined off it); per case ``|F|`` and ``sum(g)``. ``cnt`` is updated in place."""
     B, n = w.shape
     sums = np.zeros(B)
     for b in range(B):
         gb, c = gbar[b], cnt[b]
         if go[b]:
-            if listed:
-                for k in range(ncand[b]):
-                    i = cand[b, k]
+            for i in range(n):
+                if w[b, i] < gb and not f[b, i]:
                     f[b, i] = True
                     idx[b, c] = i
                     c += 1
-            else:
-                for i in range(n):
-                    if w[b, i] < gb and not f[b, i]:
-                        f[b, i] = True
-                        idx[b, c] = i
-                        c += 1
             cnt[b] = c
         s = 0.0
         for k in range(c):
@@ -482,10 +451,6 @@ class FreeSet:
     ----------
     mask : numpy.ndarray
         ``(B, nx, ny)`` bool.
-    pending : tuple or None
-        ``(gbar, nodes, counts)``: the nodes off ``F`` below ``gbar`` that the last measure found
-        (:meth:`FusedCpuKernels.measure_gap`), which the next join with that same ``gbar`` appends
-        without a pass over the grid; None otherwise.
     idx : numpy.ndarray
         ``(B, nx ny)`` int32 (int64 beyond 2**31 nodes); the first ``count[b]`` of row ``b`` are
         case ``b``'s nodes (flat indices), in no particular order after a join.
@@ -498,16 +463,6 @@ class FreeSet:
         f = mask.reshape(mask.shape[0], -1)
         self.idx = np.empty(f.shape, dtype=np.int32 if f.shape[1] < 2**31 else np.int64)
         self.count = _index(f, self.idx)
-        # the nodes that the last measure found off F below its gbar (FusedCpuKernels.measure_gap), for
-        # the join to append without a second pass over the grid: (gbar, nodes, counts) or None
-        self.pending = None
-        self._cand = None
-
-    def candidates(self) -> np.ndarray:
-        """The buffer of :attr:`pending`'s nodes, ``idx``'s shape (made at first use)."""
-        if self._cand is None:
-            self._cand = np.empty_like(self.idx)
-        return self._cand
 
     @property
     def shape(self):
@@ -675,29 +630,12 @@ class FusedCpuKernels(ArrayKernels):
         _sub_on(*_fields(x), _cases(c, x.shape[0]), fs.idx, fs.count)
         return x
 
-    def measure_gap(self, w, F, nF):
-        """:meth:`~.kernels.ArrayKernels.measure_gap` with one pass over the grid, not two: the minimum of
-        ``w`` and the nodes that would join ``F`` (kept in the :class:`FreeSet` for :meth:`join_stats`)."""
-        if not isinstance(F, FreeSet):
-            return super().measure_gap(w, F, nF)
-        B = w.shape[0]
-        gbar = self.gbar(self.masked_sum(w, F), nF)
-        f, _, _ = F.flat()
-        cand = F.candidates()
-        mins, counts = _scan(*_fields(w), _cases(gbar, B), f, cand)
-        F.pending = (gbar, cand, counts)
-        return gbar, self.allmin(self._col(mins))
-
     def join_stats(self, w, gbar, F, go):
         fs = self._set(F)
         B = w.shape[0]
         g = self.buffer("gap", w.shape, np.float64)
         f, idx, cnt = fs.flat()
-        listed = fs.pending is not None and fs.pending[0] is gbar
-        cand, ncand = (fs.pending[1], fs.pending[2]) if listed else (idx, cnt)  # not read unless listed
-        fs.pending = None
-        sums = _join(*_fields(w), _cases(gbar, B), f, idx, cnt, _cases(go, B, np.bool_), *_fields(g), cand, ncand,
-                     listed)
+        sums = _join(*_fields(w), _cases(gbar, B), f, idx, cnt, _cases(go, B, np.bool_), *_fields(g))
         return fs, g, self.allcount(self._col(cnt.copy())), self.allsum(self._col(sums))
 
     def new_direction_input(self, t, a, g, beta, keep, go, g_prev, F, inv_sigma, out=None):
@@ -734,7 +672,6 @@ class FusedCpuKernels(ArrayKernels):
         if not isinstance(F, FreeSet):  # a plain mask: the plain expressions (nothing to keep indexed)
             return super().shrink_stats(P, F, t, g_prev)
         f, idx, cnt = F.flat()
-        F.pending = None
         sums = _shrink(*_fields(P), f, idx, cnt, *_fields(t, g_prev))
         return self.allcount(self._col(cnt.copy())), self.allsum(self._col(sums))
 

@@ -141,8 +141,8 @@ class BatchIteration:
         """
         k, s = self.k, self.s
         # gap on F (zero mean there: gbar is -d), sign violations off F (min of w), complementarity
-        gbar, wmin = k.measure_gap(s.w, self.F, self.nF)
-        self.gbar = gbar  # the join's (fused kernels: it appends the nodes this measure found below gbar)
+        w_on_f, wmin = k.gap_stats(s.w, self.F)
+        self.gbar = gbar = k.gbar(w_on_f, self.nF)
         k.decide(k.orth(s.P, s.w, gbar, self.F), wmin, gbar, self.inv_norm, self.scale, self.tol,
                  self.stall, math.inf, self.it, self.max_iter_d, self.fresh, self.next_sync, self.best, self.at,
                  self.done, self.waiting, self.converged, self.go)

@@ -69,12 +69,6 @@ class ArrayKernels:
         """``(sum of w on F, min of w)`` per case (the measure's two reductions of the gap)."""
         return self.masked_sum(w, F), self.rmin(w)
 
-    def measure_gap(self, w, F, nF):
-        """``(gbar, min of w)`` per case: the gap's mean on ``F`` (``|F| = nF``) and its least value (the
-        measure's reductions of the gap, :meth:`gap_stats`)."""
-        w_on_f, wmin = self.gap_stats(w, F)
-        return self.gbar(w_on_f, nF), wmin
-
     def orth(self, P, w, gbar, F):
         """``sum_F p |w - gbar|`` per case (complementarity, unnormalised)."""
         return self.rsum(P * self.xp.abs(w - gbar) * F)
