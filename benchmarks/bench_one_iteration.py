@@ -7,6 +7,8 @@ equal loads to p0/E* = ``--p-max``, tol 1e-8), single-threaded (``OMP_NUM_THREAD
 - ``single``: :func:`roughcontact.solver.solve_contact` on the map (``PKIteration``, compressed sets);
 - ``batched``: :func:`roughcontact.solver.solve_contact_batch` on ``h[None]`` (the batched iteration with the
   fused CPU kernels of ``solver/batch/cpu.py``, B = 1): the iteration the MPI solver runs on each rank;
+- ``batched-apart`` (``--apart``): the same with the batches' out-of-place float32 transforms, not one case's
+  in-place ones (the A/B of ``BatchFFT``'s in-place plans);
 - ``tamaas``: Tamaas' ``PolonskyKeerRey`` (``bench_solver.run_tamaas``), once (its cold start costs it most).
 
 Ours run ``--repeats`` times each, interleaved (``single, batched, single, ...``) after one warm-up each (the
@@ -49,6 +51,9 @@ def main(argv=None) -> int:
     ap.add_argument("--p-max", type=float, default=0.005)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--no-tamaas", action="store_true")
+    ap.add_argument("--apart", action="store_true",
+                    help="add the row 'batched-apart': B = 1 with the batches' out-of-place transforms instead of "
+                         "one case's in-place ones (the A/B of solver/batch/halfspace.py's in-place plans)")
     a = ap.parse_args(argv)
     from bench_solver import run_tamaas
 
@@ -59,6 +64,18 @@ def main(argv=None) -> int:
     h = generate_surface(a.n, 16, 32, 0.8, 0, rms_slope=0.1)
     loads = np.linspace(a.p_max / a.steps, a.p_max, a.steps)
     ours = {"single": lambda: solve_contact(h, loads), "batched": lambda: solve_contact_batch(h[None], loads)}
+    if a.apart:
+        from roughcontact.solver.batch import halfspace
+
+        def apart():
+            shipped = halfspace.fft_module.has_shipped_plans
+            halfspace.fft_module.has_shipped_plans = lambda shape: False  # BatchFFT plans out of place
+            try:
+                return solve_contact_batch(h[None], loads)
+            finally:
+                halfspace.fft_module.has_shipped_plans = shipped
+
+        ours["batched-apart"] = apart
     for fn in ours.values():
         fn()  # warm-up: plans, the kernels' cache
     runs = {k: [] for k in ours}
@@ -88,9 +105,11 @@ def main(argv=None) -> int:
         ratio = f"{t_cpu / cmin:.1f}x" if t_cpu and name != "tamaas" else ""
         print(f"| {name} | {cmin:.2f} | {cmed:.2f} | {wmin:.2f} | {its} | {1e3 * cmin / its:.2f} | {conv} | "
               f"{area:.6f} | {ratio} |")
-    single, batched = rows[0], rows[1]
-    print(f"batched / single CPU (least): {batched[1] / single[1]:.3f}; per iteration: "
-          f"{(batched[1] / batched[4]) / (single[1] / single[4]):.3f}")
+    single = rows[0]
+    for row in rows[1:]:
+        if row[0] != "tamaas":
+            print(f"{row[0]} / single CPU (least): {row[1] / single[1]:.3f}; per iteration: "
+                  f"{(row[1] / row[4]) / (single[1] / single[4]):.3f}")
     return 0
 
 
