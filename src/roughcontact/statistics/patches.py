@@ -39,6 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
+from numba import njit
 from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
@@ -101,6 +102,20 @@ def _components(m: np.ndarray, periodic_x: bool, periodic_y: bool) -> tuple[np.n
     return ids, np.bincount(ids[m], minlength=n_comp).astype(np.int64)
 
 
+@njit(cache=True, nogil=True)
+def _label_sizes(raw, comp, n_comp):
+    """Node count of each component ``comp[label]`` of the labels ``raw`` (label 0: no contact, not counted).
+
+    One pass and no temporary: ``np.bincount`` of the labels first converts them to a new int64 array as large as
+    the grid, whose fresh pages cost more than the counting itself (86-232 ms a call at 2048² inside a solve on a
+    2-core VM, against 9-27 for the labelling, 2026-12-02)."""
+    sizes = np.zeros(n_comp, dtype=np.int64)
+    for v in raw.ravel():
+        if v:
+            sizes[comp[v]] += 1
+    return sizes
+
+
 def patch_sizes(mask, periodic: bool = True) -> np.ndarray:
     """Node counts of the contact patches of one step, largest first.
 
@@ -126,7 +141,9 @@ def patch_sizes(mask, periodic: bool = True) -> np.ndarray:
     m = _grid(mask)
     if not m.any():
         return np.zeros(0, dtype=np.int64)
-    sizes = _components(m, periodic, periodic)[1]
+    raw, n_raw = ndimage.label(m, structure=EDGE_NEIGHBOURS)
+    n_comp, comp = merge_across_edges(raw, n_raw, periodic, periodic)
+    sizes = _label_sizes(raw, comp, n_comp)
     return np.sort(sizes[sizes > 0])[::-1]
 
 
