@@ -94,14 +94,6 @@ def _grid(mask) -> np.ndarray:
     return m
 
 
-def _components(m: np.ndarray, periodic_x: bool, periodic_y: bool) -> tuple[np.ndarray, np.ndarray]:
-    """``(ids, sizes)``: each node's patch id (-1 off contact) and each patch's node count, of a 2-D bool grid."""
-    raw, n_raw = ndimage.label(m, structure=EDGE_NEIGHBOURS)
-    n_comp, comp = merge_across_edges(raw, n_raw, periodic_x, periodic_y)
-    ids = np.where(m, comp[raw], -1)
-    return ids, np.bincount(ids[m], minlength=n_comp).astype(np.int64)
-
-
 @njit(cache=True, nogil=True)
 def _label_sizes(raw, comp, n_comp):
     """Node count of each component ``comp[label]`` of the labels ``raw`` (label 0: no contact, not counted).
@@ -114,6 +106,15 @@ def _label_sizes(raw, comp, n_comp):
         if v:
             sizes[comp[v]] += 1
     return sizes
+
+
+def _components(m: np.ndarray, periodic_x: bool, periodic_y: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(raw, comp, sizes)`` of a 2-D bool grid: its raw labels (0 off contact), each raw label's patch id
+    (``comp[0]`` a patch of no node) and each patch's node count. A node's patch id is ``comp[raw]`` where
+    ``m``; no field of ids is made (:func:`_label_sizes`)."""
+    raw, n_raw = ndimage.label(m, structure=EDGE_NEIGHBOURS)
+    n_comp, comp = merge_across_edges(raw, n_raw, periodic_x, periodic_y)
+    return raw, comp, _label_sizes(raw, comp, n_comp)
 
 
 def patch_sizes(mask, periodic: bool = True) -> np.ndarray:
@@ -141,9 +142,7 @@ def patch_sizes(mask, periodic: bool = True) -> np.ndarray:
     m = _grid(mask)
     if not m.any():
         return np.zeros(0, dtype=np.int64)
-    raw, n_raw = ndimage.label(m, structure=EDGE_NEIGHBOURS)
-    n_comp, comp = merge_across_edges(raw, n_raw, periodic, periodic)
-    sizes = _label_sizes(raw, comp, n_comp)
+    sizes = _components(m, periodic, periodic)[2]
     return np.sort(sizes[sizes > 0])[::-1]
 
 
@@ -213,15 +212,16 @@ def slab_patches(mask: np.ndarray, periodic: bool = True) -> SlabPatches:
     """:class:`SlabPatches` of one slab of rows ``mask`` (bool ``(rows, ny)``) of a grid split along x (axis 0),
     patches joined across the y edges where ``periodic``."""
     m = _grid(mask)
-    ids, sizes = _components(m, False, periodic)
-    edge = np.unique(np.concatenate([ids[0], ids[-1]]))
+    raw, comp, sizes = _components(m, False, periodic)
+    ids = [np.where(m[r], comp[raw[r]], -1) for r in (0, -1)]  # the edge rows' patch ids (-1 off contact)
+    edge = np.unique(np.concatenate(ids))
     edge = edge[edge >= 0]
     inner = np.ones(sizes.size, bool)
     inner[edge] = False
     local = np.zeros(sizes.size + 1, dtype=np.int64)  # patch id + 1 -> edge id (0: not an edge patch)
     local[edge + 1] = np.arange(1, edge.size + 1)
     return SlabPatches(nodes=int(m.sum()), interior=int(sizes[inner].max(initial=0)),
-                       first=local[ids[0] + 1], last=local[ids[-1] + 1],
+                       first=local[ids[0] + 1], last=local[ids[1] + 1],
                        sizes=np.concatenate([[0], sizes[edge]]).astype(np.int64))
 
 
