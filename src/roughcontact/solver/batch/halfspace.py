@@ -35,6 +35,9 @@ class BatchFFT:
         self.kw, self.ikw = {}, {}
         self.input32 = None
         self.in_place = False
+        # called after a float32 transform in place has overwritten input32 (set by BatchOperator: the kernels'
+        # next sparse write there must zero the whole buffer)
+        self.on_overwrite = None
         mod = be.xp.fft  # no SciPy; the tests' stand-in CuPy (numpy's fft under CuPy's name)
         try:
             if be.name == "numpy":
@@ -91,6 +94,10 @@ class BatchFFT:
             self.bwd64 = pyfftw.FFTW(self.spec64, self.real64, axes=(1, 2), direction="FFTW_BACKWARD",
                                      flags=fft_module.PLANNER_FLAGS, threads=self.threads)
 
+    def _overwritten(self) -> None:
+        if self.in_place and self.on_overwrite is not None:
+            self.on_overwrite()
+
     def rfft2(self, x):
         """The spectrum of ``x`` over its last two axes; a buffer of the plans where they hold ``x``'s shape
         (valid until the next transform of that precision)."""
@@ -99,6 +106,7 @@ class BatchFFT:
                 if x is not self.input32:
                     self.input32[...] = x
                 self.fwd32.execute()
+                self._overwritten()
                 return self.spec32
             if x.dtype == np.float64 and x.shape == (1, *self.shape):
                 if self.spec64 is None:
@@ -113,6 +121,7 @@ class BatchFFT:
         if self.input32 is not None:
             if spec is self.spec32:
                 self.bwd32.execute()  # destroys the spectrum, as the c2r elsewhere may (overwrite_x)
+                self._overwritten()
                 return self.output32
             if spec is self.spec64:
                 self.bwd64.execute()
@@ -134,6 +143,8 @@ class BatchOperator:
         nx, ny = self.shape = tuple(shape)
         self.input_shape = (batch or 1, nx, ny)
         self.fft = BatchFFT(be, shape, threads, batch)
+        if self.fft.in_place:
+            self.fft.on_overwrite = lambda: kernels.overwritten(self.fft.input32)
         if be.name == "cupy":
             # one plan per shape, precision and direction: the batch's and the float64 refreshes'
             # power-of-two subsets (<= 2 log2(B) + 6 plans) stay in CuPy's plan cache (default 16)
@@ -161,13 +172,10 @@ class BatchOperator:
     def transform32(self, x32):
         """float32 spectrum of a float32 field (:meth:`input32` or any ``(B, nx, ny)``), unscaled.
 
-        A transform in place overwrites :meth:`input32`: the kernels are told, so that their next sparse
-        write there zeroes the whole buffer (:meth:`~.kernels.ArrayKernels.overwritten`).
+        A transform in place overwrites :meth:`input32`, and the kernels are told (:attr:`BatchFFT.on_overwrite`,
+        :meth:`~.kernels.ArrayKernels.overwritten`), so that their next sparse write there zeroes all of it.
         """
-        spec = self.fft.rfft2(x32)
-        if getattr(self.fft, "in_place", False):
-            self.k.overwritten(self.fft.input32)
-        return spec
+        return self.fft.rfft2(x32)
 
     def spectrum32(self, x, inv_sigma, F=None):
         """float32 spectrum of ``x * inv_sigma`` (one batched forward transform; ``x`` zero off ``F`` if given).
@@ -199,10 +207,7 @@ class BatchOperator:
         """``F^-1[mult spec]``: float32 ``(B, nx, ny)``, maybe a view with padded rows (the spectrum is
         overwritten; in place, so is :meth:`input32`)."""
         spec *= mult
-        out = self.fft.irfft2(spec)
-        if getattr(self.fft, "in_place", False) and spec is self.fft.spec32:
-            self.k.overwritten(self.fft.input32)
-        return out
+        return self.fft.irfft2(spec)
 
     def apply64(self, P):
         """``K P`` in float64, ``(B, nx, ny)``."""
