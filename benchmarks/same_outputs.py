@@ -18,6 +18,13 @@ on one machine write the same bytes (tests/test_workflow.py's rerun; measured wi
 run to run: the solver's ``wall_time`` is not written), so nothing is excluded. The files of ``ranks2`` and any file
 that differs are also opened with xarray (every group) and the largest relative difference of each variable reported;
 ``ranks2`` passes within :data:`MPI_RTOL`. The exit status is 0 only when every other file is byte-identical.
+
+Across the one contact path (issue 64, 2026-12-02) a run of the older layout (the f89aa95 baseline) is compared as
+:func:`older_layout` says: a batch's file and an MPI job's file moved to ``contact/`` under the same name, and the
+per-case copies the older layout made of them are gone, each case now written once (its group of a batch's file, or
+the MPI job's own file, which stands for its copy). Each copy of a batch's case is checked to hold its group's
+variables and attributes exactly (xarray's ``identical``), since a copy was written again from what it read (its
+bytes are not the original's).
 """
 from __future__ import annotations
 
@@ -123,6 +130,47 @@ def largest_differences(a: Path, b: Path) -> dict[str, float]:
     return out
 
 
+#: Folders of the older layout whose files moved to ``contact/`` under the same name (issue 64, item 2).
+MOVED_TO_CONTACT = ("contact_batch", "contact_mpi")
+
+
+def older_layout(root: Path, files: set[Path], other: set[Path]) -> tuple[dict[Path, Path], dict[Path, Path]]:
+    """A run of the layout before the one contact path, as the newer one names its files.
+
+    Returns ``(files, copies)``: every file of ``root`` by its newer name (``<scene>/contact_batch/X`` and
+    ``<scene>/contact_mpi/X`` become ``<scene>/contact/X``, replacing the copy of the same name), and the older
+    per-case copies of a batch's cases that the newer layout (``other``) no longer has, each with what it copied
+    (``file`` or ``file#group``, relative to ``root``). A run of the newer layout comes back unchanged, with no copies.
+    """
+    named = {p: p for p in files}
+    for p in sorted(files):
+        if len(p.parts) == 3 and p.parts[1] in MOVED_TO_CONTACT:
+            named[Path(p.parts[0], "contact", p.name)] = p
+            del named[p]
+    copies = {}
+    for new, old in list(named.items()):
+        if new.parts[1:2] != ("contact",) or new in other or old != new:
+            continue
+        batch = next((b for b in files if b.parts[1] == "contact_batch" and _holds_group(root / b, new.stem)), None)
+        if batch is not None:
+            copies[new] = Path(f"{batch}#{new.stem}")
+            del named[new]
+    return named, copies
+
+
+def _holds_group(path: Path, group: str) -> bool:
+    with xr.open_datatree(path) as tree:
+        return group in tree.children
+
+
+def _same_as_group(copy: Path, source: Path) -> bool:
+    """Whether a per-case copy holds exactly the variables and attributes of its group in a batch's file."""
+    path, group = str(source).split("#")
+    with xr.open_dataset(path, group=group) as a, xr.open_dataset(copy) as b:
+        a, b = a.load(), b.load()
+    return a.identical(b) and a.attrs == b.attrs
+
+
 def compare(dir_a: Path, dir_b: Path, families: list[str] | None = None) -> bool:
     """Print one line per family (files, identical, differing) and the differences; True when all pass.
 
@@ -132,16 +180,25 @@ def compare(dir_a: Path, dir_b: Path, families: list[str] | None = None) -> bool
     for name in families or sorted(found):
         ra, rb = dir_a / name / "wd" / "results", dir_b / name / "wd" / "results"
         fa, fb = result_files(ra) if ra.is_dir() else set(), result_files(rb) if rb.is_dir() else set()
+        na, copies_a = older_layout(ra, fa, fb)  # newer name -> file of dir_a
+        nb, copies_b = older_layout(rb, fb, fa)
+        fa, fb = set(na), set(nb)
         missing = sorted(fa ^ fb)
-        differ = sorted(p for p in fa & fb if (ra / p).read_bytes() != (rb / p).read_bytes())
+        differ = sorted(p for p in fa & fb if (ra / na[p]).read_bytes() != (rb / nb[p]).read_bytes())
+        moved = [f"\n  moved: {na[p]} -> {nb[p]}" for p in sorted(fa & fb) if na[p] != nb[p]]
+        copies = {(root / p, root / src) for root, got in ((ra, copies_a), (rb, copies_b)) for p, src in got.items()}
+        bad_copies = sorted(str(c) for c, src in copies if not _same_as_group(c, src))
         print(f"{name}: {len(fa | fb)} files, {len(fa & fb) - len(differ)} identical, {len(differ)} differing"
+              + "".join(moved)
+              + (f"\n  {len(copies)} per-case copies of the older layout, each equal to its group: "
+                 f"{'yes' if not bad_copies else 'NO: ' + ', '.join(bad_copies)}" if copies else "")
               + "".join(f"\n  differs: {p}" for p in differ)
               + "".join(f"\n  only in {dir_a if p in fa else dir_b}: {p}" for p in missing if fa and fb)
               + "".join(f"\n  no results in {d}" for d, files in ((dir_a, fa), (dir_b, fb)) if not files))
-        family_ok = not missing and not differ and bool(fa | fb)
+        family_ok = not missing and not differ and not bad_copies and bool(fa | fb)
         worst = {}
         for p in sorted(fa & fb) if name == "ranks2" else differ:
-            for var, rel in largest_differences(ra / p, rb / p).items():
+            for var, rel in largest_differences(ra / na[p], rb / nb[p]).items():
                 worst[var] = max(worst.get(var, 0.0), rel)
         for var, rel in sorted(worst.items()):
             if rel > 0:

@@ -327,6 +327,28 @@ def test_the_library_looks_up_no_scene_key(sources):
     assert found == {}
 
 
+# ------------------------------------------------------------------------------ one contact path
+def workflow_outputs() -> dict[str, list[str]]:
+    """Every rule of the shipped workflow and its output patterns, as Snakemake parses them."""
+    from snakemake.api import SnakemakeApi
+    from snakemake.settings.types import ConfigSettings, OutputSettings, ResourceSettings, StorageSettings
+
+    with SnakemakeApi(OutputSettings(quiet={"all"})) as api:
+        workflow = api.workflow(resource_settings=ResourceSettings(), config_settings=ConfigSettings(),
+                                storage_settings=StorageSettings(), snakefile=SRC.parent / "Snakefile",
+                                workdir=SRC.parent)
+        return {rule.name: [str(out) for out in rule.output] for rule in workflow._workflow.rules}
+
+
+def test_one_rule_writes_contact_files():
+    # issue 64.2: one case, a batch or one case over MPI ranks is one contact job of one rule, each case's file
+    # written once (no batch or MPI job whose file another job copies)
+    outputs = workflow_outputs()
+    writers = {rule: outs for rule, outs in outputs.items() if any("/contact/" in out for out in outs)}
+    assert list(writers) == ["contact"] and len(writers["contact"]) == 1, writers
+    assert not [rule for rule in outputs if rule.startswith("contact") and rule != "contact"]
+
+
 # ------------------------------------------------------------------------------ the checker can fail
 def test_checker_finds_effect_names_and_scene_keys():
     source = ('from .cases import is_adhesive\nif is_adhesive(b): pass\nx = cases.is_adhesive\n'

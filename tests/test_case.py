@@ -34,7 +34,7 @@ def test_a_block_runs_as_the_solver_with_its_settings(surface):
              "effects": {"plasticity": {"hardness": 0.5}},
              "outputs": {"fields": [6], "clusters": True, "stiffness": True}}
     case = contact_case(block, length_unit="um")
-    ds = run_case(surface, case, length=1.0, rms_slope=0.1)
+    [ds] = run_case(surface, case, length=1.0, rms_slope=0.1)
     loads = np.geomspace(0.05 * 2.0 * 0.1 / 6, 0.05 * 2.0 * 0.1, 6)
     ref = solve_contact(surface, load_schedule(block).pressures(2.0, 0.1), e_star=2.0, tol=1e-9,
                         max_iter=5000, hardness=1.0, store_fields=[6], length_unit="um", pressure_unit="MPa",
@@ -50,7 +50,7 @@ def test_a_block_runs_as_the_solver_with_its_settings(surface):
 
 def test_a_target_area_is_searched_on_the_case_surface(surface):
     case = ContactCase(LoadSchedule(4, target_area=0.05), SolverSettings(tol=1e-10))
-    ds = run_case(surface, case, length=1.0, rms_slope=0.1)
+    [ds] = run_case(surface, case, length=1.0, rms_slope=0.1)
     assert abs(float(ds.area_fraction[-1]) - 0.05) <= max(0.01 * 0.05, 1.5 / surface.size) + 1 / surface.size
     assert ds.attrs["load_probes"] >= 1 and "load_p_max" not in ds.attrs
 

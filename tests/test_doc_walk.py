@@ -415,6 +415,8 @@ COMMANDS = {
         lambda p: ["regenerate", str(p)], lambda p: ["regenerate", str(p)],
         lambda p: ["regenerate", str(_truncated(p, ["representativity.nc", "contact.nc", "cel.nc"], RP))]),
     # a surface file, not a folder: the "empty folder" case gives the folder itself as the surface
+    # the ranks' program of a case over MPI ranks: its one argument is the job file run_case writes
+    "roughcontact.case": (lambda p: [str(p / "case.json")], lambda p: [str(p)], lambda p: [str(_list_yaml(p))]),
     "roughcontact.solver.mpi": (lambda p: _mpi_argv(p / "h.nc", p.parent / "out.nc"),
                                 lambda p: _mpi_argv(p, p / "out.nc"),
                                 lambda p: _mpi_argv(_not_netcdf(p), p / "out.nc")),
@@ -439,6 +441,10 @@ def _main(module):
         from roughcontact.solver.mpi.__main__ import main
 
         return lambda argv: sys.exit(main(argv))
+    if module == "roughcontact.case":  # the same: its main returns each rank's exit code
+        from roughcontact.case.__main__ import main as case_main
+
+        return lambda argv: sys.exit(case_main(argv))
     where = {"roughcontact.pipeline.config": "roughcontact.pipeline.scenes",
              "roughcontact.studies.kappa_gap": "roughcontact.studies.kappa_gap.page",
              "roughcontact.studies.open_questions": "roughcontact.studies.open_questions.page"}.get(module, module)

@@ -9,6 +9,7 @@ import copy
 import json
 import logging
 import re
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -42,7 +43,7 @@ del SINGLE["scenes"]["tiny"]["contact"]["solver"]["batch"]
 
 HS = ("0.5", "0.8")
 CONTACT = "results/tiny/contact/kl2_ks8_H{H}_s{seed}.nc"
-BATCH = "results/tiny/contact_batch/kl2_ks8_H{H}_b{index}.nc"
+BATCH = "results/tiny/contact/kl2_ks8_H{H}_b{index}.nc"
 SURF = "results/tiny/surfaces/kl2_ks8_H{H}_s{seed}.nc"
 
 
@@ -147,7 +148,7 @@ def test_run_case_on_a_batch_is_each_case_alone(surfaces):
     batch = run_case(surfaces, CASE, length=1.0, rms_slope=slopes, name=["a", "b", "c"])
     assert len(batch) == 3
     for h, slope, got in zip(surfaces, slopes, batch, strict=True):
-        alone = run_case(h, CASE, length=1.0, rms_slope=slope)
+        [alone] = run_case(h, CASE, length=1.0, rms_slope=slope)
         assert set(got.variables) - set(alone.variables) == {"rounds"} and set(alone.variables) <= set(got.variables)
         assert set(got.attrs) - set(alone.attrs) == {"batch_size", "check_every"} and got.attrs["batch_size"] == 3
         for key, value in alone.attrs.items():  # the settings, the cell and the loads (load_pbar_max per case)
@@ -226,35 +227,48 @@ def targets():
     return Targets.from_config(copy.deepcopy(BATCHED), variants, FIGURES)
 
 
-def _w(**values):
-    return SimpleNamespace(scene="tiny", k_l="2", k_s="8", H="0.8", **values)
+def _w(group):
+    return SimpleNamespace(scene="tiny", group=group)
 
 
-def test_a_batched_case_reads_its_batch(targets):
-    assert targets.contact_input(_w(seed="3")) == {"batch": BATCH.format(H="0.8", index=0)}
-    assert targets.contact_input(_w(seed="4")) == {"batch": BATCH.format(H="0.8", index=1)}
-    assert targets.contact_batch_input(_w(batch="0")) == [SURF.format(H="0.8", seed=s) for s in range(4)]
-    assert targets.contact_batch_seeds(_w(batch="1")) == [4]
-    assert targets.contact_batch_params(params.contact)(_w(batch="1"))["solver"]["batch"] == 4
-    assert targets.contact_job_mem_mb(_w(seed="0")) < targets.batch_job_mem_mb(_w(batch="0"))
+def test_a_batch_is_one_contact_job_and_its_file_holds_its_cases(targets):
+    group = targets.contact_group(_w("kl2_ks8_H0.8_b0"))
+    assert group.kind == "batch" and [c.seed for c in group.members] == [0, 1, 2, 3]
+    assert targets.contact_input(_w("kl2_ks8_H0.8_b0")) == [SURF.format(H="0.8", seed=s) for s in range(4)]
+    assert targets.contact_input(_w("kl2_ks8_H0.8_b1")) == [SURF.format(H="0.8", seed=4)]
+    assert targets.contact_cases(_w("kl2_ks8_H0.8_b1")) == [{"k_l": "2", "k_s": "8", "H": "0.8", "seed": "4"}]
+    assert targets.contact_params(params.contact)(_w("kl2_ks8_H0.8_b1"))["solver"]["batch"] == 4
+    assert targets.contact_tasks(_w("kl2_ks8_H0.8_b0")) == 1
+    assert targets.contact_bundle(_w("kl2_ks8_H0.8_b0")) == "solve"
     single = Targets.from_config(copy.deepcopy(SINGLE), variants, FIGURES)
-    assert single.contact_input(_w(seed="3")) == {"surface": SURF.format(H="0.8", seed=3)}
+    assert single.contact_input(_w("kl2_ks8_H0.8_s3")) == [SURF.format(H="0.8", seed=3)]
+    assert single.contact_job_mem_mb(_w("kl2_ks8_H0.8_s3")) < targets.contact_job_mem_mb(_w("kl2_ks8_H0.8_b0"))
+    # the aggregate reads each case from its batch's file, in the order of the cases
+    members = targets.contact_members_of("tiny")
+    assert [m[1] for m in members][:5] == [f"kl2_ks8_H0.5_s{s}" for s in range(5)]
+    assert members[4] == [BATCH.format(H="0.5", index=1), "kl2_ks8_H0.5_s4"]
+    assert targets.contact_files("tiny") == [BATCH.format(H=h, index=i) for h in HS for i in (0, 1)]
+    assert single.contact_members_of("tiny")[0] == [CONTACT.format(H="0.5", seed=0), None]
 
 
-@pytest.mark.parametrize("w, words", [
-    (_w(batch="2"), "wildcard batch=2 is not one of the scene's batches 0..1 (5 seeds in batches of 4"),
-    (_w(batch="01"), "wildcard batch=01 is not one of the scene's batches"),
-    (SimpleNamespace(scene="tiny", k_l="2", k_s="9", H="0.8", batch="0"), "wildcard k_s=9 is not in the scene"),
+@pytest.mark.parametrize("group, words", [
+    ("kl2_ks8_H0.8_b2", "batch 2 of kl2_ks8_H0.8_b2 is not one of the scene's batches 0..1 (5 seeds in batches of 4"),
+    ("kl2_ks8_H0.8_b01", "batch 01 of kl2_ks8_H0.8_b01 is not one of the scene's batches"),
+    ("kl2_ks9_H0.8_b0", "wildcard k_s=9 is not in the scene"),
+    ("kl2_ks8_H0.8_s3", "case kl2_ks8_H0.8_s3 has no file of its own: it is a group of "
+                        "results/tiny/contact/kl2_ks8_H0.8_b0.nc"),
+    ("kl2_ks8_H0.8_s7", "wildcard seed=7 is not one of the scene's seeds 0..4"),
+    ("surface", "'surface' names no case"),
 ])
-def test_a_batch_outside_the_scene_is_named(targets, w, words):
+def test_a_group_outside_the_scene_is_named(targets, group, words):
     with pytest.raises(WorkflowError, match=re.escape(words)):
-        targets.contact_batch_input(w)
+        targets.contact_input(_w(group))
 
 
 def test_an_unbatched_scene_has_no_batch_files():
     single = Targets.from_config(copy.deepcopy(SINGLE), variants, FIGURES)
     with pytest.raises(WorkflowError, match=r"solves each contact case alone \(contact.solver.batch is 1\)"):
-        single.contact_batch_input(_w(batch="0"))
+        single.contact_input(_w("kl2_ks8_H0.8_b0"))
 
 
 # ------------------------------------------------------------------------------ Snakemake
@@ -269,33 +283,41 @@ def test_a_dry_run_shows_the_grouped_jobs(tmp_path):
     assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
     assert "120 solves at N=32, in 4 batches of up to 4 cases" in res.stderr + res.stdout
     jobs = _jobs(res.stdout)
-    assert jobs["contact_batch"] == 4 and jobs["contact"] == 10 and jobs["surface"] == 10, jobs
+    assert jobs["contact"] == 4 and jobs["surface"] == 10 and "contact_batch" not in jobs, jobs
     planned = _planned(res.stdout)
     assert {BATCH.format(H=h, index=i) for h in HS for i in (0, 1)} <= planned
-    # unbatched: no batch jobs
+    assert not {CONTACT.format(H=h, seed=s) for h in HS for s in range(5)} & planned  # no file a case
+    # unbatched: a job a case
     wd = copy_workflow(tmp_path / "single", SINGLE)
     res = run_snakemake(wd, "-n", timeout=300)
-    assert res.returncode == 0 and "contact_batch" not in _jobs(res.stdout) and _jobs(res.stdout)["contact"] == 10
+    assert res.returncode == 0 and _jobs(res.stdout)["contact"] == 10
 
 
 def _contact_targets():
     return [CONTACT.format(H=h, seed=s) for h in HS for s in range(5)]
 
 
+def _batch_targets(seeds=5):
+    return [BATCH.format(H=h, index=i) for h in HS for i in range(-(-seeds // 4))]
+
+
 @pytest.mark.slow  # two tiny runs (10 cases each, only the contact files) and three dry runs: ~3 min on 2 cores
 def test_batch_4_equals_the_unbatched_run_and_a_new_seed_solves_only_its_batch(tmp_path):
     runs = {}
-    for name, cfg in (("batched", BATCHED), ("single", SINGLE)):
+    for name, cfg, targets in (("batched", BATCHED, _batch_targets()), ("single", SINGLE, _contact_targets())):
         wd = copy_workflow(tmp_path / name, cfg)
-        res = run_snakemake(wd, "-j2", *_contact_targets())
+        res = run_snakemake(wd, "-j2", *targets)
         assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
         runs[name] = wd
     batched = runs["batched"]
-    assert sorted(p.name for p in (batched / "results/tiny/contact_batch").iterdir()) == [
-        f"kl2_ks8_H{h}_b{i}.nc" for h in HS for i in (0, 1)]
+    assert sorted(p.name for p in (batched / "results/tiny/contact").iterdir()) == [
+        f"kl2_ks8_H{h}_b{i}.nc" for h in HS for i in (0, 1)]  # each case written once: in its batch's file
     for target in _contact_targets():
-        with xr.open_dataset(batched / target) as a, xr.open_dataset(runs["single"] / target) as b:
-            a, b = a.load(), b.load()
+        seed = int(target.split("_s")[-1].removesuffix(".nc"))
+        path = batched / BATCH.format(H=target.split("_H")[1].split("_")[0], index=seed // 4)
+        a = read_dataset(path, stage="contact", group=Path(target).stem)
+        with xr.open_dataset(runs["single"] / target) as b:
+            b = b.load()
         assert set(a.variables) - set(b.variables) == {"rounds"} and set(b.variables) <= set(a.variables), target
         differ = {k for k in set(a.attrs) | set(b.attrs) if a.attrs.get(k) != b.attrs.get(k)}
         assert differ == {"batch_size", "check_every", "scene_parameters", "config_hash"}, (target, differ)
@@ -307,23 +329,19 @@ def test_batch_4_equals_the_unbatched_run_and_a_new_seed_solves_only_its_batch(t
         np.testing.assert_allclose(a.mean_gap, b.mean_gap, rtol=tol * 100, err_msg=target)
         np.testing.assert_allclose(a.kappa, b.kappa, rtol=1e-6, err_msg=target)
         assert np.all(np.abs(a.iterations.values - b.iterations.values) <= 1) and a.converged.values.all(), target
-    assert_cf_clean([batched / CONTACT.format(H="0.5", seed=1)], tmp_path / "tables")
-    # the batches solved again (and their cases copied again): byte-identical
-    first = {t: (batched / t).read_bytes() for t in _contact_targets()}
-    batch_files = sorted((batched / "results/tiny/contact_batch").iterdir())
-    first_batches = {p: p.read_bytes() for p in batch_files}
-    res = run_snakemake(batched, "-j2", "-R", "contact_batch", *_contact_targets())
+    assert_cf_clean([batched / BATCH.format(H="0.5", index=0)], tmp_path / "tables")
+    # the batches solved again: byte-identical
+    first = {t: (batched / t).read_bytes() for t in _batch_targets()}
+    res = run_snakemake(batched, "-j2", "-R", "contact", *_batch_targets())
     assert res.returncode == 0, res.stderr[-3000:]
-    assert {t: (batched / t).read_bytes() for t in _contact_targets()} == first
-    assert {p: p.read_bytes() for p in batch_files} == first_batches
+    assert {t: (batched / t).read_bytes() for t in _batch_targets()} == first
     # nothing left to do; then a sixth seed joins batch 1 of each (k_l, k_s, H): only that batch reruns
-    res = run_snakemake(batched, "-n", *_contact_targets())
+    res = run_snakemake(batched, "-n", *_batch_targets())
     assert res.returncode == 0 and "Nothing to be done" in res.stdout + res.stderr, res.stdout[-2000:]
     more = copy.deepcopy(BATCHED)
     more["scenes"]["tiny"]["contact"]["seeds"] = 6
     copy_workflow(batched, more)
-    res = run_snakemake(batched, "-n", *[CONTACT.format(H=h, seed=s) for h in HS for s in range(6)])
+    res = run_snakemake(batched, "-n", *_batch_targets(6))
     assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
     assert _planned(res.stdout) == ({BATCH.format(H=h, index=1) for h in HS}
-                                    | {CONTACT.format(H=h, seed=s) for h in HS for s in (4, 5)}
                                     | {SURF.format(H=h, seed=5) for h in HS}), sorted(_planned(res.stdout))

@@ -2,7 +2,7 @@
 
 The config's refusals (each named, before any job), MPI asked for but not installed, ``ranks: 1`` dropped,
 the rules' functions and resources, the launcher (:func:`~roughcontact.case.mpi_command`),
-:func:`~roughcontact.case.run_case_on_ranks` against :func:`~roughcontact.case.run_case`
+:func:`~roughcontact.case.run_case` over ranks against it in one process
 on the same surface file, the MPI solver's own refusal passed on as one line, a dry run under the SLURM
 profile (an MPI job: ``mpi=srun``, ``tasks`` = ranks) and (slow) a tiny scene with ``ranks: 2`` against
 the same scene in one process, file by file. The runs skip, saying why, where mpi4py or ``mpiexec`` is
@@ -30,7 +30,7 @@ from snakemake.exceptions import WorkflowError
 
 import roughcontact.case as case_module
 from conftest import REPO, copy_workflow, edited_contact, run_snakemake
-from roughcontact.case import ContactCase, mpi_command, run_case, run_case_on_ranks
+from roughcontact.case import ContactCase, case_document, case_from_document, mpi_command, run_case
 from roughcontact.case.loading import LoadSchedule
 from roughcontact.figures.registry import FIGURES
 from roughcontact.pipeline import params
@@ -154,26 +154,34 @@ def _targets(cfg=SPLIT) -> Targets:
     return Targets.from_config(copy.deepcopy(cfg), variants, FIGURES)
 
 
-def _w(seed="0", **more):
-    return SimpleNamespace(scene="tiny", k_l="2", k_s="8", H="0.5", seed=seed, **more)
+def _w(seed="0"):
+    return SimpleNamespace(scene="tiny", group=f"kl2_ks8_H0.5_s{seed}")
 
 
-def test_a_case_over_ranks_is_an_mpi_job_its_contact_job_copies():
+def test_a_case_over_ranks_is_one_mpi_contact_job():
     t = _targets()
-    assert t.contact_input(_w()) == {"mpi": "results/tiny/contact_mpi/kl2_ks8_H0.5_s0.nc"}
-    assert t.contact_mpi_input(_w("1")) == "results/tiny/surfaces/kl2_ks8_H0.5_s1.nc"
-    assert t.mpi_job_tasks(_w()) == 2
-    assert t.mpi_job_mem_mb(_w()) == contact_mpi_mem_mb(64, 2) == 600 + int(40 * 8 * 64**2 / 2**20)
-    assert t.mpi_job_runtime_min(_w()) == contact_mpi_runtime_min(64, 12, 2) == 10  # 4 x the 5-min floor, over 2
+    assert t.contact_group(_w()).kind == "ranks"
+    assert t.contact_input(_w("1")) == ["results/tiny/surfaces/kl2_ks8_H0.5_s1.nc"]
+    assert t.contact_tasks(_w()) == 2 and t.contact_bundle(_w()) is None  # an MPI job, in no SLURM bundle
+    assert t.contact_job_mem_mb(_w()) == contact_mpi_mem_mb(64, 2) == 600 + int(40 * 8 * 64**2 / 2**20)
+    assert t.contact_job_runtime_min(_w()) == contact_mpi_runtime_min(64, 12, 2) == 10  # 4 x the 5-min floor, / 2
     assert contact_mpi_runtime_min(8192, 30, 4) == int(np.ceil(4 * contact_runtime_min(8192, 30) / 4))
-    assert t.contact_job_mem_mb(_w()) == 300  # the copy's
-    assert t.contact_mpi_params(params.contact)(_w()) == params.contact(t.scenes["tiny"]["contact"])
+    assert t.contact_params(params.contact)(_w()) == params.contact(t.scenes["tiny"]["contact"])
     with pytest.raises(WorkflowError, match="seed=5"):
-        t.contact_mpi_input(_w("5"))
+        t.contact_input(_w("5"))
     single = _targets(SINGLE)
-    with pytest.raises(WorkflowError, match=r"no contact_mpi files; its cases are results/tiny/contact/"):
-        single.contact_mpi_input(_w())
-    assert "surface" in single.contact_input(_w())
+    assert single.contact_group(_w()).kind == "case" and single.contact_tasks(_w()) == 1
+    assert single.contact_bundle(_w()) == "solve"
+
+
+def test_a_case_written_as_plain_values_is_the_same_case():
+    case = ContactCase(LoadSchedule(6, "geometric", p_max=0.01, p_min=0.001, relative_to="rms_slope"),
+                       SolverSettings(tol=1e-9, length=(1.0, 2.0), length_unit="um", pressure_unit="MPa"),
+                       outputs={"fields": [], "clusters": False, "stiffness": True}, ranks=3)
+    doc = json.loads(json.dumps(case_document(case)))
+    assert case_from_document(doc) == case
+    with pytest.raises(ValueError, match=r"effects \(plasticity\)"):
+        case_document(replace(case, settings=SolverSettings(effects=(PlasticityCap(0.5),))))
 
 
 # ------------------------------------------------------------------------------ the launcher and the runner
@@ -198,27 +206,28 @@ def _surface_file(path: Path, n=64, seed=0) -> tuple[Path, np.ndarray]:
 def test_run_case_asks_for_the_file_and_the_runner_refuses_what_ranks_cannot_compute(tmp_path):
     path, h = _surface_file(tmp_path / "s.nc")
     case = ContactCase(LoadSchedule(4, p_max=0.005), ranks=2)
-    with pytest.raises(ValueError, match="run_case_on_ranks"):
+    with pytest.raises(ValueError, match="give the surface's file"):
         run_case(h, case, length=1.0, rms_slope=0.1)
+    with pytest.raises(ValueError, match="only a case over MPI ranks reads"):
+        run_case(path, replace(case, ranks=1), length=1.0, rms_slope=0.1)
     for changed, named in ((dict(outputs={"fields": [4], "clusters": False}), "outputs['fields']"),
                            (dict(settings=SolverSettings(boundary="free")), "boundary='free'"),
                            (dict(settings=SolverSettings(effects=(PlasticityCap(0.5),))), "effects (plasticity)"),
                            (dict(schedule=LoadSchedule(4, target_area=0.1)), "target_area")):
         bad = replace(case, **changed)
         with pytest.raises(ValueError, match=re.escape(named)):
-            run_case_on_ranks(path, bad, length=1.0, rms_slope=0.1, shape=h.shape)
+            run_case(path, bad, length=1.0, rms_slope=0.1, shape=h.shape)
 
 
 @needs_mpi
-def test_run_case_on_ranks_gives_run_cases_answers(tmp_path, caplog):
+def test_run_case_over_ranks_gives_run_cases_answers(tmp_path, caplog):
     path, h = _surface_file(tmp_path / "s.nc")
     case = ContactCase(LoadSchedule(6, p_max=0.005), SolverSettings(length_unit="um", pressure_unit="MPa"),
                        outputs={"fields": [], "clusters": False, "stiffness": True})
     log = logging.getLogger("test_pipeline_mpi")
     with caplog.at_level(logging.INFO, logger="test_pipeline_mpi"):
-        got = run_case_on_ranks(path, replace(case, ranks=2), length=(1.0, 1.0),
-                                rms_slope=0.1, shape=h.shape, log=log, name="s")
-    ref = run_case(h, case, length=(1.0, 1.0), rms_slope=0.1)
+        [got] = run_case(path, replace(case, ranks=2), length=(1.0, 1.0), rms_slope=0.1, log=log, name="s")
+    [ref] = run_case(h, case, length=(1.0, 1.0), rms_slope=0.1)
     assert got.attrs["mpi_ranks"] == 2 and bool(got.converged.all())
     assert np.max(np.abs(got.area_fraction.values - ref.area_fraction.values)) <= 2.0 / h.size
     np.testing.assert_allclose(got.mean_gap.values, ref.mean_gap.values, rtol=1e-6)
@@ -237,7 +246,7 @@ def test_the_mpi_solvers_refusal_comes_back_as_its_one_line(tmp_path):
     path, h = _surface_file(tmp_path / "s.nc", n=8)
     case = ContactCase(LoadSchedule(3, p_max=0.005), ranks=9)  # 9 ranks for 8 rows
     with pytest.raises(ValueError, match=r"^ranks: 9 MPI ranks for 8 rows|each rank needs at least one row"):
-        run_case_on_ranks(path, case, length=1.0, rms_slope=0.1, shape=h.shape)
+        run_case(path, case, length=1.0, rms_slope=0.1, shape=h.shape)
 
 
 @needs_mpi
@@ -252,20 +261,23 @@ def test_processes_the_launcher_started_but_mpi_did_not_join_are_refused(tmp_pat
     case = ContactCase(LoadSchedule(3, p_max=0.005), ranks=2)
     with pytest.raises(ValueError, match=r"ranks: 2 MPI ranks were asked for, but this process sees a world of 1.*"
                                          r"srun --mpi=pmi2"):
-        run_case_on_ranks(path, case, shape=h.shape, length=1.0, rms_slope=0.1, launcher=str(fake))
+        run_case(path, case, shape=h.shape, length=1.0, rms_slope=0.1, launcher=str(fake))
     fake.write_text("#!/bin/sh\nexit 0\n")  # a wrapper that runs nothing and says all is well
     with pytest.raises(RuntimeError, match="ended with status 0 but wrote no file"):
-        run_case_on_ranks(path, case, shape=h.shape, length=1.0, rms_slope=0.1, launcher=str(fake))
+        run_case(path, case, shape=h.shape, length=1.0, rms_slope=0.1, launcher=str(fake))
 
 
-# ------------------------------------------------------------------------------ the contact_mpi job's reads
+# ------------------------------------------------------------------------------ the reads of a contact job over ranks
 def _run_job(script: str, tmp_path: Path, block, surface_file: Path, out: Path | None = None) -> Path:
     """``workflow/scripts/<script>`` run in this process as Snakemake runs it (its ``snakemake`` object), for case
     kl2_ks8_H0.5_s0 of the validated contact block ``block``; its log file."""
     log = tmp_path / f"{script}.log"
-    job = SimpleNamespace(wildcards=_w(), input=[str(surface_file)], output=[str(out or surface_file)], log=[str(log)],
-                          params=SimpleNamespace(settings=params.contact(block), surface=params.surface(block)),
-                          resources=SimpleNamespace(mpi="mpiexec"))
+    case = {"k_l": "2", "k_s": "8", "H": "0.5", "seed": "0"}
+    job = SimpleNamespace(wildcards=SimpleNamespace(scene="tiny", group="kl2_ks8_H0.5_s0", **case),
+                          input=[str(surface_file)], output=[str(out or surface_file)], log=[str(log)],
+                          params=SimpleNamespace(settings=params.contact(block), surface=params.surface(block),
+                                                 cases=[case]),
+                          resources=SimpleNamespace(mpi="mpiexec"), threads=1)
     try:
         runpy.run_path(str(REPO / "workflow" / "scripts" / script), init_globals={"snakemake": job})
     finally:  # run_logged's handlers: closed, so that the next job logs to its own file only
@@ -276,11 +288,11 @@ def _run_job(script: str, tmp_path: Path, block, surface_file: Path, out: Path |
 
 
 class _Launched(Exception):
-    """Where the stand-in for run_case_on_ranks stops the job: what the job checked is all it read."""
+    """Where the stand-in for run_case stops the job: what the job checked is all it read."""
 
 
 def test_the_mpi_jobs_check_reads_the_header_and_a_sample_of_rows(tmp_path, monkeypatch):
-    """The contact_mpi job (its script, run here) reads SAMPLE_ROWS rows of a 1024² surface from the file, one read
+    """A contact job over ranks (its script, run here) reads SAMPLE_ROWS rows of a 1024² surface from the file, one read
     each, and nothing else of the heights (xarray's netCDF4 reads counted), its peak memory far below the field's
     8 MiB (tracemalloc), and passes on the grid, the cell and the rms slope the whole field gives."""
     block = _contact(**{"surface.N": 1024})
@@ -292,12 +304,12 @@ def test_the_mpi_jobs_check_reads_the_header_and_a_sample_of_rows(tmp_path, monk
         launched.update(kw, path=path, ranks=case.ranks)
         raise _Launched
 
-    monkeypatch.setattr(case_module, "run_case_on_ranks", stand_in)
+    monkeypatch.setattr(case_module, "run_case", stand_in)
     reads = heights_reads(monkeypatch)
     tracemalloc.start()
     try:
         with pytest.raises(_Launched):
-            _run_job("contact_mpi.py", tmp_path, block, surface, out=tmp_path / "contact.nc")
+            _run_job("contact.py", tmp_path, block, surface, out=tmp_path / "contact.nc")
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
@@ -337,28 +349,29 @@ def test_a_nan_outside_the_checked_rows_ends_every_rank_naming_the_file(tmp_path
     assert "Traceback" not in res.stderr and "step 1:" not in res.stderr and not out.exists()
     out = tmp_path / "contact.nc"
     with pytest.raises(SystemExit) as end:
-        _run_job("contact_mpi.py", tmp_path, block, surface, out=out)
+        _run_job("contact.py", tmp_path, block, surface, out=out)
     assert end.value.code == 1 and not out.exists()
-    errors = [line for line in (tmp_path / "contact_mpi.py.log").read_text().splitlines() if " ERROR " in line]
+    errors = [line for line in (tmp_path / "contact.py.log").read_text().splitlines() if " ERROR " in line]
     assert len(errors) == 1 and errors[0].endswith(f"ERROR {message}"), errors
 
 
 # ------------------------------------------------------------------------------ the workflow
 def test_the_slurm_profile_makes_it_an_mpi_job(tmp_path):
-    """Under profiles/slurm the contact_mpi job carries ``mpi=srun`` and ``tasks=2`` (the executor's MPI job: one
-    allocation of 2 tasks, srun inside it), 1 thread per task; locally ``mpi=mpiexec`` and 2 threads."""
+    """Under profiles/slurm a contact job over ranks carries ``mpi=srun`` and ``tasks=2`` (the executor's MPI job: one
+    allocation of 2 tasks, srun inside it), 1 thread per task, and joins no group; locally ``mpi=mpiexec`` and 2
+    threads."""
     if importlib.util.find_spec("snakemake_executor_plugin_slurm") is None:
         pytest.skip("snakemake-executor-plugin-slurm not installed (pip install -e '.[slurm]')")
     if importlib.util.find_spec("mpi4py") is None:
         pytest.skip("mpi4py not installed (pip install 'roughcontact[mpi]'): the scene is refused before planning")
     wd = copy_workflow(tmp_path / "wf", SPLIT)
-    target = "results/tiny/contact_mpi/kl2_ks8_H0.5_s0.nc"
+    target = CONTACT.format(H="0.5", seed=0)
     res = run_snakemake(wd, "-n", "--workflow-profile", "profiles/slurm", target)
     assert res.returncode == 0, res.stderr[-3000:]
-    job = res.stdout.split("rule contact_mpi:")[1].split("\n\n")[0]
-    assert "mpi=srun" in job and "tasks=2" in job and "threads:" not in job, job
+    job = res.stdout.split("rule contact:")[1].split("\n\n")[0]
+    assert "mpi=srun" in job and "tasks=2" in job and "threads:" not in job and "group" not in job, job
     res = run_snakemake(wd, "-n", target)
-    job = res.stdout.split("rule contact_mpi:")[1].split("\n\n")[0]
+    job = res.stdout.split("rule contact:")[1].split("\n\n")[0]
     assert "mpi=mpiexec" in job and "tasks=2" in job and "threads: 2" in job, job
 
 
@@ -372,9 +385,8 @@ def test_ranks_2_equals_the_run_in_one_process(tmp_path):
     single = [t.replace("results/tiny/", "results/single/") for t in TARGETS]
     res = run_snakemake(wd, "-j2", *TARGETS, *single)
     assert res.returncode == 0, res.stdout[-3000:] + res.stderr[-3000:]
-    assert sorted(p.name for p in (wd / "results/tiny/contact_mpi").iterdir()) == sorted(
-        Path(t).name for t in TARGETS)
-    assert not (wd / "results/single/contact_mpi").exists()
+    assert sorted(p.name for p in (wd / "results/tiny/contact").iterdir()) == sorted(Path(t).name for t in TARGETS)
+    assert [p.name for p in (wd / "results/tiny").iterdir() if p.name.startswith("contact")] == ["contact"]
     for target, other in zip(TARGETS, single, strict=True):
         with xr.open_dataset(wd / target) as a, xr.open_dataset(wd / other) as b:
             a, b = a.load(), b.load()
@@ -388,9 +400,9 @@ def test_ranks_2_equals_the_run_in_one_process(tmp_path):
         assert np.all(np.abs(a.iterations.values - b.iterations.values) <= 2) and a.converged.values.all(), target
     # the MPI solves again: byte-identical
     first = {t: (wd / t).read_bytes() for t in TARGETS}
-    solved = sorted((wd / "results/tiny/contact_mpi").iterdir())
+    solved = [wd / t for t in TARGETS]
     stamps = [p.stat().st_mtime_ns for p in solved]
-    res = run_snakemake(wd, "-j2", "-R", "contact_mpi", *TARGETS)
+    res = run_snakemake(wd, "-j2", "-R", "contact", *TARGETS)
     assert res.returncode == 0, res.stderr[-3000:]
     assert all(p.stat().st_mtime_ns != t for p, t in zip(solved, stamps, strict=True))  # solved again
     assert {t: (wd / t).read_bytes() for t in TARGETS} == first

@@ -40,7 +40,7 @@ def test_the_1d_solver_is_the_y_invariant_map():
     """run_case's solve of a profile equals the same profile as an (n, 4) map invariant along y: A/A0 and the
     interval ends per length to the last bit here (one iteration path), the mean gap to 1e-9 relative."""
     h = generate_profile(1024, 4, 64, 0.8, 0, rms_slope=0.1)
-    one = run_case(h, ContactCase(LoadSchedule(8, p_max=1e-2)), length=1.0, rms_slope=0.1)
+    [one] = run_case(h, ContactCase(LoadSchedule(8, p_max=1e-2)), length=1.0, rms_slope=0.1)
     two = profile_solve(h, one.pressure.values)
     assert one.attrs["surface_dimension"] == 1 and bool(one.converged.all())
     np.testing.assert_allclose(one.area_fraction, two.area_fraction, rtol=1e-12)
@@ -98,7 +98,7 @@ def test_run_case_on_a_profile_loads_relative_to_its_slope():
     schedule = LoadSchedule(10, p_max=0.05, relative_to="rms_slope")
     contact = ContactCase(schedule, SolverSettings(e_star=2.0),
                           outputs={"fields": [10], "clusters": False, "stiffness": True, "full_contact_load": True})
-    result = run_case(h, contact, length=1.0, rms_slope=slope)
+    [result] = run_case(h, contact, length=1.0, rms_slope=slope)
     assert result.attrs["load_pbar_max"] == pytest.approx(0.05) and bool(result.converged.all())
     assert result.attrs["load_p0_max"] == pytest.approx(0.05 * 2.0 * slope)
     assert float(result.full_contact_pressure) == pytest.approx(full_contact_load_profile(h, 2.0, 1.0))
@@ -117,7 +117,7 @@ def _cases():
         for hurst in ("0.36", "0.84"):
             for seed in range(2):
                 h = generate_profile(1024, float(kl), 64, float(hurst), seed, rms_slope=0.1)
-                result = run_case(h, contact, length=1.0, rms_slope=0.1)
+                [result] = run_case(h, contact, length=1.0, rms_slope=0.1)
                 out.append(contact_dataset(result, rms_slope=0.1, alpha=5.0, e_star=1.0, k_l=kl, k_s="64",
                                            hurst=hurst, seed=seed))
     return out

@@ -201,7 +201,7 @@ def test_each_rank_reads_its_rows_and_nothing_else(tmp_path, monkeypatch):
     import tracemalloc
     from types import SimpleNamespace
 
-    from roughcontact.solver.mpi.__main__ import read_rows
+    from roughcontact.solver.mpi.program import read_rows
 
     n = 1024
     h = np.random.default_rng(0).standard_normal((n, n))
@@ -228,7 +228,7 @@ def test_each_rank_reads_its_rows_and_nothing_else(tmp_path, monkeypatch):
 def test_a_nan_in_a_ranks_rows_is_named_with_its_file_and_rows(tmp_path):
     from types import SimpleNamespace
 
-    from roughcontact.solver.mpi.__main__ import read_rows
+    from roughcontact.solver.mpi.program import read_rows
 
     h = generate_surface(16, 1, 4, 0.8, 0, rms_slope=0.1)
     h[9, 3] = np.inf

@@ -149,6 +149,7 @@ def test_unknown_and_invalid_scenes(targets):
 def test_files_of_every_case_and_batch(targets):
     files = targets.case_files("demo", "contact", "contact")
     assert len(files) == 12 and all(f.startswith("results/demo/contact/kl") for f in files)
+    assert targets.contact_files("demo") == files  # unbatched: one contact job, one file, a case
     assert len(targets.batch_files("demo", "representativity", "representativity")) == 3
     assert targets.case_list("contact")(wildcards())[0] == ["4", "32", "0.36", 0]
     assert targets.study_params("contact", len)(wildcards()) == len(targets.scenes["demo"]["contact"])

@@ -54,7 +54,7 @@ def test_dry_run_every_shipped_scene(repo, scene):
         assert jobs["contact"] == 16 and jobs["surface"] == 16 and jobs["representativity"] == 2
     if scene == "array":
         # two .npy patches: their own surface rule, no generated surfaces
-        assert jobs["contact_topography"] == 2 and "surface" not in jobs and "contact" not in jobs
+        assert jobs["contact"] == 2 and "surface" not in jobs and "contact_topography" not in jobs
     # the dry run says what the scene computes before anything runs
     solves = {"demo": "12 contact cases x 30 load steps = 360 solves at N=256",
               "paper": "1200 contact cases x 30 load steps = 36000 solves at N=1024",

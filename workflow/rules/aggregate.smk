@@ -28,7 +28,7 @@ rule aggregate_representativity:
 
 rule aggregate_contact:
     input:
-        lambda w: case_files(w.scene, "contact", "contact"),
+        lambda w: contact_files(w.scene),
     output:
         "results/{scene}/aggregate/contact.nc",
     log:
@@ -39,6 +39,8 @@ rule aggregate_contact:
         "../../envs/roughcontact.yaml"
     params:
         cases=case_list("contact"),
+        # each case's file and its group there (a batch's file holds one group a case)
+        members=lambda w: contact_members_of(w.scene),
     script:
         "../scripts/aggregate_contact.py"
 

@@ -17,8 +17,8 @@ from roughcontact.pipeline.targets import (
     batch_path,
     batch_runtime_min,
     case_path,
-    contact_batch_path,
     contact_mem_mb,
+    contact_path,
     contact_runtime_min,
     map_side,
     surface_mem_mb,
@@ -83,18 +83,15 @@ patch_names = TARGETS.patch_names
 study_block = TARGETS.study_block
 case_input = TARGETS.case_input
 contact_input = TARGETS.contact_input
-contact_batch_input = TARGETS.contact_batch_input
-contact_batch_params = TARGETS.contact_batch_params
-contact_batch_seeds = TARGETS.contact_batch_seeds
+contact_params = TARGETS.contact_params
+contact_surface_params = TARGETS.contact_surface_params
+contact_cases = TARGETS.contact_cases
+contact_tasks = TARGETS.contact_tasks
+contact_bundle = TARGETS.contact_bundle
 contact_job_mem_mb = TARGETS.contact_job_mem_mb
 contact_job_runtime_min = TARGETS.contact_job_runtime_min
-batch_job_mem_mb = TARGETS.batch_job_mem_mb
-batch_job_runtime_min = TARGETS.batch_job_runtime_min
-contact_mpi_input = TARGETS.contact_mpi_input
-contact_mpi_params = TARGETS.contact_mpi_params
-mpi_job_tasks = TARGETS.mpi_job_tasks
-mpi_job_mem_mb = TARGETS.mpi_job_mem_mb
-mpi_job_runtime_min = TARGETS.mpi_job_runtime_min
+contact_files = TARGETS.contact_files
+contact_members_of = TARGETS.contact_members_of
 case_params = TARGETS.case_params
 case_files = TARGETS.case_files
 case_list = TARGETS.case_list

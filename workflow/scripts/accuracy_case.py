@@ -16,7 +16,7 @@ def main(log):
     # the paper's uniform steps to p_max E* (E* = 1)
     case = ContactCase(LoadSchedule(int(s["n_steps"]), p_max=block["p_max"]),
                        SolverSettings(tol=float(s["tol"]), threads=snakemake.threads))
-    result = run_case(h, case, length=length, rms_slope=stats["rms_slope"])
+    [result] = run_case(h, case, length=length, rms_slope=stats["rms_slope"])
     ds = contact_dataset(result, rms_slope=stats["rms_slope"], alpha=stats["alpha"], e_star=1.0,
                          k_l=w.k_l, k_s=w.k_s, hurst=w.H, seed=int(w.seed))
     ds.attrs.update(setting=w.variant, n=n, length=length)

@@ -9,11 +9,13 @@ REQUIRED = ["pressure", "area_fraction", "mean_contact_pressure", "kappa", "conv
 
 
 def main(log):
-    paths = list(snakemake.input)
+    members = snakemake.params.members  # [file, group] a case, in the order of the cases
+    paths = [path if group is None else f"{path} (group {group})" for path, group in members]
     # an adhesive case's unloading branch has as many steps as that case needed: it stays in the case's
     # file (the hysteresis figure reads it there); its pull-off and status are per-case scalars
-    datasets = [read_dataset(p, stage="contact", variables=REQUIRED).drop_dims(UNLOADING_DIMS, errors="ignore")
-                for p in paths]
+    datasets = [read_dataset(path, stage="contact", variables=REQUIRED, group=group).drop_dims(UNLOADING_DIMS,
+                                                                                             errors="ignore")
+                for path, group in members]
     # the surface source whose case dimensions the files have stacks them (with its statistics)
     source = for_dims(datasets[0].dims)
     ds = source.aggregate(datasets, paths, snakemake.params.cases)

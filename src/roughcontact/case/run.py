@@ -12,7 +12,7 @@ Examples
 >>> from roughcontact.surfaces.synthetic import generate_surface
 >>> h = generate_surface(64, 2, 16, 0.8, seed=0, rms_slope=0.1)
 >>> case = ContactCase(LoadSchedule(5, p_max=0.005), SolverSettings(tol=1e-9))
->>> ds = run_case(h, case, length=1.0, rms_slope=0.1)
+>>> [ds] = run_case(h, case, length=1.0, rms_slope=0.1)
 >>> ds.sizes["step"], ds.attrs["load_p0_max"]
 (5, 0.005)
 
@@ -23,12 +23,13 @@ A batch (heights of shape ``(B, nx, ny)``, one load schedule for all) gives one 
 [3, 3, 3]
 
 A case split over MPI ranks (``ContactCase(..., ranks=R)``) runs from its surface's file, every rank reading
-its own rows: :func:`run_case_on_ranks`.
+its own rows: ``run_case(path, case, ...)``, one dataset as well.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import os
 import re
@@ -80,8 +81,8 @@ class ContactCase:
     warm_start : {"extrapolated", "scaled"}
         How a step after the first starts (:func:`roughcontact.solver.solve_contact`).
     ranks : int
-        MPI ranks the case is split over: 1 solves it in this process (:func:`run_case`), more in ``ranks``
-        processes of :mod:`roughcontact.solver.mpi` (:func:`run_case_on_ranks`).
+        MPI ranks the case is split over: 1 solves it in this process, more in ``ranks`` processes that
+        :func:`run_case` starts from the surface's file (:mod:`roughcontact.case.__main__`).
     """
 
     schedule: LoadSchedule
@@ -95,20 +96,25 @@ class ContactCase:
         return dataclasses.replace(self.settings, length=length)
 
 
-def run_case(heights: np.ndarray, case: ContactCase, *, length, rms_slope, log=None, name=None,
-             observers: Sequence = ()) -> xr.Dataset | list[xr.Dataset]:
-    """Solve one surface (or a batch of them) as ``case`` asks: loads resolved, every step solved, outputs added.
+def run_case(surfaces, case: ContactCase, *, length, rms_slope, log=None, name=None, observers: Sequence = (),
+             launcher: str = "mpiexec", shape=None) -> list[xr.Dataset]:
+    """Solve a group of cases as ``case`` asks: loads resolved, every step solved, outputs added; one dataset a case.
+
+    A group is what one solve computes together: one surface, ``B`` surfaces of one grid solved as a batch
+    (:func:`roughcontact.solver.solve_contact_batch`), or one surface split over ``case.ranks`` MPI processes.
 
     Parameters
     ----------
-    heights : numpy.ndarray, shape (nx, ny) or (B, nx, ny)
-        The surface [length], or ``B`` surfaces of one grid solved together
-        (:func:`roughcontact.solver.solve_contact_batch`).
+    surfaces : numpy.ndarray, shape (nx, ny), (n,) or (B, nx, ny); or a path
+        The surface [length] (a map, or a profile of ``n`` points), or ``B`` surfaces of one grid. With
+        ``case.ranks`` > 1, the path of a NetCDF file with ``heights`` over ``(x, y)`` (other dimensions of
+        length 1: a surface job's file), of which every rank reads its own rows.
     case : ContactCase
-        What to compute. A batch runs one load schedule for all its cases: their resolved loads must be
-        equal (loads relative to E*), and it computes neither stored fields, clusters, P(p), effects nor
-        a ``target_area`` search (each refused with a ``ValueError``; a scene's ``contact.solver.batch`` is
-        refused with them before any job, :func:`roughcontact.pipeline.config.checks.check_batch`).
+        What to compute. A batch runs one load schedule (the resolved loads must be equal: loads relative to
+        E*) and, as a case over ranks, computes the per-step columns only (stiffness and, for a batch, the
+        full-contact load allowed): stored fields, clusters, P(p), effects, ``target_area`` or another warm start
+        are each refused with a ``ValueError`` (a scene's before any job:
+        :mod:`roughcontact.pipeline.config.checks`); over ranks also the free boundary and CuPy.
     length : float or (float, float)
         The cell's side ``L`` or sides ``(Lx, Ly)`` [length].
     rms_slope : float, or sequence of B floats for a batch
@@ -118,24 +124,40 @@ def run_case(heights: np.ndarray, case: ContactCase, *, length, rms_slope, log=N
     name : str, or sequence of B str for a batch, optional
         The case's name, at the start of its warnings (jobs' lines meet in one console).
     observers : sequence
-        More observers of each step (:class:`roughcontact.solver.solve.StepView`), besides those
-        ``case.outputs`` asks for (none for a batch).
+        More observers of each step (:class:`roughcontact.solver.solve.StepView`) of one surface in this process.
+    launcher : str
+        Over ranks, the command that starts MPI processes (:func:`mpi_command`): ``mpiexec``, or ``srun`` on SLURM.
+    shape : (int, int), optional
+        Over ranks, the file's grid ``(nx, ny)``; read from its header when not given.
 
     Returns
     -------
-    xarray.Dataset or list of xarray.Dataset
-        :func:`roughcontact.solver.solve_contact`'s dataset, with ``contact_stiffness`` and
-        ``full_contact_pressure`` where asked, and the load's attributes (``load_*``,
-        :meth:`~.loading.LoadSchedule.resolve`). A batch gives one such dataset per case, in order: the
-        batched solve's case ``b`` (its per-case variables over ``step``), with ``wall_time`` and
-        ``rounds`` of the whole batch and the attributes ``batch_size`` and ``check_every``.
+    list of xarray.Dataset
+        One per case of the group, in order: :func:`roughcontact.solver.solve_contact`'s dataset, with
+        ``contact_stiffness`` and ``full_contact_pressure`` where asked and the load's attributes (``load_*``,
+        :meth:`~.loading.LoadSchedule.resolve`). A batch's cases add ``rounds`` and ``wall_time`` of the whole batch,
+        ``batch_size`` and ``check_every``; a case over ranks ``mpi_ranks`` and ``fft_library``. Over ranks, a
+        launcher not found or the ranks' refusal is a ``ValueError`` (their one line), any other end of theirs a
+        ``RuntimeError`` with their last lines.
     """
     if case.ranks != 1:
-        raise ValueError(f"run_case: a case over {case.ranks} MPI ranks reads its surface from a file on every rank; "
-                         "run it with run_case_on_ranks (the surface's file), or give ContactCase ranks=1")
-    if np.ndim(heights) == 3:
-        return _run_batch(np.asarray(heights), case, length=length, rms_slope=rms_slope, log=log, names=name,
+        if isinstance(surfaces, (str, os.PathLike)):
+            return [_run_on_ranks(surfaces, case, shape=shape, length=length, rms_slope=rms_slope,
+                                  launcher=launcher, log=log, name=name)]
+        raise ValueError(f"run_case: a case over {case.ranks} MPI ranks reads its surface from a file on every "
+                         "rank: give the surface's file (NetCDF with 'heights' over (x, y)) as surfaces, or give "
+                         "ContactCase ranks=1 to solve the array in this process")
+    if isinstance(surfaces, (str, os.PathLike)):
+        raise ValueError(f"run_case: surfaces={os.fspath(surfaces)!r} is a path, which only a case over MPI ranks "
+                         "reads (ContactCase ranks > 1); give the heights as an array to solve them in this process")
+    if np.ndim(surfaces) == 3:
+        return _run_batch(np.asarray(surfaces), case, length=length, rms_slope=rms_slope, log=log, names=name,
                           observers=observers)
+    return [_run_one(surfaces, case, length=length, rms_slope=rms_slope, log=log, name=name, observers=observers)]
+
+
+def _run_one(heights, case: ContactCase, *, length, rms_slope, log, name, observers: Sequence) -> xr.Dataset:
+    """:func:`run_case` of one surface in this process."""
     settings = case.solver_settings(length)
 
     def area_at(p0: float) -> float:  # a target_area probe: the surface at one load
@@ -187,80 +209,77 @@ def mpi_command(launcher: str, ranks: int) -> list[str]:
     return [found, *words[1:], "-n", str(int(ranks))]
 
 
-#: A step line of ``python -m roughcontact.solver.mpi`` (its ``_log_step``), re-logged as :func:`run_case`'s.
+#: A step line of the ranks' program (:mod:`roughcontact.case.__main__`), re-logged as :func:`run_case`'s.
 _MPI_STEP = re.compile(r"^step (\d+): p0=(\S+) A/A0=(\S+) iterations=(\d+) converged=(True|False) (\S+) s$")
 
 
-def run_case_on_ranks(surface_file, case: ContactCase, *, shape, length, rms_slope: float,
-                      launcher: str = "mpiexec", log=None, name=None) -> xr.Dataset:
-    """Solve one surface over ``case.ranks`` MPI processes: :func:`run_case`'s dataset, computed by
-    ``launcher -n ranks python -m roughcontact.solver.mpi`` (:mod:`roughcontact.solver.mpi`).
+def case_document(case: ContactCase) -> dict:
+    """``case`` as plain values (JSON): its schedule, its settings, its outputs, its warm start and ranks.
 
-    Every rank reads its own rows of ``surface_file`` (the grid is split in slabs along x), so no
-    process but rank 0's writer ever holds a whole field; rank 0 writes the per-step columns to a
-    temporary file, read back here. The load schedule is resolved here as :func:`run_case` does and
-    passed exactly (``repr`` of each p0).
+    :func:`case_from_document` makes the same case again. Effects are objects of their own and are not
+    written: a case with effects is a ``ValueError`` here (a case over ranks, the one written, refuses them).
+    """
+    if case.settings.effects:
+        raise ValueError(f"case_document: a case with effects ({', '.join(e.name for e in case.settings.effects)}) "
+                         "is not written as plain values")
+    settings = {f.name: getattr(case.settings, f.name) for f in dataclasses.fields(case.settings)
+                if f.name != "effects"}
+    if isinstance(settings["length"], tuple):
+        settings["length"] = list(settings["length"])
+    return {"schedule": dataclasses.asdict(case.schedule), "settings": settings,
+            "options": {"outputs": dict(case.outputs), "warm_start": case.warm_start, "ranks": case.ranks}}
 
-    Parameters
-    ----------
-    surface_file : path
-        A NetCDF file with ``heights`` over ``(x, y)`` (other dimensions of length 1): a surface job's file.
-    case : ContactCase
-        With ``ranks`` >= 1; the periodic elastic solve with per-step outputs only (stiffness allowed):
-        stored fields, clusters, P(p), the full-contact load, effects, the free boundary, CuPy, another
-        method and ``target_area`` are refused with a ``ValueError`` (a scene's are refused before any
-        job: :func:`roughcontact.pipeline.config.checks.check_ranks`).
-    shape : (int, int)
-        The file's grid ``(nx, ny)``.
-    length : float or (float, float)
-        The cell's side ``L`` or sides ``(Lx, Ly)`` [length].
-    rms_slope : float
-        The surface's rms slope h' (loads relative to it, κ).
-    launcher : str
-        The command that starts MPI processes (:func:`mpi_command`): ``mpiexec`` locally, ``srun`` in a SLURM job.
-    log : logging.Logger, optional
-        Each step's line (as :func:`run_case`'s), the ranks' peak memory, the warnings.
-    name : str, optional
-        The case's name in warnings.
 
-    Returns
-    -------
-    xarray.Dataset
-        :func:`roughcontact.solver.solve_contact`'s layout (attributes ``mpi_ranks``, ``fft_library``),
-        with ``contact_stiffness`` where asked and the load's attributes.
+def case_from_document(doc: Mapping) -> ContactCase:
+    """The :class:`ContactCase` that :func:`case_document` wrote as ``doc``."""
+    settings = dict(doc["settings"])
+    if isinstance(settings["length"], list):
+        settings["length"] = tuple(settings["length"])
+    return ContactCase(LoadSchedule(**doc["schedule"]), SolverSettings(**settings), **doc["options"])
 
-    Raises
-    ------
-    ValueError
-        A refused setting, a launcher not found, or the MPI solver's own refusal (its one-line message).
-    RuntimeError
-        The MPI processes ended otherwise (the last lines of their output).
+
+def _run_on_ranks(surface_file, case: ContactCase, *, shape, length, rms_slope: float, launcher: str, log,
+                  name) -> xr.Dataset:
+    """:func:`run_case` of one surface file over ``case.ranks`` MPI processes.
+
+    The loads are resolved here, as for a surface solved in this process; the case and its loads are
+    written as plain values (:func:`case_document`, JSON: every float exact) for the ranks' program
+    ``launcher -n ranks python -m roughcontact.case JOB`` (:mod:`roughcontact.case.__main__`). Every rank
+    reads its own rows of ``surface_file`` (the grid is split in slabs along x), so no process but rank 0's
+    writer ever holds a whole field; rank 0 writes the per-step columns to a temporary file, read back here.
     """
     refused = _refused_over_ranks(case)
     if refused:
-        raise ValueError(f"run_case_on_ranks: a case over MPI ranks computes the periodic elastic solve's per-step "
-                         f"columns only, not {', '.join(refused)}; run it with run_case (ranks=1) for those")
+        raise ValueError(f"run_case: a case over MPI ranks computes the periodic elastic solve's per-step "
+                         f"columns only, not {', '.join(refused)}; run it with ranks=1 (the heights as an array) "
+                         "for those")
+    if shape is None:
+        shape = _file_grid(surface_file)
     cell = Cell.of(shape, length)
     loads, load_info = case.schedule.resolve(case.settings.e_star, rms_slope, cell.shape[0] * cell.shape[1], None,
                                              log, name, cap=case.settings.hardness)
     with tempfile.TemporaryDirectory(prefix="roughcontact-mpi-") as tmp:
-        out = Path(tmp) / "contact.nc"
-        cmd = [*mpi_command(launcher, case.ranks), *_mpi_solver_args(surface_file, case, loads, cell, out)]
+        out, job = Path(tmp) / "contact.nc", Path(tmp) / "case.json"
+        job.write_text(json.dumps({"case": case_document(case), "surface_file": os.path.abspath(surface_file),
+                                   "shape": [int(n) for n in cell.shape], "length": list(cell.sides),
+                                   "loads": [float(p) for p in loads], "out": os.fspath(out)}))
+        cmd = [*mpi_command(launcher, case.ranks), sys.executable, "-m", "roughcontact.case", os.fspath(job)]
         if log is not None:
-            log.info("%s over %d MPI ranks: %s", name or "case", case.ranks, " ".join(cmd[:cmd.index("--loads")]))
+            log.info("%s over %d MPI ranks: %s", name or "case", case.ranks, " ".join(cmd[:-1]))
         result = _run_ranks(cmd, out, step_logger(log, len(loads)), log)
     return _finished(result, None, case, length, load_info, log, name or "case")
 
 
-def _mpi_solver_args(surface_file, case: ContactCase, loads, cell: Cell, out: Path) -> list[str]:
-    """``python -m roughcontact.solver.mpi`` with ``case``'s settings and ``loads`` (exact: ``repr``) writing
-    ``out``."""
-    sides = ["--length", repr(cell.sides[0])] + ([] if cell.square else ["--length-y", repr(cell.sides[1])])
-    s = case.settings
-    return [sys.executable, "-m", "roughcontact.solver.mpi", "--surface", os.fspath(surface_file),
-            "--expect-ranks", str(int(case.ranks)), "--loads", *(repr(float(p)) for p in loads), *sides,
-            "--e-star", repr(float(s.e_star)), "--tol", repr(float(s.tol)), "--max-iter", str(int(s.max_iter)),
-            "--length-unit", s.length_unit, "--pressure-unit", s.pressure_unit, "--out", os.fspath(out)]
+def _file_grid(path) -> tuple[int, int]:
+    """The ``(nx, ny)`` of a surface file's ``heights`` from its header (nothing else read)."""
+    try:
+        with xr.open_dataset(path) as ds:
+            if "heights" not in ds.variables:
+                raise ValueError(f"{path}: holds no variable 'heights'")
+            sizes = ds["heights"].sizes
+            return int(sizes.get("x", 0)), int(sizes.get("y", 0))
+    except OSError as exc:
+        raise ValueError(f"{path}: cannot be read as NetCDF ({exc})") from None
 
 
 def _run_ranks(cmd: list[str], out: Path, progress, log) -> xr.Dataset:

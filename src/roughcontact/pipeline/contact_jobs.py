@@ -1,34 +1,51 @@
-"""What the contact rules ask of a scene: each case's input, the batches of ``contact.solver.batch``, resources.
+"""What the one ``contact`` rule asks of a scene: each job's group of cases, its input, params and resources.
 
-With ``contact.solver.batch: B`` (> 1) the seeds of each ``(k_l, k_s, H)`` are solved ``B`` at a time
-(:func:`roughcontact.pipeline.cases.contact_batches`) by the ``contact_batch`` rule, whose file
-(:func:`contact_batch_path`) holds one group per case, and each case's ``contact`` job copies its group
-out (:meth:`ContactJobs.contact_input` names the batch file as its input). With ``contact.solver.ranks: R``
-(> 1) each case is solved over ``R`` MPI processes by the ``contact_mpi`` rule (an MPI job: Snakemake's
-``mpi`` and ``tasks`` resources), whose file ``results/{scene}/contact_mpi/<case>.nc`` the case's ``contact``
-job copies, as it copies a batch's group: the MPI job stays out of the SLURM profile's group of contact jobs.
-:class:`ContactJobs` holds the functions the rules call with a job's wildcards;
+A contact job solves a *group* and writes its file ``results/{scene}/contact/{group}.nc`` (:func:`contact_path`)
+once:
+
+* one case (``kl{k_l}_ks{k_s}_H{H}_s{seed}``: :data:`~.cases.CASE_STEM`), solved in one process, or over
+  ``contact.solver.ranks: R`` (> 1) MPI processes: an MPI job (Snakemake's ``mpi`` and ``tasks`` resources), the
+  ranks started by :func:`roughcontact.case.run_case`;
+* with ``contact.solver.batch: B`` (> 1), the seeds ``b B .. (b + 1) B - 1`` of one ``(k_l, k_s, H)``
+  (``kl{k_l}_ks{k_s}_H{H}_b{b}``: :data:`~.cases.CONTACT_BATCH_STEM`, :func:`~.cases.contact_batches`), solved
+  together; the file holds one NetCDF group per case (:func:`roughcontact.pipeline.io.write_groups`), which the
+  aggregate reads (:meth:`ContactJobs.contact_members_of`);
+* a named case of a patch source (a measured or array file): ``{topography}``.
+
+:class:`ContactJobs` holds the functions the rule calls with a job's wildcards;
 :class:`roughcontact.pipeline.targets.Targets` is one.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping
+from dataclasses import dataclass
+from types import SimpleNamespace
 
 from snakemake.exceptions import WorkflowError
 
-from .cases import CASE_STEM, CONTACT_BATCH_STEM, ContactBatch, batch_index, batch_seeds, batch_size
+from .cases import (
+    CASE_STEM,
+    CONTACT_BATCH_STEM,
+    Case,
+    ContactBatch,
+    batch_index,
+    batch_seeds,
+    batch_size,
+    contact_batches,
+)
 
-__all__ = ["COPY_MEM_MB", "COPY_RUNTIME_MIN", "ContactJobs", "contact_batch_mem_mb", "contact_batch_path",
+__all__ = ["BUNDLE", "NAMED_RUNTIME_MIN", "ContactGroup", "ContactJobs", "contact_batch_mem_mb",
            "contact_batch_runtime_min", "contact_mem_mb", "contact_mpi_mem_mb", "contact_mpi_runtime_min",
-           "contact_runtime_min", "map_side", "ranks_of"]
+           "contact_path", "contact_runtime_min", "map_side", "ranks_of"]
 
 
-def contact_batch_path(folder: str, ext: str = "nc") -> str:
-    """Pattern of one contact batch's file (``contact.solver.batch`` > 1): ``results/{scene}/<folder>/``
-    ``kl{k_l}_ks{k_s}_H{H}_b{batch}.<ext>`` (:class:`~.cases.ContactBatch`)."""
-    return f"results/{{scene}}/{folder}/{CONTACT_BATCH_STEM}.{ext}"
+def contact_path(folder: str, ext: str = "nc") -> str:
+    """Pattern of one contact job's file: ``results/{scene}/<folder>/{group}.<ext>``, the group's stem (one case, a
+    batch of seeds, or a named case: the module's docstring)."""
+    return f"results/{{scene}}/{folder}/{{group}}.{ext}"
 
 
 def map_side(surface: Mapping) -> float:
@@ -80,124 +97,179 @@ def contact_mpi_runtime_min(n: int, n_steps: int, ranks: int) -> int:
     return max(5, math.ceil(4 * contact_runtime_min(n, n_steps) / ranks))
 
 
-#: Peak memory [MB] and wall time [min] of a batched case's own job: it copies its case out of its batch's file.
-COPY_MEM_MB, COPY_RUNTIME_MIN = 300, 5
+#: The SLURM profile's bundle of small jobs that contact jobs join (``group-components`` there); a job over MPI
+#: ranks joins none (its allocation is its ranks').
+BUNDLE = "solve"
+
+#: Wall-time request of a named case's contact job [min].
+NAMED_RUNTIME_MIN = 60
+
+#: A group's stem, parsed: one generated case, or one batch of seeds of a ``(k_l, k_s, H)``.
+_CASE = re.compile(r"kl(?P<k_l>[^_/]+)_ks(?P<k_s>[^_/]+)_H(?P<H>[^_/]+)_s(?P<seed>\d+)")
+_BATCH = re.compile(r"kl(?P<k_l>[^_/]+)_ks(?P<k_s>[^_/]+)_H(?P<H>[^_/]+)_b(?P<batch>\d+)")
 
 
-def _case_of(w) -> dict:
-    """A generated case's wildcards (``k_l``, ``k_s``, ``H``, ``seed``) as :data:`CASE_STEM`'s fields."""
-    return {"k_l": w.k_l, "k_s": w.k_s, "H": w.H, "seed": w.seed}
+@dataclass(frozen=True)
+class ContactGroup:
+    """What one contact job solves: its kind, its file's stem, its cases and its scene's contact block.
+
+    Attributes
+    ----------
+    kind : {"case", "ranks", "batch", "named"}
+        One generated case in one process, one over MPI ranks, a batch of seeds, or a patch source's named case.
+    stem : str
+        The file's stem (the ``group`` wildcard).
+    members : tuple
+        The group's cases in the order of the solve: :class:`~.cases.Case` (generated), or the named case's name.
+    block : Mapping
+        The scene's validated ``contact`` block.
+    ranks : int
+        MPI processes of the job (1 but for ``"ranks"``).
+    """
+
+    kind: str
+    stem: str
+    members: tuple
+    block: Mapping
+    ranks: int = 1
+
+    @property
+    def stems(self) -> list[str]:
+        """The file stems of its cases (their surfaces' files under ``results/{scene}/surfaces/``)."""
+        return [m.stem if isinstance(m, Case) else m for m in self.members]
 
 
 class ContactJobs:
-    """The contact rules' functions of a job's wildcards (a mixin of :class:`~.targets.Targets`).
+    """The ``contact`` rule's functions of a job's wildcards (a mixin of :class:`~.targets.Targets`).
 
-    The class it is mixed into supplies ``scenes`` (the validated scenes), ``check_grid_values(w, study)``
-    and ``check_case(w, study)`` (a requested file's wildcards checked against its scene's grid, with the
-    allowed values named).
+    The class it is mixed into supplies ``scenes`` (the validated scenes), ``scene_source``, ``study_block``,
+    ``check_grid_values(w, study)``, ``check_topography(w, study)`` and ``measured_mem_mb(w)`` (a requested
+    file's wildcards checked against its scene, with the allowed values named).
     """
 
-    def contact_batch_of(self, w) -> ContactBatch:
-        """The contact batch named by a job's wildcards (``k_l``, ``k_s``, ``H``, ``batch``), checked against its
-        scene: a grid value outside the grid, a scene that batches nothing or a batch past its seeds is named."""
-        block = self.check_grid_values(w, "contact")
+    def contact_group(self, w) -> ContactGroup:
+        """The group a contact job's ``group`` wildcard names, checked against its scene: a value outside the grid,
+        a case of a batched scene, a batch of an unbatched one or past the seeds, a name not among the files, each
+        named with what the scene has."""
+        block = self.study_block(w.scene, "contact")
+        if self.scene_source(w.scene).stem != CASE_STEM:  # a patch source: its named cases
+            self.check_topography(SimpleNamespace(scene=w.scene, topography=w.group), "contact")
+            return ContactGroup("named", w.group, (w.group,), block)
+        case, batch = _CASE.fullmatch(w.group), _BATCH.fullmatch(w.group)
+        if case is None and batch is None:
+            raise WorkflowError(f"scene {w.scene!r}, contact: {w.group!r} names no case (kl{{k_l}}_ks{{k_s}}_H{{H}}_"
+                                "s{seed}) and no batch of seeds (kl{k_l}_ks{k_s}_H{H}_b{batch})")
+        found = case or batch
+        self.check_grid_values(SimpleNamespace(scene=w.scene, **{k: found[k] for k in ("k_l", "k_s", "H")}),
+                               "contact")
         size = batch_size(block)
+        if case is not None:
+            return self._one_case(w, case, block, size)
         if size == 1:
             raise WorkflowError(f"scene {w.scene!r} solves each contact case alone (contact.solver.batch is 1), so it "
                                 f"has no contact batch files; its cases are results/{w.scene}/contact/{CASE_STEM}.nc")
         n_batches = -(-block["seeds"] // size)
-        if w.batch != str(int(w.batch)) or int(w.batch) >= n_batches:
-            raise WorkflowError(f"scene {w.scene!r}, contact: wildcard batch={w.batch} is not one of the scene's "
+        index = batch["batch"]
+        if index != str(int(index)) or int(index) >= n_batches:
+            raise WorkflowError(f"scene {w.scene!r}, contact: batch {index} of {w.group} is not one of the scene's "
                                 f"batches 0..{n_batches - 1} ({block['seeds']} seeds in batches of {size}; written "
                                 "without leading zeros)")
-        index = int(w.batch)
-        return ContactBatch(w.k_l, w.k_s, w.H, index, batch_seeds(index, size, block["seeds"]))
+        group = ContactBatch(batch["k_l"], batch["k_s"], batch["H"], int(index),
+                             batch_seeds(int(index), size, block["seeds"]))
+        return ContactGroup("batch", w.group, tuple(group.cases), block)
 
-    def contact_batch_input(self, w) -> list[str]:
-        """The surfaces of a contact batch's cases, in seed order (the order of its solve)."""
-        return [f"results/{w.scene}/surfaces/{case.stem}.nc" for case in self.contact_batch_of(w).cases]
+    @staticmethod
+    def _one_case(w, case, block: Mapping, size: int) -> ContactGroup:
+        """The group of one generated case (in one process or over ranks); a case of a batched scene is named with
+        its batch's file."""
+        seed = case["seed"]
+        if seed != str(int(seed)) or int(seed) >= block["seeds"]:
+            raise WorkflowError(f"scene {w.scene!r}, contact: wildcard seed={seed} is not one of the scene's seeds "
+                                f"0..{block['seeds'] - 1} (written without leading zeros)")
+        if size > 1:
+            stem = CONTACT_BATCH_STEM.format(k_l=case["k_l"], k_s=case["k_s"], H=case["H"],
+                                             batch=batch_index(seed, size))
+            raise WorkflowError(f"scene {w.scene!r} solves its seeds in batches of {size} (contact.solver.batch), so "
+                                f"case {w.group} has no file of its own: it is a group of "
+                                f"results/{w.scene}/contact/{stem}.nc")
+        ranks = ranks_of(block)
+        return ContactGroup("ranks" if ranks > 1 else "case", w.group,
+                            (Case(case["k_l"], case["k_s"], case["H"], int(seed)),), block, ranks)
 
-    def contact_batch_seeds(self, w) -> list[int]:
-        """A params function: the seeds of a contact batch, in the order of its input surfaces."""
-        return list(self.contact_batch_of(w).seeds)
+    def contact_input(self, w) -> list[str]:
+        """The surfaces of a contact job's cases, in the order of its solve."""
+        return [f"results/{w.scene}/surfaces/{stem}.nc" for stem in self.contact_group(w).stems]
 
-    def contact_batch_params(self, provider):
-        """A params function: ``provider``'s values for the contact block of a batch's scene, once the batch is
-        checked."""
+    def contact_params(self, provider):
+        """A params function: ``provider``'s values of the scene's contact block, once the job's group is checked."""
+        return lambda w: provider(self.contact_group(w).block)
+
+    def contact_surface_params(self, provider):
+        """A params function: what a job's surfaces were made with: ``provider`` of the contact block (generated),
+        or the named case's reader settings (a patch source's)."""
 
         def values(w):
-            self.contact_batch_of(w)
-            return provider(self.scenes[w.scene]["contact"])
+            group = self.contact_group(w)
+            if group.kind == "named":
+                return self.scene_source(w.scene).reader_settings(self.scenes[w.scene], group.stem)
+            return provider(group.block)
 
         return values
 
-    def contact_input(self, w) -> dict:
-        """The input of one contact case's job (the case checked against its scene's grid): its surface
-        (``surface``), with ``contact.solver.batch`` > 1 its batch's file (``batch``), with ``contact.solver.ranks``
-        > 1 its MPI job's file (``mpi``): the job copies its case out of either."""
-        block = self.check_case(w, "contact")
-        size = batch_size(block)
-        if ranks_of(block) > 1:
-            return {"mpi": f"results/{w.scene}/contact_mpi/{CASE_STEM.format(**_case_of(w))}.nc"}
-        if size == 1:
-            return {"surface": f"results/{w.scene}/surfaces/{CASE_STEM.format(**_case_of(w))}.nc"}
-        stem = CONTACT_BATCH_STEM.format(k_l=w.k_l, k_s=w.k_s, H=w.H, batch=batch_index(w.seed, size))
-        return {"batch": f"results/{w.scene}/contact_batch/{stem}.nc"}
+    def contact_cases(self, w) -> list[dict]:
+        """A params function: the group's cases in the order of its solve, as the wildcards of a case's file:
+        ``{k_l, k_s, H, seed}`` each (generated), or ``{topography: name}``."""
+        group = self.contact_group(w)
+        if group.kind == "named":
+            return [{"topography": group.stem}]
+        return [{"k_l": c.k_l, "k_s": c.k_s, "H": c.H, "seed": str(c.seed)} for c in group.members]
+
+    def contact_tasks(self, w) -> int:
+        """MPI processes of a contact job (SLURM's ``--ntasks``; locally its cores too): ``contact.solver.ranks`` for
+        a case over ranks, else 1."""
+        return self.contact_group(w).ranks
+
+    def contact_bundle(self, w) -> str | None:
+        """The rule's ``group``: :data:`BUNDLE` (``profiles/slurm`` packs such jobs into one SLURM job), none for a job
+        over MPI ranks. Snakemake ignores groups in local runs."""
+        return None if self.contact_group(w).kind == "ranks" else BUNDLE
 
     def contact_job_mem_mb(self, w) -> int:
-        """Peak memory of one contact case's job [MB]: a solve's (:func:`contact_mem_mb`), or a batched or MPI
-        case's copy."""
-        block = self.scenes[w.scene]["contact"]
-        if batch_size(block) > 1 or ranks_of(block) > 1:
-            return COPY_MEM_MB
+        """Peak memory of one contact job [MB]: one case's (:func:`contact_mem_mb`), a batch's, all ranks' of a case
+        over ranks, or a named case's (from its file's size)."""
+        group = self.contact_group(w)
+        block = group.block
+        if group.kind == "named":
+            return self.measured_mem_mb(SimpleNamespace(scene=w.scene, topography=group.stem))
+        if group.kind == "batch":
+            return contact_batch_mem_mb(block["surface"]["N"], batch_size(block))
+        if group.kind == "ranks":
+            return contact_mpi_mem_mb(block["surface"]["N"], group.ranks)
         return contact_mem_mb(map_side(block["surface"]))
 
     def contact_job_runtime_min(self, w) -> int:
-        """Wall-time request of one contact case's job [min]: a solve's (:func:`contact_runtime_min`), or a copy's."""
-        block = self.scenes[w.scene]["contact"]
-        if batch_size(block) > 1 or ranks_of(block) > 1:
-            return COPY_RUNTIME_MIN
-        return contact_runtime_min(map_side(block["surface"]), block["load"]["n_steps"])
+        """Wall-time request of one contact job [min], by its kind as :meth:`contact_job_mem_mb`
+        (:data:`NAMED_RUNTIME_MIN` for a named case)."""
+        group = self.contact_group(w)
+        block = group.block
+        if group.kind == "named":
+            return NAMED_RUNTIME_MIN
+        n_steps = block["load"]["n_steps"]
+        if group.kind == "batch":
+            return contact_batch_runtime_min(block["surface"]["N"], n_steps, batch_size(block))
+        if group.kind == "ranks":
+            return contact_mpi_runtime_min(block["surface"]["N"], n_steps, group.ranks)
+        return contact_runtime_min(map_side(block["surface"]), n_steps)
 
-    def batch_job_mem_mb(self, w) -> int:
-        """Peak memory of one contact batch job [MB] (:func:`contact_batch_mem_mb` of the scene's N and batch)."""
-        block = self.scenes[w.scene]["contact"]
-        return contact_batch_mem_mb(block["surface"]["N"], batch_size(block))
+    def contact_members_of(self, scene: str) -> list[list]:
+        """Where each contact case of ``scene`` is, in the order of its cases (the aggregate's ``cases``):
+        ``[file, group]``, the group ``None`` for a file of one case, the case's stem in a batch's file."""
+        block = self.study_block(scene, "contact")
+        if self.scene_source(scene).stem != CASE_STEM or batch_size(block) == 1:
+            stems = self.scene_source(scene).stems(self.scenes[scene], "contact")
+            return [[f"results/{scene}/contact/{stem}.nc", None] for stem in stems]
+        return [[f"results/{scene}/contact/{b.stem}.nc", case.stem] for b in contact_batches(block) for case in b.cases]
 
-    def batch_job_runtime_min(self, w) -> int:
-        """Wall-time request of one contact batch job [min] (:func:`contact_batch_runtime_min`)."""
-        block = self.scenes[w.scene]["contact"]
-        return contact_batch_runtime_min(block["surface"]["N"], block["load"]["n_steps"], batch_size(block))
-
-    def contact_mpi_block(self, w) -> Mapping:
-        """The contact block of a case over MPI ranks, the case checked against its scene: a scene that solves its
-        cases in one process (``contact.solver.ranks`` 1) has no ``contact_mpi`` files, and says so."""
-        block = self.check_case(w, "contact")
-        if ranks_of(block) == 1:
-            raise WorkflowError(f"scene {w.scene!r} solves each contact case in one process (contact.solver.ranks is "
-                                f"1), so it has no contact_mpi files; its cases are "
-                                f"results/{w.scene}/contact/{CASE_STEM}.nc")
-        return block
-
-    def contact_mpi_input(self, w) -> str:
-        """The surface of a case over MPI ranks (every rank reads its rows of it)."""
-        self.contact_mpi_block(w)
-        return f"results/{w.scene}/surfaces/{CASE_STEM.format(**_case_of(w))}.nc"
-
-    def contact_mpi_params(self, provider):
-        """A params function: ``provider``'s values for the contact block of a case over MPI ranks."""
-        return lambda w: provider(self.contact_mpi_block(w))
-
-    def mpi_job_tasks(self, w) -> int:
-        """MPI processes of one case's ``contact_mpi`` job: ``contact.solver.ranks`` (SLURM's ``--ntasks``)."""
-        return ranks_of(self.scenes[w.scene]["contact"])
-
-    def mpi_job_mem_mb(self, w) -> int:
-        """Peak memory of one ``contact_mpi`` job [MB], all ranks (:func:`contact_mpi_mem_mb`)."""
-        block = self.scenes[w.scene]["contact"]
-        return contact_mpi_mem_mb(block["surface"]["N"], ranks_of(block))
-
-    def mpi_job_runtime_min(self, w) -> int:
-        """Wall-time request of one ``contact_mpi`` job [min] (:func:`contact_mpi_runtime_min`)."""
-        block = self.scenes[w.scene]["contact"]
-        return contact_mpi_runtime_min(block["surface"]["N"], block["load"]["n_steps"], ranks_of(block))
+    def contact_files(self, scene: str) -> list[str]:
+        """Every contact job's file of ``scene``, once each (the aggregate's input)."""
+        return list(dict.fromkeys(path for path, _ in self.contact_members_of(scene)))

@@ -319,8 +319,8 @@ def surface_grid(ds: xr.Dataset, source, sample_rows: int = SAMPLE_ROWS):
         Naming ``source``, with :func:`surface_heights`' messages for what the header shows (the variable
         missing, its dimensions or shape, a type that is not real numbers, the cell's sides) and for a NaN or
         infinite height in the rows sampled. A NaN or infinite height in another row is not seen here: the MPI
-        ranks find it, each checking the rows it reads (``python -m roughcontact.solver.mpi --surface``, its
-        ``read_rows``), and every rank ends with one line naming the file and its rows (exit status 2).
+        ranks find it, each checking the rows it reads (:func:`roughcontact.solver.mpi.program.read_rows`), and
+        every rank ends with one line naming the file and its rows (exit status 2).
     """
     da = heights_field(ds, source)
     rows = np.unique(np.round(np.linspace(0, da.shape[0] - 1, max(1, min(sample_rows, da.shape[0])))).astype(int))

@@ -43,8 +43,8 @@ from .sources import source_of
 #: The per-step line of a contact job's log (workflow/scripts/contact.py), or of a batch's (``B cases``).
 STEP_LINE = re.compile(r"step (\d+)/(\d+): .*?, (?:(\d+) cases, )?\d+ iterations, ([0-9.]+) s")
 PLAN_FILE = "plan.json"
-#: The rules whose jobs solve contact cases (the progress line counts their jobs apart).
-CONTACT_RULES = ("contact", "contact_batch", "contact_mpi", "contact_topography")
+#: The rule whose jobs solve contact cases (the progress line counts its jobs apart): one per group.
+CONTACT_RULES = ("contact",)
 #: The time stamp that begins each line of a job's log (roughcontact.pipeline.io.run_logged).
 LOG_TIME = re.compile(r"^(\d{4}-\d\d-\d\d \d\d:\d\d:\d\d),(\d{3}) ")
 

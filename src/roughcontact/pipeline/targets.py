@@ -31,8 +31,8 @@ from .cases import BATCH_STEM, CASE_STEM
 from .config import ConfigError, load_schema
 from .contact_jobs import (  # noqa: F401 (the rules' resource formulas)
     ContactJobs,
-    contact_batch_path,
     contact_mem_mb,
+    contact_path,
     contact_runtime_min,
     map_side,
 )
@@ -55,6 +55,8 @@ WILDCARD_CONSTRAINTS = {
     "variant": r"[^/]+",
     "figure": r"[A-Za-z0-9_-]+",
     "topography": NOT_GENERATED + r"[A-Za-z0-9][A-Za-z0-9._-]*",
+    # a contact job's group: one case's stem, a batch's or a named case's (roughcontact.pipeline.contact_jobs)
+    "group": r"[A-Za-z0-9][A-Za-z0-9._-]*",
 }
 
 

@@ -179,7 +179,7 @@ def check_batch(scene: str, block: dict, source: str | None) -> None:
 def check_ranks(scene: str, block: dict, source: str | None) -> None:
     """``solver.ranks`` of a contact block: what a case over MPI ranks cannot do, refused before any job is planned.
 
-    A case over ranks (:func:`roughcontact.case.run_case_on_ranks`) is solved by
+    A case over ranks (:func:`roughcontact.case.run_case` with ``ranks`` > 1) is solved by
     :mod:`roughcontact.solver.mpi`: a generated map (``source`` None) split in slabs of rows along x, the periodic
     elastic iteration on numpy, per-step columns only. So a block with ``ranks`` > 1 has no batch, effects, free
     boundary, CuPy, stored fields, clusters, P(p), full-contact load or ``target_area``, and at most one rank per

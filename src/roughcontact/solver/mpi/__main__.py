@@ -19,18 +19,15 @@ Example (the Contact-Mechanics-Challenge-like surface of issue 50 at N = 8192 on
 from __future__ import annotations
 
 import argparse
-import os
 import resource
 import sys
-import traceback
 
 import numpy as np
 
-from ...core.cli import BAD_INPUT, one_line
 from ...core.files import atomic_output, check_writable
-from .run import MpiUnavailableError, rows_of, solve_contact_mpi, world
+from .program import file_rows, run_program
+from .run import rows_of, solve_contact_mpi
 from .slabs import FFT_LIBRARIES
-from .solver import CollectiveError
 
 
 def parser() -> argparse.ArgumentParser:
@@ -64,38 +61,6 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--fields", action="store_true", help="gather the last step's pressure and gap into the file")
     ap.add_argument("--out", required=True, help="contact NetCDF file written by rank 0")
     return ap
-
-
-def read_rows(path: str, comm) -> tuple[np.ndarray, tuple[int, int], float]:
-    """This rank's rows of the file's heights, the grid and the file's ``length`` attribute (1 without).
-
-    Reads the header, then the rank's rows ``[x0, x1)`` (:func:`~.run.rows_of`) and nothing else: one hyperslab
-    read of ``(x1 - x0) ny`` values (xarray's lazy ``isel``), decoded as xarray decodes the whole variable (a
-    ``_FillValue`` becomes NaN), so no rank holds the whole field (34 GB at 65536²). The rows are checked to be
-    finite here, where they are read: the job that starts the ranks checks only a sample of rows
-    (:func:`roughcontact.pipeline.datasets.surface_grid`). Raises ``ValueError`` naming the file, the rows and the
-    remedy; run under :func:`~.solver.collective` (as :func:`main` does), every rank then ends with it.
-    """
-    import xarray as xr
-
-    with xr.open_dataset(path) as ds:
-        if "heights" not in ds.variables:
-            raise ValueError(f"{path}: holds no variable 'heights'")
-        var = ds["heights"]
-        extra = [d for d in var.dims if d not in ("x", "y")]
-        if any(var.sizes[d] != 1 for d in extra) or "x" not in var.dims or "y" not in var.dims:
-            raise ValueError(f"{path}: 'heights' must lie over (x, y) (other dimensions of length 1), got "
-                             f"{dict(var.sizes)}")
-        var = var.isel({d: 0 for d in extra}).transpose("x", "y")
-        shape = (var.sizes["x"], var.sizes["y"])
-        x0, x1 = rows_of(shape, comm)
-        rows = np.asarray(var.isel(x=slice(x0, x1)).values, dtype=np.float64)
-        bad = rows.size - int(np.count_nonzero(np.isfinite(rows)))
-        if bad:
-            raise ValueError(f"{path}: 'heights' holds {bad} NaN or infinite value(s) in rows {x0}..{x1 - 1} (rank "
-                             f"{comm.rank}'s); every height must be finite: remake the file (a pipeline's surface "
-                             "file: remove it, or rerun with -f), or fill those points")
-        return rows, shape, float(ds.attrs.get("length", 1.0))
 
 
 #: The values of ``--generate``, in order, with the type each must have.
@@ -141,30 +106,7 @@ def generated_rows(args, comm) -> tuple[np.ndarray, tuple[int, int], float]:
 
 def main(argv=None) -> int:
     args = parser().parse_args(argv)
-    try:
-        comm = world()
-    except MpiUnavailableError as exc:
-        print(f"error: {one_line(exc)}", file=sys.stderr)
-        return BAD_INPUT
-    try:
-        return _run(args, comm)
-    except CollectiveError as exc:  # raised on every rank at once: each may return
-        if comm.rank == 0:
-            print(f"error: {one_line(exc)}", file=sys.stderr)
-        return BAD_INPUT
-    except (ValueError, OSError) as exc:
-        # raised on this rank alone: the others may wait in a collective call for ever (on a cluster, until
-        # the allocation ends), so the whole run is aborted
-        print(f"error: {one_line(exc)}", file=sys.stderr, flush=True)
-        if comm.size > 1:
-            comm.Abort(BAD_INPUT)
-        return BAD_INPUT
-    except BaseException:
-        if comm.size > 1:  # a bug: its traceback, then no rank left waiting
-            traceback.print_exc()
-            sys.stderr.flush()
-            comm.Abort(1)
-        raise
+    return run_program(lambda comm: _run(args, comm))
 
 
 def _run(args, comm) -> int:
@@ -217,23 +159,9 @@ def _heights(args, comm):
     from .solver import collective
 
     if args.surface is not None:
-        return collective(comm, lambda: _file_rows(args.surface, comm))
+        return collective(comm, lambda: file_rows(args.surface, comm))
     collective(comm, lambda: _check_generate(args, comm))
     return generated_rows(args, comm)
-
-
-def _file_rows(path, comm):
-    if os.path.isdir(path):
-        raise ValueError(f"{path}: is a folder; give a surface file (NetCDF with 'heights', as the surface jobs write)")
-    try:
-        return read_rows(path, comm)
-    except OSError as exc:
-        raise ValueError(f"{path}: cannot be read as NetCDF ({one_line(exc)})") from None
-    except ValueError as exc:
-        if "IO backends" not in str(exc):
-            raise  # the file's content refused (rows, NaN, ...): the message says why
-        # xarray names no file when no engine recognises it: a truncated or foreign file
-        raise ValueError(f"{path}: not a readable NetCDF file (truncated or foreign?): {one_line(exc)}") from None
 
 
 def _check_generate(args, comm):
