@@ -15,11 +15,11 @@ rule contact:
         contact_path("logs/contact", "log"),
     benchmark:
         contact_path("benchmarks/contact", "tsv")
-    conda:
-        "../../envs/roughcontact.yaml"
     # profiles/slurm packs these jobs into SLURM jobs of several (group-components); a case over ranks stays alone
     group:
         contact_bundle
+    conda:
+        "../../envs/roughcontact.yaml"
     # locally a case over ranks takes its ranks' cores (profiles/slurm sets 1 CPU per task)
     threads: contact_tasks
     resources:
