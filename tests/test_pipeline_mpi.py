@@ -366,10 +366,18 @@ def test_the_slurm_profile_makes_it_an_mpi_job(tmp_path):
         pytest.skip("mpi4py not installed (pip install 'roughcontact[mpi]'): the scene is refused before planning")
     wd = copy_workflow(tmp_path / "wf", SPLIT)
     target = CONTACT.format(H="0.5", seed=0)
-    res = run_snakemake(wd, "-n", "--workflow-profile", "profiles/slurm", target)
+    res = run_snakemake(wd, "-n", "--workflow-profile", "profiles/slurm", *TARGETS)
     assert res.returncode == 0, res.stderr[-3000:]
     job = res.stdout.split("rule contact:")[1].split("\n\n")[0]
-    assert "mpi=srun" in job and "tasks=2" in job and "threads:" not in job and "group" not in job, job
+    assert "mpi=srun" in job and "tasks=2" in job and "threads:" not in job, job
+    # each MPI job an allocation of its own: in no group job (a grouped job's rule line is indented under it)
+    assert res.stdout.count("\nrule contact:") == 2 and "Group job solve" not in res.stdout, res.stdout[-3000:]
+    # one-process cases are bundled (group-components: 10 a SLURM job)
+    single = copy_workflow(tmp_path / "single", SINGLE)
+    res = run_snakemake(single, "-n", "--workflow-profile", "profiles/slurm", *TARGETS)
+    assert res.returncode == 0, res.stderr[-3000:]
+    bundle = res.stdout.split("Group job solve")[1].split("Job stats")[0]
+    assert bundle.count("    rule contact:") == 2 and "tasks=1" in bundle, bundle
     res = run_snakemake(wd, "-n", target)
     job = res.stdout.split("rule contact:")[1].split("\n\n")[0]
     assert "mpi=mpiexec" in job and "tasks=2" in job and "threads: 2" in job, job

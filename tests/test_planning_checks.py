@@ -11,6 +11,7 @@ import importlib.util
 
 import numpy as np
 import pytest
+import yaml
 
 from cel_synthetic import simulate_cel_cases
 from conftest import REPO
@@ -233,6 +234,19 @@ def test_target_area_with_seeds_fits_each_seeds_own_schedule():
 def test_target_area_with_seeds_plans(shipped_config):
     scene = plan(shipped_config, {"contact": {**GEN, "surface": {"N": 64}, "load": {"target_area": 0.1}}})
     assert scene["contact"]["load"]["target_area"] == 0.1 and "p_max" not in scene["contact"]["load"]
+
+
+def test_adopt_into_a_batched_scene_is_refused_in_one_line(tmp_path, monkeypatch, capsys):
+    # a batched scene's cases are groups of its batches' files (one contact job a batch): a copied case file
+    # would be read by nothing
+    config = tmp_path / "batched.yaml"
+    config.write_text(yaml.safe_dump({"scenes": {"batched": {"contact": {**GEN, "surface": {"N": 64},
+                                                                         "solver": {"batch": 2}}}}}))
+    with pytest.raises(SystemExit) as stop:
+        adopt.main(["results/adhesion", "--scene", "batched", "--configfile", str(config), "--dry-run"])
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and err.count("\n") == 1, err
+    assert "solves its seeds in batches (contact.solver.batch: 2)" in err and "without solver.batch" in err
 
 
 @pytest.mark.parametrize("target", ["measured", "array"])

@@ -223,6 +223,13 @@ def check_adoptable(name: str, scene: dict) -> None:
                          "reads each mapped case's surface file, which adoption does not copy: Snakemake would make "
                          "the surface again and then solve the adopted case again; adopt into a scene without "
                          f"outputs.fields, or run the scene itself (snakemake -j2 --config scene={name})")
+    batch = scene["contact"]["solver"].get("batch", 1)
+    if batch > 1:
+        # its cases are groups of one file per batch (roughcontact.pipeline.contact_jobs), which the aggregate
+        # reads: a case file copied beside them would be read by nothing
+        raise AdoptError(f"scene {name!r} solves its seeds in batches (contact.solver.batch: {batch}), one file "
+                         "holding each batch's cases, and adoption copies files of one case; adopt into the scene "
+                         f"without solver.batch, or run it (snakemake -j2 --config scene={name})")
     source = source_of(scene, name)
     if source.key is not None:
         raise AdoptError(f"scene {name!r} takes its surfaces from its {source.key} block ({source.name} files), "
