@@ -340,6 +340,13 @@ def workflow_outputs() -> dict[str, list[str]]:
         return {rule.name: [str(out) for out in rule.output] for rule in workflow._workflow.rules}
 
 
+def test_scene_vocabulary_becomes_a_case_in_one_module_only():
+    # issue 64.1: the job scripts take their cases from roughcontact.pipeline.case (contact_case, accuracy_case)
+    found = {m: lines for m, (src, _) in script_sources().items()
+             if (lines := names_used(src, {"ContactCase", "LoadSchedule", "SolverSettings"}))}
+    assert found == {}
+
+
 def test_one_rule_writes_contact_files():
     # issue 64.2: one case, a batch or one case over MPI ranks is one contact job of one rule, each case's file
     # written once (no batch or MPI job whose file another job copies)

@@ -3,7 +3,7 @@
 ``python benchmarks/mpi/plan.py [--inputs FILE] [--set NAME=VALUE ...] [--date YYYY-MM-DD] [--out FILE]`` prints,
 for each grid of ``sizes`` (N x N), the plan as markdown: nodes and ranks, memory per rank and per node, the time
 of one iteration (compute-bound, memory-bandwidth-bound, the transposes), of a load step and of the whole load
-schedule, and its core-hours; then the ``contact_mpi`` rule's request for the same case beside the plan. Every
+schedule, and its core-hours; then the ``contact`` rule's request for the same case over ranks beside the plan. Every
 number comes from the inputs file (:data:`INPUTS`, each value with what measured it or that it is assumed);
 ``--set`` replaces one, its value read as JSON (``--set ns_per_node_iteration=150``).
 
@@ -219,9 +219,10 @@ def inputs_table(inputs: dict[str, dict]) -> str:
 
 
 def rule_request_table(rows: list[Row], request, node_memory_gib: float) -> str:
-    """The ``contact_mpi`` rule's resources for each planned case beside the plan: ``request(n, steps, ranks)`` ->
-    ``(mem_mb, runtime_min)`` (:func:`rule_request`). The rule's ``mem_mb`` [MiB] is for all ranks together, and
-    SLURM reads it (``--mem``) per node, so it is set against the plan's fullest node and a node's memory."""
+    """The ``contact`` rule's resources for each planned case over ranks beside the plan:
+    ``request(n, steps, ranks)`` -> ``(mem_mb, runtime_min)`` (:func:`rule_request`). The rule's ``mem_mb`` [MiB]
+    is for all ranks together, and SLURM reads it (``--mem``) per node, so it is set against the plan's fullest
+    node and a node's memory."""
     node_mib = node_memory_gib * GIB / MIB
     out = ["| N | ranks (nodes) | rule: mem_mb, all ranks = `--mem` a node | plan: fullest node [MiB] | rule / plan | "
            f"rule's `--mem` fits a {node_memory_gib:g} GiB node | rule: runtime [min] | plan: wall [min] |",
@@ -236,7 +237,7 @@ def rule_request_table(rows: list[Row], request, node_memory_gib: float) -> str:
 
 
 def rule_request(n: int, steps: int, ranks: int) -> tuple[int, int]:
-    """The ``contact_mpi`` rule's ``mem_mb`` and ``runtime`` for one case (roughcontact.pipeline.contact_jobs)."""
+    """The ``contact`` rule's ``mem_mb`` and ``runtime`` for one case over ranks (pipeline.contact_jobs)."""
     from roughcontact.pipeline.contact_jobs import contact_mpi_mem_mb, contact_mpi_runtime_min
 
     return contact_mpi_mem_mb(n, ranks), contact_mpi_runtime_min(n, steps, ranks)
@@ -249,7 +250,7 @@ def report(inputs: dict[str, dict], *, date: str, command: str, request=rule_req
     return "\n\n".join([
         f"Made {date} by `{command}` (an estimate from measured per-node numbers, not a measurement):",
         plan_tables(rows, p),
-        "The `contact_mpi` rule's request for the same case (`contact_mpi_mem_mb`, `contact_mpi_runtime_min`):",
+        "The `contact` rule's request for the same case over ranks (`contact_mpi_mem_mb`, `contact_mpi_runtime_min`):",
         rule_request_table(rows, request, p["node_memory_gib"]),
         "Inputs (`benchmarks/mpi/plan_inputs.json`):",
         inputs_table(inputs),

@@ -1,8 +1,8 @@
 """Accuracy study: generate one surface at the setting's N and solve it at its tol and steps."""
-from roughcontact.case import ContactCase, LoadSchedule, run_case
+from roughcontact.case import run_case
+from roughcontact.pipeline.case import accuracy_case
 from roughcontact.pipeline.datasets import contact_dataset
 from roughcontact.pipeline.io import run_logged, write_dataset
-from roughcontact.solver import SolverSettings
 from roughcontact.surfaces.synthetic import generate_surface, spectral_moments
 
 
@@ -13,10 +13,8 @@ def main(log):
     h = generate_surface(n, float(w.k_l), float(w.k_s), float(w.H), int(w.seed),
                          rms_slope=block["surface"]["rms_slope"], length=length)
     stats = spectral_moments(h, length)
-    # the paper's uniform steps to p_max E* (E* = 1)
-    case = ContactCase(LoadSchedule(int(s["n_steps"]), p_max=block["p_max"]),
-                       SolverSettings(tol=float(s["tol"]), threads=snakemake.threads))
-    [result] = run_case(h, case, length=length, rms_slope=stats["rms_slope"])
+    [result] = run_case(h, accuracy_case(block, threads=snakemake.threads), length=length,
+                        rms_slope=stats["rms_slope"])
     ds = contact_dataset(result, rms_slope=stats["rms_slope"], alpha=stats["alpha"], e_star=1.0,
                          k_l=w.k_l, k_s=w.k_s, hurst=w.H, seed=int(w.seed))
     ds.attrs.update(setting=w.variant, n=n, length=length)

@@ -97,7 +97,7 @@ class ContactCase:
 
 
 def run_case(surfaces, case: ContactCase, *, length, rms_slope, log=None, name=None, observers: Sequence = (),
-             launcher: str = "mpiexec", shape=None) -> list[xr.Dataset]:
+             launcher: str = "mpiexec", shape=None, comm=None) -> list[xr.Dataset]:
     """Solve a group of cases as ``case`` asks: loads resolved, every step solved, outputs added; one dataset a case.
 
     A group is what one solve computes together: one surface, ``B`` surfaces of one grid solved as a batch
@@ -125,10 +125,11 @@ def run_case(surfaces, case: ContactCase, *, length, rms_slope, log=None, name=N
         The case's name, at the start of its warnings (jobs' lines meet in one console).
     observers : sequence
         More observers of each step (:class:`roughcontact.solver.solve.StepView`) of one surface in this process.
-    launcher : str
-        Over ranks, the command that starts MPI processes (:func:`mpi_command`): ``mpiexec``, or ``srun`` on SLURM.
-    shape : (int, int), optional
-        Over ranks, the file's grid ``(nx, ny)``; read from its header when not given.
+    launcher, shape, comm
+        Over ranks: the command that starts MPI processes (:func:`mpi_command`: ``mpiexec``, ``srun`` on SLURM); the
+        file's grid ``(nx, ny)`` (else read from its header); without ``comm``, ``run_case`` starts the ranks'
+        program (:mod:`roughcontact.case.__main__`) under ``launcher``, in which every rank calls it with its
+        ``comm``: each solves its rows, rank 0 gets the list and the others an empty one.
 
     Returns
     -------
@@ -141,12 +142,8 @@ def run_case(surfaces, case: ContactCase, *, length, rms_slope, log=None, name=N
         ``RuntimeError`` with their last lines.
     """
     if case.ranks != 1:
-        if isinstance(surfaces, (str, os.PathLike)):
-            return [_run_on_ranks(surfaces, case, shape=shape, length=length, rms_slope=rms_slope,
-                                  launcher=launcher, log=log, name=name)]
-        raise ValueError(f"run_case: a case over {case.ranks} MPI ranks reads its surface from a file on every "
-                         "rank: give the surface's file (NetCDF with 'heights' over (x, y)) as surfaces, or give "
-                         "ContactCase ranks=1 to solve the array in this process")
+        return _over_ranks(surfaces, case, shape=shape, length=length, rms_slope=rms_slope, launcher=launcher,
+                           log=log, name=name, comm=comm)
     if isinstance(surfaces, (str, os.PathLike)):
         raise ValueError(f"run_case: surfaces={os.fspath(surfaces)!r} is a path, which only a case over MPI ranks "
                          "reads (ContactCase ranks > 1); give the heights as an array to solve them in this process")
@@ -154,6 +151,19 @@ def run_case(surfaces, case: ContactCase, *, length, rms_slope, log=None, name=N
         return _run_batch(np.asarray(surfaces), case, length=length, rms_slope=rms_slope, log=log, names=name,
                           observers=observers)
     return [_run_one(surfaces, case, length=length, rms_slope=rms_slope, log=log, name=name, observers=observers)]
+
+
+def _over_ranks(surfaces, case: ContactCase, *, shape, length, rms_slope, launcher, log, name, comm) -> list:
+    """:func:`run_case` of a case over ranks: started under the launcher, or on a rank (``comm``)."""
+    if not isinstance(surfaces, (str, os.PathLike)):
+        raise ValueError(f"run_case: a case over {case.ranks} MPI ranks reads its surface from a file on every "
+                         "rank: give the surface's file (NetCDF with 'heights' over (x, y)) as surfaces, or give "
+                         "ContactCase ranks=1 to solve the array in this process")
+    if comm is not None:
+        solved = _solve_on_ranks(surfaces, case, comm, shape=shape, length=length, rms_slope=rms_slope)
+        return [] if solved is None else [solved]
+    return [_run_on_ranks(surfaces, case, shape=shape, length=length, rms_slope=rms_slope, launcher=launcher,
+                          log=log, name=name)]
 
 
 def _run_one(heights, case: ContactCase, *, length, rms_slope, log, name, observers: Sequence) -> xr.Dataset:
@@ -209,7 +219,7 @@ def mpi_command(launcher: str, ranks: int) -> list[str]:
     return [found, *words[1:], "-n", str(int(ranks))]
 
 
-#: A step line of the ranks' program (:mod:`roughcontact.case.__main__`), re-logged as :func:`run_case`'s.
+#: A step line of the ranks (:func:`_print_step`), re-logged as :func:`run_case`'s.
 _MPI_STEP = re.compile(r"^step (\d+): p0=(\S+) A/A0=(\S+) iterations=(\d+) converged=(True|False) (\S+) s$")
 
 
@@ -262,12 +272,62 @@ def _run_on_ranks(surface_file, case: ContactCase, *, shape, length, rms_slope: 
         out, job = Path(tmp) / "contact.nc", Path(tmp) / "case.json"
         job.write_text(json.dumps({"case": case_document(case), "surface_file": os.path.abspath(surface_file),
                                    "shape": [int(n) for n in cell.shape], "length": list(cell.sides),
-                                   "loads": [float(p) for p in loads], "out": os.fspath(out)}))
+                                   "rms_slope": float(rms_slope), "out": os.fspath(out)}))
         cmd = [*mpi_command(launcher, case.ranks), sys.executable, "-m", "roughcontact.case", os.fspath(job)]
         if log is not None:
             log.info("%s over %d MPI ranks: %s", name or "case", case.ranks, " ".join(cmd[:-1]))
         result = _run_ranks(cmd, out, step_logger(log, len(loads)), log)
-    return _finished(result, None, case, length, load_info, log, name or "case")
+    if result.attrs.get("load_p0_max") != load_info["load_p0_max"]:  # the ranks resolve the same schedule
+        raise RuntimeError(f"the MPI ranks solved up to p0 = {result.attrs.get('load_p0_max')!r}, not the "
+                           f"{load_info['load_p0_max']!r} this case resolves to")
+    if log is not None:
+        _warn(log, result, name or "case", case.settings.tol)
+    return result
+
+
+def _solve_on_ranks(surface_file, case: ContactCase, comm, *, shape, length, rms_slope: float) -> xr.Dataset | None:
+    """:func:`run_case` of one surface file on every rank of ``comm``: each rank reads and solves its rows; rank 0
+    prints each step's line to stderr (as :func:`_run_ranks` reads it) and gets the dataset, the others None."""
+    from ..solver.mpi import solve_contact_mpi
+    from ..solver.mpi.program import file_rows
+    from ..solver.mpi.solver import collective
+
+    def check():
+        if comm.size != case.ranks:
+            raise ValueError(f"ranks: {case.ranks} MPI ranks were asked for, but this process sees a world of "
+                             f"{comm.size}: the launcher started processes MPI did not join (srun without the PMI "
+                             "of the MPI library mpi4py was built with: try srun --mpi=pmi2, or build mpi4py "
+                             "against the site's MPI, docs/cluster.md)")
+        refused = _refused_over_ranks(case)
+        if refused:
+            raise ValueError(f"run_case: a case over MPI ranks computes the periodic elastic solve's per-step "
+                             f"columns only, not {', '.join(refused)}")
+
+    collective(comm, check)
+    rows, found, _ = collective(comm, lambda: file_rows(surface_file, comm))
+
+    def same_grid():
+        if shape is not None and tuple(found) != tuple(shape):
+            raise ValueError(f"{surface_file}: its grid is {found[0]} x {found[1]}, not the {shape[0]} x {shape[1]} "
+                             "the case was planned for; solve it again from the file")
+
+    collective(comm, same_grid)
+    loads, load_info = case.schedule.resolve(case.settings.e_star, rms_slope, found[0] * found[1], None,
+                                             cap=case.settings.hardness)
+    result = solve_contact_mpi(rows, found, loads, case.solver_settings(length), comm=comm,
+                               progress=_print_step if comm.rank == 0 else None)
+    if comm.rank != 0:
+        return None
+    # rank 0 writes it as a file of its own (CF-checked); the attribute before the load's, as the pipeline's
+    # files of a case over ranks have always had them
+    result.attrs["Conventions"] = "CF-1.8"
+    return _finished(result, None, case, length, load_info, None, "case")
+
+
+def _print_step(step, p0, area, iterations, converged, seconds):
+    """A step's line of the ranks (rank 0's stderr), in the form :data:`_MPI_STEP` reads."""
+    print(f"step {step}: p0={p0:.6g} A/A0={area:.6g} iterations={iterations} converged={converged} "
+          f"{seconds:.2f} s", file=sys.stderr, flush=True)
 
 
 def _file_grid(path) -> tuple[int, int]:

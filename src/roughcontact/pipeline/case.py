@@ -1,6 +1,6 @@
-"""A scene's ``contact`` block as a library case: :func:`contact_case`, the one place scene vocabulary becomes
-:class:`~roughcontact.case.ContactCase`, :class:`~roughcontact.case.LoadSchedule` and
-:class:`~roughcontact.solver.SolverSettings`."""
+"""A scene's block as a library case: :func:`contact_case` (a ``contact`` block) and :func:`accuracy_case` (a setting
+of the ``accuracy`` study), the one place scene vocabulary becomes :class:`~roughcontact.case.ContactCase`,
+:class:`~roughcontact.case.LoadSchedule` and :class:`~roughcontact.solver.SolverSettings`."""
 
 from __future__ import annotations
 
@@ -65,3 +65,11 @@ def contact_case(block: Mapping, *, length_unit: str = "1", threads: int = 1) ->
                               length_unit=length_unit, pressure_unit=solver["pressure_unit"],
                               array_backend=solver.get("array_backend", "numpy"))
     return ContactCase(load_schedule(block), settings, outputs=block["outputs"], ranks=solver.get("ranks", 1))
+
+
+def accuracy_case(block: Mapping, *, threads: int = 1) -> ContactCase:
+    """The case of one setting of a validated ``accuracy`` block (``setting``: its ``tol`` and ``n_steps``; the
+    study's ``p_max``): the paper's uniform steps to ``p_max E*`` with E* = 1 (``threads``: the job's)."""
+    setting = block["setting"]
+    return ContactCase(LoadSchedule(int(setting["n_steps"]), p_max=block["p_max"]),
+                       SolverSettings(tol=float(setting["tol"]), threads=threads))
