@@ -1,4 +1,5 @@
-"""Batches in the pipeline (issue 48, item 3): ``contact.solver.batch`` from the config to one NetCDF per case.
+"""Batches in the pipeline (issue 48, item 3; issue 64): ``contact.solver.batch`` from the config to one contact job
+and one file a batch, a NetCDF group a case.
 
 The grouping (:func:`roughcontact.pipeline.cases.contact_batches`), the config's refusals, ``run_case`` on a
 batch against each case alone, the batch file's groups, the rules' functions, a dry run that shows the
@@ -238,6 +239,7 @@ def test_a_batch_is_one_contact_job_and_its_file_holds_its_cases(targets):
     assert targets.contact_input(_w("kl2_ks8_H0.8_b1")) == [SURF.format(H="0.8", seed=4)]
     assert targets.contact_cases(_w("kl2_ks8_H0.8_b1")) == [{"k_l": "2", "k_s": "8", "H": "0.8", "seed": "4"}]
     assert targets.contact_params(params.contact)(_w("kl2_ks8_H0.8_b1"))["solver"]["batch"] == 4
+    assert targets.contact_kind(_w("kl2_ks8_H0.8_b1")) == "batch"  # a batch even of one seed
     assert targets.contact_tasks(_w("kl2_ks8_H0.8_b0")) == 1
     assert targets.contact_bundle(_w("kl2_ks8_H0.8_b0")) == "solve"
     single = Targets.from_config(copy.deepcopy(SINGLE), variants, FIGURES)

@@ -276,7 +276,7 @@ def _run_job(script: str, tmp_path: Path, block, surface_file: Path, out: Path |
     job = SimpleNamespace(wildcards=SimpleNamespace(scene="tiny", group="kl2_ks8_H0.5_s0", **case),
                           input=[str(surface_file)], output=[str(out or surface_file)], log=[str(log)],
                           params=SimpleNamespace(settings=params.contact(block), surface=params.surface(block),
-                                                 cases=[case]),
+                                                 cases=[case], kind="ranks"),
                           resources=SimpleNamespace(mpi="mpiexec"), threads=1)
     try:
         runpy.run_path(str(REPO / "workflow" / "scripts" / script), init_globals={"snakemake": job})

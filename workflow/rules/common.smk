@@ -86,6 +86,7 @@ contact_input = TARGETS.contact_input
 contact_params = TARGETS.contact_params
 contact_surface_params = TARGETS.contact_surface_params
 contact_cases = TARGETS.contact_cases
+contact_kind = TARGETS.contact_kind
 contact_tasks = TARGETS.contact_tasks
 contact_bundle = TARGETS.contact_bundle
 contact_job_mem_mb = TARGETS.contact_job_mem_mb

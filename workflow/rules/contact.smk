@@ -31,5 +31,6 @@ rule contact:
         settings=contact_params(params.contact),
         surface=contact_surface_params(params.surface),
         cases=contact_cases,
+        kind=contact_kind,
     script:
         "../scripts/contact.py"

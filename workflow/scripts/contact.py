@@ -17,11 +17,11 @@ SURFACE_VARIABLES = ["heights", "rms_slope", "alpha"]
 
 
 def main(log):
-    settings, cases = snakemake.params.settings, snakemake.params.cases
+    settings, cases, kind = snakemake.params.settings, snakemake.params.cases, snakemake.params.kind
     unit = snakemake.params.surface["unit"]  # a generator block and a reader's settings name the length unit
-    if settings["solver"].get("batch", 1) > 1:  # a batch's job, even of one seed (the last of the seeds)
+    if kind == "batch":  # even of one seed (the last of the seeds)
         solve_batch(log, cases, contact_case(settings, length_unit=unit, threads=snakemake.threads))
-    elif contact_case(settings, length_unit=unit).ranks > 1:
+    elif kind == "ranks":
         solve_over_ranks(log, cases[0], contact_case(settings, length_unit=unit))
     else:
         solve_one(log, cases[0], contact_case(settings, length_unit=unit, threads=snakemake.threads))

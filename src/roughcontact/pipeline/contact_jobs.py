@@ -216,6 +216,11 @@ class ContactJobs:
 
         return values
 
+    def contact_kind(self, w) -> str:
+        """A params function: what the job solves, :attr:`ContactGroup.kind` (``case``, ``ranks``, ``batch``,
+        ``named``)."""
+        return self.contact_group(w).kind
+
     def contact_cases(self, w) -> list[dict]:
         """A params function: the group's cases in the order of its solve, as the wildcards of a case's file:
         ``{k_l, k_s, H, seed}`` each (generated), or ``{topography: name}``."""
