@@ -240,7 +240,7 @@ def test_a_batch_is_one_contact_job_and_its_file_holds_its_cases(targets):
     assert targets.contact_cases(_w("kl2_ks8_H0.8_b1")) == [{"k_l": "2", "k_s": "8", "H": "0.8", "seed": "4"}]
     assert targets.contact_params(params.contact)(_w("kl2_ks8_H0.8_b1"))["solver"]["batch"] == 4
     assert targets.contact_kind(_w("kl2_ks8_H0.8_b1")) == "batch"  # a batch even of one seed
-    assert targets.contact_tasks(_w("kl2_ks8_H0.8_b0")) == 1
+    assert targets.contact_tasks(_w("kl2_ks8_H0.8_b0")) is None and targets.contact_threads(_w("kl2_ks8_H0.8_b0")) == 1
     assert targets.contact_bundle(_w("kl2_ks8_H0.8_b0")) == "solve"
     single = Targets.from_config(copy.deepcopy(SINGLE), variants, FIGURES)
     assert single.contact_input(_w("kl2_ks8_H0.8_s3")) == [SURF.format(H="0.8", seed=3)]
@@ -260,7 +260,8 @@ def test_a_batch_is_one_contact_job_and_its_file_holds_its_cases(targets):
     ("kl2_ks8_H0.8_s3", "case kl2_ks8_H0.8_s3 has no file of its own: it is a group of "
                         "results/tiny/contact/kl2_ks8_H0.8_b0.nc"),
     ("kl2_ks8_H0.8_s7", "wildcard seed=7 is not one of the scene's seeds 0..4"),
-    ("surface", "'surface' names no case"),
+    ("surface", "scene 'tiny' has no topography block nor array block, so it has no named case 'surface'; its "
+                "contact files are named kl{k_l}_ks{k_s}_H{H}_b{batch}.nc (its seeds in batches of 4"),
 ])
 def test_a_group_outside_the_scene_is_named(targets, group, words):
     with pytest.raises(WorkflowError, match=re.escape(words)):

@@ -4,7 +4,7 @@ The config's refusals (each named, before any job), MPI asked for but not instal
 the rules' functions and resources, the launcher (:func:`~roughcontact.case.mpi_command`),
 :func:`~roughcontact.case.run_case` over ranks against it in one process
 on the same surface file, the MPI solver's own refusal passed on as one line, a dry run under the SLURM
-profile (an MPI job: ``mpi=srun``, ``tasks`` = ranks) and (slow) a tiny scene with ``ranks: 2`` against
+profile (an MPI job: ``mpi``, ``tasks`` = ranks, ``launcher=srun``) and (slow) a tiny scene with ``ranks: 2`` against
 the same scene in one process, file by file. The runs skip, saying why, where mpi4py or ``mpiexec`` is
 missing (the ``test`` extra brings them).
 """
@@ -162,7 +162,8 @@ def test_a_case_over_ranks_is_one_mpi_contact_job():
     t = _targets()
     assert t.contact_group(_w()).kind == "ranks"
     assert t.contact_input(_w("1")) == ["results/tiny/surfaces/kl2_ks8_H0.5_s1.nc"]
-    assert t.contact_tasks(_w()) == 2 and t.contact_bundle(_w()) is None  # an MPI job, in no SLURM bundle
+    assert t.contact_tasks(_w()) == 2 and t.contact_mpi(_w()) == 1 and t.contact_threads(_w()) == 2
+    assert t.contact_bundle(_w()) is None  # an MPI job, in no SLURM bundle
     assert t.contact_job_mem_mb(_w()) == contact_mpi_mem_mb(64, 2) == 600 + int(40 * 8 * 64**2 / 2**20)
     assert t.contact_job_runtime_min(_w()) == contact_mpi_runtime_min(64, 12, 2) == 10  # 4 x the 5-min floor, / 2
     assert contact_mpi_runtime_min(8192, 30, 4) == int(np.ceil(4 * contact_runtime_min(8192, 30) / 4))
@@ -170,7 +171,8 @@ def test_a_case_over_ranks_is_one_mpi_contact_job():
     with pytest.raises(WorkflowError, match="seed=5"):
         t.contact_input(_w("5"))
     single = _targets(SINGLE)
-    assert single.contact_group(_w()).kind == "case" and single.contact_tasks(_w()) == 1
+    assert single.contact_group(_w()).kind == "case" and single.contact_threads(_w()) == 1
+    assert single.contact_tasks(_w()) is None and single.contact_mpi(_w()) is None  # not an MPI job
     assert single.contact_bundle(_w()) == "solve"
 
 
@@ -190,7 +192,7 @@ def test_the_launcher_is_found_or_named(monkeypatch):
         cmd = mpi_command("mpiexec", 3)
         assert Path(cmd[0]).name == "mpiexec" and cmd[1:] == ["-n", "3"]
     assert mpi_command(f"{sys.executable} --flag", 2)[1:] == ["--flag", "-n", "2"]
-    with pytest.raises(ValueError, match=r"'no-such-launcher' \(the rule's 'mpi' resource\) is not found.*"
+    with pytest.raises(ValueError, match=r"'no-such-launcher' \(the rule's 'launcher' resource\) is not found.*"
                                          r"roughcontact\[mpi\]"):
         mpi_command("no-such-launcher", 2)
     with pytest.raises(ValueError, match="launcher .* is empty"):
@@ -277,7 +279,7 @@ def _run_job(script: str, tmp_path: Path, block, surface_file: Path, out: Path |
                           input=[str(surface_file)], output=[str(out or surface_file)], log=[str(log)],
                           params=SimpleNamespace(settings=params.contact(block), surface=params.surface(block),
                                                  cases=[case], kind="ranks"),
-                          resources=SimpleNamespace(mpi="mpiexec"), threads=1)
+                          resources=SimpleNamespace(launcher="mpiexec"), threads=1)
     try:
         runpy.run_path(str(REPO / "workflow" / "scripts" / script), init_globals={"snakemake": job})
     finally:  # run_logged's handlers: closed, so that the next job logs to its own file only
@@ -357,9 +359,10 @@ def test_a_nan_outside_the_checked_rows_ends_every_rank_naming_the_file(tmp_path
 
 # ------------------------------------------------------------------------------ the workflow
 def test_the_slurm_profile_makes_it_an_mpi_job(tmp_path):
-    """Under profiles/slurm a contact job over ranks carries ``mpi=srun`` and ``tasks=2`` (the executor's MPI job: one
-    allocation of 2 tasks, srun inside it), 1 thread per task, and joins no group; locally ``mpi=mpiexec`` and 2
-    threads."""
+    """Under profiles/slurm a contact job over ranks carries ``mpi`` and ``tasks=2`` (the executor's MPI job: one
+    allocation of 2 tasks) and ``launcher=srun`` (srun inside it), 1 thread per task, and joins no group; locally
+    ``launcher=mpiexec`` and 2 threads. One-process contact jobs carry neither ``mpi`` nor ``tasks`` (the executor
+    would submit them, and their group job with its tasks added up, as MPI jobs)."""
     if importlib.util.find_spec("snakemake_executor_plugin_slurm") is None:
         pytest.skip("snakemake-executor-plugin-slurm not installed (pip install -e '.[slurm]')")
     if importlib.util.find_spec("mpi4py") is None:
@@ -369,7 +372,7 @@ def test_the_slurm_profile_makes_it_an_mpi_job(tmp_path):
     res = run_snakemake(wd, "-n", "--workflow-profile", "profiles/slurm", *TARGETS)
     assert res.returncode == 0, res.stderr[-3000:]
     job = res.stdout.split("rule contact:")[1].split("\n\n")[0]
-    assert "mpi=srun" in job and "tasks=2" in job and "threads:" not in job, job
+    assert "mpi=1" in job and "tasks=2" in job and "launcher=srun" in job and "threads:" not in job, job
     # each MPI job an allocation of its own: in no group job (a grouped job's rule line is indented under it)
     assert res.stdout.count("\nrule contact:") == 2 and "Group job solve" not in res.stdout, res.stdout[-3000:]
     # one-process cases are bundled (group-components: 10 a SLURM job)
@@ -377,10 +380,11 @@ def test_the_slurm_profile_makes_it_an_mpi_job(tmp_path):
     res = run_snakemake(single, "-n", "--workflow-profile", "profiles/slurm", *TARGETS)
     assert res.returncode == 0, res.stderr[-3000:]
     bundle = res.stdout.split("Group job solve")[1].split("Job stats")[0]
-    assert bundle.count("    rule contact:") == 2 and "tasks=1" in bundle, bundle
+    assert bundle.count("    rule contact:") == 2 and "launcher=srun" in bundle, bundle
+    assert "mpi=" not in bundle and "tasks=" not in bundle, bundle
     res = run_snakemake(wd, "-n", target)
     job = res.stdout.split("rule contact:")[1].split("\n\n")[0]
-    assert "mpi=mpiexec" in job and "tasks=2" in job and "threads: 2" in job, job
+    assert "launcher=mpiexec" in job and "tasks=2" in job and "threads: 2" in job, job
 
 
 @needs_mpi

@@ -1,7 +1,7 @@
 # Stage 3: frictionless normal contact, loaded in steps. One rule solves each group of cases and writes its file
 # once (roughcontact.pipeline.contact_jobs): one case ({group} = kl{k_l}_ks{k_s}_H{H}_s{seed}, or a measured
-# scene's file name), one case over contact.solver.ranks MPI processes (an MPI job: `mpi` resource mpiexec
-# locally, srun under profiles/slurm; `tasks` the ranks), or with contact.solver.batch: B the seeds
+# scene's file name), one case over contact.solver.ranks MPI processes (an MPI job: `mpi` and `tasks` the
+# ranks; `launcher` mpiexec locally, srun under profiles/slurm), or with contact.solver.batch: B the seeds
 # bB..bB+B-1 of one (k_l, k_s, H) ({group} = kl{k_l}_ks{k_s}_H{H}_b{b}: one NetCDF group a case).
 # params carry exactly the settings a solve depends on (roughcontact.pipeline.params.contact).
 
@@ -21,12 +21,15 @@ rule contact:
     conda:
         "../../envs/roughcontact.yaml"
     # locally a case over ranks takes its ranks' cores (profiles/slurm sets 1 CPU per task)
-    threads: contact_tasks
+    threads: contact_threads
+    # a case over ranks: an MPI job (mpi: 1) of `tasks` ranks, started by `launcher` (srun under profiles/slurm);
+    # a job in one process has neither mpi nor tasks (the SLURM executor would make it an MPI job)
     resources:
         mem_mb=contact_job_mem_mb,
         runtime=contact_job_runtime_min,
         tasks=contact_tasks,
-        mpi="mpiexec",
+        mpi=contact_mpi,
+        launcher="mpiexec",
     params:
         settings=contact_params(params.contact),
         surface=contact_surface_params(params.surface),

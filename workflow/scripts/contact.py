@@ -63,7 +63,7 @@ def solve_over_ranks(log, case, contact):
         shape, length = surface_grid(surf, path)  # a NaN in rows it does not sample: the ranks name it
         rms_slope, alpha, recorded_by = float(surf.rms_slope.squeeze()), float(surf.alpha.squeeze()), recorded(surf)
     [result] = run_case(path, contact, length=length, rms_slope=rms_slope, shape=shape,
-                        launcher=snakemake.resources.mpi, log=log, name=Path(snakemake.output[0]).stem)
+                        launcher=snakemake.resources.launcher, log=log, name=Path(snakemake.output[0]).stem)
     ds = contact_dataset(result, rms_slope=rms_slope, alpha=alpha, e_star=contact.settings.e_star,
                          **{"hurst" if key == "H" else key: value for key, value in case.items()})
     write_dataset(ds, snakemake.output[0], stage="contact", scene=snakemake.wildcards.scene,

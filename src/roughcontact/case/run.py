@@ -207,13 +207,13 @@ def mpi_command(launcher: str, ranks: int) -> list[str]:
     """
     words = shlex.split(launcher)
     if not words:
-        raise ValueError("contact.solver.ranks: the MPI launcher (the rule's 'mpi' resource) is empty; set it to "
+        raise ValueError("contact.solver.ranks: the MPI launcher (the rule's 'launcher' resource) is empty; set it to "
                          "mpiexec (local runs) or srun (SLURM)")
     found = shutil.which(words[0])
     if found is None and words[0] == "mpiexec" and (Path(sys.executable).parent / "mpiexec").exists():
         found = str(Path(sys.executable).parent / "mpiexec")
     if found is None:
-        raise ValueError(f"contact.solver.ranks: the MPI launcher {words[0]!r} (the rule's 'mpi' resource) is not "
+        raise ValueError(f"contact.solver.ranks: the MPI launcher {words[0]!r} (the rule's 'launcher' resource) is not "
                          "found; install one with pip install 'roughcontact[mpi]' (mpiexec), or on a cluster run "
                          "with --workflow-profile profiles/slurm (srun)")
     return [found, *words[1:], "-n", str(int(ranks))]
@@ -363,7 +363,7 @@ def _run_ranks(cmd: list[str], out: Path, progress, log) -> xr.Dataset:
                            "last lines:\n" + "\n".join(tail))
     if not out.is_file():  # a launcher that ends well without running the solve (a wrapper that drops it)
         raise RuntimeError(f"the MPI solve ({' '.join(cmd[:4])} ...) ended with status 0 but wrote no file; the "
-                           "launcher (the rule's 'mpi' resource) must run the command it is given")
+                           "launcher (the rule's 'launcher' resource) must run the command it is given")
     return xr.load_dataset(out)
 
 

@@ -36,6 +36,7 @@ from .cases import (
     batch_size,
     contact_batches,
 )
+from .sources import SOURCES, PatchSource
 
 __all__ = ["BUNDLE", "NAMED_RUNTIME_MIN", "ContactGroup", "ContactJobs", "contact_batch_mem_mb",
            "contact_batch_runtime_min", "contact_mem_mb", "contact_mpi_mem_mb", "contact_mpi_runtime_min",
@@ -152,17 +153,23 @@ class ContactJobs:
         a case of a batched scene, a batch of an unbatched one or past the seeds, a name not among the files, each
         named with what the scene has."""
         block = self.study_block(w.scene, "contact")
-        if self.scene_source(w.scene).stem != CASE_STEM:  # a patch source: its named cases
-            self.check_topography(SimpleNamespace(scene=w.scene, topography=w.group), "contact")
-            return ContactGroup("named", w.group, (w.group,), block)
         case, batch = _CASE.fullmatch(w.group), _BATCH.fullmatch(w.group)
+        named = SimpleNamespace(scene=w.scene, topography=w.group)
+        if self.scene_source(w.scene).stem != CASE_STEM:  # a patch source: its named cases
+            if case or batch:
+                self.generated_block(w.scene, "contact")  # says the scene's cases are named by file
+            self.check_topography(named, "contact")
+            return ContactGroup("named", w.group, (w.group,), block)
+        size = batch_size(block)
         if case is None and batch is None:
-            raise WorkflowError(f"scene {w.scene!r}, contact: {w.group!r} names no case (kl{{k_l}}_ks{{k_s}}_H{{H}}_"
-                                "s{seed}) and no batch of seeds (kl{k_l}_ks{k_s}_H{H}_b{batch})")
+            blocks = " nor ".join(f"{s.key} block" for s in SOURCES.values() if issubclass(s, PatchSource))
+            stem = (f"{CONTACT_BATCH_STEM}.nc (its seeds in batches of {size}: contact.solver.batch)" if size > 1
+                    else f"{CASE_STEM}.nc")
+            raise WorkflowError(f"scene {w.scene!r} has no {blocks}, so it has no named case {w.group!r}; its "
+                                f"contact files are named {stem}")
         found = case or batch
         self.check_grid_values(SimpleNamespace(scene=w.scene, **{k: found[k] for k in ("k_l", "k_s", "H")}),
                                "contact")
-        size = batch_size(block)
         if case is not None:
             return self._one_case(w, case, block, size)
         if size == 1:
@@ -229,10 +236,27 @@ class ContactJobs:
             return [{"topography": group.stem}]
         return [{"k_l": c.k_l, "k_s": c.k_s, "H": c.H, "seed": str(c.seed)} for c in group.members]
 
-    def contact_tasks(self, w) -> int:
-        """MPI processes of a contact job (SLURM's ``--ntasks``; locally its cores too): ``contact.solver.ranks`` for
-        a case over ranks, else 1."""
+    def contact_threads(self, w) -> int:
+        """Cores of a contact job: its ranks for a case over ranks (locally; ``profiles/slurm`` sets one CPU a task),
+        else 1."""
         return self.contact_group(w).ranks
+
+    def contact_tasks(self, w) -> int | None:
+        """The ``tasks`` resource of a contact job: its MPI processes (SLURM's ``--ntasks``) for a case over ranks;
+        none for a job in one process (Snakemake drops a resource that is None), whose group job's resources would
+        otherwise add up the tasks of its jobs."""
+        group = self.contact_group(w)
+        return group.ranks if group.kind == "ranks" else None
+
+    def contact_mpi(self, w) -> int | None:
+        """The ``mpi`` resource of a contact job: 1 for a case over ranks, none for a job in one process.
+
+        Its presence makes a job an MPI job to the SLURM executor (one allocation of ``tasks`` tasks, the job's
+        script run once inside it) and nothing else reads it: the command that starts the ranks is the rule's own
+        ``launcher`` resource (``mpiexec``; ``srun`` under ``profiles/slurm``), which a one-process job carries
+        unread, since a profile sets resources per rule, not per job.
+        """
+        return 1 if self.contact_group(w).kind == "ranks" else None
 
     def contact_bundle(self, w) -> str | None:
         """The rule's ``group``: :data:`BUNDLE` (``profiles/slurm`` packs such jobs into one SLURM job), none for a job
