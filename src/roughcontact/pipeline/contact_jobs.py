@@ -144,8 +144,8 @@ class ContactJobs:
     """The ``contact`` rule's functions of a job's wildcards (a mixin of :class:`~.targets.Targets`).
 
     The class it is mixed into supplies ``scenes`` (the validated scenes), ``scene_source``, ``study_block``,
-    ``check_grid_values(w, study)``, ``check_topography(w, study)`` and ``measured_mem_mb(w)`` (a requested
-    file's wildcards checked against its scene, with the allowed values named).
+    ``generated_block``, ``check_grid_values(w, study)``, ``check_topography(w, study)`` and ``measured_mem_mb(w)``
+    (a requested file's wildcards checked against its scene, with the allowed values named).
     """
 
     def contact_group(self, w) -> ContactGroup:
