@@ -30,6 +30,11 @@ def main(log):
         log.info(scene[1].text(scene[0]))
 
 
+def labels(case):
+    """The case's labels as contact_dataset names them (the wildcards' strings; H is hurst)."""
+    return {"hurst" if key == "H" else key: value for key, value in case.items()}
+
+
 def made_with(case):
     """What the case's surface must have been made with: its source's record (generator block, reader settings)."""
     return {for_case(case).record_key: snakemake.params.surface}
@@ -46,7 +51,7 @@ def solve_one(log, case, contact):
     [result] = run_case(heights, contact, length=length, rms_slope=rms_slope, log=log,
                         name=Path(snakemake.output[0]).stem)
     ds = contact_dataset(result, rms_slope=rms_slope, alpha=float(surf.alpha.squeeze()), e_star=contact.settings.e_star,
-                         **{"hurst" if key == "H" else key: value for key, value in case.items()})
+                         **labels(case))
     write_dataset(ds, snakemake.output[0], stage="contact", scene=snakemake.wildcards.scene,
                   scene_parameters={**recorded(surf), **snakemake.params.settings})
     log.info("contact %s: A/A0 %.4g -> %.4g, %d iterations in %.2f s", snakemake.output[0],
@@ -65,7 +70,7 @@ def solve_over_ranks(log, case, contact):
     [result] = run_case(path, contact, length=length, rms_slope=rms_slope, shape=shape,
                         launcher=snakemake.resources.launcher, log=log, name=Path(snakemake.output[0]).stem)
     ds = contact_dataset(result, rms_slope=rms_slope, alpha=alpha, e_star=contact.settings.e_star,
-                         **{"hurst" if key == "H" else key: value for key, value in case.items()})
+                         **labels(case))
     write_dataset(ds, snakemake.output[0], stage="contact", scene=snakemake.wildcards.scene,
                   scene_parameters={**recorded_by, **snakemake.params.settings})
     log.info("contact over %d ranks %s: A/A0 %.4g -> %.4g, %d iterations in %.2f s", contact.ranks,

@@ -186,16 +186,20 @@ def _run_one(heights, case: ContactCase, *, length, rms_slope, log, name, observ
     return _finished(result, heights, case, length, load_info, log, name or "case")
 
 
-def _refused_over_ranks(case: ContactCase) -> list[str]:
-    """What ``case`` asks that a solve over MPI ranks cannot compute (:mod:`roughcontact.solver.mpi` solves the
-    periodic elastic problem and reports per-step columns), named; a scene's are refused before any job by
-    :func:`roughcontact.pipeline.config.checks.check_ranks`."""
+def _refuse_over_ranks(case: ContactCase) -> None:
+    """``ValueError`` naming what ``case`` asks that a solve over MPI ranks cannot compute
+    (:mod:`roughcontact.solver.mpi` solves the periodic elastic problem and reports per-step columns); a scene's
+    are refused before any job by :func:`roughcontact.pipeline.config.checks.check_ranks`."""
     settings = case.settings
     refused = [(bool(case.outputs.get("full_contact_load")), "outputs['full_contact_load']"),
                (settings.boundary != "periodic", f"boundary={settings.boundary!r}"),
                (settings.array_backend not in (None, "numpy"), f"array_backend={settings.array_backend!r}"),
                (settings.method not in (None, BATCH_METHOD), f"method={settings.method!r}")]
-    return _beyond_per_step_columns(case) + [what for flag, what in refused if flag]
+    refused = _beyond_per_step_columns(case) + [what for flag, what in refused if flag]
+    if refused:
+        raise ValueError(f"run_case: a case over MPI ranks computes the periodic elastic solve's per-step "
+                         f"columns only, not {', '.join(refused)}; run it with ranks=1 (the heights as an array) "
+                         "for those")
 
 
 def mpi_command(launcher: str, ranks: int) -> list[str]:
@@ -250,19 +254,16 @@ def case_from_document(doc: Mapping) -> ContactCase:
 
 def _run_on_ranks(surface_file, case: ContactCase, *, shape, length, rms_slope: float, launcher: str, log,
                   name) -> xr.Dataset:
-    """:func:`run_case` of one surface file over ``case.ranks`` MPI processes.
+    """:func:`run_case` of one surface file over ``case.ranks`` MPI processes, started under ``launcher``.
 
-    The loads are resolved here, as for a surface solved in this process; the case and its loads are
-    written as plain values (:func:`case_document`, JSON: every float exact) for the ranks' program
-    ``launcher -n ranks python -m roughcontact.case JOB`` (:mod:`roughcontact.case.__main__`). Every rank
-    reads its own rows of ``surface_file`` (the grid is split in slabs along x), so no process but rank 0's
-    writer ever holds a whole field; rank 0 writes the per-step columns to a temporary file, read back here.
+    The loads are resolved here too (for the log and the step lines); the case, the cell and the surface's rms
+    slope are written as plain values (:func:`case_document`, JSON: every float exact) for the ranks' program
+    ``launcher -n ranks python -m roughcontact.case JOB`` (:mod:`roughcontact.case.__main__`), whose ranks
+    resolve the same loads (checked on the file they write). Every rank reads its own rows of ``surface_file``
+    (the grid is split in slabs along x), so no process but rank 0's writer ever holds a whole field; rank 0
+    writes the per-step columns to a temporary file, read back here.
     """
-    refused = _refused_over_ranks(case)
-    if refused:
-        raise ValueError(f"run_case: a case over MPI ranks computes the periodic elastic solve's per-step "
-                         f"columns only, not {', '.join(refused)}; run it with ranks=1 (the heights as an array) "
-                         "for those")
+    _refuse_over_ranks(case)
     if shape is None:
         shape = _file_grid(surface_file)
     cell = Cell.of(shape, length)
@@ -289,19 +290,12 @@ def _solve_on_ranks(surface_file, case: ContactCase, comm, *, shape, length, rms
     """:func:`run_case` of one surface file on every rank of ``comm``: each rank reads and solves its rows; rank 0
     prints each step's line to stderr (as :func:`_run_ranks` reads it) and gets the dataset, the others None."""
     from ..solver.mpi import solve_contact_mpi
-    from ..solver.mpi.program import file_rows
+    from ..solver.mpi.program import check_world, file_rows
     from ..solver.mpi.solver import collective
 
     def check():
-        if comm.size != case.ranks:
-            raise ValueError(f"ranks: {case.ranks} MPI ranks were asked for, but this process sees a world of "
-                             f"{comm.size}: the launcher started processes MPI did not join (srun without the PMI "
-                             "of the MPI library mpi4py was built with: try srun --mpi=pmi2, or build mpi4py "
-                             "against the site's MPI, docs/cluster.md)")
-        refused = _refused_over_ranks(case)
-        if refused:
-            raise ValueError(f"run_case: a case over MPI ranks computes the periodic elastic solve's per-step "
-                             f"columns only, not {', '.join(refused)}")
+        check_world(comm, case.ranks)
+        _refuse_over_ranks(case)
 
     collective(comm, check)
     rows, found, _ = collective(comm, lambda: file_rows(surface_file, comm))
@@ -334,10 +328,10 @@ def _file_grid(path) -> tuple[int, int]:
     """The ``(nx, ny)`` of a surface file's ``heights`` from its header (nothing else read)."""
     try:
         with xr.open_dataset(path) as ds:
-            if "heights" not in ds.variables:
-                raise ValueError(f"{path}: holds no variable 'heights'")
+            if "heights" not in ds.variables or not {"x", "y"} <= set(ds["heights"].dims):
+                raise ValueError(f"{path}: holds no variable 'heights' over (x, y); give a surface job's file")
             sizes = ds["heights"].sizes
-            return int(sizes.get("x", 0)), int(sizes.get("y", 0))
+            return int(sizes["x"]), int(sizes["y"])
     except OSError as exc:
         raise ValueError(f"{path}: cannot be read as NetCDF ({exc})") from None
 

@@ -38,7 +38,7 @@ from .cases import (
 )
 from .sources import SOURCES, PatchSource
 
-__all__ = ["BUNDLE", "NAMED_RUNTIME_MIN", "ContactGroup", "ContactJobs", "contact_batch_mem_mb",
+__all__ = ["BUNDLE", "NAMED_RUNTIME_MIN", "ContactGroup", "ContactJobs", "check_seed", "contact_batch_mem_mb",
            "contact_batch_runtime_min", "contact_mem_mb", "contact_mpi_mem_mb", "contact_mpi_runtime_min",
            "contact_path", "contact_runtime_min", "map_side", "ranks_of"]
 
@@ -96,6 +96,15 @@ def contact_mpi_runtime_min(n: int, n_steps: int, ranks: int) -> int:
     fused kernels of 2026-12-02, 1.14x on one rank and 0.70x a rank on two since; the transposes of many ranks and
     a cluster's shared memory bandwidth are not measured here)."""
     return max(5, math.ceil(4 * contact_runtime_min(n, n_steps) / ranks))
+
+
+def check_seed(scene: str, where: str, seed: str, n_seeds: int) -> None:
+    """Stop unless ``seed`` is one of the scene's seeds 0..n_seeds-1, written without leading zeros."""
+    if seed != str(int(seed)) or int(seed) >= n_seeds:
+        raise WorkflowError(
+            f"scene {scene!r}, {where}: wildcard seed={seed} is not one of the scene's seeds 0..{n_seeds - 1} "
+            "(written without leading zeros)"
+        )
 
 
 #: The SLURM profile's bundle of small jobs that contact jobs join (``group-components`` there); a job over MPI
@@ -190,9 +199,7 @@ class ContactJobs:
         """The group of one generated case (in one process or over ranks); a case of a batched scene is named with
         its batch's file."""
         seed = case["seed"]
-        if seed != str(int(seed)) or int(seed) >= block["seeds"]:
-            raise WorkflowError(f"scene {w.scene!r}, contact: wildcard seed={seed} is not one of the scene's seeds "
-                                f"0..{block['seeds'] - 1} (written without leading zeros)")
+        check_seed(w.scene, "contact", seed, block["seeds"])
         if size > 1:
             stem = CONTACT_BATCH_STEM.format(k_l=case["k_l"], k_s=case["k_s"], H=case["H"],
                                              batch=batch_index(seed, size))

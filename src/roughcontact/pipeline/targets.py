@@ -31,6 +31,7 @@ from .cases import BATCH_STEM, CASE_STEM
 from .config import ConfigError, load_schema
 from .contact_jobs import (  # noqa: F401 (the rules' resource formulas)
     ContactJobs,
+    check_seed,
     contact_mem_mb,
     contact_path,
     contact_runtime_min,
@@ -118,15 +119,6 @@ def not_allowed(scene: str, where: str, key: str, value: str, allowed) -> Workfl
     if same:
         msg += f" (file names carry the config's text verbatim: write {key}={same[0]})"
     return WorkflowError(msg)
-
-
-def check_seed(scene: str, where: str, seed: str, n_seeds: int) -> None:
-    """Stop unless ``seed`` is one of the scene's seeds 0..n_seeds-1, written without leading zeros."""
-    if seed != str(int(seed)) or int(seed) >= n_seeds:
-        raise WorkflowError(
-            f"scene {scene!r}, {where}: wildcard seed={seed} is not one of the scene's seeds 0..{n_seeds - 1} "
-            "(written without leading zeros)"
-        )
 
 
 def check_one_case(w, block: Mapping, study: str) -> None:

@@ -25,7 +25,7 @@ import sys
 import numpy as np
 
 from ...core.files import atomic_output, check_writable
-from .program import file_rows, run_program
+from .program import check_world, file_rows, run_program
 from .run import rows_of, solve_contact_mpi
 from .slabs import FFT_LIBRARIES
 
@@ -141,11 +141,8 @@ def _run(args, comm) -> int:
 def _check_arguments(args, comm) -> None:
     """What the command line alone decides, before any work; ``--out`` on rank 0, which writes it at the end (a
     path it cannot write fails now, not after the solve)."""
-    if args.expect_ranks is not None and comm.size != args.expect_ranks:
-        raise ValueError(f"ranks: {args.expect_ranks} MPI ranks were asked for, but this process sees a world of "
-                         f"{comm.size}: the launcher started processes MPI did not join (srun without the PMI "
-                         "of the MPI library mpi4py was built with: try srun --mpi=pmi2, or build mpi4py "
-                         "against the site's MPI, docs/cluster.md)")
+    if args.expect_ranks is not None:
+        check_world(comm, args.expect_ranks)
     if args.steps < 1:
         raise ValueError(f"--steps must be >= 1, got {args.steps}")
     if args.length_y is not None and args.length is None:

@@ -17,6 +17,16 @@ from .run import MpiUnavailableError, rows_of, world
 from .solver import CollectiveError
 
 
+def check_world(comm, ranks: int) -> None:
+    """``ValueError`` unless ``comm`` joins ``ranks`` processes: a launcher that starts ``ranks`` unconnected
+    processes (srun without the MPI library's PMI) gives ``ranks`` one-rank worlds, each solving the whole case."""
+    if comm.size != ranks:
+        raise ValueError(f"ranks: {ranks} MPI ranks were asked for, but this process sees a world of {comm.size}: "
+                         "the launcher started processes MPI did not join (srun without the PMI of the MPI library "
+                         "mpi4py was built with: try srun --mpi=pmi2, or build mpi4py against the site's MPI, "
+                         "docs/cluster.md)")
+
+
 def run_program(body) -> int:
     """``body(comm)`` on every rank of ``COMM_WORLD``, its exit status; bad input ends every rank with status 2.
 
