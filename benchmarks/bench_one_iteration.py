@@ -51,6 +51,10 @@ def main(argv=None) -> int:
     ap.add_argument("--p-max", type=float, default=0.005)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--no-tamaas", action="store_true")
+    ap.add_argument("--batch", type=int, default=1,
+                    help="the batched rows solve B copies of the map at once; their CPU is then given per case "
+                         "(the total divided by B), so that the ratio is a case's cost in a batch against the "
+                         "single solve's")
     ap.add_argument("--apart", action="store_true",
                     help="add the row 'batched-apart': B = 1 with the batches' out-of-place transforms instead of "
                          "one case's in-place ones (the A/B of solver/batch/halfspace.py's in-place plans)")
@@ -63,7 +67,8 @@ def main(argv=None) -> int:
     load0 = os.getloadavg()
     h = generate_surface(a.n, 16, 32, 0.8, 0, rms_slope=0.1)
     loads = np.linspace(a.p_max / a.steps, a.p_max, a.steps)
-    ours = {"single": lambda: solve_contact(h, loads), "batched": lambda: solve_contact_batch(h[None], loads)}
+    hb = np.repeat(h[None], a.batch, axis=0)
+    ours = {"single": lambda: solve_contact(h, loads), "batched": lambda: solve_contact_batch(hb, loads)}
     if a.apart:
         from roughcontact.solver.batch import halfspace
 
@@ -71,7 +76,7 @@ def main(argv=None) -> int:
             shipped = halfspace.fft_module.has_shipped_plans
             halfspace.fft_module.has_shipped_plans = lambda shape: False  # BatchFFT plans out of place
             try:
-                return solve_contact_batch(h[None], loads)
+                return solve_contact_batch(hb, loads)
             finally:
                 halfspace.fft_module.has_shipped_plans = shipped
 
@@ -85,14 +90,16 @@ def main(argv=None) -> int:
     tamaas = None if a.no_tamaas else run_tamaas(h, loads, 1e-8)
     load1 = os.getloadavg()
     print(f"bench_one_iteration {datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M} UTC, N = {a.n}, "
-          f"{a.steps} steps to {a.p_max}, repeats {a.repeats}, load {load0[0]:.2f} -> {load1[0]:.2f}")
+          f"{a.steps} steps to {a.p_max}, repeats {a.repeats}, B = {a.batch} (batched rows: CPU and wall per case), "
+          f"load {load0[0]:.2f} -> {load1[0]:.2f}")
     rows = []
     for name, rs in runs.items():
-        its = int(rs[0][2].iterations.sum())
+        per = a.batch if name != "single" else 1  # a batch's cost per case
+        its = int(rs[0][2].iterations.sum()) // per
         conv = all(bool(r[2].converged.all()) for r in rs)
         area = float(np.asarray(rs[0][2].area_fraction).reshape(-1)[-1])
-        cpu = [r[0] for r in rs]
-        wall = [r[1] for r in rs]
+        cpu = [r[0] / per for r in rs]
+        wall = [r[1] / per for r in rs]
         rows.append((name, min(cpu), statistics.median(cpu), min(wall), its, conv, area))
     if tamaas is not None:
         rows.append(("tamaas", tamaas["cpu"], tamaas["cpu"], tamaas["wall"], int(sum(tamaas["iterations"])), True,

@@ -259,3 +259,61 @@ def test_the_in_place_plans_are_those_of_one_case_with_shipped_plans():
     assert one.in_place and not many.in_place and not odd.in_place
     assert one.input32.base is not None and not one.input32.flags.c_contiguous
     assert np.shares_memory(one.input32, one.spec32) and not np.shares_memory(many.input32, many.spec32)
+
+
+def _per_case(rng, B, kind):
+    """A ``(B, 1, 1)`` per-case array of random values with the edge values a decision must handle."""
+    if kind == "bool":
+        return (rng.random(B) < 0.5).reshape(B, 1, 1)
+    if kind == "int":
+        return rng.integers(0, 12, B).astype(np.int64).reshape(B, 1, 1)
+    v = rng.standard_normal(B) * 10.0 ** rng.integers(-12, 3, B)
+    special = rng.random(B)
+    v[special < 0.08] = 0.0
+    v[(special >= 0.08) & (special < 0.12)] = -0.0
+    v[(special >= 0.12) & (special < 0.15)] = np.inf
+    v[(special >= 0.15) & (special < 0.17)] = np.nan
+    return v.reshape(B, 1, 1)
+
+
+def test_compiled_decisions_are_the_plain_expressions_bit_for_bit():
+    """The per-case decisions of the fused host kernels (one compiled call each) give the plain expressions'
+    results and in-place updates bit for bit, signed zeros, infinities and NaNs among the inputs."""
+    from roughcontact.solver.batch.cpu import FusedCpuKernels
+    from roughcontact.solver.batch.kernels import ArrayKernels
+
+    rng = np.random.default_rng(11)
+    B = 4000
+    r = functools.partial(_per_case, rng, B)
+    pos = np.abs(r("float"))
+    it, at, max_iter = r("int"), r("int"), r("int")
+    calls = {
+        "gbar": (lambda k, s, n: k.gbar(s, n), (r("float"), r("int")), 0),
+        "decide": (lambda k, *a: k.decide(*a),
+                   (pos, r("float"), r("float"), pos + 0.5, pos + 1.0, 1e-8, 3, np.inf, it, max_iter, r("bool"),
+                    10.0 ** rng.integers(-9, -3, B).reshape(B, 1, 1), pos * 10, at, r("bool"), r("bool"),
+                    r("bool"), r("bool")), 11),
+        "join_fix": (lambda k, *a: k.join_fix(*a), (r("int"), r("int"), r("float"), r("bool"), r("bool")), 3),
+        "beta": (lambda k, *a: k.beta(*a), (r("float"), r("float"), r("float"), r("float"), r("bool"), r("bool"),
+                                           r("bool")), 5),
+        "direction_done": (lambda k, *a: k.direction_done(*a), (r("float"), r("bool"), r("float"), r("bool"),
+                                                               r("bool"), r("float"), r("float")), 4),
+        "step_length": (lambda k, *a: k.step_length(*a), (r("float"), r("float"), r("float"), np.nan, r("bool"),
+                                                         r("bool")), 4),
+        "projection_scale": (lambda k, *a: k.projection_scale(*a), (r("bool"), r("float"), pos, r("bool"),
+                                                                   r("bool"), r("float")), 3),
+        "shrink_fix": (lambda k, *a: k.shrink_fix(*a), (r("int"), r("int"), r("float"), 0.1, r("bool"), r("bool"),
+                                                       r("bool"), r("bool")), 6),
+    }
+    for name, (call, args, first_state) in calls.items():
+        got = {}
+        for label, k in (("plain", ArrayKernels(np)), ("fused", FusedCpuKernels())):
+            a = [x.copy() if isinstance(x, np.ndarray) else x for x in args]
+            with np.errstate(all="ignore"):  # the NaNs and infinities are meant
+                out = call(k, *a)
+            got[label] = [*(out if isinstance(out, tuple) else (() if out is None else (out,))), *a[first_state:]]
+        for plain, fused in zip(got["plain"], got["fused"], strict=True):
+            plain, fused = np.asarray(plain), np.asarray(fused)
+            assert plain.dtype == fused.dtype and plain.shape == fused.shape, name
+            same = plain.view(np.uint8) == fused.view(np.uint8) if plain.dtype != bool else plain == fused
+            assert same.all(), (name, np.flatnonzero(~same.reshape(B, -1).all(axis=1))[:5])

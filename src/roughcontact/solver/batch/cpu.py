@@ -33,7 +33,7 @@ _JIT = {"cache": True, "nogil": True}
 
 def _fields(*arrays):
     """``(B, n)`` views of ``(B, nx, ny)`` fields (C-contiguous: a reshape is a view)."""
-    return tuple(a.reshape(a.shape[0], -1) for a in arrays)
+    return [a.reshape(a.shape[0], -1) for a in arrays]
 
 
 def _rows(a):
@@ -49,6 +49,26 @@ def _rows(a):
     shift = ny.bit_length() - 1 if ny & (ny - 1) == 0 else -1
     if a.flags.c_contiguous:
         return a.reshape(B, -1), ny, shift, 0
+    # a padded buffer is a transform's, made once and used every round: its view is made once too (the
+    # checks and as_strided cost ~15 us, which a small grid's round notices). The cache holds the view,
+    # and with it the buffer, so the address cannot be another array's while the entry lives.
+    key = (a.__array_interface__["data"][0], a.shape, a.strides, a.dtype.str)
+    hit = _ROWS.get(key)
+    if hit is not None:
+        return hit
+    if len(_ROWS) >= 16:
+        _ROWS.clear()
+    hit = _ROWS[key] = _padded_rows(a, shift)
+    return hit
+
+
+#: :func:`_rows`' views of padded buffers, by address, shape, strides and type
+_ROWS: dict = {}
+
+
+def _padded_rows(a, shift):
+    """:func:`_rows` of a field with padded rows (checked to lie in one buffer)."""
+    B, nx, ny = a.shape
     it = a.itemsize
     row = a.strides[1] // it if a.strides[1] % it == 0 else 0
     base = a
@@ -75,8 +95,21 @@ def _at(i, ny, shift, extra):
 
 def _cases(x, B: int, dtype=np.float64):
     """A per-case value as a contiguous ``(B,)`` array (``(B, 1, 1)`` arrays and scalars alike)."""
+    if type(x) is np.ndarray and x.dtype == dtype and x.size == B and x.flags.c_contiguous:
+        return x.reshape(B)  # the iteration's own per-case arrays: a view, no conversion
     a = np.asarray(x, dtype=dtype).reshape(-1)
     return a if a.size == B else np.full(B, a[0], dtype=dtype)
+
+
+def _state(*arrays):
+    """``(B,)`` views of per-case state arrays that a kernel updates in place (``(B, 1, 1)``, C-contiguous)."""
+    out = []
+    for a in arrays:
+        if not (isinstance(a, np.ndarray) and a.flags.c_contiguous):
+            raise TypeError(f"a per-case state must be a C-contiguous numpy array to be updated in place; got "
+                            f"{type(a).__name__}")
+        out.append(a.reshape(-1))
+    return out
 
 
 @njit(**_JIT)
@@ -440,6 +473,116 @@ def _finish_start(P, w, h, R, ny, shift, extra, sigma, sc, loaded, ext, lin, p_f
                 P[b, i] = p_fill[b]
 
 
+# -- per-case decisions: one compiled call each instead of 10-40 numpy operations on (B, 1, 1) arrays --
+# The same arithmetic as ArrayKernels' expressions, case by case: ``_nmax(a, b)`` is numpy's maximum (NaN
+# propagated; ``a`` where equal), so the results are those of the plain expressions bit for bit.
+
+
+@njit(inline="always")
+def _nmax(a, b):
+    if a != a or a >= b:
+        return a
+    return b
+
+
+@njit(**_JIT)
+def _gbar(s, n, out):
+    for b in range(s.shape[0]):
+        out[b] = s[b] / n[b] if n[b] > 0 else 0.0
+
+
+@njit(**_JIT)
+def _decide(orth, wmin, gbar, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
+            next_sync, best, at, done, waiting, converged, go):
+    for b in range(orth.shape[0]):
+        pen = _nmax(gbar[b] - wmin[b], 0.0)
+        o = orth[b] * inv_norm[b]
+        r = _nmax(_nmax(o, pen / scale[b]), 0.0) if np.isfinite(o) and np.isfinite(pen) else big
+        active = not (done[b] or waiting[b])
+        below = r <= tol
+        conv = active and below and fresh[b]
+        sync_level = (not below) and r < next_sync[b]
+        want = active and (not fresh[b]) and (below or sync_level)
+        for _ in range(6):  # at most ~4 steps from 1e-5 to any tol >= 1e-16
+            if want and sync_level and next_sync[b] > r:
+                next_sync[b] = next_sync[b] * 1e-4
+        rest = active and not conv and not want
+        if rest and r < 0.5 * best[b]:
+            best[b] = r
+            at[b] = it[b]
+        stop = rest and (not np.isfinite(r) or it[b] >= max_iter[b] or it[b] - at[b] >= stall)
+        go[b] = rest and not stop
+        converged[b] = converged[b] or conv
+        waiting[b] = waiting[b] or want
+        done[b] = done[b] or conv or stop
+
+
+@njit(**_JIT)
+def _join_fix(nnew, nold, gsum, go, done, c, nf):
+    for b in range(nnew.shape[0]):
+        joined = go[b] and nnew[b] > nold[b]
+        empty = go[b] and nnew[b] == 0
+        done[b] = done[b] or empty
+        go[b] = go[b] and not empty
+        nf[b] = np.float64(nnew[b]) if nnew[b] > 0 else 1.0
+        c[b] = gsum[b] / nf[b] if joined else 0.0
+
+
+@njit(**_JIT)
+def _beta(G, gpa, g_old, delta, gprev_ok, go, done, beta, restart):
+    for b in range(G.shape[0]):
+        ok = G[b] > 0.0 and np.isfinite(G[b])
+        done[b] = done[b] or (go[b] and not ok)
+        go[b] = go[b] and ok
+        restart[b] = not (delta[b] > 0.0 and g_old[b] > 0.0)
+        d = g_old[b] if g_old[b] != 0.0 else 1.0
+        bb = _nmax(0.0, (G[b] - gpa[b]) / d) if gprev_ok[b] else G[b] / d
+        beta[b] = 0.0 if restart[b] or not go[b] else bb
+
+
+@njit(**_JIT)
+def _direction_done(dd, restart, G, go, gprev_ok, g_old, delta, keep):
+    for b in range(dd.shape[0]):
+        keep[b] = go[b] and (restart[b] or dd[b] > 0.0)
+        if go[b]:
+            gprev_ok[b] = True
+            g_old[b] = G[b]
+            delta[b] = 1.0
+
+
+@njit(**_JIT)
+def _step_length(quad, sigma, gt, nan, go, done, tau):
+    for b in range(quad.shape[0]):
+        rt = quad[b] * (sigma[b] * sigma[b])  # numpy's sigma ** 2 is this product
+        tt = gt[b] / rt if rt > 0.0 else nan
+        ok = np.isfinite(tt) and tt > 0.0
+        done[b] = done[b] or (go[b] and not ok)
+        go[b] = go[b] and ok
+        tau[b] = tt if go[b] else 0.0
+
+
+@njit(**_JIT)
+def _projection_scale(pany, total, target, go, done, tau, proj, ps):
+    for b in range(pany.shape[0]):
+        pj = go[b] and pany[b]
+        bad = pj and not (total[b] > 0.0)
+        done[b] = done[b] or bad
+        go[b] = go[b] and not bad
+        proj[b] = pj and not bad
+        if not go[b]:
+            tau[b] = 0.0
+        ps[b] = target[b] / (total[b] if total[b] > 0.0 else 1.0) if proj[b] else 1.0
+
+
+@njit(**_JIT)
+def _shrink_fix(nold, nnew, tsum, frac, proj, go, gprev_ok, fresh, c):
+    for b in range(nold.shape[0]):
+        if proj[b] and (nold[b] - nnew[b]) >= frac * nold[b]:
+            gprev_ok[b] = False
+        fresh[b] = fresh[b] and not go[b]
+        c[b] = tsum[b] / (nnew[b] if nnew[b] > 0 else 1) if proj[b] else 0.0
+
+
 class FreeSet:
     """The free set ``F`` of every case of a batch: its mask and each case's node indices.
 
@@ -674,6 +817,61 @@ class FusedCpuKernels(ArrayKernels):
         f, idx, cnt = F.flat()
         sums = _shrink(*_fields(P), f, idx, cnt, *_fields(t, g_prev))
         return self.allcount(self._col(cnt.copy())), self.allsum(self._col(sums))
+
+    # -- per-case decisions (the state arguments in place) ------------------------------------
+
+    def gbar(self, s, n):
+        B = s.shape[0]
+        out = np.empty(B)
+        _gbar(_cases(s, B), _cases(n, B, np.int64), out)
+        return self._col(out)
+
+    def decide(self, orth, wmin, gbar, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
+               next_sync, best, at, done, waiting, converged, go):
+        B = orth.shape[0]
+        _decide(_cases(orth, B), _cases(wmin, B), _cases(gbar, B), _cases(inv_norm, B), _cases(scale, B),
+                float(tol), int(stall), float(big), _cases(it, B, np.int64), _cases(max_iter, B, np.int64),
+                _cases(fresh, B, np.bool_), *_state(next_sync, best, at, done, waiting, converged, go))
+
+    def join_fix(self, nnew, nold, gsum, go, done):
+        B = gsum.shape[0]
+        c, nf = np.empty(B), np.empty(B)
+        _join_fix(_cases(nnew, B, np.int64), _cases(nold, B, np.int64), _cases(gsum, B), *_state(go, done), c, nf)
+        return self._col(c), self._col(nf)
+
+    def beta(self, G, gpa, g_old, delta, gprev_ok, go, done):
+        B = G.shape[0]
+        beta, restart = np.empty(B), np.empty(B, dtype=np.bool_)
+        _beta(_cases(G, B), _cases(gpa, B), _cases(g_old, B), _cases(delta, B), _cases(gprev_ok, B, np.bool_),
+              *_state(go, done), beta, restart)
+        return self._col(beta), self._col(restart)
+
+    def direction_done(self, dd, restart, G, go, gprev_ok, g_old, delta):
+        B = G.shape[0]
+        keep = np.empty(B, dtype=np.bool_)
+        _direction_done(_cases(dd, B), _cases(restart, B, np.bool_), _cases(G, B), _cases(go, B, np.bool_),
+                        *_state(gprev_ok, g_old, delta), keep)
+        return self._col(keep)
+
+    def step_length(self, quad, sigma, gt, nan, go, done):
+        B = gt.shape[0]
+        tau = np.empty(B)
+        _step_length(_cases(quad, B), _cases(sigma, B), _cases(gt, B), float(nan), *_state(go, done), tau)
+        return self._col(tau)
+
+    def projection_scale(self, pany, total, target, go, done, tau):
+        B = total.shape[0]
+        proj, ps = np.empty(B, dtype=np.bool_), np.empty(B)
+        _projection_scale(_cases(pany, B, np.bool_), _cases(total, B), _cases(target, B), *_state(go, done, tau),
+                          proj, ps)
+        return self._col(proj), self._col(ps)
+
+    def shrink_fix(self, nold, nnew, tsum, frac, proj, go, gprev_ok, fresh):
+        B = tsum.shape[0]
+        c = np.empty(B)
+        _shrink_fix(_cases(nold, B, np.int64), _cases(nnew, B, np.int64), _cases(tsum, B), float(frac),
+                    _cases(proj, B, np.bool_), _cases(go, B, np.bool_), *_state(gprev_ok, fresh), c)
+        return self._col(c)
 
     # -- the warm start of a load step --------------------------------------------------------
 

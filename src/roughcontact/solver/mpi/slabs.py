@@ -158,12 +158,14 @@ class _SlabPlans:
                 return
             self.col_spec = pyfftw.empty_aligned((B, cols, nx), dtype=cplx)
             # a forward sends the rank's rows of the half spectrum and receives its columns; a backward the
-            # reverse. One pair of byte buffers serves both precisions (``exchange``: the other's, viewed)
+            # reverse. The blocks to send are packed (transposed) into one byte buffer that serves both
+            # precisions (``exchange``: the other's, viewed); they are received in place (no buffer)
             size = B * max(rows * nc, cols * nx) * np.dtype(cplx).itemsize
-            if exchange is None or exchange[0].nbytes < size:
-                exchange = (np.empty(size, dtype=np.uint8), np.empty(size, dtype=np.uint8))
+            if exchange is None or exchange.nbytes < size:
+                exchange = np.empty(size, dtype=np.uint8)
             self.exchange = exchange
-            self.send, self.recv = (b[:size].view(cplx) for b in exchange)
+            self.send = exchange[:size].view(cplx)
+            self.types = {}  # FftwSlabFFT._receive_types' datatypes, by receiving buffer
             self.rfft = pyfftw.FFTW(self.real_in, self.row_spec, axes=(2,), direction="FFTW_FORWARD", **kw)
             self.cfft = pyfftw.FFTW(self.col_spec, self.col_spec, axes=(2,), direction="FFTW_FORWARD", **kw)
             self.icfft = pyfftw.FFTW(self.col_spec, self.col_spec, axes=(2,), direction="FFTW_BACKWARD", **kw)
@@ -195,15 +197,26 @@ class FftwSlabFFT(SlabFFT):
             if shared is not None and self._plans[key].exchange is not shared:  # larger now: every plan uses it
                 for p in self._plans.values():
                     p.exchange = self._plans[key].exchange
-                    p.send, p.recv = (b[:p.send.nbytes].view(p.send.dtype) for b in p.exchange)
+                    p.send = p.exchange[:p.send.nbytes].view(p.send.dtype)
         return self._plans[key]
 
-    def _alltoall(self, p: _SlabPlans, send_counts, recv_counts) -> None:
-        from mpi4py import MPI
+    def _receive_types(self, p: _SlabPlans, dst, dst_parts) -> list:
+        """MPI datatypes that put rank ``r``'s block straight into ``dst[:, :, d0:d1]`` (made once a buffer).
 
-        mt = MPI.C_FLOAT_COMPLEX if p.send.dtype == np.complex64 else MPI.C_DOUBLE_COMPLEX
-        self.comm.Alltoallv([p.send, (send_counts, np.cumsum([0] + send_counts[:-1])), mt],
-                            [p.recv, (recv_counts, np.cumsum([0] + recv_counts[:-1])), mt])
+        A vector of ``B m`` rows of ``d1 - d0`` values, ``dst.shape[2]`` apart: the received block lands in
+        place, with no unpacking copy. Measured at 2048² on 2 ranks (2026-12-02): a forward and backward
+        transpose pair 5.95-6.27 ms of CPU a rank against 6.65-6.76 with the copy. Sending with datatypes
+        too (the transpose done by MPI) cost 3x: MPICH packs such a type value by value.
+        """
+        key = (id(dst), tuple(dst_parts))
+        types = p.types.get(key)
+        if types is None:
+            from mpi4py import MPI
+
+            base = MPI.C_FLOAT_COMPLEX if dst.dtype == np.complex64 else MPI.C_DOUBLE_COMPLEX
+            B, m, k = dst.shape
+            types = p.types[key] = [base.Create_vector(B * m, d1 - d0, k).Commit() for d0, d1 in dst_parts]
+        return types
 
     def _transpose(self, p: _SlabPlans, src, dst, src_parts, dst_parts) -> None:
         """The all-to-all transpose between the rows' and the columns' layouts, either way.
@@ -213,7 +226,7 @@ class FftwSlabFFT(SlabFFT):
         in ``dst[:, :, d0:d1]`` (``(d0, d1) = dst_parts[r]``). The rank's own block is copied across
         directly, not sent.
         """
-        B, me, m = src.shape[0], self.slabs.rank, dst.shape[1]
+        B, me = src.shape[0], self.slabs.rank
         counts, at = [], 0
         for r, (a0, a1) in enumerate(src_parts):
             n = 0 if r == me else B * (a1 - a0) * src.shape[1]
@@ -223,13 +236,16 @@ class FftwSlabFFT(SlabFFT):
             at += n
         (a0, a1), (d0, d1) = src_parts[me], dst_parts[me]
         np.copyto(dst[:, :, d0:d1], src[:, :, a0:a1].transpose(0, 2, 1))
-        recv_counts = [0 if r == me else B * m * (d1 - d0) for r, (d0, d1) in enumerate(dst_parts)]
-        self._alltoall(p, counts, recv_counts)
-        at = 0
-        for (d0, d1), n in zip(dst_parts, recv_counts, strict=True):
-            if n:
-                dst[:, :, d0:d1] = p.recv[at:at + n].reshape(B, m, d1 - d0)
-            at += n
+        from mpi4py import MPI
+
+        base = MPI.C_FLOAT_COMPLEX if p.send.dtype == np.complex64 else MPI.C_DOUBLE_COMPLEX
+        item = p.send.itemsize
+        send_displs = [int(x) * item for x in np.cumsum([0] + counts[:-1])]
+        # rank r's block received in place: one value of its vector type, at byte offset d0 of dst's rows
+        recv_counts = [0 if r == me or d1 == d0 else 1 for r, (d0, d1) in enumerate(dst_parts)]
+        recv_displs = [d0 * item for d0, _ in dst_parts]
+        self.comm.Alltoallw([p.send, counts, send_displs, [base] * len(counts)],
+                            [dst, recv_counts, recv_displs, self._receive_types(p, dst, dst_parts)])
 
     def forward(self, x):
         p = self.plans(x.shape[0], x.dtype)
