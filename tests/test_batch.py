@@ -202,20 +202,21 @@ def test_fused_kernels_read_and_write_padded_rows_as_contiguous_ones(ny):
 
     def run(out, rin):
         k = FusedCpuKernels()
+        vec = functools.partial(k.gather, F=mask)  # t, g, a, g_prev as the kernels hold them: vectors on F
         got = {}
-        k.to32(P, inv_sigma, out=out, F=mask)
+        k.to32(vec(P), inv_sigma, out=out, F=mask)
         got["to32"] = out.copy()
         k.overwritten(out)  # as after an in-place transform: the next sparse write zeroes it whole
         out[...] = 5.0
-        tt, gp = t.copy(), g_prev.copy()
-        _, gt = k.new_direction_input(tt, a, g, beta, keep, go, gp, mask, inv_sigma, out=out)
-        got["direction"], got["t"], got["gt"] = out.copy(), tt, gt
+        tt, gp = vec(t), vec(g_prev)
+        _, gt = k.new_direction_input(tt, vec(a), vec(g), beta, keep, go, gp, mask, inv_sigma, out=out)
+        got["direction"], got["t"], got["gt"] = out.copy(), k.scatter(tt, mask), gt
         PP = P.copy()
-        k.project(PP, t, tau, go, scale, inv_sigma, out=out, F=mask)
+        k.project(PP, vec(t), tau, go, scale, inv_sigma, out=out, F=mask)
         got["project"], got["P"] = out.copy(), PP
         rin[...] = R
         sc, s = k.scaled_sum(rin, col(1.5, 2.5), mask)
-        got["scaled"], got["scaled_sum"] = np.where(mask, sc, 0.0), s
+        got["scaled"], got["scaled_sum"] = k.scatter(sc, mask), s
         w = g.copy()
         k.add_scaled(w, rin, col(0.25, -1.0))
         got["w"] = w
@@ -317,3 +318,55 @@ def test_compiled_decisions_are_the_plain_expressions_bit_for_bit():
             assert plain.dtype == fused.dtype and plain.shape == fused.shape, name
             same = plain.view(np.uint8) == fused.view(np.uint8) if plain.dtype != bool else plain == fused
             assert same.all(), (name, np.flatnonzero(~same.reshape(B, -1).all(axis=1))[:5])
+
+
+def test_compressed_vectors_on_the_free_set_are_the_plain_fields():
+    """The fused host kernels hold t, g, a and g_prev compressed over F (one value per node of F, in its
+    index order); the plain kernels as fields zero off F. Through a join, the direction's passes, a
+    projected step, a shrink (F compacted) and a second join (the joining nodes' t and g_prev must be 0),
+    both give the same fields, exactly where a value is element-wise and to round-off where a sum's order
+    differs."""
+    from roughcontact.solver.batch.cpu import FusedCpuKernels
+    from roughcontact.solver.batch.kernels import ArrayKernels
+
+    rng = np.random.default_rng(5)
+    B, n = 3, 12
+    shape = (B, n, n)
+    col = lambda *v, dt=float: np.array(v, dtype=dt).reshape(B, 1, 1)  # noqa: E731
+    mask0 = rng.random(shape) < 0.3
+    P0 = np.where(mask0, rng.random(shape) + 0.05, 0.0)
+    w0 = rng.standard_normal(shape)
+    t0, gp0 = (np.where(mask0, rng.standard_normal(shape), 0.0) for _ in range(2))
+    R = rng.standard_normal(shape).astype(np.float32)
+    go = col(True, False, True, dt=bool)
+    gbar, tau, sigma = col(-0.5, 0.0, 0.3), col(0.4, 0.2, 0.9), col(1.5, 0.7, 2.0)
+
+    def run(k):
+        F = k.free_set(mask0.copy())
+        P, w = P0.copy(), w0.copy()
+        t, gp = k.gather(t0, F), k.gather(gp0, F)
+        out = {}
+        F, g, nF, gsum = k.join_stats(w, gbar, F, go)
+        k.sub_masked(g, gsum / np.maximum(nF, 1), F)
+        out["g"], out["t_joined"], out["F"] = k.scatter(g, F), k.scatter(t, F), getattr(F, "mask", F).copy()
+        a, a_sum = k.scaled_sum(R, sigma, F)
+        G, gpa, gt = k.center_dots(a, a_sum / np.maximum(nF, 1), F, g, gp, t)
+        out["a"], out["dots"] = k.scatter(a, F), np.concatenate([G, gpa, gt])
+        x32, gt2 = k.new_direction_input(t, a, g, col(0.5, 0.1, 0.0), col(True, False, False, dt=bool), go, gp, F,
+                                         1.0 / sigma, out=np.zeros(shape, np.float32))
+        out["x32"], out["t"], out["gp"], out["gt"] = x32.copy(), k.scatter(t, F), k.scatter(gp, F), gt2
+        total, pany = k.trial_stats(P, t, tau, F)
+        out["trial"] = np.concatenate([total, pany.astype(float)])
+        d32 = k.project(P, t, tau, go, col(1.2, 1.0, 0.9), 1.0 / sigma, out=np.zeros(shape, np.float32), F=F)
+        out["d32"], out["P"] = d32.copy(), P.copy()
+        nF2, tsum = k.shrink_stats(P, F, t, gp)
+        out["shrunk"] = np.concatenate([nF2.astype(float), tsum])
+        out["t_shrunk"], out["gp_shrunk"] = k.scatter(t, F), k.scatter(gp, F)
+        F, g, nF3, _ = k.join_stats(w - 0.3, gbar + 0.8, F, col(True, True, True, dt=bool))
+        out["t_rejoined"], out["gp_rejoined"], out["n3"] = k.scatter(t, F), k.scatter(gp, F), nF3
+        return out
+
+    plain, fused = run(ArrayKernels(np)), run(FusedCpuKernels())
+    assert plain["n3"].sum() > plain["shrunk"][:B].sum() > 0  # the second join added nodes, the shrink took some
+    for name, want in plain.items():
+        np.testing.assert_allclose(fused[name], want, rtol=1e-12, atol=1e-12, err_msg=name)

@@ -7,13 +7,16 @@ load or core count), as :class:`~.cuda.CupyKernels` does with CUDA kernels on a 
 measurement (benchmarks/profile_iteration.py ``--batched``, benchmarks/README.md): at 1024² the
 plain expressions cost ~80 ms of CPU an iteration, the fused loops ~10.
 
-What makes most passes cheap: the pressure ``P``, the direction ``t`` and the last gradient
-``g_prev`` are zero off the free set ``F`` (10 % of the nodes at the paper's loads), and the gradient
-``g`` and the preconditioned gradient ``a`` are read on ``F`` only (their values off ``F`` are left
-undefined here). So a loop touches the float64 values on ``F``'s nodes only, and skips eight nodes at
-a time where ``F`` holds none of them (one 8-byte read of ``F``'s flags). Only the gap ``w`` and the
-float32 transforms' inputs are dense. Passes that follow each other are fused where the iteration
-allows (:meth:`FusedCpuKernels.center_dots`, :meth:`FusedCpuKernels.new_direction_on`).
+What makes most passes cheap: the pressure ``P`` is zero off the free set ``F`` (10 % of the nodes at the
+paper's loads), and the iteration's vectors on ``F`` (the direction ``t``, the last gradient ``g_prev``, a
+round's gradient ``g`` and preconditioned gradient ``a``) are held compressed: ``(B, nx ny)`` arrays whose
+position ``k`` holds node ``F.idx[b, k]``'s value, for ``k < |F|`` (:class:`FreeSet`,
+:meth:`FusedCpuKernels.vector`). So a loop reads ``|F|`` consecutive values of each vector, and the
+pressure and the gap at ``F``'s nodes through its indices. Only the gap ``w``, ``P`` and the float32
+transforms' inputs are fields. Measured against the same loops on fields indexed through ``F``
+(2026-12-02, benchmarks/README.md, side by side with the single solve in one process): a batch of one case
+went from 1.030x to 0.953x the single solve's CPU at 1024² and from 1.045x to 0.921x at 2048². Passes that follow each other are fused where the iteration allows
+(:meth:`FusedCpuKernels.center_dots`, :meth:`FusedCpuKernels.new_direction_input`).
 
 Sums are accumulated in index order per case (deterministic; not numpy's pairwise order, so a sum
 differs from :class:`~.kernels.ArrayKernels`' in the last bits). Per-case partial results
@@ -183,14 +186,14 @@ def _orth(p, w, gbar, idx, cnt):
 
 
 @njit(**_JIT)
-def _dot_on(u, v, idx, cnt):
+def _dot_on(u, v, cnt):
+    """``u . v`` per case of two vectors on F."""
     B = u.shape[0]
     out = np.zeros(B)
     for b in range(B):
         s = 0.0
         for k in range(cnt[b]):
-            i = idx[b, k]
-            s += u[b, i] * v[b, i]
+            s += u[b, k] * v[b, k]
         out[b] = s
     return out
 
@@ -207,11 +210,11 @@ def _clear(out, ny, shift, extra, written, wcnt):
 
 @njit(**_JIT)
 def _to32_on(x, scale, idx, cnt, out, ny, shift, extra):
+    """``out = x scale`` at F's nodes (``x`` a vector on F, ``out`` a :func:`_rows` view)."""
     for b in range(x.shape[0]):
         s = scale[b]
         for k in range(cnt[b]):
-            i = idx[b, k]
-            out[b, _at(i, ny, shift, extra)] = x[b, i] * s  # rounded once to out's precision
+            out[b, _at(idx[b, k], ny, shift, extra)] = x[b, k] * s  # rounded once to out's precision
 
 
 @njit(**_JIT)
@@ -236,15 +239,14 @@ def _quadratic(re_im, weights):
 
 @njit(**_JIT)
 def _scaled_on(r, ny, shift, extra, c, idx, cnt, out):
-    """``out = r c`` on F (undefined off it; ``r`` a :func:`_rows` view) and its sum per case."""
+    """The vector ``out = r c`` on F (``r`` a :func:`_rows` view of a field) and its sum per case."""
     B = out.shape[0]
     sums = np.zeros(B)
     for b in range(B):
         cb, s = c[b], 0.0
         for k in range(cnt[b]):
-            i = idx[b, k]
-            v = np.float64(r[b, _at(i, ny, shift, extra)]) * cb
-            out[b, i] = v
+            v = np.float64(r[b, _at(idx[b, k], ny, shift, extra)]) * cb
+            out[b, k] = v
             s += v
         sums[b] = s
     return sums
@@ -266,19 +268,21 @@ def _add_scaled(w, r, ny, extra, c):
 
 
 @njit(**_JIT)
-def _sub_on(x, c, idx, cnt):
+def _sub_on(x, c, cnt):
+    """``x -= c`` per case, ``x`` a vector on F."""
     for b in range(x.shape[0]):
         cb = c[b]
         if cb == 0.0:
             continue
         for k in range(cnt[b]):
-            x[b, idx[b, k]] -= cb
+            x[b, k] -= cb
 
 
 @njit(**_JIT)
 def _join(w, gbar, f, idx, cnt, go, g):
-    """Nodes off F with ``w < gbar`` join it where ``go`` (appended to ``idx``); ``g = w - gbar`` on the
-    new F (undefined off it); per case ``|F|`` and ``sum(g)``. ``cnt`` is updated in place."""
+    """Nodes off F with ``w < gbar`` join it where ``go`` (appended to ``idx``); the vector ``g = w - gbar``
+    on the new F; per case ``|F|`` and ``sum(g)``. ``cnt`` is updated in place. The vectors on F that the
+    iteration keeps (``t``, ``g_prev``) are zero past ``cnt`` (:func:`_shrink`): a joining node's are 0."""
     B, n = w.shape
     sums = np.zeros(B)
     for b in range(B):
@@ -292,17 +296,16 @@ def _join(w, gbar, f, idx, cnt, go, g):
             cnt[b] = c
         s = 0.0
         for k in range(c):
-            i = idx[b, k]
-            v = w[b, i] - gb
-            g[b, i] = v
+            v = w[b, idx[b, k]] - gb
+            g[b, k] = v
             s += v
         sums[b] = s
     return sums
 
 
 @njit(**_JIT)
-def _center_dots(a, c, idx, cnt, g, g_prev, t):
-    """``a -= c`` on F, then per case ``g . a``, ``g_prev . a`` and ``g . t``, one pass over F's nodes."""
+def _center_dots(a, c, cnt, g, g_prev, t):
+    """``a -= c``, then per case ``g . a``, ``g_prev . a`` and ``g . t``, one pass (vectors on F)."""
     B = a.shape[0]
     ga = np.zeros(B)
     pa = np.zeros(B)
@@ -310,13 +313,12 @@ def _center_dots(a, c, idx, cnt, g, g_prev, t):
     for b in range(B):
         cb, s0, s1, s2 = c[b], 0.0, 0.0, 0.0
         for k in range(cnt[b]):
-            i = idx[b, k]
-            v = a[b, i] - cb
-            a[b, i] = v
-            gi = g[b, i]
+            v = a[b, k] - cb
+            a[b, k] = v
+            gi = g[b, k]
             s0 += gi * v
-            s1 += g_prev[b, i] * v
-            s2 += gi * t[b, i]
+            s1 += g_prev[b, k] * v
+            s2 += gi * t[b, k]
         ga[b] = s0
         pa[b] = s1
         gt[b] = s2
@@ -325,35 +327,34 @@ def _center_dots(a, c, idx, cnt, g, g_prev, t):
 
 @njit(**_JIT)
 def _new_direction(t, a, g, beta, keep, go, g_prev, idx, cnt, scale, out, ny, shift, extra):
-    """``t = beta t + a`` where kept, else ``a`` (cases that move), ``g_prev = g``, on F; ``out =
-    float32(t scale)`` on F (a :func:`_rows` view; the caller zeroed the rest); per case ``g . t``."""
+    """``t = beta t + a`` where kept, else ``a`` (cases that move), ``g_prev = g`` (vectors on F); ``out =
+    float32(t scale)`` at F's nodes (a :func:`_rows` view; the caller zeroed the rest); per case ``g . t``."""
     B = t.shape[0]
     gts = np.zeros(B)
     for b in range(B):
         be, kp, moving, sc, s = beta[b], keep[b], go[b], scale[b], 0.0
         for k in range(cnt[b]):
-            i = idx[b, k]
             if moving:
-                t[b, i] = t[b, i] * be + a[b, i] if kp else a[b, i]
-                g_prev[b, i] = g[b, i]
-            ti = t[b, i]
-            out[b, _at(i, ny, shift, extra)] = ti * sc
-            s += g[b, i] * ti
+                t[b, k] = t[b, k] * be + a[b, k] if kp else a[b, k]
+                g_prev[b, k] = g[b, k]
+            tk = t[b, k]
+            out[b, _at(idx[b, k], ny, shift, extra)] = tk * sc
+            s += g[b, k] * tk
         gts[b] = s
     return gts
 
 
 @njit(**_JIT)
 def _trial_stats(p, t, tau, idx, cnt):
-    """``(sum(max(p - tau t, 0)), any(p - tau t <= 0))`` over F per case (p = t = 0 off F)."""
+    """``(sum(max(p - tau t, 0)), any(p - tau t <= 0))`` over F per case (``p`` a field, 0 off F; ``t`` a
+    vector on F)."""
     B = p.shape[0]
     sums = np.zeros(B)
     anys = np.zeros(B, dtype=np.bool_)
     for b in range(B):
         s, ta, hit = 0.0, tau[b], False
         for k in range(cnt[b]):
-            i = idx[b, k]
-            tr = p[b, i] - ta * t[b, i]
+            tr = p[b, idx[b, k]] - ta * t[b, k]
             if tr > 0.0:
                 s += tr
             else:
@@ -375,9 +376,10 @@ def _project(p, t, tau, go, scale, inv_sigma, idx, cnt, out, ny, shift, extra):
         ta, sc, isg = tau[b], scale[b], inv_sigma[b]
         for k in range(cnt[b]):
             i = idx[b, k]
-            trial = p[b, i] - ta * t[b, i]
+            tk = t[b, k]
+            trial = p[b, i] - ta * tk
             tp = trial if trial > 0.0 else 0.0
-            d = (tp - trial) + (sc - 1.0) * tp - ta * t[b, i]
+            d = (tp - trial) + (sc - 1.0) * tp - ta * tk
             out[b, _at(i, ny, shift, extra)] = d * isg
             p[b, i] = tp * sc
         wrote[b] = cnt[b]
@@ -392,27 +394,32 @@ def _step_on(p, t, tau, go, idx, cnt):
         ta = tau[b]
         for k in range(cnt[b]):
             i = idx[b, k]
-            p[b, i] = p[b, i] - ta * t[b, i]
+            p[b, i] = p[b, i] - ta * t[b, k]
 
 
 @njit(**_JIT)
 def _shrink(p, f, idx, cnt, t, g_prev):
-    """Nodes of F at ``p <= 0`` leave it (``t``, ``g_prev`` zeroed there; ``idx`` compacted, ``cnt`` updated
-    in place); per case ``sum(t)`` over what is left."""
+    """Nodes of F at ``p <= 0`` leave it: ``idx`` and the vectors ``t``, ``g_prev`` compacted together, ``cnt``
+    updated in place, the vectors zeroed past the new count (a node that joins later starts at 0 there);
+    per case ``sum(t)`` over what is left."""
     B = p.shape[0]
     sums = np.zeros(B)
     for b in range(B):
-        c, s = 0, 0.0
-        for k in range(cnt[b]):
+        c, s, n = 0, 0.0, cnt[b]
+        for k in range(n):
             i = idx[b, k]
             if p[b, i] > 0.0:
                 idx[b, c] = i
+                tk = t[b, k]
+                t[b, c] = tk
+                g_prev[b, c] = g_prev[b, k]
                 c += 1
-                s += t[b, i]
+                s += tk
             else:
                 f[b, i] = False
-                t[b, i] = 0.0
-                g_prev[b, i] = 0.0
+        for k in range(c, n):
+            t[b, k] = 0.0
+            g_prev[b, k] = 0.0
         cnt[b] = c
         sums[b] = s
     return sums
@@ -627,9 +634,9 @@ class _Written:
 class FusedCpuKernels(ArrayKernels):
     """:class:`~.kernels.ArrayKernels` on the host with each field pass one compiled loop.
 
-    The same results as the plain expressions up to the order of summation (module docstring),
-    except where marked: the gradient of :meth:`join_stats` and the field of :meth:`scaled_sum` are
-    defined on ``F`` only. Where a kernel takes the free set ``F``, it may be a :class:`FreeSet`
+    The same results as the plain expressions up to the order of summation (module docstring), the
+    vectors on ``F`` compressed (:meth:`vector`; :meth:`gather` and :meth:`scatter` convert). Where a
+    kernel takes the free set ``F``, it may be a :class:`FreeSet`
     (:meth:`free_set`, the iteration's: updated in place by :meth:`join_stats` and
     :meth:`shrink_stats`) or a plain mask (indexed for the call). Outputs that the plain kernels
     allocate are written into buffers kept per shape and reused: a result is valid until the same
@@ -656,6 +663,34 @@ class FusedCpuKernels(ArrayKernels):
 
     def free_set(self, mask):
         return FreeSet(mask)
+
+    # -- vectors on F: compressed, position k holding node idx[b, k]'s value ------------------
+
+    def vector(self, F):
+        """A zero vector on ``F``: ``(B, nx ny)`` float64, of which case ``b`` uses the first ``|F|`` values.
+
+        Room for every node, since ``F`` may grow to the whole grid; the pages past the largest ``|F|``
+        are never touched (so never made resident).
+        """
+        return np.zeros(self._set(F).idx.shape)
+
+    def gather(self, field, F):
+        fs = self._set(F)
+        flat = field.reshape(field.shape[0], -1)
+        out = np.zeros(fs.idx.shape)
+        for b in range(flat.shape[0]):
+            n = fs.count[b]
+            out[b, :n] = flat[b, fs.idx[b, :n]]
+        return out
+
+    def scatter(self, vector, F):
+        fs = self._set(F)
+        out = np.zeros(fs.shape)
+        flat = out.reshape(out.shape[0], -1)
+        for b in range(flat.shape[0]):
+            n = fs.count[b]
+            flat[b, fs.idx[b, :n]] = vector[b, :n]
+        return out
 
     @staticmethod
     def _set(F):
@@ -721,7 +756,7 @@ class FusedCpuKernels(ArrayKernels):
 
     def dot_on(self, a, b, F):
         fs = self._set(F)
-        return self.allsum(self._col(_dot_on(*_fields(a, b), fs.idx, fs.count)))
+        return self.allsum(self._col(_dot_on(a, b, fs.count)))
 
     def quadratic(self, spec, weights):
         B = spec.shape[0]
@@ -732,7 +767,7 @@ class FusedCpuKernels(ArrayKernels):
 
     def trial_stats(self, P, t, tau, F):
         fs = self._set(F)
-        sums, anys = _trial_stats(*_fields(P, t), _cases(tau, P.shape[0]), fs.idx, fs.count)
+        sums, anys = _trial_stats(*_fields(P), t, _cases(tau, P.shape[0]), fs.idx, fs.count)
         return self.allsum(self._col(sums)), self.allany(self._col(anys))
 
     def proj_any(self, P, t, tau, F):
@@ -740,7 +775,7 @@ class FusedCpuKernels(ArrayKernels):
 
     def center_dots(self, a, c, F, g, g_prev, t):
         fs = self._set(F)
-        ga, pa, gt = _center_dots(*_fields(a), _cases(c, a.shape[0]), fs.idx, fs.count, *_fields(g, g_prev, t))
+        ga, pa, gt = _center_dots(a, _cases(c, a.shape[0]), fs.count, g, g_prev, t)
         return self.allsum(self._col(ga)), self.allsum(self._col(pa)), self.allsum(self._col(gt))
 
     # -- element-wise passes --------------------------------------------------------------------
@@ -751,16 +786,16 @@ class FusedCpuKernels(ArrayKernels):
             out = super().to32(x, scale, self.buffer("to32", x.shape, np.float32) if out is None else out)
             self._dense(out)
             return out
-        fs = self._set(F)
-        out, rec = self._sparse_out(out, x.shape)
-        _to32_on(*_fields(x), _cases(scale, B), fs.idx, fs.count, *_rows(out))
+        fs = self._set(F)  # x: a vector on F
+        out, rec = self._sparse_out(out, fs.shape)
+        _to32_on(x, _cases(scale, B), fs.idx, fs.count, *_rows(out))
         self._record(rec, fs)
         return out
 
     def scaled_sum(self, R, factor, F):
         fs = self._set(F)
-        a = self.buffer("scaled", R.shape, np.float64)
-        sums = _scaled_on(*_rows(R), _cases(factor, R.shape[0]), fs.idx, fs.count, *_fields(a))
+        a = self.buffer("scaled", fs.idx.shape, np.float64)
+        sums = _scaled_on(*_rows(R), _cases(factor, R.shape[0]), fs.idx, fs.count, a)
         return a, self.allsum(self._col(sums))
 
     def add_scaled(self, w, R, factor):
@@ -770,52 +805,48 @@ class FusedCpuKernels(ArrayKernels):
 
     def sub_masked(self, x, c, F):
         fs = self._set(F)
-        _sub_on(*_fields(x), _cases(c, x.shape[0]), fs.idx, fs.count)
+        _sub_on(x, _cases(c, x.shape[0]), fs.count)
         return x
 
     def join_stats(self, w, gbar, F, go):
         fs = self._set(F)
         B = w.shape[0]
-        g = self.buffer("gap", w.shape, np.float64)
+        g = self.buffer("gap", fs.idx.shape, np.float64)
         f, idx, cnt = fs.flat()
-        sums = _join(*_fields(w), _cases(gbar, B), f, idx, cnt, _cases(go, B, np.bool_), *_fields(g))
+        sums = _join(*_fields(w), _cases(gbar, B), f, idx, cnt, _cases(go, B, np.bool_), g)
         return fs, g, self.allcount(self._col(cnt.copy())), self.allsum(self._col(sums))
 
     def new_direction_input(self, t, a, g, beta, keep, go, g_prev, F, inv_sigma, out=None):
         fs = self._set(F)
         B = t.shape[0]
-        out, rec = self._sparse_out(out, t.shape)
-        gt = _new_direction(*_fields(t, a, g), _cases(beta, B), _cases(keep, B, np.bool_), _cases(go, B, np.bool_),
-                            *_fields(g_prev), fs.idx, fs.count, _cases(inv_sigma, B), *_rows(out))
+        out, rec = self._sparse_out(out, fs.shape)
+        gt = _new_direction(t, a, g, _cases(beta, B), _cases(keep, B, np.bool_), _cases(go, B, np.bool_),
+                            g_prev, fs.idx, fs.count, _cases(inv_sigma, B), *_rows(out))
         self._record(rec, fs)
         return out, self.allsum(self._col(gt))
 
     def project(self, P, t, tau, go, scale, inv_sigma, out=None, F=None):
-        if F is None:  # the loop below visits F's nodes only
-            return super().project(P, t, tau, go, scale, inv_sigma, out)
+        if F is None:
+            raise TypeError("FusedCpuKernels.project needs the free set F: t is a vector on it")
         fs = self._set(F)
         B = P.shape[0]
         out, rec = self._sparse_out(out, P.shape)
-        wrote = _project(*_fields(P, t), _cases(tau, B), _cases(go, B, np.bool_), _cases(scale, B),
+        wrote = _project(*_fields(P), t, _cases(tau, B), _cases(go, B, np.bool_), _cases(scale, B),
                          _cases(inv_sigma, B), fs.idx, fs.count, *_rows(out))
         self._record(rec, fs, wrote)
         return out
 
     def step_on(self, P, t, tau, go, F):
         fs = self._set(F)
-        _step_on(*_fields(P, t), _cases(tau, P.shape[0]), _cases(go, P.shape[0], np.bool_), fs.idx, fs.count)
+        _step_on(*_fields(P), t, _cases(tau, P.shape[0]), _cases(go, P.shape[0], np.bool_), fs.idx, fs.count)
 
     def shrink(self, P, F, t, g_prev):
-        if isinstance(F, FreeSet):
-            self.shrink_stats(P, F, t, g_prev)
-        else:  # a plain mask: the plain expressions (shrink_stats of a mask calls this)
-            super().shrink(P, F, t, g_prev)
+        self.shrink_stats(P, F, t, g_prev)
 
     def shrink_stats(self, P, F, t, g_prev):
-        if not isinstance(F, FreeSet):  # a plain mask: the plain expressions (nothing to keep indexed)
-            return super().shrink_stats(P, F, t, g_prev)
-        f, idx, cnt = F.flat()
-        sums = _shrink(*_fields(P), f, idx, cnt, *_fields(t, g_prev))
+        fs = self._set(F)  # a plain mask is updated in place too (where C-contiguous)
+        f, idx, cnt = fs.flat()
+        sums = _shrink(*_fields(P), f, idx, cnt, t, g_prev)
         return self.allcount(self._col(cnt.copy())), self.allsum(self._col(sums))
 
     # -- per-case decisions (the state arguments in place) ------------------------------------

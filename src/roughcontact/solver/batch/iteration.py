@@ -15,7 +15,8 @@ class BatchIteration:
 
     State per case (fields ``(B, nx, ny)``, numbers ``(B, 1, 1)``): ``P`` (the solver's, zero off
     ``F``) and ``w = K P - h`` (the solver's, updated in place), ``F`` the free set, ``t`` the
-    direction and ``g_prev`` the last direction's gradient (zero off ``F``), ``g_old``, ``delta``,
+    direction and ``g_prev`` the last direction's gradient (vectors on ``F``, in the kernels' form:
+    :class:`~.kernels.ArrayKernels`), ``g_old``, ``delta``,
     whether ``g_prev`` is valid, the iteration count, the stall guard's best residual and its
     iteration, ``next_sync``, and the round's flags: ``done`` (converged or stopped), ``waiting``
     (for a float64 recomputation at the next check), ``fresh`` (``w`` recomputed since the last
@@ -43,8 +44,8 @@ class BatchIteration:
         self.fresh = xp.asarray((fresh0 >= 0).reshape(B, 1, 1))  # refreshed ones are fresh now
         self.F = self.k.free_set(solver.P > 0.0)
         self.nF = self.k.rcount(self.F)
-        self.t = xp.zeros_like(solver.P)
-        self.g_prev = xp.zeros_like(solver.P)
+        self.t = self.k.vector(self.F)  # vectors on F (the kernels' form: fields, or compressed on the host)
+        self.g_prev = self.k.vector(self.F)
         self.gprev_ok = xp.zeros((B, 1, 1), dtype=bool)
         self.delta = xp.zeros((B, 1, 1))
         self.g_old = xp.ones((B, 1, 1))

@@ -15,7 +15,13 @@ class ArrayKernels:
     """The element-wise passes and per-case reductions of a round, as plain array expressions.
 
     Every argument is an array of the backend: fields ``(B, nx, ny)``, per-case numbers
-    ``(B, 1, 1)``. Results of reductions are ``(B, 1, 1)`` float64 (or int64 for counts).
+    ``(B, 1, 1)``, and the iteration's *vectors on the free set* ``F``: the direction ``t``, the last
+    gradient ``g_prev`` and a round's gradient ``g`` and preconditioned gradient ``a``. Here a vector on
+    ``F`` is a field, zero off ``F``; :class:`.cpu.FusedCpuKernels` holds it compressed, one value per node
+    of ``F`` in its index order, so that a pass over it reads ``|F|`` consecutive values. The iteration
+    makes them with :meth:`vector` (or gets them from a kernel) and hands them back unopened; only
+    :meth:`gather` and :meth:`scatter` convert. Results of reductions are ``(B, 1, 1)`` float64 (or int64
+    for counts).
     :class:`.cuda.CupyKernels` replaces them by fused CUDA kernels (one pass over the fields each) with
     the same results up to the order of summation; the methods named "in place" must update their
     field arguments in place in both.
@@ -51,6 +57,18 @@ class ArrayKernels:
         """The iteration's free set made from ``mask`` (``(B, nx, ny)`` bool): the mask itself here;
         :meth:`.cpu.FusedCpuKernels.free_set` keeps each case's node indices beside it."""
         return mask
+
+    def vector(self, F):
+        """A zero vector on ``F``."""
+        return self.xp.zeros(F.shape)
+
+    def gather(self, field, F):
+        """``field``'s values on ``F`` as a vector on ``F``."""
+        return field * F
+
+    def scatter(self, vector, F):
+        """A vector on ``F`` as a field, zero off ``F``."""
+        return vector * F
 
     def rsum(self, x):
         return self.allsum(self.xp.sum(x, axis=(-2, -1), keepdims=True, dtype=np.float64))

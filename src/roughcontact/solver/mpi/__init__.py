@@ -5,8 +5,8 @@
 into ``R`` slabs of rows (:mod:`.slabs`); each rank holds its rows of the heights, the pressure, the
 gap and the masks, and the iteration is the batched one (:class:`~roughcontact.solver.batch.iteration.
 BatchIteration`, B = 1) unchanged: its per-case reductions are collective (:class:`.kernels.MpiKernels`)
-and its transforms distributed (:class:`.kernels.SlabOperator`: a real FFT along y, a transpose by
-``Alltoallv``, a complex FFT along x). Same answers as :func:`~roughcontact.solver.solve_contact`
+and its transforms distributed (:class:`.kernels.SlabOperator`: a real FFT along y, an all-to-all
+transpose, a complex FFT along x). Same answers as :func:`~roughcontact.solver.solve_contact`
 to the tolerance, for any number of ranks (tests/test_solver_mpi.py).
 
 Runs the periodic elastic problem with the default method ``"pk-fourier-f32"``; the free boundary

@@ -11,9 +11,9 @@ multipliers).
 
 Two implementations of that one layout (:data:`FFT_LIBRARIES`):
 
-- ``"slab"`` (the default): pyFFTW's planned 1-D transforms (:class:`FftwSlabFFT`; scipy.fft's,
-  :class:`SlabFFT`, where pyFFTW is missing) and mpi4py's ``Alltoallv``, pip-installable with the
-  ``mpi`` extra;
+- ``"slab"`` (the default): pyFFTW's planned 1-D transforms (:class:`FftwSlabFFT`, whose ``Alltoallw``
+  receives each block in place through an MPI vector datatype; scipy.fft's and ``Alltoallv``,
+  :class:`SlabFFT`, where pyFFTW is missing), pip-installable with the ``mpi`` extra;
 - ``"mpi4py-fft"`` (:class:`MpiFFTPlan`): mpi4py-fft's ``PFFT`` on FFTW, which has no wheel on
   PyPI and builds only where FFTW's headers and libraries are installed (``libfftw3-dev``):
   measured against the first in ``benchmarks/README.md`` ("The solver over MPI ranks").
