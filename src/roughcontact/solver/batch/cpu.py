@@ -15,8 +15,9 @@ position ``k`` holds node ``F.idx[b, k]``'s value, for ``k < |F|`` (:class:`Free
 pressure and the gap at ``F``'s nodes through its indices. Only the gap ``w``, ``P`` and the float32
 transforms' inputs are fields. Measured against the same loops on fields indexed through ``F``
 (2026-12-02, benchmarks/README.md, side by side with the single solve in one process): a batch of one case
-went from 1.030x to 0.953x the single solve's CPU at 1024² and from 1.045x to 0.921x at 2048². Passes that follow each other are fused where the iteration allows
-(:meth:`FusedCpuKernels.center_dots`, :meth:`FusedCpuKernels.new_direction_input`).
+went from 1.030x to 0.953x the single solve's CPU at 1024² and from 1.045x to 0.921x at 2048². Passes
+that follow each other are fused where the iteration allows (:meth:`FusedCpuKernels.center_dots`,
+:meth:`FusedCpuKernels.new_direction_input`).
 
 Sums are accumulated in index order per case (deterministic; not numpy's pairwise order, so a sum
 differs from :class:`~.kernels.ArrayKernels`' in the last bits). Per-case partial results
