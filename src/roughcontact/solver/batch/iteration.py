@@ -153,7 +153,7 @@ class BatchIteration:
         k, s = self.k, self.s
         go = self.go
         self.it += go
-        # join: violating nodes (w < gbar off F) enter F; their p, t and g_prev are 0 there already
+        # join: violating nodes (w < gbar off F) enter F; their p, t and g_prev are 0 already (in either form)
         F, g, nF_new, gsum = k.join_stats(s.w, self.gbar, self.F, go)
         c, nf = k.join_fix(nF_new, self.nF, gsum, go, self.done)  # go, done in place
         self.F, self.nF = F, nF_new
@@ -167,7 +167,7 @@ class BatchIteration:
         Returns the new direction's float32 spectrum (of ``t / sigma``) and ``g . t`` per case.
         """
         k, op, F = self.k, self.op, self.F
-        # g, t, g_prev and a are zero off F (or not read there): the kernels may touch F's nodes only
+        # g, t, g_prev and a are vectors on F (fields zero off F, or compressed): the kernels touch F's nodes only
         R = op.inverse32(op.spectrum32(g, self.inv_sigma, F), op.mmult32)  # M g / sigma
         a, a_sum = k.scaled_sum(R, self.sigma, F)
         # zero mean on F; g . a, g_prev . a and g . t (the last for the descent test of beta t + a)

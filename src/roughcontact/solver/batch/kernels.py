@@ -101,8 +101,8 @@ class ArrayKernels:
     def to32(self, x, scale, out=None, F=None):
         """``float32(x * scale)``: the product in float64, rounded once (as ``SpectralProduct.load``).
 
-        Into ``out`` where given (a transform's input buffer); ``F``: ``x`` is zero off it (a kernel
-        may skip those nodes' values).
+        Into ``out`` where given (a transform's input buffer); with ``F``, ``x`` is a vector on ``F``
+        (here a field zero off it) and the result a field, zero off ``F``.
         """
         if out is None:
             return (x * scale).astype(np.float32)
