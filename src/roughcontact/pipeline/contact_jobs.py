@@ -86,14 +86,16 @@ def ranks_of(block: Mapping) -> int:
 def contact_mpi_mem_mb(n: int, ranks: int) -> int:
     """Peak memory of one contact case over ``ranks`` MPI processes [MB], all ranks together: an interpreter per
     rank and 40 doubles a node of solver work, split (a margin: measured at N = 8192 on 2 ranks, 206 B a node and
-    0.25 GiB a rank since the fused kernels of 2026-12-02, 152 B before: benchmarks/README.md)."""
+    0.25 GiB a rank after the fused kernels of 2026-12-02, 156 B since the compressed vectors, 152 B before both:
+    benchmarks/README.md)."""
     return int(300 * ranks + 40 * 8 * n * n / 2**20)
 
 
 def contact_mpi_runtime_min(n: int, n_steps: int, ranks: int) -> int:
     """Wall-time request of one contact case over ``ranks`` processes [min]: :func:`contact_runtime_min` x 4, shared
     by the ranks (a margin: the distributed iteration's CPU per iteration was 3.6-4.1x the single solve's before the
-    fused kernels of 2026-12-02, 1.14x on one rank and 0.70x a rank on two since; the transposes of many ranks and
+    fused kernels of 2026-12-02, then 1.14x on one rank and 0.70x a rank on two, 0.97-1.00x and 0.55-0.59x at
+    2048² since the compressed vectors; the transposes of many ranks and
     a cluster's shared memory bandwidth are not measured here)."""
     return max(5, math.ceil(4 * contact_runtime_min(n, n_steps) / ranks))
 

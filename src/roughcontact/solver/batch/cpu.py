@@ -13,9 +13,10 @@ round's gradient ``g`` and preconditioned gradient ``a``) are held compressed: `
 position ``k`` holds node ``F.idx[b, k]``'s value, for ``k < |F|`` (:class:`FreeSet`,
 :meth:`FusedCpuKernels.vector`). So a loop reads ``|F|`` consecutive values of each vector, and the
 pressure and the gap at ``F``'s nodes through its indices. Only the gap ``w``, ``P`` and the float32
-transforms' inputs are fields. Measured against the same loops on fields indexed through ``F``
-(2026-12-02, benchmarks/README.md, side by side with the single solve in one process): a batch of one case
-went from 1.030x to 0.953x the single solve's CPU at 1024² and from 1.045x to 0.921x at 2048². Passes
+transforms' inputs are fields. Measured against 2133c96 (the same loops on fields indexed through ``F``,
+before the per-case decisions were compiled too; 2026-12-02, benchmarks/README.md, each side by side with the
+single solve in one process): a batch of one case went from 1.030x to 0.953x the single solve's CPU at 1024²
+and from 1.045x to 0.921x at 2048². Passes
 that follow each other are fused where the iteration allows (:meth:`FusedCpuKernels.center_dots`,
 :meth:`FusedCpuKernels.new_direction_input`).
 

@@ -204,9 +204,10 @@ class FftwSlabFFT(SlabFFT):
         """MPI datatypes that put rank ``r``'s block straight into ``dst[:, :, d0:d1]`` (made once a buffer).
 
         A vector of ``B m`` rows of ``d1 - d0`` values, ``dst.shape[2]`` apart: the received block lands in
-        place, with no unpacking copy. Measured at 2048² on 2 ranks (2026-12-02): a forward and backward
-        transpose pair 5.95-6.27 ms of CPU a rank against 6.65-6.76 with the copy. Sending with datatypes
-        too (the transpose done by MPI) cost 3x: MPICH packs such a type value by value.
+        place, with no unpacking copy and no receive buffer. Measured at 2048² on 2 ranks (2026-12-02,
+        benchmarks/README.md): a whole solve's CPU per rank 0.96-0.99 of the unpacking version's. Sending with
+        datatypes too (the transpose done by MPI) cost 3x in a microbenchmark: MPICH packs such a type value by
+        value.
         """
         key = (id(dst), tuple(dst_parts))
         types = p.types.get(key)
