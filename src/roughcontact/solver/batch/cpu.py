@@ -55,19 +55,19 @@ def _rows(a):
     if a.flags.c_contiguous:
         return a.reshape(B, -1), ny, shift, 0
     # a padded buffer is a transform's, made once and used every round: its view is made once too (the
-    # checks and as_strided cost ~15 us, which a small grid's round notices). The cache holds the view,
-    # and with it the buffer, so the address cannot be another array's while the entry lives.
-    key = (a.__array_interface__["data"][0], a.shape, a.strides, a.dtype.str)
-    hit = _ROWS.get(key)
-    if hit is not None:
-        return hit
+    # checks and as_strided cost ~15 us, which a small grid's round notices)
+    hit = _ROWS.get(id(a))
+    if hit is not None and hit[0] is a:  # the very view (a transform's buffer is one object, asked for again)
+        return hit[1]
     if len(_ROWS) >= 16:
         _ROWS.clear()
-    hit = _ROWS[key] = _padded_rows(a, shift)
-    return hit
+    rows = _padded_rows(a, shift)
+    _ROWS[id(a)] = (a, rows)
+    return rows
 
 
-#: :func:`_rows`' views of padded buffers, by address, shape, strides and type
+#: :func:`_rows`' views of padded buffers, by the id of the view they were made from (kept in the entry, so
+#: that the id cannot be another object's while the entry lives)
 _ROWS: dict = {}
 
 
@@ -654,6 +654,7 @@ class FusedCpuKernels(ArrayKernels):
         super().__init__(np)
         self._buffers = {}
         self._written = {}
+        self._wq = {}
 
     def buffer(self, name: str, shape, dtype) -> np.ndarray:
         """A scratch array ``name`` of ``shape`` and ``dtype``, made once and reused."""
@@ -764,8 +765,20 @@ class FusedCpuKernels(ArrayKernels):
         B = spec.shape[0]
         real = np.float32 if spec.dtype == np.complex64 else np.float64
         ri = np.ascontiguousarray(spec).view(real).reshape(B, -1, 2)
-        wq = np.ascontiguousarray(np.broadcast_to(weights, spec.shape[1:]).reshape(-1), dtype=real)
-        return self.allsum(self._col(_quadratic(ri, wq)))
+        return self.allsum(self._col(_quadratic(ri, self._weights(weights, spec.shape[1:], real))))
+
+    def _weights(self, weights, shape, real):
+        """``weights`` over ``shape`` as a contiguous 1-D array of ``real`` (an operator's multiplier, asked
+        for every round: made once, kept with the array it was made from)."""
+        key = (id(weights), tuple(shape), np.dtype(real))
+        hit = self._wq.get(key)
+        if hit is not None and hit[0] is weights:
+            return hit[1]
+        wq = np.ascontiguousarray(np.broadcast_to(weights, shape).reshape(-1), dtype=real)
+        if len(self._wq) >= 8:  # an operator has two (float32, float64): anything else is a caller's own
+            self._wq.clear()
+        self._wq[key] = (weights, wq)
+        return wq
 
     def trial_stats(self, P, t, tau, F):
         fs = self._set(F)
