@@ -16,9 +16,8 @@ pressure and the gap at ``F``'s nodes through its indices. Only the gap ``w``, `
 transforms' inputs are fields. Measured against 2133c96 (the same loops on fields indexed through ``F``,
 before the per-case decisions were compiled too; 2026-12-02, benchmarks/README.md, each side by side with the
 single solve in one process): a batch of one case went from 1.030x to 0.953x the single solve's CPU at 1024²
-and from 1.045x to 0.921x at 2048². Passes
-that follow each other are fused where the iteration allows (:meth:`FusedCpuKernels.center_dots`,
-:meth:`FusedCpuKernels.new_direction_input`).
+and from 1.045x to 0.921x at 2048². Passes that follow each other are fused where the iteration allows
+(:meth:`FusedCpuKernels.center_dots`, :meth:`FusedCpuKernels.new_direction_input`).
 
 Sums are accumulated in index order per case (deterministic; not numpy's pairwise order, so a sum
 differs from :class:`~.kernels.ArrayKernels`' in the last bits). Per-case partial results
@@ -54,21 +53,31 @@ def _rows(a):
     shift = ny.bit_length() - 1 if ny & (ny - 1) == 0 else -1
     if a.flags.c_contiguous:
         return a.reshape(B, -1), ny, shift, 0
-    # a padded buffer is a transform's, made once and used every round: its view is made once too (the
-    # checks and as_strided cost ~15 us, which a small grid's round notices)
-    hit = _ROWS.get(id(a))
-    if hit is not None and hit[0] is a:  # the very view (a transform's buffer is one object, asked for again)
-        return hit[1]
-    if len(_ROWS) >= 16:
-        _ROWS.clear()
-    rows = _padded_rows(a, shift)
-    _ROWS[id(a)] = (a, rows)
-    return rows
+    # a padded buffer is a transform's, one object made once and used every round: its view is made once too
+    # (the checks and as_strided cost ~15 us, which a small grid's round notices)
+    return _made_once(_ROWS, a, (), lambda: _padded_rows(a, shift), 16)
 
 
-#: :func:`_rows`' views of padded buffers, by the id of the view they were made from (kept in the entry, so
-#: that the id cannot be another object's while the entry lives)
+#: :func:`_rows`' views of padded buffers (:func:`_made_once`)
 _ROWS: dict = {}
+
+
+def _made_once(cache: dict, obj, key: tuple, make, limit: int):
+    """``make()`` for the object ``obj`` (and ``key``), made at the first call and kept in ``cache``.
+
+    The entry holds ``obj`` itself beside the value, so that its ``id`` cannot be another object's while the
+    entry lives; a cache of ``limit`` entries is emptied before it grows further (an object asked for once is
+    a caller's own, not an operator's buffer or multiplier).
+    """
+    k = (id(obj), *key)
+    hit = cache.get(k)
+    if hit is not None and hit[0] is obj:
+        return hit[1]
+    if len(cache) >= limit:
+        cache.clear()
+    value = make()
+    cache[k] = (obj, value)
+    return value
 
 
 def _padded_rows(a, shift):
@@ -482,7 +491,7 @@ def _finish_start(P, w, h, R, ny, shift, extra, sigma, sc, loaded, ext, lin, p_f
                 P[b, i] = p_fill[b]
 
 
-# -- per-case decisions: one compiled call each instead of 10-40 numpy operations on (B, 1, 1) arrays --
+# -- per-case decisions: one compiled call each instead of up to ~80 numpy operations on (B, 1, 1) arrays --
 # The same arithmetic as ArrayKernels' expressions, case by case: ``_nmax(a, b)`` is numpy's maximum (NaN
 # propagated; ``a`` where equal), so the results are those of the plain expressions bit for bit.
 
@@ -769,16 +778,9 @@ class FusedCpuKernels(ArrayKernels):
 
     def _weights(self, weights, shape, real):
         """``weights`` over ``shape`` as a contiguous 1-D array of ``real`` (an operator's multiplier, asked
-        for every round: made once, kept with the array it was made from)."""
-        key = (id(weights), tuple(shape), np.dtype(real))
-        hit = self._wq.get(key)
-        if hit is not None and hit[0] is weights:
-            return hit[1]
-        wq = np.ascontiguousarray(np.broadcast_to(weights, shape).reshape(-1), dtype=real)
-        if len(self._wq) >= 8:  # an operator has two (float32, float64): anything else is a caller's own
-            self._wq.clear()
-        self._wq[key] = (weights, wq)
-        return wq
+        for every round: made once, :func:`_made_once`; an operator has two, float32 and float64)."""
+        return _made_once(self._wq, weights, (tuple(shape), np.dtype(real)),
+                          lambda: np.ascontiguousarray(np.broadcast_to(weights, shape).reshape(-1), dtype=real), 8)
 
     def trial_stats(self, P, t, tau, F):
         fs = self._set(F)

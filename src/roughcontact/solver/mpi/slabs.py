@@ -27,6 +27,13 @@ import numpy as np
 FFT_LIBRARIES = ("slab", "mpi4py-fft")
 
 
+def _complex_type(dtype):
+    """The MPI datatype of a spectrum's values: complex64 or complex128."""
+    from mpi4py import MPI
+
+    return MPI.C_FLOAT_COMPLEX if np.dtype(dtype) == np.complex64 else MPI.C_DOUBLE_COMPLEX
+
+
 def split(n: int, parts: int) -> list[tuple[int, int]]:
     """``[(start, stop), ...]``: ``n`` items in ``parts`` consecutive blocks, the first ``n % parts`` one larger."""
     base, extra = divmod(n, parts)
@@ -87,13 +94,11 @@ class SlabFFT:
 
     def _exchange(self, send_blocks, recv_shapes, dtype):
         """Alltoallv of one contiguous block per rank; the received blocks, in rank order."""
-        from mpi4py import MPI
-
         sendbuf = np.concatenate([b.reshape(-1) for b in send_blocks])
         counts = [int(np.prod(s)) for s in recv_shapes]
         recv = np.empty(sum(counts), dtype=dtype)
         scounts = [b.size for b in send_blocks]
-        mt = MPI.C_FLOAT_COMPLEX if dtype == np.complex64 else MPI.C_DOUBLE_COMPLEX
+        mt = _complex_type(dtype)
         self.comm.Alltoallv([sendbuf, (scounts, np.cumsum([0] + scounts[:-1])), mt],
                             [recv, (counts, np.cumsum([0] + counts[:-1])), mt])
         out, start = [], 0
@@ -212,11 +217,9 @@ class FftwSlabFFT(SlabFFT):
         key = (id(dst), tuple(dst_parts))
         types = p.types.get(key)
         if types is None:
-            from mpi4py import MPI
-
-            base = MPI.C_FLOAT_COMPLEX if dst.dtype == np.complex64 else MPI.C_DOUBLE_COMPLEX
             B, m, k = dst.shape
-            types = p.types[key] = [base.Create_vector(B * m, d1 - d0, k).Commit() for d0, d1 in dst_parts]
+            types = p.types[key] = [_complex_type(dst.dtype).Create_vector(B * m, d1 - d0, k).Commit()
+                                    for d0, d1 in dst_parts]
         return types
 
     def _transpose(self, p: _SlabPlans, src, dst, src_parts, dst_parts) -> None:
@@ -227,25 +230,21 @@ class FftwSlabFFT(SlabFFT):
         in ``dst[:, :, d0:d1]`` (``(d0, d1) = dst_parts[r]``). The rank's own block is copied across
         directly, not sent.
         """
-        B, me = src.shape[0], self.slabs.rank
-        counts, at = [], 0
+        B, me, item = src.shape[0], self.slabs.rank, p.send.itemsize
+        counts, send_displs, at = [], [], 0
         for r, (a0, a1) in enumerate(src_parts):
             n = 0 if r == me else B * (a1 - a0) * src.shape[1]
             if n:
                 np.copyto(p.send[at:at + n].reshape(B, a1 - a0, src.shape[1]), src[:, :, a0:a1].transpose(0, 2, 1))
             counts.append(n)
+            send_displs.append(at * item)  # Alltoallw takes byte displacements
             at += n
         (a0, a1), (d0, d1) = src_parts[me], dst_parts[me]
         np.copyto(dst[:, :, d0:d1], src[:, :, a0:a1].transpose(0, 2, 1))
-        from mpi4py import MPI
-
-        base = MPI.C_FLOAT_COMPLEX if p.send.dtype == np.complex64 else MPI.C_DOUBLE_COMPLEX
-        item = p.send.itemsize
-        send_displs = [int(x) * item for x in np.cumsum([0] + counts[:-1])]
         # rank r's block received in place: one value of its vector type, at byte offset d0 of dst's rows
         recv_counts = [0 if r == me or d1 == d0 else 1 for r, (d0, d1) in enumerate(dst_parts)]
         recv_displs = [d0 * item for d0, _ in dst_parts]
-        self.comm.Alltoallw([p.send, counts, send_displs, [base] * len(counts)],
+        self.comm.Alltoallw([p.send, counts, send_displs, [_complex_type(p.send.dtype)] * len(counts)],
                             [dst, recv_counts, recv_displs, self._receive_types(p, dst, dst_parts)])
 
     def forward(self, x):
