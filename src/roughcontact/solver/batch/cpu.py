@@ -601,6 +601,88 @@ def _shrink_fix(nold, nnew, tsum, frac, proj, go, gprev_ok, fresh, c):
         c[b] = tsum[b] / (nnew[b] if nnew[b] > 0 else 1) if proj[b] else 0.0
 
 
+# -- a round's passes between two transforms, each one compiled call (FusedCpuKernels.measure, ...) ----------
+# The same compiled loops and decisions as the methods one at a time, called in the same order: the same results
+# bit for bit (tests/test_batch.py). A small grid's round is otherwise mostly the calls' own cost (at 64² ~25
+# calls of ~5-10 us each against ~0.25 ms for the single solve's whole iteration).
+
+
+@njit(**_JIT)
+def _sparse_begin(out, ny, shift, extra, written, wcnt, clear):
+    """Before a sparse write into ``out`` (a :func:`_rows` view): undo the last one (``written``, ``wcnt``)
+    where ``clear``, else zero every node (not the rows' padding). Here, not before the call: ``out`` may be
+    the buffer that the call reads first (an in-place transform's output)."""
+    if clear:
+        _clear(out, ny, shift, extra, written, wcnt)
+        return
+    row = ny + extra
+    zero = 0.0
+    for b in range(out.shape[0]):
+        for y in range(out.shape[1] // row):
+            for x in range(ny):
+                out[b, y * row + x] = zero
+
+
+@njit(**_JIT)
+def _sparse_end(idx, cnt, written, wcnt):
+    """After a sparse write at ``F``'s nodes: they are the ones to undo next (:meth:`FusedCpuKernels._record`)."""
+    for b in range(idx.shape[0]):
+        for k in range(cnt[b]):
+            written[b, k] = idx[b, k]
+        wcnt[b] = cnt[b]
+
+
+@njit(**_JIT)
+def _measure_round(p, w, idx, cnt, nf, wmin, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
+                   next_sync, best, at, done, waiting, converged, go, gbar):
+    _gbar(_masked_sum(w, idx, cnt), nf, gbar)
+    _decide(_orth(p, w, gbar, idx, cnt), wmin, gbar, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
+            next_sync, best, at, done, waiting, converged, go)
+
+
+@njit(**_JIT)
+def _join_round(w, gbar, f, idx, cnt, go, done, it, nold, g, c, nf, inv_sigma,
+                out, ny, shift, extra, written, wcnt, clear):
+    for b in range(go.shape[0]):
+        it[b] += go[b]
+    _join_fix(cnt, nold, _join(w, gbar, f, idx, cnt, go, g), go, done, c, nf)
+    _sub_on(g, c, cnt)
+    _sparse_begin(out, ny, shift, extra, written, wcnt, clear)
+    _to32_on(g, inv_sigma, idx, cnt, out, ny, shift, extra)
+    _sparse_end(idx, cnt, written, wcnt)
+
+
+@njit(**_JIT)
+def _direction_round(r, rny, rshift, rextra, sigma, nf, idx, cnt, a, g, g_prev, t, g_old, delta, gprev_ok, go,
+                     done, inv_sigma, out, ny, shift, extra, written, wcnt, clear):
+    B = a.shape[0]
+    G, gpa, gt_old = _center_dots(a, _scaled_on(r, rny, rshift, rextra, sigma, idx, cnt, a) / nf, cnt, g, g_prev, t)
+    beta, restart, keep = np.empty(B), np.empty(B, dtype=np.bool_), np.empty(B, dtype=np.bool_)
+    _beta(G, gpa, g_old, delta, gprev_ok, go, done, beta, restart)
+    dd = np.empty(B)
+    for b in range(B):
+        dd[b] = beta[b] * gt_old[b] + G[b]
+    _direction_done(dd, restart, G, go, gprev_ok, g_old, delta, keep)
+    _sparse_begin(out, ny, shift, extra, written, wcnt, clear)
+    gt = _new_direction(t, a, g, beta, keep, go, g_prev, idx, cnt, inv_sigma, out, ny, shift, extra)
+    _sparse_end(idx, cnt, written, wcnt)
+    return gt
+
+
+@njit(**_JIT)
+def _trial_round(re_im, weights, sigma, gt, nan, p, t, idx, cnt, target, go, done, tau, proj, ps):
+    _step_length(_quadratic(re_im, weights), sigma, gt, nan, go, done, tau)
+    total, pany = _trial_stats(p, t, tau, idx, cnt)
+    _projection_scale(pany, total, target, go, done, tau, proj, ps)
+
+
+@njit(**_JIT)
+def _settle_round(w, r, rny, rextra, factor, p, f, idx, cnt, t, g_prev, nold, frac, proj, go, gprev_ok, fresh, c):
+    _add_scaled(w, r, rny, rextra, factor)
+    _shrink_fix(nold, cnt, _shrink(p, f, idx, cnt, t, g_prev), frac, proj, go, gprev_ok, fresh, c)
+    _sub_on(t, c, cnt)
+
+
 class FreeSet:
     """The free set ``F`` of every case of a batch: its mask and each case's node indices.
 
@@ -658,6 +740,12 @@ class FusedCpuKernels(ArrayKernels):
     :meth:`overwritten`, and the next sparse one zeroes it all). A transform's buffers may have padded
     rows (:func:`_rows`): the kernels that write its input or read its output take them as they are.
     """
+
+    #: Whether the fields are split over processes (:class:`~roughcontact.solver.mpi.kernels.MpiKernels`): then a
+    #: round's passes (:meth:`measure`, :meth:`join`, ...) run one kernel at a time, as
+    #: :class:`~.kernels.ArrayKernels` composes them, so that each reduction adds the processes' parts before the
+    #: decisions read it; here each is one compiled call.
+    split = False
 
     def __init__(self):
         super().__init__(np)
@@ -920,6 +1008,86 @@ class FusedCpuKernels(ArrayKernels):
         _shrink_fix(_cases(nold, B, np.int64), _cases(nnew, B, np.int64), _cases(tsum, B), float(frac),
                     _cases(proj, B, np.bool_), _cases(go, B, np.bool_), *_state(gprev_ok, fresh), c)
         return self._col(c)
+
+    # -- a round's passes, each one compiled call (ArrayKernels' compositions where split) ----------
+
+    def _sparse_target(self, out, shape):
+        """``(out, written record, whether the record holds the last write)`` for a compiled sparse write
+        (:func:`_sparse_begin` zeroes ``out`` where it does not, :func:`_sparse_end` records the write)."""
+        out = self.buffer("to32", shape, np.float32) if out is None else out
+        rec = self._written.get(id(out))
+        flat = (out.shape[0], out.shape[1] * out.shape[2])
+        if rec is None or rec.idx.shape != flat:
+            rec = self._written[id(out)] = _Written(flat, np.int32 if flat[1] < 2**31 else np.int64)
+        clear = rec.count is not None
+        if not clear:
+            rec.count = np.zeros(flat[0], dtype=np.int64)
+        return out, rec, clear
+
+    def measure(self, P, w, F, nF, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
+                next_sync, best, at, done, waiting, converged, go):
+        if self.split:
+            return super().measure(P, w, F, nF, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
+                                   next_sync, best, at, done, waiting, converged, go)
+        fs = self._set(F)
+        B = P.shape[0]
+        gbar = np.empty(B)
+        wmin = np.min(w, axis=(-2, -1))  # numpy's SIMD minimum, as rmin
+        _measure_round(*_fields(P, w), fs.idx, fs.count, _cases(nF, B, np.int64), wmin, _cases(inv_norm, B),
+                       _cases(scale, B), float(tol), int(stall), float(big), _cases(it, B, np.int64),
+                       _cases(max_iter, B, np.int64), _cases(fresh, B, np.bool_),
+                       *_state(next_sync, best, at, done, waiting, converged, go), gbar)
+        return self._col(gbar)
+
+    def join(self, w, gbar, F, nF, go, done, it, inv_sigma, out=None):
+        if self.split:
+            return super().join(w, gbar, F, nF, go, done, it, inv_sigma, out=out)
+        fs = self._set(F)
+        B = w.shape[0]
+        g = self.buffer("gap", fs.idx.shape, np.float64)
+        c, nf = np.empty(B), np.empty(B)
+        out, rec, clear = self._sparse_target(out, fs.shape)
+        f, idx, cnt = fs.flat()
+        _join_round(*_fields(w), _cases(gbar, B), f, idx, cnt, *_state(go, done, it), _cases(nF, B, np.int64), g, c,
+                    nf, _cases(inv_sigma, B), *_rows(out), rec.idx, rec.count, clear)
+        return fs, g, self._col(cnt.copy()), self._col(nf), out
+
+    def direction(self, R, sigma, nf, F, g, g_prev, t, g_old, delta, gprev_ok, go, done, inv_sigma, out=None):
+        if self.split:
+            return super().direction(R, sigma, nf, F, g, g_prev, t, g_old, delta, gprev_ok, go, done, inv_sigma,
+                                     out=out)
+        fs = self._set(F)
+        B = R.shape[0]
+        a = self.buffer("scaled", fs.idx.shape, np.float64)
+        out, rec, clear = self._sparse_target(out, fs.shape)
+        gt = _direction_round(*_rows(R), _cases(sigma, B), _cases(nf, B), fs.idx, fs.count, a, g, g_prev, t,
+                              *_state(g_old, delta, gprev_ok, go, done), _cases(inv_sigma, B), *_rows(out),
+                              rec.idx, rec.count, clear)
+        return out, self._col(gt)
+
+    def trial(self, spec, weights, sigma, gt, nan, P, t, F, target, go, done):
+        if self.split:
+            return super().trial(spec, weights, sigma, gt, nan, P, t, F, target, go, done)
+        fs = self._set(F)
+        B = P.shape[0]
+        real = np.float32 if spec.dtype == np.complex64 else np.float64
+        ri = np.ascontiguousarray(spec).view(real).reshape(B, -1, 2)
+        tau, proj, ps = np.empty(B), np.empty(B, dtype=np.bool_), np.empty(B)
+        _trial_round(ri, self._weights(weights, spec.shape[1:], real), _cases(sigma, B), _cases(gt, B), float(nan),
+                     *_fields(P), t, fs.idx, fs.count, _cases(target, B), *_state(go, done), tau, proj, ps)
+        return self._col(tau), self._col(proj), self._col(ps)
+
+    def settle(self, w, R, factor, P, F, t, g_prev, nF, frac, proj, go, gprev_ok, fresh):
+        if self.split:
+            return super().settle(w, R, factor, P, F, t, g_prev, nF, frac, proj, go, gprev_ok, fresh)
+        fs = self._set(F)
+        B = w.shape[0]
+        r, ny, _, extra = _rows(R)
+        f, idx, cnt = fs.flat()
+        _settle_round(*_fields(w), r, ny, extra, _cases(factor, B), *_fields(P), f, idx, cnt, t, g_prev,
+                      _cases(nF, B, np.int64), float(frac), _cases(proj, B, np.bool_), _cases(go, B, np.bool_),
+                      *_state(gprev_ok, fresh), np.empty(B))
+        return self._col(cnt.copy())
 
     # -- the warm start of a load step --------------------------------------------------------
 

@@ -140,67 +140,58 @@ class BatchIteration:
         :meth:`act`. Measuring again a case whose state has not changed decides the same (the stall
         guard's and ``next_sync``'s updates are idempotent).
         """
-        k, s = self.k, self.s
+        s = self.s
         # gap on F (zero mean there: gbar is -d), sign violations off F (min of w), complementarity
-        w_on_f, wmin = k.gap_stats(s.w, self.F)
-        self.gbar = gbar = k.gbar(w_on_f, self.nF)
-        k.decide(k.orth(s.P, s.w, gbar, self.F), wmin, gbar, self.inv_norm, self.scale, self.tol,
-                 self.stall, math.inf, self.it, self.max_iter_d, self.fresh, self.next_sync, self.best, self.at,
-                 self.done, self.waiting, self.converged, self.go)
+        self.gbar = self.k.measure(s.P, s.w, self.F, self.nF, self.inv_norm, self.scale, self.tol, self.stall,
+                                   math.inf, self.it, self.max_iter_d, self.fresh, self.next_sync, self.best,
+                                   self.at, self.done, self.waiting, self.converged, self.go)
 
     def act(self) -> None:
         """The second half of the loop for the cases that iterate: join, direction, step."""
-        k, s = self.k, self.s
+        k, op, s = self.k, self.op, self.s
         go = self.go
-        self.it += go
-        # join: violating nodes (w < gbar off F) enter F; their p, t and g_prev are 0 already (in either form)
-        F, g, nF_new, gsum = k.join_stats(s.w, self.gbar, self.F, go)
-        c, nf = k.join_fix(nF_new, self.nF, gsum, go, self.done)  # go, done in place
-        self.F, self.nF = F, nF_new
-        k.sub_masked(g, c, F)  # re-centred on the enlarged F where nodes joined (shifts d only)
-        spec, gt = self._direction(g, go, nf)
+        # join: violating nodes (w < gbar off F) enter F; their p, t and g_prev are 0 already (in either form);
+        # the gradient re-centred on the enlarged F where nodes joined (shifts d only), and its transform input
+        self.F, g, self.nF, nf, x32 = k.join(s.w, self.gbar, self.F, self.nF, go, self.done, self.it,
+                                            self.inv_sigma, out=op.input32)
+        spec, gt = self._direction(g, go, nf, x32)
         self._step(go, spec, gt)
 
-    def _direction(self, g, go, nf):
+    def _direction(self, g, go, nf, x32):
         """``t = z + beta t`` (``t = z`` at a restart or where that is no descent); a breakdown stops the case.
 
-        Returns the new direction's float32 spectrum (of ``t / sigma``) and ``g . t`` per case.
+        ``x32``: the transform input of ``g / sigma``. Returns the new direction's float32 spectrum (of
+        ``t / sigma``) and ``g . t`` per case.
         """
-        k, op, F = self.k, self.op, self.F
+        op = self.op
         # g, t, g_prev and a are vectors on F (fields zero off F, or compressed): the kernels touch F's nodes only
-        R = op.inverse32(op.spectrum32(g, self.inv_sigma, F), op.mmult32)  # M g / sigma
-        a, a_sum = k.scaled_sum(R, self.sigma, F)
-        # zero mean on F; g . a, g_prev . a and g . t (the last for the descent test of beta t + a)
-        G, gpa, gt_old = k.center_dots(a, a_sum / nf, F, g, self.g_prev, self.t)
-        beta, restart = k.beta(G, gpa, self.g_old, self.delta, self.gprev_ok, go, self.done)
-        keep = k.direction_done(beta * gt_old + G, restart, G, go, self.gprev_ok, self.g_old, self.delta)
-        t32, gt = k.new_direction_input(self.t, a, g, beta, keep, go, self.g_prev, F, self.inv_sigma,
-                                        out=op.input32)
+        R = op.inverse32(op.transform32(x32), op.mmult32)  # M g / sigma
+        t32, gt = self.k.direction(R, self.sigma, nf, self.F, g, self.g_prev, self.t, self.g_old, self.delta,
+                                   self.gprev_ok, go, self.done, self.inv_sigma, out=op.input32)
         return op.transform32(t32), gt
 
-    def _step_host(self, spec, tau, proj, pscale) -> None:
-        """The move of :meth:`_step` where the per-case flags are on the host (numpy).
+    def _step_host(self, spec, tau, proj, pscale):
+        """The move of :meth:`_step` where the per-case flags are on the host (numpy); ``(R, factor)`` for ``w``.
 
         A case that does not project moves ``p`` by ``-tau t`` and ``w`` by ``-tau K t``, ``K t`` from
         ``t``'s spectrum, already made for the step length: one inverse transform, as the single
         solve's step. A projected case transforms its change (:meth:`_step`). Each case's arithmetic
         is its own whatever the others do, so that a case's result does not depend on its batch.
         """
-        k, op, s = self.k, self.op, self.s
+        k, op = self.k, self.op
         t, F, go = self.t, self.F, self.go
         pj = self.s.be.to_host(proj).reshape(-1)
         if not pj.any():
-            k.step_on(s.P, t, tau, go, F)
-            k.add_scaled(s.w, op.inverse32(spec, op.kmult32), -tau * self.sigma)
-            return
+            k.step_on(self.s.P, t, tau, go, F)
+            return op.inverse32(spec, op.kmult32), -tau * self.sigma
         kept = spec[~pj].copy() if not pj.all() else None  # the spectrum's buffer is the next transform's
-        d32 = k.project(s.P, t, tau, go, pscale, self.inv_sigma, out=op.input32, F=F)
+        d32 = k.project(self.s.P, t, tau, go, pscale, self.inv_sigma, out=op.input32, F=F)
         mixed = op.transform32(d32)
         factor = self.sigma
         if kept is not None:
             mixed[~pj] = kept
             factor = self.xp.where(proj, self.sigma, -tau * self.sigma)
-        k.add_scaled(s.w, op.inverse32(mixed, op.kmult32), factor)
+        return op.inverse32(mixed, op.kmult32), factor
 
     def _step(self, go, spec, gt) -> None:
         """Exact line search along ``-t``, the projection onto ``p >= 0``, ``w`` moved by ``K`` of the change.
@@ -209,19 +200,15 @@ class BatchIteration:
         """
         k, op, s = self.k, self.op, self.s
         t, F = self.t, self.F
-        tau = k.step_length(op.quadratic32(spec), self.sigma, gt, math.nan, go, self.done)
-        total, pany = k.trial_stats(s.P, t, tau, F)
-        proj, pscale = k.projection_scale(pany, total, self.target, go, self.done, tau)
+        tau, proj, pscale = k.trial(spec, op.kquad32, self.sigma, gt, math.nan, s.P, t, F, self.target, go,
+                                    self.done)
         if not self.host:
             # w <- w + K (p_new - p): one forward and one inverse float32 transform (every case)
             d32 = k.project(s.P, t, tau, go, pscale, self.inv_sigma, out=op.input32, F=F)
-            k.add_scaled(s.w, op.inverse32(op.transform32(d32), op.kmult32), self.sigma)
+            R, factor = op.inverse32(op.transform32(d32), op.kmult32), self.sigma
         else:
-            self._step_host(spec, tau, proj, pscale)
-        nF_old = self.nF
-        # a projected case's F loses the nodes at p = 0; |F| and sum(t) on what is left
-        self.nF, t_sum = k.shrink_stats(s.P, F, t, self.g_prev)
-        # Polak-Ribiere's history off after a projection that took a large part of F away; zero mean
-        # of t on the reduced F
-        c = k.shrink_fix(nF_old, self.nF, t_sum, FR_AFTER_LOSS, proj, go, self.gprev_ok, self.fresh)
-        k.sub_masked(t, c, F)
+            R, factor = self._step_host(spec, tau, proj, pscale)
+        # w moved; a projected case's F loses the nodes at p = 0; Polak-Ribiere's history off after a projection
+        # that took a large part of F away; zero mean of t on the reduced F
+        self.nF = k.settle(s.w, R, factor, s.P, F, t, self.g_prev, self.nF, FR_AFTER_LOSS, proj, go, self.gprev_ok,
+                           self.fresh)

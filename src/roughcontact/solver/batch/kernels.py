@@ -213,6 +213,72 @@ class ArrayKernels:
         self.shrink(P, F, t, g_prev)
         return self.rcount(F), self.rsum(t)
 
+    # -- a round's passes between two transforms (:class:`.iteration.BatchIteration`) ---------------
+    # Each is the sequence of the kernels above that the iteration runs between two transforms (or a
+    # host read). Here they are those calls in turn; :class:`.cpu.FusedCpuKernels` makes each one
+    # compiled call (a small grid's round is otherwise mostly the calls' own cost).
+
+    def measure(self, P, w, F, nF, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
+                next_sync, best, at, done, waiting, converged, go):
+        """The measure of a round: :meth:`gap_stats`, :meth:`gbar`, :meth:`orth`, :meth:`decide`; returns ``gbar``.
+
+        The state arguments of :meth:`decide` are updated in place.
+        """
+        w_on_f, wmin = self.gap_stats(w, F)
+        gbar = self.gbar(w_on_f, nF)
+        self.decide(self.orth(P, w, gbar, F), wmin, gbar, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
+                    next_sync, best, at, done, waiting, converged, go)
+        return gbar
+
+    def join(self, w, gbar, F, nF, go, done, it, inv_sigma, out=None):
+        """The join of a round, up to the preconditioner's transform input; ``(F, g, nF, nf, x32)``.
+
+        ``it += go``; :meth:`join_stats` and :meth:`join_fix` (``go``, ``done`` in place); the gradient ``g``
+        re-centred on the enlarged ``F`` (:meth:`sub_masked`); ``x32 = to32(g, inv_sigma)`` on ``F``, into
+        ``out`` where given. ``nF`` is ``|F|`` before the join, the returned one after; ``nf`` is
+        :meth:`join_fix`'s.
+        """
+        it += go
+        F, g, n_new, gsum = self.join_stats(w, gbar, F, go)
+        c, nf = self.join_fix(n_new, nF, gsum, go, done)
+        self.sub_masked(g, c, F)
+        return F, g, n_new, nf, self.to32(g, inv_sigma, out=out, F=F)
+
+    def direction(self, R, sigma, nf, F, g, g_prev, t, g_old, delta, gprev_ok, go, done, inv_sigma, out=None):
+        """The direction of a round from ``R = M g / sigma``; ``(to32(t, inv_sigma), g . t)`` of the new ``t``.
+
+        ``a = R sigma`` on ``F`` (:meth:`scaled_sum`), zero mean there (:meth:`center_dots`), then
+        :meth:`beta`, :meth:`direction_done` (``beta g.t + g.a``: the descent test) and
+        :meth:`new_direction_input`; the CG's state in place.
+        """
+        a, a_sum = self.scaled_sum(R, sigma, F)
+        G, gpa, gt_old = self.center_dots(a, a_sum / nf, F, g, g_prev, t)
+        beta, restart = self.beta(G, gpa, g_old, delta, gprev_ok, go, done)
+        keep = self.direction_done(beta * gt_old + G, restart, G, go, gprev_ok, g_old, delta)
+        return self.new_direction_input(t, a, g, beta, keep, go, g_prev, F, inv_sigma, out=out)
+
+    def trial(self, spec, weights, sigma, gt, nan, P, t, F, target, go, done):
+        """The line search of a round from ``t``'s spectrum; ``(tau, proj, scale)``.
+
+        ``t.Kt`` by Parseval (:meth:`quadratic` with ``weights``), :meth:`step_length`, :meth:`trial_stats`
+        and :meth:`projection_scale` (``go``, ``done`` in place).
+        """
+        tau = self.step_length(self.quadratic(spec, weights), sigma, gt, nan, go, done)
+        total, pany = self.trial_stats(P, t, tau, F)
+        proj, scale = self.projection_scale(pany, total, target, go, done, tau)
+        return tau, proj, scale
+
+    def settle(self, w, R, factor, P, F, t, g_prev, nF, frac, proj, go, gprev_ok, fresh):
+        """The end of a round's step: ``w += R factor`` (:meth:`add_scaled`), then :meth:`shrink_stats`,
+        :meth:`shrink_fix` and ``t`` re-centred on the reduced ``F``; returns the new ``|F|``.
+
+        ``nF`` is ``|F|`` before the shrink.
+        """
+        self.add_scaled(w, R, factor)
+        n_new, t_sum = self.shrink_stats(P, F, t, g_prev)
+        self.sub_masked(t, self.shrink_fix(nF, n_new, t_sum, frac, proj, go, gprev_ok, fresh), F)
+        return n_new
+
     # -- the warm start of a load step (:meth:`.solver.BatchSolver.start`), in place --------
 
     def scale_start(self, P, w, h, s, plain):

@@ -34,6 +34,8 @@ class MpiKernels(FusedCpuKernels):
     goes through one of :meth:`allsum`, :meth:`allcount`, :meth:`allmin` or :meth:`allany`.
     """
 
+    split = True  # a round's passes one at a time, each reduction combined over the ranks (FusedCpuKernels.split)
+
     def __init__(self, comm):
         super().__init__()
         self.comm = comm
