@@ -370,3 +370,26 @@ def test_compressed_vectors_on_the_free_set_are_the_plain_fields():
     assert plain["n3"].sum() > plain["shrunk"][:B].sum() > 0  # the second join added nodes, the shrink took some
     for name, want in plain.items():
         np.testing.assert_allclose(fused[name], want, rtol=1e-12, atol=1e-12, err_msg=name)
+
+
+@pytest.mark.parametrize("cases", [(1,), (0, 1, 2)], ids=["B1", "B3"])
+def test_each_round_pass_as_one_compiled_call_is_the_kernels_one_at_a_time(cases, monkeypatch):
+    """The fused host kernels run each of a round's passes (measure, join, direction, trial, settle) as one
+    compiled call; the kernels one at a time (ArrayKernels' compositions of the same fused kernels, as the MPI
+    ranks run them) give every output bit for bit. B = 1 takes the in-place transforms (padded rows, the
+    transform's output in the buffer that the direction's pass writes), B = 3 the out-of-place ones."""
+    from roughcontact.solver.batch.cpu import FusedCpuKernels
+    from roughcontact.solver.batch.kernels import ArrayKernels
+
+    h = np.stack([_surface(k) for k in cases])
+    loads = LOADS[::2]
+    composed = solve_contact_batch(h, loads)
+    for name in ("measure", "join", "direction", "trial", "settle"):
+        assert getattr(FusedCpuKernels, name) is not getattr(ArrayKernels, name)
+        monkeypatch.setattr(FusedCpuKernels, name, getattr(ArrayKernels, name))
+    apart = solve_contact_batch(h, loads)
+    assert int(composed.iterations.sum()) > 20 * len(cases) * loads.size
+    timed = [name for name, var in apart.data_vars.items() if "wall" in name]
+    assert timed == ["wall_time"]  # the one column that is a clock's, not the solve's
+    for name, var in apart.drop_vars(timed).data_vars.items():
+        np.testing.assert_array_equal(composed[name].values, var.values, err_msg=name)
