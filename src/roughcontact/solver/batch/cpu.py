@@ -632,31 +632,49 @@ def _sparse_end(idx, cnt, written, wcnt):
         wcnt[b] = cnt[b]
 
 
+@njit(inline="always")
+def _v(x):
+    """A per-case array (``(B, 1, 1)``, C-contiguous) as ``(B,)``: a view, so in-place updates reach the caller's.
+    Done here, not by the caller: :func:`_cases` and :func:`_state` cost ~1 us an argument on this VM, and a
+    round's passes take ~40 of them."""
+    return x.reshape(x.size)
+
+
+@njit(inline="always")
+def _f(x):
+    """A ``(B, nx, ny)`` C-contiguous field as ``(B, nx ny)`` (:func:`_fields`)."""
+    return x.reshape(x.shape[0], x.size // x.shape[0])
+
+
 @njit(**_JIT)
 def _measure_round(p, w, idx, cnt, nf, wmin, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
                    next_sync, best, at, done, waiting, converged, go, gbar):
-    _gbar(_masked_sum(w, idx, cnt), nf, gbar)
-    _decide(_orth(p, w, gbar, idx, cnt), wmin, gbar, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
-            next_sync, best, at, done, waiting, converged, go)
+    p, w, gbar = _f(p), _f(w), _v(gbar)
+    _gbar(_masked_sum(w, idx, cnt), _v(nf), gbar)
+    _decide(_orth(p, w, gbar, idx, cnt), _v(wmin), gbar, _v(inv_norm), _v(scale), tol, stall, big, _v(it),
+            _v(max_iter), _v(fresh), _v(next_sync), _v(best), _v(at), _v(done), _v(waiting), _v(converged), _v(go))
 
 
 @njit(**_JIT)
 def _join_round(w, gbar, f, idx, cnt, go, done, it, nold, g, c, nf, inv_sigma,
                 out, ny, shift, extra, written, wcnt, clear):
+    go, done, it, c, nf = _v(go), _v(done), _v(it), _v(c), _v(nf)
     for b in range(go.shape[0]):
         it[b] += go[b]
-    _join_fix(cnt, nold, _join(w, gbar, f, idx, cnt, go, g), go, done, c, nf)
+    _join_fix(cnt, _v(nold), _join(_f(w), _v(gbar), f, idx, cnt, go, g), go, done, c, nf)
     _sub_on(g, c, cnt)
     _sparse_begin(out, ny, shift, extra, written, wcnt, clear)
-    _to32_on(g, inv_sigma, idx, cnt, out, ny, shift, extra)
+    _to32_on(g, _v(inv_sigma), idx, cnt, out, ny, shift, extra)
     _sparse_end(idx, cnt, written, wcnt)
 
 
 @njit(**_JIT)
 def _direction_round(r, rny, rshift, rextra, sigma, nf, idx, cnt, a, g, g_prev, t, g_old, delta, gprev_ok, go,
-                     done, inv_sigma, out, ny, shift, extra, written, wcnt, clear):
+                     done, inv_sigma, out, ny, shift, extra, written, wcnt, clear, gt):
+    g_old, delta, gprev_ok, go, done = _v(g_old), _v(delta), _v(gprev_ok), _v(go), _v(done)
     B = a.shape[0]
-    G, gpa, gt_old = _center_dots(a, _scaled_on(r, rny, rshift, rextra, sigma, idx, cnt, a) / nf, cnt, g, g_prev, t)
+    G, gpa, gt_old = _center_dots(a, _scaled_on(r, rny, rshift, rextra, _v(sigma), idx, cnt, a) / _v(nf), cnt, g,
+                                  g_prev, t)
     beta, restart, keep = np.empty(B), np.empty(B, dtype=np.bool_), np.empty(B, dtype=np.bool_)
     _beta(G, gpa, g_old, delta, gprev_ok, go, done, beta, restart)
     dd = np.empty(B)
@@ -664,22 +682,24 @@ def _direction_round(r, rny, rshift, rextra, sigma, nf, idx, cnt, a, g, g_prev, 
         dd[b] = beta[b] * gt_old[b] + G[b]
     _direction_done(dd, restart, G, go, gprev_ok, g_old, delta, keep)
     _sparse_begin(out, ny, shift, extra, written, wcnt, clear)
-    gt = _new_direction(t, a, g, beta, keep, go, g_prev, idx, cnt, inv_sigma, out, ny, shift, extra)
+    _v(gt)[:] = _new_direction(t, a, g, beta, keep, go, g_prev, idx, cnt, _v(inv_sigma), out, ny, shift, extra)
     _sparse_end(idx, cnt, written, wcnt)
-    return gt
 
 
 @njit(**_JIT)
 def _trial_round(re_im, weights, sigma, gt, nan, p, t, idx, cnt, target, go, done, tau, proj, ps):
-    _step_length(_quadratic(re_im, weights), sigma, gt, nan, go, done, tau)
-    total, pany = _trial_stats(p, t, tau, idx, cnt)
-    _projection_scale(pany, total, target, go, done, tau, proj, ps)
+    go, done, tau = _v(go), _v(done), _v(tau)
+    _step_length(_quadratic(re_im, weights), _v(sigma), _v(gt), nan, go, done, tau)
+    total, pany = _trial_stats(_f(p), t, tau, idx, cnt)
+    _projection_scale(pany, total, _v(target), go, done, tau, _v(proj), _v(ps))
 
 
 @njit(**_JIT)
 def _settle_round(w, r, rny, rextra, factor, p, f, idx, cnt, t, g_prev, nold, frac, proj, go, gprev_ok, fresh, c):
-    _add_scaled(w, r, rny, rextra, factor)
-    _shrink_fix(nold, cnt, _shrink(p, f, idx, cnt, t, g_prev), frac, proj, go, gprev_ok, fresh, c)
+    c = _v(c)
+    _add_scaled(_f(w), r, rny, rextra, _v(factor))
+    _shrink_fix(_v(nold), cnt, _shrink(_f(p), f, idx, cnt, t, g_prev), frac, _v(proj), _v(go), _v(gprev_ok),
+                _v(fresh), c)
     _sub_on(t, c, cnt)
 
 
@@ -1024,20 +1044,20 @@ class FusedCpuKernels(ArrayKernels):
             rec.count = np.zeros(flat[0], dtype=np.int64)
         return out, rec, clear
 
+    # The compiled calls below take the iteration's per-case arrays ((B, 1, 1), C-contiguous, of the dtypes
+    # ArrayKernels' expressions give them) and its fields as they are, without _cases or _state (:func:`_v`).
+
     def measure(self, P, w, F, nF, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
                 next_sync, best, at, done, waiting, converged, go):
         if self.split:
             return super().measure(P, w, F, nF, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
                                    next_sync, best, at, done, waiting, converged, go)
         fs = self._set(F)
-        B = P.shape[0]
-        gbar = np.empty(B)
+        gbar = np.empty((P.shape[0], 1, 1))
         wmin = np.min(w, axis=(-2, -1))  # numpy's SIMD minimum, as rmin
-        _measure_round(*_fields(P, w), fs.idx, fs.count, _cases(nF, B, np.int64), wmin, _cases(inv_norm, B),
-                       _cases(scale, B), float(tol), int(stall), float(big), _cases(it, B, np.int64),
-                       _cases(max_iter, B, np.int64), _cases(fresh, B, np.bool_),
-                       *_state(next_sync, best, at, done, waiting, converged, go), gbar)
-        return self._col(gbar)
+        _measure_round(P, w, fs.idx, fs.count, nF, wmin, inv_norm, scale, float(tol), int(stall), float(big), it,
+                       max_iter, fresh, next_sync, best, at, done, waiting, converged, go, gbar)
+        return gbar
 
     def join(self, w, gbar, F, nF, go, done, it, inv_sigma, out=None):
         if self.split:
@@ -1045,25 +1065,24 @@ class FusedCpuKernels(ArrayKernels):
         fs = self._set(F)
         B = w.shape[0]
         g = self.buffer("gap", fs.idx.shape, np.float64)
-        c, nf = np.empty(B), np.empty(B)
+        c, nf = np.empty((B, 1, 1)), np.empty((B, 1, 1))
         out, rec, clear = self._sparse_target(out, fs.shape)
         f, idx, cnt = fs.flat()
-        _join_round(*_fields(w), _cases(gbar, B), f, idx, cnt, *_state(go, done, it), _cases(nF, B, np.int64), g, c,
-                    nf, _cases(inv_sigma, B), *_rows(out), rec.idx, rec.count, clear)
-        return fs, g, self._col(cnt.copy()), self._col(nf), out
+        _join_round(w, gbar, f, idx, cnt, go, done, it, nF, g, c, nf, inv_sigma, *_rows(out), rec.idx, rec.count,
+                    clear)
+        return fs, g, self._col(cnt.copy()), nf, out
 
     def direction(self, R, sigma, nf, F, g, g_prev, t, g_old, delta, gprev_ok, go, done, inv_sigma, out=None):
         if self.split:
             return super().direction(R, sigma, nf, F, g, g_prev, t, g_old, delta, gprev_ok, go, done, inv_sigma,
                                      out=out)
         fs = self._set(F)
-        B = R.shape[0]
         a = self.buffer("scaled", fs.idx.shape, np.float64)
+        gt = np.empty((R.shape[0], 1, 1))
         out, rec, clear = self._sparse_target(out, fs.shape)
-        gt = _direction_round(*_rows(R), _cases(sigma, B), _cases(nf, B), fs.idx, fs.count, a, g, g_prev, t,
-                              *_state(g_old, delta, gprev_ok, go, done), _cases(inv_sigma, B), *_rows(out),
-                              rec.idx, rec.count, clear)
-        return out, self._col(gt)
+        _direction_round(*_rows(R), sigma, nf, fs.idx, fs.count, a, g, g_prev, t, g_old, delta, gprev_ok, go, done,
+                         inv_sigma, *_rows(out), rec.idx, rec.count, clear, gt)
+        return out, gt
 
     def trial(self, spec, weights, sigma, gt, nan, P, t, F, target, go, done):
         if self.split:
@@ -1072,21 +1091,19 @@ class FusedCpuKernels(ArrayKernels):
         B = P.shape[0]
         real = np.float32 if spec.dtype == np.complex64 else np.float64
         ri = np.ascontiguousarray(spec).view(real).reshape(B, -1, 2)
-        tau, proj, ps = np.empty(B), np.empty(B, dtype=np.bool_), np.empty(B)
-        _trial_round(ri, self._weights(weights, spec.shape[1:], real), _cases(sigma, B), _cases(gt, B), float(nan),
-                     *_fields(P), t, fs.idx, fs.count, _cases(target, B), *_state(go, done), tau, proj, ps)
-        return self._col(tau), self._col(proj), self._col(ps)
+        tau, proj, ps = np.empty((B, 1, 1)), np.empty((B, 1, 1), dtype=np.bool_), np.empty((B, 1, 1))
+        _trial_round(ri, self._weights(weights, spec.shape[1:], real), sigma, gt, float(nan), P, t, fs.idx, fs.count,
+                     target, go, done, tau, proj, ps)
+        return tau, proj, ps
 
     def settle(self, w, R, factor, P, F, t, g_prev, nF, frac, proj, go, gprev_ok, fresh):
         if self.split:
             return super().settle(w, R, factor, P, F, t, g_prev, nF, frac, proj, go, gprev_ok, fresh)
         fs = self._set(F)
-        B = w.shape[0]
         r, ny, _, extra = _rows(R)
         f, idx, cnt = fs.flat()
-        _settle_round(*_fields(w), r, ny, extra, _cases(factor, B), *_fields(P), f, idx, cnt, t, g_prev,
-                      _cases(nF, B, np.int64), float(frac), _cases(proj, B, np.bool_), _cases(go, B, np.bool_),
-                      *_state(gprev_ok, fresh), np.empty(B))
+        _settle_round(w, r, ny, extra, factor, P, f, idx, cnt, t, g_prev, nF, float(frac), proj, go, gprev_ok, fresh,
+                      np.empty((w.shape[0], 1, 1)))
         return self._col(cnt.copy())
 
     # -- the warm start of a load step --------------------------------------------------------
