@@ -97,9 +97,9 @@ def test_the_command_line_sets_an_input_and_says_so(capsys, tmp_path):
     assert text == out.read_text()
     assert text.startswith("Made 2026-12-02 by `python benchmarks/mpi/plan.py --set ns_per_node_iteration=2000 ")
     assert "set on the command line (--set ns_per_node_iteration=2000)" in text
-    # 2000 ns: both bounds scale with it (20 kB a node at 10 GB/s); the shipped inputs put 32768 on 2 nodes:
-    # 2000 ns x 32768^2 / 256 ranks = 8.39 s, 20 kB x 32768^2 / 2 nodes / 300 GB/s = 35.79 s
-    assert "| 32768 | 8.39 | 35.79 |" in text
+    # 2000 ns: both bounds scale with it (20 kB a node at 10 GB/s); the shipped inputs put 32768 on 1 node:
+    # 2000 ns x 32768^2 / 128 ranks = 16.78 s, 20 kB x 32768^2 / 1 node / 300 GB/s = 71.58 s
+    assert "| 32768 | 16.78 | 71.58 |" in text
     assert plan.main(["--set", "no_such_input=1"]) == 2
     assert "expected NAME=VALUE with NAME one of" in capsys.readouterr().err
 

@@ -17,7 +17,13 @@ transforms' inputs are fields. Measured against 2133c96 (the same loops on field
 before the per-case decisions were compiled too; 2026-12-02, benchmarks/README.md, each side by side with the
 single solve in one process): a batch of one case went from 1.030x to 0.953x the single solve's CPU at 1024²
 and from 1.045x to 0.921x at 2048². Passes that follow each other are fused where the iteration allows
-(:meth:`FusedCpuKernels.center_dots`, :meth:`FusedCpuKernels.new_direction_input`).
+(:meth:`FusedCpuKernels.center_dots`, :meth:`FusedCpuKernels.new_direction_input`), and each of a round's five
+stretches between two transforms (:meth:`~.kernels.ArrayKernels.measure`, ``join``, ``direction``, ``trial``,
+``settle``) is one compiled call that runs those loops in turn, taking the iteration's per-case arrays as they are:
+on a small grid the ~25 calls from Python a round cost more than the loops (64², 2026-12-02,
+benchmarks/bench_round_passes.py: the iterations 1.69x the single solve's CPU with the calls one at a time, 1.10x
+composed). Over MPI ranks (:attr:`FusedCpuKernels.split`) they stay one at a time, so that each reduction combines
+the ranks' parts before a decision reads it.
 
 Sums are accumulated in index order per case (deterministic; not numpy's pairwise order, so a sum
 differs from :class:`~.kernels.ArrayKernels`' in the last bits). Per-case partial results
