@@ -105,8 +105,8 @@ def one_size(n: int, steps: int, repeats: int) -> list[str]:
             ratios = (f"| {min(it) / min(cpu_it['single']):.3f} | {paired:.3f} | "
                       f"{min(whole) / min(cpu_all['single']):.3f} |")
         rows.append(f"| {n}² | {name} | {its[name]} | {1e3 * min(it) / its[name]:.4f} | "
-                    f"{1e3 * statistics.median(it) / its[name]:.4f} | {min(whole):.4f} | {statistics.median(whole):.4f} "
-                    f"{ratios}")
+                    f"{1e3 * statistics.median(it) / its[name]:.4f} | {min(whole):.4f} | "
+                    f"{statistics.median(whole):.4f} {ratios}")
     return rows
 
 

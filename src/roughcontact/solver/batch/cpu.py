@@ -20,7 +20,7 @@ and from 1.045x to 0.921x at 2048². Passes that follow each other are fused whe
 (:meth:`FusedCpuKernels.center_dots`, :meth:`FusedCpuKernels.new_direction_input`), and each of a round's five
 stretches between two transforms (:meth:`~.kernels.ArrayKernels.measure`, ``join``, ``direction``, ``trial``,
 ``settle``) is one compiled call that runs those loops in turn, taking the iteration's per-case arrays as they are:
-on a small grid the ~25 calls from Python a round cost more than the loops (64², 2026-12-02,
+on a small grid the ~25 calls from Python a round cost about as much as the loops (64², 2026-12-02,
 benchmarks/bench_round_passes.py: the iterations 1.69x the single solve's CPU with the calls one at a time, 1.10x
 composed). Over MPI ranks (:attr:`FusedCpuKernels.split`) they stay one at a time, so that each reduction combines
 the ranks' parts before a decision reads it.
@@ -610,7 +610,7 @@ def _shrink_fix(nold, nnew, tsum, frac, proj, go, gprev_ok, fresh, c):
 # -- a round's passes between two transforms, each one compiled call (FusedCpuKernels.measure, ...) ----------
 # The same compiled loops and decisions as the methods one at a time, called in the same order: the same results
 # bit for bit (tests/test_batch.py). A small grid's round is otherwise mostly the calls' own cost (at 64² ~25
-# calls of ~5-10 us each against ~0.25 ms for the single solve's whole iteration).
+# calls of ~5-10 us each against ~0.18 ms for the single solve's whole iteration: benchmarks/bench_round_passes.py).
 
 
 @njit(**_JIT)
