@@ -15,7 +15,9 @@ call; compare shares, not the solve's total with the benchmark's.
 method of its kernels (``plain``: :class:`roughcontact.solver.batch.kernels.ArrayKernels`, numpy
 expressions; ``fused``: :class:`roughcontact.solver.batch.cpu.FusedCpuKernels`, numba loops over the free
 set's indices), the batched transforms and the warm start, so that the options compare side by side
-(benchmarks/README.md, "One iteration code"). A kernel that calls another is counted in both.
+(benchmarks/README.md, "One iteration code"). A kernel that calls another is counted in both: the plain
+kernels' round passes (``measure``, ``join``, ``direction``, ``trial``, ``settle``) call their other kernels,
+where the fused kernels make each pass one compiled call (its row alone).
 """
 
 from __future__ import annotations
