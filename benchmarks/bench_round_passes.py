@@ -1,7 +1,7 @@
 #!/usr/bin/env python
 """A round's passes as one compiled call each, against the kernels one at a time, beside the single solve (issue 63).
 
-The batched iteration (:class:`roughcontact.solver.batch.iteration.BatchIteration`) runs a round as five passes
+The batched iteration (:class:`roughcontact.solver.iteration.BatchIteration`) runs a round as five passes
 between its transforms (``measure``, ``join``, ``direction``, ``trial``, ``settle`` of
 :class:`~roughcontact.solver.batch.kernels.ArrayKernels`). On the host
 (:class:`~roughcontact.solver.batch.cpu.FusedCpuKernels`) each is one compiled call; ``ArrayKernels`` composes

@@ -304,21 +304,31 @@ def _time_cupy_pair(cp, n: int, repeats: int = 5) -> float:
 def _count_pairs():
     """Count the solver's FFT pairs (double and single precision) inside the block.
 
-    Every ``Workspace.apply_*`` method is one product (one FFT pair); ``spectrum32_on`` (a forward
-    transform) and ``displacement32`` (an inverse) are half a pair each; names with ``32`` are
-    single precision. Only the outermost call counts, should one product call another.
+    Every ``Workspace.apply_*`` method is one product (one FFT pair), names with ``32`` single
+    precision; so is a ``SpectralProduct`` called whole, and its ``forward`` (a forward transform) and
+    ``backward`` (an inverse) are half a pair each, single precision where the product's dtype is
+    float32 (the float32 iteration's products, :mod:`roughcontact.solver.compressed`). Only the
+    outermost call counts, should one product call another.
     """
+    from roughcontact.core.backend import SpectralProduct
     from roughcontact.solver.workspace import Workspace
 
     counts = {"double": 0.0, "single": 0.0}
     depth = [0]
-    weights = {k: 1.0 for k, v in vars(Workspace).items() if k.startswith("apply_") and callable(v)}
-    weights.update({k: 0.5 for k in ("spectrum32_on", "displacement32") if hasattr(Workspace, k)})
-    saved = {name: getattr(Workspace, name) for name in weights}
+    wrapped = [(Workspace, k, 1.0) for k, v in vars(Workspace).items() if k.startswith("apply_") and callable(v)]
+    wrapped += [(SpectralProduct, "__call__", 1.0), (SpectralProduct, "forward", 0.5),
+                (SpectralProduct, "backward", 0.5)]
+    saved = [(cls, name, getattr(cls, name)) for cls, name, _ in wrapped]
 
-    def wrap(original, kind, weight):
+    def kind_of(obj, name):
+        if isinstance(obj, SpectralProduct):
+            return "single" if obj.dtype == np.float32 else "double"
+        return "single" if "32" in name else "double"
+
+    def wrap(original, name, weight):
         def counting(self, *args, **kwargs):
-            counts[kind] += weight if depth[0] == 0 else 0.0
+            if depth[0] == 0:
+                counts[kind_of(self, name)] += weight
             depth[0] += 1
             try:
                 return original(self, *args, **kwargs)
@@ -326,13 +336,13 @@ def _count_pairs():
                 depth[0] -= 1
         return counting
 
-    for name, weight in weights.items():
-        setattr(Workspace, name, wrap(saved[name], "single" if "32" in name else "double", weight))
+    for cls, name, weight in wrapped:
+        setattr(cls, name, wrap(getattr(cls, name), name, weight))
     try:
         yield counts
     finally:
-        for name, fn in saved.items():
-            setattr(Workspace, name, fn)
+        for cls, name, fn in saved:
+            setattr(cls, name, fn)
 
 
 def _warm_up(h, loads, tol, backend: str) -> float:

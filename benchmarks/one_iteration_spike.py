@@ -1,7 +1,7 @@
 #!/usr/bin/env python
 """Experiment (issue 63): the single solve's float32 iteration run by the batched iteration class, byte for byte.
 
-One iteration class needs ``solve_contact`` to run :class:`roughcontact.solver.batch.iteration.BatchIteration` with
+One iteration class needs ``solve_contact`` to run :class:`roughcontact.solver.iteration.BatchIteration` with
 B = 1. Switched as it is, every scene's outputs would move in their last bits (another order of summation, the
 float64 update of ``w``, another descent test), and every published number would need rechecking. This script
 tries the other route: kernels of ``BatchIteration`` (:class:`SingleKernels`) whose arithmetic is
@@ -41,8 +41,8 @@ from pathlib import Path
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
-
 from roughcontact.solver.batch.iteration import BatchIteration  # noqa: E402
+
 from roughcontact.solver.batch.kernels import ArrayKernels  # noqa: E402
 from roughcontact.solver.workspace import dot  # noqa: E402
 

@@ -1,7 +1,9 @@
 #!/usr/bin/env python
 """Where an iteration's CPU goes: per-call CPU timers around the elastic iteration's parts.
 
-Wraps the methods of :class:`roughcontact.solver.elastic.PKIteration`, the float32 transforms of
+Wraps the passes of the single solve's kernels (:class:`roughcontact.solver.compressed.CompressedKernels`, which
+:class:`roughcontact.solver.iteration.BatchIteration` calls for one case), its float64 recomputations, the float32
+transforms of
 :class:`roughcontact.core.backend.SpectralProduct` (forward, spectrum product, backward), its
 Parseval sum, the sparse loads and read-backs and the float64 products, solves the benchmark's
 paper case (k_l 16, k_s 32, H 0.8, rms slope 0.1, 30 steps to p0/E* = 0.005, tol 1e-8) on one
@@ -32,7 +34,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 
 CPU = time.process_time
-METHODS = ("_measure", "_direction", "_step_single", "_project_single", "_join", "_resync", "_finish", "_project")
+METHODS = ("measure", "join", "direction", "trial", "step_on", "project", "settle")
 
 
 def timer(acc: collections.Counter, calls: collections.Counter, owner, name: str, key: str) -> None:
@@ -52,14 +54,16 @@ def timer(acc: collections.Counter, calls: collections.Counter, owner, name: str
 def instrument(acc: collections.Counter, calls: collections.Counter) -> None:
     """Wrap the iteration's methods and the transforms with CPU timers adding into ``acc``."""
     import roughcontact.core.backend as be
-    import roughcontact.solver.elastic as el
+    import roughcontact.solver.compressed as co
     import roughcontact.solver.halfspace as hs
+    import roughcontact.solver.iteration as it
 
     def wrap(owner, name, key):
         timer(acc, calls, owner, name, key)
 
     for name in METHODS:
-        wrap(el.PKIteration, name, name)
+        wrap(co.CompressedKernels, name, name)
+    wrap(it.BatchIteration, "resync", "resync")
 
     def forward(self):
         t = CPU()

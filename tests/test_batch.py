@@ -101,7 +101,7 @@ def test_unconverged_case_stops_at_max_iter_like_the_single_solve():
 
 def test_fallback_runs_on_the_stalled_case_alone(monkeypatch):
     """A case whose batched iteration stalls moves on to the single solve's fallbacks, from its pressure."""
-    from roughcontact.solver.batch import iteration as batch_iteration
+    from roughcontact.solver import iteration as batch_iteration
 
     monkeypatch.setattr(batch_iteration, "STALL_WINDOW", 0)  # the batched iteration "stalls" at once, every case
     ds = solve_contact_batch(np.stack([_surface(0), _surface(2)]), LOADS[:3])

@@ -409,7 +409,7 @@ _STALLED_RUN = """
 import json, sys
 import numpy as np
 from mpi4py import MPI
-import roughcontact.solver.batch.iteration as bi
+import roughcontact.solver.iteration as bi
 from roughcontact.solver.mpi import rows_of, solve_contact_mpi
 bi.STALL_WINDOW = 0
 h = np.load(sys.argv[1])

@@ -80,10 +80,10 @@ def main():
               f"{1e3 * wall / rounds / b:.3f} ms a case-round, converged {ok}", flush=True)
     if args.no_wrap:
         return
+    from roughcontact.solver import iteration as batch_iteration
     from roughcontact.solver.batch import (
         cuda as batch_cuda,
         halfspace as batch_halfspace,
-        iteration as batch_iteration,
         kernels as batch_kernels,
     )
 

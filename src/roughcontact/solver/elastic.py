@@ -11,16 +11,9 @@ import math
 
 import numpy as np
 
+from .compressed import solve_f32
 from .projection import enforce_mean
 from .workspace import StallGuard, Workspace, dot
-
-#: After a projection that takes at least this fraction of ``F`` out of contact, the next ``beta``
-#: is Fletcher-Reeves' (as after a full projection) instead of Polak-Ribiere's. Measured: on
-#: frt-2's plateau (SurfaceTopography's file) Polak-Ribiere's kept history cycles with period 2
-#: (~11 000 nodes join, ~4 400 leave) until the stall guard; Fletcher-Reeves' converges the step in
-#: 16 iterations. On synthetic surfaces a projection clips ~10 of ~17 000 nodes: the rule rarely
-#: applies there, and it changed the iterations by less than 1 % (4 cases at N = 512).
-FR_AFTER_LOSS = 0.1
 
 
 def pk_solve(ws: Workspace, p0: float, tol: float, max_iter: int, fresh: bool | None):
@@ -32,6 +25,8 @@ def pk_solve(ws: Workspace, p0: float, tol: float, max_iter: int, fresh: bool | 
     Returns ``(iterations, converged)`` with ``ws.P`` and ``ws.w`` consistent
     (``ws.w`` freshly recomputed) on exit.
     """
+    if ws.method == "pk-fourier-f32":
+        return solve_f32(ws, p0, tol, max_iter, fresh)
     return PKIteration(ws, p0, tol, max_iter, fresh).run()
 
 
@@ -43,9 +38,8 @@ class PKIteration:
     ``p_c`` is the pressure, ``g_c`` the gap with its mean over ``F`` removed,
     ``t_c`` the search direction and ``a_c`` scratch (all float64, shape
     ``(idx.size,)``). ``fresh`` says whether ``ws.w`` equals ``K P - h`` exactly or
-    has been updated incrementally since. With ``pk-fourier-f32`` the products
-    are single precision and ``ws.w`` is recomputed in float64 below each level
-    ``next_sync`` of the residual.
+    has been updated incrementally since. ``pk`` and ``pk-fourier`` (float64 products);
+    ``pk-fourier-f32`` runs :class:`~.iteration.BatchIteration` (:func:`~.compressed.solve_f32`).
     """
 
     def __init__(self, ws: Workspace, p0: float, tol: float, max_iter: int, fresh: bool | None):
@@ -55,13 +49,8 @@ class PKIteration:
         self.inv_norm = 1.0 / (self.target * self.scale)
         self.maskf = ws.mask.ravel()
         self.precond = ws.method != "pk"
-        self.single = ws.method == "pk-fourier-f32"
         ws.setup_method()
         self.Zf = ws.Z.ravel() if self.precond else None
-        # single precision: w drifts from K p - h by ~1e-7 of the steps taken; it is
-        # recomputed in float64 when the residual falls below each of these levels
-        self.next_sync = 1e-5
-        self.ksig = ws.sigma if self.single else 1.0
         if fresh is False:
             ws.refresh()
         self.idx = ws.active_set()
@@ -89,12 +78,6 @@ class PKIteration:
                     self.converged = True
                     break
                 self._resync()  # incremental updates may have drifted: confirm on a fresh K p
-                continue
-            if self.single and residual < self.next_sync and not self.fresh:
-                # float64 gap below 1e-5 and after every further four decades
-                while self.next_sync > residual:
-                    self.next_sync *= 1e-4
-                self._resync()
                 continue
             if self.guard.stop(residual, self.it):
                 break
@@ -170,13 +153,9 @@ class PKIteration:
                 g_c -= g_c.sum() / nf
                 self.joined_after = 0
             # z = P_F M P_F g, zero mean on F
-            if self.single:
-                self.ws.apply_m32_on(self.idx, g_c, a_c)
-                a_c *= self.ksig  # the float32 product is M g / sigma
-            else:
-                self.Zf[self.idx] = g_c
-                a_c[...] = self.ws.apply_m(self.ws.Z)[self.ws.nodes(self.idx)]
-                self.Zf[self.idx] = 0.0
+            self.Zf[self.idx] = g_c
+            a_c[...] = self.ws.apply_m(self.ws.Z)[self.ws.nodes(self.idx)]
+            self.Zf[self.idx] = 0.0
             a_c -= a_c.sum() / nf
             G = dot(g_c, a_c)
             if not (G > 0.0 and math.isfinite(G)):
@@ -226,8 +205,6 @@ class PKIteration:
 
         False for a null direction (nothing can move: reported as not converged).
         """
-        if self.single:
-            return self._step_single()
         ws, idx, t_c, a_c = self.ws, self.idx, self.t_c, self.a_c
         ws.Tf[idx] = t_c
         R = ws.apply_k(ws.T)  # maybe a strided view of the product's buffer: used in 2-D, not copied
@@ -256,72 +233,12 @@ class PKIteration:
         self.a_c += self.p_c
         return tau
 
-    def _step_single(self) -> bool:
-        """:meth:`_step` with single-precision transforms: one forward and one inverse per step.
-
-        ``t . K t`` comes from the spectrum of ``t`` (Parseval), so the step length is known
-        before the inverse transform, and a step that leaves ``p >= 0`` folds the clipped part
-        into that same inverse (:meth:`_project_single`): ``K p`` is never transformed afresh.
-        """
-        ws, idx, t_c, a_c = self.ws, self.idx, self.t_c, self.a_c
-        spec = ws.spectrum32_on(idx, t_c)
-        tau = self._trial(ws.quadratic32(spec) * ws.sigma ** 2)  # from t . K t
-        if tau is None:
-            return False
-        if not bool((a_c <= 0.0).any()):
-            self.p_c, self.a_c = a_c, self.p_c
-            R = ws.displacement32(spec)  # K t / sigma
-            np.multiply(R, R.dtype.type(tau * self.ksig), out=R)
-            np.subtract(ws.w, R, out=ws.w)  # u <- u - tau K t: exact, no FFT pair for p
-        elif not self._project_single(a_c, tau):
-            self._project(a_c)
-            return True
-        self.fresh = False
-        return True
-
-    def _project_single(self, trial: np.ndarray, tau: float) -> bool:
-        """Projection of ``trial = p - tau t`` onto ``p >= 0`` with the exact mean, ``w`` updated.
-
-        The new pressure is ``s max(trial, 0)`` (``s`` restores the mean), so
-        ``p_new - p = x - tau t`` with ``x = max(-trial, 0) + (s - 1) s^-1 p_new`` on ``F``: one
-        forward transform of that change (``F[t]`` has given the step length and is not needed
-        any more) and one inverse, and ``w`` moves by ``K (p_new - p)`` like an ordinary step;
-        ``K p`` is never transformed afresh. Transforming the change itself, rather than ``x``
-        combined with ``F[t]`` in the spectrum, saves two passes over the half spectrum. False
-        (nothing done) when no pressure is left, for :meth:`_project`'s uniform restart.
-        """
-        ws, idx = self.ws, self.idx
-        x = np.maximum(-trial, 0.0)  # the clipped part
-        np.maximum(trial, 0.0, out=trial)
-        total = float(trial.sum())
-        if not total > 0.0:
-            return False
-        scale = self.target / total
-        x += (scale - 1.0) * trial
-        trial *= scale
-        x -= tau * self.t_c  # p_new - p on F
-        R = ws.displacement32(ws.spectrum32_on(idx, x))  # K (p_new - p) / sigma
-        np.multiply(R, R.dtype.type(self.ksig), out=R)
-        np.add(ws.w, R, out=ws.w)
-        keep = trial > 0.0
-        gone = idx[~keep]
-        self.maskf[gone] = False
-        ws.Pf[gone] = 0.0
-        self.idx, self.p_c = idx[keep], trial[keep]
-        if self.g_prev is not None:
-            self.g_prev = None if gone.size >= FR_AFTER_LOSS * idx.size else self.g_prev[keep]
-        t_c = self.t_c = self.t_c[keep]
-        if t_c.size:
-            t_c -= t_c.mean()
-        self.g_c, self.a_c = np.empty_like(self.p_c), np.empty_like(self.p_c)
-        return True
-
     def _project(self, trial: np.ndarray) -> None:
         """Polonsky-Keer projection of ``trial`` onto ``p >= 0``, exact mean, fresh ``K p``."""
         ws, old = self.ws, self.idx
         np.maximum(trial, 0.0, out=trial)
         ws.Pf[old] = trial
-        ws.Tf[old] = self.t_c  # T is zero off F (the single-precision steps do not write it)
+        ws.Tf[old] = self.t_c
         enforce_mean(ws.P, self.target, None)
         self.idx = ws.active_set()
         self.g_prev = None

@@ -29,6 +29,9 @@ class ArrayKernels:
 
     def __init__(self, xp):
         self.xp = xp
+        # whether the iteration may read the per-case flags at every step (free on the host; on a GPU a
+        # synchronisation, so there it reads them at the checks only)
+        self.flags_on_host = xp is np
 
     # -- where a field is split over processes (MPI ranks), their per-case parts combined --------
     # Every reduction below goes through exactly one of these; here each process holds whole fields.

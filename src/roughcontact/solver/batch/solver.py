@@ -13,13 +13,13 @@ from ...statistics.patches import contact_patches
 from ..box import box_solve
 from ..check import MEAN_RTOL
 from ..elastic import pk_solve
+from ..iteration import BatchIteration
 from ..settings import SolverSettings
 from ..units import Units, check_loads, rms_about_mean
 from ..workspace import FALLBACKS, SOLVER_PATHS, Workspace
 from .cpu import FusedCpuKernels
 from .cuda import fused_kernels
 from .halfspace import BatchOperator
-from .iteration import BatchIteration
 
 #: The only elastic iteration a batch runs (the package default).
 BATCH_METHOD = "pk-fourier-f32"

@@ -3,7 +3,7 @@
 ``mpiexec -n R python -m roughcontact.solver.mpi ...`` (:mod:`.__main__`) or
 :func:`solve_contact_mpi` from a program every rank runs. The grid ``(nx, ny)`` is split along x
 into ``R`` slabs of rows (:mod:`.slabs`); each rank holds its rows of the heights, the pressure, the
-gap and the masks, and the iteration is the batched one (:class:`~roughcontact.solver.batch.iteration.
+gap and the masks, and the iteration is the batched one (:class:`~roughcontact.solver.iteration.
 BatchIteration`, B = 1) unchanged: its per-case reductions are collective (:class:`.kernels.MpiKernels`)
 and its transforms distributed (:class:`.kernels.SlabOperator`: a real FFT along y, an all-to-all
 transpose, a complex FFT along x). Same answers as :func:`~roughcontact.solver.solve_contact`

@@ -84,7 +84,7 @@ class SlabOperator(BatchOperator):
     """The periodic half-space's products on the rank's slab (internal units, ``E* = Lx = 1``).
 
     :class:`~roughcontact.solver.batch.halfspace.BatchOperator`'s products (its methods, which
-    :class:`~roughcontact.solver.batch.iteration.BatchIteration` calls), with the distributed
+    :class:`~roughcontact.solver.iteration.BatchIteration` calls), with the distributed
     transforms and the multipliers ``K``, ``M = |q| E* / 2`` and Parseval's weights on the rank's
     spectral columns ``[c0, c1)`` (shape ``(nx, c1 - c0)``), computed there alone.
 

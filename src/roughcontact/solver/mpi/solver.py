@@ -1,6 +1,6 @@
 """One case split over MPI ranks: :class:`MpiSolver`, the batched solver (B = 1) on the rank's slab.
 
-The iteration is :class:`~roughcontact.solver.batch.iteration.BatchIteration` unchanged, with
+The iteration is :class:`~roughcontact.solver.iteration.BatchIteration` unchanged, with
 :class:`~.kernels.MpiKernels` (collective reductions) and :class:`~.kernels.SlabOperator` (the
 distributed transforms). What the batched solver does on a whole field is made rank-aware here:
 the surface's moments (the internal units, the rms height of the convergence criterion) are
@@ -25,8 +25,8 @@ from ...core.backend import get_backend
 from ...core.cell import Cell
 from ...core.cli import one_line
 from ...statistics.patches import merge_slabs, slab_patches
-from ..batch.iteration import BatchIteration
 from ..batch.solver import BATCH_METHOD, BatchSolver
+from ..iteration import BatchIteration
 from ..units import Units
 from ..workspace import FALLBACKS, SOLVER_PATHS, STALL_WINDOW as SINGLE_STALL_WINDOW
 from .kernels import MpiKernels, SlabOperator

@@ -6,8 +6,7 @@ import math
 
 import numpy as np
 
-from ..elastic import FR_AFTER_LOSS
-from ..workspace import STALL_WINDOW
+from .workspace import FR_AFTER_LOSS, STALL_WINDOW
 
 
 class BatchIteration:
@@ -62,7 +61,7 @@ class BatchIteration:
         # on the host the per-case flags cost nothing to read: a step that projects no case moves w by
         # K of -tau t from t's spectrum, already made for the step length (one forward transform less);
         # on a GPU that read would be a synchronisation a round
-        self.host = solver.be.name == "numpy"
+        self.host = self.k.flags_on_host
 
     def run(self, check_every: int) -> tuple[np.ndarray, np.ndarray]:
         """Iterate every case to convergence or a stop; ``(iterations, converged)`` per case (host).
@@ -91,6 +90,8 @@ class BatchIteration:
 
     def _flags(self):
         s = self.s
+        if self.xp is np:  # numpy arrays: read in place
+            return self.done.reshape(-1), self.waiting.reshape(-1)
         flags = s.be.to_host(self.xp.concatenate([self.done.reshape(-1), self.waiting.reshape(-1)]))
         return flags[: s.batch], flags[s.batch:]
 

@@ -1,0 +1,390 @@
+"""One case on its :class:`~.workspace.Workspace`: the kernels of :class:`~.iteration.BatchIteration` over index sets.
+
+:func:`solve_f32` runs one load step of ``"pk-fourier-f32"`` (Polonsky & Keer's CG with the Fourier
+preconditioner and float32 products: docs/solver.md, "Algorithm") with the one iteration class,
+:class:`~.iteration.BatchIteration`, for B = 1. Its kernels here (:class:`CompressedKernels`) hold the
+free set ``F`` as flat node indices (ascending, then the nodes that joined, appended in order) and every
+vector on ``F`` compressed, one value per node, in numpy (or the workspace's array module); the
+transforms are the workspace's own half-space's float32 products (:class:`WorkspaceProducts`), loading
+and reading ``F``'s nodes only. Sums are numpy's pairwise ones over the compressed arrays and inner
+products einsum's (:func:`~.workspace.dot`), ``w`` moves by the float32 ``K`` of the change scaled once
+and then added, and the per-case decisions are Python numbers: the arithmetic of the single solve, so
+its outputs are those of the single solve before this module, bit for bit (tests/test_compressed.py).
+
+The batched kernels (:class:`~.batch.kernels.ArrayKernels` and its fused forms) write the same
+algorithm with masks for ``B`` cases at once; their sums run in another order and agree to round-off.
+
+Examples
+--------
+>>> import numpy as np
+>>> from roughcontact.solver.workspace import Workspace
+>>> from roughcontact.surfaces.synthetic import generate_surface
+>>> h = generate_surface(32, 2, 8, 0.8, 0, rms_slope=0.1)
+>>> ws = Workspace(h / 32, 1.0, 1, "pk-fourier-f32")
+>>> ws.P.fill(1e-3)
+>>> iterations, converged = solve_f32(ws, 1e-3, 1e-8, 1000, False)
+>>> converged, bool(abs(ws.P.mean() - 1e-3) < 1e-15)
+(True, True)
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .iteration import BatchIteration
+from .projection import enforce_mean
+from .workspace import Workspace, dot
+
+
+class WorkspaceProducts:
+    """The float32 products of a workspace's half-space, as :class:`~.iteration.BatchIteration` calls them.
+
+    A transform input is the product it was loaded into (:attr:`k` for ``K``, :attr:`m` for the
+    preconditioner ``M``), loaded by :class:`CompressedKernels` at ``F``'s nodes; ``None`` is no input (a
+    case that stopped, or a step whose ``w`` was recomputed in float64), whose transforms are ``None``.
+    """
+
+    def __init__(self, ws: Workspace):
+        ws.setup_method()
+        self.hs = hs = ws.op
+        pre = getattr(hs, "precond", hs)  # the free operator's periodic preconditioner, or the operator
+        self.k, self.m = hs, pre
+        self.kmult32, self.kquad32, self.mmult32 = hs.kmult32, hs.kquad32, pre.mmult32
+        self.input32 = None  # the iteration passes it as ``out``: the kernels load the product they need
+        self._last = None
+
+    def transform32(self, product):
+        """The forward transform of what was loaded into ``product`` (its spectrum buffer)."""
+        self._last = product
+        return None if product is None else product.prod32.forward()
+
+    def inverse32(self, spec, mult):
+        """The inverse of the last transform's spectrum times ``mult``: ``K x / sigma`` on the grid for ``K``'s;
+        for ``M``'s the product's buffer, which :class:`CompressedKernels` reads at ``F``'s nodes."""
+        if spec is None:
+            return None
+        if mult is self.kmult32:  # (the periodic operator is its own preconditioner: the multiplier tells)
+            return self.k.displacement32(spec)
+        return self._last.prod32.backward(spec, mult)
+
+
+class _FreeSet:
+    """``F`` of one case: node indices, the vectors made on it, and what a round carries between passes."""
+
+    def __init__(self, ws: Workspace):
+        self.idx = ws.active_set()
+        self.vectors = []
+        self.cand = self.g_cand = None  # nodes off F with w < gbar, and their gap
+        self.g = None  # the round's gradient on F (zero mean)
+        self.trial = self.clipped = None  # the step's trial pressure p - tau t, and its clipped part
+        self.full = False  # the step left no pressure: a full projection with a fresh K p
+
+
+class _Vector:
+    """A vector on ``F``, compressed; ``valid`` False stands for none (Polak-Ribiere's missing ``g_prev``)."""
+
+    def __init__(self, n: int, xp):
+        self.a = xp.zeros(n)
+        self.valid = False
+
+
+class CompressedKernels:
+    """The passes of :class:`~.iteration.BatchIteration`'s round for one case over compressed index sets.
+
+    Implements the methods the iteration calls (:class:`~.batch.kernels.ArrayKernels` documents them) with
+    the single solve's arithmetic; per-case numbers are ``(1, 1, 1)`` arrays of the iteration's, read once
+    per call. ``flags_on_host``: the iteration may read the per-case flags at every step.
+    """
+
+    flags_on_host = True
+
+    def __init__(self, ws: Workspace, products: WorkspaceProducts, target: float):
+        self.ws, self.op, self.xp = ws, products, ws.xp
+        self.target = target  # the load's total, p0 times the nodes
+        self.F = None
+        self.inv_sigma = 1.0 / ws.sigma
+        self._proj = np.zeros(1, dtype=bool)  # the step's projection flag, as the host reads it
+
+    # -- the free set and its vectors --------------------------------------------------------------
+
+    def free_set(self, mask):
+        """``F`` from the workspace's pressure (``mask`` is ``P > 0``, as the workspace makes it itself)."""
+        self.F = _FreeSet(self.ws)
+        return self.F
+
+    def rcount(self, F):
+        return F.idx.size
+
+    def vector(self, F):
+        v = _Vector(F.idx.size, self.xp)
+        F.vectors.append(v)
+        return v
+
+    def rsum(self, P):
+        """The pressure's total, summed over ``F`` (zero off it) in its order: the resync's."""
+        return self.ws.Pf[self.F.idx].sum()
+
+    # -- a round ---------------------------------------------------------------------------------
+
+    def measure(self, P, w, F, nF, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
+                next_sync, best, at, done, waiting, converged, go):
+        """Gap on ``F`` (zero mean there), sign violations off ``F``, the residual and the decisions; ``gbar``."""
+        ws, idx = self.ws, F.idx
+        nf = idx.size
+        gbar = 0.0
+        g = None
+        if nf:
+            g = np.take(ws.wf, idx)
+            gbar = g.sum() / nf
+            g -= gbar
+        F.g = g
+        # sign violations: out-of-contact nodes with g < 0
+        np.less(ws.w, gbar, out=ws.bbuf)
+        np.greater(ws.bbuf, ws.mask, out=ws.bbuf)  # (w < gbar) & ~mask, for booleans
+        pen = 0.0
+        F.cand = F.g_cand = None
+        if int(np.count_nonzero(ws.bbuf)):
+            F.cand = np.flatnonzero(ws.bbuf)
+            F.g_cand = ws.wf[F.cand] - gbar
+            pen = -float(F.g_cand.min())
+        orth = 0.0
+        if nf:
+            pen = max(pen, -float(g.min()))
+            orth = dot(ws.Pf[idx], np.abs(g)) * inv_norm.item()
+        residual = max(orth, pen / scale.item(), 0.0)
+        self._decide(residual, tol, stall, it, max_iter, fresh, next_sync, best, at, done, waiting, converged, go)
+        return gbar
+
+    @staticmethod
+    def _decide(r, tol, stall, it, max_iter, fresh, next_sync, best, at, done, waiting, converged, go):
+        """The single solve's loop head: converge (on a fresh ``w``), recompute ``w`` in float64 (below ``tol``
+        or a level of ``next_sync``), or the stall guard (:class:`~.workspace.StallGuard`'s rule)."""
+        if done.item() or waiting.item():
+            go[...] = False
+            return
+        if r <= tol:
+            if fresh.item():
+                converged[...] = done[...] = True
+            else:
+                waiting[...] = True  # incremental updates may have drifted: confirm on a fresh K p
+            go[...] = False
+            return
+        level = next_sync.item()
+        if r < level and not fresh.item():
+            while level > r:  # float64 gap below 1e-5 and after every further four decades
+                level *= 1e-4
+            next_sync[...] = level
+            waiting[...] = True
+            go[...] = False
+            return
+        n = it.item()
+        stop = not math.isfinite(r) or n >= max_iter.item()
+        if not stop:
+            if r < 0.5 * best.item():
+                best[...] = r
+                at[...] = n
+            else:
+                stop = n - at.item() >= stall
+        done[...] = stop
+        go[...] = not stop
+
+    def join(self, w, gbar, F, nF, go, done, it, inv_sigma, out=None):
+        """Violating nodes join ``F`` (their ``p``, ``t`` and ``g_prev`` 0); ``g`` re-centred where they did.
+
+        The direction is kept across a join (zero on the joining nodes, so still zero-mean on ``F``)
+        and the next one conjugated against it. Loads ``g / sigma`` into ``M``'s product.
+        """
+        if not go.item():
+            return F, None, nF, None, None
+        it += 1
+        ws, g = self.ws, F.g
+        if F.cand is not None:
+            n_join = F.cand.size
+            F.idx = np.concatenate([F.idx, F.cand])
+            g = np.concatenate([g, F.g_cand]) if g is not None else F.g_cand
+            for v in F.vectors:
+                v.a = np.concatenate([v.a, self.xp.zeros(n_join)])
+            ws.mask.reshape(-1)[F.cand] = True
+            g -= g.sum() / F.idx.size  # the gradient on the enlarged set: zero mean on F (shifts d only)
+            F.g = g
+        n = F.idx.size
+        if n == 0:
+            go[...] = False
+            done[...] = True
+            return F, None, n, None, None
+        self.op.m.loader.load(F.idx, g, self.inv_sigma)
+        return F, None, n, None, self.op.m
+
+    def direction(self, R, sigma, nf, F, g, g_prev, t, g_old, delta, gprev_ok, go, done, inv_sigma, out=None):
+        """``t = z + beta t`` with Polak-Ribiere's ``beta`` (``t = z`` at a restart or where that is no descent);
+        ``z = P_F M P_F g`` from ``R``. A breakdown (``g.z`` not positive and finite) stops the case.
+        Loads ``t / sigma`` into ``K``'s product; ``(that product, g.t)``."""
+        if R is None:
+            return None, 0.0
+        ws, idx, g = self.ws, F.idx, F.g
+        a = np.empty_like(g)
+        self.op.m.loader.take(R, idx, a)
+        a *= ws.sigma  # the float32 product is M g / sigma
+        a -= a.sum() / idx.size
+        restart = not (delta.item() > 0.0 and g_old.item() > 0.0)
+        G = dot(g, a)
+        if not (G > 0.0 and math.isfinite(G)):
+            go[...] = False
+            done[...] = True
+            return None, 0.0
+        tc = t.a
+        if restart:
+            tc[...] = a
+        else:
+            # Polak-Ribiere's beta; Fletcher-Reeves' where there is no g_prev (after a projection that took
+            # a large part of F away: FR_AFTER_LOSS)
+            gold = g_old.item()
+            beta = max(0.0, (G - dot(g_prev.a, a)) / gold) if g_prev.valid else G / gold
+            tc *= beta
+            tc += a
+            if not dot(g, tc) > 0.0:  # conjugated across a change of F: no descent
+                tc[...] = a
+        g_prev.a = g.copy()
+        g_prev.valid = True
+        g_old[...] = G
+        delta[...] = 1.0
+        self.op.k.loader.load(idx, tc, self.inv_sigma)
+        return self.op.k, dot(g, tc)
+
+    def trial(self, spec, weights, sigma, gt, nan, P, t, F, target, go, done):
+        """The exact step length ``tau = g.t / t.Kt`` (Parseval, from ``t``'s spectrum) and the trial ``p - tau t``;
+        ``(tau, projects, scale)``, ``scale`` restoring the mean of the clipped trial where it projects."""
+        self._proj[0] = False
+        if spec is None or not go.item():
+            return 0.0, self._proj, 1.0
+        ws = self.ws
+        rt = self.op.k.prod32.quadratic(spec, weights) * ws.sigma ** 2  # t . K t
+        tau = gt / rt if rt > 0.0 else math.nan
+        if not (math.isfinite(tau) and tau > 0.0):
+            go[...] = False  # a null direction: nothing can move (the final check decides)
+            done[...] = True
+            return 0.0, self._proj, 1.0
+        trial = np.multiply(t.a, -tau)
+        trial += ws.Pf[F.idx]
+        F.trial = trial
+        if not bool((trial <= 0.0).any()):
+            return tau, self._proj, 1.0
+        self._proj[0] = True
+        F.clipped = np.maximum(-trial, 0.0)
+        np.maximum(trial, 0.0, out=trial)
+        total = float(trial.sum())
+        F.full = not total > 0.0
+        return tau, self._proj, (target.item() / total if not F.full else 1.0)
+
+    def step_on(self, P, t, tau, go, F):
+        """An unprojected step: ``p <- p - tau t`` on ``F``."""
+        if go.item():
+            self.ws.Pf[F.idx] = F.trial
+
+    def project(self, P, t, tau, go, scale, inv_sigma, out=None, F=None):
+        """A projected step: ``p <- scale max(p - tau t, 0)`` on ``F``, and its change loaded into ``K``'s product.
+
+        ``p_new - p = x - tau t`` with ``x = max(-trial, 0) + (scale - 1) scale^-1 p_new`` on ``F``, so
+        ``w`` moves by ``K (p_new - p)`` like an ordinary step and ``K p`` is never transformed afresh.
+        A step that leaves no pressure is :meth:`_full_projection` instead (nothing loaded).
+        """
+        if F.full:
+            self._full_projection(F, t)
+            return None
+        ws, trial, x = self.ws, F.trial, F.clipped
+        x += (scale - 1.0) * trial
+        trial *= scale
+        x -= tau * t.a  # p_new - p on F
+        ws.Pf[F.idx] = trial
+        self.op.k.loader.load(F.idx, x, self.inv_sigma)
+        return self.op.k
+
+    def _full_projection(self, F, t) -> None:
+        """Polonsky-Keer's projection where the step left no pressure: the load spread evenly, ``F`` every
+        node, ``w`` from a fresh ``K p`` in float64, Polak-Ribiere's history dropped, ``t`` kept on the old
+        ``F`` and re-centred."""
+        ws, old = self.ws, F.idx
+        ws.Pf[old] = F.trial  # all zero
+        T = self.xp.zeros(ws.size)
+        T[old] = t.a
+        enforce_mean(ws.P, self.target, None)
+        F.idx = ws.active_set()
+        tc = T[F.idx]
+        if tc.size:
+            tc -= tc.mean()
+        t.a = tc
+        for v in F.vectors:
+            if v is not t:
+                v.a, v.valid = self.xp.zeros(F.idx.size), False
+        ws.refresh()
+
+    def settle(self, w, R, factor, P, F, t, g_prev, nF, frac, proj, go, gprev_ok, fresh):
+        """``w`` moved by ``R`` scaled by ``factor`` (``-tau sigma`` after a step, ``sigma`` after a projected
+        step's change); a projected step's ``F`` loses the nodes at ``p = 0`` and ``t`` is re-centred on it;
+        Polak-Ribiere's history dropped after a projection that took ``frac`` of ``F`` away."""
+        if not go.item():
+            return nF
+        if F.full:  # w recomputed in float64
+            F.full = False
+            fresh[...] = True
+            return F.idx.size
+        f = float(factor) if np.ndim(factor) == 0 else factor.item()
+        ws = self.ws
+        np.multiply(R, R.dtype.type(abs(f)), out=R)
+        if f < 0:
+            np.subtract(ws.w, R, out=ws.w)  # u <- u - tau K t: exact, no FFT pair for p
+        else:
+            np.add(ws.w, R, out=ws.w)
+        fresh[...] = False
+        if not proj[0]:
+            return nF
+        idx = F.idx
+        keep = F.trial > 0.0
+        gone = idx[~keep]
+        ws.mask.reshape(-1)[gone] = False
+        ws.Pf[gone] = 0.0
+        F.idx = idx[keep]
+        if g_prev.valid:
+            if gone.size >= frac * idx.size:
+                g_prev.valid = False
+            else:
+                g_prev.a = g_prev.a[keep]
+        tc = t.a = t.a[keep]
+        if tc.size:
+            tc -= tc.mean()
+        return F.idx.size
+
+
+class WorkspaceCase:
+    """What :class:`~.iteration.BatchIteration` reads of its solver, for the one case of a workspace."""
+
+    batch = 1
+
+    def __init__(self, ws: Workspace, tol: float, p0: float):
+        self.ws, self.tol, self.size = ws, tol, ws.size
+        self.xp, self.be = ws.xp, ws.be
+        self.op = WorkspaceProducts(ws)
+        self.kernels = CompressedKernels(ws, self.op, p0 * ws.size)
+        self.h_rms = np.full((1, 1, 1), ws.h_rms)
+        self.P, self.w = ws.P[None], ws.w[None]
+
+    def refresh(self, cases) -> None:
+        """``w = K P - h`` in float64 (one FFT pair)."""
+        self.ws.refresh()
+
+
+def solve_f32(ws: Workspace, p0: float, tol: float, max_iter: int, fresh: bool | None) -> tuple[int, bool]:
+    """One ``"pk-fourier-f32"`` load step on ``ws`` (as :func:`~.elastic.pk_solve`); ``(iterations, converged)``.
+
+    ``ws.P`` must be >= 0 with mean ``p0``; ``fresh`` says whether ``ws.w`` equals ``K P - h`` (True), must
+    be computed (False), or equals it up to single-precision round-off (None). On exit ``ws.P``, ``ws.w``
+    (freshly recomputed) and ``ws.mask`` (``P > 0``) are consistent.
+    """
+    case = WorkspaceCase(ws, tol, p0)
+    f0 = np.array([1 if fresh is True else (0 if fresh is False else -1)])
+    it = BatchIteration(case, np.full((1, 1, 1), p0), f0, np.array([max_iter]))
+    its, conv = it.run(1)
+    np.greater(ws.P, 0.0, out=ws.mask)  # an early exit right after nodes joined leaves them flagged with p = 0
+    return int(its[0]), bool(conv[0])
