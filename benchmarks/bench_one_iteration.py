@@ -4,7 +4,8 @@
 The paper case of ``bench_solver.py`` (k_l = 16, k_s = 32, H = 0.8, rms slope 0.1, seed 0, ``--steps``
 equal loads to p0/E* = ``--p-max``, tol 1e-8), single-threaded (``OMP_NUM_THREADS=1``), solved by
 
-- ``single``: :func:`roughcontact.solver.solve_contact` on the map (``PKIteration``, compressed sets);
+- ``single``: :func:`roughcontact.solver.solve_contact` on the map (compressed sets: ``PKIteration`` before
+  2026-12-03, since then ``BatchIteration`` with :class:`~roughcontact.solver.compressed.CompressedKernels`);
 - ``batched``: :func:`roughcontact.solver.solve_contact_batch` on ``h[None]`` (the batched iteration with the
   fused CPU kernels of ``solver/batch/cpu.py``, B = 1): the iteration the MPI solver runs on each rank;
 - ``batched-apart`` (``--apart``): the same with the batches' out-of-place float32 transforms, not one case's

@@ -10,11 +10,12 @@ small grid those calls' own cost is much of a round. Three solvers, interleaved 
 each, on the paper case of ``bench_solver.py`` (k_l = 16, k_s = 32, H = 0.8, rms slope 0.1, seed 0; ``--steps``
 loads to p0/E* = 0.005, tol 1e-8), single-threaded (``OMP_NUM_THREADS=1``):
 
-- ``single``: :func:`roughcontact.solver.solve_contact` (``PKIteration``);
+- ``single``: :func:`roughcontact.solver.solve_contact` (``PKIteration`` before 2026-12-03; since, ``BatchIteration``
+  with :class:`~roughcontact.solver.compressed.CompressedKernels`);
 - ``composed``: :func:`roughcontact.solver.solve_contact_batch` on ``h[None]`` (B = 1), the passes compiled whole;
 - ``apart``: the same with ``FusedCpuKernels``' five passes replaced by ``ArrayKernels``' compositions.
 
-Per solver: the CPU (``process_time``) of the iterations alone (``PKIteration.run``, ``BatchIteration.run``:
+Per solver: the CPU (``process_time``) of the iterations alone (``PKIteration.run`` where it runs, ``BatchIteration.run``:
 what one iteration class must match) and of the whole call (with the set-up, the per-step checks and the
 dataset), the least and the median of ``--repeats``; then the ratios to ``single``: of the least, and the median
 of the ratios paired within a repeat. The outputs of ``composed`` and ``apart`` are checked to be equal (the
@@ -40,8 +41,8 @@ PASSES = ("measure", "join", "direction", "trial", "settle")
 
 def one_size(n: int, steps: int, repeats: int) -> list[str]:
     """The table rows of one grid size."""
-    from roughcontact.solver import elastic, solve_contact, solve_contact_batch
-    from roughcontact.solver.batch import cpu, iteration
+    from roughcontact.solver import elastic, iteration, solve_contact, solve_contact_batch
+    from roughcontact.solver.batch import cpu
     from roughcontact.solver.batch.kernels import ArrayKernels
     from roughcontact.surfaces.synthetic import generate_surface
 

@@ -166,23 +166,23 @@ class _FFTWProduct:
     the free operator's padded grid.
     """
 
-    def __init__(self, prod: SpectralProduct, threads: int):
+    def __init__(self, shape, dtype, in_place: bool, threads: int):
         pyfftw = _fft.pyfftw
-        n0, n1 = prod.shape
-        cdtype = np.result_type(prod.dtype, np.complex64)
+        n0, n1 = shape
+        cdtype = np.result_type(dtype, np.complex64)
         self.spec = pyfftw.empty_aligned((n0, n1 // 2 + 1), dtype=cdtype)
-        self.in_place = prod.in_place
+        self.in_place = in_place
         if self.in_place:
             self.n1, self.row = n1, 2 * (n1 // 2 + 1)
-            self.input = self.spec.view(prod.dtype)[:, :n1]
-            self.flat = self.spec.view(prod.dtype).reshape(-1)
+            self.input = self.spec.view(dtype)[:, :n1]
+            self.flat = self.spec.view(dtype).reshape(-1)
             self.spec.fill(0.0)
             self.out, self.out_flat = self.input, self.flat
         else:
             self.n1 = self.row = n1
-            self.input = pyfftw.zeros_aligned(prod.shape, dtype=prod.dtype)
+            self.input = pyfftw.zeros_aligned(shape, dtype=dtype)
             self.flat = self.input.reshape(-1)
-            self.out = pyfftw.empty_aligned(prod.shape, dtype=prod.dtype)
+            self.out = pyfftw.empty_aligned(shape, dtype=dtype)
             self.out_flat = self.out.reshape(-1)
         self.last = None  # out of place: the last load's positions (True: dense)
         with _fft.shipped_wisdom_only():
@@ -224,6 +224,21 @@ class _FFTWProduct:
 
     def take(self, real, pos, out):
         take_into(self.out_flat, pos, out)  # ``real`` is this plan's output
+
+
+@functools.lru_cache(maxsize=16)
+def fftw_product(shape: tuple, dtype, in_place: bool, threads: int) -> _FFTWProduct:
+    """The pyFFTW plans and buffers of a :class:`SpectralProduct`, made once per process for each shape,
+    precision, layout and thread count (the 16 most recent kept).
+
+    Planning runs inside :func:`~.fft.shipped_wisdom_only`, whose swaps of FFTW's wisdom cost ~8 ms of CPU
+    whatever the size (measured 2026-12-03, 64²): every solve made four such plans before. Every product of
+    one kind then shares the buffers, like the solver's other FFTs (the package's note: two solves of one
+    size must not run concurrently in threads of one process); a product's load, transforms and read-back
+    run in one sequence, so sharing is safe where products are used one after the other. The plans are
+    those the shipped wisdom gives, so the results are the same bit for bit.
+    """
+    return _FFTWProduct(shape, np.dtype(dtype), in_place, threads)
 
 
 class _ArrayModuleProduct:
@@ -316,7 +331,7 @@ class ArrayBackend:
 
     def product_plan(self, prod: SpectralProduct, threads: int):
         if _fft.default_backend() == "pyfftw":
-            return _FFTWProduct(prod, threads)
+            return fftw_product(prod.shape, prod.dtype, prod.in_place, threads)
         return _ArrayModuleProduct(prod, np)
 
 

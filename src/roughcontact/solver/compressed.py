@@ -75,6 +75,7 @@ class _FreeSet:
 
     def __init__(self, ws: Workspace):
         self.idx = ws.active_set()
+        self.p = ws.Pf[self.idx]  # the pressure on F (the field's values there are written back by to_mean)
         self.vectors = []
         self.cand = self.g_cand = None  # nodes off F with w < gbar, and their gap
         self.g = None  # the round's gradient on F (zero mean)
@@ -122,9 +123,15 @@ class CompressedKernels:
         F.vectors.append(v)
         return v
 
-    def rsum(self, P):
-        """The pressure's total, summed over ``F`` (zero off it) in its order: the resync's."""
-        return self.ws.Pf[self.F.idx].sum()
+    def to_mean(self, P, cases, target) -> None:
+        """The pressure on ``F`` scaled to the exact total (summed in ``F``'s order) and written into the field."""
+        F, tgt = self.F, target[0]
+        if not F.p.size:
+            return
+        tot = F.p.sum()
+        if tot > 0 and tgt > 0:
+            F.p *= tgt / tot
+        self.ws.Pf[F.idx] = F.p
 
     # -- a round ---------------------------------------------------------------------------------
 
@@ -152,7 +159,7 @@ class CompressedKernels:
         orth = 0.0
         if nf:
             pen = max(pen, -float(g.min()))
-            orth = dot(ws.Pf[idx], np.abs(g)) * inv_norm.item()
+            orth = dot(F.p, np.abs(g)) * inv_norm.item()
         residual = max(orth, pen / scale.item(), 0.0)
         self._decide(residual, tol, stall, it, max_iter, fresh, next_sync, best, at, done, waiting, converged, go)
         return gbar
@@ -198,11 +205,12 @@ class CompressedKernels:
         """
         if not go.item():
             return F, None, nF, None, None
-        it += 1
+        it[...] = it.item() + 1  # (numpy's in-place add on a (1, 1, 1) array costs 3x this)
         ws, g = self.ws, F.g
         if F.cand is not None:
             n_join = F.cand.size
             F.idx = np.concatenate([F.idx, F.cand])
+            F.p = np.concatenate([F.p, self.xp.zeros(n_join)])
             g = np.concatenate([g, F.g_cand]) if g is not None else F.g_cand
             for v in F.vectors:
                 v.a = np.concatenate([v.a, self.xp.zeros(n_join)])
@@ -267,7 +275,7 @@ class CompressedKernels:
             done[...] = True
             return 0.0, self._proj, 1.0
         trial = np.multiply(t.a, -tau)
-        trial += ws.Pf[F.idx]
+        trial += F.p
         F.trial = trial
         if not bool((trial <= 0.0).any()):
             return tau, self._proj, 1.0
@@ -281,7 +289,7 @@ class CompressedKernels:
     def step_on(self, P, t, tau, go, F):
         """An unprojected step: ``p <- p - tau t`` on ``F``."""
         if go.item():
-            self.ws.Pf[F.idx] = F.trial
+            F.p = F.trial
 
     def project(self, P, t, tau, go, scale, inv_sigma, out=None, F=None):
         """A projected step: ``p <- scale max(p - tau t, 0)`` on ``F``, and its change loaded into ``K``'s product.
@@ -297,7 +305,7 @@ class CompressedKernels:
         x += (scale - 1.0) * trial
         trial *= scale
         x -= tau * t.a  # p_new - p on F
-        ws.Pf[F.idx] = trial
+        F.p = trial
         self.op.k.loader.load(F.idx, x, self.inv_sigma)
         return self.op.k
 
@@ -311,6 +319,7 @@ class CompressedKernels:
         T[old] = t.a
         enforce_mean(ws.P, self.target, None)
         F.idx = ws.active_set()
+        F.p = ws.Pf[F.idx]
         tc = T[F.idx]
         if tc.size:
             tc -= tc.mean()
@@ -330,7 +339,7 @@ class CompressedKernels:
             F.full = False
             fresh[...] = True
             return F.idx.size
-        f = float(factor) if np.ndim(factor) == 0 else factor.item()
+        f = factor.item()
         ws = self.ws
         np.multiply(R, R.dtype.type(abs(f)), out=R)
         if f < 0:
@@ -345,7 +354,7 @@ class CompressedKernels:
         gone = idx[~keep]
         ws.mask.reshape(-1)[gone] = False
         ws.Pf[gone] = 0.0
-        F.idx = idx[keep]
+        F.idx, F.p = idx[keep], F.p[keep]
         if g_prev.valid:
             if gone.size >= frac * idx.size:
                 g_prev.valid = False

@@ -98,7 +98,7 @@ class BatchIteration:
     def check(self) -> bool:
         """The host's check after a measure: recomputations for the waiting cases; True when all are done."""
         done, waiting = self._flags()
-        sync = np.flatnonzero(waiting)
+        sync = waiting.nonzero()[0]  # (a method: np.flatnonzero's wrappers cost more than one case's round here)
         if sync.size:
             self.resync(sync)
             idx = self.s.xp.asarray(sync)
@@ -112,11 +112,7 @@ class BatchIteration:
         """Pressure brought to the exact mean and ``w`` recomputed in float64 for ``cases`` (host ints)."""
         s = self.s
         if self.host:  # in place, case by case (a gather and scatter of whole fields costs more)
-            target = s.be.to_host(self.target).reshape(-1)
-            for b in cases:
-                tot = float(self.k.rsum(s.P[b:b + 1]).reshape(()))
-                if tot > 0:
-                    s.P[b] *= target[b] / tot
+            self.k.to_mean(s.P, cases, s.be.to_host(self.target).reshape(-1))
             s.refresh(cases)
             return
         idx = s.xp.asarray(cases)

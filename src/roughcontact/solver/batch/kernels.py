@@ -76,6 +76,14 @@ class ArrayKernels:
     def rsum(self, x):
         return self.allsum(self.xp.sum(x, axis=(-2, -1), keepdims=True, dtype=np.float64))
 
+    def to_mean(self, P, cases, target) -> None:
+        """Each case ``b`` of ``cases`` (host ints) scaled in place to the total ``target[b]`` (host floats), where
+        it has a positive total: the pressure's mean made exact before ``w`` is recomputed in float64."""
+        for b in cases:
+            tot = float(self.rsum(P[b:b + 1]).reshape(()))
+            if tot > 0:
+                P[b] *= target[b] / tot
+
     def rcount(self, m):
         return self.allcount(self.xp.sum(m, axis=(-2, -1), keepdims=True, dtype=np.int64))
 
