@@ -13,8 +13,8 @@ p0/E* = 0.005, tol 1e-8) with both, interleaved after a warm-up each, single-thr
   step's pressure and gap fields stored in the warm-up);
 - the CPU (``process_time``) of the iterations alone (``contact.pk_solve``'s calls: the loop with its per-step
   set-up, the float32 products planned before the timer) and of the whole ``solve_contact`` call (the products
-  planned once per process since 2026-12-03, each solve before), the least and the median of ``--repeats``, and the ratios
-  after / before: of the least, and the median of the ratios paired within a repeat.
+  planned once per process since 2026-12-03, each solve before), the least and the median of ``--repeats``, and
+  the ratios after / before: of the least, and the median of the ratios paired within a repeat.
 
 The header gives the UTC date and ``os.getloadavg()`` at the start; the last line the time and load at the end.
 

@@ -15,8 +15,8 @@ loads to p0/E* = 0.005, tol 1e-8), single-threaded (``OMP_NUM_THREADS=1``):
 - ``composed``: :func:`roughcontact.solver.solve_contact_batch` on ``h[None]`` (B = 1), the passes compiled whole;
 - ``apart``: the same with ``FusedCpuKernels``' five passes replaced by ``ArrayKernels``' compositions.
 
-Per solver: the CPU (``process_time``) of the iterations alone (``PKIteration.run`` where it runs, ``BatchIteration.run``:
-what one iteration class must match) and of the whole call (with the set-up, the per-step checks and the
+Per solver: the CPU (``process_time``) of the iterations alone (``BatchIteration.run``; ``PKIteration.run`` before
+2026-12-03: what one iteration class must match) and of the whole call (with the set-up, the per-step checks and the
 dataset), the least and the median of ``--repeats``; then the ratios to ``single``: of the least, and the median
 of the ratios paired within a repeat. The outputs of ``composed`` and ``apart`` are checked to be equal (the
 same arithmetic). The header gives the UTC date and ``os.getloadavg()`` at the start and the end.
@@ -41,7 +41,7 @@ PASSES = ("measure", "join", "direction", "trial", "settle")
 
 def one_size(n: int, steps: int, repeats: int) -> list[str]:
     """The table rows of one grid size."""
-    from roughcontact.solver import elastic, iteration, solve_contact, solve_contact_batch
+    from roughcontact.solver import iteration, solve_contact, solve_contact_batch
     from roughcontact.solver.batch import cpu
     from roughcontact.solver.batch.kernels import ArrayKernels
     from roughcontact.surfaces.synthetic import generate_surface
@@ -50,7 +50,7 @@ def one_size(n: int, steps: int, repeats: int) -> list[str]:
     loads = np.linspace(0.005 / steps, 0.005, steps)
     spent = [0.0]
     runs = {}
-    for cls in (elastic.PKIteration, iteration.BatchIteration):
+    for cls in (iteration.BatchIteration,):
         runs[cls] = cls.run
 
         def timed_run(self, *args, _run=runs[cls]):

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from roughcontact.solver import compressed
-from roughcontact.solver.compressed import CompressedKernels, WorkspaceProducts, solve_f32
+from roughcontact.solver.compressed import CompressedKernels, WorkspaceProducts, pk_solve
 from roughcontact.solver.workspace import STALL_WINDOW, StallGuard, Workspace
 from roughcontact.surfaces.synthetic import generate_surface
 
@@ -106,7 +106,7 @@ def test_the_loop_head_recomputes_w_before_it_converges_and_at_each_level():
 
 def test_a_solve_holds_the_mean_and_the_contact_mask():
     ws = _workspace(p0=1e-3)
-    its, ok = solve_f32(ws, 1e-3, 1e-8, 1000, True)
+    its, ok = pk_solve(ws, 1e-3, 1e-8, 1000, True)
     assert ok and its > 0
     assert abs(ws.P.sum() - 1e-3 * ws.size) <= 1e-12 * 1e-3 * ws.size
     assert np.array_equal(ws.mask, ws.P > 0)

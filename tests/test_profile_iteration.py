@@ -22,7 +22,8 @@ def _profile(*args) -> tuple[str, dict]:
 def test_a_tiny_profile_names_every_part_with_its_share():
     head, rows = _profile()
     assert re.match(r"N = 64, single solve: solve CPU [\d.]+ s, \d+ iterations", head), head
-    assert {"measure", "join", "direction", "trial", "settle", "f32 forward", "f32 backward", "Parseval sum"} <= set(rows), rows
+    want = {"measure", "join", "direction", "trial", "settle", "f32 forward", "f32 backward", "Parseval sum"}
+    assert want <= set(rows), rows
 
 
 @pytest.mark.parametrize("kernels", ["fused", "plain"])

@@ -8,8 +8,9 @@ the iterations and the convergence criterion are stated in docs/solver.md ("The 
 algorithm and convergence criterion"); the modules refer to its sections.
 
 Parts: :mod:`.halfspace` (and :mod:`.love`) the elastic operators, periodic and free; :mod:`.workspace`
-the fields of one surface and the iterations' names; :mod:`.elastic` and :mod:`.box` the pressure
-iterations (elastic, capped), :mod:`.projection` their projections; :mod:`.check` the final check;
+the fields of one surface and the iterations' names; :mod:`.iteration` the elastic iteration (one class for
+one case, a batch and MPI ranks), :mod:`.compressed` its kernels for one case (the elastic load step) and
+:mod:`.box` the capped iteration, :mod:`.projection` their projections; :mod:`.check` the final check;
 :mod:`.results` the assembly of the output; :mod:`.units` and :mod:`.validation` the checks of the
 input; :mod:`.settings` and :mod:`.options` what a solve is asked to do; :mod:`.contact` one surface's
 solver; :mod:`.solve` the entry points and the step loop. Folders: :mod:`.effects` what acts on the

@@ -222,9 +222,9 @@ class BoxIteration:
 
         ``keep`` (a CG step that left the box, preconditioned iteration only): the direction
         and the last gradient stay, zeroed off the new face, and the next CG step conjugates
-        against them with Polak-Ribiere's ``beta`` (as :class:`~.elastic.PKIteration` does across
-        joins); else the CG restarts. A gradient-projection step always restarts it (keeping the
-        direction there too cost 1.03-1.06x the CPU, measured at N = 512).
+        against them with Polak-Ribiere's ``beta`` (as the elastic iteration does across joins:
+        :class:`~.compressed.CompressedKernels`); else the CG restarts. A gradient-projection step always
+        restarts it (keeping the direction there too cost 1.03-1.06x the CPU, measured at N = 512).
         """
         self.idx = self._active_sets()  # leaves the face's mask in b1
         keep = keep and self.precond
@@ -238,7 +238,7 @@ class BoxIteration:
         """Conjugate gradient on the face ``{0 < p < H}``, direction zero-mean there.
 
         ``G = g_f.g_f``. With a preconditioner, ``z = P_F M P_F g`` (mean over ``F`` removed) as in
-        :class:`~.elastic.PKIteration`. False at a breakdown or a null direction.
+        :class:`~.compressed.CompressedKernels`. False at a breakdown or a null direction.
         """
         idx, t, g_f, p_f = self.idx, self.t, self.g_f, self.p_f
         z_f, Gz = (_precondition(self.ws, idx, g_f) if self.precond else (g_f, G))

@@ -1,18 +1,22 @@
 """One case on its :class:`~.workspace.Workspace`: the kernels of :class:`~.iteration.BatchIteration` over index sets.
 
-:func:`solve_f32` runs one load step of ``"pk-fourier-f32"`` (Polonsky & Keer's CG with the Fourier
-preconditioner and float32 products: docs/solver.md, "Algorithm") with the one iteration class,
-:class:`~.iteration.BatchIteration`, for B = 1. Its kernels here (:class:`CompressedKernels`) hold the
-free set ``F`` as flat node indices (ascending, then the nodes that joined, appended in order) and every
-vector on ``F`` compressed, one value per node, in numpy (or the workspace's array module); the
-transforms are the workspace's own half-space's float32 products (:class:`WorkspaceProducts`), loading
-and reading ``F``'s nodes only. Sums are numpy's pairwise ones over the compressed arrays and inner
-products einsum's (:func:`~.workspace.dot`), ``w`` moves by the float32 ``K`` of the change scaled once
-and then added, and the per-case decisions are Python numbers: the arithmetic of the single solve, so
-its outputs are those of the single solve before this module, bit for bit (tests/test_compressed.py).
+:func:`pk_solve` runs one load step of an elastic iteration (docs/solver.md, "Algorithm") with the one
+iteration class, :class:`~.iteration.BatchIteration`, for B = 1: ``"pk-fourier-f32"`` (Polonsky & Keer's CG
+with the Fourier preconditioner and float32 products), ``"pk-fourier"`` (the same with float64 products) or
+``"pk"`` (Polonsky & Keer's CG as Tamaas' ``PolonskyKeerRey``, no preconditioner). Its kernels here
+(:class:`CompressedKernels`) hold the free set ``F`` as flat node indices (ascending, then the nodes that
+joined, appended in order) and every vector on ``F`` compressed, one value per node, in numpy (or the
+workspace's array module). The float32 transforms are the workspace's own half-space's products
+(:class:`WorkspaceProducts`), loading and reading ``F``'s nodes only; the float64 ones its whole products.
+Sums are numpy's pairwise ones over the compressed arrays and inner products einsum's
+(:func:`~.workspace.dot`), ``w`` moves by ``K`` of the change scaled once and then added, and the per-case
+decisions are Python numbers: the arithmetic of the single solve's own loop before this module, so that
+its outputs are those of that loop bit for bit (checked when it was replaced, 2026-12-03: the 30 solver
+fingerprints and every scene's files, ``benchmarks/bench_one_class.py``).
 
-The batched kernels (:class:`~.batch.kernels.ArrayKernels` and its fused forms) write the same
-algorithm with masks for ``B`` cases at once; their sums run in another order and agree to round-off.
+The batched kernels (:class:`~.batch.kernels.ArrayKernels` and its fused forms) run the same iteration with
+masks for ``B`` cases at once (``"pk-fourier-f32"`` only); their sums run in another order and agree to
+round-off.
 
 Examples
 --------
@@ -22,7 +26,7 @@ Examples
 >>> h = generate_surface(32, 2, 8, 0.8, 0, rms_slope=0.1)
 >>> ws = Workspace(h / 32, 1.0, 1, "pk-fourier-f32")
 >>> ws.P.fill(1e-3)
->>> iterations, converged = solve_f32(ws, 1e-3, 1e-8, 1000, False)
+>>> iterations, converged = pk_solve(ws, 1e-3, 1e-8, 1000, False)
 >>> converged, bool(abs(ws.P.mean() - 1e-3) < 1e-15)
 (True, True)
 """
@@ -35,36 +39,57 @@ import numpy as np
 
 from .iteration import BatchIteration
 from .projection import enforce_mean
-from .workspace import Workspace, dot
+from .workspace import STALL_WINDOW, Workspace, dot
+
+
+class _Dense:
+    """A float64 product of a workspace field (written at ``F``'s nodes, zero elsewhere): one FFT pair."""
+
+    def __init__(self, apply, field):
+        self.apply, self.field = apply, field
 
 
 class WorkspaceProducts:
-    """The float32 products of a workspace's half-space, as :class:`~.iteration.BatchIteration` calls them.
+    """The products of a workspace's half-space, as :class:`~.iteration.BatchIteration` calls them.
 
-    A transform input is the product it was loaded into (:attr:`k` for ``K``, :attr:`m` for the
-    preconditioner ``M``), loaded by :class:`CompressedKernels` at ``F``'s nodes; ``None`` is no input (a
-    case that stopped, or a step whose ``w`` was recomputed in float64), whose transforms are ``None``.
+    A transform input is the product it was loaded into: for ``"pk-fourier-f32"`` the half-space's float32
+    product (:attr:`k` for ``K``, :attr:`m` for the preconditioner ``M``), loaded by :class:`CompressedKernels`
+    at ``F``'s nodes, whose forward transform gives a spectrum; for the float64 methods a whole product of
+    the workspace's ``T`` (``K``) or ``Z`` (``M``) field, whose result stands for its spectrum and its
+    inverse. ``None`` is no input (a case that stopped, a step whose ``w`` was recomputed in float64, or
+    ``"pk"``'s direction, which needs no product), whose transforms are ``None``.
     """
 
     def __init__(self, ws: Workspace):
         ws.setup_method()
+        self.single = ws.method == "pk-fourier-f32"
         self.hs = hs = ws.op
-        pre = getattr(hs, "precond", hs)  # the free operator's periodic preconditioner, or the operator
-        self.k, self.m = hs, pre
-        self.kmult32, self.kquad32, self.mmult32 = hs.kmult32, hs.kquad32, pre.mmult32
+        if self.single:
+            pre = getattr(hs, "precond", hs)  # the free operator's periodic preconditioner, or the operator
+            self.k, self.m = hs, pre
+            self.kmult32, self.kquad32, self.mmult32 = hs.kmult32, hs.kquad32, pre.mmult32
+        else:
+            self.k, self.m = _Dense(ws.apply_k, ws.T), _Dense(ws.apply_m, ws.Z)
+            self.kmult32 = self.kquad32 = self.mmult32 = None
         self.input32 = None  # the iteration passes it as ``out``: the kernels load the product they need
         self._last = None
 
     def transform32(self, product):
-        """The forward transform of what was loaded into ``product`` (its spectrum buffer)."""
+        """The forward transform of what was loaded into ``product`` (its spectrum buffer); a float64
+        product whole (its result, maybe a strided view of a buffer the next product overwrites)."""
         self._last = product
-        return None if product is None else product.prod32.forward()
+        if product is None:
+            return None
+        if type(product) is _Dense:
+            return product.apply(product.field)
+        return product.prod32.forward()
 
     def inverse32(self, spec, mult):
         """The inverse of the last transform's spectrum times ``mult``: ``K x / sigma`` on the grid for ``K``'s;
-        for ``M``'s the product's buffer, which :class:`CompressedKernels` reads at ``F``'s nodes."""
-        if spec is None:
-            return None
+        for ``M``'s the product's buffer, which :class:`CompressedKernels` reads at ``F``'s nodes; a float64
+        product's result as it is."""
+        if spec is None or type(self._last) is _Dense:
+            return spec
         if mult is self.kmult32:  # (the periodic operator is its own preconditioner: the multiplier tells)
             return self.k.displacement32(spec)
         return self._last.prod32.backward(spec, mult)
@@ -95,8 +120,9 @@ class CompressedKernels:
     """The passes of :class:`~.iteration.BatchIteration`'s round for one case over compressed index sets.
 
     Implements the methods the iteration calls (:class:`~.batch.kernels.ArrayKernels` documents them) with
-    the single solve's arithmetic; per-case numbers are ``(1, 1, 1)`` arrays of the iteration's, read once
-    per call. ``flags_on_host``: the iteration may read the per-case flags at every step.
+    the single solve's arithmetic for the workspace's method (``ws.method``); per-case numbers are
+    ``(1, 1, 1)`` arrays of the iteration's, read once per call. ``flags_on_host``: the iteration may read
+    the per-case flags at every step.
     """
 
     flags_on_host = True
@@ -105,7 +131,15 @@ class CompressedKernels:
         self.ws, self.op, self.xp = ws, products, ws.xp
         self.target = target  # the load's total, p0 times the nodes
         self.F = None
-        self.inv_sigma = 1.0 / ws.sigma
+        # float32 products (their inputs divided by sigma), and w recomputed in float64 below residual levels
+        self.single = ws.method == "pk-fourier-f32"
+        self.precond = ws.method != "pk"
+        self.sigma = ws.sigma if self.single else 1.0
+        self.inv_sigma = 1.0 / self.sigma
+        self.joined_after = 0  # "pk": > 0, the nodes from this index on joined F in this iteration
+        self.restart = False  # "pk": nodes joined, the next direction restarts the CG (delta = 0)
+        # the float64 preconditioner's input, zero off F (made by the workspace's setup_method)
+        self.Zf = ws.Z.ravel() if self.precond and not self.single else None
         self._proj = np.zeros(1, dtype=bool)  # the step's projection flag, as the host reads it
 
     # -- the free set and its vectors --------------------------------------------------------------
@@ -113,6 +147,8 @@ class CompressedKernels:
     def free_set(self, mask):
         """``F`` from the workspace's pressure (``mask`` is ``P > 0``, as the workspace makes it itself)."""
         self.F = _FreeSet(self.ws)
+        if not self.single:
+            self.ws.T.fill(0.0)  # the direction's field for the float64 products: zero off F
         return self.F
 
     def rcount(self, F):
@@ -161,13 +197,16 @@ class CompressedKernels:
             pen = max(pen, -float(g.min()))
             orth = dot(F.p, np.abs(g)) * inv_norm.item()
         residual = max(orth, pen / scale.item(), 0.0)
-        self._decide(residual, tol, stall, it, max_iter, fresh, next_sync, best, at, done, waiting, converged, go)
+        self._decide(residual, tol, stall, it, max_iter, fresh, next_sync, best, at, done, waiting, converged, go,
+                     levels=self.single)
         return gbar
 
     @staticmethod
-    def _decide(r, tol, stall, it, max_iter, fresh, next_sync, best, at, done, waiting, converged, go):
-        """The single solve's loop head: converge (on a fresh ``w``), recompute ``w`` in float64 (below ``tol``
-        or a level of ``next_sync``), or the stall guard (:class:`~.workspace.StallGuard`'s rule)."""
+    def _decide(r, tol, stall, it, max_iter, fresh, next_sync, best, at, done, waiting, converged, go,
+                levels=True):
+        """The single solve's loop head: converge (on a fresh ``w``), recompute ``w`` in float64 (below ``tol``,
+        or with ``levels`` below a level of ``next_sync``), or the stall guard (:class:`~.workspace.StallGuard`'s
+        rule)."""
         if done.item() or waiting.item():
             go[...] = False
             return
@@ -179,7 +218,7 @@ class CompressedKernels:
             go[...] = False
             return
         level = next_sync.item()
-        if r < level and not fresh.item():
+        if levels and r < level and not fresh.item():
             while level > r:  # float64 gap below 1e-5 and after every further four decades
                 level *= 1e-4
             next_sync[...] = level
@@ -198,10 +237,11 @@ class CompressedKernels:
         go[...] = not stop
 
     def join(self, w, gbar, F, nF, go, done, it, inv_sigma, out=None):
-        """Violating nodes join ``F`` (their ``p``, ``t`` and ``g_prev`` 0); ``g`` re-centred where they did.
+        """Violating nodes join ``F`` (their ``p``, ``t`` and ``g_prev`` 0); loads the input of ``M``'s product.
 
-        The direction is kept across a join (zero on the joining nodes, so still zero-mean on ``F``)
-        and the next one conjugated against it. Loads ``g / sigma`` into ``M``'s product.
+        Preconditioned, the direction is kept across a join (zero on the joining nodes, so still zero-mean
+        on ``F``), the gradient re-centred on the enlarged ``F`` and the next direction conjugated against
+        it; ``"pk"`` restarts its CG at a join (Polonsky & Keer's rule, ``delta`` = 0).
         """
         if not go.item():
             return F, None, nF, None, None
@@ -215,60 +255,102 @@ class CompressedKernels:
             for v in F.vectors:
                 v.a = np.concatenate([v.a, self.xp.zeros(n_join)])
             ws.mask.reshape(-1)[F.cand] = True
-            g -= g.sum() / F.idx.size  # the gradient on the enlarged set: zero mean on F (shifts d only)
+            if self.precond:
+                g -= g.sum() / F.idx.size  # the gradient on the enlarged set: zero mean on F (shifts d only)
+            else:
+                self.joined_after, self.restart = F.idx.size - n_join, True
             F.g = g
         n = F.idx.size
         if n == 0:
             go[...] = False
             done[...] = True
             return F, None, n, None, None
-        self.op.m.loader.load(F.idx, g, self.inv_sigma)
+        if not self.precond:
+            return F, None, n, None, None
+        if self.single:
+            self.op.m.loader.load(F.idx, g, self.inv_sigma)
+        else:
+            self.Zf[F.idx] = g
         return F, None, n, None, self.op.m
 
     def direction(self, R, sigma, nf, F, g, g_prev, t, g_old, delta, gprev_ok, go, done, inv_sigma, out=None):
-        """``t = z + beta t`` with Polak-Ribiere's ``beta`` (``t = z`` at a restart or where that is no descent);
-        ``z = P_F M P_F g`` from ``R``. A breakdown (``g.z`` not positive and finite) stops the case.
-        Loads ``t / sigma`` into ``K``'s product; ``(that product, g.t)``."""
-        if R is None:
+        """The conjugate direction ``t``, zero mean on ``F`` so that the mean pressure is kept; loads ``t`` into
+        ``K``'s product; ``(that product, g.t)``.
+
+        Preconditioned: ``t = z + beta t``, ``z = P_F M P_F g`` from ``R``, with Polak-Ribiere's ``beta``
+        (Fletcher-Reeves' where there is no ``g_prev``: after a projection that took a large part of ``F``
+        away, ``FR_AFTER_LOSS``), and ``t = z`` at a restart or where that is no descent; a breakdown
+        (``g.z`` not positive and finite) stops the case. ``"pk"``: ``t = g + delta G / g_old t``; at a restart
+        after a join each joining node keeps ``t = g`` (< 0), the others restored to zero mean, so that the
+        step moves it into the contact set as Polonsky & Keer's rule does (``g.t = |g|^2`` still holds: ``g``
+        has zero mean on the former ``F``).
+        """
+        if not go.item():
             return None, 0.0
         ws, idx, g = self.ws, F.idx, F.g
-        a = np.empty_like(g)
-        self.op.m.loader.take(R, idx, a)
-        a *= ws.sigma  # the float32 product is M g / sigma
-        a -= a.sum() / idx.size
+        if self.restart:
+            delta[...] = 0.0
+            self.restart = False
         restart = not (delta.item() > 0.0 and g_old.item() > 0.0)
-        G = dot(g, a)
-        if not (G > 0.0 and math.isfinite(G)):
-            go[...] = False
-            done[...] = True
-            return None, 0.0
         tc = t.a
-        if restart:
-            tc[...] = a
-        else:
-            # Polak-Ribiere's beta; Fletcher-Reeves' where there is no g_prev (after a projection that took
-            # a large part of F away: FR_AFTER_LOSS)
-            gold = g_old.item()
-            beta = max(0.0, (G - dot(g_prev.a, a)) / gold) if g_prev.valid else G / gold
-            tc *= beta
-            tc += a
-            if not dot(g, tc) > 0.0:  # conjugated across a change of F: no descent
+        if self.precond:
+            if self.single:
+                a = np.empty_like(g)
+                self.op.m.loader.take(R, idx, a)
+                a *= ws.sigma  # the float32 product is M g / sigma
+            else:
+                a = R[ws.nodes(idx)]
+                self.Zf[idx] = 0.0
+            a -= a.sum() / idx.size
+            G = dot(g, a)
+            if not (G > 0.0 and math.isfinite(G)):
+                go[...] = False
+                done[...] = True
+                return None, 0.0
+            if restart:
                 tc[...] = a
-        g_prev.a = g.copy()
-        g_prev.valid = True
+            else:
+                gold = g_old.item()
+                beta = max(0.0, (G - dot(g_prev.a, a)) / gold) if g_prev.valid else G / gold
+                tc *= beta
+                tc += a
+                if not dot(g, tc) > 0.0:  # conjugated across a change of F: no descent
+                    tc[...] = a
+            g_prev.a = g.copy()
+            g_prev.valid = True
+        else:
+            G = dot(g, g)
+            if restart:
+                tc[...] = g
+                if self.joined_after:
+                    tc[: self.joined_after] -= tc.sum() / self.joined_after
+                self.joined_after = 0
+            else:
+                tc *= delta.item() * G / g_old.item()
+                tc += g
         g_old[...] = G
         delta[...] = 1.0
-        self.op.k.loader.load(idx, tc, self.inv_sigma)
+        if self.single:
+            self.op.k.loader.load(idx, tc, self.inv_sigma)
+        else:
+            ws.Tf[idx] = tc
         return self.op.k, dot(g, tc)
 
     def trial(self, spec, weights, sigma, gt, nan, P, t, F, target, go, done):
-        """The exact step length ``tau = g.t / t.Kt`` (Parseval, from ``t``'s spectrum) and the trial ``p - tau t``;
-        ``(tau, projects, scale)``, ``scale`` restoring the mean of the clipped trial where it projects."""
+        """The exact step length ``tau = g.t / t.Kt`` and the trial ``p - tau t``; ``(tau, projects, scale)``,
+        ``scale`` restoring the mean of the clipped trial where it projects.
+
+        ``t . K t`` from the float32 spectrum of ``t`` (Parseval), or from the float64 product ``K t`` at ``F``'s
+        nodes. A float64 step that leaves ``p >= 0`` is :meth:`_full_projection`.
+        """
         self._proj[0] = False
         if spec is None or not go.item():
             return 0.0, self._proj, 1.0
         ws = self.ws
-        rt = self.op.k.prod32.quadratic(spec, weights) * ws.sigma ** 2  # t . K t
+        if self.single:
+            rt = self.op.k.prod32.quadratic(spec, weights) * ws.sigma ** 2  # t . K t
+        else:
+            rt = dot(spec[ws.nodes(F.idx)], t.a)
         tau = gt / rt if rt > 0.0 else math.nan
         if not (math.isfinite(tau) and tau > 0.0):
             go[...] = False  # a null direction: nothing can move (the final check decides)
@@ -276,10 +358,13 @@ class CompressedKernels:
             return 0.0, self._proj, 1.0
         trial = np.multiply(t.a, -tau)
         trial += F.p
-        F.trial = trial
+        F.trial, F.tau = trial, tau
         if not bool((trial <= 0.0).any()):
             return tau, self._proj, 1.0
         self._proj[0] = True
+        if not self.single:
+            F.full = True
+            return tau, self._proj, 1.0
         F.clipped = np.maximum(-trial, 0.0)
         np.maximum(trial, 0.0, out=trial)
         total = float(trial.sum())
@@ -296,12 +381,12 @@ class CompressedKernels:
 
         ``p_new - p = x - tau t`` with ``x = max(-trial, 0) + (scale - 1) scale^-1 p_new`` on ``F``, so
         ``w`` moves by ``K (p_new - p)`` like an ordinary step and ``K p`` is never transformed afresh.
-        A step that leaves no pressure is :meth:`_full_projection` instead (nothing loaded).
+        A float64 step, or one that leaves no pressure, is :meth:`_full_projection` instead (nothing loaded).
         """
         if F.full:
             self._full_projection(F, t)
             return None
-        ws, trial, x = self.ws, F.trial, F.clipped
+        trial, x = F.trial, F.clipped
         x += (scale - 1.0) * trial
         trial *= scale
         x -= tau * t.a  # p_new - p on F
@@ -310,13 +395,17 @@ class CompressedKernels:
         return self.op.k
 
     def _full_projection(self, F, t) -> None:
-        """Polonsky-Keer's projection where the step left no pressure: the load spread evenly, ``F`` every
-        node, ``w`` from a fresh ``K p`` in float64, Polak-Ribiere's history dropped, ``t`` kept on the old
-        ``F`` and re-centred."""
+        """Polonsky & Keer's projection of the trial onto ``p >= 0`` with the exact mean, ``F`` its support
+        (every node where the step left no pressure: the load spread evenly), ``w`` from a fresh ``K p`` in
+        float64, Polak-Ribiere's history dropped, ``t`` kept on the old ``F`` and re-centred: every projected
+        step of the float64 methods, and a float32 step that left no pressure."""
         ws, old = self.ws, F.idx
-        ws.Pf[old] = F.trial  # all zero
+        trial = np.maximum(F.trial, 0.0, out=F.trial)
+        ws.Pf[old] = trial
         T = self.xp.zeros(ws.size)
         T[old] = t.a
+        if not self.single:
+            ws.Tf[old] = 0.0  # the new F is within the old one
         enforce_mean(ws.P, self.target, None)
         F.idx = ws.active_set()
         F.p = ws.Pf[F.idx]
@@ -339,8 +428,13 @@ class CompressedKernels:
             F.full = False
             fresh[...] = True
             return F.idx.size
-        f = factor.item()
         ws = self.ws
+        if not self.single:  # u <- u - tau K t, float64
+            np.multiply(R, F.tau, out=R)
+            ws.w -= R
+            fresh[...] = False
+            return nF
+        f = factor.item()
         np.multiply(R, R.dtype.type(abs(f)), out=R)
         if f < 0:
             np.subtract(ws.w, R, out=ws.w)  # u <- u - tau K t: exact, no FFT pair for p
@@ -384,16 +478,18 @@ class WorkspaceCase:
         self.ws.refresh()
 
 
-def solve_f32(ws: Workspace, p0: float, tol: float, max_iter: int, fresh: bool | None) -> tuple[int, bool]:
-    """One ``"pk-fourier-f32"`` load step on ``ws`` (as :func:`~.elastic.pk_solve`); ``(iterations, converged)``.
+def pk_solve(ws: Workspace, p0: float, tol: float, max_iter: int, fresh: bool | None) -> tuple[int, bool]:
+    """Solve one elastic load step of ``ws.method`` in place on ``ws`` from the pressure in ``ws.P``.
 
-    ``ws.P`` must be >= 0 with mean ``p0``; ``fresh`` says whether ``ws.w`` equals ``K P - h`` (True), must
-    be computed (False), or equals it up to single-precision round-off (None). On exit ``ws.P``, ``ws.w``
-    (freshly recomputed) and ``ws.mask`` (``P > 0``) are consistent.
+    The unilateral problem ``{p >= 0, g >= 0, p g = 0, mean(p) = p0}`` (docs/solver.md, "Algorithm"). ``ws.P``
+    must be >= 0 with mean ``p0``; ``fresh`` says whether ``ws.w`` already equals ``K P - h`` (True), must be
+    computed (False), or equals it up to single-precision round-off (None: not recomputed, but not taken as
+    fresh either). Returns ``(iterations, converged)``; on exit ``ws.P``, ``ws.w`` (freshly recomputed) and
+    ``ws.mask`` (``P > 0``) are consistent.
     """
     case = WorkspaceCase(ws, tol, p0)
     f0 = np.array([1 if fresh is True else (0 if fresh is False else -1)])
-    it = BatchIteration(case, np.full((1, 1, 1), p0), f0, np.array([max_iter]))
+    it = BatchIteration(case, np.full((1, 1, 1), p0), f0, np.array([max_iter]), stall=STALL_WINDOW)
     its, conv = it.run(1)
     np.greater(ws.P, 0.0, out=ws.mask)  # an early exit right after nodes joined leaves them flagged with p = 0
     return int(its[0]), bool(conv[0])

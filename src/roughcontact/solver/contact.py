@@ -14,7 +14,7 @@ import numpy as np
 from ..core.backend import get_backend
 from .box import box_solve
 from .check import MEAN_RTOL, final_check
-from .elastic import pk_solve
+from .compressed import pk_solve
 from .projection import enforce_mean
 from .results import StepRecord, contact_perimeter
 from .settings import SolverSettings
@@ -277,7 +277,7 @@ class ContactSolver:
         if self.method != "pk":
             self._older = None if self.prev is None else (self.prev, self._last, self._last_w)
             self._last = ws.P.copy()
-            # fresh after every step (PKIteration._finish, box); kept for the float32 iteration only
+            # fresh after every step (compressed.pk_solve, box); kept for the float32 iteration only
             self._last_w = ws.w.copy() if path == "pk-fourier-f32" else None
         self.prev = p_int
         p = units.pressure(ws.be.to_host(ws.P), out=self._pbuf)

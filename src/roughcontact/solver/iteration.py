@@ -10,12 +10,18 @@ from .workspace import FR_AFTER_LOSS, STALL_WINDOW
 
 
 class BatchIteration:
-    """:class:`~roughcontact.solver.elastic.PKIteration` (``pk-fourier-f32``) on ``B`` cases at once, with masks.
+    """Polonsky & Keer's elastic iteration (docs/solver.md, "Algorithm") on ``B`` cases at once: one class for all.
+
+    The kernels (``solver.kernels``) hold the arithmetic of each backend: one case on its workspace over index
+    sets (:class:`~roughcontact.solver.compressed.CompressedKernels`, ``solve_contact``'s, every elastic method),
+    ``B`` cases with masks on the host (:class:`~roughcontact.solver.batch.cpu.FusedCpuKernels`) or a GPU
+    (:class:`~roughcontact.solver.batch.cuda.CupyKernels`), one case over MPI ranks
+    (:class:`~roughcontact.solver.mpi.kernels.MpiKernels`); the operator (``solver.op``) its transforms.
 
     State per case (fields ``(B, nx, ny)``, numbers ``(B, 1, 1)``): ``P`` (the solver's, zero off
     ``F``) and ``w = K P - h`` (the solver's, updated in place), ``F`` the free set, ``t`` the
     direction and ``g_prev`` the last direction's gradient (vectors on ``F``, in the kernels' form:
-    :class:`~.kernels.ArrayKernels`), ``g_old``, ``delta``,
+    :class:`~roughcontact.solver.batch.kernels.ArrayKernels`), ``g_old``, ``delta``,
     whether ``g_prev`` is valid, the iteration count, the stall guard's best residual and its
     iteration, ``next_sync``, and the round's flags: ``done`` (converged or stopped), ``waiting``
     (for a float64 recomputation at the next check), ``fresh`` (``w`` recomputed since the last
@@ -131,7 +137,7 @@ class BatchIteration:
             self.fresh[self.s.xp.asarray(stale)] = True
 
     def measure(self) -> None:
-        """The first half of the single solve's loop (``PKIteration.run``) for every case: residual and decisions.
+        """The first half of a round for every case: residual and decisions (the loop head).
 
         Converged, waiting and stopped cases are flagged; ``self.go`` says which iterate in
         :meth:`act`. Measuring again a case whose state has not changed decides the same (the stall

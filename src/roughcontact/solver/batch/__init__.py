@@ -5,7 +5,8 @@ Every field carries a leading case axis, ``(B, nx, ny)``; every transform is one
 ``rfft2`` / ``irfft2`` over the last two axes (cuFFT or scipy.fft batches them); every reduction
 runs along ``(-2, -1)`` and gives one number per case, kept as a ``(B, 1, 1)`` array so that it
 broadcasts back onto the fields. The iteration is the default elastic one,
-``"pk-fourier-f32"`` (:class:`~roughcontact.solver.elastic.PKIteration`): Polonsky & Keer's CG on the free set
+``"pk-fourier-f32"`` (:class:`~roughcontact.solver.iteration.BatchIteration`, which runs the single solve
+too): Polonsky & Keer's CG on the free set
 ``F``, the Fourier preconditioner ``M = |q| E* / 2`` with Polak-Ribiere's ``beta`` kept across
 joins, the projection onto ``p >= 0`` with the mean restored by rescaling, float32 products in the
 loop, float64 recomputations of ``w = K p - h`` below the residual levels 1e-5, 1e-9, ... and to

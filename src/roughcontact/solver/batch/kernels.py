@@ -201,7 +201,7 @@ class ArrayKernels:
 
         ``scale`` is ``target / sum(max(trial, 0))`` for projected cases and 1 for the others. The
         change is ``max(-trial, 0) + (scale - 1) max(trial, 0) - tau t`` (the single solve's
-        ``x - tau t`` of :meth:`~roughcontact.solver.elastic.PKIteration._project_single`; ``-tau t`` unprojected), 0
+        ``x - tau t`` of :meth:`~roughcontact.solver.compressed.CompressedKernels.project`; ``-tau t`` unprojected), 0
         where not ``go``, times ``inv_sigma`` and rounded to float32 for the transform.
         """
         xp = self.xp

@@ -12,7 +12,7 @@ from ...core.cell import Cell
 from ...statistics.patches import contact_patches
 from ..box import box_solve
 from ..check import MEAN_RTOL
-from ..elastic import pk_solve
+from ..compressed import pk_solve
 from ..iteration import BatchIteration
 from ..settings import SolverSettings
 from ..units import Units, check_loads, rms_about_mean
