@@ -141,3 +141,32 @@ def test_array_backend_switch(solver_options, stand_in_cupy):
     assert SolverSettings().checked((8, 8)).array_backend == "cupy"
     assert SolverSettings(array_backend="numpy").checked((8, 8)).array_backend == "numpy"
     assert backend_mod.ARRAY_BACKENDS == ("numpy", "cupy")
+
+
+@pytest.mark.parametrize("in_place", [True, False])
+def test_products_of_one_kind_share_their_plans_and_stay_exact(in_place):
+    """The pyFFTW plans and buffers are made once per shape, precision, layout and threads (planning with the
+    shipped wisdom costs ~8 ms): two products of one kind share them, and used in turn, each on its own node
+    set, each still gives its own product (a load clears what the other left in the shared input)."""
+    from roughcontact.core.fft import has_pyfftw
+
+    if not has_pyfftw():
+        pytest.skip("pyFFTW's plans only")
+    be = get_backend("numpy")
+    shape = (24, 40)
+    a, b = (SpectralProduct(be, shape, np.float64, in_place=in_place) for _ in range(2))
+    assert a._plan is b._plan
+    assert SpectralProduct(be, shape, np.float32, in_place=in_place)._plan is not a._plan
+    rng = np.random.default_rng(5)
+    x = rng.standard_normal(shape)
+    mult = rng.random((shape[0], shape[1] // 2 + 1))
+    ma, mb = a.multiplier(mult), b.multiplier(mult)
+    nodes = [np.flatnonzero(rng.random(shape) < f) for f in (0.2, 0.6)]
+    refs = [_sparse_reference(x, mult, k) for k in nodes]
+    for _ in range(2):
+        for prod, m, k, ref in ((a, ma, nodes[0], refs[0]), (b, mb, nodes[1], refs[1])):
+            pos = prod.positions(k)
+            prod.load(pos, x.flat[k], 1.0)
+            got = np.empty(k.size)
+            prod.take(prod(m), pos, got)
+            assert np.max(np.abs(got - ref.flat[k])) <= 1e-13 * np.max(np.abs(ref))

@@ -294,14 +294,7 @@ class CompressedKernels:
         restart = not (delta.item() > 0.0 and g_old.item() > 0.0)
         tc = t.a
         if self.precond:
-            if self.single:
-                a = np.empty_like(g)
-                self.op.m.loader.take(R, idx, a)
-                a *= ws.sigma  # the float32 product is M g / sigma
-            else:
-                a = R[ws.nodes(idx)]
-                self.Zf[idx] = 0.0
-            a -= a.sum() / idx.size
+            a = self._preconditioned(R, idx)
             G = dot(g, a)
             if not (G > 0.0 and math.isfinite(G)):
                 go[...] = False
@@ -335,6 +328,18 @@ class CompressedKernels:
         else:
             ws.Tf[idx] = tc
         return self.op.k, dot(g, tc)
+
+    def _preconditioned(self, R, idx):
+        """``z = P_F M P_F g`` at ``F``'s nodes ``idx``, mean over ``F`` removed, from ``M``'s product ``R``."""
+        if self.single:
+            a = self.xp.empty(idx.size)
+            self.op.m.loader.take(R, idx, a)
+            a *= self.ws.sigma  # the float32 product is M g / sigma
+        else:
+            a = R[self.ws.nodes(idx)]
+            self.Zf[idx] = 0.0
+        a -= a.sum() / idx.size
+        return a
 
     def trial(self, spec, weights, sigma, gt, nan, P, t, F, target, go, done):
         """The exact step length ``tau = g.t / t.Kt`` and the trial ``p - tau t``; ``(tau, projects, scale)``,
