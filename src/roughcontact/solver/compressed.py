@@ -39,7 +39,7 @@ import numpy as np
 
 from .iteration import BatchIteration
 from .projection import enforce_mean
-from .workspace import STALL_WINDOW, Workspace, dot
+from .workspace import STALL_WINDOW, Workspace, dot, stall_rule
 
 
 class _Dense:
@@ -205,8 +205,7 @@ class CompressedKernels:
     def _decide(r, tol, stall, it, max_iter, fresh, next_sync, best, at, done, waiting, converged, go,
                 levels=True):
         """The single solve's loop head: converge (on a fresh ``w``), recompute ``w`` in float64 (below ``tol``,
-        or with ``levels`` below a level of ``next_sync``), or the stall guard (:class:`~.workspace.StallGuard`'s
-        rule)."""
+        or with ``levels`` below a level of ``next_sync``), or the stall guard (:func:`~.workspace.stall_rule`)."""
         if done.item() or waiting.item():
             go[...] = False
             return
@@ -225,14 +224,10 @@ class CompressedKernels:
             waiting[...] = True
             go[...] = False
             return
-        n = it.item()
-        stop = not math.isfinite(r) or n >= max_iter.item()
-        if not stop:
-            if r < 0.5 * best.item():
-                best[...] = r
-                at[...] = n
-            else:
-                stop = n - at.item() >= stall
+        b0, a0 = best.item(), at.item()
+        stop, b1, a1 = stall_rule(r, it.item(), max_iter.item(), b0, a0, stall)
+        if b1 != b0 or a1 != a0:
+            best[...], at[...] = b1, a1
         done[...] = stop
         go[...] = not stop
 

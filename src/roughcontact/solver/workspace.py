@@ -46,8 +46,23 @@ STALL_WINDOW = 300
 FR_AFTER_LOSS = 0.1
 
 
+def stall_rule(residual: float, it: int, max_iter: int, best: float, at: int,
+               window: int = STALL_WINDOW) -> tuple[bool, float, int]:
+    """The stop rule of every iteration: ``(stop, best, at)`` at iteration ``it`` with this ``residual``.
+
+    A step ends unconverged at a non-finite residual, at ``max_iter``, or when its best residual ``best``
+    (reached at iteration ``at``) has not been halved within ``window`` iterations; a residual below half
+    the best becomes the new best. The batched kernels write the same rule over their per-case arrays.
+    """
+    if not math.isfinite(residual) or it >= max_iter:
+        return True, best, at
+    if residual < 0.5 * best:
+        return False, residual, it
+    return it - at >= window, best, at
+
+
 class StallGuard:
-    """The stop rule both iterations share: a non-finite residual, ``max_iter``, or a stall."""
+    """:func:`stall_rule` with its state, for an iteration of its own (the capped one, :mod:`.box`)."""
 
     def __init__(self, max_iter: int):
         self.max_iter = max_iter
@@ -55,12 +70,8 @@ class StallGuard:
 
     def stop(self, residual: float, it: int) -> bool:
         """Whether iteration ``it`` with this ``residual`` ends the step (unconverged)."""
-        if not math.isfinite(residual) or it >= self.max_iter:
-            return True
-        if residual < 0.5 * self.best:
-            self.best, self.at = residual, it
-            return False
-        return it - self.at >= STALL_WINDOW
+        stop, self.best, self.at = stall_rule(residual, it, self.max_iter, self.best, self.at, STALL_WINDOW)
+        return stop
 
 
 def dot(a: np.ndarray, b: np.ndarray) -> float:
