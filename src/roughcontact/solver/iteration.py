@@ -112,7 +112,7 @@ class BatchIteration:
             self.waiting[idx] = False
             self.measure()  # the others' decisions stand (measuring an unchanged case again changes nothing)
             done, _ = self._flags()
-        return bool(done.all())
+        return np.count_nonzero(done) == done.size  # (numpy's all() on a few flags costs 5x this)
 
     def resync(self, cases: np.ndarray) -> None:
         """Pressure brought to the exact mean and ``w`` recomputed in float64 for ``cases`` (host ints)."""
@@ -184,10 +184,11 @@ class BatchIteration:
         k, op = self.k, self.op
         t, F, go = self.t, self.F, self.go
         pj = self.s.be.to_host(proj).reshape(-1)
-        if not pj.any():
+        projected = np.count_nonzero(pj)
+        if not projected:
             k.step_on(self.s.P, t, tau, go, F)
             return op.inverse32(spec, op.kmult32), -tau * self.sigma
-        kept = spec[~pj].copy() if not pj.all() else None  # the spectrum's buffer is the next transform's
+        kept = spec[~pj].copy() if projected < pj.size else None  # the spectrum's buffer is the next transform's
         d32 = k.project(self.s.P, t, tau, go, pscale, self.inv_sigma, out=op.input32, F=F)
         mixed = op.transform32(d32)
         factor = self.sigma
