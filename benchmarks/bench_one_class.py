@@ -7,10 +7,11 @@ Since 2026-12-03 ``solve_contact``'s default iteration (``pk-fourier-f32``) is
 script extracts the package of an earlier commit (``--before``, default 8f8d00a, the last with the former loop) with
 ``git archive`` into a temporary folder under another name (``rc_before``: its imports are relative), and solves the
 paper case of ``bench_solver.py`` (k_l = 16, k_s = 32, H = 0.8, rms slope 0.1, seed 0; ``--steps`` loads to
-p0/E* = 0.005, tol 1e-8) with both, interleaved after a warm-up each, single-threaded (``OMP_NUM_THREADS=1``):
+p0/E* = 0.005, tol 1e-8) with both, interleaved after a warm-up each (the earlier commit first in each repeat),
+single-threaded (``OMP_NUM_THREADS=1``):
 
-- the outputs are compared variable by variable, by their bytes (every variable but the wall time, with every
-  step's pressure and gap fields stored in the warm-up);
+- the outputs of the warm-up solves are compared variable by variable, by their bytes (every variable but the wall
+  time, with every step's pressure and gap fields stored);
 - the CPU (``process_time``) of the iterations alone (``contact.pk_solve``'s calls: the loop with its per-step
   set-up, the float32 products planned before the timer) and of the whole ``solve_contact`` call (the products
   planned once per process since 2026-12-03, each solve before), the least and the median of ``--repeats``, and

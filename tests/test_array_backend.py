@@ -157,6 +157,8 @@ def test_products_of_one_kind_share_their_plans_and_stay_exact(in_place):
     a, b = (SpectralProduct(be, shape, np.float64, in_place=in_place) for _ in range(2))
     assert a._plan is b._plan
     assert SpectralProduct(be, shape, np.float32, in_place=in_place)._plan is not a._plan
+    big = (520, 520)  # above SHARED_PLAN_NODES: its own plans, freed with it
+    assert SpectralProduct(be, big, np.float32)._plan is not SpectralProduct(be, big, np.float32)._plan
     rng = np.random.default_rng(5)
     x = rng.standard_normal(shape)
     mult = rng.random((shape[0], shape[1] // 2 + 1))

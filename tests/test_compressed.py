@@ -111,3 +111,17 @@ def test_a_solve_holds_the_mean_and_the_contact_mask():
     assert abs(ws.P.sum() - 1e-3 * ws.size) <= 1e-12 * 1e-3 * ws.size
     assert np.array_equal(ws.mask, ws.P > 0)
     np.testing.assert_array_equal(ws.w, ws.op.apply(ws.P) - ws.h)  # w fresh on exit
+
+
+@pytest.mark.parametrize("boundary", ["periodic", "free"])
+@pytest.mark.parametrize("method", ["pk-fourier-f32", "pk-fourier", "pk"])
+def test_a_solve_from_no_pressure_joins_into_an_empty_free_set(method, boundary):
+    """``P = 0`` (an empty ``F``: every node joins at the first iteration; the gradient is not re-centred there, as
+    the former loop did) converges for every method and boundary, with the mean, the mask and a fresh ``w``."""
+    h = generate_surface(32, 2, 8, 0.8, 0, rms_slope=0.1) / 32
+    ws = Workspace(h, 1.0, 1, method, boundary=boundary)
+    its, ok = pk_solve(ws, 1e-3, 1e-8, 1000, False)
+    assert ok and its > 0
+    assert abs(ws.P.sum() - 1e-3 * ws.size) <= 1e-12 * 1e-3 * ws.size
+    assert ws.P.min() >= 0.0 and np.array_equal(ws.mask, ws.P > 0)
+    np.testing.assert_array_equal(ws.w, ws.op.apply(ws.P) - ws.h)

@@ -226,17 +226,25 @@ class _FFTWProduct:
         take_into(self.out_flat, pos, out)  # ``real`` is this plan's output
 
 
+#: Grids of at most this many nodes share their products' plans and buffers within a process
+#: (:func:`fftw_product`); larger ones plan their own, whose ~10 ms is nothing beside their solve, and free
+#: their buffers with it (16 kept products of 512² hold ~100 MiB at most).
+SHARED_PLAN_NODES = 512 * 512
+
+
 @functools.lru_cache(maxsize=16)
 def fftw_product(shape: tuple, dtype, in_place: bool, threads: int) -> _FFTWProduct:
     """The pyFFTW plans and buffers of a :class:`SpectralProduct`, made once per process for each shape,
-    precision, layout and thread count (the 16 most recent kept).
+    precision, layout and thread count (the 16 most recent kept; grids up to :data:`SHARED_PLAN_NODES`).
 
-    Planning runs inside :func:`~.fft.shipped_wisdom_only`, whose swaps of FFTW's wisdom cost ~8 ms of CPU
-    whatever the size (measured 2026-12-03, 64²): every solve made four such plans before. Every product of
-    one kind then shares the buffers, like the solver's other FFTs (the package's note: two solves of one
-    size must not run concurrently in threads of one process); a product's load, transforms and read-back
-    run in one sequence, so sharing is safe where products are used one after the other. The plans are
-    those the shipped wisdom gives, so the results are the same bit for bit.
+    Planning runs inside :func:`~.fft.shipped_wisdom_only`, whose swap of FFTW's wisdom costs ~9-10 ms of CPU
+    whatever the size (measured 2026-12-03): a periodic solve made two products (four plans) and paid two
+    swaps, a free one three or four. Every product of one kind then shares the buffers, like the solver's
+    other FFTs (the package's note: two solves of one size must not run concurrently in threads of one
+    process). Sharing is safe where each product's load, transforms and read-back run in one sequence before
+    another product of its kind is loaded, as in the solver; interleaving two (loading one, then the other,
+    then transforming the first) would transform the other's input without an error. The plans are those
+    the shipped wisdom gives, so the results are the same bit for bit.
     """
     return _FFTWProduct(shape, np.dtype(dtype), in_place, threads)
 
@@ -331,7 +339,9 @@ class ArrayBackend:
 
     def product_plan(self, prod: SpectralProduct, threads: int):
         if _fft.default_backend() == "pyfftw":
-            return fftw_product(prod.shape, prod.dtype, prod.in_place, threads)
+            if prod.shape[0] * prod.shape[1] <= SHARED_PLAN_NODES:
+                return fftw_product(prod.shape, prod.dtype, prod.in_place, threads)
+            return _FFTWProduct(prod.shape, prod.dtype, prod.in_place, threads)
         return _ArrayModuleProduct(prod, np)
 
 

@@ -250,7 +250,7 @@ class CompressedKernels:
             for v in F.vectors:
                 v.a = np.concatenate([v.a, self.xp.zeros(n_join)])
             ws.mask.reshape(-1)[F.cand] = True
-            if self.precond:
+            if self.precond and F.idx.size > n_join:  # (as the former loop: not where F was empty)
                 g -= g.sum() / F.idx.size  # the gradient on the enlarged set: zero mean on F (shifts d only)
             else:
                 self.joined_after, self.restart = F.idx.size - n_join, True
