@@ -12,8 +12,9 @@ single-threaded (``OMP_NUM_THREADS=1``):
 
 - the outputs of the warm-up solves are compared variable by variable, by their bytes (every variable but the wall
   time, with every step's pressure and gap fields stored);
-- the CPU (``process_time``) of the iterations alone (``contact.pk_solve``'s calls: the loop with its per-step
-  set-up, the float32 products planned before the timer) and of the whole ``solve_contact`` call (the products
+- the CPU (``process_time``) of the iterations alone (``pk_solve``'s calls, from ``solver.steps`` since
+  2026-12-03, from ``solver.contact`` before: the loop with its per-step set-up, the float32 products planned
+  before the timer) and of the whole ``solve_contact`` call (the products
   planned once per process since 2026-12-03, each solve before), the least and the median of ``--repeats``, and
   the ratios after / before: of the least, and the median of the ratios paired within a repeat.
 
@@ -69,10 +70,15 @@ def one_size(packages: dict, n: int, steps: int, repeats: int) -> str:
     spent = [0.0]
     solvers = {}
     for name, pkg in packages.items():
-        contact = importlib.import_module(f"{pkg.__name__}.solver.contact")
+        # the module whose pk_solve the single solve calls: solver.steps since 2026-12-03 (its run_path), before
+        # solver.contact
+        try:
+            caller = importlib.import_module(f"{pkg.__name__}.solver.steps")
+        except ModuleNotFoundError:
+            caller = importlib.import_module(f"{pkg.__name__}.solver.contact")
         solve = importlib.import_module(f"{pkg.__name__}.solver").solve_contact
 
-        def timed(ws, *args, _real=contact.pk_solve):
+        def timed(ws, *args, _real=caller.pk_solve):
             ws.setup_method()  # the float32 products made (planned) untimed: not the iteration's cost
             c0 = time.process_time()
             try:
@@ -80,7 +86,7 @@ def one_size(packages: dict, n: int, steps: int, repeats: int) -> str:
             finally:
                 spent[0] += time.process_time() - c0
 
-        contact.pk_solve = timed
+        caller.pk_solve = timed
         solvers[name] = solve
     first = {name: solve(h, loads, store_fields=True) for name, solve in solvers.items()}
     names = [k for k in first["before"].data_vars if k != "wall_time"]

@@ -125,3 +125,30 @@ def test_a_solve_from_no_pressure_joins_into_an_empty_free_set(method, boundary)
     assert abs(ws.P.sum() - 1e-3 * ws.size) <= 1e-12 * 1e-3 * ws.size
     assert ws.P.min() >= 0.0 and np.array_equal(ws.mask, ws.P > 0)
     np.testing.assert_array_equal(ws.w, ws.op.apply(ws.P) - ws.h)
+
+
+def test_the_step_rules_every_solver_shares():
+    """``solver.steps``: the module's example; the extrapolation's factor at its edges (the last two loads equal,
+    the loads turning back, an increment of exactly and of more than twice the last); the fallbacks' chain ends
+    where the solver cannot go on (MPI ranks run the float64 iteration only), where iterations run out, and at
+    the first iteration that converges."""
+    from roughcontact.solver import steps
+
+    assert doctest.testmod(steps).failed == 0
+    c = steps.extrapolation_factor(np.array([3.0, 2.5, 1.5, 4.0, 4.0001, 2.5]), np.full(6, 2.0),
+                                   np.array([1.0, 2.0, 1.0, 1.0, 1.0, 3.0]))
+    assert c.tolist() == [1.0, 0.0, 0.0, 2.0, 0.0, 0.0]
+    assert float(steps.extrapolation_factor(3.0, 2.0, 1.0)) == 1.0
+    ran = []
+
+    def run(method, left):
+        ran.append((method, left))
+        return 7, False
+
+    assert steps.fall_back("pk-fourier-f32", 10, False, 100, run, reachable=("pk-fourier",)) == (17, "pk-fourier",
+                                                                                               False)
+    assert ran == [("pk-fourier", 90)]
+    assert steps.fall_back("pk-fourier-f32", 100, False, 100, run) == (100, "pk-fourier-f32", False)
+    assert steps.fall_back("pk-fourier-f32", 10, True, 100, run) == (10, "pk-fourier-f32", True)
+    assert steps.fall_back("pk", 10, False, 100, run) == (17, "box", False)
+    assert ran == [("pk-fourier", 90), ("box", 90)]

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from roughcontact import solver as solver_mod
-from roughcontact.solver import check, contact, projection, solve_contact, solve_step, validation
+from roughcontact.solver import check, contact, projection, solve_contact, solve_step, steps, validation
 from roughcontact.solver.check import MEAN_RTOL
 from roughcontact.surfaces.synthetic import generate_surface
 from solver_invariants import check_solution
@@ -200,7 +200,7 @@ def test_a_false_elastic_claim_is_caught(monkeypatch, issue_surface):
         ws.refresh()
         return 0, True
 
-    monkeypatch.setattr(contact, "pk_solve", lazy)
+    monkeypatch.setattr(steps, "pk_solve", lazy)  # (every elastic iteration runs through steps.run_path)
     ds = solve_contact(issue_surface, [0.0003])
     assert not ds["converged"].values.any()
 

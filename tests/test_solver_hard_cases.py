@@ -493,9 +493,9 @@ def test_a_forced_stall_is_finished_by_the_next_iteration(monkeypatch):
     # The first iteration of the chain is cut short (3 iterations, unconverged: what a stall
     # returns); the next one in FALLBACKS takes its pressure and converges the step, every invariant
     # holds, solver_path names it and the iterations count both.
-    from roughcontact.solver import contact
+    from roughcontact.solver import steps
 
-    real = contact.pk_solve
+    real = steps.pk_solve
     first = solver_mod.SolverSettings().method
 
     def stalling(ws, p0, tol, max_iter, fresh):
@@ -503,7 +503,7 @@ def test_a_forced_stall_is_finished_by_the_next_iteration(monkeypatch):
             return real(ws, p0, 1e-300, 3, fresh)[0], False
         return real(ws, p0, tol, max_iter, fresh)
 
-    monkeypatch.setattr(contact, "pk_solve", stalling)
+    monkeypatch.setattr(steps, "pk_solve", stalling)
     h = generate_surface(64, 8, 32, 0.8, 0, rms_slope=0.1)
     ds = solve_contact(h, _loads(0.005, 3), tol=TOL, store_fields=True)
     check_solution(ds, h, tol=TOL)

@@ -39,7 +39,7 @@ import numpy as np
 
 from .iteration import BatchIteration
 from .projection import enforce_mean
-from .workspace import STALL_WINDOW, Workspace, dot, stall_rule
+from .workspace import CONVERGED, GO, STALL_WINDOW, STOP, WAIT, Workspace, dot, loop_head
 
 
 class _Dense:
@@ -204,32 +204,26 @@ class CompressedKernels:
     @staticmethod
     def _decide(r, tol, stall, it, max_iter, fresh, next_sync, best, at, done, waiting, converged, go,
                 levels=True):
-        """The single solve's loop head: converge (on a fresh ``w``), recompute ``w`` in float64 (below ``tol``,
-        or with ``levels`` below a level of ``next_sync``), or the stall guard (:func:`~.workspace.stall_rule`)."""
+        """The loop head (:func:`~.workspace.loop_head`) on the iteration's ``(1, 1, 1)`` state: converge (on a
+        fresh ``w``), recompute ``w`` in float64 (below ``tol``, or with ``levels`` below ``next_sync``), or the stall
+        guard."""
         if done.item() or waiting.item():
             go[...] = False
             return
-        if r <= tol:
-            if fresh.item():
-                converged[...] = done[...] = True
-            else:
-                waiting[...] = True  # incremental updates may have drifted: confirm on a fresh K p
-            go[...] = False
-            return
-        level = next_sync.item()
-        if levels and r < level and not fresh.item():
-            while level > r:  # float64 gap below 1e-5 and after every further four decades
-                level *= 1e-4
-            next_sync[...] = level
-            waiting[...] = True
-            go[...] = False
-            return
-        b0, a0 = best.item(), at.item()
-        stop, b1, a1 = stall_rule(r, it.item(), max_iter.item(), b0, a0, stall)
+        level, b0, a0 = next_sync.item(), best.item(), at.item()
+        decision, level1, b1, a1 = loop_head(r, tol, fresh.item(), level, levels, it.item(), max_iter.item(), b0, a0,
+                                             stall)
+        if level1 != level:
+            next_sync[...] = level1
         if b1 != b0 or a1 != a0:
             best[...], at[...] = b1, a1
-        done[...] = stop
-        go[...] = not stop
+        go[...] = decision == GO
+        if decision == CONVERGED:
+            converged[...] = done[...] = True
+        elif decision == WAIT:
+            waiting[...] = True
+        elif decision == STOP:
+            done[...] = True
 
     def join(self, w, gbar, F, nF, go, done, it, inv_sigma, out=None):
         """Violating nodes join ``F`` (their ``p``, ``t`` and ``g_prev`` 0); loads the input of ``M``'s product.

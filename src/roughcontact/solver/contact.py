@@ -18,8 +18,9 @@ from .compressed import pk_solve
 from .projection import enforce_mean
 from .results import StepRecord, contact_perimeter
 from .settings import SolverSettings
+from .steps import extrapolation_factor, fall_back, run_path
 from .units import Units, check_loads, frexp_ratio
-from .workspace import FALLBACKS, SOLVER_PATHS, STICKY, Workspace
+from .workspace import SOLVER_PATHS, STICKY, Workspace
 
 
 class ContactSolver:
@@ -78,13 +79,11 @@ class ContactSolver:
         return self.ws.backend if self.ws is not None else get_backend(self.array_backend).fft_name()
 
     def _extrapolation(self, p_int: float) -> float:
-        """Factor ``c`` of the linear extrapolation in the load, 0 when not used."""
+        """Factor ``c`` of the linear extrapolation in the load (:func:`~.steps.extrapolation_factor`), 0 when
+        not used (the reference ``"pk"``, or fewer than two steps solved)."""
         if self.method == "pk" or self._older is None:
             return 0.0
-        if self._older[0] == self.prev:
-            return 0.0
-        c = (p_int - self.prev) / (self.prev - self._older[0])
-        return c if 0.0 < c <= 2.0 else 0.0
+        return float(extrapolation_factor(p_int, self.prev, self._older[0]))
 
     def start(self, p0: float, initial=None) -> bool | None:
         """Put the starting pressure for ``p0`` in the workspace; returns ``fresh``.
@@ -223,46 +222,21 @@ class ContactSolver:
         """Iterate the step to ``tol``; ``(iterations, path)``, the path being the iteration that ended it.
 
         A step starts on :attr:`start_method`, the scene's iteration until a step has needed a
-        fallback. An iteration that stalls (its residual stops falling, :class:`StallGuard`) before
-        ``max_iter`` hands its pressure to the next, more robust one in :data:`FALLBACKS`, within the
-        same ``max_iter`` in all: single-precision products stall at ~1e-5 on some measured surfaces
-        whose gaps span many decades, where float64 converges; Polonsky & Keer's active-set rule can
-        cycle far from the solution on a plateau with isolated spikes, where the monotone gradient
-        projection (``"box"``, the capped iteration with a cap no node can reach) converges
-        (tests/test_solver_hard_cases.py). A step that needed a fallback makes the method that
+        fallback; a step that stalls before ``max_iter`` is handed down the fallbacks
+        (:func:`~.steps.fall_back`). A step that needed a fallback makes the method that
         converged it the start of the next steps (``STICKY``), so that one hard surface pays the
         stall window once, not at every step.
         """
+        ws, tol = self.ws, self.tol
         if self.cap is not None:
-            return box_solve(self.ws, p_int, self.tol, self.max_iter, self.cap, fresh)[0], "box"
+            return box_solve(ws, p_int, tol, self.max_iter, self.cap, fresh)[0], "box"
         path = self.start_method
-        its, ok = self._run(path, p_int, self.max_iter, fresh)
-        for method in FALLBACKS[path]:
-            if ok or its >= self.max_iter:
-                break
-            path = method
-            more, ok = self._run(method, p_int, self.max_iter - its, True)
-            its += more
+        its, ok = run_path(ws, path, p_int, tol, self.max_iter, fresh, self.method)
+        its, path, ok = fall_back(path, its, ok, self.max_iter,
+                                  lambda method, left: run_path(ws, method, p_int, tol, left, True, self.method))
         if ok and STICKY and path != self.start_method:
             self.start_method = path
         return its, path
-
-    def _run(self, path: str, p_int: float, max_iter: int, fresh: bool | None) -> tuple[int, bool]:
-        """One iteration of :data:`SOLVER_PATHS` on the workspace; ``(iterations, converged)``.
-
-        ``"box"`` is the capped iteration with the cap at twice the total load, which no node can
-        reach (every node's pressure is at most the total), preconditioned unless the scene's
-        iteration is the reference ``"pk"``.
-        """
-        ws = self.ws
-        try:
-            if path == "box":
-                ws.method = "pk" if self.method == "pk" else "pk-fourier"
-                return box_solve(ws, p_int, self.tol, max_iter, 2.0 * p_int * ws.size, fresh)
-            ws.method = path
-            return pk_solve(ws, p_int, self.tol, max_iter, fresh)
-        finally:
-            ws.method = self.method
 
     def solve(self, p0: float, initial=None, keep_gap: bool = False):
         """Solve the step for the physical mean pressure ``p0``; returns ``(StepRecord, gap)``."""

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba.extending import register_jitable
 
 from ..core.backend import get_backend
 from ..core.cell import Cell
@@ -46,19 +47,50 @@ STALL_WINDOW = 300
 FR_AFTER_LOSS = 0.1
 
 
+@register_jitable
 def stall_rule(residual: float, it: int, max_iter: int, best: float, at: int,
                window: int = STALL_WINDOW) -> tuple[bool, float, int]:
     """The stop rule of every iteration: ``(stop, best, at)`` at iteration ``it`` with this ``residual``.
 
     A step ends unconverged at a non-finite residual, at ``max_iter``, or when its best residual ``best``
     (reached at iteration ``at``) has not been halved within ``window`` iterations; a residual below half
-    the best becomes the new best. The batched kernels write the same rule over their per-case arrays.
+    the best becomes the new best. :func:`loop_head` applies it.
     """
     if not math.isfinite(residual) or it >= max_iter:
         return True, best, at
     if residual < 0.5 * best:
-        return False, residual, it
-    return it - at >= window, best, at
+        best, at = residual, it
+    return it - at >= window, best, at  # (a window of 0 stops at once)
+
+
+#: The decisions of :func:`loop_head`: the case iterates, has converged, waits for ``w`` recomputed in float64,
+#: or stops unconverged.
+GO, CONVERGED, WAIT, STOP = 0, 1, 2, 3
+
+
+@register_jitable
+def loop_head(residual: float, tol: float, fresh: bool, level: float, levels: bool, it: int, max_iter: int,
+              best: float, at: int, window: int) -> tuple[int, float, float, int]:
+    """The elastic iteration's loop head for a case that is neither done nor waiting: ``(decision, level, best, at)``.
+
+    With ``residual <= tol`` the case has converged where ``w`` is fresh (``K P - h`` recomputed in float64 since
+    the last step), and waits for that recomputation otherwise: incremental updates may have drifted. With
+    ``levels`` (the float32 iteration) a residual below ``level`` on a stale ``w`` waits for it too, and the level
+    falls by four decades until it is below the residual (``w`` recomputed below 1e-5 and after every further four
+    decades). Otherwise the stall guard (:func:`stall_rule`) stops the case or lets it iterate (:data:`GO`).
+
+    Written once: the single solve's kernels (:mod:`.compressed`) call it, and numba compiles it into the batched
+    CPU kernels (``register_jitable``). The array kernels (:class:`~.batch.kernels.ArrayKernels`, numpy or CuPy)
+    and the CUDA kernels write it over their per-case arrays; tests/test_batch.py holds each form to this one.
+    """
+    if residual <= tol:
+        return (CONVERGED if fresh else WAIT), level, best, at
+    if levels and residual < level and not fresh:
+        while level > residual:
+            level *= 1e-4
+        return WAIT, level, best, at
+    stop, best, at = stall_rule(residual, it, max_iter, best, at, window)
+    return (STOP if stop else GO), level, best, at
 
 
 class StallGuard:

@@ -33,9 +33,12 @@ go through :meth:`~.kernels.ArrayKernels.allsum` (and its siblings) so that
 
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 from numba import njit
 
+from ..workspace import CONVERGED, GO, STOP, WAIT, loop_head, stall_rule
 from .kernels import ArrayKernels
 
 _JIT = {"cache": True, "nogil": True}
@@ -516,32 +519,6 @@ def _gbar(s, n, out):
 
 
 @njit(**_JIT)
-def _decide(orth, wmin, gbar, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
-            next_sync, best, at, done, waiting, converged, go):
-    for b in range(orth.shape[0]):
-        pen = _nmax(gbar[b] - wmin[b], 0.0)
-        o = orth[b] * inv_norm[b]
-        r = _nmax(_nmax(o, pen / scale[b]), 0.0) if np.isfinite(o) and np.isfinite(pen) else big
-        active = not (done[b] or waiting[b])
-        below = r <= tol
-        conv = active and below and fresh[b]
-        sync_level = (not below) and r < next_sync[b]
-        want = active and (not fresh[b]) and (below or sync_level)
-        for _ in range(6):  # at most ~4 steps from 1e-5 to any tol >= 1e-16
-            if want and sync_level and next_sync[b] > r:
-                next_sync[b] = next_sync[b] * 1e-4
-        rest = active and not conv and not want
-        if rest and r < 0.5 * best[b]:
-            best[b] = r
-            at[b] = it[b]
-        stop = rest and (not np.isfinite(r) or it[b] >= max_iter[b] or it[b] - at[b] >= stall)
-        go[b] = rest and not stop
-        converged[b] = converged[b] or conv
-        waiting[b] = waiting[b] or want
-        done[b] = done[b] or conv or stop
-
-
-@njit(**_JIT)
 def _join_fix(nnew, nold, gsum, go, done, c, nf):
     for b in range(nnew.shape[0]):
         joined = go[b] and nnew[b] > nold[b]
@@ -652,13 +629,59 @@ def _f(x):
     return x.reshape(x.shape[0], x.size // x.shape[0])
 
 
-@njit(**_JIT)
-def _measure_round(p, w, idx, cnt, nf, wmin, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
-                   next_sync, best, at, done, waiting, converged, go, gbar):
-    p, w, gbar = _f(p), _f(w), _v(gbar)
-    _gbar(_masked_sum(w, idx, cnt), _v(nf), gbar)
-    _decide(_orth(p, w, gbar, idx, cnt), _v(wmin), gbar, _v(inv_norm), _v(scale), tol, stall, big, _v(it),
-            _v(max_iter), _v(fresh), _v(next_sync), _v(best), _v(at), _v(done), _v(waiting), _v(converged), _v(go))
+def _rule_digest() -> int:
+    """A digest of the loop head's rule as numba compiles it (``workspace.loop_head`` and ``stall_rule``: bytecode,
+    constants and names)."""
+    h = hashlib.sha256()
+    for fn in (loop_head, stall_rule):
+        code = fn.__code__
+        h.update(code.co_code + repr((code.co_consts, code.co_names)).encode())
+    return int.from_bytes(h.digest()[:7], "little")
+
+
+def _head_kernels(digest: int):
+    """``(decide, measure_round)``: the kernels that compile the loop head's rule (``workspace.loop_head``) in.
+
+    numba finds a cached kernel by its own file's stamp, its bytecode and the values of its closure, not by the
+    functions it compiles in: were the rule edited, a kernel cached here would go on running the former rule until
+    this file changed (it did, 2026-12-03). ``digest`` (:func:`_rule_digest`) sits in their closure, so a changed
+    rule is compiled anew. A cached kernel that calls these must carry it too (and call them as globals: a
+    dispatcher in a closure defeats the cache).
+    """
+
+    @njit(**_JIT)
+    def decide(orth, wmin, gbar, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
+               next_sync, best, at, done, waiting, converged, go):
+        digest  # noqa: B018 (the rule's digest in the closure: the docstring above)
+        for b in range(orth.shape[0]):
+            pen = _nmax(gbar[b] - wmin[b], 0.0)
+            o = orth[b] * inv_norm[b]
+            r = _nmax(_nmax(o, pen / scale[b]), 0.0) if np.isfinite(o) and np.isfinite(pen) else big
+            if done[b] or waiting[b]:
+                go[b] = False
+                continue
+            decision, level, best_b, at_b = loop_head(r, tol, fresh[b], next_sync[b], True, it[b], max_iter[b],
+                                                      best[b], at[b], stall)
+            next_sync[b], best[b], at[b] = level, best_b, at_b
+            go[b] = decision == GO
+            converged[b] = converged[b] or decision == CONVERGED
+            waiting[b] = waiting[b] or decision == WAIT
+            done[b] = done[b] or decision == CONVERGED or decision == STOP
+
+    @njit(**_JIT)
+    def measure_round(p, w, idx, cnt, nf, wmin, inv_norm, scale, tol, stall, big, it, max_iter, fresh,
+                      next_sync, best, at, done, waiting, converged, go, gbar):
+        digest  # noqa: B018
+        p, w, gbar = _f(p), _f(w), _v(gbar)
+        _gbar(_masked_sum(w, idx, cnt), _v(nf), gbar)
+        _decide(_orth(p, w, gbar, idx, cnt), _v(wmin), gbar, _v(inv_norm), _v(scale), tol, stall, big, _v(it),
+                _v(max_iter), _v(fresh), _v(next_sync), _v(best), _v(at), _v(done), _v(waiting), _v(converged),
+                _v(go))
+
+    return decide, measure_round
+
+
+_decide, _measure_round = _head_kernels(_rule_digest())
 
 
 @njit(**_JIT)

@@ -83,7 +83,7 @@ ELEMENTWISE = {
         "bool sync_level = !below && r < next_sync; bool want = active && !fresh && (below || sync_level); "
         "for (int j = 0; j < 6; ++j) { if (want && sync_level && next_sync > r) next_sync *= 1e-4; } "
         "bool rest = active && !conv && !want; "
-        "if (rest && r < 0.5 * best) { best = r; at = it; } "
+        "if (rest && r < 0.5 * best && it < max_iter) { best = r; at = it; } "
         "bool stop = rest && (!isfinite(r) || it >= max_iter || it - at >= stall); "
         "go = rest && !stop; converged = converged || conv; waiting = waiting || want; "
         "done = done || conv || stop"),

@@ -333,9 +333,12 @@ class ArrayKernels:
         """The measure's decisions (:meth:`.iteration.BatchIteration.measure`), in place.
 
         Residual ``r = max(orth inv_norm, max(gbar - wmin, 0) / scale, 0)`` (``big`` where not
-        finite); converged where fresh and ``r <= tol``; waiting for a float64 recomputation where
-        not fresh and ``r <= tol`` or below ``next_sync`` (lowered by four decades under ``r``);
-        the stall guard (``best``, ``at``, ``stall``), ``max_iter``; ``go`` for the others.
+        finite), then the loop head :func:`~roughcontact.solver.workspace.loop_head` (with ``levels``) for every
+        case neither done nor waiting: converged where fresh and ``r <= tol``; waiting for a float64
+        recomputation where not fresh and ``r <= tol`` or below ``next_sync`` (lowered by four decades under
+        ``r``); the stall guard (``best``, ``at``, ``stall``), ``max_iter``; ``go`` for the others. Written
+        over arrays (a GPU's form), the level is lowered at most six times, from 1e-5 to 1e-29: the rule's
+        decisions wherever the residual stays above that (tests/test_batch.py holds the two to each other).
         """
         xp = self.xp
         pen = xp.maximum(gbar - wmin, 0.0)
@@ -349,7 +352,7 @@ class ArrayKernels:
         for _ in range(6):  # at most ~4 steps from 1e-5 to any tol >= 1e-16
             next_sync[...] = xp.where(want & sync_level & (next_sync > r), next_sync * 1e-4, next_sync)
         rest = active & ~conv & ~want
-        better = rest & (r < 0.5 * best)
+        better = rest & (r < 0.5 * best) & (it < max_iter)  # (a step stopped at max_iter keeps its best)
         best[...] = xp.where(better, r, best)
         at[...] = xp.where(better, it, at)
         stop = rest & (~xp.isfinite(r) | (it >= max_iter) | (it - at >= stall))

@@ -10,13 +10,12 @@ import numpy as np
 from ...core.backend import get_backend
 from ...core.cell import Cell
 from ...statistics.patches import contact_patches
-from ..box import box_solve
 from ..check import MEAN_RTOL
-from ..compressed import pk_solve
 from ..iteration import BatchIteration
 from ..settings import SolverSettings
+from ..steps import extrapolation_factor, fall_back, run_path
 from ..units import Units, check_loads, rms_about_mean
-from ..workspace import FALLBACKS, SOLVER_PATHS, Workspace
+from ..workspace import SOLVER_PATHS, Workspace
 from .cpu import FusedCpuKernels
 from .cuda import fused_kernels
 from .halfspace import BatchOperator
@@ -128,12 +127,7 @@ class BatchSolver:
             self.P[...] = xp.asarray(p_int.reshape(B, 1, 1))
             return fresh
         s = p_int / self.prev
-        c = np.zeros(B)
-        if self._older is not None:
-            op0 = self._older[0]
-            with np.errstate(divide="ignore", invalid="ignore"):
-                cc = (p_int - self.prev) / (self.prev - op0)
-            c = np.where((op0 != self.prev) & (cc > 0.0) & (cc <= 2.0), cc, 0.0)
+        c = np.zeros(B) if self._older is None else extrapolation_factor(p_int, self.prev, self._older[0])
         lin = (c > 0) & self._last[2] & self._older[3] if self._older is not None else np.zeros(B, bool)
         extra = (c > 0) & ~lin
         k = self.kernels
@@ -156,7 +150,8 @@ class BatchSolver:
         return fresh
 
     def fallback(self, b: int, p_int: float, its: int) -> tuple[int, str, bool]:
-        """The single solve's fallbacks (:data:`FALLBACKS`) on case ``b`` alone, from its pressure.
+        """The single solve's fallbacks (:func:`~roughcontact.solver.steps.fall_back`) on case ``b`` alone, from its
+        pressure.
 
         ``its`` iterations are spent; returns ``(iterations in all, path, converged)`` with the
         batch's ``P`` and ``w`` of the case replaced by the fallback's (fresh).
@@ -167,19 +162,8 @@ class BatchSolver:
                                          backend=self.array_backend)
         ws.P[...] = self.P[b]
         ws.w[...] = self.w[b]
-        path, ok = BATCH_METHOD, False
-        for method in FALLBACKS[BATCH_METHOD]:
-            if ok or its >= self.max_iter:
-                break
-            path = method
-            if method == "box":
-                ws.method = "pk-fourier"
-                more, ok = box_solve(ws, p_int, self.tol, self.max_iter - its, 2.0 * p_int * ws.size, True)
-            else:
-                ws.method = method
-                more, ok = pk_solve(ws, p_int, self.tol, self.max_iter - its, True)
-            its += more
-        ws.method = "pk-fourier"
+        its, path, ok = fall_back(BATCH_METHOD, its, False, self.max_iter,
+                                  lambda method, left: run_path(ws, method, p_int, self.tol, left, True, "pk-fourier"))
         self.P[b] = ws.P
         self.w[b] = ws.w
         return its, path, ok

@@ -27,6 +27,7 @@ from ...core.cli import one_line
 from ...statistics.patches import merge_slabs, slab_patches
 from ..batch.solver import BATCH_METHOD, BatchSolver
 from ..iteration import BatchIteration
+from ..steps import fall_back
 from ..units import Units
 from ..workspace import FALLBACKS, SOLVER_PATHS, STALL_WINDOW as SINGLE_STALL_WINDOW
 from .kernels import MpiKernels, SlabOperator
@@ -142,14 +143,18 @@ class MpiSolver(BatchSolver):
         Returns ``(iterations in all, path, converged)``; the box fallback does not run over ranks
         (module docstring).
         """
-        if its >= self.max_iter:
-            return its, BATCH_METHOD, False
+        return fall_back(BATCH_METHOD, its, False, self.max_iter, lambda method, left: self._float64(p_int, left),
+                         reachable=(FLOAT64_FALLBACK,))
+
+    def _float64(self, p_int: float, left: int) -> tuple[int, bool]:
+        """``pk-fourier`` over the ranks to the internal load ``p_int`` for ``left`` iterations at most;
+        ``(iterations, converged)``."""
         if self._op64 is None:
             self._op64 = self.op.float64_products()
-        it = BatchIteration(self, np.full((1, 1, 1), p_int), np.zeros(1, dtype=np.int8),
-                            np.array([self.max_iter - its]), op=self._op64, stall=SINGLE_STALL_WINDOW)
+        it = BatchIteration(self, np.full((1, 1, 1), p_int), np.zeros(1, dtype=np.int8), np.array([left]),
+                            op=self._op64, stall=SINGLE_STALL_WINDOW)
         more, conv = it.run(1)
-        return its + int(more[0]), FLOAT64_FALLBACK, bool(conv[0])
+        return int(more[0]), bool(conv[0])
 
     def perimeter(self) -> np.ndarray:
         """Contact perimeter per unit area (periodic), the edges along x across slab boundaries included; (1,)."""
