@@ -12,9 +12,9 @@ single-threaded (``OMP_NUM_THREADS=1``):
 
 - the outputs of the warm-up solves are compared variable by variable, by their bytes (every variable but the wall
   time, with every step's pressure and gap fields stored);
-- the CPU (``process_time``) of the iterations alone (``pk_solve``'s calls, from ``solver.steps`` since
-  2026-12-03, from ``solver.contact`` before: the loop with its per-step set-up, the float32 products planned
-  before the timer) and of the whole ``solve_contact`` call (the products
+- the CPU (``process_time``) of the iterations alone (``pk_solve``'s calls from ``solver.steps``, which runs a
+  rough surface's every step since 2026-12-03, from ``solver.contact`` before: the loop with its per-step set-up,
+  the float32 products planned before the timer) and of the whole ``solve_contact`` call (the products
   planned once per process since 2026-12-03, each solve before), the least and the median of ``--repeats``, and
   the ratios after / before: of the least, and the median of the ratios paired within a repeat.
 

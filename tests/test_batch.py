@@ -321,11 +321,11 @@ def test_compiled_decisions_are_the_plain_expressions_bit_for_bit():
 
 
 def _loop_head_states():
-    """Every combination of the loop head's inputs around its edges: (B, 1, 1) arrays by name (tol 1e-8, window 3)."""
+    """Every combination of the loop head's inputs around its edges: (B, 1, 1) arrays by name."""
     import itertools
 
     grid = itertools.product(
-        [0.0, 1e-10, 1e-8, 5e-8, 3e-6, 2e-5, 0.4, 1.0, np.inf, np.nan],  # residual: at tol, levels, best/2
+        [0.0, 5e-19, 3e-14, 1e-10, 1e-8, 5e-8, 3e-6, 2e-5, 0.4, 1.0, np.inf, np.nan],  # residual: tol, levels, best/2
         [False, True], [(False, False), (True, False), (False, True)],  # fresh; (done, waiting)
         [1e-5, 1e-9], [(5, 100), (100, 100), (399, 400)],  # next_sync; (it, max_iter)
         [0, 2, 3], [np.inf, 1.0, 1e-7])  # it - at against the window; best
@@ -334,14 +334,16 @@ def _loop_head_states():
     return {n: np.array(col).reshape(-1, 1, 1) for n, col in zip(names, zip(*rows, strict=True), strict=True)}
 
 
-@pytest.mark.parametrize("window", [3, 0], ids=["window3", "window0"])
-def test_each_form_of_the_loop_head_is_the_rule(window):
+@pytest.mark.parametrize(("window", "tol"), [(3, 1e-8), (0, 1e-8), (3, 1e-20)],
+                         ids=["window3", "window0", "tol1e-20"])
+def test_each_form_of_the_loop_head_is_the_rule(window, tol):
     """The loop head is written once (``workspace.loop_head``): the single solve's kernels call it, the fused host
     kernels compile it, and the array kernels (numpy here, CuPy on a GPU) write it over per-case arrays. Each
     form gives the rule's decisions and state (``next_sync``, ``best``, ``at``, the four flags) for every
-    combination of residual, freshness, flags, recomputation level, iteration, stall window and best residual
+    combination of residual, freshness, flags, recomputation level, iteration, stall window and best residual.
     A window of 0 stops every case at once (the
-    batch's fallback test uses it). A stale numba cache of the compiled form would fail here."""
+    batch's fallback test uses it); a tol of 1e-20 lowers the float64 recomputation level up to four times in one
+    call. A stale numba cache of the compiled form would fail here."""
     from roughcontact.solver.batch.cpu import FusedCpuKernels
     from roughcontact.solver.batch.kernels import ArrayKernels
     from roughcontact.solver.compressed import CompressedKernels
@@ -356,7 +358,7 @@ def test_each_form_of_the_loop_head_is_the_rule(window):
         if st["done"][b].item() or st["waiting"][b].item():
             continue
         d, want["next_sync"][b], want["best"][b], want["at"][b] = loop_head(
-            st["r"][b].item(), 1e-8, st["fresh"][b].item(), st["next_sync"][b].item(), True, st["it"][b].item(),
+            st["r"][b].item(), tol, st["fresh"][b].item(), st["next_sync"][b].item(), True, st["it"][b].item(),
             st["max_iter"][b].item(), st["best"][b].item(), st["at"][b].item(), window)
         want["go"][b], want["converged"][b], want["waiting"][b] = d == GO, d == CONVERGED, d == WAIT
         want["done"][b] = d in (CONVERGED, STOP)
@@ -373,12 +375,12 @@ def test_each_form_of_the_loop_head_is_the_rule(window):
         s = got[label] = state()
         zero = np.zeros((B, 1, 1))
         with np.errstate(invalid="ignore"):
-            k.decide(st["r"], zero, zero, np.ones((B, 1, 1)), np.ones((B, 1, 1)), 1e-8, window, np.inf, st["it"],
+            k.decide(st["r"], zero, zero, np.ones((B, 1, 1)), np.ones((B, 1, 1)), tol, window, np.inf, st["it"],
                      st["max_iter"], st["fresh"], *(s[n] for n in ("next_sync", "best", "at", *flags)))
     s = got["compressed"] = state()
     for b in range(B):
         one = {n: s[n][b:b + 1] for n in s}
-        CompressedKernels._decide(st["r"][b].item(), 1e-8, window, st["it"][b:b + 1], st["max_iter"][b:b + 1],
+        CompressedKernels._decide(st["r"][b].item(), tol, window, st["it"][b:b + 1], st["max_iter"][b:b + 1],
                                   st["fresh"][b:b + 1], one["next_sync"], one["best"], one["at"],
                                   *(one[n] for n in flags))
     for label, s in got.items():

@@ -152,3 +152,43 @@ def test_the_step_rules_every_solver_shares():
     assert steps.fall_back("pk-fourier-f32", 10, True, 100, run) == (10, "pk-fourier-f32", True)
     assert steps.fall_back("pk", 10, False, 100, run) == (17, "box", False)
     assert ran == [("pk-fourier", 90), ("box", 90)]
+
+
+def test_the_loop_head_lowers_its_level_until_it_is_below_the_residual():
+    """``workspace.loop_head``: on a stale ``w`` a residual below the recomputation level waits for ``w`` in float64,
+    the level lowered by four decades as often as it takes (three times here); without ``levels`` (the float64
+    methods) or on a fresh ``w`` the case goes on; at or below ``tol`` it converges on a fresh ``w`` only."""
+    from roughcontact.solver.workspace import CONVERGED, GO, WAIT, loop_head
+
+    decision, level, best, at = loop_head(3e-14, 1e-20, False, 1e-5, True, 7, 100, 1.0, 2, 300)
+    assert (decision, best, at) == (WAIT, 1.0, 2) and level == pytest.approx(1e-17) and level < 3e-14 < level * 1e4
+    assert loop_head(3e-14, 1e-20, False, 1e-5, False, 7, 100, 1.0, 2, 300) == (GO, 1e-5, 3e-14, 7)
+    assert loop_head(3e-14, 1e-20, True, 1e-5, True, 7, 100, 1.0, 2, 300)[0] == GO
+    assert loop_head(1e-21, 1e-20, True, 1e-5, True, 7, 100, 1.0, 2, 300)[0] == CONVERGED
+    assert loop_head(1e-21, 1e-20, False, 1e-5, False, 7, 100, 1.0, 2, 300)[0] == WAIT
+
+
+@pytest.mark.parametrize("method", ["pk", "pk-fourier"])
+def test_run_path_runs_each_iteration_with_the_workspace_method_restored(monkeypatch, method):
+    """``steps.run_path``: an elastic path runs ``pk_solve`` with that method; ``"box"`` the capped iteration with a
+    cap of twice the total load, unpreconditioned under the reference ``"pk"`` only; the workspace's method comes
+    back either way, after an error too."""
+    from roughcontact.solver import steps
+
+    ws = _workspace()
+    ws.method = method
+    seen = []
+    monkeypatch.setattr(steps, "box_solve", lambda w, p0, tol, it, cap, fresh: seen.append(("box", w.method, cap)) or
+                        (1, True))
+    monkeypatch.setattr(steps, "pk_solve", lambda w, p0, tol, it, fresh: seen.append(("pk", w.method)) or (2, False))
+    assert steps.run_path(ws, "box", 2e-3, 1e-8, 10, True, method) == (1, True)
+    assert steps.run_path(ws, "pk-fourier-f32", 2e-3, 1e-8, 10, True, method) == (2, False)
+    assert seen == [("box", method, 2.0 * 2e-3 * ws.size), ("pk", "pk-fourier-f32")] and ws.method == method
+
+    def broken(*args):
+        raise RuntimeError("broken")
+
+    monkeypatch.setattr(steps, "pk_solve", broken)
+    with pytest.raises(RuntimeError):
+        steps.run_path(ws, "pk-fourier", 2e-3, 1e-8, 10, True, method)
+    assert ws.method == method

@@ -81,7 +81,8 @@ def loop_head(residual: float, tol: float, fresh: bool, level: float, levels: bo
 
     Written once: the single solve's kernels (:mod:`.compressed`) call it, and numba compiles it into the batched
     CPU kernels (``register_jitable``). The array kernels (:class:`~.batch.kernels.ArrayKernels`, numpy or CuPy)
-    and the CUDA kernels write it over their per-case arrays; tests/test_batch.py holds each form to this one.
+    and the CUDA kernels write it over their per-case arrays, with at most six lowerings of the level a call;
+    tests/test_batch.py holds the host's forms to this one (the CUDA kernel runs on a GPU only).
     """
     if residual <= tol:
         return (CONVERGED if fresh else WAIT), level, best, at

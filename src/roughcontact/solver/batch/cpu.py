@@ -630,12 +630,13 @@ def _f(x):
 
 
 def _rule_digest() -> int:
-    """A digest of the loop head's rule as numba compiles it (``workspace.loop_head`` and ``stall_rule``: bytecode,
-    constants and names)."""
+    """A digest of the loop head's rule as numba compiles it: ``workspace.loop_head`` and ``stall_rule``'s bytecode,
+    constants, names, defaults and the values of the module's numbers they name (the decisions ``GO`` ...)."""
     h = hashlib.sha256()
     for fn in (loop_head, stall_rule):
         code = fn.__code__
-        h.update(code.co_code + repr((code.co_consts, code.co_names)).encode())
+        numbers = {n: fn.__globals__[n] for n in code.co_names if isinstance(fn.__globals__.get(n), (int, float))}
+        h.update(code.co_code + repr((code.co_consts, code.co_names, fn.__defaults__, numbers)).encode())
     return int.from_bytes(h.digest()[:7], "little")
 
 
@@ -643,10 +644,10 @@ def _head_kernels(digest: int):
     """``(decide, measure_round)``: the kernels that compile the loop head's rule (``workspace.loop_head``) in.
 
     numba finds a cached kernel by its own file's stamp, its bytecode and the values of its closure, not by the
-    functions it compiles in: were the rule edited, a kernel cached here would go on running the former rule until
-    this file changed (it did, 2026-12-03). ``digest`` (:func:`_rule_digest`) sits in their closure, so a changed
-    rule is compiled anew. A cached kernel that calls these must carry it too (and call them as globals: a
-    dispatcher in a closure defeats the cache).
+    functions it compiles in: were the rule edited, a kernel cached here could go on running the former rule (seen
+    2026-12-03). ``digest`` (:func:`_rule_digest`) sits in their closure, so a changed rule is compiled anew (a
+    function the rule comes to call must join the digest). A cached kernel that calls these must carry it too,
+    and call them as globals (a dispatcher in a closure defeats the cache).
     """
 
     @njit(**_JIT)

@@ -337,8 +337,9 @@ class ArrayKernels:
         case neither done nor waiting: converged where fresh and ``r <= tol``; waiting for a float64
         recomputation where not fresh and ``r <= tol`` or below ``next_sync`` (lowered by four decades under
         ``r``); the stall guard (``best``, ``at``, ``stall``), ``max_iter``; ``go`` for the others. Written
-        over arrays (a GPU's form), the level is lowered at most six times, from 1e-5 to 1e-29: the rule's
-        decisions wherever the residual stays above that (tests/test_batch.py holds the two to each other).
+        over arrays (a GPU's form, the CUDA kernel's too), the level is lowered at most six times a call: the
+        rule's decisions unless the residual falls more than 24 decades below the level between two measures
+        (tests/test_batch.py holds this form to the rule, with up to four lowerings a call).
         """
         xp = self.xp
         pen = xp.maximum(gbar - wmin, 0.0)
@@ -349,7 +350,7 @@ class ArrayKernels:
         conv = active & below & fresh
         sync_level = ~below & (r < next_sync)
         want = active & ~fresh & (below | sync_level)
-        for _ in range(6):  # at most ~4 steps from 1e-5 to any tol >= 1e-16
+        for _ in range(6):  # the rule's `while`, capped (a GPU's loop cannot ask the host whether to go on)
             next_sync[...] = xp.where(want & sync_level & (next_sync > r), next_sync * 1e-4, next_sync)
         rest = active & ~conv & ~want
         better = rest & (r < 0.5 * best) & (it < max_iter)  # (a step stopped at max_iter keeps its best)
