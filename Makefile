@@ -63,9 +63,10 @@ browser:
 		echo "no chromium, and installing it needs root and apt-get: the report's browser test will skip"; \
 	fi
 
-# The inner loop (under 3 min on 2 cores: 2 min 37 s quiet on 2026-11-26, one pytest worker per
-# core): every test not marked slow. Slow tests (real runs of small scenes, dry runs of the
-# paper scene's full DAG, concurrency and bootstrap studies) run in `make test`.
+# The inner loop (under 3 min on 2 cores: 2 min 22 s on 2026-12-03, one pytest worker per core):
+# every test not marked slow. Slow tests (real runs of small scenes, dry runs of the scenes' DAGs,
+# MPI runs, concurrency and bootstrap studies, and every test that took over 3 s in test-fast's own
+# run, `--durations=0`, 2026-12-03: 8 min 41 s before they were marked) run in `make test`.
 test-fast: install-test
 	PATH=$(abspath $(BIN)):$$PATH $(BIN)/python -m pytest -m "not slow" -n $(JOBS) --dist loadgroup
 

@@ -155,6 +155,7 @@ def test_non_converged_step_is_flagged():
 
 
 @pytest.mark.parametrize("cls, p_end", [(Exponential, 1e-4), (MaugisDugdale, -1e-4)])
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_rough_load_cycle_invariants(cls, p_end):
     """Loading, then unloading under pressure control, every step converged.
 
@@ -201,6 +202,7 @@ def test_theory_limits():
     assert th.tabor_parameter(1.0, 1e-4, 1.0, 1e-3) == pytest.approx((1e-8 / 1e-9) ** (1 / 3))
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_johnson_wavy_surface():
     """1-D sinusoid (``ny = 1``), exponential law of short range, against Johnson (1995).
 

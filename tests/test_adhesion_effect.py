@@ -143,6 +143,7 @@ def _loaded(surface):
     return solver
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_untrusted_pull_off_is_nan_with_its_reason(surface):
     # every load step failed (max_iter = 2): unloading from an unconverged state is not a pull-off
     ds = solve_contact(surface, LOADS, effects=(Adhesion("exponential", 2e-6, 1e-3),), max_iter=2)
@@ -183,6 +184,7 @@ def test_adhesive_area_is_where_the_law_pulls_hard(surface):
 
 
 # ------------------------------------------------- an untrusted pull-off flags no unloading step converged
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_untrusted_pull_off_flags_no_unloading_step_converged(surface):
     # Every status but trusted, each from its own cause (the unconverged step beside the minimum has no cheap
     # reliable cause; the same one rule sets the flags). Each trace holds steps that met their own residual (a

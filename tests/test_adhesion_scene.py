@@ -40,6 +40,7 @@ def test_adhesive_scene_asks_for_the_adhesion_figures_only():
     assert not {"hysteresis", "pull_off"} & set(scene_figures(plain))
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_adhesive_scene_plans_no_fit(tmp_path):
     wd = copy_workflow(tmp_path / "plan", _adhesive())
     res = run_snakemake(wd, "-n")

@@ -134,6 +134,7 @@ def _cli(cwd, *args):
                           text=True, timeout=300)
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_cli_dry_run_and_a_held_working_directory(tmp_path):
     (tmp_path / "config").mkdir()
     (tmp_path / "config" / "config.yaml").write_text(yaml.safe_dump(CONFIG))
@@ -150,6 +151,7 @@ def test_cli_dry_run_and_a_held_working_directory(tmp_path):
     assert res.returncode == 2 and "nosuch" in res.stderr
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_cli_refuses_a_target_it_cannot_write_before_copying(tmp_path):
     """results/<scene> blocked by a file: the command says so before it checks or copies a case (issue 62)."""
     (tmp_path / "config").mkdir()
@@ -163,6 +165,7 @@ def test_cli_refuses_a_target_it_cannot_write_before_copying(tmp_path):
     assert "Traceback" not in res.stderr
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_cli_configfile_adds_to_the_shipped_config_as_snakemake_does(tmp_path):
     """A scene kept in its own file, written over the shipped `defaults`, is adopted into as it is run."""
     shipped = {"scene": "small", "defaults": {"contact": CONTACT, "fit": TINY["scenes"]["tiny"]["fit"]},

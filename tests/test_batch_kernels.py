@@ -136,6 +136,7 @@ def compiled_cupy(monkeypatch, kernel_dir):
     get_backend.cache_clear()
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_every_fused_kernel_passes_its_self_check(compiled_cupy):
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # a kernel replaced by its plain form warns
@@ -144,6 +145,7 @@ def test_every_fused_kernel_passes_its_self_check(compiled_cupy):
     assert set(kernels.FUSED) <= {m for m in dir(batch_kernels.ArrayKernels) if not m.startswith("_")}
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_a_wrong_kernel_is_replaced_by_its_plain_form(compiled_cupy, monkeypatch):
     """A kernel whose result differs from the plain expression's is dropped, with a warning."""
     monkeypatch.setitem(batch_cuda.REDUCTIONS, "_dot", ("float64 u, float64 v", "float64 y", "u + v",

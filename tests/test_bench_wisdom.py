@@ -8,6 +8,7 @@ from conftest import load_script
 bench = load_script(Path(__file__).resolve().parents[1] / "benchmarks" / "bench_wisdom.py", "bench_wisdom")
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_the_shipped_wisdom_against_itself_gives_the_same_solution(capsys):
     pytest.importorskip("pyfftw")
     from roughcontact.core import fft

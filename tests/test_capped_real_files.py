@@ -27,6 +27,7 @@ MAX_STEP_ITERATIONS = 100
 
 
 @pytest.mark.parametrize("name, steps", [("nid-1.nid", 1), ("spot_1-1000nm.ibw", 3)])
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_capped_steps_of_real_files_converge(name, steps):
     s = read_topography(DATA / name, unit="um", undefined="harmonic", detrend="height")
     slope = nonperiodic_moments(s.heights, s.lengths)["rms_slope"]

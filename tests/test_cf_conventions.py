@@ -125,6 +125,7 @@ def outputs(tmp_path_factory):
 KINDS = ["surface", "representativity", "contact", "aggregate_contact", "aggregate_representativity", "fit"]
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_every_kind_of_file_has_no_cf_error_or_warning(outputs, tmp_path):
     assert sorted(outputs["generated"]) == sorted([*KINDS, "accuracy"]) and sorted(outputs["measured"]) == sorted(KINDS)
     assert_cf_clean([p for files in outputs.values() for p in files.values()], tmp_path / "tables")

@@ -378,6 +378,7 @@ def test_malformed_yaml_is_named_with_line_column_and_remedy(tmp_path, text, wor
         assert "indent with spaces, not tabs" in str(info.value)
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_config_files_add_to_the_shipped_config_as_snakemake_reads_them(tmp_path, monkeypatch, shipped_config):
     """``--configfile mine.yaml`` adds its scene to config/config.yaml (mappings merged key by key)."""
     import subprocess

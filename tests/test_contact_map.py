@@ -103,6 +103,7 @@ def test_a_map_without_contact_draws_no_pressure():
     assert in_contact(np.array([0.0, 1e-300, -1.0])).mask.tolist() == [True, False, True]
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_the_figure_and_its_caption_are_reproducible_and_true(cases_2d, tmp_path):
     fig = fig_contact_maps(cases_2d)
     # the figure draws no reference line: its caption is the lead and the notes of a 2-D map's layout

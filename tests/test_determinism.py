@@ -90,6 +90,7 @@ def test_fft_results_identical_across_concurrent_processes(tmp_path):
 
 
 @pytest.mark.parametrize("n", [96, 128])  # 128 has a shipped plan, 96 not
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_estimate_plan_ignores_measured_wisdom(n):
     """A timed plan made earlier in the process must not replace the ESTIMATE choice.
 

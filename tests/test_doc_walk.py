@@ -303,6 +303,7 @@ def walk_workflow(tmp_path_factory):
     return wd
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_dry_runs_plan_beside_an_invalid_scene(walk_workflow):
     res = run_snakemake(walk_workflow, "-n", "--configfile", "walk.yaml", "--config", "scene=gen-target")
     out = res.stdout + res.stderr

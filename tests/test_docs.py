@@ -572,6 +572,7 @@ def test_every_documented_item_has_a_handler():
 
 
 @pytest.mark.parametrize("item", [_param(it) for it in ITEMS])
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_documented_item(item, ctx, tmp_path):
     handler = handler_for(item)
     if handler is None:

@@ -74,6 +74,7 @@ def test_optional_outputs_and_effects_add_exactly_their_variables(tmp_path):
     assert np.all(ds_a["area_fraction"].values > ds_base["area_fraction"].values)
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_scene_without_contact_block_plans_no_contact_jobs(tmp_path):
     cfg = copy.deepcopy(TINY)
     del cfg["scenes"]["tiny"]["contact"]

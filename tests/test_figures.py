@@ -52,6 +52,7 @@ def drawn_figures():
     return {name: (build(), build) for name, build in builders.items()}
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_every_registered_figure_is_one_width_at_one_pixel_density(drawn_figures, tmp_path):
     """The pull-off figure was written at half the pixel width of the others, so its text showed twice the size
     (issue 60): every figure is one width class at one pixel density, whatever its data."""
@@ -79,6 +80,7 @@ def test_every_registered_figure_records_what_it_drew_and_its_caption_says_it(dr
         assert json.loads(record_json(record)) == record
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_every_log_axis_of_every_registered_figure_shows_two_labelled_ticks(drawn_figures):
     """A log axis over less than a decade has no decade tick to label (issue 60): each shows at least two."""
     for name, (fig, _) in drawn_figures.items():

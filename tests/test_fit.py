@@ -67,6 +67,7 @@ def test_recovers_known_constants_from_noisy_synthetic_data():
         assert np.all(h >= 9), (est, h)
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_joint_covariance_matches_the_scatter_of_the_estimates():
     # Independent noise per point is what the Jacobian covariance assumes: its standard
     # error must match the spread of the estimates over draws (within sampling error).
@@ -157,6 +158,7 @@ def test_bad_arguments(kwargs, word):
         fit_cel(_agg(seeds=range(2)), **kwargs)
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_structure_groups_and_reproducibility():
     agg = _agg(k_l=(4.0, 16.0), k_s=(8.0, 32.0), hurst=(0.36, 0.84), seeds=range(3), seed_scatter=0.01)
     fit = fit_cel(agg, n_boot=20, rng_seed=7)

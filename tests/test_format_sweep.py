@@ -68,6 +68,7 @@ def test_solve_line_with_a_hardness_ends_with_the_plastic_area():
 
 
 @pytest.mark.peer
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_solve_line_with_the_peer_ends_with_its_area():
     """ContactMechanics' A/A0 at the last load (mi-1: the same node count at tol 1e-8)."""
     pytest.importorskip("ContactMechanics", reason="ContactMechanics is not installed: peer comparison skipped")

@@ -249,6 +249,7 @@ def _check_full_contact(case, h, ds) -> list[float]:
 
 
 # --------------------------------------------------------------------------- the suite
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_case_converges_and_meets_its_reference(solution, request):
     case, h, ds = solution
     if case.xfail:

@@ -274,6 +274,7 @@ def test_sigkill_mid_csv_write(tmp_path, previous):
 
 @pytest.mark.parametrize("kill_format", ["png", "pdf"])
 @pytest.mark.parametrize("previous", [True, False], ids=["over-previous", "new-file"])
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_sigkill_mid_figure_write(tmp_path, kill_format, previous):
     folder = tmp_path / "figures"
     base = folder / "fig2"

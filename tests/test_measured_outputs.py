@@ -225,6 +225,7 @@ def _render(name, scene_dir):
 
 
 @pytest.mark.parametrize("name", MEASURED_FIGURES)
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_figures_render_from_the_scene_files_and_save_byte_identically(name, scene_dir, tmp_path):
     fig = _render(name, scene_dir)
     title = fig._suptitle.get_text()

@@ -275,6 +275,7 @@ def test_the_published_page_follows_from_the_published_data(tmp_path):
 
 
 @pytest.mark.skipif(not (DOCS / page.REPRODUCTION["grid"]).is_file(), reason="the paper grid is not published")
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_the_whole_range_row_fits_every_point_and_reads_pending_without_its_run():
     grid = page._reproduction(DOCS)["grid"]
     question = page.RANGE_QUESTION

@@ -280,6 +280,7 @@ def _planned(stdout: str) -> set[str]:
     return {m.group(1) for m in re.finditer(r"^\s+output: ([^,\s]+)", stdout, flags=re.MULTILINE)}
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_a_dry_run_shows_the_grouped_jobs(tmp_path):
     wd = copy_workflow(tmp_path / "wf", BATCHED)
     res = run_snakemake(wd, "-n", timeout=300)

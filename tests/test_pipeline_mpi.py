@@ -222,6 +222,7 @@ def test_run_case_asks_for_the_file_and_the_runner_refuses_what_ranks_cannot_com
 
 
 @needs_mpi
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_run_case_over_ranks_gives_run_cases_answers(tmp_path, caplog):
     path, h = _surface_file(tmp_path / "s.nc")
     case = ContactCase(LoadSchedule(6, p_max=0.005), SolverSettings(length_unit="um", pressure_unit="MPa"),
@@ -244,6 +245,7 @@ def test_run_case_over_ranks_gives_run_cases_answers(tmp_path, caplog):
 
 
 @needs_mpi
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_the_mpi_solvers_refusal_comes_back_as_its_one_line(tmp_path):
     path, h = _surface_file(tmp_path / "s.nc", n=8)
     case = ContactCase(LoadSchedule(3, p_max=0.005), ranks=9)  # 9 ranks for 8 rows
@@ -252,6 +254,7 @@ def test_the_mpi_solvers_refusal_comes_back_as_its_one_line(tmp_path):
 
 
 @needs_mpi
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_processes_the_launcher_started_but_mpi_did_not_join_are_refused(tmp_path):
     """A launcher that starts R unconnected processes (srun without the MPI library's PMI does: R one-rank worlds,
     each solving the whole case) is an error naming the cause, not R copies of the solve."""
@@ -325,6 +328,7 @@ def test_the_mpi_jobs_check_reads_the_header_and_a_sample_of_rows(tmp_path, monk
 
 
 @needs_mpi
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_a_nan_outside_the_checked_rows_ends_every_rank_naming_the_file(tmp_path):
     """A NaN in rank 1's rows that the job's sample misses: the check passes, the ranks refuse the file in one line
     naming it, its rows and the remedy (exit status 2 within the cap, no traceback, no step), and the job logs that
@@ -358,6 +362,7 @@ def test_a_nan_outside_the_checked_rows_ends_every_rank_naming_the_file(tmp_path
 
 
 # ------------------------------------------------------------------------------ the workflow
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_the_slurm_profile_makes_it_an_mpi_job(tmp_path):
     """Under profiles/slurm a contact job over ranks carries ``mpi`` and ``tasks=2`` (the executor's MPI job: one
     allocation of 2 tasks) and ``launcher=srun`` (srun inside it), 1 thread per task, and joins no group; locally

@@ -53,6 +53,7 @@ def _builders(contact, rep_stats, examples):
 
 @pytest.mark.parametrize("name", ["representativity", "surface_examples", "area_load", "kappa", "dpbar",
                                   "area_load_nofit", "kappa_one_panel"])
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_figure_builds_and_saves_byte_identically(name, contact, rep_stats, examples, tmp_path):
     build = _builders(contact, rep_stats, examples)[name]
     fig = build()
@@ -101,6 +102,7 @@ def test_data_colours_are_okabe_ito(contact):
         assert grey or mcolors.to_hex(c) in allowed, c
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_save_is_reproducible_across_processes(tmp_path):
     script = textwrap.dedent("""
         import sys

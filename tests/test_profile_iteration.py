@@ -19,6 +19,7 @@ def _profile(*args) -> tuple[str, dict]:
     return lines[0], rows
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_a_tiny_profile_names_every_part_with_its_share():
     head, rows = _profile()
     assert re.match(r"N = 64, single solve: solve CPU [\d.]+ s, \d+ iterations", head), head
@@ -27,6 +28,7 @@ def test_a_tiny_profile_names_every_part_with_its_share():
 
 
 @pytest.mark.parametrize("kernels", ["fused", "plain"])
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_the_batched_iteration_profiles_with_either_kernels(kernels):
     """``--batched fused|plain``: the batched iteration's kernels, transforms and start, each with its share.
 

@@ -123,6 +123,7 @@ def _cases():
     return out
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_aggregate_and_fit_of_profiles():
     """The generated source's aggregate indexes profiles by (k_l, k_s, H, seed) and step as maps; the CEL fit
     runs on them and reports each group with its seeds. On these profiles

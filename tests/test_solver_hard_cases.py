@@ -466,6 +466,7 @@ def test_spikes_on_a_plateau_converge_without_a_stall():
     assert a_cm is not None and abs(float(ds["area_fraction"][-1]) - a_cm) <= 1e-4 * a_cm
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_spikes_on_a_plateau_converge_on_the_gradient_projection_after_pk(solver_options, monkeypatch):
     # Unpreconditioned, Polonsky & Keer's active-set rule cycles on frt-2's first loads (residual
     # 8.8 / 4.1 / 1.4 at steps 1-3, 2026-11-25): the monotone gradient projection ("box" with an

@@ -111,6 +111,7 @@ def _loads(p_max=P_MAX, steps=STEPS):
 @pytest.mark.parametrize("ranks", [1, 2])
 # the broadband case's 2-rank run is the longest here (9 s on 2 busy cores): make test only
 @pytest.mark.parametrize("k", [0, pytest.param(1, marks=pytest.mark.slow)])
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_same_answers_as_the_single_solve(tmp_path, ranks, k):
     h = _surface(k)
     ds = solve_mpi(tmp_path, h, ranks)
@@ -148,6 +149,7 @@ def test_odd_split_three_ranks_and_gathered_fields(tmp_path):
 
 
 @needs_mpi
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_full_contact_is_exact_on_two_ranks(tmp_path):
     """Past the full-contact load the pressure is ``p0 + (E*/2) F^-1[|q| h^]`` everywhere."""
     h = generate_surface(N, 2, 8, 0.8, 5, rms_slope=0.05)
@@ -161,6 +163,7 @@ def test_full_contact_is_exact_on_two_ranks(tmp_path):
 
 
 @needs_mpi
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_westergaard_on_two_ranks(tmp_path):
     """The wave runs along x, the split axis: half-width to a node, pressure to 1 % of its peak, mean gap to 1e-3."""
     n, delta = 256, 0.01
@@ -183,6 +186,7 @@ def test_westergaard_on_two_ranks(tmp_path):
 
 
 @needs_mpi
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_more_ranks_than_rows_is_refused(tmp_path):
     h = generate_surface(8, 1, 2, 0.8, 0, rms_slope=0.1)[:4]  # 4 rows
     res = run_mpi(5, "--surface", write_surface(tmp_path / "s.nc", h), "--p-max", 0.01, "--out",
@@ -259,6 +263,7 @@ BAD_RUNS = {
 
 @needs_mpi
 @pytest.mark.parametrize("case", list(BAD_RUNS))
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_bad_input_ends_every_rank_at_once(tmp_path, case):
     """Status 2, one line ``error: ...`` (rank 0's), no traceback, no load step solved, nothing written; in seconds
     (``subprocess``' cap of 60 s catches the hang: a run ends in ~2 s here)."""
@@ -294,6 +299,7 @@ sys.exit(cli.main(["--generate", "64", "2", "16", "0.8", "0", "--rms-slope", "0.
 
 
 @needs_mpi
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_an_error_on_one_rank_aborts_the_run(tmp_path):
     script = tmp_path / "one_rank_fails.py"
     script.write_text(ONE_RANK_FAILS)
@@ -314,6 +320,7 @@ def test_generator_values_name_the_value_at_fault():
 
 
 @needs_mpi
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_explicit_loads_and_a_rectangular_cell(tmp_path):
     """``--loads`` (the pipeline's resolved schedule, exact) and ``--length Lx --length-y Ly``: the single solve's
     answers on the same rectangle; ``--length-y`` alone is refused in one line."""
@@ -378,6 +385,7 @@ NO_MPI = {
 
 
 @pytest.mark.parametrize("how", list(NO_MPI))
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_mpi_requested_but_not_installed(tmp_path, how):
     """Without MPI the command says how to install it, in one line, exit status 2 (runs everywhere)."""
     code = (f"import sys; {NO_MPI[how]}; from roughcontact.solver.mpi.__main__ import main; "
@@ -422,6 +430,7 @@ if MPI.COMM_WORLD.rank == 0:
 
 
 @needs_mpi
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_a_stalled_step_goes_on_in_float64_over_the_ranks(tmp_path):
     """The single solve's first fallback over 2 ranks: the iteration with float64 products (``pk-fourier``)
     from where the float32 one stalled, converging to the single solve's answer."""

@@ -170,6 +170,7 @@ def _kkt_violation(p, h, hardness):
 
 
 @pytest.mark.parametrize("hardness", [1e-3, 1e-2, 1e-1])
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_tamaas_kato_saturated_sweep(hardness):
     # A/A0 and the plastic area equal to KatoSaturated's to 1e-3 relative from 5 % of
     # the hardness to 99.9 % (measured: node for node equal in all 15 cases).
@@ -202,6 +203,7 @@ def test_tamaas_kato_saturated_sweep(hardness):
         pytest.param(1e-3, (0.05, 0.3), marks=pytest.mark.slow),
     ],
 )
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_contact_mechanics_hardness_sweep(hardness, fractions):
     # Where ContactMechanics' hardness option converges to its own contact conditions
     # (its CG mode: more than 1 % of the contact area elastic) A/A0 and the plastic area

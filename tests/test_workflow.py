@@ -35,6 +35,7 @@ def _jobs(stdout):
 
 @pytest.mark.parametrize("scene", ["demo", pytest.param("paper", marks=pytest.mark.slow), "representative",
                                    "kappa-gap", "adhesion", "array", "lines"])
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_dry_run_every_shipped_scene(repo, scene):
     # --forceall: the full job list, whatever a local results/ already holds
     res = run_snakemake(repo, "-n", "--forceall", "--config", f"scene={scene}", timeout=600)
@@ -69,6 +70,7 @@ def test_dry_run_every_shipped_scene(repo, scene):
     assert planned == (scene in ("demo", "lines"))
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_representativity_only_scene_plans_no_contact(tmp_path):
     wd = copy_workflow(tmp_path / "wf", {**TINY, "scene": "reponly"})
     res = run_snakemake(wd, "-n")
@@ -87,6 +89,7 @@ def test_representativity_only_scene_plans_no_contact(tmp_path):
         (lambda c: c.update(scene="nosuch"), "unknown scene 'nosuch'"),
     ],
 )
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_invalid_config_stops_before_any_job(tmp_path, edit, words):
     cfg = copy.deepcopy(TINY)
     edit(cfg)
@@ -151,6 +154,7 @@ MISTYPED = [
 
 
 @pytest.mark.parametrize("target, words", MISTYPED)
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_a_target_outside_its_scene_is_named_with_the_allowed_values(shipped_copy, target, words):
     res = run_snakemake(shipped_copy, "-n", target)
     log = res.stdout + res.stderr
@@ -173,6 +177,7 @@ def test_mistyped_target_fails_at_once(tmp_path):
     assert "scene 'reponly' does not ask for figure 'kappa'; its figures: representativity" in res.stdout + res.stderr
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_nested_config_values_on_the_command_line_are_read_as_the_schema_types(shipped_copy):
     """`--config 'scenes={demo: {contact: {seeds: 4}}}'`: Snakemake passes '4', the scene gets 4 seeds."""
     res = run_snakemake(shipped_copy, "-n", "--config", "scenes={demo: {contact: {seeds: 4, solver: {tol: 1e-9}}}}")
@@ -185,6 +190,7 @@ def test_nested_config_values_on_the_command_line_are_read_as_the_schema_types(s
     assert "write a whole number, e.g. 4" in log and "not of type" not in log
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_malformed_yaml_is_named_with_file_line_and_column(tmp_path):
     wd = copy_workflow(tmp_path / "wf")
     config = wd / "config" / "config.yaml"
@@ -207,6 +213,7 @@ def test_malformed_yaml_is_named_with_file_line_and_column(tmp_path):
     assert res.returncode == 2 and "my_scene.yaml: not valid YAML at line 3, column 1" in res.stderr, res.stderr
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_own_scene_in_its_own_file(tmp_path):
     """`--configfile my_scene.yaml --config scene=mine`: a user's scene beside the shipped ones."""
     wd = copy_workflow(tmp_path / "wf")

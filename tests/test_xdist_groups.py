@@ -37,6 +37,7 @@ SAMPLE = {
 LINE = re.compile(r"\[(gw\d+)\].* PASSED (\S+?)::([\w\[\]-]+?)(@\w+)?\s*$")
 
 
+@pytest.mark.slow  # over 3 s (make test-fast, 2026-12-03); run by make test
 def test_the_demo_a_scene_run_and_a_modules_group_each_run_on_one_worker(tmp_path):
     for name, text in SAMPLE.items():
         (tmp_path / name).write_text(text)
