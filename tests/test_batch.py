@@ -341,9 +341,8 @@ def test_each_form_of_the_loop_head_is_the_rule(window, tol):
     kernels compile it, and the array kernels (numpy here, CuPy on a GPU) write it over per-case arrays. Each
     form gives the rule's decisions and state (``next_sync``, ``best``, ``at``, the four flags) for every
     combination of residual, freshness, flags, recomputation level, iteration, stall window and best residual.
-    A window of 0 stops every case at once (the
-    batch's fallback test uses it); a tol of 1e-20 lowers the float64 recomputation level up to four times in one
-    call. A stale numba cache of the compiled form would fail here."""
+    A window of 0 stops every case at once (the batch's fallback test uses it); a tol of 1e-20 lowers the float64
+    recomputation level up to four times in one call. A stale numba cache of the compiled form would fail here."""
     from roughcontact.solver.batch.cpu import FusedCpuKernels
     from roughcontact.solver.batch.kernels import ArrayKernels
     from roughcontact.solver.compressed import CompressedKernels
@@ -352,8 +351,13 @@ def test_each_form_of_the_loop_head_is_the_rule(window, tol):
     st = _loop_head_states()
     B = st["r"].shape[0]
     flags = ("done", "waiting", "converged", "go")
-    want = {k: st[k].copy() for k in ("next_sync", "best", "at", "done", "waiting")}
-    want["converged"], want["go"] = np.zeros((B, 1, 1), bool), np.zeros((B, 1, 1), bool)
+
+    def state():
+        out = {k: st[k].copy() for k in ("next_sync", "best", "at", "done", "waiting")}
+        out["converged"], out["go"] = np.zeros((B, 1, 1), bool), np.zeros((B, 1, 1), bool)
+        return out
+
+    want = state()
     for b in range(B):
         if st["done"][b].item() or st["waiting"][b].item():
             continue
@@ -364,12 +368,6 @@ def test_each_form_of_the_loop_head_is_the_rule(window, tol):
         want["done"][b] = d in (CONVERGED, STOP)
     seen = {int(v) for v in np.unique(want["go"] * 1 + want["converged"] * 2 + want["waiting"] * 4)}
     assert seen == ({0, 1, 2, 4} if window else {0, 2, 4})  # (window 0: no case goes on)
-
-    def state():
-        out = {k: st[k].copy() for k in ("next_sync", "best", "at", "done", "waiting")}
-        out["converged"], out["go"] = np.zeros((B, 1, 1), bool), np.zeros((B, 1, 1), bool)
-        return out
-
     got = {}
     for label, k in (("array", ArrayKernels(np)), ("compiled", FusedCpuKernels())):
         s = got[label] = state()
