@@ -139,6 +139,18 @@ def test_the_step_rules_every_solver_shares():
                                    np.array([1.0, 2.0, 1.0, 1.0, 1.0, 3.0]))
     assert c.tolist() == [1.0, 0.0, 0.0, 2.0, 0.0, 0.0]
     assert float(steps.extrapolation_factor(3.0, 2.0, 1.0)) == 1.0
+    # the start of each case: none solved yet; one solved (no older load); extrapolated or linear where c > 0
+    kinds, c = steps.start_kind(np.array([1.0, 2.0]), None, None, True)
+    assert kinds.tolist() == [steps.UNIFORM] * 2 and c.tolist() == [0.0, 0.0]
+    kinds, c = steps.start_kind(2.5, 2.0, None, True)
+    assert int(kinds) == steps.SCALED and float(c) == 0.0
+    kinds, c = steps.start_kind(np.array([3.0, 3.0, 2.5, 1.5, 4.0001]), np.full(5, 2.0), np.full(5, 1.0),
+                                np.array([True, False, False, True, True]))
+    assert kinds.tolist() == [steps.LINEAR, steps.EXTRAPOLATED, steps.EXTRAPOLATED, steps.SCALED, steps.SCALED]
+    assert c.tolist() == [1.0, 1.0, 0.5, 0.0, 0.0]
+    assert steps.start_fresh(kinds).tolist() == [-1, 0, 0, 1, 1]
+    assert steps.start_fresh(kinds, capped=True).tolist() == [-1, 0, 0, 0, 0]
+    assert steps.start_fresh(np.array([steps.UNIFORM])).tolist() == [0]
     ran = []
 
     def run(method, left):

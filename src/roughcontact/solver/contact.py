@@ -18,9 +18,12 @@ from .compressed import pk_solve
 from .projection import enforce_mean
 from .results import StepRecord, contact_perimeter
 from .settings import SolverSettings
-from .steps import extrapolation_factor, fall_back, run_path
+from .steps import LINEAR, SCALED, UNIFORM, fall_back, run_path, start_fresh, start_kind
 from .units import Units, check_loads, frexp_ratio
 from .workspace import SOLVER_PATHS, STICKY, Workspace
+
+#: ``fresh`` as :func:`~.compressed.pk_solve` takes it, by :func:`~.steps.start_fresh`'s code (1, 0, -1)
+_FRESH = {1: True, 0: False, -1: None}
 
 
 class ContactSolver:
@@ -78,18 +81,13 @@ class ContactSolver:
     def backend(self) -> str:
         return self.ws.backend if self.ws is not None else get_backend(self.array_backend).fft_name()
 
-    def _extrapolation(self, p_int: float) -> float:
-        """Factor ``c`` of the linear extrapolation in the load (:func:`~.steps.extrapolation_factor`), 0 when
-        not used (the reference ``"pk"``, or fewer than two steps solved)."""
-        if self.method == "pk" or self._older is None:
-            return 0.0
-        return float(extrapolation_factor(p_int, self.prev, self._older[0]))
-
     def start(self, p0: float, initial=None) -> bool | None:
         """Put the starting pressure for ``p0`` in the workspace; returns ``fresh``.
 
-        ``fresh``: True when ``ws.w`` equals ``K P - h``, False when it must be recomputed, None
-        when it is ``K P - h`` up to single-precision round-off of a small part
+        A given ``initial`` pressure (clipped, scaled to the cap or its maximum, then to the load), or every node
+        at the cap where ``p0`` reaches it; else the start of :func:`~.steps.start_kind` (the reference ``"pk"``
+        does not extrapolate). ``fresh``: True when ``ws.w`` equals ``K P - h``, False when it must be
+        recomputed, None when it is ``K P - h`` up to single-precision round-off of a small part
         (:meth:`_linear_start`).
         """
         ws, cap = self.ws, self.cap
@@ -110,49 +108,47 @@ class ContactSolver:
             # p0 within an ulp of the hardness: every node at the cap
             ws.P.fill(cap)
             return False
-        if self.prev is None:
+        older = None if self.method == "pk" or self._older is None else self._older
+        # the linear update of w: the last two steps ended on the float32 iteration (a capped step keeps no gap)
+        linear = self.start_method == "pk-fourier-f32" and self._last_w is not None and older is not None \
+            and older[2] is not None
+        kind, c = start_kind(p_int, self.prev, None if older is None else older[0], linear)
+        kind, c = int(kind), float(c)
+        if kind == UNIFORM:
             ws.P.fill(p_int)
-            return False
-        s = p_int / self.prev
-        c = self._extrapolation(p_int)
-        if c:
-            # Extrapolated warm start, linear in the load through the last two
-            # solutions (loads moving on in the same direction, by at most twice
-            # the last increment), clipped at 0 and at the cap; otherwise the
-            # scaled last solution below.
-            ws.P -= self._older[1]
+        elif kind == SCALED:
+            s = p_int / self.prev
+            if cap is None:
+                # p and u = K p scale together, so w = K p - h follows without a transform
+                ws.w *= s
+                ws.w += (s - 1.0) * ws.h
+            ws.P *= s
+            if cap is not None:
+                enforce_mean(ws.P, target, cap)
+        else:
+            # linear in the load through the last two solutions, clipped at 0 (and at the cap)
+            ws.P -= older[1]
             ws.P *= c
             ws.P += self._last
-            if self._linear_start(c, target):  # not after a capped step: it keeps no gap
-                return None
-            np.maximum(ws.P, 0.0, out=ws.P)
-            enforce_mean(ws.P, target, cap)  # with a cap, clips there too
-            return False
-        if cap is None:
-            # Warm start: p and u = K p scale together, so w = K p - h follows
-            # without a transform.
-            ws.w *= s
-            ws.w += (s - 1.0) * ws.h
-            ws.P *= s
-            return True
-        ws.P *= s
-        enforce_mean(ws.P, target, cap)
-        return False
+            if kind == LINEAR:
+                self._linear_start(c, target)
+            else:
+                np.maximum(ws.P, 0.0, out=ws.P)
+                enforce_mean(ws.P, target, cap)
+        return _FRESH[int(start_fresh(kind, cap is not None))]
 
-    def _linear_start(self, c: float, target: float) -> bool:
-        """``ws.w`` for the extrapolated ``P`` (in ``ws.P``, before its clip) without a float64 product.
+    def _linear_start(self, c: float, target: float) -> None:
+        """``ws.w`` for the extrapolated ``P`` (in ``ws.P``, before its clip) without a float64 product
+        (:data:`~.steps.LINEAR`).
 
         ``K`` is linear, so ``P = (1 + c) p_last - c p_older`` has ``w = (1 + c) w_last - c w_older``
         exactly (float64 sums of the last two steps' fresh gaps). The clip of ``P`` at zero (nodes
         leaving contact) adds ``K x`` for the clipped part ``x``: one float32 product, whose round-off
         (~1e-7 of ``K x``) the float32 iteration's float64 recomputations absorb as they do its own.
-        The rescale to the mean is exact (``K (s P) = s K P``). Used on the float32 iteration only
-        (whose steps end on a fresh ``w``); it replaces a float64 product per step (a float64 pair
-        costs ~2.5 float32 pairs at N = 1024). False (nothing done) where it does not apply.
+        The rescale to the mean is exact (``K (s P) = s K P``). It replaces a float64 product per step (a
+        float64 pair costs ~2.5 float32 pairs at N = 1024).
         """
         ws = self.ws
-        if self.start_method != "pk-fourier-f32" or self._last_w is None or self._older[2] is None:
-            return False
         np.subtract(self._last_w, self._older[2], out=ws.w)
         ws.w *= c
         ws.w += self._last_w
@@ -166,7 +162,6 @@ class ContactSolver:
         ws.P *= s
         ws.w *= s
         ws.w += (s - 1.0) * ws.h  # K (s P) - h = s (w + h) - h
-        return True
 
     def _flat(self, p0: float, keep_gap: bool):
         # exact solution: u = K p0 = 0, so g = 0 with d = h

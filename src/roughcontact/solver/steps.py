@@ -1,11 +1,12 @@
-"""The rules of a load step that every solver shares: its warm start's extrapolation and its fallbacks.
+"""The rules of a load step that every solver shares: its warm start and its fallbacks.
 
 The single solve (:class:`~.contact.ContactSolver`), a batch (:class:`~.batch.solver.BatchSolver`) and one case
 over MPI ranks (:class:`~.mpi.solver.MpiSolver`) start a step and hand a stalled one on by these functions, so
 that each rule is written once:
 
-- :func:`extrapolation_factor`: whether a step starts from the linear extrapolation, in the load, through the
-  last two solutions, and with which factor (per case for a batch);
+- :func:`start_kind`: which start a step takes (:data:`UNIFORM`, :data:`SCALED`, :data:`EXTRAPOLATED` or
+  :data:`LINEAR`), with :func:`extrapolation_factor`'s factor, and :func:`start_fresh` what that start leaves of
+  ``w = K P - h`` (per case for a batch);
 - :func:`fall_back`: a step that stalled moves on to the next, more robust iteration of :data:`.workspace.FALLBACKS`
   from its pressure, within the same ``max_iter`` in all;
 - :func:`run_path`: one of those iterations on a :class:`~.workspace.Workspace`.
@@ -19,6 +20,9 @@ Examples
 (1.0, 0.0)
 >>> extrapolation_factor(np.array([3.0, 9.0, 1.0]), np.array([2.0, 2.0, 2.0]), np.array([1.0, 1.0, 1.0]))
 array([1., 0., 0.])
+>>> kinds, c = start_kind(np.array([3.0, 3.0, 9.0]), np.full(3, 2.0), np.full(3, 1.0), np.array([True, False, True]))
+>>> [START_NAMES[k] for k in kinds], c.tolist(), start_fresh(kinds).tolist()
+(['linear', 'extrapolated', 'scaled'], [1.0, 1.0, 0.0], [-1, 0, 1])
 >>> calls = []
 >>> def run(method, left):
 ...     calls.append((method, left))
@@ -59,6 +63,62 @@ def extrapolation_factor(p, prev, older):
     with np.errstate(divide="ignore", invalid="ignore"):
         c = (p - prev) / (prev - older)
     return np.where((older != prev) & (c > 0.0) & (c <= 2.0), c, 0.0)
+
+
+#: the starts of a load step (:func:`start_kind`), indices into :data:`START_NAMES`
+UNIFORM, SCALED, EXTRAPOLATED, LINEAR = 0, 1, 2, 3
+START_NAMES = ("uniform", "scaled", "extrapolated", "linear")
+#: ``fresh`` after each start, in the iterations' code: 1 ``w`` is ``K P - h`` (``P`` and ``u = K P`` scale
+#: together), 0 ``w`` must be computed, -1 it is, up to float32 round-off of a small part (not recomputed, not
+#: taken as fresh either)
+_FRESH = np.array([0, 1, 0, -1], dtype=np.int8)
+
+
+def start_kind(p, prev, older, linear):
+    """Which start each case's load step takes, and the extrapolation's factor: ``(kinds, c)``.
+
+    - :data:`UNIFORM` where no step was solved yet (``prev`` None): the load spread evenly;
+    - :data:`EXTRAPOLATED` where :func:`extrapolation_factor` gives ``c > 0`` (``older`` given):
+      ``P = max((1 + c) P_last - c P_older, 0)`` scaled to the load, ``w`` computed afresh;
+    - :data:`LINEAR`, the same start where ``linear`` (the last two steps ended on the float32 iteration with a
+      fresh ``w`` kept): ``w = (1 + c) w_last - c w_older`` exactly (``K`` is linear) plus ``K`` of the clipped
+      part in float32, no float64 product;
+    - :data:`SCALED` otherwise: the last solution scaled to the load, ``w`` with it.
+
+    Parameters
+    ----------
+    p : float or numpy.ndarray
+        This step's internal load (per case for a batch).
+    prev, older : float or numpy.ndarray or None
+        The last step's load and the one's before it; None where there is none (``older`` None also where the
+        solver does not extrapolate: the reference ``"pk"``, ``warm_start="scaled"``).
+    linear : bool or numpy.ndarray
+        Whether the linear update of ``w`` is available (per case).
+
+    Returns
+    -------
+    kinds : numpy.ndarray of int8
+        The start per case (the loads' broadcast shape; 0-d for floats).
+    c : numpy.ndarray of float64
+        The factor, 0 where the start is not extrapolated.
+    """
+    p = np.asarray(p, dtype=np.float64)
+    if prev is None:
+        return np.full(p.shape, UNIFORM, dtype=np.int8), np.zeros(p.shape)
+    c = np.zeros(np.broadcast(p, prev).shape) if older is None else extrapolation_factor(p, prev, older)
+    kinds = np.where(c > 0.0, np.where(linear, LINEAR, EXTRAPOLATED), SCALED).astype(np.int8)
+    return kinds, c
+
+
+def start_fresh(kinds, capped: bool = False) -> np.ndarray:
+    """``fresh`` after each start of ``kinds`` (:func:`start_kind`): 1, 0 or -1 (int8, as the iterations take it).
+
+    ``capped``: a cap acts (the single solve's plasticity); the scaled start is clipped at it, so its ``w`` is
+    computed afresh.
+    """
+    kinds = np.asarray(kinds)
+    fresh = _FRESH[kinds]
+    return np.where(kinds == SCALED, 0, fresh).astype(np.int8) if capped else fresh
 
 
 def run_path(ws: Workspace, path: str, p0: float, tol: float, max_iter: int, fresh: bool | None,

@@ -13,7 +13,7 @@ from ...statistics.patches import contact_patches
 from ..check import MEAN_RTOL
 from ..iteration import BatchIteration
 from ..settings import SolverSettings
-from ..steps import extrapolation_factor, fall_back, run_path
+from ..steps import EXTRAPOLATED, LINEAR, SCALED, fall_back, run_path, start_fresh, start_kind
 from ..units import Units, check_loads, rms_about_mean
 from ..workspace import SOLVER_PATHS, Workspace
 from .cpu import FusedCpuKernels
@@ -115,39 +115,38 @@ class BatchSolver:
     def start(self, p_int: np.ndarray) -> np.ndarray:
         """The starting pressure (and ``w``) of every case for internal loads ``p_int`` (B,); per-case ``fresh``.
 
-        As :meth:`~roughcontact.solver.contact.ContactSolver.start` for the float32 iteration without a cap: the uniform
-        load at the first step; the scaled last solution (``w`` scaled with it: fresh) while there is
-        one; from the third step the extrapolation through the last two, clipped at 0, with ``w``
-        from their gaps and one float32 product of the clipped part (fresh = -1: not recomputed).
+        The start of :func:`~roughcontact.solver.steps.start_kind` per case, as the single solve's for the float32
+        iteration without a cap: the uniform load at the first step; the scaled last solution (``w`` scaled with
+        it: fresh) while there is one; from the third step the extrapolation through the last two, clipped at 0,
+        with ``w`` from their gaps and one float32 product of the clipped part (fresh = -1: not recomputed) where
+        both ended on the batch's iteration, else computed afresh.
         """
         xp, B = self.xp, self.batch
         target = p_int * self.size
-        fresh = np.zeros(B, dtype=np.int8)
+        older = self._older
+        linear = self._last[2] & older[3] if older is not None else False
+        kinds, c = start_kind(p_int, self.prev, None if older is None else older[0], linear)
         if self.prev is None:
             self.P[...] = xp.asarray(p_int.reshape(B, 1, 1))
-            return fresh
+            return start_fresh(kinds)
         s = p_int / self.prev
-        c = np.zeros(B) if self._older is None else extrapolation_factor(p_int, self.prev, self._older[0])
-        lin = (c > 0) & self._last[2] & self._older[3] if self._older is not None else np.zeros(B, bool)
-        extra = (c > 0) & ~lin
         k = self.kernels
-        # the scaled start (c = 0): p and u = K p scale together, so w follows without a transform
-        k.scale_start(self.P, self.w, self.h, xp.asarray(s.reshape(B, 1, 1)), xp.asarray((c == 0).reshape(B, 1, 1)))
-        fresh[c == 0] = 1
-        if (c > 0).any():
-            ext, ld = xp.asarray((c > 0).reshape(B, 1, 1)), xp.asarray(lin.reshape(B, 1, 1))
+        # the scaled start: p and u = K p scale together, so w follows without a transform
+        k.scale_start(self.P, self.w, self.h, xp.asarray(s.reshape(B, 1, 1)),
+                      xp.asarray((kinds == SCALED).reshape(B, 1, 1)))
+        lin = kinds == LINEAR
+        if (kinds >= EXTRAPOLATED).any():
+            ext, ld = xp.asarray((kinds >= EXTRAPOLATED).reshape(B, 1, 1)), xp.asarray(lin.reshape(B, 1, 1))
             # p = max((1 + c) p_last - c p_older, 0) (unscaled yet); where lin, w = (1 + c) w_last - c w_older
             # exactly, plus K of the clipped part (float32, from the transform input x32)
-            tot, x32 = k.extrapolate(self.P, self.w, self._last[0], self._older[1], self._last[1], self._older[2],
+            tot, x32 = k.extrapolate(self.P, self.w, self._last[0], older[1], self._last[1], older[2],
                                      xp.asarray(c.reshape(B, 1, 1)), ext, ld, 1.0 / self.h_rms,
                                      out=self.op.input32)
             R = self.op.inverse32(self.op.transform32(x32), self.op.kmult32) if lin.any() else None
             sc = xp.asarray(target.reshape(B, 1, 1)) / xp.where(tot > 0, tot, 1.0)
             k.finish_start(self.P, self.w, self.h, R, self.h_rms, sc, tot > 0, ext, ld,
                            xp.asarray(p_int.reshape(B, 1, 1)))
-            fresh[lin] = -1
-            fresh[extra] = 0
-        return fresh
+        return start_fresh(kinds)
 
     def fallback(self, b: int, p_int: float, its: int) -> tuple[int, str, bool]:
         """The single solve's fallbacks (:func:`~roughcontact.solver.steps.fall_back`) on case ``b`` alone, from its
