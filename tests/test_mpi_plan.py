@@ -71,12 +71,17 @@ def test_every_input_moves_the_plan(name):
 
 
 def test_the_rule_request_is_set_beside_the_plan():
+    """The rule's memory per CPU (all ranks' over the ranks, rounded up) against the plan's per rank, the ranks a
+    256 GiB node holds at it (at most its 128 cores) and the nodes SLURM then needs."""
     rows = [plan.plan(n, P) for n in P["sizes"]]
     table = plan.rule_request_table(rows, lambda n, steps, ranks: (100_000 * ranks // 128, 90), 256)
     lines = table.splitlines()[2:]
-    # 32768: the fullest node 179.2 GiB = 183501 MiB; 100000 MiB asked fits a 256 GiB node
-    assert lines[0].startswith("| 32768 | 128 (1) | 100000 | 183501 | 0.5 | yes | 90 | 44-58 |"), lines[0]
-    assert "| no (391 GiB) |" in lines[1], lines[1]  # 400000 MiB at 512 ranks
+    # 32768: 100000 MiB over 128 ranks = 782 MiB a CPU (781.25 up), the plan 1.3375 GiB = 1370 MiB a rank; a node
+    # holds its 128 cores' ranks at that: 1 node
+    assert lines[0].startswith("| 32768 | 128 (1) | 100000 | 782 | 1370 | 0.6 | 128 | 1 | 90 | 44-58 |"), lines[0]
+    table = plan.rule_request_table(rows, lambda n, steps, ranks: (400_000 * ranks // 128, 90), 256)
+    # 3125 MiB a CPU: 262144 // 3125 = 83 ranks a node, so 128 ranks need 2 nodes and 512 need 7
+    assert "| 3125 | 1370 | 2.3 | 83 | 2 |" in table.splitlines()[2] and "| 83 | 7 |" in table.splitlines()[3], table
 
 
 def test_the_shipped_inputs_name_their_sources_and_the_scene_follows_the_plan():

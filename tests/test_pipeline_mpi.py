@@ -378,6 +378,8 @@ def test_the_slurm_profile_makes_it_an_mpi_job(tmp_path):
     assert res.returncode == 0, res.stderr[-3000:]
     job = res.stdout.split("rule contact:")[1].split("\n\n")[0]
     assert "mpi=1" in job and "tasks=2" in job and "launcher=srun" in job and "threads:" not in job, job
+    mem = contact_mpi_mem_mb(64, 2)
+    assert f"mem_mb={mem}," in job and f"mem_mb_per_cpu={-(-mem // 2)}," in job, job  # 1 CPU a rank
     # each MPI job an allocation of its own: in no group job (a grouped job's rule line is indented under it)
     assert res.stdout.count("\nrule contact:") == 2 and "Group job solve" not in res.stdout, res.stdout[-3000:]
     # one-process cases are bundled (group-components: 10 a SLURM job)
@@ -386,10 +388,40 @@ def test_the_slurm_profile_makes_it_an_mpi_job(tmp_path):
     assert res.returncode == 0, res.stderr[-3000:]
     bundle = res.stdout.split("Group job solve")[1].split("Job stats")[0]
     assert bundle.count("    rule contact:") == 2 and "launcher=srun" in bundle, bundle
-    assert "mpi=" not in bundle and "tasks=" not in bundle, bundle
+    assert "mpi=" not in bundle and "tasks=" not in bundle and "mem_mb_per_cpu" not in bundle, bundle
     res = run_snakemake(wd, "-n", target)
     job = res.stdout.split("rule contact:")[1].split("\n\n")[0]
     assert "launcher=mpiexec" in job and "tasks=2" in job and "threads: 2" in job, job
+    assert f"mem_mb_per_cpu={-(-mem // 4)}," in job, job  # 2 ranks of 2 threads
+
+
+def test_an_mpi_job_asks_slurm_for_its_memory_per_cpu_not_per_node():
+    """SLURM grants ``--mem`` per node, so an MPI job whose ranks span nodes would ask each node for the memory of
+    all; the contact job over ranks gives ``mem_mb_per_cpu`` (its memory over ``ranks x threads``), which the SLURM
+    executor turns into ``--mem-per-cpu`` in place of ``--mem`` (checked on the executor's own submit command); a
+    job in one process keeps ``--mem``. The 256 ranks of the ``cmc-32768`` scene ask 1580 MB a CPU, not 404 GB."""
+    t, single = _targets(), _targets(SINGLE)
+    mem = t.contact_job_mem_mb(_w())
+    assert t.contact_job_mem_mb_per_cpu(_w(), threads=1) == -(-mem // 2)
+    assert t.contact_job_mem_mb_per_cpu(_w(), threads=3) == -(-mem // 6)
+    assert single.contact_job_mem_mb_per_cpu(_w()) is None
+    assert -(-contact_mpi_mem_mb(32768, 256) // 256) == 1580
+    if importlib.util.find_spec("snakemake_executor_plugin_slurm") is None:
+        pytest.skip("snakemake-executor-plugin-slurm not installed (pip install -e '.[slurm]')")
+    from snakemake_executor_plugin_slurm.submit_string import get_submit_command
+
+    class Resources(dict):
+        __getattr__ = dict.__getitem__
+
+    def submit(resources):
+        job = SimpleNamespace(resources=Resources({k: v for k, v in resources.items() if v is not None}), threads=1)
+        params = dict(run_uuid="u", slurm_logfile="l", comment_str="c", account="", partition="", workdir=None)
+        return get_submit_command(job, params)
+
+    mpi_job = submit(dict(mem_mb=mem, mem_mb_per_cpu=t.contact_job_mem_mb_per_cpu(_w()), tasks=2, mpi=1))
+    assert f"--mem-per-cpu {-(-mem // 2)}" in mpi_job and "--mem " not in mpi_job and "--ntasks=2" in mpi_job, mpi_job
+    one = submit(dict(mem_mb=single.contact_job_mem_mb(_w()), mem_mb_per_cpu=single.contact_job_mem_mb_per_cpu(_w())))
+    assert f"--mem {single.contact_job_mem_mb(_w())}" in one and "--mem-per-cpu" not in one, one
 
 
 @needs_mpi

@@ -221,18 +221,25 @@ def inputs_table(inputs: dict[str, dict]) -> str:
 def rule_request_table(rows: list[Row], request, node_memory_gib: float) -> str:
     """The ``contact`` rule's resources for each planned case over ranks beside the plan:
     ``request(n, steps, ranks)`` -> ``(mem_mb, runtime_min)`` (:func:`rule_request`). The rule's ``mem_mb`` [MiB]
-    is for all ranks together, and SLURM reads it (``--mem``) per node, so it is set against the plan's fullest
-    node and a node's memory."""
+    is for all ranks together; its ``mem_mb_per_cpu`` (:func:`~roughcontact.pipeline.contact_jobs.mpi_mem_mb_per_cpu`,
+    one CPU a rank as under ``profiles/slurm``) is what SLURM is asked (``--mem-per-cpu``), set against the plan's
+    memory per rank, with the ranks a node of ``node_memory_gib`` holds at that request (at most its cores) and
+    the nodes SLURM then needs."""
+    from roughcontact.pipeline.contact_jobs import mpi_mem_mb_per_cpu
+
     node_mib = node_memory_gib * GIB / MIB
-    out = ["| N | ranks (nodes) | rule: mem_mb, all ranks = `--mem` a node | plan: fullest node [MiB] | rule / plan | "
-           f"rule's `--mem` fits a {node_memory_gib:g} GiB node | rule: runtime [min] | plan: wall [min] |",
-           "|---:|---:|---:|---:|---:|---|---:|---:|"]
+    out = ["| N | ranks (nodes) | rule: mem_mb, all ranks | rule: `--mem-per-cpu` [MiB] | plan: a rank [MiB] | "
+           f"rule / plan | ranks a {node_memory_gib:g} GiB node holds at the rule's | nodes SLURM needs | "
+           "rule: runtime [min] | plan: wall [min] |",
+           "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         mem_mb, runtime = request(r.n, r.steps, r.ranks)
-        fullest = r.first_node_gib * GIB / MIB
-        fits = "yes" if mem_mb <= node_mib else f"no ({mem_mb * MIB / GIB:.0f} GiB)"
-        out.append(f"| {r.n} | {r.ranks} ({r.nodes}) | {mem_mb} | {fullest:.0f} | {mem_mb / fullest:.1f} | {fits} | "
-                   f"{runtime} | {_range([w / 60 for w in r.wall_s])} |")
+        per_cpu = mpi_mem_mb_per_cpu(mem_mb, r.ranks)
+        per_rank = r.rank_gib * GIB / MIB
+        held = min(r.cores, int(node_mib // per_cpu))
+        out.append(f"| {r.n} | {r.ranks} ({r.nodes}) | {mem_mb} | {per_cpu} | {per_rank:.0f} | "
+                   f"{per_cpu / per_rank:.1f} | {held} | {-(-r.ranks // held) if held else 'none'} | {runtime} | "
+                   f"{_range([w / 60 for w in r.wall_s])} |")
     return "\n".join(out)
 
 

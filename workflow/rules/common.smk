@@ -92,6 +92,7 @@ contact_threads = TARGETS.contact_threads
 contact_mpi = TARGETS.contact_mpi
 contact_bundle = TARGETS.contact_bundle
 contact_job_mem_mb = TARGETS.contact_job_mem_mb
+contact_job_mem_mb_per_cpu = TARGETS.contact_job_mem_mb_per_cpu
 contact_job_runtime_min = TARGETS.contact_job_runtime_min
 contact_files = TARGETS.contact_files
 contact_members_of = TARGETS.contact_members_of

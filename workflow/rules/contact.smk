@@ -22,10 +22,12 @@ rule contact:
         "../../envs/roughcontact.yaml"
     # locally a case over ranks takes its ranks' cores (profiles/slurm sets 1 CPU per task)
     threads: contact_threads
-    # a case over ranks: an MPI job (mpi: 1) of `tasks` ranks, started by `launcher` (srun under profiles/slurm);
-    # a job in one process has neither mpi nor tasks (the SLURM executor would make it an MPI job)
+    # a case over ranks: an MPI job (mpi: 1) of `tasks` ranks, started by `launcher` (srun under profiles/slurm),
+    # its memory also per CPU (SLURM's --mem is per node: ranks over several nodes would ask each for all of it);
+    # a job in one process has neither mpi nor tasks (the SLURM executor would make it an MPI job) nor memory per CPU
     resources:
         mem_mb=contact_job_mem_mb,
+        mem_mb_per_cpu=contact_job_mem_mb_per_cpu,
         runtime=contact_job_runtime_min,
         tasks=contact_tasks,
         mpi=contact_mpi,

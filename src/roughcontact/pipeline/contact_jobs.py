@@ -91,6 +91,13 @@ def contact_mpi_mem_mb(n: int, ranks: int) -> int:
     return int(300 * ranks + 40 * 8 * n * n / 2**20)
 
 
+def mpi_mem_mb_per_cpu(mem_mb: int, ranks: int, threads: int = 1) -> int:
+    """A job's ``mem_mb`` (all ranks together) over its ``ranks x threads`` CPUs [MB], rounded up: the
+    ``mem_mb_per_cpu`` (SLURM's ``--mem-per-cpu``) of a case over MPI ranks, whose memory then follows its ranks
+    to whatever nodes SLURM puts them on."""
+    return -(-int(mem_mb) // (int(ranks) * max(1, int(threads))))
+
+
 def contact_mpi_runtime_min(n: int, n_steps: int, ranks: int) -> int:
     """Wall-time request of one contact case over ``ranks`` processes [min]: :func:`contact_runtime_min` x 4, shared
     by the ranks (a margin: the distributed iteration's CPU per iteration was 3.6-4.1x the single solve's before the
@@ -284,6 +291,20 @@ class ContactJobs:
         if group.kind == "ranks":
             return contact_mpi_mem_mb(block["surface"]["N"], group.ranks)
         return contact_mem_mb(map_side(block["surface"]))
+
+    def contact_job_mem_mb_per_cpu(self, w, threads: int = 1) -> int | None:
+        """The ``mem_mb_per_cpu`` resource of a contact job over MPI ranks [MB]: :meth:`contact_job_mem_mb` (all
+        ranks together) over its CPUs, ``ranks x threads``, rounded up; none for a job in one process.
+
+        The SLURM executor asks ``--mem-per-cpu`` for it in place of ``--mem``, which SLURM grants per node: a job
+        whose ranks span several nodes would otherwise ask each node for the memory of all (404 GB a node for the
+        ``cmc-32768`` scene's 256 ranks). ``threads`` is the job's (1 under ``profiles/slurm``; Snakemake passes it),
+        so that the CPUs asked for, times this, are the job's memory whatever a profile sets.
+        """
+        group = self.contact_group(w)
+        if group.kind != "ranks":
+            return None
+        return mpi_mem_mb_per_cpu(self.contact_job_mem_mb(w), group.ranks, threads)
 
     def contact_job_runtime_min(self, w) -> int:
         """Wall-time request of one contact job [min], by its kind as :meth:`contact_job_mem_mb`
