@@ -112,6 +112,28 @@ def test_fallback_runs_on_the_stalled_case_alone(monkeypatch):
         assert np.max(np.abs(ds.area_fraction.values[b] - ref.area_fraction.values[:3])) <= 2.0 / N**2
 
 
+def test_the_linear_start_needs_both_last_steps_on_the_batch_iteration(monkeypatch):
+    """A step's start (``steps.start_kind``) per case: uniform, then scaled (``fresh`` 1), then extrapolated with
+    ``w`` from the last two steps' gaps (-1) only where both ended on the batch's own iteration; a case whose
+    second step is marked as ended on a fallback starts its third and fourth steps extrapolated with ``w``
+    computed afresh (0), and its fifth linear again."""
+    from roughcontact.solver.batch.solver import BatchSolver
+
+    seen, real = [], BatchSolver.start
+
+    def start(self, p_int):
+        if len(seen) == 2:
+            self._last[2][0] = False  # case 0's second step, as if a fallback had ended it
+        fresh = real(self, p_int)
+        seen.append(fresh.tolist())
+        return fresh
+
+    monkeypatch.setattr(BatchSolver, "start", start)
+    ds = solve_contact_batch(np.stack([_surface(0), _surface(2)]), LOADS[:5])
+    assert seen == [[0, 0], [1, 1], [0, -1], [0, -1], [-1, -1]]
+    assert bool(ds.converged.values.all())
+
+
 def test_batch_through_the_backend_seam(stand_in_cupy):  # noqa: F811
     """The CuPy code paths (transfers, the transforms of the array module, the kernels' plain form)
     with numpy standing in for CuPy: the same answers as the numpy backend."""

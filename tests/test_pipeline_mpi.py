@@ -399,7 +399,7 @@ def test_an_mpi_job_asks_slurm_for_its_memory_per_cpu_not_per_node():
     """SLURM grants ``--mem`` per node, so an MPI job whose ranks span nodes would ask each node for the memory of
     all; the contact job over ranks gives ``mem_mb_per_cpu`` (its memory over ``ranks x threads``), which the SLURM
     executor turns into ``--mem-per-cpu`` in place of ``--mem`` (checked on the executor's own submit command); a
-    job in one process keeps ``--mem``. The 256 ranks of the ``cmc-32768`` scene ask 1580 MB a CPU, not 404 GB."""
+    job in one process keeps ``--mem``. 256 ranks at N = 32768 ask 1580 MB a CPU, not 404 GB a node."""
     t, single = _targets(), _targets(SINGLE)
     mem = t.contact_job_mem_mb(_w())
     assert t.contact_job_mem_mb_per_cpu(_w(), threads=1) == -(-mem // 2)

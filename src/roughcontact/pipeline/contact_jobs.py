@@ -297,8 +297,8 @@ class ContactJobs:
         ranks together) over its CPUs, ``ranks x threads``, rounded up; none for a job in one process.
 
         The SLURM executor asks ``--mem-per-cpu`` for it in place of ``--mem``, which SLURM grants per node: a job
-        whose ranks span several nodes would otherwise ask each node for the memory of all (404 GB a node for the
-        ``cmc-32768`` scene's 256 ranks). ``threads`` is the job's (1 under ``profiles/slurm``; Snakemake passes it),
+        whose ranks span several nodes would otherwise ask each node for the memory of all (358 GiB a node for the
+        ``cmc-32768`` scene's 128 ranks). ``threads`` is the job's (1 under ``profiles/slurm``; Snakemake passes it),
         so that the CPUs asked for, times this, are the job's memory whatever a profile sets.
         """
         group = self.contact_group(w)
