@@ -23,7 +23,7 @@ from .units import Units, check_loads, frexp_ratio
 from .workspace import SOLVER_PATHS, STICKY, Workspace
 
 #: ``fresh`` as :func:`~.compressed.pk_solve` takes it, by :func:`~.steps.start_fresh`'s code (1, 0, -1)
-_FRESH = {1: True, 0: False, -1: None}
+_PK_FRESH = {1: True, 0: False, -1: None}
 
 
 class ContactSolver:
@@ -118,12 +118,12 @@ class ContactSolver:
             ws.P.fill(p_int)
         elif kind == SCALED:
             s = p_int / self.prev
+            ws.P *= s
             if cap is None:
                 # p and u = K p scale together, so w = K p - h follows without a transform
                 ws.w *= s
                 ws.w += (s - 1.0) * ws.h
-            ws.P *= s
-            if cap is not None:
+            else:
                 enforce_mean(ws.P, target, cap)
         else:
             # linear in the load through the last two solutions, clipped at 0 (and at the cap)
@@ -135,7 +135,7 @@ class ContactSolver:
             else:
                 np.maximum(ws.P, 0.0, out=ws.P)
                 enforce_mean(ws.P, target, cap)
-        return _FRESH[int(start_fresh(kind, cap is not None))]
+        return _PK_FRESH[int(start_fresh(kind, cap is not None))]
 
     def _linear_start(self, c: float, target: float) -> None:
         """``ws.w`` for the extrapolated ``P`` (in ``ws.P``, before its clip) without a float64 product

@@ -21,8 +21,8 @@ Examples
 >>> extrapolation_factor(np.array([3.0, 9.0, 1.0]), np.array([2.0, 2.0, 2.0]), np.array([1.0, 1.0, 1.0]))
 array([1., 0., 0.])
 >>> kinds, c = start_kind(np.array([3.0, 3.0, 9.0]), np.full(3, 2.0), np.full(3, 1.0), np.array([True, False, True]))
->>> [START_NAMES[k] for k in kinds], c.tolist(), start_fresh(kinds).tolist()
-(['linear', 'extrapolated', 'scaled'], [1.0, 1.0, 0.0], [-1, 0, 1])
+>>> kinds.tolist() == [LINEAR, EXTRAPOLATED, SCALED], c.tolist(), start_fresh(kinds).tolist()
+(True, [1.0, 1.0, 0.0], [-1, 0, 1])
 >>> calls = []
 >>> def run(method, left):
 ...     calls.append((method, left))
@@ -65,9 +65,8 @@ def extrapolation_factor(p, prev, older):
     return np.where((older != prev) & (c > 0.0) & (c <= 2.0), c, 0.0)
 
 
-#: the starts of a load step (:func:`start_kind`), indices into :data:`START_NAMES`
+#: the starts of a load step (:func:`start_kind`)
 UNIFORM, SCALED, EXTRAPOLATED, LINEAR = 0, 1, 2, 3
-START_NAMES = ("uniform", "scaled", "extrapolated", "linear")
 #: ``fresh`` after each start, in the iterations' code: 1 ``w`` is ``K P - h`` (``P`` and ``u = K P`` scale
 #: together), 0 ``w`` must be computed, -1 it is, up to float32 round-off of a small part (not recomputed, not
 #: taken as fresh either)

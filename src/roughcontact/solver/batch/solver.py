@@ -134,9 +134,9 @@ class BatchSolver:
         # the scaled start: p and u = K p scale together, so w follows without a transform
         k.scale_start(self.P, self.w, self.h, xp.asarray(s.reshape(B, 1, 1)),
                       xp.asarray((kinds == SCALED).reshape(B, 1, 1)))
-        lin = kinds == LINEAR
-        if (kinds >= EXTRAPOLATED).any():
-            ext, ld = xp.asarray((kinds >= EXTRAPOLATED).reshape(B, 1, 1)), xp.asarray(lin.reshape(B, 1, 1))
+        extrapolated, lin = kinds >= EXTRAPOLATED, kinds == LINEAR
+        if extrapolated.any():
+            ext, ld = xp.asarray(extrapolated.reshape(B, 1, 1)), xp.asarray(lin.reshape(B, 1, 1))
             # p = max((1 + c) p_last - c p_older, 0) (unscaled yet); where lin, w = (1 + c) w_last - c w_older
             # exactly, plus K of the clipped part (float32, from the transform input x32)
             tot, x32 = k.extrapolate(self.P, self.w, self._last[0], older[1], self._last[1], older[2],
