@@ -64,7 +64,8 @@ WISDOM_FILE = Path(__file__).with_name("fftw_wisdom.json")
 #: Planner flags :func:`write_wisdom` measures with. FFTW_PATIENT's plans took 0.80-0.99x the
 #: time of FFTW_MEASURE's for a pair at N = 256-4096, both precisions, in and out of place (AMD
 #: EPYC, 2026-11-27, interleaved; 0.81 for the solver's float32 pair at 1024); FFTW_EXHAUSTIVE's
-#: were no faster at 1024 and took 11x longer to plan.
+#: were no faster at 1024 and took 11x longer to plan. On an Intel Xeon (the default set, N <= 2048,
+#: 2026-12-03): 0.84x for that pair, the paper case 0.82x the CPU at 1024 (docs/solver.md).
 WISDOM_FLAGS = ("FFTW_PATIENT",)
 #: Sides above which :func:`write_wisdom` measures with FFTW_MEASURE whatever its flags: FFTW_PATIENT
 #: took 21 min of one core for the 4096 pairs (256 s for 2048), and would take hours for 8192.
