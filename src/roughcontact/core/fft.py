@@ -65,10 +65,13 @@ WISDOM_FILE = Path(__file__).with_name("fftw_wisdom.json")
 #: time of FFTW_MEASURE's for a pair at N = 256-4096, both precisions, in and out of place (AMD
 #: EPYC, 2026-11-27, interleaved; 0.81 for the solver's float32 pair at 1024); FFTW_EXHAUSTIVE's
 #: were no faster at 1024 and took 11x longer to plan. On an Intel Xeon (the default set, N <= 2048,
-#: 2026-12-03): 0.84x for that pair, the paper case 0.82x the CPU at 1024 (docs/solver.md).
+#: 2026-12-03) against the former default set (the Xeon's MEASURE plans, its in-place pairs the
+#: EPYC's): 0.84x for that pair, 0.93x out of place, the paper case 0.82x the CPU at 1024
+#: (docs/solver.md).
 WISDOM_FLAGS = ("FFTW_PATIENT",)
 #: Sides above which :func:`write_wisdom` measures with FFTW_MEASURE whatever its flags: FFTW_PATIENT
-#: took 21 min of one core for the 4096 pairs (256 s for 2048), and would take hours for 8192.
+#: took 21 min of one core for the 4096 pairs (256 s for 2048; 772 s on the Intel Xeon), and would
+#: take hours for 8192.
 WISDOM_PATIENT_MAX = 4096
 #: Square grid sizes whose plans :func:`write_wisdom` measures.
 WISDOM_SIZES = (32, 64, 128, 256, 512, 1024, 2048, 4096, 8192)
