@@ -1,4 +1,4 @@
-"""The batched elastic iteration of one load step (:mod:`roughcontact.solver.batch`): :class:`BatchIteration`."""
+"""The elastic iteration of one load step, one class for one case, a batch and MPI ranks: :class:`BatchIteration`."""
 
 from __future__ import annotations
 
