@@ -24,6 +24,8 @@ What the handlers check:
   the shipped profile's keys and values (plus the site's partition and account), and the command
   in its first-line comment dry-runs with it; a scene file must be used by a documented
   `--configfile` command.
+Every `roughcontact.x.y` and `file.py` that the README files and docs/ name exists, and README's layout
+rows name their packages' modules (the last two tests).
 Dry runs of the `paper` scene (its full DAG, thousands of jobs), the finished-scene commands and the
 python block (a 512^2 solve) are marked slow: `make test` runs them, `make test-fast` does not.
 """
@@ -604,3 +606,65 @@ def test_an_undocumented_kind_of_command_has_no_handler():
     assert handler_for(Item("command", "python -m something")) is None
     assert handler_for(Item("command", "make")) is None
     assert handler_for(Item("bash-ish", "x")) is None
+
+
+# -- the code the texts name exists ---------------------------------------------------------------------------------
+
+#: The texts a reader follows into the code (benchmarks/README.md is a dated log: its old paths are history).
+NAMING_TEXTS = ("README.md", "config/README.md", "results/README.md", "tests/README.md")
+
+
+def _naming_texts():
+    return [REPO / name for name in NAMING_TEXTS] + sorted((REPO / "docs").rglob("*.md"))
+
+
+def test_the_modules_and_names_the_texts_give_exist():
+    """Every ```roughcontact.a.b``` (a module, or a module's attribute) and every ```path.py``` / ```rule.smk``` in the
+    README files and docs/ names something that exists: the longest importable prefix imported, the rest looked up
+    on it; a path with a folder ends a tracked file's path, a bare file name is a tracked file's name. (README's
+    layout and docs/architecture.md named ``solver/elastic.py`` for a day after it had gone, results/README.md two
+    functions by their modules' former names.)"""
+    tracked = subprocess.run(["git", "ls-files"], cwd=REPO, capture_output=True, text=True, check=True).stdout.split()
+    names = {Path(p).name for p in tracked}
+    missing = []
+    for path in _naming_texts():
+        text = path.read_text()
+        for dotted in sorted(set(re.findall(r"`(roughcontact(?:\.\w+)+)(?:\(\))?`", text))):
+            parts = dotted.split(".")
+            for i in range(len(parts), 0, -1):
+                try:
+                    obj = importlib.import_module(".".join(parts[:i]))
+                    break
+                except ImportError:
+                    continue
+            for attr in parts[i:]:
+                obj = getattr(obj, attr, missing)
+            if obj is missing:
+                missing.append(f"{path.relative_to(REPO)}: {dotted}")
+        for file in sorted(set(re.findall(r"`([\w./-]+\.(?:py|smk))`", text))):
+            if "/" in file and not any(p == file or p.endswith("/" + file) for p in tracked):
+                missing.append(f"{path.relative_to(REPO)}: {file}")
+            elif "/" not in file and file not in names:
+                missing.append(f"{path.relative_to(REPO)}: {file}")
+    assert not missing, "the texts name code that does not exist:\n" + "\n".join(missing)
+
+
+def test_the_readme_layout_names_modules_that_exist():
+    """Each bare name in README's layout row of a package ``src/roughcontact/<pkg>/`` is one of its modules or
+    folders, a name one of its modules defines at top level, or a rule of the workflow."""
+    rules = set(re.findall(r"^rule (\w+)", "".join(p.read_text() for p in (REPO / "workflow" / "rules").glob("*.smk")),
+                           re.M))
+    unknown, rows = [], 0
+    for line in (REPO / "README.md").read_text().splitlines():
+        row = re.match(r"\| `src/roughcontact/(\w+)/` \| (.*) \|$", line)
+        if not row:
+            continue
+        rows += 1
+        pkg = REPO / "src" / "roughcontact" / row.group(1)
+        known = {p.stem for p in pkg.rglob("*.py")} | {p.name for p in pkg.rglob("*") if p.is_dir()} | rules
+        for src in pkg.rglob("*.py"):
+            known |= {a or b for a, b in re.findall(r"^(?:def|class) (\w+)|^(\w+)\s*[:=]", src.read_text(), re.M)}
+        unknown += [f"{row.group(1)}: {name}" for name in re.findall(r"`([a-z_][a-z0-9_]*)/?`", row.group(2))
+                    if name not in known]
+    assert rows >= 8, f"README's layout table has {rows} package rows: the check no longer reads it"
+    assert not unknown, "README's layout names what its package does not hold:\n" + "\n".join(unknown)
