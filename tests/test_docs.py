@@ -618,6 +618,24 @@ def _naming_texts():
     return [REPO / name for name in NAMING_TEXTS] + sorted((REPO / "docs").rglob("*.md"))
 
 
+def _resolves(dotted: str) -> bool:
+    """Whether ``roughcontact.a.b...`` is a module, or an attribute chain on its longest importable prefix."""
+    parts = dotted.split(".")
+    for i in range(len(parts), 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:i]))
+            break
+        except ImportError:
+            continue
+    else:
+        return False
+    for attr in parts[i:]:
+        if not hasattr(obj, attr):
+            return False
+        obj = getattr(obj, attr)
+    return True
+
+
 def test_the_modules_and_names_the_texts_give_exist():
     """Every ```roughcontact.a.b``` (a module, or a module's attribute) and every ```path.py``` / ```rule.smk``` in the
     README files and docs/ names something that exists: the longest importable prefix imported, the rest looked up
@@ -629,23 +647,12 @@ def test_the_modules_and_names_the_texts_give_exist():
     missing = []
     for path in _naming_texts():
         text = path.read_text()
-        for dotted in sorted(set(re.findall(r"`(roughcontact(?:\.\w+)+)(?:\(\))?`", text))):
-            parts = dotted.split(".")
-            for i in range(len(parts), 0, -1):
-                try:
-                    obj = importlib.import_module(".".join(parts[:i]))
-                    break
-                except ImportError:
-                    continue
-            for attr in parts[i:]:
-                obj = getattr(obj, attr, missing)
-            if obj is missing:
-                missing.append(f"{path.relative_to(REPO)}: {dotted}")
-        for file in sorted(set(re.findall(r"`([\w./-]+\.(?:py|smk))`", text))):
-            if "/" in file and not any(p == file or p.endswith("/" + file) for p in tracked):
-                missing.append(f"{path.relative_to(REPO)}: {file}")
-            elif "/" not in file and file not in names:
-                missing.append(f"{path.relative_to(REPO)}: {file}")
+        dotted = sorted(set(re.findall(r"`(roughcontact(?:\.\w+)+)(?:\(\))?`", text)))
+        files = sorted(set(re.findall(r"`([\w./-]+\.(?:py|smk))`", text)))
+        missing += [f"{path.relative_to(REPO)}: {name}" for name in dotted if not _resolves(name)]
+        missing += [f"{path.relative_to(REPO)}: {file}" for file in files
+                    if not (any(p == file or p.endswith("/" + file) for p in tracked) if "/" in file
+                            else file in names)]
     assert not missing, "the texts name code that does not exist:\n" + "\n".join(missing)
 
 
@@ -661,8 +668,9 @@ def test_the_readme_layout_names_modules_that_exist():
             continue
         rows += 1
         pkg = REPO / "src" / "roughcontact" / row.group(1)
-        known = {p.stem for p in pkg.rglob("*.py")} | {p.name for p in pkg.rglob("*") if p.is_dir()} | rules
-        for src in pkg.rglob("*.py"):
+        sources = list(pkg.rglob("*.py"))
+        known = {p.stem for p in sources} | {p.name for p in pkg.rglob("*") if p.is_dir()} | rules
+        for src in sources:
             known |= {a or b for a, b in re.findall(r"^(?:def|class) (\w+)|^(\w+)\s*[:=]", src.read_text(), re.M)}
         unknown += [f"{row.group(1)}: {name}" for name in re.findall(r"`([a-z_][a-z0-9_]*)/?`", row.group(2))
                     if name not in known]
