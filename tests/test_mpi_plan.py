@@ -17,7 +17,8 @@ from conftest import REPO, load_script
 plan = load_script(Path(__file__).resolve().parents[1] / "benchmarks" / "mpi" / "plan.py", "mpi_plan")
 
 #: Today's inputs (2026-12-02), fixed here so that a re-measured plan_inputs.json leaves the hand calculation valid.
-P = {"ns_per_node_iteration": 219.2, "bytes_per_node": 152, "rank_overhead_gib": 0.15, "job_script_bytes_per_node": 8,
+P = {"ns_per_node_iteration": 219.2, "bytes_per_node": 152, "rank_mib": 153.6, "per_rank_of_job_mib": 0.1,
+     "job_script_bytes_per_node": 8,
      "iterations_per_step_measured": [53, 50, 52, 52], "iterations_measured_at_n": 8192,
      "iteration_exponents": [0.29, 0.5], "load_steps": 4, "transposes_per_iteration": 5,
      "transpose_bytes_per_value": 8, "transpose_copy_factor": 6, "node_cores": 128, "node_memory_gib": 256,
@@ -27,11 +28,12 @@ P = {"ns_per_node_iteration": 219.2, "bytes_per_node": 152, "rank_overhead_gib":
 
 def test_one_row_against_a_hand_calculation():
     r = plan.plan(32768, P)
-    # memory: 152 B x 32768^2 / 128 ranks = 1.1875 GiB, + 0.15; 128 ranks a node; + 8 B x 32768^2 = 8 GiB on the first
-    assert r.rank_gib == pytest.approx(1.3375)
-    assert r.node_gib == pytest.approx(171.2)
-    assert r.first_node_gib == pytest.approx(179.2)
-    assert (r.nodes, r.ranks) == (1, 128)  # 179.2 GiB <= 0.85 x 256 = 217.6
+    # memory: 152 B x 32768^2 / 128 ranks = 1.1875 GiB, + 153.6 MiB (0.15 GiB) + 0.1 MiB x 128 ranks (0.0125 GiB);
+    # 128 ranks a node; + 8 B x 32768^2 = 8 GiB on the first
+    assert r.rank_gib == pytest.approx(1.35)
+    assert r.node_gib == pytest.approx(172.8)
+    assert r.first_node_gib == pytest.approx(180.8)
+    assert (r.nodes, r.ranks) == (1, 128)  # 180.8 GiB <= 0.85 x 256 = 217.6
     # compute-bound: 219.2 ns x 32768^2 / 128 = 219.2e-9 x 8388608 s
     assert r.compute_s == pytest.approx(1.838782, rel=1e-6)
     # bandwidth-bound: 219.2 ns x 10 GB/s = 2192 B a node, x 32768^2 / 300 GB/s
@@ -49,8 +51,10 @@ def test_one_row_against_a_hand_calculation():
 
 def test_a_larger_grid_takes_more_nodes_and_crosses_the_network():
     r = plan.plan(65536, P)
-    # 2 nodes: 256 ranks of 2.525 GiB = 323 GiB a node, > 217.6; 4 nodes: 171.2 + 32 GiB of heights = 203.2
-    assert (r.nodes, r.ranks) == (4, 512) and r.first_node_gib == pytest.approx(203.2)
+    # 2 nodes: 256 ranks of 2.375 + 0.15 + 0.0125 = 2.5375 GiB = 324.8 GiB a node, > 217.6; 4 nodes: 128 ranks of
+    # 1.1875 + 0.15 + 0.0125 = 1.35 GiB = 172.8 GiB, + 32 GiB of heights = 204.8 (the job's ranks on other nodes
+    # add nothing: per_rank_of_job_mib counts the 128 of a node)
+    assert (r.nodes, r.ranks) == (4, 512) and r.first_node_gib == pytest.approx(204.8)
     share = 8 * 65536 * 32769 / 4  # bytes of one transpose a node holds; 3/4 of them leave the node
     assert r.transposes_s == pytest.approx(5 * (6 * share / 300e9 + 0.75 * share / 25e9), rel=1e-9)
     # 53 x 8^0.29 = 53 x 1.828 = 96.9, 53 x 8^0.5 = 149.9
@@ -76,12 +80,12 @@ def test_the_rule_request_is_set_beside_the_plan():
     rows = [plan.plan(n, P) for n in P["sizes"]]
     table = plan.rule_request_table(rows, lambda n, steps, ranks: (100_000 * ranks // 128, 90), 256)
     lines = table.splitlines()[2:]
-    # 32768: 100000 MiB over 128 ranks = 782 MiB a CPU (781.25 up), the plan 1.3375 GiB = 1370 MiB a rank; a node
+    # 32768: 100000 MiB over 128 ranks = 782 MiB a CPU (781.25 up), the plan 1.35 GiB = 1382 MiB a rank; a node
     # holds its 128 cores' ranks at that: 1 node
-    assert lines[0].startswith("| 32768 | 128 (1) | 100000 | 782 | 1370 | 0.6 | 128 | 1 | 90 | 44-58 |"), lines[0]
+    assert lines[0].startswith("| 32768 | 128 (1) | 100000 | 782 | 1382 | 0.6 | 128 | 1 | 90 | 44-58 |"), lines[0]
     table = plan.rule_request_table(rows, lambda n, steps, ranks: (400_000 * ranks // 128, 90), 256)
     # 3125 MiB a CPU: 262144 // 3125 = 83 ranks a node, so 128 ranks need 2 nodes and 512 need 7
-    assert "| 3125 | 1370 | 2.3 | 83 | 2 |" in table.splitlines()[2] and "| 83 | 7 |" in table.splitlines()[3], table
+    assert "| 3125 | 1382 | 2.3 | 83 | 2 |" in table.splitlines()[2] and "| 83 | 7 |" in table.splitlines()[3], table
 
 
 def test_the_shipped_inputs_name_their_sources_and_the_scene_follows_the_plan():
@@ -93,6 +97,11 @@ def test_the_shipped_inputs_name_their_sources_and_the_scene_follows_the_plan():
     assert scene["surface"]["N"] == p["sizes"][0]
     assert scene["solver"]["ranks"] == plan.plan(scene["surface"]["N"], p).ranks
     assert scene["load"]["n_steps"] == p["load_steps"]
+    # the plan's memory is the model the contact rule asks by, with its measured constants
+    from roughcontact.solver.mpi import memory
+
+    assert (p["rank_mib"], p["per_rank_of_job_mib"], p["bytes_per_node"]) == \
+        (memory.RANK_MIB, memory.PER_RANK_OF_JOB_MIB, memory.BYTES_PER_NODE)
 
 
 def test_the_command_line_sets_an_input_and_says_so(capsys, tmp_path):

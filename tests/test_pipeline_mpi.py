@@ -29,13 +29,18 @@ import xarray as xr
 from snakemake.exceptions import WorkflowError
 
 import roughcontact.case as case_module
-from conftest import REPO, copy_workflow, edited_contact, run_snakemake
+from conftest import REPO, copy_workflow, edited_contact, load_script, run_snakemake
 from roughcontact.case import ContactCase, case_document, case_from_document, mpi_command, run_case
 from roughcontact.case.loading import LoadSchedule
 from roughcontact.figures.registry import FIGURES
 from roughcontact.pipeline import params
 from roughcontact.pipeline.config import ConfigError
-from roughcontact.pipeline.contact_jobs import contact_mpi_mem_mb, contact_mpi_runtime_min, contact_runtime_min
+from roughcontact.pipeline.contact_jobs import (
+    MPI_MEMORY_MARGIN,
+    contact_mpi_mem_mb,
+    contact_mpi_runtime_min,
+    contact_runtime_min,
+)
 from roughcontact.pipeline.datasets import SAMPLE_ROWS, surface_grid, surface_heights
 from roughcontact.pipeline.io import lazy_dataset, read_dataset
 from roughcontact.pipeline.scenes import validate_config
@@ -164,7 +169,8 @@ def test_a_case_over_ranks_is_one_mpi_contact_job():
     assert t.contact_input(_w("1")) == ["results/tiny/surfaces/kl2_ks8_H0.5_s1.nc"]
     assert t.contact_tasks(_w()) == 2 and t.contact_mpi(_w()) == 1 and t.contact_threads(_w()) == 2
     assert t.contact_bundle(_w()) is None  # an MPI job, in no SLURM bundle
-    assert t.contact_job_mem_mb(_w()) == contact_mpi_mem_mb(64, 2) == 600 + int(40 * 8 * 64**2 / 2**20)
+    # 2 ranks of 1.1 x (270 MiB + 0.6 MiB x 2 ranks + 170 B x 32 rows x 64) = 298.7 MiB, rounded up
+    assert t.contact_job_mem_mb(_w()) == contact_mpi_mem_mb(64, 2) == 2 * 299
     assert t.contact_job_runtime_min(_w()) == contact_mpi_runtime_min(64, 12, 2) == 10  # 4 x the 5-min floor, / 2
     assert contact_mpi_runtime_min(8192, 30, 4) == int(np.ceil(4 * contact_runtime_min(8192, 30) / 4))
     assert t.contact_params(params.contact)(_w()) == params.contact(t.scenes["tiny"]["contact"])
@@ -399,13 +405,14 @@ def test_an_mpi_job_asks_slurm_for_its_memory_per_cpu_not_per_node():
     """SLURM grants ``--mem`` per node, so an MPI job whose ranks span nodes would ask each node for the memory of
     all; the contact job over ranks gives ``mem_mb_per_cpu`` (its memory over ``ranks x threads``), which the SLURM
     executor turns into ``--mem-per-cpu`` in place of ``--mem`` (checked on the executor's own submit command); a
-    job in one process keeps ``--mem``. 256 ranks at N = 32768 ask 1580 MB a CPU, not 404 GB a node."""
+    job in one process keeps ``--mem``. 256 ranks at N = 32768 ask 1214 MB a CPU, not 311 GB a node."""
     t, single = _targets(), _targets(SINGLE)
     mem = t.contact_job_mem_mb(_w())
     assert t.contact_job_mem_mb_per_cpu(_w(), threads=1) == -(-mem // 2)
     assert t.contact_job_mem_mb_per_cpu(_w(), threads=3) == -(-mem // 6)
     assert single.contact_job_mem_mb_per_cpu(_w()) is None
-    assert -(-contact_mpi_mem_mb(32768, 256) // 256) == 1580
+    # 1.1 x (270 + 0.6 x 256 + 170 B x 128 rows x 32768 / 2^20) = 1.1 x 1103.6 = 1213.96 MiB, rounded up
+    assert -(-contact_mpi_mem_mb(32768, 256) // 256) == 1214
     if importlib.util.find_spec("snakemake_executor_plugin_slurm") is None:
         pytest.skip("snakemake-executor-plugin-slurm not installed (pip install -e '.[slurm]')")
     from snakemake_executor_plugin_slurm.submit_string import get_submit_command
@@ -422,6 +429,32 @@ def test_an_mpi_job_asks_slurm_for_its_memory_per_cpu_not_per_node():
     assert f"--mem-per-cpu {-(-mem // 2)}" in mpi_job and "--mem " not in mpi_job and "--ntasks=2" in mpi_job, mpi_job
     one = submit(dict(mem_mb=single.contact_job_mem_mb(_w()), mem_mb_per_cpu=single.contact_job_mem_mb_per_cpu(_w())))
     assert f"--mem {single.contact_job_mem_mb(_w())}" in one and "--mem-per-cpu" not in one, one
+
+
+#: ``benchmarks/mpi/memory.py run``'s output, as run on 2026-12-03 (the raw lines in a results file).
+MEMORY_RUN = REPO / "benchmarks" / "results" / "2026-12-03_mpi_memory_per_rank.md"
+
+
+def test_each_rank_asks_more_than_any_measured_rank_held():
+    """The rule's share of a rank (``contact_mpi_mem_mb`` over the ranks) against the peak memory of the fullest rank
+    of every run of ``benchmarks/mpi/memory.py run`` (its raw lines in the results file, 1-64 ranks, 256²-8192²): above
+    each by 5 % at least (no measured rank would have met its limit) and at most 25 % (no node asked for in vain);
+    the model without its margin (``rank_memory_mib``) within -15 % and +2 % of each (one rank, whose 2-D plans need
+    no exchange buffers, and the smallest grids below it); the fit of those lines gives
+    the model's constants back."""
+    from roughcontact.solver.mpi import memory
+
+    fit = load_script(REPO / "benchmarks" / "mpi" / "memory.py", "mpi_memory")
+    runs = fit.runs(MEMORY_RUN.read_text())
+    assert {r[2] for r in runs} >= {1, 2, 4, 8, 16, 32, 64} and {r[0] for r in runs} >= {256, 2048, 4096, 8192}
+    for nx, ny, ranks, peak in runs:
+        peak_mib = peak * 1024
+        assert 0.85 <= peak_mib / memory.rank_memory_mib((nx, ny), ranks) <= 1.02, (nx, ranks, peak)
+        share = contact_mpi_mem_mb(nx, ranks) / ranks
+        assert 0.75 * share <= peak_mib <= share / 1.05, (nx, ranks, peak, share)
+    a, c, b = fit.fit(runs)
+    assert a == pytest.approx(memory.RANK_MIB, rel=0.02) and c == pytest.approx(memory.PER_RANK_OF_JOB_MIB, rel=0.1)
+    assert memory.BYTES_PER_NODE - 6 <= b <= memory.BYTES_PER_NODE and MPI_MEMORY_MARGIN == 1.1
 
 
 @needs_mpi

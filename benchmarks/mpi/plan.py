@@ -9,7 +9,9 @@ number comes from the inputs file (:data:`INPUTS`, each value with what measured
 
 The model (benchmarks/README.md, "Paper estimate"):
 
-- memory: ``bytes_per_node`` of the grid spread over the ranks plus ``rank_overhead_gib`` a rank; the job's first
+- memory: ``bytes_per_node`` of a rank's slab plus ``rank_mib`` and ``per_rank_of_job_mib`` for each rank of the
+  job on its node (:func:`roughcontact.solver.mpi.rank_memory_mib`, the model the ``contact`` rule asks by, which
+  counts every rank of the job there); the job's first
   node also holds the job script's copy of the heights (``job_script_bytes_per_node``);
 - nodes: the smallest power of two whose ranks (``node_cores`` a node) fit ``node_memory_usable`` of each node;
 - compute-bound iteration: each rank's nodes at ``ns_per_node_iteration`` (one core's measured pace);
@@ -68,8 +70,13 @@ def values(inputs: dict[str, dict]) -> dict:
 
 
 def memory_per_rank_gib(n: int, ranks: int, p: dict) -> float:
-    """Peak memory of one rank [GiB]: its share of the ``n x n`` grid at ``bytes_per_node`` and its interpreter."""
-    return p["bytes_per_node"] * n * n / ranks / GIB + p["rank_overhead_gib"]
+    """Peak memory of the fullest rank [GiB]: :func:`roughcontact.solver.mpi.rank_memory_mib` (its slab's nodes at
+    ``bytes_per_node``, ``rank_mib``, and ``per_rank_of_job_mib`` for each rank of the job on its node, ``node_cores``
+    at most) with the inputs' values."""
+    from roughcontact.solver.mpi.memory import rank_memory_mib
+
+    return rank_memory_mib((n, n), ranks, ranks_per_machine=p["node_cores"], rank_mib=p["rank_mib"],
+                           per_rank_of_job_mib=p["per_rank_of_job_mib"], bytes_per_node=p["bytes_per_node"]) * MIB / GIB
 
 
 def first_node_memory_gib(n: int, nodes: int, p: dict) -> float:

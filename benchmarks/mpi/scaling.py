@@ -53,7 +53,7 @@ def run(path: str, steps: int, tile: int, max_iter: int | None) -> None:
         print(f"grid {shape[0]}x{shape[1]} ranks {comm.size} steps {steps} iterations {its} "
               f"converged {int(ds.converged.sum())}/{steps} wall {wall:.1f} s per_iteration {1e3 * wall / its:.1f} ms "
               f"cpu_per_rank {' '.join(f'{c:.1f}' for c in cpu)} s "
-              f"A/A0 {float(ds.area_fraction[-1]):.6f} peak_rss_GiB {' '.join(f'{r:.2f}' for r in rss)}", flush=True)
+              f"A/A0 {float(ds.area_fraction[-1]):.6f} peak_rss_GiB {' '.join(f'{r:.3f}' for r in rss)}", flush=True)
 
 
 def single(path: str, steps: int) -> None:

@@ -26,6 +26,7 @@ from types import SimpleNamespace
 
 from snakemake.exceptions import WorkflowError
 
+from ..solver.mpi.memory import rank_memory_mib
 from .cases import (
     CASE_STEM,
     CONTACT_BATCH_STEM,
@@ -38,9 +39,10 @@ from .cases import (
 )
 from .sources import SOURCES, PatchSource
 
-__all__ = ["BUNDLE", "NAMED_RUNTIME_MIN", "ContactGroup", "ContactJobs", "check_seed", "contact_batch_mem_mb",
-           "contact_batch_runtime_min", "contact_mem_mb", "contact_mpi_mem_mb", "contact_mpi_runtime_min",
-           "contact_path", "contact_runtime_min", "map_side", "ranks_of"]
+__all__ = ["BUNDLE", "MPI_MEMORY_MARGIN", "NAMED_RUNTIME_MIN", "ContactGroup", "ContactJobs", "check_seed",
+           "contact_batch_mem_mb", "contact_batch_runtime_min", "contact_mem_mb", "contact_mpi_mem_mb",
+           "contact_mpi_runtime_min", "contact_path", "contact_runtime_min", "map_side", "mpi_mem_mb_per_cpu",
+           "ranks_of"]
 
 
 def contact_path(folder: str, ext: str = "nc") -> str:
@@ -83,12 +85,16 @@ def ranks_of(block: Mapping) -> int:
     return int(block["solver"].get("ranks", 1))
 
 
+#: The share the ``contact`` rule asks above a rank's measured peak memory (:func:`contact_mpi_mem_mb`).
+MPI_MEMORY_MARGIN = 1.1
+
+
 def contact_mpi_mem_mb(n: int, ranks: int) -> int:
-    """Peak memory of one contact case over ``ranks`` MPI processes [MB], all ranks together: an interpreter per
-    rank and 40 doubles a node of solver work, split (a margin: measured at N = 8192 on 2 ranks, 206 B a node and
-    0.25 GiB a rank after the fused kernels of 2026-12-02, 156 B since the compressed vectors, 152 B before both:
-    benchmarks/README.md)."""
-    return int(300 * ranks + 40 * 8 * n * n / 2**20)
+    """Peak memory of one contact case over ``ranks`` MPI processes [MB], all ranks together: ``ranks`` times the
+    fullest rank's measured peak (:func:`roughcontact.solver.mpi.rank_memory_mib`: an interpreter, MPI's buffers and
+    170 B a node of its slab) and :data:`MPI_MEMORY_MARGIN`, rounded up to whole MB a rank. The fullest rank of every
+    run measured with 1-64 ranks on 256²-8192² grids (2026-12-03) peaked at 0.81-0.92 of its share of this."""
+    return ranks * math.ceil(MPI_MEMORY_MARGIN * rank_memory_mib((n, n), ranks))
 
 
 def mpi_mem_mb_per_cpu(mem_mb: int, ranks: int, threads: int = 1) -> int:

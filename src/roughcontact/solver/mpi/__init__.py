@@ -14,10 +14,12 @@ Runs the periodic elastic problem with the default method ``"pk-fourier-f32"``; 
 ``ValueError``, and a stalled step goes on with float64 products over the ranks (the single solve's first
 fallback; not the box fallback after it: :mod:`.solver`).
 mpi4py and an MPI runtime come with ``pip install 'roughcontact[mpi]'``; importing this package
-needs neither (:class:`.run.MpiUnavailableError` is raised when a solve asks for MPI).
+needs neither (:class:`.run.MpiUnavailableError` is raised when a solve asks for MPI). A rank's peak memory, as
+measured: :func:`.memory.rank_memory_mib`.
 """
 
+from .memory import rank_memory_mib
 from .run import MpiUnavailableError, rows_of, solve_contact_mpi
 from .slabs import FFT_LIBRARIES, Slabs
 
-__all__ = ["FFT_LIBRARIES", "MpiUnavailableError", "Slabs", "rows_of", "solve_contact_mpi"]
+__all__ = ["FFT_LIBRARIES", "MpiUnavailableError", "Slabs", "rank_memory_mib", "rows_of", "solve_contact_mpi"]
