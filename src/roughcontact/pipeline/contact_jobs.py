@@ -90,10 +90,11 @@ MPI_MEMORY_MARGIN = 1.1
 
 
 def contact_mpi_mem_mb(n: int, ranks: int) -> int:
-    """Peak memory of one contact case over ``ranks`` MPI processes [MB], all ranks together: ``ranks`` times the
-    fullest rank's measured peak (:func:`roughcontact.solver.mpi.rank_memory_mib`: an interpreter, MPI's buffers and
-    170 B a node of its slab) and :data:`MPI_MEMORY_MARGIN`, rounded up to whole MB a rank. The fullest rank of every
-    run measured with 1-64 ranks on 256²-8192² grids (2026-12-03) peaked at 0.81-0.92 of its share of this."""
+    """Peak memory of one contact case over ``ranks`` MPI processes [MiB, as Snakemake's ``mem_mb`` and SLURM's
+    ``--mem-per-cpu`` read it], all ranks together: ``ranks`` times the fullest rank's peak by the measured model
+    (:func:`roughcontact.solver.mpi.rank_memory_mib`: an interpreter, MPI's buffers and 170 B a node of its slab)
+    and :data:`MPI_MEMORY_MARGIN`, rounded up to whole MiB a rank. The fullest rank of every
+    run measured with 1-64 ranks on 256²-8192² grids (2026-12-03) peaked at 0.807-0.923 of its share of this."""
     return ranks * math.ceil(MPI_MEMORY_MARGIN * rank_memory_mib((n, n), ranks))
 
 

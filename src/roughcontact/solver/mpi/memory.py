@@ -16,7 +16,8 @@ import math
 #: A rank's memory that does not grow with its slab [MiB]: the interpreter and libraries, and per-slab buffers.
 RANK_MIB = 270.0
 #: A rank's memory for each rank of the job on its machine [MiB] (measured 0.605 MiB a rank more from 8 to 64 ranks
-#: on a 256² grid, all on one machine: MPICH's shared-memory state; ranks on other machines are not measured).
+#: on a 256² grid, all on one machine: MPICH's shared-memory state, presumably; ranks on other machines are not
+#: measured).
 PER_RANK_OF_JOB_MIB = 0.6
 #: A rank's memory for each node of its slab [B]: the fields, the transposes' buffers, the warm start's solutions
 #: (fitted 166.1 B on the grids of 2048² to 8192²; 152 B before the fused kernels of 2026-12-02).
