@@ -1,17 +1,17 @@
 """The peak memory of one rank of a case over MPI ranks, from measurements: :func:`rank_memory_mib`.
 
 A rank holds its slab's rows of every field, the transposes' buffers and the warm start's last two solutions (all in
-proportion to the nodes of its slab), and an interpreter with numpy, numba's compiled kernels, pyFFTW and mpi4py
-(a constant), and MPICH's shared-memory queues (a little for every other rank of the job). The three constants below
-are fitted to peak resident memory (``ru_maxrss``) measured per rank with 2 to 64 ranks on grids of 256² to 8192²
-(benchmarks/README.md, "Memory a rank", 2026-12-03; ``benchmarks/mpi/memory.py``): the fullest rank of every
-run of 2 ranks or more on the grids of 2048² and more within -5.0 % and +1.6 % of the model; the 256² grid's
-(6-9 % below) and one rank's (2-D plans, no exchange buffers; 8-11 % below) under it.
+proportion to the nodes of its slab), an interpreter with numpy, numba's compiled kernels, pyFFTW and mpi4py (a
+constant), and a little for every other rank of the job on its machine (MPICH's shared-memory state, presumably).
+The three constants below are fitted to peak resident memory (``ru_maxrss``) measured per rank with 1 to 64 ranks on
+grids of 256² to 8192² (benchmarks/README.md, "Memory a rank", 2026-12-03; ``benchmarks/mpi/memory.py``): the
+fullest rank of every run of 2 ranks or more on the grids of 2048² and more within -5.0 % and +1.6 % of the model;
+the 256² grid's (6-9 % below) and one rank's (2-D plans, no exchange buffers; 8-11 % below) under it.
 """
 
 from __future__ import annotations
 
-import math
+from .slabs import split
 
 #: A rank's memory that does not grow with its slab [MiB]: the interpreter and libraries, and per-slab buffers.
 RANK_MIB = 270.0
@@ -25,10 +25,10 @@ BYTES_PER_NODE = 170.0
 
 
 def largest_slab_nodes(shape, ranks: int) -> int:
-    """Nodes of the largest slab when an ``(nx, ny)`` grid is split into ``ranks`` slabs of rows
-    (:class:`~roughcontact.solver.mpi.slabs.Slabs`: the first ``nx % ranks`` slabs one row more)."""
-    nx, ny = (int(shape[0]), int(shape[1]))
-    return math.ceil(nx / int(ranks)) * ny
+    """Nodes of the largest slab when an ``(nx, ny)`` grid is split into ``ranks`` slabs of rows as the solver splits
+    it (:func:`~roughcontact.solver.mpi.slabs.split`: the first slab is one of the largest)."""
+    start, stop = split(int(shape[0]), int(ranks))[0]
+    return (stop - start) * int(shape[1])
 
 
 def rank_memory_mib(shape, ranks: int, *, ranks_per_machine: int | None = None, rank_mib: float = RANK_MIB,
