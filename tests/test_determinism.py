@@ -8,6 +8,7 @@ plus one CPU burner per core, loads the machine while the workers plan.
 """
 import json
 import os
+import re
 import subprocess
 import sys
 import textwrap
@@ -296,3 +297,43 @@ def test_shipped_plans_cover_the_in_place_product():
     mine = {line.strip() for line in shipped[1].decode().splitlines()[1:-1]}
     for store in created:
         assert {line.strip() for line in store.decode().splitlines()[1:-1]} == mine
+
+
+def test_slab_plans_join_the_set_and_replace_only_what_fftw_rejects(tmp_path, monkeypatch):
+    """``slabs.write_wisdom`` (``fft.add_plans``) appends the slab plans to the set, keeps the set's own lines,
+    records what it planned, and replaces a set's entry only where FFTW cannot apply it to a planned problem."""
+    pyfftw = pytest.importorskip("pyfftw")
+    from roughcontact.core import fft
+    from roughcontact.solver.mpi import slabs
+
+    monkeypatch.setattr(fft, "machine_key", lambda: "CPU A")
+    path = fft.write_wisdom(tmp_path / "w.json", sizes=(8,))
+    base = json.loads(path.read_text())["machines"]["CPU A"]
+    kw = {"sizes": (32,), "ranks": (2,), "tiles": (1,)}
+    slabs.write_wisdom(path, **kw)
+    after = json.loads(path.read_text())["machines"]["CPU A"]
+    assert after["slabs"] == {"sizes": [32], "tiles": [1], "ranks": [2], "flags": ["FFTW_MEASURE"]}
+    for k in ("double", "single"):
+        old, new = base[k].splitlines(), after[k].splitlines()
+        assert new[:len(old) - 1] == old[:-1] and len(new) > len(old) and new[-1] == ")"
+
+    def rejected(entries):
+        return fft._rejected(tuple(entries[k] for k in fft._PRECISIONS), slabs.slab_problems(**kw))
+
+    assert rejected(after) == 0
+    # a set naming a codelet of another size for one of those problems: FFTW cannot apply it
+    lines = after["single"].splitlines()
+    at = next(i for i in range(len(base["single"].splitlines()) - 1, len(lines))
+              if re.search(r"codelet_n1[fb]v_32_", lines[i]))
+    wrong = lines[at].replace("v_32_", "v_16_")
+    bad = base | {"single": "\n".join([*base["single"].splitlines()[:-1], wrong, ")"]) + "\n"}
+    assert rejected(bad) > 0
+    data = json.loads(path.read_text())
+    data["machines"]["CPU A"] = bad
+    path.write_text(json.dumps(data))
+    slabs.write_wisdom(path, **kw)
+    fixed = json.loads(path.read_text())["machines"]["CPU A"]
+    assert wrong not in fixed["single"] and rejected(fixed) == 0
+    assert fixed["single"].splitlines()[:len(base["single"].splitlines()) - 1] == base["single"].splitlines()[:-1]
+    assert fixed["double"].splitlines()[:len(base["double"].splitlines()) - 1] == base["double"].splitlines()[:-1]
+    pyfftw.forget_wisdom()

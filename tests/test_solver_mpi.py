@@ -411,6 +411,46 @@ def test_slabs_split_rows_and_spectral_columns():
         Slabs((8, 4), 4, 0)
 
 
+@pytest.mark.parametrize("dtype", [np.complex64, np.complex128])
+def test_the_slab_transpose_copies_strided_blocks_value_for_value(dtype):
+    """``copy_transposed`` (tiles) gives numpy's transpose bit for bit, on strided blocks of any shape and B."""
+    from roughcontact.solver.mpi.slabs import copy_transposed
+
+    rng = np.random.default_rng(3)
+    src = (rng.standard_normal((2, 70, 101)) + 1j * rng.standard_normal((2, 70, 101))).astype(dtype)
+    dst = np.zeros((2, 90, 150), dtype)
+    for tile in (1, 7, 32):  # smaller and larger than the blocks' sides, and not dividing them
+        dst[...] = 0
+        copy_transposed(dst[:, 5:88, 10:80], src[:, :, 9:92], tile)
+        assert np.array_equal(dst[:, 5:88, 10:80], src[:, :, 9:92].transpose(0, 2, 1))
+        assert not dst[:, :5].any() and not dst[:, 88:].any() and not dst[:, :, :10].any() and not dst[:, :, 80:].any()
+
+
+@pytest.mark.parametrize(("shape", "ranks"), [((1024, 1024), 2), ((4096, 2048), 2), ((2048, 2048), 4),
+                                              ((256, 256), 64)])
+def test_the_shipped_wisdom_holds_every_slab_transform(shape, ranks):
+    """Each rank's slab transforms (both precisions) are planned from the shipped wisdom alone: none adds an entry.
+
+    FFTW's estimating planner alone cost 1.5x the measured plans' time at 1024^2-4096^2 on 2 ranks
+    (benchmarks/README.md, "The slab transforms' plans"); a wisdom entry FFTW cannot apply would make
+    it forget the whole store and plan by those heuristics, which this catches too.
+    """
+    pyfftw = pytest.importorskip("pyfftw")
+    from roughcontact.core import fft
+    from roughcontact.solver.mpi import slabs
+
+    shipped = fft.shipped_wisdom()
+    assert shipped is not None
+    for rank in sorted({0, ranks - 1}):
+        for real in (np.float32, np.float64):
+            pyfftw.forget_wisdom()
+            pyfftw.import_wisdom(shipped)
+            before = pyfftw.export_wisdom()
+            slabs.SlabPlans(slabs.Slabs(shape, ranks, rank), 1, real, 1, flags=fft.PLANNER_FLAGS)
+            assert pyfftw.export_wisdom() == before, (shape, ranks, rank, real)
+    pyfftw.forget_wisdom()
+
+
 #: A 2-rank solve whose float32 iteration stalls at once (its stall window set to 0), so that every step
 #: goes on with the float64 fallback over the ranks; rank 0 prints the per-step columns as JSON.
 _STALLED_RUN = """

@@ -209,20 +209,113 @@ def write_wisdom(path: str | os.PathLike = WISDOM_FILE, sizes=WISDOM_SIZES, flag
     return out
 
 
+def add_plans(problems, path: str | os.PathLike = WISDOM_FILE, record: dict | None = None,
+              flags=("FFTW_MEASURE",)) -> Path:
+    """Measure the plans of ``problems`` and add them to the set of ``path`` this processor plans with.
+
+    For transforms other than :func:`write_wisdom`'s square pairs (the MPI solver's slabs:
+    :func:`roughcontact.solver.mpi.slabs.write_wisdom`). ``problems`` are callables ``plan(flags)``,
+    each making the plans of one problem with ``flags``. They are measured (``flags``) in an empty
+    store: the set's own plans stay as they were, line for line, and the measured entries for
+    problems the set lacks are appended (:func:`_fill_missing`). Where the set names another solver
+    for a problem that a measured plan also solved, it is kept too, unless FFTW then rejects the set
+    for one of ``problems`` (an entry it cannot apply: FFTW then forgets the whole store and plans by
+    its heuristics): such entries are replaced by the measured ones, one at a time, in the set's order,
+    each only if fewer problems are then rejected. ``record`` (a dict) is merged into the set, to say
+    what was planned. The set is this processor's (:func:`machine_key`) where the file has one, else
+    its default; the caller's wisdom is put back afterwards.
+
+    Raises
+    ------
+    ValueError
+        For a file of the first format (one unnamed set): write it again with :func:`write_wisdom`.
+    """
+    from .files import write_text_atomic
+
+    data = json.loads(Path(path).read_text())
+    if "machines" not in data:
+        raise ValueError(f"{path}: a wisdom file of the first format (one unnamed set); write it again with "
+                         "write_wisdom() before adding plans to it")
+    machines = data["machines"]
+    key = machine_key() if machine_key() in machines else data.get("default", next(iter(machines)))
+    chosen = machines[key]
+    saved = pyfftw.export_wisdom()
+    try:
+        pyfftw.forget_wisdom()
+        for plan in problems:
+            plan(tuple(flags))
+        measured = [w.decode("ascii") for w in pyfftw.export_wisdom()]
+        base = [chosen[k] for k in _PRECISIONS]
+        clashes = [(i, _entry_key(line)) for i, (mine, theirs) in enumerate(zip(base, measured, strict=True))
+                   for line in _entries(mine) if _entry_key(line) in _entries_by_key(theirs)
+                   and _entries_by_key(theirs)[_entry_key(line)] != line.strip()]
+        replace: set = set()
+        rejected = _rejected(_merged(base, measured, replace), problems)
+        for clash in clashes:
+            if not rejected:
+                break
+            fewer = _rejected(_merged(base, measured, replace | {clash}), problems)
+            if fewer < rejected:
+                replace, rejected = replace | {clash}, fewer
+    finally:
+        pyfftw.forget_wisdom()
+        pyfftw.import_wisdom(saved)
+    if rejected:
+        _log.warning("FFTW still rejects the composed wisdom for %d of %d problems", rejected, len(problems))
+    chosen.update(zip(_PRECISIONS, _merged(base, measured, replace), strict=True))
+    chosen.update(record or {})
+    write_text_atomic(Path(path), json.dumps(data, indent=1) + "\n")
+    shipped_wisdom.cache_clear()
+    return Path(path)
+
+
+def _entries(wisdom: str) -> list[str]:
+    """The entry lines of FFTW's text export ``wisdom`` (one ``(solver reg flags flags slvndx md5 x4)`` each)."""
+    return [line for line in wisdom.splitlines()[1:] if line.strip().startswith("(")]
+
+
+def _entry_key(line: str) -> tuple[str, ...]:
+    """The problem an entry line solves: its planner flags and the problem's md5 (the last four words)."""
+    words = line.strip().rstrip(")").split()
+    return (*words[2:4], *words[-4:])
+
+
+def _entries_by_key(wisdom: str) -> dict:
+    return {_entry_key(line): line.strip() for line in _entries(wisdom)}
+
+
+def _merged(base, measured, replace) -> tuple[str, ...]:
+    """Each precision's ``base`` with its entries keyed ``(precision, key)`` in ``replace`` taken from
+    ``measured``, then ``measured``'s entries for the problems it lacks appended."""
+    out = []
+    for i, (mine, theirs) in enumerate(zip(base, measured, strict=True)):
+        by_key = _entries_by_key(theirs)
+        lines = [("  " + by_key[_entry_key(line)]) if line.strip().startswith("(")
+                 and (i, _entry_key(line)) in replace else line for line in mine.rstrip().splitlines()]
+        out.append(_fill_missing("\n".join(lines) + "\n", theirs))
+    return tuple(out)
+
+
+def _rejected(wisdom, problems) -> int:
+    """How many of ``problems`` FFTW plans otherwise than from ``wisdom`` alone (the store gains entries)."""
+    count = 0
+    for plan in problems:
+        pyfftw.forget_wisdom()
+        pyfftw.import_wisdom(tuple(w.encode("ascii") for w in wisdom))
+        before = pyfftw.export_wisdom()
+        plan(tuple(PLANNER_FLAGS))
+        count += pyfftw.export_wisdom() != before
+    return count
+
+
 def _fill_missing(wisdom: str, extra: str) -> str:
     """``wisdom`` (FFTW's text export) with the entries of ``extra`` for problems it has no plan for.
 
     An entry is one line ``(solver reg flags flags slvndx md5 md5 md5 md5)``; its problem is the
     last four words with the flags.
     """
-    def key(line: str) -> tuple[str, ...]:
-        words = line.strip().rstrip(")").split()
-        return (*words[2:4], *words[-4:])
-
-    lines = wisdom.rstrip().splitlines()
-    have = {key(line) for line in lines[1:] if line.strip().startswith("(")}
-    new = [line for line in extra.rstrip().splitlines()[1:]
-           if line.strip().startswith("(") and key(line) not in have]
+    have = {_entry_key(line) for line in _entries(wisdom)}
+    new = [line for line in _entries(extra) if _entry_key(line) not in have]
     if not new:
         return wisdom
     body = wisdom.rstrip()[:-1].rstrip()  # the export's closing parenthesis comes back last

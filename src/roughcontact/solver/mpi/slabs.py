@@ -22,6 +22,7 @@ Two implementations of that one layout (:data:`FFT_LIBRARIES`):
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 #: Distributed FFT implementations :func:`make_fft` accepts.
 FFT_LIBRARIES = ("slab", "mpi4py-fft")
@@ -43,6 +44,31 @@ def split(n: int, parts: int) -> list[tuple[int, int]]:
         out.append((start, stop))
         start = stop
     return out
+
+
+#: Side of the square tiles :func:`copy_transposed` copies one at a time (32 x 32 complex64 values: 8 KiB read and
+#: 8 KiB written, well inside a core's L1 cache).
+TILE = 32
+
+
+@njit(cache=True, nogil=True)
+def copy_transposed(dst, src, tile=TILE):
+    """``dst[b, j, i] = src[b, i, j]`` for ``src`` of shape ``(B, m, k)`` and ``dst`` ``(B, k, m)``, tile by tile.
+
+    Either may be a strided view (a block of a slab's columns). numpy's ``np.copyto(dst, src.transpose(0, 2, 1))``
+    walks one of the two across its rows at every value: measured at 2048^2 on 2 ranks (2026-12-04,
+    benchmarks/README.md, "The slab transpose") 2.3 ms for the backward transform's block against 0.5-0.6 ms
+    here, 15.7 against 2.7 ms at 4096^2. A copy: the values are the same bits either way.
+    """
+    B, m, k = src.shape
+    for b in range(B):
+        for i0 in range(0, m, tile):
+            i1 = min(i0 + tile, m)
+            for j0 in range(0, k, tile):
+                j1 = min(j0 + tile, k)
+                for j in range(j0, j1):
+                    for i in range(i0, i1):
+                        dst[b, j, i] = src[b, i, j]
 
 
 class Slabs:
@@ -130,7 +156,7 @@ class SlabFFT:
         return self.sp.irfft(a, n=self.shape[1], axis=-1, norm="forward", workers=self.workers)
 
 
-class _SlabPlans:
+class SlabPlans:
     """pyFFTW's plans and buffers of :class:`FftwSlabFFT` for one precision and batch ``B``.
 
     One rank: the 2-D pair over the whole grid, as the batched solver's (planned with the shipped
@@ -140,7 +166,9 @@ class _SlabPlans:
     estimating planner does not reorder it): the exchange packs each block transposed.
     """
 
-    def __init__(self, slabs: Slabs, B: int, real, threads: int, exchange=None):
+    def __init__(self, slabs: Slabs, B: int, real, threads: int, exchange=None, flags=None):
+        import contextlib
+
         import pyfftw
 
         from ...core import fft as fft_module
@@ -154,8 +182,10 @@ class _SlabPlans:
         # float32: the input stays the kernels' (they zero only what they wrote last); float64 (the
         # refreshes: a product's input is not needed once transformed) writes its output over its input
         self.real_out = pyfftw.empty_aligned((B, rows, ny), dtype=real) if real == np.float32 else self.real_in
-        kw = {"flags": fft_module.PLANNER_FLAGS, "threads": threads}
-        with fft_module.shipped_wisdom_only():
+        # planned with the shipped wisdom alone (core.fft), or measured with ``flags`` in FFTW's store as it is
+        # (write_wisdom, which makes the shipped slab plans)
+        kw = {"flags": fft_module.PLANNER_FLAGS if flags is None else tuple(flags), "threads": threads}
+        with fft_module.shipped_wisdom_only() if flags is None else contextlib.nullcontext():
             if slabs.size == 1:
                 self.col_spec = self.row_spec
                 self.fwd = pyfftw.FFTW(self.real_in, self.row_spec, axes=(1, 2), direction="FFTW_FORWARD", **kw)
@@ -177,6 +207,56 @@ class _SlabPlans:
             self.irfft = pyfftw.FFTW(self.row_spec, self.real_out, axes=(2,), direction="FFTW_BACKWARD", **kw)
 
 
+#: Grids and rank counts whose slab transforms :func:`write_wisdom` measures for the shipped wisdom: ``T N x N``
+#: for ``N`` in ``WISDOM_SIZES`` and ``T`` in ``WISDOM_TILES`` (the square cells, and those tiled twice along x
+#: that benchmarks/mpi/scaling.py's weak scaling solves), on each rank count of ``WISDOM_RANKS``. FFTW's
+#: estimating planner alone cost 1.5x the measured plans' time for a float32 pair of a slab's transforms
+#: at 1024^2 to 4096^2 on 2 ranks (2026-12-04, benchmarks/README.md, "The slab transforms' plans").
+WISDOM_SIZES = (256, 512, 1024, 2048, 4096, 8192)
+WISDOM_TILES = (1, 2)
+WISDOM_RANKS = (2, 4, 8, 16, 32, 64)
+#: FFTW_PATIENT's slab plans were no faster than FFTW_MEASURE's at 1024^2 and 2048^2 (2026-12-04) and took 30x
+#: longer to make.
+WISDOM_FLAGS = ("FFTW_MEASURE",)
+
+
+def slab_problems(sizes=WISDOM_SIZES, ranks=WISDOM_RANKS, tiles=WISDOM_TILES) -> list:
+    """The transforms :class:`FftwSlabFFT` plans (one case, both precisions) on ``T N x N`` over ``R`` ranks.
+
+    For each ``N`` in ``sizes``, ``T`` in ``tiles`` and ``R`` in ``ranks`` (``R <= N // 2 + 1``), each
+    slab shape its ranks hold (two at most: :func:`split` gives the first ranks one row or spectral
+    column more) in each precision: a callable ``plan(flags)`` that makes that rank's plans with
+    ``flags``, in FFTW's store as it is (:func:`roughcontact.core.fft.add_plans`).
+    """
+    problems, seen = [], set()
+    for n, tile, size in ((n, t, r) for n in sizes for t in tiles for r in ranks):
+        for rank in range(size if size <= n // 2 + 1 else 0):
+            slabs = Slabs((tile * n, n), size, rank)
+            if (slabs.local_shape, slabs.spectrum_shape) in seen:
+                continue
+            seen.add((slabs.local_shape, slabs.spectrum_shape))
+            for real in (np.float64, np.float32):
+                problems.append(lambda flags, s=slabs, r=real: SlabPlans(s, 1, r, 1, flags=flags))
+    return problems
+
+
+def write_wisdom(path=None, sizes=WISDOM_SIZES, ranks=WISDOM_RANKS, tiles=WISDOM_TILES, flags=WISDOM_FLAGS):
+    """Measure the slab transforms of :func:`slab_problems` and add them to the shipped wisdom (``path``).
+
+    Run on a quiet machine, once per FFTW build and processor model, after
+    :func:`roughcontact.core.fft.write_wisdom` (``python -c "from roughcontact.solver.mpi.slabs import
+    write_wisdom; write_wisdom()"``): the plans join the set this processor plans with
+    (:func:`~roughcontact.core.fft.add_plans`, which says which of its plans stay), and the set records
+    ``"slabs": {"sizes", "tiles", "ranks", "flags"}``. About 4 min of one core for the defaults (2026-12-04,
+    Intel Xeon).
+    """
+    from ...core import fft as fft_module
+
+    record = {"slabs": {"sizes": list(sizes), "tiles": list(tiles), "ranks": list(ranks), "flags": list(flags)}}
+    return fft_module.add_plans(slab_problems(sizes, ranks, tiles),
+                                fft_module.WISDOM_FILE if path is None else path, record, flags)
+
+
 class FftwSlabFFT(SlabFFT):
     """:class:`SlabFFT` with pyFFTW's planned transforms on buffers of their own (the default where pyFFTW
     imports): on one rank the single solve's 2-D transform; on more, the spectrum held transposed,
@@ -193,19 +273,19 @@ class FftwSlabFFT(SlabFFT):
         self.transposed = slabs.size > 1
         self.input32 = self.plans(1, np.float32).real_in
 
-    def plans(self, B: int, real) -> _SlabPlans:
+    def plans(self, B: int, real) -> SlabPlans:
         """The plans of ``B`` cases in precision ``real`` (float32 or float64), made at first use."""
         key = (int(B), np.dtype(real))
         if key not in self._plans:
             shared = next((p.exchange for p in self._plans.values() if hasattr(p, "exchange")), None)
-            self._plans[key] = _SlabPlans(self.slabs, B, real, self.workers, shared)
+            self._plans[key] = SlabPlans(self.slabs, B, real, self.workers, shared)
             if shared is not None and self._plans[key].exchange is not shared:  # larger now: every plan uses it
                 for p in self._plans.values():
                     p.exchange = self._plans[key].exchange
                     p.send = p.exchange[:p.send.nbytes].view(p.send.dtype)
         return self._plans[key]
 
-    def _receive_types(self, p: _SlabPlans, dst, dst_parts) -> list:
+    def _receive_types(self, p: SlabPlans, dst, dst_parts) -> list:
         """MPI datatypes that put rank ``r``'s block straight into ``dst[:, :, d0:d1]`` (made once a buffer).
 
         A vector of ``B m`` rows of ``d1 - d0`` values, ``dst.shape[2]`` apart: the received block lands in
@@ -222,7 +302,7 @@ class FftwSlabFFT(SlabFFT):
                                     for d0, d1 in dst_parts]
         return types
 
-    def _transpose(self, p: _SlabPlans, src, dst, src_parts, dst_parts) -> None:
+    def _transpose(self, p: SlabPlans, src, dst, src_parts, dst_parts) -> None:
         """The all-to-all transpose between the rows' and the columns' layouts, either way.
 
         ``src`` and ``dst`` are ``(B, m, k)`` with this rank's share of the other axis first: rank ``r``
@@ -235,12 +315,12 @@ class FftwSlabFFT(SlabFFT):
         for r, (a0, a1) in enumerate(src_parts):
             n = 0 if r == me else B * (a1 - a0) * src.shape[1]
             if n:
-                np.copyto(p.send[at:at + n].reshape(B, a1 - a0, src.shape[1]), src[:, :, a0:a1].transpose(0, 2, 1))
+                copy_transposed(p.send[at:at + n].reshape(B, a1 - a0, src.shape[1]), src[:, :, a0:a1])
             counts.append(n)
             send_displs.append(at * item)  # Alltoallw takes byte displacements
             at += n
         (a0, a1), (d0, d1) = src_parts[me], dst_parts[me]
-        np.copyto(dst[:, :, d0:d1], src[:, :, a0:a1].transpose(0, 2, 1))
+        copy_transposed(dst[:, :, d0:d1], src[:, :, a0:a1])
         # rank r's block received in place: one value of its vector type, at byte offset d0 of dst's rows
         recv_counts = [0 if r == me or d1 == d0 else 1 for r, (d0, d1) in enumerate(dst_parts)]
         recv_displs = [d0 * item for d0, _ in dst_parts]
