@@ -39,6 +39,7 @@ import shlex
 import shutil
 import subprocess
 import sys
+import textwrap
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -444,6 +445,28 @@ def activate_venv(cmd, ctx):
         assert (Path(sys.prefix) / "bin" / "activate").is_file()
 
 
+def python_slab_wisdom(cmd, ctx):
+    """``python -c "...write_wisdom(...)"`` of the MPI slabs: the code runs with ``write_wisdom`` replaced by a check
+    that its arguments bind to the real signature and name problems ``slab_problems`` can plan (running it would
+    measure plans into the installed package's wisdom file)."""
+    code = shlex.split(cmd)[2]
+    check = textwrap.dedent("""
+        import inspect
+        import roughcontact.solver.mpi.slabs as slabs
+        real = slabs.write_wisdom
+        def write_wisdom(*args, **kwargs):
+            bound = inspect.signature(real).bind(*args, **kwargs)
+            bound.apply_defaults()
+            a = bound.arguments
+            assert slabs.slab_problems(a["sizes"], a["ranks"], a["tiles"]), "no slab problem to plan"
+            print("bound", dict(a))
+        slabs.write_wisdom = write_wisdom
+    """)
+    res = subprocess.run([sys.executable, "-c", check + code], capture_output=True, text=True, timeout=60)
+    _ok(res, f"`{cmd}`")
+    assert "bound" in res.stdout
+
+
 def python_block(text, ctx, tmp_path):
     script = tmp_path / "block.py"
     script.write_text(text)
@@ -533,6 +556,8 @@ COMMANDS = [
     (r"^pip install -e ", pip_extra, "the extra exists"),
     (r"^(mpiexec -n \d+|srun) python -m roughcontact\.solver\.mpi\s", mpi_command, "its arguments parse"),
     (r"^\.\s+\S+/bin/activate$", activate_venv, "the Makefile makes that venv"),
+    (r"^python -c \"from roughcontact\.solver\.mpi\.slabs import write_wisdom; ", python_slab_wisdom,
+     "its arguments bind to write_wisdom's and name slab problems"),
 ]
 # (block language, predicate on the text, handler, what it checks) - first match wins.
 BLOCKS = [

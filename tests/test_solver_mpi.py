@@ -431,8 +431,8 @@ def test_the_slab_transpose_copies_strided_blocks_value_for_value(dtype):
 def test_the_shipped_wisdom_holds_every_slab_transform(shape, ranks):
     """Each rank's slab transforms (both precisions) are planned from the shipped wisdom alone: none adds an entry.
 
-    FFTW's estimating planner alone cost 1.5x the measured plans' time at 1024^2-4096^2 on 2 ranks
-    (benchmarks/README.md, "The slab transforms' plans"); a wisdom entry FFTW cannot apply would make
+    FFTW's estimating planner alone cost 1.5-1.6x the measured plans' time at 1024^2-4096^2 on 2 ranks
+    (benchmarks/README.md, "The slab transforms' plans and transposes"); a wisdom entry FFTW cannot apply would make
     it forget the whole store and plan by those heuristics, which this catches too.
     """
     pyfftw = pytest.importorskip("pyfftw")

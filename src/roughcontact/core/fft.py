@@ -19,7 +19,9 @@ and restored afterwards), and FFTW uses wisdom of a more patient planner for an
 ``FFTW_ESTIMATE`` request: the plan is then a function of the shipped file alone,
 whatever the machine's load. Where the shipped plans cannot be used (another FFTW
 version, a CPU without the SIMD they name), FFTW falls back to its ``FFTW_ESTIMATE``
-heuristics, again the same in every process.
+heuristics, again the same in every process. The MPI solver's 1-D slab transforms have
+plans of their own in the same sets (:func:`add_plans`, from
+:func:`roughcontact.solver.mpi.slabs.write_wisdom`; ``FFTW_MEASURE``).
 
 The best plan depends on the processor (plans measured on a Xeon cost 1.4x the measured
 plans' time for a float32 pair at N = 1024 on an AMD EPYC, 2026-11-26), so the file holds one

@@ -56,9 +56,9 @@ def copy_transposed(dst, src, tile=TILE):
     """``dst[b, j, i] = src[b, i, j]`` for ``src`` of shape ``(B, m, k)`` and ``dst`` ``(B, k, m)``, tile by tile.
 
     Either may be a strided view (a block of a slab's columns). numpy's ``np.copyto(dst, src.transpose(0, 2, 1))``
-    walks one of the two across its rows at every value: measured at 2048^2 on 2 ranks (2026-12-04,
-    benchmarks/README.md, "The slab transpose") 2.3 ms for the backward transform's block against 0.5-0.6 ms
-    here, 15.7 against 2.7 ms at 4096^2. A copy: the values are the same bits either way.
+    walks one of the two across its rows at every value: the backward transform's block of 2 ranks took 2.3 ms
+    at 2048^2 against 0.6 ms here, 15.7 against 2.7 ms at 4096^2 (one process, 2026-12-04; benchmarks/README.md,
+    "The slab transforms' plans and transposes"). A copy: the values are the same bits either way.
     """
     B, m, k = src.shape
     for b in range(B):
@@ -210,8 +210,8 @@ class SlabPlans:
 #: Grids and rank counts whose slab transforms :func:`write_wisdom` measures for the shipped wisdom: ``T N x N``
 #: for ``N`` in ``WISDOM_SIZES`` and ``T`` in ``WISDOM_TILES`` (the square cells, and those tiled twice along x
 #: that benchmarks/mpi/scaling.py's weak scaling solves), on each rank count of ``WISDOM_RANKS``. FFTW's
-#: estimating planner alone cost 1.5x the measured plans' time for a float32 pair of a slab's transforms
-#: at 1024^2 to 4096^2 on 2 ranks (2026-12-04, benchmarks/README.md, "The slab transforms' plans").
+#: estimating planner alone cost 1.5-1.6x the measured plans' time for a float32 pair of a slab's transforms
+#: at 1024^2 to 4096^2 on 2 ranks (2026-12-04, benchmarks/README.md, "The slab transforms' plans and transposes").
 WISDOM_SIZES = (256, 512, 1024, 2048, 4096, 8192)
 WISDOM_TILES = (1, 2)
 WISDOM_RANKS = (2, 4, 8, 16, 32, 64)
