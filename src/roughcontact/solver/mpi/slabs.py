@@ -164,6 +164,10 @@ class SlabPlans:
     ny // 2 + 1)`` and the complex ones along x of its columns, held transposed ``(B, cols, nx)`` so
     that each column is contiguous (a transform striding along x is ~3x slower at 2048², and FFTW's
     estimating planner does not reorder it): the exchange packs each block transposed.
+
+    ``flags=None`` plans with the shipped wisdom alone (:data:`roughcontact.core.fft.PLANNER_FLAGS`); other
+    flags (``("FFTW_MEASURE",)``) plan in FFTW's store as it is: :func:`write_wisdom` measures the shipped
+    slab plans so.
     """
 
     def __init__(self, slabs: Slabs, B: int, real, threads: int, exchange=None, flags=None):
@@ -215,7 +219,7 @@ class SlabPlans:
 WISDOM_SIZES = (256, 512, 1024, 2048, 4096, 8192)
 WISDOM_TILES = (1, 2)
 WISDOM_RANKS = (2, 4, 8, 16, 32, 64)
-#: FFTW_PATIENT's slab plans were no faster than FFTW_MEASURE's at 1024^2 and 2048^2 (2026-12-04) and took 30x
+#: FFTW_PATIENT's slab plans were no faster than FFTW_MEASURE's at 1024^2 and 2048^2 (2026-12-04) and took 17-30x
 #: longer to make.
 WISDOM_FLAGS = ("FFTW_MEASURE",)
 
