@@ -248,9 +248,9 @@ def add_plans(problems, path: str | os.PathLike = WISDOM_FILE, record: dict | No
             plan(tuple(flags))
         measured = [w.decode("ascii") for w in pyfftw.export_wisdom()]
         base = [chosen[k] for k in _PRECISIONS]
-        clashes = [(i, _entry_key(line)) for i, (mine, theirs) in enumerate(zip(base, measured, strict=True))
-                   for line in _entries(mine) if _entry_key(line) in _entries_by_key(theirs)
-                   and _entries_by_key(theirs)[_entry_key(line)] != line.strip()]
+        by_key = [_entries_by_key(theirs) for theirs in measured]
+        clashes = [(i, _entry_key(line)) for i, mine in enumerate(base) for line in _entries(mine)
+                   if by_key[i].get(_entry_key(line), line.strip()) != line.strip()]
         replace: set = set()
         rejected = _rejected(_merged(base, measured, replace), problems)
         for clash in clashes:

@@ -21,6 +21,8 @@ Two implementations of that one layout (:data:`FFT_LIBRARIES`):
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 from numba import njit
 
@@ -171,8 +173,6 @@ class SlabPlans:
     """
 
     def __init__(self, slabs: Slabs, B: int, real, threads: int, exchange=None, flags=None):
-        import contextlib
-
         import pyfftw
 
         from ...core import fft as fft_module
