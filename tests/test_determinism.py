@@ -337,3 +337,19 @@ def test_slab_plans_join_the_set_and_replace_only_what_fftw_rejects(tmp_path, mo
     assert fixed["single"].splitlines()[:len(base["single"].splitlines()) - 1] == base["single"].splitlines()[:-1]
     assert fixed["double"].splitlines()[:len(base["double"].splitlines()) - 1] == base["double"].splitlines()[:-1]
     pyfftw.forget_wisdom()
+
+
+def test_adding_plans_to_a_file_of_the_first_format_is_refused_with_its_remedy(tmp_path):
+    """``add_plans`` on a wisdom file of one unnamed set names the file and says to write it again first."""
+    pytest.importorskip("pyfftw")
+    from roughcontact.solver.mpi import slabs
+
+    path = tmp_path / "old.json"
+    text = json.dumps({"machine": "CPU A", "double": "(fftw-3.3.5 fftw_wisdom #x0\n)\n",
+                       "single": "(fftw-3.3.5 fftwf_wisdom #x0\n)\n",
+                       "long_double": "(fftw-3.3.5 fftwl_wisdom #x0\n)\n"})
+    path.write_text(text)
+    with pytest.raises(ValueError, match=r"old\.json: a wisdom file of the first format .* write it again with "
+                                         r"write_wisdom\(\) before adding plans to it"):
+        slabs.write_wisdom(path, sizes=(32,), ranks=(2,), tiles=(1,))
+    assert path.read_text() == text  # untouched
