@@ -110,6 +110,7 @@ def solve_contact_mpi(heights, shape, pressures, settings: SolverSettings | None
     collective(comm, lambda: solver.check_loads(p, "pressures"))
     cols, iters, conv, paths = _run_steps(solver, p, progress if comm.rank == 0 else None)
     field = _gather_fields(solver) if fields else None
+    solver.close()
     if comm.rank != 0:
         return None
     return _dataset(solver, p, cols, iters, conv, paths, field, fft_library)

@@ -11,8 +11,8 @@ multipliers).
 
 Two implementations of that one layout (:data:`FFT_LIBRARIES`):
 
-- ``"slab"`` (the default): pyFFTW's planned 1-D transforms (:class:`FftwSlabFFT`, whose ``Alltoallw``
-  receives each block in place through an MPI vector datatype; scipy.fft's and ``Alltoallv``,
+- ``"slab"`` (the default): pyFFTW's planned 1-D transforms (:class:`FftwSlabFFT`: the ranks of a machine write
+  their blocks into each other's shared memory, ``Alltoallw`` takes the others; scipy.fft's and ``Alltoallv``,
   :class:`SlabFFT`, where pyFFTW is missing), pip-installable with the ``mpi`` extra;
 - ``"mpi4py-fft"`` (:class:`MpiFFTPlan`): mpi4py-fft's ``PFFT`` on FFTW, which has no wheel on
   PyPI and builds only where FFTW's headers and libraries are installed (``libfftw3-dev``):
@@ -47,6 +47,9 @@ def split(n: int, parts: int) -> list[tuple[int, int]]:
         start = stop
     return out
 
+
+#: Bytes of a memory page: each rank's part of a shared-memory window starts on one (FFTW plans an aligned buffer).
+PAGE = 4096
 
 #: Side of the square tiles :func:`copy_transposed` copies one at a time (32 x 32 complex64 values: 8 KiB read and
 #: 8 KiB written, well inside a core's L1 cache).
@@ -165,14 +168,17 @@ class SlabPlans:
     wisdom). More: the real transforms along y of the rank's rows ``(B, rows, ny) <-> (B, rows,
     ny // 2 + 1)`` and the complex ones along x of its columns, held transposed ``(B, cols, nx)`` so
     that each column is contiguous (a transform striding along x is ~3x slower at 2048², and FFTW's
-    estimating planner does not reorder it): the exchange packs each block transposed.
+    estimating planner does not reorder it): each block is copied transposed.
 
-    ``flags=None`` plans with the shipped wisdom alone (:data:`roughcontact.core.fft.PLANNER_FLAGS`); other
-    flags (``("FFTW_MEASURE",)``) plan in FFTW's store as it is: :func:`write_wisdom` measures the shipped
-    slab plans so.
+    ``spectra``: the ``(row_spec, col_spec)`` buffers to use (this rank's part of a shared-memory window,
+    :class:`FftwSlabFFT`), else its own; ``remote=False`` (every rank shares this one's memory) makes no
+    exchange buffer. ``flags=None`` plans with the shipped wisdom alone
+    (:data:`roughcontact.core.fft.PLANNER_FLAGS`); other flags (``("FFTW_MEASURE",)``) plan in FFTW's store as it
+    is: :func:`write_wisdom` measures the shipped slab plans so.
     """
 
-    def __init__(self, slabs: Slabs, B: int, real, threads: int, exchange=None, flags=None):
+    def __init__(self, slabs: Slabs, B: int, real, threads: int, exchange=None, flags=None, spectra=None,
+                 remote: bool = True):
         import pyfftw
 
         from ...core import fft as fft_module
@@ -182,7 +188,9 @@ class SlabPlans:
         nx, cols = slabs.spectrum_shape
         nc = ny // 2 + 1
         self.real_in = pyfftw.empty_aligned((B, rows, ny), dtype=real)
-        self.row_spec = pyfftw.empty_aligned((B, rows, nc), dtype=cplx)
+        # the spectra's two layouts: this rank's own buffers, or its part of its machine's shared window
+        # (``spectra``: FftwSlabFFT, where the ranks that share its memory write their blocks straight in)
+        self.row_spec = pyfftw.empty_aligned((B, rows, nc), dtype=cplx) if spectra is None else spectra[0]
         # float32: the input stays the kernels' (they zero only what they wrote last); float64 (the
         # refreshes: a product's input is not needed once transformed) writes its output over its input
         self.real_out = pyfftw.empty_aligned((B, rows, ny), dtype=real) if real == np.float32 else self.real_in
@@ -195,15 +203,17 @@ class SlabPlans:
                 self.fwd = pyfftw.FFTW(self.real_in, self.row_spec, axes=(1, 2), direction="FFTW_FORWARD", **kw)
                 self.bwd = pyfftw.FFTW(self.row_spec, self.real_out, axes=(1, 2), direction="FFTW_BACKWARD", **kw)
                 return
-            self.col_spec = pyfftw.empty_aligned((B, cols, nx), dtype=cplx)
+            self.col_spec = pyfftw.empty_aligned((B, cols, nx), dtype=cplx) if spectra is None else spectra[1]
             # a forward sends the rank's rows of the half spectrum and receives its columns; a backward the
-            # reverse. The blocks to send are packed (transposed) into one byte buffer that serves both
-            # precisions (``exchange``: the other's, viewed); they are received in place (no buffer)
-            size = B * max(rows * nc, cols * nx) * np.dtype(cplx).itemsize
-            if exchange is None or exchange.nbytes < size:
-                exchange = np.empty(size, dtype=np.uint8)
-            self.exchange = exchange
-            self.send = exchange[:size].view(cplx)
+            # reverse. The blocks for ranks on other machines (``remote``) are packed (transposed) into one byte
+            # buffer that serves both precisions (``exchange``: the other's, viewed); they are received in place
+            self.exchange = self.send = None
+            if remote:
+                size = B * max(rows * nc, cols * nx) * np.dtype(cplx).itemsize
+                if exchange is None or exchange.nbytes < size:
+                    exchange = np.empty(size, dtype=np.uint8)
+                self.exchange = exchange
+                self.send = exchange[:size].view(cplx)
             self.types = {}  # FftwSlabFFT._receive_types' datatypes, by receiving buffer
             self.rfft = pyfftw.FFTW(self.real_in, self.row_spec, axes=(2,), direction="FFTW_FORWARD", **kw)
             self.cfft = pyfftw.FFTW(self.col_spec, self.col_spec, axes=(2,), direction="FFTW_FORWARD", **kw)
@@ -266,28 +276,93 @@ class FftwSlabFFT(SlabFFT):
     imports): on one rank the single solve's 2-D transform; on more, the spectrum held transposed,
     ``(B, c1 - c0, nx)`` (:attr:`transposed`; :class:`~.kernels.SlabOperator` makes its multipliers so).
 
+    The transpose between the two layouts moves each block once where it can. The ranks on one machine
+    (``node``: by default ``comm.Split_type(COMM_TYPE_SHARED)``) hold their spectra in one MPI shared-memory
+    window, and each copies its blocks, transposed, straight into the others' (between two barriers of the
+    machine's ranks). A block for a rank on another machine is packed transposed and sent (``Alltoallw``, received
+    in place). At 2048^2 on 2 ranks the shared window took 0.91-0.96x the CPU of the exchange through MPI, which
+    copies each block twice more (benchmarks/README.md, "The transposes through shared memory").
+
     :attr:`input32` is the float32 forward transform's input buffer (B = 1), where the kernels write;
     :meth:`forward` returns the spectrum's buffer and :meth:`backward` the real output's, valid until
-    the next transform of that precision (a caller keeps a copy of what it needs).
+    the next transform of that precision (a caller keeps a copy of what it needs). :meth:`close` frees the
+    windows (collective).
+
+    ``node`` (an ``mpi4py`` communicator, optional): the ranks of ``comm`` whose memory this rank shares, this one
+    included (a communicator of one: every block through MPI); default, those on its machine.
     """
 
-    def __init__(self, comm, slabs: Slabs, threads: int = 1):
+    def __init__(self, comm, slabs: Slabs, threads: int = 1, node=None):
         super().__init__(comm, slabs, threads)
         self._plans = {}
+        self._windows = []
         self.transposed = slabs.size > 1
+        self.node, self.local = None, (slabs.rank,)
+        if slabs.size > 1:
+            if node is None:
+                from mpi4py import MPI
+
+                node = comm.Split_type(MPI.COMM_TYPE_SHARED, key=comm.rank)
+            # the ranks of comm this one shares memory with, by their rank in ``node``
+            self.local = tuple(node.allgather(comm.rank))
+            self.node = node if node.size > 1 else None
         self.input32 = self.plans(1, np.float32).real_in
 
     def plans(self, B: int, real) -> SlabPlans:
-        """The plans of ``B`` cases in precision ``real`` (float32 or float64), made at first use."""
+        """The plans of ``B`` cases in precision ``real`` (float32 or float64), made at first use (collective over
+        the machine's ranks, which make theirs at the same transform)."""
         key = (int(B), np.dtype(real))
         if key not in self._plans:
-            shared = next((p.exchange for p in self._plans.values() if hasattr(p, "exchange")), None)
-            self._plans[key] = SlabPlans(self.slabs, B, real, self.workers, shared)
-            if shared is not None and self._plans[key].exchange is not shared:  # larger now: every plan uses it
-                for p in self._plans.values():
-                    p.exchange = self._plans[key].exchange
-                    p.send = p.exchange[:p.send.nbytes].view(p.send.dtype)
+            exchanges = [p.exchange for p in self._plans.values() if getattr(p, "exchange", None) is not None]
+            spectra = self._shared_spectra(B, real) if self.node is not None else None
+            p = SlabPlans(self.slabs, B, real, self.workers, exchanges[0] if exchanges else None,
+                          spectra=None if spectra is None else spectra[self.slabs.rank],
+                          remote=len(self.local) < self.slabs.size)
+            self._plans[key] = p
+            # the blocks' destinations: this rank's own buffers, and those of the ranks sharing its memory
+            p.local = spectra or {self.slabs.rank: (p.row_spec, p.col_spec)}
+            if exchanges and p.exchange is not exchanges[0]:  # larger now: every plan uses it
+                for q in self._plans.values():
+                    if q.exchange is not None:
+                        q.exchange = p.exchange
+                        q.send = q.exchange[:q.send.nbytes].view(q.send.dtype)
         return self._plans[key]
+
+    def _shared_spectra(self, B: int, real) -> dict:
+        """``{rank: (row_spec, col_spec)}`` of every rank on this machine, in one shared-memory window (made here,
+        collectively over :attr:`node`; each rank's part page-aligned, so FFTW plans them as its own buffers)."""
+        from mpi4py import MPI
+
+        cplx = np.dtype(np.result_type(real, np.complex64))
+        nx, ny = self.slabs.shape
+
+        def parts(rank):  # bytes of the rank's row_spec and col_spec, the first rounded up to whole pages
+            s = Slabs(self.slabs.shape, self.slabs.size, rank)
+            rows = B * s.local_shape[0] * (ny // 2 + 1) * cplx.itemsize
+            return s, rows, -(-rows // PAGE) * PAGE, B * s.spectrum_shape[1] * nx * cplx.itemsize
+
+        _, _, at, cols = parts(self.slabs.rank)
+        info = MPI.Info.Create()
+        info.Set("alloc_shared_noncontig", "true")  # each rank's part on its own pages, near its core
+        try:
+            win = MPI.Win.Allocate_shared(at + -(-cols // PAGE) * PAGE, 1, info, comm=self.node)
+        finally:
+            info.Free()
+        self._windows.append(win)
+        out = {}
+        for i, rank in enumerate(self.local):
+            s, rows, at, cols = parts(rank)
+            raw = np.frombuffer(win.Shared_query(i)[0], dtype=np.uint8)
+            out[rank] = (raw[:rows].view(cplx).reshape(B, s.local_shape[0], ny // 2 + 1),
+                         raw[at:at + cols].view(cplx).reshape(B, s.spectrum_shape[1], nx))
+        return out
+
+    def close(self) -> None:
+        """Free the shared-memory windows (collective over the machine's ranks); the transforms are spent after."""
+        for win in self._windows:
+            win.Free()
+        self._windows, self._plans = [], {}
+        self.input32 = None
 
     def _receive_types(self, p: SlabPlans, dst, dst_parts) -> list:
         """MPI datatypes that put rank ``r``'s block straight into ``dst[:, :, d0:d1]`` (made once a buffer).
@@ -306,27 +381,41 @@ class FftwSlabFFT(SlabFFT):
                                     for d0, d1 in dst_parts]
         return types
 
-    def _transpose(self, p: SlabPlans, src, dst, src_parts, dst_parts) -> None:
+    def _transpose(self, p: SlabPlans, src, layout: int, src_parts, dst_parts) -> None:
         """The all-to-all transpose between the rows' and the columns' layouts, either way.
 
-        ``src`` and ``dst`` are ``(B, m, k)`` with this rank's share of the other axis first: rank ``r``
-        gets ``src[:, :, a0:a1]`` transposed (``(a0, a1) = src_parts[r]``), and what rank ``r`` sends lands
-        in ``dst[:, :, d0:d1]`` (``(d0, d1) = dst_parts[r]``). The rank's own block is copied across
-        directly, not sent.
+        ``src`` is ``(B, m, k)`` and so is the destination, ``layout`` 0 (``row_spec``) or 1 (``col_spec``), each
+        with this rank's share of the other axis first: rank ``r`` gets ``src[:, :, a0:a1]`` transposed
+        (``(a0, a1) = src_parts[r]``), and what rank ``r`` sends lands in ``dst[:, :, d0:d1]`` (``(d0, d1) =
+        dst_parts[r]``). A rank sharing this one's memory (this one too) gets its block copied into its buffer
+        directly; the others' go through ``Alltoallw``.
         """
-        B, me, item = src.shape[0], self.slabs.rank, p.send.itemsize
+        me = self.slabs.rank
+        d0, d1 = dst_parts[me]
+        if self.node is not None:
+            self.node.Barrier()  # each rank of the machine is in this transform: what its buffer held is spent
+        for rank, spectra in p.local.items():
+            a0, a1 = src_parts[rank]
+            copy_transposed(spectra[layout][:, :, d0:d1], src[:, :, a0:a1])
+        if len(p.local) < self.slabs.size:
+            self._send(p, src, (p.row_spec, p.col_spec)[layout], src_parts, dst_parts)
+        if self.node is not None:
+            self.node.Barrier()  # every block from this machine's ranks is in place
+
+    def _send(self, p: SlabPlans, src, dst, src_parts, dst_parts) -> None:
+        """The blocks of :meth:`_transpose` to and from ranks on other machines: packed transposed, one
+        ``Alltoallw``, received in place (:meth:`_receive_types`)."""
+        B, item = src.shape[0], p.send.itemsize
         counts, send_displs, at = [], [], 0
         for r, (a0, a1) in enumerate(src_parts):
-            n = 0 if r == me else B * (a1 - a0) * src.shape[1]
+            n = 0 if r in p.local else B * (a1 - a0) * src.shape[1]
             if n:
                 copy_transposed(p.send[at:at + n].reshape(B, a1 - a0, src.shape[1]), src[:, :, a0:a1])
             counts.append(n)
             send_displs.append(at * item)  # Alltoallw takes byte displacements
             at += n
-        (a0, a1), (d0, d1) = src_parts[me], dst_parts[me]
-        copy_transposed(dst[:, :, d0:d1], src[:, :, a0:a1])
         # rank r's block received in place: one value of its vector type, at byte offset d0 of dst's rows
-        recv_counts = [0 if r == me or d1 == d0 else 1 for r, (d0, d1) in enumerate(dst_parts)]
+        recv_counts = [0 if r in p.local or d1 == d0 else 1 for r, (d0, d1) in enumerate(dst_parts)]
         recv_displs = [d0 * item for d0, _ in dst_parts]
         self.comm.Alltoallw([p.send, counts, send_displs, [_complex_type(p.send.dtype)] * len(counts)],
                             [dst, recv_counts, recv_displs, self._receive_types(p, dst, dst_parts)])
@@ -341,7 +430,7 @@ class FftwSlabFFT(SlabFFT):
             return p.row_spec
         p.rfft.execute()
         # to rank r: this rank's rows of r's spectral columns, transposed
-        self._transpose(p, p.row_spec, p.col_spec, s.cols, s.rows)
+        self._transpose(p, p.row_spec, 1, s.cols, s.rows)
         p.cfft.execute()
         return p.col_spec
 
@@ -356,7 +445,7 @@ class FftwSlabFFT(SlabFFT):
             return p.real_out
         p.icfft.execute()
         # to rank r: its rows of this rank's spectral columns, transposed
-        self._transpose(p, p.col_spec, p.row_spec, s.rows, s.cols)
+        self._transpose(p, p.col_spec, 0, s.rows, s.cols)
         p.irfft.execute()  # destroys row_spec
         return p.real_out
 

@@ -131,6 +131,13 @@ class MpiSolver(BatchSolver):
         self._op64 = None
         self.paths = SOLVER_PATHS
 
+    def close(self) -> None:
+        """Free the memory the transforms share with the other ranks of the machine (collective; the solver is spent
+        after: :class:`~.slabs.FftwSlabFFT`'s windows)."""
+        close = getattr(self.fft, "close", None)
+        if close is not None:
+            close()
+
     @property
     def backend(self) -> str:
         return f"mpi-{self.fft.name}"
