@@ -7,6 +7,13 @@ The three constants below are fitted to peak resident memory (``ru_maxrss``) mea
 grids of 256² to 8192² (benchmarks/README.md, "Memory a rank", 2026-12-03; ``benchmarks/mpi/memory.py``): the
 fullest rank of every run of 2 ranks or more on the grids of 2048² and more within -5.0 % and +1.6 % of the model;
 the 256² grid's (6-9 % below) and one rank's (2-D plans, no exchange buffers; 8-11 % below) under it.
+
+Since 2026-12-04 the ranks of a machine hold their spectra in one shared-memory window (:class:`.slabs.FftwSlabFFT`),
+and a rank's resident memory also counts the pages of the others' parts it writes into, which the machine holds
+once: the same runs gave the fullest rank's RSS 1.00-1.11x the model on 2048² to 8192² with 2 ranks or more, while
+the memory the machine holds (the ranks' summed proportional set size) fell 3 % (benchmarks/README.md, "The
+transposes through shared memory"). The model is kept as the bound of what a machine holds, which a cgroup limit
+counts; a limit on the sum of the ranks' RSS would need up to 11 % more.
 """
 
 from __future__ import annotations
