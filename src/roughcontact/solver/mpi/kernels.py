@@ -94,7 +94,7 @@ class SlabOperator(BatchOperator):
         The decomposition.
     aspect : float
         ``Ly / Lx`` of the cell.
-    fft : .slabs.SlabFFT or .slabs.MpiFFTPlan
+    fft : .slabs.SlabFFT or .mpi4pyfft.MpiFFTPlan
         The distributed transforms.
     kernels : MpiKernels
         The reductions (the quadratic form sums over every rank's columns).

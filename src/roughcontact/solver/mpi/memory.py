@@ -12,8 +12,9 @@ Since 2026-12-04 the ranks of a machine hold their spectra in one shared-memory 
 and a rank's resident memory also counts the pages of the others' parts it writes into, which the machine holds
 once: the same runs gave the fullest rank's RSS 1.00-1.11x the model on 2048² to 8192² with 2 ranks or more, while
 the memory the machine holds (the ranks' summed proportional set size) fell 3 % (benchmarks/README.md, "The
-transposes through shared memory"). The model is kept as the bound of what a machine holds, which a cgroup limit
-counts; a limit on the sum of the ranks' RSS would need up to 11 % more.
+transposes through shared memory"). The model is kept, as a bound of what a machine holds (a memory cgroup charges
+a shared page once); a limit on the sum of the ranks' RSS would need up to 11 % more than the model, 1 % more than
+the ``contact`` rule asks (4096² on 8 ranks).
 """
 
 from __future__ import annotations

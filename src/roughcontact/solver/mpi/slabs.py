@@ -14,7 +14,7 @@ Two implementations of that one layout (:data:`FFT_LIBRARIES`):
 - ``"slab"`` (the default): pyFFTW's planned 1-D transforms (:class:`FftwSlabFFT`: the ranks of a machine write
   their blocks into each other's shared memory, ``Alltoallw`` takes the others; scipy.fft's and ``Alltoallv``,
   :class:`SlabFFT`, where pyFFTW is missing), pip-installable with the ``mpi`` extra;
-- ``"mpi4py-fft"`` (:class:`MpiFFTPlan`): mpi4py-fft's ``PFFT`` on FFTW, which has no wheel on
+- ``"mpi4py-fft"`` (:class:`~.mpi4pyfft.MpiFFTPlan`): mpi4py-fft's ``PFFT`` on FFTW, which has no wheel on
   PyPI and builds only where FFTW's headers and libraries are installed (``libfftw3-dev``):
   measured against the first in ``benchmarks/README.md`` ("The solver over MPI ranks").
 """
@@ -22,6 +22,7 @@ Two implementations of that one layout (:data:`FFT_LIBRARIES`):
 from __future__ import annotations
 
 import contextlib
+import shutil
 
 import numpy as np
 from numba import njit
@@ -50,6 +51,20 @@ def split(n: int, parts: int) -> list[tuple[int, int]]:
 
 #: Bytes of a memory page: each rank's part of a shared-memory window starts on one (FFTW plans an aligned buffer).
 PAGE = 4096
+#: The file system where MPI libraries keep the memory a machine's ranks share (MPICH and Open MPI, on Linux).
+SHARED_MEMORY_DIR = "/dev/shm"
+
+
+def fits_shared_memory(nbytes: int, path=SHARED_MEMORY_DIR) -> bool:
+    """Whether ``path`` has ``nbytes`` free: True where it does not exist (the MPI library's own way then).
+
+    A container's ``/dev/shm`` may be small (Docker's default: 64 MiB); there :class:`FftwSlabFFT` keeps each rank's
+    spectra its own and sends every block through MPI.
+    """
+    try:
+        return shutil.disk_usage(path).free >= nbytes
+    except OSError:
+        return True
 
 #: Side of the square tiles :func:`copy_transposed` copies one at a time (32 x 32 complex64 values: 8 KiB read and
 #: 8 KiB written, well inside a core's L1 cache).
@@ -280,8 +295,8 @@ class FftwSlabFFT(SlabFFT):
     (``node``: by default ``comm.Split_type(COMM_TYPE_SHARED)``) hold their spectra in one MPI shared-memory
     window, and each copies its blocks, transposed, straight into the others' (between two barriers of the
     machine's ranks). A block for a rank on another machine is packed transposed and sent (``Alltoallw``, received
-    in place). At 2048^2 on 2 ranks the shared window took 0.91-0.96x the CPU of the exchange through MPI, which
-    copies each block twice more (benchmarks/README.md, "The transposes through shared memory").
+    in place). A whole solve on 2 ranks took 0.95-0.97x the CPU of the exchange through MPI (which copies each
+    block twice more) at 2048^2, 0.88-0.91x at 4096^2 (benchmarks/README.md, "The transposes through shared memory").
 
     :attr:`input32` is the float32 forward transform's input buffer (B = 1), where the kernels write;
     :meth:`forward` returns the spectrum's buffer and :meth:`backward` the real output's, valid until
@@ -297,15 +312,19 @@ class FftwSlabFFT(SlabFFT):
         self._plans = {}
         self._windows = []
         self.transposed = slabs.size > 1
-        self.node, self.local = None, (slabs.rank,)
+        self.node, self.local, self._split = None, (slabs.rank,), None
         if slabs.size > 1:
             if node is None:
                 from mpi4py import MPI
 
-                node = comm.Split_type(MPI.COMM_TYPE_SHARED, key=comm.rank)
-            # the ranks of comm this one shares memory with, by their rank in ``node``
-            self.local = tuple(node.allgather(comm.rank))
-            self.node = node if node.size > 1 else None
+                node = self._split = comm.Split_type(MPI.COMM_TYPE_SHARED, key=comm.rank)
+            # the ranks of comm this one shares memory with, by their rank in ``node``, if the machine has room for
+            # their spectra in both precisions (decided once for all of them)
+            local = tuple(node.allgather(comm.rank))
+            room = node.size > 1 and node.bcast(fits_shared_memory(sum(
+                sum(self._parts(r, 1, c)[2:]) for r in local for c in (np.complex64, np.complex128))))
+            if room:
+                self.node, self.local = node, local
         self.input32 = self.plans(1, np.float32).real_in
 
     def plans(self, B: int, real) -> SlabPlans:
@@ -335,33 +354,37 @@ class FftwSlabFFT(SlabFFT):
 
         cplx = np.dtype(np.result_type(real, np.complex64))
         nx, ny = self.slabs.shape
-
-        def parts(rank):  # bytes of the rank's row_spec and col_spec, the first rounded up to whole pages
-            s = Slabs(self.slabs.shape, self.slabs.size, rank)
-            rows = B * s.local_shape[0] * (ny // 2 + 1) * cplx.itemsize
-            return s, rows, -(-rows // PAGE) * PAGE, B * s.spectrum_shape[1] * nx * cplx.itemsize
-
-        _, _, at, cols = parts(self.slabs.rank)
         info = MPI.Info.Create()
         info.Set("alloc_shared_noncontig", "true")  # each rank's part on its own pages, near its core
         try:
-            win = MPI.Win.Allocate_shared(at + -(-cols // PAGE) * PAGE, 1, info, comm=self.node)
+            win = MPI.Win.Allocate_shared(sum(self._parts(self.slabs.rank, B, cplx)[2:]), 1, info, comm=self.node)
         finally:
             info.Free()
         self._windows.append(win)
         out = {}
         for i, rank in enumerate(self.local):
-            s, rows, at, cols = parts(rank)
+            s, rows, at, _ = self._parts(rank, B, cplx)
             raw = np.frombuffer(win.Shared_query(i)[0], dtype=np.uint8)
             out[rank] = (raw[:rows].view(cplx).reshape(B, s.local_shape[0], ny // 2 + 1),
-                         raw[at:at + cols].view(cplx).reshape(B, s.spectrum_shape[1], nx))
+                         raw[at:at + s.spectrum_shape[1] * nx * B * cplx.itemsize].view(cplx)
+                         .reshape(B, s.spectrum_shape[1], nx))
         return out
+
+    def _parts(self, rank: int, B: int, cplx) -> tuple:
+        """``(slabs, row bytes, their whole pages, col bytes in whole pages)`` of ``rank``'s part of a window."""
+        s = Slabs(self.slabs.shape, self.slabs.size, rank)
+        nx, ny = self.slabs.shape
+        rows = B * s.local_shape[0] * (ny // 2 + 1) * np.dtype(cplx).itemsize
+        cols = B * s.spectrum_shape[1] * nx * np.dtype(cplx).itemsize
+        return s, rows, -(-rows // PAGE) * PAGE, -(-cols // PAGE) * PAGE
 
     def close(self) -> None:
         """Free the shared-memory windows (collective over the machine's ranks); the transforms are spent after."""
         for win in self._windows:
             win.Free()
-        self._windows, self._plans = [], {}
+        if self._split is not None:
+            self._split.Free()
+        self._windows, self._plans, self._split = [], {}, None
         self.input32 = None
 
     def _receive_types(self, p: SlabPlans, dst, dst_parts) -> list:
@@ -450,48 +473,13 @@ class FftwSlabFFT(SlabFFT):
         return p.real_out
 
 
-class MpiFFTPlan:
-    """The same transforms by mpi4py-fft's ``PFFT`` (FFTW), one plan per precision, on one case (B = 1).
-
-    mpi4py-fft splits rows and spectral columns as :class:`Slabs` does (checked at construction:
-    a different split is refused).
-    """
-
-    name = "mpi4py-fft"
-
-    def __init__(self, comm, slabs: Slabs, threads: int = 1):
-        try:
-            from mpi4py_fft import PFFT
-        except ImportError as exc:
-            raise ValueError(f"fft_library='mpi4py-fft' needs mpi4py-fft, not importable here ({exc}); it builds "
-                             "only with FFTW installed (libfftw3-dev): use fft_library='slab'") from exc
-        self.slabs, self.shape = slabs, slabs.shape
-        self.plans = {np.dtype(d): PFFT(comm, slabs.shape, axes=(0, 1), dtype=d, grid=(-1,), threads=threads)
-                      for d in (np.float32, np.float64)}
-        plan = self.plans[np.dtype(np.float64)]
-        rows, cols = plan.local_slice(False)[0], plan.local_slice(True)[1]
-        if (rows.start, rows.stop, cols.start, cols.stop) != (slabs.x0, slabs.x1, slabs.c0, slabs.c1):
-            raise ValueError(f"mpi4py-fft split the grid differently ({rows}, {cols}) from the solver's slabs")
-
-    def forward(self, x):
-        plan = self.plans[x.dtype]
-        out = np.empty((1, *plan.shape(True)), dtype=plan.forward.output_array.dtype)
-        plan.forward(np.ascontiguousarray(x[0]), out[0], normalize=False)
-        return out
-
-    def backward(self, spec):
-        real = np.float32 if spec.dtype == np.complex64 else np.float64
-        plan = self.plans[np.dtype(real)]
-        out = np.empty((1, *plan.shape(False)), dtype=real)
-        plan.backward(np.ascontiguousarray(spec[0]), out[0], normalize=False)
-        return out
-
-
 def make_fft(library: str, comm, slabs: Slabs, threads: int = 1):
     """The distributed FFT named ``library`` (:data:`FFT_LIBRARIES`) on ``slabs``."""
     if library not in FFT_LIBRARIES:
         raise ValueError(f"fft_library must be one of {FFT_LIBRARIES}, got {library!r}")
     if library == "mpi4py-fft":
+        from .mpi4pyfft import MpiFFTPlan
+
         return MpiFFTPlan(comm, slabs, threads)
     from ...core import fft as fft_module
 
