@@ -6,23 +6,19 @@ measured against the default ``"slab"`` transforms in ``benchmarks/README.md`` (
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
-if TYPE_CHECKING:
-    from .slabs import Slabs
 
 class MpiFFTPlan:
     """The same transforms by mpi4py-fft's ``PFFT`` (FFTW), one plan per precision, on one case (B = 1).
 
-    mpi4py-fft splits rows and spectral columns as :class:`~.slabs.Slabs` does (checked at construction:
-    a different split is refused).
+    mpi4py-fft splits rows and spectral columns as :class:`~.slabs.Slabs` does (``slabs``, this rank's; checked
+    at construction: a different split is refused).
     """
 
     name = "mpi4py-fft"
 
-    def __init__(self, comm, slabs: Slabs, threads: int = 1):
+    def __init__(self, comm, slabs, threads: int = 1):
         try:
             from mpi4py_fft import PFFT
         except ImportError as exc:
