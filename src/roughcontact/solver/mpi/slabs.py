@@ -66,6 +66,7 @@ def fits_shared_memory(nbytes: int, path=SHARED_MEMORY_DIR) -> bool:
     except OSError:
         return True
 
+
 #: Side of the square tiles :func:`copy_transposed` copies one at a time (32 x 32 complex64 values: 8 KiB read and
 #: 8 KiB written, well inside a core's L1 cache).
 TILE = 32
@@ -322,7 +323,7 @@ class FftwSlabFFT(SlabFFT):
             # their spectra in both precisions (decided once for all of them)
             local = tuple(node.allgather(comm.rank))
             room = node.size > 1 and node.bcast(fits_shared_memory(sum(
-                sum(self._parts(r, 1, c)[2:]) for r in local for c in (np.complex64, np.complex128))))
+                self._part(r, 1, c)[2] for r in local for c in (np.complex64, np.complex128))))
             if room:
                 self.node, self.local = node, local
         self.input32 = self.plans(1, np.float32).real_in
@@ -339,7 +340,7 @@ class FftwSlabFFT(SlabFFT):
                           remote=len(self.local) < self.slabs.size)
             self._plans[key] = p
             # the blocks' destinations: this rank's own buffers, and those of the ranks sharing its memory
-            p.local = spectra or {self.slabs.rank: (p.row_spec, p.col_spec)}
+            p.spectra = spectra or {self.slabs.rank: (p.row_spec, p.col_spec)}
             if exchanges and p.exchange is not exchanges[0]:  # larger now: every plan uses it
                 for q in self._plans.values():
                     if q.exchange is not None:
@@ -357,26 +358,26 @@ class FftwSlabFFT(SlabFFT):
         info = MPI.Info.Create()
         info.Set("alloc_shared_noncontig", "true")  # each rank's part on its own pages, near its core
         try:
-            win = MPI.Win.Allocate_shared(sum(self._parts(self.slabs.rank, B, cplx)[2:]), 1, info, comm=self.node)
+            win = MPI.Win.Allocate_shared(self._part(self.slabs.rank, B, cplx)[2], 1, info, comm=self.node)
         finally:
             info.Free()
         self._windows.append(win)
         out = {}
         for i, rank in enumerate(self.local):
-            s, rows, at, _ = self._parts(rank, B, cplx)
-            raw = np.frombuffer(win.Shared_query(i)[0], dtype=np.uint8)
-            out[rank] = (raw[:rows].view(cplx).reshape(B, s.local_shape[0], ny // 2 + 1),
-                         raw[at:at + s.spectrum_shape[1] * nx * B * cplx.itemsize].view(cplx)
-                         .reshape(B, s.spectrum_shape[1], nx))
+            s, at, _ = self._part(rank, B, cplx)
+            buf = win.Shared_query(i)[0]
+            out[rank] = (np.ndarray((B, s.local_shape[0], ny // 2 + 1), cplx, buf),
+                         np.ndarray((B, s.spectrum_shape[1], nx), cplx, buf, offset=at))
         return out
 
-    def _parts(self, rank: int, B: int, cplx) -> tuple:
-        """``(slabs, row bytes, their whole pages, col bytes in whole pages)`` of ``rank``'s part of a window."""
+    def _part(self, rank: int, B: int, cplx) -> tuple:
+        """``(slabs, offset, size)`` of ``rank``'s part of a window [B]: its ``row_spec``, then from the next page
+        (``offset``) its ``col_spec``, up to a whole page."""
         s = Slabs(self.slabs.shape, self.slabs.size, rank)
         nx, ny = self.slabs.shape
-        rows = B * s.local_shape[0] * (ny // 2 + 1) * np.dtype(cplx).itemsize
-        cols = B * s.spectrum_shape[1] * nx * np.dtype(cplx).itemsize
-        return s, rows, -(-rows // PAGE) * PAGE, -(-cols // PAGE) * PAGE
+        item = np.dtype(cplx).itemsize
+        at = -(-B * s.local_shape[0] * (ny // 2 + 1) * item // PAGE) * PAGE
+        return s, at, at + -(-B * s.spectrum_shape[1] * nx * item // PAGE) * PAGE
 
     def close(self) -> None:
         """Free the shared-memory windows (collective over the machine's ranks); the transforms are spent after."""
@@ -417,10 +418,10 @@ class FftwSlabFFT(SlabFFT):
         d0, d1 = dst_parts[me]
         if self.node is not None:
             self.node.Barrier()  # each rank of the machine is in this transform: what its buffer held is spent
-        for rank, spectra in p.local.items():
+        for rank, spectra in p.spectra.items():
             a0, a1 = src_parts[rank]
             copy_transposed(spectra[layout][:, :, d0:d1], src[:, :, a0:a1])
-        if len(p.local) < self.slabs.size:
+        if len(self.local) < self.slabs.size:
             self._send(p, src, (p.row_spec, p.col_spec)[layout], src_parts, dst_parts)
         if self.node is not None:
             self.node.Barrier()  # every block from this machine's ranks is in place
@@ -431,14 +432,14 @@ class FftwSlabFFT(SlabFFT):
         B, item = src.shape[0], p.send.itemsize
         counts, send_displs, at = [], [], 0
         for r, (a0, a1) in enumerate(src_parts):
-            n = 0 if r in p.local else B * (a1 - a0) * src.shape[1]
+            n = 0 if r in self.local else B * (a1 - a0) * src.shape[1]
             if n:
                 copy_transposed(p.send[at:at + n].reshape(B, a1 - a0, src.shape[1]), src[:, :, a0:a1])
             counts.append(n)
             send_displs.append(at * item)  # Alltoallw takes byte displacements
             at += n
         # rank r's block received in place: one value of its vector type, at byte offset d0 of dst's rows
-        recv_counts = [0 if r in p.local or d1 == d0 else 1 for r, (d0, d1) in enumerate(dst_parts)]
+        recv_counts = [0 if r in self.local or d1 == d0 else 1 for r, (d0, d1) in enumerate(dst_parts)]
         recv_displs = [d0 * item for d0, _ in dst_parts]
         self.comm.Alltoallw([p.send, counts, send_displs, [_complex_type(p.send.dtype)] * len(counts)],
                             [dst, recv_counts, recv_displs, self._receive_types(p, dst, dst_parts)])
