@@ -3,7 +3,10 @@
 ``mpiexec -n R python benchmarks/mpi/scaling.py SURFACE.npy STEPS [--tile T]`` solves the surface
 (a ``.npy`` file, memory-mapped: each rank reads its rows only) under ``STEPS`` equal loads up to
 ``P_MAX`` and prints one line on rank 0: grid, ranks, iterations, wall time, time per iteration and
-the peak resident memory of each rank (``ru_maxrss``). ``--tile T`` stacks the surface ``T`` times
+the peak resident memory of each rank (``ru_maxrss``) and how much of it is the other ranks' parts of its machine's
+shared-memory windows, which it maps where it writes its blocks (:attr:`~roughcontact.solver.mpi.slabs.FftwSlabFFT.
+peer_parts`, read from ``/proc/self/pagemap`` before the windows are freed; 0 where that is unreadable): the machine
+holds those pages once, in their owner's count. ``--tile T`` stacks the surface ``T`` times
 along x (a ``T L x L`` cell): the same contact problem repeated, so the iterations stay the same and
 the work per rank is constant when ``T`` grows with ``R`` (weak scaling). ``--max-iter`` stops each
 step early: every field is allocated in the first iterations, so a few give the peak memory.
@@ -15,6 +18,7 @@ H = 0.8, rms slope 0.1) first, in a process of its own; ``--single`` solves it w
 from __future__ import annotations
 
 import argparse
+import os
 import resource
 import time
 
@@ -29,10 +33,37 @@ def make(n: int, path: str) -> None:
     np.save(path, generate_surface(n, 4, n // 8, 0.8, 0, rms_slope=0.1))
 
 
+def mapped_bytes(parts) -> int:
+    """Bytes of the address ranges ``parts`` (``(address, bytes)`` each) that this process maps: the pages whose
+    ``/proc/self/pagemap`` entry has its present bit (63) set. 0 where the file cannot be read (not Linux)."""
+    page = os.sysconf("SC_PAGE_SIZE")
+    try:
+        fh = open("/proc/self/pagemap", "rb")
+    except OSError:
+        return 0
+    total = 0
+    with fh:
+        for address, nbytes in parts:
+            first, last = address // page, (address + nbytes - 1) // page
+            fh.seek(8 * first)
+            entries = np.frombuffer(fh.read(8 * (last - first + 1)), dtype=np.uint64)
+            total += int(np.count_nonzero(entries >> np.uint64(63))) * page
+    return total
+
+
 def run(path: str, steps: int, tile: int, max_iter: int | None) -> None:
     from mpi4py import MPI
 
-    from roughcontact.solver.mpi import rows_of, solve_contact_mpi
+    from roughcontact.solver.mpi import rows_of, slabs, solve_contact_mpi
+
+    peer = [0]
+    close = slabs.FftwSlabFFT.close
+
+    def close_counting(self):  # the other ranks' pages this one maps, counted before the windows are freed
+        peer[0] = max(peer[0], mapped_bytes(self.peer_parts))
+        close(self)
+
+    slabs.FftwSlabFFT.close = close_counting
 
     comm = MPI.COMM_WORLD
     h = np.load(path, mmap_mode="r")
@@ -48,12 +79,14 @@ def run(path: str, steps: int, tile: int, max_iter: int | None) -> None:
     wall = time.perf_counter() - t0
     cpu = comm.gather(time.process_time() - c0, root=0)  # each rank's CPU: its share of the work on a busy machine
     rss = comm.gather(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20, root=0)  # GiB (ru_maxrss in KiB)
+    peers = comm.gather(peer[0] / 2**30, root=0)
     if comm.rank == 0:
         its = int(ds.iterations.sum())
         print(f"grid {shape[0]}x{shape[1]} ranks {comm.size} steps {steps} iterations {its} "
               f"converged {int(ds.converged.sum())}/{steps} wall {wall:.1f} s per_iteration {1e3 * wall / its:.1f} ms "
               f"cpu_per_rank {' '.join(f'{c:.1f}' for c in cpu)} s "
-              f"A/A0 {float(ds.area_fraction[-1]):.6f} peak_rss_GiB {' '.join(f'{r:.3f}' for r in rss)}", flush=True)
+              f"A/A0 {float(ds.area_fraction[-1]):.6f} peak_rss_GiB {' '.join(f'{r:.3f}' for r in rss)} "
+              f"peer_window_GiB {' '.join(f'{r:.3f}' for r in peers)}", flush=True)
 
 
 def single(path: str, steps: int) -> None:

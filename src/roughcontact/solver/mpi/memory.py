@@ -8,13 +8,12 @@ grids of 256² to 8192² (benchmarks/README.md, "Memory a rank", 2026-12-03; ``b
 fullest rank of every run of 2 ranks or more on the grids of 2048² and more within -5.0 % and +1.6 % of the model;
 the 256² grid's (6-9 % below) and one rank's (2-D plans, no exchange buffers; 8-11 % below) under it.
 
-Since 2026-12-04 the ranks of a machine hold their spectra in one shared-memory window (:class:`.slabs.FftwSlabFFT`),
-and a rank's resident memory also counts the pages of the others' parts it writes into, which the machine holds
-once: the same runs gave the fullest rank's RSS 1.00-1.11x the model on 2048² to 8192² with 2 ranks or more, while
-the memory the machine holds (the ranks' summed proportional set size) fell 3 % (benchmarks/README.md, "The
-transposes through shared memory"). The model is kept, as a bound of what a machine holds (a memory cgroup charges
-a shared page once); a limit on the sum of the ranks' RSS would need up to 11 % more than the model, 1 % more than
-the ``contact`` rule asks (4096² on 8 ranks).
+Since 2026-12-04 the ranks of a machine hold their spectra in one shared-memory window (:class:`.slabs.FftwSlabFFT`).
+What a rank holds of its own (its peak RSS less the other ranks' window pages it maps, which the machine holds once)
+fell 0-5 %: the same runs lie 0.4-11 % under the model, which is kept as a bound (benchmarks/README.md, "With the
+shared windows"). A rank's RSS also counts those pages: where a site limits the sum of the ranks' RSS rather than
+what a memory cgroup charges, a rank needs more than the model (up to 1.007x the ``contact`` rule's share measured,
+at 4096² on 8 ranks; about 1.18x for 32768² on 128 ranks of a node, by the layout).
 """
 
 from __future__ import annotations

@@ -302,7 +302,8 @@ class FftwSlabFFT(SlabFFT):
     :attr:`input32` is the float32 forward transform's input buffer (B = 1), where the kernels write;
     :meth:`forward` returns the spectrum's buffer and :meth:`backward` the real output's, valid until
     the next transform of that precision (a caller keeps a copy of what it needs). :meth:`close` frees the
-    windows (collective).
+    windows (collective). :attr:`peer_parts` lists ``(address, bytes)`` of the other ranks' parts of them, which this
+    rank maps where it writes (benchmarks/mpi/scaling.py counts them apart from a rank's own memory).
 
     ``node`` (an ``mpi4py`` communicator, optional): the ranks of ``comm`` whose memory this rank shares, this one
     included (a communicator of one: every block through MPI); default, those on its machine.
@@ -312,6 +313,7 @@ class FftwSlabFFT(SlabFFT):
         super().__init__(comm, slabs, threads)
         self._plans = {}
         self._windows = []
+        self.peer_parts = []  # (address, bytes) of the other ranks' parts of the windows (memory measurements)
         self.transposed = slabs.size > 1
         self.node, self.local, self._split = None, (slabs.rank,), None
         if slabs.size > 1:
@@ -366,6 +368,8 @@ class FftwSlabFFT(SlabFFT):
         for i, rank in enumerate(self.local):
             s, at, _ = self._part(rank, B, cplx)
             buf = win.Shared_query(i)[0]
+            if rank != self.slabs.rank:
+                self.peer_parts.append((buf.address, buf.nbytes))
             out[rank] = (np.ndarray((B, s.local_shape[0], ny // 2 + 1), cplx, buf),
                          np.ndarray((B, s.spectrum_shape[1], nx), cplx, buf, offset=at))
         return out
@@ -385,7 +389,7 @@ class FftwSlabFFT(SlabFFT):
             win.Free()
         if self._split is not None:
             self._split.Free()
-        self._windows, self._plans, self._split = [], {}, None
+        self._windows, self._plans, self._split, self.peer_parts = [], {}, None, []
         self.input32 = None
 
     def _receive_types(self, p: SlabPlans, dst, dst_parts) -> list:
