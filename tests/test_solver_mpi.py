@@ -501,7 +501,7 @@ def test_a_stalled_step_goes_on_in_float64_over_the_ranks(tmp_path):
 #: Each rank transforms its rows of a field (odd split, B = 2, both precisions) with the transposes through a shared
 #: window on all ranks, on two machines' worth of ranks (a node split in two: shared within, MPI across), through
 #: MPI alone (nodes of one rank) and where the machine has no room to share (MPI alone); each rank checks that all
-#: give the same bits and numpy's rfft2 to rounding.
+#: give the same bits and numpy's rfft2 to rounding, and that closing frees the exchanges' MPI datatypes.
 _TRANSFORMS = """
 import sys
 import numpy as np
@@ -525,7 +525,10 @@ for name, node in nodes.items():
         x = whole[:, slabs.x0:slabs.x1].astype(real)
         spec = fft.forward(x).copy()
         res += [spec, fft.backward(spec.copy()).copy()]
+    types = [t for r in (np.float32, np.float64) for ts in getattr(fft.plans(2, r), "types", {}).values() for t in ts]
+    assert bool(types) == (name in ("mpi only", "no room") or (name == "two machines" and comm.size >= 2)), name
     fft.close()
+    assert all(t == MPI.DATATYPE_NULL for t in types), name  # the exchanges' datatypes freed
     out[name] = res
     shares = name == "shared" or (name == "two machines" and comm.size >= 4)  # 2 ranks: a machine each
     assert (fft.node is not None) == shares and len(fft.local) == (comm.size // 2 if name != "shared" and shares

@@ -60,19 +60,21 @@ def fit(rows) -> tuple[float, float, float]:
     return a / MIB, c / MIB, b
 
 
-def peer_pages(shape, ranks: int, page: int = 4096) -> list[int]:
+def peer_pages(shape, ranks: int, per_machine: int | None = None, page: int = 4096) -> list[int]:
     """Bytes of the other ranks' window parts each rank maps, by the layout alone [one value a rank]: the pages it
     writes its transposed blocks into (``FftwSlabFFT._transpose``: a forward's rows of each other rank's columns,
     ``(cols_r, nx)``, a backward's columns of each other rank's rows, ``(rows_r, ny // 2 + 1)``), in both
-    precisions, each part page-aligned with its ``col_spec`` from the next page on, all ranks on one machine."""
+    precisions, each part page-aligned with its ``col_spec`` from the next page on; the ranks on a machine are
+    ``per_machine`` consecutive ones (default: all on one)."""
     nx, ny = int(shape[0]), int(shape[1])
     nc = ny // 2 + 1
     rows, cols = split(nx, ranks), split(nc, ranks)
+    block = int(per_machine or ranks)
     out = []
     for me in range(ranks):
         (x0, x1), (c0, c1) = rows[me], cols[me]
         total = 0
-        for r in range(ranks):
+        for r in range(me // block * block, min(ranks, (me // block + 1) * block)):
             if r == me:
                 continue
             nrow, ncol = rows[r][1] - rows[r][0], cols[r][1] - cols[r][0]

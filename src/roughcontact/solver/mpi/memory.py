@@ -10,10 +10,10 @@ the 256² grid's (6-9 % below) and one rank's (2-D plans, no exchange buffers; 8
 
 Since 2026-12-04 the ranks of a machine hold their spectra in one shared-memory window (:class:`.slabs.FftwSlabFFT`).
 What a rank holds of its own (its peak RSS less the other ranks' window pages it maps, which the machine holds once)
-fell 0-5 %: the same runs lie 0.4-11 % under the model, which is kept as a bound (benchmarks/README.md, "With the
-shared windows"). A rank's RSS also counts those pages: where a site limits the sum of the ranks' RSS rather than
-what a memory cgroup charges, a rank needs more than the model (up to 1.007x the ``contact`` rule's share measured,
-at 4096² on 8 ranks; about 1.18x for 32768² on 128 ranks of a node, by the layout).
+fell 0.4-4.3 % on 2 ranks or more: the same runs lie 0.4-11 % under the model, which is kept as a bound
+(benchmarks/README.md, "With the shared windows"). A rank's RSS also counts those pages: where a site limits the sum
+of the ranks' RSS rather than what a memory cgroup charges, a rank may need more than the ``contact`` rule asks (up
+to 1.007x its share measured, at 4096² on 8 ranks; about 1.18x for 32768² on 128 ranks of one node, by the layout).
 """
 
 from __future__ import annotations

@@ -384,7 +384,12 @@ class FftwSlabFFT(SlabFFT):
         return s, at, at + -(-B * s.spectrum_shape[1] * nx * item // PAGE) * PAGE
 
     def close(self) -> None:
-        """Free the shared-memory windows (collective over the machine's ranks); the transforms are spent after."""
+        """Free the shared-memory windows (collective over the machine's ranks) and the exchanges' datatypes; the
+        transforms are spent after."""
+        for p in self._plans.values():
+            for types in getattr(p, "types", {}).values():
+                for t in types:
+                    t.Free()
         for win in self._windows:
             win.Free()
         if self._split is not None:
