@@ -310,6 +310,45 @@ def test_an_error_on_one_rank_aborts_the_run(tmp_path):
     assert "error: rank 1 alone refuses" in res.stderr and "Traceback" not in res.stderr
 
 
+NO_SHARED_MEMORY = """
+import sys
+import mpi4py
+from mpi4py import MPI as real
+
+class FailingWin:  # the machine's shared memory refused after the room check passed (another job took it)
+    @staticmethod
+    def Allocate_shared(*args, **kwargs):
+        raise real.Exception(real.ERR_NO_MEM)
+
+class Proxy:
+    def __getattr__(self, name):
+        return FailingWin if name == "Win" else getattr(real, name)
+
+mpi4py.MPI = Proxy()  # what ``from mpi4py import MPI`` gives the slab transforms from here on
+import roughcontact.solver.mpi.__main__ as cli
+sys.exit(cli.main(["--generate", "64", "2", "16", "0.8", "0", "--rms-slope", "0.1", "--p-max", "0.005",
+                   "--out", sys.argv[1]]))
+"""
+
+
+@needs_mpi
+@pytest.mark.slow  # a 2-rank run (~4 s on 2 busy cores)
+def test_a_shared_memory_window_refused_is_one_line(tmp_path):
+    """MPI refusing the shared-memory window for the spectra (after the room check passed) ends every rank with one
+    line naming the shared-memory folder, what it needed and the remedy: no traceback from inside mpi4py, no rank
+    waiting for ever, no file. Both precisions' windows are made with the solver, so a refusal cannot come later, in
+    the middle of a solve."""
+    script = tmp_path / "no_shared_memory.py"
+    script.write_text(NO_SHARED_MEMORY)
+    res = subprocess.run([MPIEXEC, "-n", "2", sys.executable, str(script), str(tmp_path / "c.nc")],
+                         capture_output=True, text=True, timeout=CAP)
+    assert res.returncode == 2, res.stderr
+    assert re.search(r"error: ranks: the shared memory for this machine's 2 ranks' spectra \([\d.]+ MiB in /dev/shm\) "
+                     r"could not be had \(.+\); free room there \(df /dev/shm\), or give a container more "
+                     r"\(docker run --shm-size\)", res.stderr), res.stderr
+    assert "Traceback" not in res.stderr and res.stderr.count("error:") == 1 and not (tmp_path / "c.nc").exists()
+
+
 def test_generator_values_name_the_value_at_fault():
     from roughcontact.solver.mpi.__main__ import generator_values
 

@@ -329,6 +329,7 @@ class FftwSlabFFT(SlabFFT):
             if room:
                 self.node, self.local = node, local
         self.input32 = self.plans(1, np.float32).real_in
+        self.plans(1, np.float64)  # its window made here too, where a failure is one line (MpiSolver: collective)
 
     def plans(self, B: int, real) -> SlabPlans:
         """The plans of ``B`` cases in precision ``real`` (float32 or float64), made at first use (collective over
@@ -361,6 +362,11 @@ class FftwSlabFFT(SlabFFT):
         info.Set("alloc_shared_noncontig", "true")  # each rank's part on its own pages, near its core
         try:
             win = MPI.Win.Allocate_shared(self._part(self.slabs.rank, B, cplx)[2], 1, info, comm=self.node)
+        except MPI.Exception as exc:
+            need = sum(self._part(r, B, cplx)[2] for r in self.local) / 2**20
+            raise OSError(f"ranks: the shared memory for this machine's {len(self.local)} ranks' spectra ({need:.1f} "
+                          f"MiB in {SHARED_MEMORY_DIR}) could not be had ({exc.Get_error_string()}); free room there "
+                          f"(df {SHARED_MEMORY_DIR}), or give a container more (docker run --shm-size)") from exc
         finally:
             info.Free()
         self._windows.append(win)
@@ -386,10 +392,8 @@ class FftwSlabFFT(SlabFFT):
     def close(self) -> None:
         """Free the shared-memory windows (collective over the machine's ranks) and the exchanges' datatypes; the
         transforms are spent after."""
-        for p in self._plans.values():
-            for types in getattr(p, "types", {}).values():
-                for t in types:
-                    t.Free()
+        for t in (t for p in self._plans.values() for types in getattr(p, "types", {}).values() for t in types):
+            t.Free()
         for win in self._windows:
             win.Free()
         if self._split is not None:
