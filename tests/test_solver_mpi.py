@@ -454,7 +454,7 @@ def test_slabs_split_rows_and_spectral_columns():
 @pytest.mark.parametrize("dtype", [np.complex64, np.complex128])
 def test_the_slab_transpose_copies_strided_blocks_value_for_value(dtype):
     """``copy_transposed`` (tiles) gives numpy's transpose bit for bit, on strided blocks of any shape and B."""
-    from roughcontact.solver.mpi.slabs import copy_transposed
+    from roughcontact.solver.mpi.transpose import copy_transposed
 
     rng = np.random.default_rng(3)
     src = (rng.standard_normal((2, 70, 101)) + 1j * rng.standard_normal((2, 70, 101))).astype(dtype)

@@ -105,6 +105,8 @@ class SlabOperator(BatchOperator):
         self.k, self.xp = kernels, np
         nx, ny = self.shape = slabs.shape
         self.fft = _SlabTransforms(fft)
+        if hasattr(fft, "on_overwrite"):  # its float32 transforms in place write over input32 (FftwSlabFFT)
+            fft.on_overwrite = lambda: kernels.overwritten(fft.input32)
         kx, ky = wavenumbers(self.shape, internal_length(aspect))
         ky = ky[:, slabs.c0:slabs.c1]
         q = 2.0 * np.pi * np.hypot(kx, ky)  # (nx, c1 - c0): this rank's columns only

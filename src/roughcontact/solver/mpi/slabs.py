@@ -25,7 +25,8 @@ import contextlib
 import shutil
 
 import numpy as np
-from numba import njit
+
+from .transpose import copy_transposed
 
 #: Distributed FFT implementations :func:`make_fft` accepts.
 FFT_LIBRARIES = ("slab", "mpi4py-fft")
@@ -65,31 +66,6 @@ def fits_shared_memory(nbytes: int, path=SHARED_MEMORY_DIR) -> bool:
         return shutil.disk_usage(path).free >= nbytes
     except OSError:
         return True
-
-
-#: Side of the square tiles :func:`copy_transposed` copies one at a time (32 x 32 complex64 values: 8 KiB read and
-#: 8 KiB written, well inside a core's L1 cache).
-TILE = 32
-
-
-@njit(cache=True, nogil=True)
-def copy_transposed(dst, src, tile=TILE):
-    """``dst[b, j, i] = src[b, i, j]`` for ``src`` of shape ``(B, m, k)`` and ``dst`` ``(B, k, m)``, tile by tile.
-
-    Either may be a strided view (a block of a slab's columns). numpy's ``np.copyto(dst, src.transpose(0, 2, 1))``
-    walks one of the two across its rows at every value: the backward transform's block of 2 ranks took 2.3 ms
-    at 2048^2 against 0.6 ms here, 15.7 against 2.7 ms at 4096^2 (one process, 2026-12-04; benchmarks/README.md,
-    "The slab transforms' plans and transposes"). A copy: the values are the same bits either way.
-    """
-    B, m, k = src.shape
-    for b in range(B):
-        for i0 in range(0, m, tile):
-            i1 = min(i0 + tile, m)
-            for j0 in range(0, k, tile):
-                j1 = min(j0 + tile, k)
-                for j in range(j0, j1):
-                    for i in range(i0, i1):
-                        dst[b, j, i] = src[b, i, j]
 
 
 class Slabs:
@@ -186,6 +162,11 @@ class SlabPlans:
     that each column is contiguous (a transform striding along x is ~3x slower at 2048², and FFTW's
     estimating planner does not reorder it): each block is copied transposed.
 
+    float32 (the iteration's products, ``in_place``): the real transforms write over their input, the rows'
+    spectrum viewed as reals with padded rows (``real_in`` is ``real_out``); float64 (the refreshes) out of
+    place. In place, a rank's float32 real transforms at 2048^2 on 2 ranks took 0.6-0.7x the time out of place
+    (2026-12-05, benchmarks/README.md, "The slab transforms in place").
+
     ``spectra``: the ``(row_spec, col_spec)`` buffers to use (this rank's part of a shared-memory window,
     :class:`FftwSlabFFT`), else its own; ``remote=False`` (every rank shares this one's memory) makes no
     exchange buffer. ``flags=None`` plans with the shipped wisdom alone
@@ -203,13 +184,19 @@ class SlabPlans:
         rows, ny = slabs.local_shape
         nx, cols = slabs.spectrum_shape
         nc = ny // 2 + 1
-        self.real_in = pyfftw.empty_aligned((B, rows, ny), dtype=real)
         # the spectra's two layouts: this rank's own buffers, or its part of its machine's shared window
         # (``spectra``: FftwSlabFFT, where the ranks that share its memory write their blocks straight in)
         self.row_spec = pyfftw.empty_aligned((B, rows, nc), dtype=cplx) if spectra is None else spectra[0]
-        # float32: the input stays the kernels' (they zero only what they wrote last); float64 (the
-        # refreshes: a product's input is not needed once transformed) writes its output over its input
-        self.real_out = pyfftw.empty_aligned((B, rows, ny), dtype=real) if real == np.float32 else self.real_in
+        # float32 in place (the class docstring; one rank's 2-D pair where the wisdom holds it, as the single solve's);
+        # float64 (the refreshes: a product's input is not needed once transformed) writes its output over its input
+        self.in_place = real == np.float32 and (slabs.size > 1 or (B == 1 and fft_module.has_shipped_plans(
+            slabs.shape)))
+        if self.in_place:
+            self.real_in = self.real_out = self.row_spec.view(real)[:, :, :ny]
+        else:
+            self.real_in = self.real_out = pyfftw.empty_aligned((B, rows, ny), dtype=real)
+            if real == np.float32:  # the input stays the kernels' (they zero only what they wrote last)
+                self.real_out = pyfftw.empty_aligned((B, rows, ny), dtype=real)
         # planned with the shipped wisdom alone (core.fft), or measured with ``flags`` in FFTW's store as it is
         # (write_wisdom, which makes the shipped slab plans)
         kw = {"flags": fft_module.PLANNER_FLAGS if flags is None else tuple(flags), "threads": threads}
@@ -299,9 +286,10 @@ class FftwSlabFFT(SlabFFT):
     in place). A whole solve on 2 ranks took 0.95-0.97x the CPU of the exchange through MPI (which copies each
     block twice more) at 2048^2, 0.88-0.91x at 4096^2 (benchmarks/README.md, "The transposes through shared memory").
 
-    :attr:`input32` is the float32 forward transform's input buffer (B = 1), where the kernels write;
-    :meth:`forward` returns the spectrum's buffer and :meth:`backward` the real output's, valid until
-    the next transform of that precision (a caller keeps a copy of what it needs). :meth:`close` frees the
+    :attr:`input32` is the float32 forward transform's input buffer (B = 1), where the kernels write, and the
+    float32 inverse's output (:class:`SlabPlans`, in place: either transform writes over it and calls
+    :attr:`on_overwrite`); :meth:`forward` returns the spectrum's buffer and :meth:`backward` the real output's,
+    valid until the next transform of that precision (a caller keeps a copy of what it needs). :meth:`close` frees the
     windows (collective). :attr:`peer_parts` lists ``(address, bytes)`` of the other ranks' parts of them, which this
     rank maps where it writes (benchmarks/mpi/scaling.py counts them apart from a rank's own memory).
 
@@ -315,6 +303,9 @@ class FftwSlabFFT(SlabFFT):
         self._windows = []
         self.peer_parts = []  # (address, bytes) of the other ranks' parts of the windows (memory measurements)
         self.transposed = slabs.size > 1
+        # called after a float32 transform has written over input32 (SlabPlans.in_place; set by SlabOperator:
+        # the kernels' next sparse write there zeroes all of it)
+        self.on_overwrite = None
         self.node, self.local, self._split = None, (slabs.rank,), None
         if slabs.size > 1:
             if node is None:
@@ -464,8 +455,10 @@ class FftwSlabFFT(SlabFFT):
         s = self.slabs
         if s.size == 1:
             p.fwd.execute()
+            self._overwritten(p)
             return p.row_spec
         p.rfft.execute()
+        self._overwritten(p)
         # to rank r: this rank's rows of r's spectral columns, transposed
         self._transpose(p, p.row_spec, 1, s.cols, s.rows)
         p.cfft.execute()
@@ -479,12 +472,18 @@ class FftwSlabFFT(SlabFFT):
         s = self.slabs
         if s.size == 1:
             p.bwd.execute()  # destroys the spectrum
+            self._overwritten(p)
             return p.real_out
         p.icfft.execute()
         # to rank r: its rows of this rank's spectral columns, transposed
         self._transpose(p, p.col_spec, 0, s.rows, s.cols)
         p.irfft.execute()  # destroys row_spec
+        self._overwritten(p)
         return p.real_out
+
+    def _overwritten(self, p: SlabPlans) -> None:
+        if p.in_place and self.on_overwrite is not None:
+            self.on_overwrite()
 
 
 def make_fft(library: str, comm, slabs: Slabs, threads: int = 1):
