@@ -457,19 +457,19 @@ def test_the_pages_a_process_maps_are_counted_page_by_page():
 
 #: ``benchmarks/mpi/memory.py run``'s output, as run on 2026-12-04 with the shared-memory windows (the raw lines in a
 #: results file).
-MEMORY_RUN = REPO / "benchmarks" / "results" / "2026-12-04_mpi_memory_per_rank.md"
+MEMORY_RUN = REPO / "benchmarks" / "results" / "2026-12-05_mpi_memory_per_rank.md"
 
 
 def test_each_rank_asks_more_than_any_measured_rank_held():
     """The rule's share of a rank (``contact_mpi_mem_mb`` over the ranks) against what the fullest rank of every run of
     ``benchmarks/mpi/memory.py run`` held of its own (its peak RSS less the other ranks' shared-memory pages it mapped;
     the raw lines in the results file, 1-64 ranks, 256²-8192²): above each by 5 % at least (no measured rank would
-    have met its limit where the machine charges a shared page once, as a memory cgroup does) and at most 25 % (no
-    node asked for in vain); the model without its margin (``rank_memory_mib``) within -15 % and +2 % of each (one
-    rank, whose 2-D plans need no exchange buffers, and the smallest grids below it); the fit of those lines at most
-    the model's constants and within 10 % of them (the model was fitted to the runs of 2026-12-03, before the
-    windows, which held 0-5 % more). The other ranks' pages a rank maps are those the layout predicts
-    (``memory.peer_pages``) within 2 % from 2048² up (the lines print MiB, too coarse below)."""
+    have met its limit where the machine charges a shared page once, as a memory cgroup does) and at most a third
+    (no node asked for in vain); what each held 0.85-1.02 of the model without its margin (``rank_memory_mib``;
+    one rank, whose 2-D pair runs in place with no exchange buffers, from 0.8); the fit of those lines at most the
+    model's constants and within 10 % of them (the model was fitted to the runs of 2026-12-03, before the windows and
+    the slab transforms in place, which held 0-5 % more). The other ranks' pages a rank maps are those the layout
+    predicts (``memory.peer_pages``) within 2 % from 2048² up (the lines print MiB, too coarse below)."""
     from roughcontact.solver.mpi import memory
 
     fit = load_script(REPO / "benchmarks" / "mpi" / "memory.py", "mpi_memory")
@@ -478,7 +478,7 @@ def test_each_rank_asks_more_than_any_measured_rank_held():
     assert {r[2] for r in runs} >= {1, 2, 4, 8, 16, 32, 64} and {r[0] for r in runs} >= {256, 2048, 4096, 8192}
     for nx, ny, ranks, held, _rss in runs:
         held_mib = held * 1024
-        assert 0.85 <= held_mib / memory.rank_memory_mib((nx, ny), ranks) <= 1.02, (nx, ranks, held)
+        assert (0.85 if ranks > 1 else 0.8) <= held_mib / memory.rank_memory_mib((nx, ny), ranks) <= 1.02, (nx, ranks)
         share = contact_mpi_mem_mb(nx, ranks) / ranks
         assert 0.75 * share <= held_mib <= share / 1.05, (nx, ranks, held, share)
     a, c, b = fit.fit(runs)

@@ -14,6 +14,9 @@ fell 0.4-4.3 % on 2 ranks or more: the same runs lie 0.4-11 % under the model, w
 (benchmarks/README.md, "With the shared windows"). A rank's RSS also counts those pages: where a site limits the sum
 of the ranks' RSS rather than what a memory cgroup charges, a rank may need more than the ``contact`` rule asks (up
 to 1.007x its share measured, at 4096² on 8 ranks; about 1.18x for 32768² on 128 ranks of one node, by the layout).
+Since 2026-12-05 the float32 slab transforms run in place (8 B a node less): every run lies 2.7-15.6 % under the
+model, every peak RSS under the rule's share (at most 0.986x; benchmarks/README.md, "With the slab transforms in
+place").
 """
 
 from __future__ import annotations

@@ -164,8 +164,8 @@ class SlabPlans:
 
     float32 (the iteration's products, ``in_place``): the real transforms write over their input, the rows'
     spectrum viewed as reals with padded rows (``real_in`` is ``real_out``); float64 (the refreshes) out of
-    place. In place, a rank's float32 real transforms at 2048^2 on 2 ranks took 0.6-0.7x the time out of place
-    (2026-12-05, benchmarks/README.md, "The slab transforms in place").
+    place. In place, a rank's float32 real transforms at 2048^2 on 2 ranks took 0.69x (forward) and 0.75x
+    (inverse) the time out of place (2026-12-05, benchmarks/README.md, "The slab transforms in place").
 
     ``spectra``: the ``(row_spec, col_spec)`` buffers to use (this rank's part of a shared-memory window,
     :class:`FftwSlabFFT`), else its own; ``remote=False`` (every rank shares this one's memory) makes no
