@@ -193,10 +193,9 @@ class SlabPlans:
             slabs.shape)))
         if self.in_place:
             self.real_in = self.real_out = self.row_spec.view(real)[:, :, :ny]
-        else:
-            self.real_in = self.real_out = pyfftw.empty_aligned((B, rows, ny), dtype=real)
-            if real == np.float32:  # the input stays the kernels' (they zero only what they wrote last)
-                self.real_out = pyfftw.empty_aligned((B, rows, ny), dtype=real)
+        else:  # float32 out of place: the input stays the kernels' (they zero only what they wrote last)
+            self.real_in = pyfftw.empty_aligned((B, rows, ny), dtype=real)
+            self.real_out = pyfftw.empty_aligned((B, rows, ny), dtype=real) if real == np.float32 else self.real_in
         # planned with the shipped wisdom alone (core.fft), or measured with ``flags`` in FFTW's store as it is
         # (write_wisdom, which makes the shipped slab plans)
         kw = {"flags": fft_module.PLANNER_FLAGS if flags is None else tuple(flags), "threads": threads}
