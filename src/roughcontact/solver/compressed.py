@@ -37,6 +37,7 @@ import math
 
 import numpy as np
 
+from ..core.passes import move_field
 from .iteration import BatchIteration
 from .projection import enforce_mean
 from .workspace import CONVERGED, GO, STALL_WINDOW, STOP, WAIT, Workspace, dot, loop_head
@@ -126,6 +127,8 @@ class CompressedKernels:
     """
 
     flags_on_host = True
+    #: On the host ``w`` moves in one pass, :func:`~roughcontact.core.passes.move_field` (numpy's bits), if True.
+    FUSED = True
 
     def __init__(self, ws: Workspace, products: WorkspaceProducts, target: float):
         self.ws, self.op, self.xp = ws, products, ws.xp
@@ -141,6 +144,8 @@ class CompressedKernels:
         # the float64 preconditioner's input, zero off F (made by the workspace's setup_method)
         self.Zf = ws.Z.ravel() if self.precond and not self.single else None
         self._proj = np.zeros(1, dtype=bool)  # the step's projection flag, as the host reads it
+        self.fused = self.FUSED and self.xp is np and ws.w.flags.c_contiguous
+        self._least_off = None  # the least w off F after the last move of w, for the next measure only
 
     # -- the free set and its vectors --------------------------------------------------------------
 
@@ -183,13 +188,14 @@ class CompressedKernels:
             gbar = g.sum() / nf
             g -= gbar
         F.g = g
-        # sign violations: out-of-contact nodes with g < 0
-        np.less(ws.w, gbar, out=ws.bbuf)
-        np.greater(ws.bbuf, ws.mask, out=ws.bbuf)  # (w < gbar) & ~mask, for booleans
-        pen = 0.0
-        F.cand = F.g_cand = None
-        if int(np.count_nonzero(ws.bbuf)):
-            F.cand = np.flatnonzero(ws.bbuf)
+        # sign violations: nodes off F with g < 0; none where the least w off F after the last move is not below
+        least, self._least_off = self._least_off, None  # gbar (known for the next measure only)
+        pen, F.cand, F.g_cand = 0.0, None, None
+        if least is None or least < gbar:
+            np.less(ws.w, gbar, out=ws.bbuf)
+            np.greater(ws.bbuf, ws.mask, out=ws.bbuf)  # (w < gbar) & ~mask, for booleans
+            F.cand = np.flatnonzero(ws.bbuf) if np.count_nonzero(ws.bbuf) else None
+        if F.cand is not None:
             F.g_cand = ws.wf[F.cand] - gbar
             pen = -float(F.g_cand.min())
         orth = 0.0
@@ -429,17 +435,22 @@ class CompressedKernels:
             fresh[...] = False
             return nF
         f = factor.item()
-        np.multiply(R, R.dtype.type(abs(f)), out=R)
-        if f < 0:
-            np.subtract(ws.w, R, out=ws.w)  # u <- u - tau K t: exact, no FFT pair for p
+        if self.fused:  # one pass, the same bits; the least w off F for the next measure
+            self._least_off = move_field(ws.w, R, R.dtype.type(abs(f)), f < 0, ws.mask)
         else:
-            np.add(ws.w, R, out=ws.w)
+            np.multiply(R, R.dtype.type(abs(f)), out=R)
+            if f < 0:
+                np.subtract(ws.w, R, out=ws.w)  # u <- u - tau K t: exact, no FFT pair for p
+            else:
+                np.add(ws.w, R, out=ws.w)
         fresh[...] = False
         if not proj[0]:
             return nF
         idx = F.idx
         keep = F.trial > 0.0
         gone = idx[~keep]
+        if self._least_off is not None and gone.size:  # the nodes leaving F are off it now
+            self._least_off = min(self._least_off, float(np.fmin.reduce(ws.wf[gone], initial=math.inf)))
         ws.mask.reshape(-1)[gone] = False
         ws.Pf[gone] = 0.0
         F.idx, F.p = idx[keep], F.p[keep]

@@ -1,0 +1,114 @@
+"""Fused passes over whole fields for the numpy backend: one pass (numba) where numpy made several.
+
+The single solve's round (:class:`~roughcontact.solver.compressed.CompressedKernels`) passes over the whole
+grid besides its transforms: ``w`` moved by the float32 product, the search for nodes off the contact set
+that violate the gap, and ``t . K t`` from a spectrum. They are bound by memory traffic, not arithmetic
+(1024²: 4-8 MiB a field, beyond a core's L2). :func:`move_field` moves ``w`` and finds, in that same pass,
+the least ``w`` off the contact set, so that the next search runs only where some node can violate (on the
+paper case at 1024², 326 of 637 measures: the 267 that found some, the first of each step and those after a
+recomputation of ``w``); :func:`weighted_squares` sums ``t . K t`` without numpy's
+temporaries. Each gives the bits of the numpy expressions it replaces (the same operations in the same
+order, ``fastmath`` off; ``tests/test_passes.py`` compares them), so the solver's results do not change.
+
+Examples
+--------
+>>> import numpy as np
+>>> w = np.array([[0.5, -1.0], [2.0, 0.25]])
+>>> r = np.array([[1.0, 1.0], [0.0, 4.0]], dtype=np.float32)
+>>> mask = np.array([[False, True], [False, False]])
+>>> move_field(w, r, np.float32(0.5), True, mask)  # w - 0.5 r; the least w off the mask
+-1.75
+>>> w
+array([[ 0.  , -1.5 ],
+       [ 2.  , -1.75]])
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+_JIT = {"cache": True, "nogil": True}
+
+
+@njit(**_JIT)
+def move_field(w, r, c, subtract, mask):
+    """``w -= r c`` (``subtract``) or ``w += r c`` in place; the least new ``w`` off ``mask`` (inf if none).
+
+    ``w``: float64 ``(nx, ny)``; ``r``: float32 ``(nx, ny)``, maybe a strided view (padded rows); ``c``: a
+    float32 number: ``r c`` is rounded to float32 first, as numpy's ``np.multiply(r, c, out=r)`` then
+    ``w -= r`` (``r`` is left unchanged here). NaN never counts as the least value (as ``w < x`` is False for
+    it). Shapes are not checked: the caller's fields share one shape.
+    """
+    nx, ny = w.shape
+    least = np.inf
+    for i in range(nx):
+        for j in range(ny):
+            d = np.float64(r[i, j] * c)
+            v = w[i, j] - d if subtract else w[i, j] + d
+            w[i, j] = v
+            if v < least and not mask[i, j]:
+                least = v
+    return least
+
+
+@njit(inline="always")
+def _block(a, wt, s, n):
+    # numpy's pairwise_sum for n <= 128 (loops_utils.h.src): eight accumulators, then the rest in order
+    if n < 8:
+        res = np.float32(0.0)
+        for i in range(s, s + n):
+            res += wt[i] * (a[i] * a[i])
+        return res
+    r0 = wt[s] * (a[s] * a[s])
+    r1 = wt[s + 1] * (a[s + 1] * a[s + 1])
+    r2 = wt[s + 2] * (a[s + 2] * a[s + 2])
+    r3 = wt[s + 3] * (a[s + 3] * a[s + 3])
+    r4 = wt[s + 4] * (a[s + 4] * a[s + 4])
+    r5 = wt[s + 5] * (a[s + 5] * a[s + 5])
+    r6 = wt[s + 6] * (a[s + 6] * a[s + 6])
+    r7 = wt[s + 7] * (a[s + 7] * a[s + 7])
+    i = s + 8
+    end = s + n - n % 8
+    while i < end:
+        r0 += wt[i] * (a[i] * a[i])
+        r1 += wt[i + 1] * (a[i + 1] * a[i + 1])
+        r2 += wt[i + 2] * (a[i + 2] * a[i + 2])
+        r3 += wt[i + 3] * (a[i + 3] * a[i + 3])
+        r4 += wt[i + 4] * (a[i + 4] * a[i + 4])
+        r5 += wt[i + 5] * (a[i + 5] * a[i + 5])
+        r6 += wt[i + 6] * (a[i + 6] * a[i + 6])
+        r7 += wt[i + 7] * (a[i + 7] * a[i + 7])
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < s + n:
+        res += wt[i] * (a[i] * a[i])
+        i += 1
+    return res
+
+
+@njit(**_JIT)
+def _pairwise(a, wt, s, n):
+    if n <= 128:
+        return _block(a, wt, s, n)
+    half = n // 2
+    half -= half % 8  # (numpy's split: a multiple of the unrolling)
+    return _pairwise(a, wt, s, half) + _pairwise(a, wt, s + half, n - half)
+
+
+def weighted_squares(a, weights) -> float:
+    """``sum(weights * a**2)`` over float32 arrays of one shape, as numpy's ``(a * a * weights).sum()``.
+
+    The float32 terms summed in numpy's pairwise order (blocks of 128 with eight accumulators, halves
+    split at multiples of 8), so the result is numpy's to the bit; one pass reading ``a`` and ``weights``,
+    no temporary (numpy: two multiplies into a buffer, then the sum). Both must be C-contiguous float32.
+
+    >>> a = np.arange(300, dtype=np.float32)
+    >>> weighted_squares(a, np.full(300, 0.5, dtype=np.float32)) == float((a * a * np.float32(0.5)).sum())
+    True
+    """
+    a, weights = a.reshape(-1), weights.reshape(-1)
+    if a.dtype != np.float32 or weights.dtype != np.float32 or a.size != weights.size:
+        raise ValueError(f"weighted_squares takes float32 arrays of one size; got {a.dtype} ({a.size}) and "
+                         f"{weights.dtype} ({weights.size})")
+    return float(_pairwise(a, weights, 0, a.size)) if a.size else 0.0

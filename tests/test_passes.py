@@ -1,0 +1,85 @@
+"""The fused whole-grid passes of the numpy backend (roughcontact.core.passes): numpy's bits, one pass.
+
+Each kernel stands in for numpy expressions inside the single solve, whose outputs must not change by a bit
+(tests/solver_fingerprints.py); so each is compared here with those expressions for equality, not to a
+tolerance, on shapes that exercise every branch (padded rows, blocks of 8 and 128 with rests, NaN), and the
+single solve with the passes against the same solve with numpy's.
+"""
+from __future__ import annotations
+
+import doctest
+
+import numpy as np
+import pytest
+
+from roughcontact.core import passes
+from roughcontact.core.passes import move_field, weighted_squares
+from roughcontact.solver import compressed, solve_contact
+from roughcontact.surfaces.synthetic import generate_surface
+
+
+def test_the_module_examples_run():
+    assert doctest.testmod(passes).failed == 0
+
+
+def _padded(rng, nx, ny):
+    """A float32 ``(nx, ny)`` view with padded rows, as an in-place transform's output."""
+    buf = rng.standard_normal((nx, 2 * (ny // 2 + 1))).astype(np.float32)
+    return buf[:, :ny]
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (3, 5), (16, 16), (64, 40), (128, 128)])
+@pytest.mark.parametrize("subtract", [True, False])
+def test_move_field_is_numpys_two_passes_and_finds_the_least_w_off_the_mask(shape, subtract):
+    rng = np.random.default_rng(sum(shape) + subtract)
+    w = rng.standard_normal(shape) * 1e-3
+    mask = rng.random(shape) < 0.3
+    for r in (_padded(rng, *shape), rng.standard_normal(shape).astype(np.float32)):
+        c = np.float32(rng.random() * 1e-2)
+        expected = w.copy()
+        rs = np.multiply(r, c)  # what settle's numpy passes did: r scaled in float32, then added in float64
+        (np.subtract if subtract else np.add)(expected, rs, out=expected)
+        r_before = r.copy()
+        least = move_field(w, r, c, subtract, mask)
+        assert np.array_equal(w, expected)
+        assert np.array_equal(r, r_before)  # the product's output is left as it was
+        assert least == (expected[~mask].min() if (~mask).any() else np.inf)
+
+
+def test_move_field_ignores_nan_and_gives_inf_where_every_node_is_masked():
+    w = np.array([[np.nan, 1.0], [2.0, 3.0]])
+    r = np.zeros((2, 2), dtype=np.float32)
+    assert move_field(w.copy(), r, np.float32(1.0), True, np.array([[False, True], [False, True]])) == 2.0
+    assert move_field(w.copy(), r, np.float32(1.0), True, np.ones((2, 2), dtype=bool)) == np.inf
+
+
+@pytest.mark.parametrize("n", [0, 1, 7, 8, 9, 15, 16, 127, 128, 129, 136, 255, 256, 1000, 4099, 65 * 66, 513 * 1026])
+def test_weighted_squares_is_numpys_pairwise_sum_to_the_bit(n):
+    rng = np.random.default_rng(n)
+    a = (rng.standard_normal(n) * 10.0 ** rng.integers(-3, 4, n)).astype(np.float32)
+    wt = rng.random(n).astype(np.float32)
+    square = np.multiply(a, a)
+    np.multiply(square, wt, out=square)
+    assert weighted_squares(a, wt) == float(square.sum())
+
+
+def test_weighted_squares_keeps_nan_and_refuses_other_dtypes():
+    a = np.ones(300, dtype=np.float32)
+    a[200] = np.nan
+    assert np.isnan(weighted_squares(a, np.ones(300, dtype=np.float32)))
+    with pytest.raises(ValueError, match="float32"):
+        weighted_squares(a.astype(np.float64), np.ones(300))
+
+
+@pytest.mark.parametrize("boundary", ["periodic", "free"])
+def test_the_single_solve_gives_the_same_bits_with_the_fused_passes(monkeypatch, boundary):
+    """The solve's every output with :func:`move_field` (and the measure's skip it allows) against numpy's passes."""
+    h = generate_surface(128, 4, 32, 0.8, 2, rms_slope=0.1)
+    loads = np.linspace(5e-4, 5e-3, 6)
+    fused = solve_contact(h, loads, boundary=boundary, store_fields=[6])
+    monkeypatch.setattr(compressed.CompressedKernels, "FUSED", False)
+    plain = solve_contact(h, loads, boundary=boundary, store_fields=[6])
+    assert int(fused["iterations"].sum()) > 0
+    for name in plain.variables:
+        if name != "wall_time":
+            assert np.array_equal(fused[name].values, plain[name].values, equal_nan=True), name
