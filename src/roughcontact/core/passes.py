@@ -5,10 +5,11 @@ grid besides its transforms: ``w`` moved by the float32 product, the search for 
 that violate the gap, and ``t . K t`` from a spectrum. They are bound by memory traffic, not arithmetic
 (1024²: 4-8 MiB a field, beyond a core's L2). :func:`move_field` moves ``w`` and finds, in that same pass,
 the least ``w`` off the contact set, so that the next search runs only where some node can violate (on the
-paper case at 1024², 326 of 637 measures: the 267 that found some, the first of each step and those after a
-recomputation of ``w``); :func:`weighted_squares` sums ``t . K t`` without numpy's
-temporaries. Each gives the bits of the numpy expressions it replaces (the same operations in the same
-order, ``fastmath`` off; ``tests/test_passes.py`` compares them), so the solver's results do not change.
+paper case at 1024², 326 of 637 measures: the 236 whose least was below ``gbar``, each of which found some, and the
+90 where it was not known: a step's first measure, or one after ``w`` was recomputed in float64);
+:func:`weighted_squares` sums ``t . K t`` in one pass, without numpy's passes through a buffer. Each gives the bits
+of the numpy expressions it replaces (the same operations in the same order, ``fastmath`` off;
+``tests/test_passes.py`` compares them), so the solver's results do not change.
 
 Examples
 --------
