@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from roughcontact.core import passes
-from roughcontact.core.passes import move_field, weighted_squares
+from roughcontact.core.backend import remap_rows
+from roughcontact.core.passes import move_field, remap, scatter_scaled, weighted_squares
 from roughcontact.solver import compressed, solve_contact
 from roughcontact.surfaces.synthetic import generate_surface
 
@@ -69,6 +70,31 @@ def test_weighted_squares_keeps_nan_and_refuses_other_dtypes():
     assert np.isnan(weighted_squares(a, np.ones(300, dtype=np.float32)))
     with pytest.raises(ValueError, match="float32"):
         weighted_squares(a.astype(np.float64), np.ones(300))
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_scatter_scaled_is_numpys_scaled_copy_and_fancy_index(dtype):
+    """Each product taken in float64 and rounded once, as ``np.multiply(..., out=buffer, casting="unsafe")``: over
+    magnitudes that float32 overflows and rounds to subnormals, and scales that are not powers of two."""
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        values = rng.standard_normal(700) * 10.0 ** rng.integers(-45, 45, 700)
+        scale = float(rng.standard_normal() * 10.0 ** rng.integers(-8, 8))
+        pos = rng.choice(3000, 700, replace=False)
+        expected, flat = np.zeros(3000, dtype=dtype), np.zeros(3000, dtype=dtype)
+        with np.errstate(over="ignore"):  # (float32 overflows to inf, as the kernel's rounding does)
+            expected[pos] = np.multiply(values, scale, out=np.empty(700, dtype=dtype), casting="unsafe")
+        scatter_scaled(flat, pos, values, scale)
+        assert np.array_equal(flat, expected, equal_nan=True)
+
+
+@pytest.mark.parametrize("itype", [np.int32, np.int64])
+def test_remap_is_numpys_expression_and_keeps_the_dtype(itype):
+    idx = np.sort(np.random.default_rng(3).choice(1000 * 999, 5000, replace=False)).astype(itype)
+    out = remap(idx, 999, 1000)
+    assert out.dtype == itype and np.array_equal(out, (idx // 999) * 1000 + idx % 999)
+    assert np.array_equal(remap_rows(idx, 999, 1000), out) and remap_rows(idx, 999, 999) is idx
+    assert np.array_equal(remap(np.zeros(0, dtype=itype), 4, 6), np.zeros(0, dtype=itype))
 
 
 @pytest.mark.parametrize("boundary", ["periodic", "free"])

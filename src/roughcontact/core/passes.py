@@ -113,3 +113,25 @@ def weighted_squares(a, weights) -> float:
         raise ValueError(f"weighted_squares takes float32 arrays of one size; got {a.dtype} ({a.size}) and "
                          f"{weights.dtype} ({weights.size})")
     return float(_pairwise(a, weights, 0, a.size)) if a.size else 0.0
+
+
+@njit(**_JIT)
+def scatter_scaled(flat, pos, values, scale):
+    """``flat[pos] = values * scale``, each product taken in float64 and rounded once to ``flat``'s dtype.
+
+    numpy's ``np.multiply(values, scale, out=float32 buffer, casting="unsafe")`` then ``flat[pos] = buffer``, without
+    the buffer and the fancy-index pass. ``flat``: 1-D; ``pos``: int; ``values``: float64, one per position.
+    """
+    for k in range(pos.size):
+        flat[pos[k]] = values[k] * scale
+
+
+@njit(**_JIT)
+def remap(idx, n1, row):
+    """``(idx // n1) * row + idx % n1`` for non-negative ``idx`` (1-D int), in one pass (a new array, ``idx``'s
+    dtype): flat indices of a grid with rows of ``n1`` as those of a grid with rows of ``row``."""
+    out = np.empty_like(idx)
+    for k in range(idx.size):
+        i = idx[k]
+        out[k] = (i // n1) * row + i % n1
+    return out
