@@ -7,9 +7,10 @@ that violate the gap, and ``t . K t`` from a spectrum. They are bound by memory 
 the least ``w`` off the contact set, so that the next search runs only where some node can violate (on the
 paper case at 1024², 326 of 637 measures: the 236 whose least was below ``gbar``, each of which found some, and the
 90 where it was not known: a step's first measure, or one after ``w`` was recomputed in float64);
-:func:`weighted_squares` sums ``t . K t`` in one pass, without numpy's passes through a buffer. Each gives the bits
-of the numpy expressions it replaces (the same operations in the same order, ``fastmath`` off;
-``tests/test_passes.py`` compares them), so the solver's results do not change.
+:func:`weighted_squares` sums ``t . K t`` in one pass, without numpy's passes through a buffer. A sparse load into a
+transform's input (:func:`scatter_scaled`) and the remap of node indices to a padded layout (:func:`remap`) are one
+pass each too. Each gives the bits of the numpy expressions it replaces (the same operations in the same order,
+``fastmath`` off; ``tests/test_passes.py`` compares them), so the solver's results do not change.
 
 Examples
 --------
