@@ -89,12 +89,14 @@ def test_scatter_scaled_is_numpys_scaled_copy_and_fancy_index(dtype):
 
 
 @pytest.mark.parametrize("itype", [np.int32, np.int64])
-def test_remap_is_numpys_expression_and_keeps_the_dtype(itype):
-    idx = np.sort(np.random.default_rng(3).choice(1000 * 999, 5000, replace=False)).astype(itype)
-    out = remap(idx, 999, 1000)
-    assert out.dtype == itype and np.array_equal(out, (idx // 999) * 1000 + idx % 999)
-    assert np.array_equal(remap_rows(idx, 999, 1000), out) and remap_rows(idx, 999, 999) is idx
-    assert np.array_equal(remap(np.zeros(0, dtype=itype), 4, 6), np.zeros(0, dtype=itype))
+@pytest.mark.parametrize("n1", [999, 1024, 1])
+def test_remap_is_numpys_expression_and_keeps_the_dtype(itype, n1):
+    """Both forms, a division (999) and a shift and mask (powers of two), on negative indices too (both floor)."""
+    idx = np.random.default_rng(n1).integers(-5000, 1000 * 999, 5000).astype(itype)
+    out = remap(idx, n1, n1 + 2)
+    assert out.dtype == itype and np.array_equal(out, (idx // n1) * (n1 + 2) + idx % n1)
+    assert np.array_equal(remap_rows(idx, n1, n1 + 2), out) and remap_rows(idx, n1, n1) is idx
+    assert np.array_equal(remap(np.zeros(0, dtype=itype), n1, n1 + 2), np.zeros(0, dtype=itype))
 
 
 @pytest.mark.parametrize("boundary", ["periodic", "free"])
@@ -109,3 +111,20 @@ def test_the_single_solve_gives_the_same_bits_with_the_fused_passes(monkeypatch,
     for name in plain.variables:
         if name != "wall_time":
             assert np.array_equal(fused[name].values, plain[name].values, equal_nan=True), name
+
+
+def test_a_sparse_load_gives_numpys_input_and_refuses_mismatched_lengths_as_before():
+    """``SpectralProduct.load``'s one-pass path (float64 values, index arrays of one length) writes numpy's input;
+    anything else takes numpy's path, which refuses values that do not fit the positions."""
+    from roughcontact.core.backend import SpectralProduct, get_backend
+
+    prod = SpectralProduct(get_backend("numpy"), (16, 16), np.float32, in_place=True)
+    rng = np.random.default_rng(5)
+    pos = prod.positions(np.sort(rng.choice(256, 40, replace=False)))
+    values = rng.standard_normal(40)
+    prod.load(pos, values, 0.3)
+    expected = np.zeros_like(prod._plan.flat)
+    expected[pos] = np.multiply(values, 0.3, out=np.empty(40, dtype=np.float32), casting="unsafe")
+    assert np.array_equal(prod._plan.flat, expected)
+    with pytest.raises(ValueError):
+        prod.load(pos, values[:39], 0.3)

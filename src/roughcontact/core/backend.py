@@ -95,11 +95,12 @@ class SpectralProduct:
     def load(self, pos, values, scale: float) -> None:
         """Input of :meth:`forward`: ``values * scale`` at :meth:`positions` ``pos``, 0 elsewhere.
 
-        The product is taken in float64 and rounded once to the product's precision. Loading the
-        same ``pos`` array again writes only those nodes where the plan keeps its input.
+        The product is taken in float64 for float64 ``values`` (the solver's) and rounded once to the product's
+        precision. Loading the same ``pos`` array again writes only those nodes where the plan keeps its input.
         """
         plan = self._plan
-        if isinstance(plan, _FFTWProduct) and values.dtype == np.float64 and pos.ndim == 1:
+        if (isinstance(plan, _FFTWProduct) and isinstance(values, np.ndarray) and isinstance(pos, np.ndarray)
+                and values.dtype == np.float64 and values.ndim == pos.ndim == 1 and values.size == pos.size):
             scatter_scaled(plan.cleared(pos), pos, values, float(scale))  # (one pass, the same bits)
         else:
             plan.load(pos, np.multiply(values, scale, out=self.backend.xp.empty(values.shape, dtype=self.dtype),
@@ -312,7 +313,7 @@ def remap_rows(idx, n1: int, row: int):
     if row == n1:
         return idx
     if isinstance(idx, np.ndarray) and idx.ndim == 1 and idx.dtype.kind == "i":
-        return remap(idx, n1, row)  # (one pass: numpy's three and two temporaries cost 4-5x at 1024²)
+        return remap(idx, n1, row)  # (one pass where numpy made four, each with its temporary)
     return (idx // n1) * row + idx % n1
 
 

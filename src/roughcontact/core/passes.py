@@ -1,4 +1,4 @@
-"""Fused passes over whole fields for the numpy backend: one pass (numba) where numpy made several.
+"""Fused passes of the single solve for the numpy backend: one pass (numba) where numpy made several.
 
 The single solve's round (:class:`~roughcontact.solver.compressed.CompressedKernels`) passes over the whole
 grid besides its transforms: ``w`` moved by the float32 product, the search for nodes off the contact set
@@ -9,8 +9,9 @@ paper case at 1024², 326 of 637 measures: the 236 whose least was below ``gbar`
 90 where it was not known: a step's first measure, or one after ``w`` was recomputed in float64);
 :func:`weighted_squares` sums ``t . K t`` in one pass, without numpy's passes through a buffer. A sparse load into a
 transform's input (:func:`scatter_scaled`) and the remap of node indices to a padded layout (:func:`remap`) are one
-pass each too. Each gives the bits of the numpy expressions it replaces (the same operations in the same order,
-``fastmath`` off; ``tests/test_passes.py`` compares them), so the solver's results do not change.
+pass each too. Each gives the bits of the numpy expressions it replaces (their floating-point operations in their order,
+``fastmath`` off; a shift and a mask for an integer division by a power of two; ``tests/test_passes.py`` compares
+them), so the solver's results do not change.
 
 Examples
 --------
@@ -120,8 +121,10 @@ def weighted_squares(a, weights) -> float:
 def scatter_scaled(flat, pos, values, scale):
     """``flat[pos] = values * scale``, each product taken in float64 and rounded once to ``flat``'s dtype.
 
-    numpy's ``np.multiply(values, scale, out=float32 buffer, casting="unsafe")`` then ``flat[pos] = buffer``, without
-    the buffer and the fancy-index pass. ``flat``: 1-D; ``pos``: int; ``values``: float64, one per position.
+    numpy's ``np.multiply(values, scale, out=buffer of flat's dtype, casting="unsafe")`` then ``flat[pos] = buffer``,
+    without the buffer and the fancy-index pass. ``flat``: 1-D; ``pos``: 1-D int; ``values``: 1-D float64 of
+    ``pos``'s length. Nothing is checked (no bounds, no lengths) and no floating-point warning is given (a float32
+    overflow rounds to inf silently): the caller (``SpectralProduct.load``) passes its own arrays.
     """
     for k in range(pos.size):
         flat[pos[k]] = values[k] * scale
@@ -129,9 +132,19 @@ def scatter_scaled(flat, pos, values, scale):
 
 @njit(**_JIT)
 def remap(idx, n1, row):
-    """``(idx // n1) * row + idx % n1`` for non-negative ``idx`` (1-D int), in one pass (a new array, ``idx``'s
-    dtype): flat indices of a grid with rows of ``n1`` as those of a grid with rows of ``row``."""
+    """``(idx // n1) * row + idx % n1`` for ``idx`` (1-D int), in one pass (a new array, ``idx``'s dtype): flat
+    indices of a grid with rows of ``n1`` as those of a grid with rows of ``row``. Where ``n1`` is a power of two the
+    division is a shift and the remainder a mask (the same values, negative ones too: both floor); elsewhere a
+    division a node, which costs this pass most of its gain over numpy's."""
     out = np.empty_like(idx)
+    if n1 > 0 and n1 & (n1 - 1) == 0:
+        shift, mask = 0, n1 - 1
+        while (1 << shift) < n1:
+            shift += 1
+        for k in range(idx.size):
+            i = idx[k]
+            out[k] = (i >> shift) * row + (i & mask)
+        return out
     for k in range(idx.size):
         i = idx[k]
         out[k] = (i // n1) * row + i % n1
