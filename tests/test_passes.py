@@ -1,4 +1,4 @@
-"""The fused whole-grid passes of the numpy backend (roughcontact.core.passes): numpy's bits, one pass.
+"""The fused passes of the numpy backend (roughcontact.core.passes): numpy's bits, one pass each.
 
 Each kernel stands in for numpy expressions inside the single solve, whose outputs must not change by a bit
 (tests/solver_fingerprints.py); so each is compared here with those expressions for equality, not to a

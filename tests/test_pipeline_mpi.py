@@ -455,8 +455,8 @@ def test_the_pages_a_process_maps_are_counted_page_by_page():
         m.close()
 
 
-#: ``benchmarks/mpi/memory.py run``'s output, as run on 2026-12-04 with the shared-memory windows (the raw lines in a
-#: results file).
+#: ``benchmarks/mpi/memory.py run``'s output, as run on 2026-12-05 with the shared-memory windows and the slab
+#: transforms in place (the raw lines in a results file).
 MEMORY_RUN = REPO / "benchmarks" / "results" / "2026-12-05_mpi_memory_per_rank.md"
 
 

@@ -114,7 +114,7 @@ def weighted_squares(a, weights) -> float:
     if a.dtype != np.float32 or weights.dtype != np.float32 or a.size != weights.size:
         raise ValueError(f"weighted_squares takes float32 arrays of one size; got {a.dtype} ({a.size}) and "
                          f"{weights.dtype} ({weights.size})")
-    return float(_pairwise(a, weights, 0, a.size)) if a.size else 0.0
+    return float(_pairwise(a, weights, 0, a.size))  # (none: 0.0, as numpy's)
 
 
 @njit(**_JIT)
