@@ -455,6 +455,38 @@ def test_the_pages_a_process_maps_are_counted_page_by_page():
         m.close()
 
 
+def test_a_tiled_grid_is_planned_in_place_from_its_measured_plans(tmp_path, monkeypatch):
+    """benchmarks/mpi/scaling.py's ``measured_plans`` (one rank on a tiled grid, the weak scaling's serial
+    reference): the grid's 2-D pairs are measured into a copy of the shipped wisdom, with a record of them, and the
+    process then plans that grid in place from the copy, as a square grid's; the shipped file is left unchanged."""
+    pytest.importorskip("pyfftw")
+    from roughcontact.core import fft
+    from roughcontact.solver.mpi import slabs
+
+    scaling = load_script(REPO / "benchmarks" / "mpi" / "scaling.py", "mpi_scaling")
+    shape = (128, 64)
+    shipped = fft.WISDOM_FILE.read_bytes()
+    monkeypatch.setattr(fft, "WISDOM_FILE", fft.WISDOM_FILE)  # restored after: measured_plans points it at the copy
+    monkeypatch.setattr(fft, "has_shipped_plans", fft.has_shipped_plans)
+    assert not fft.has_shipped_plans(shape)
+    try:
+        scaling.measured_plans(shape, tmp_path)
+        assert fft.WISDOM_FILE == tmp_path / "wisdom.json"
+        assert fft.has_shipped_plans(shape) and fft.has_shipped_plans((64, 64)) and not fft.has_shipped_plans((64, 128))
+        data = json.loads(fft.WISDOM_FILE.read_text())
+        chosen = data["machines"].get(fft.machine_key(), data["machines"][data["default"]])
+        assert chosen["benchmark"] == f"{shape} on one rank"
+        plans = slabs.SlabPlans(slabs.Slabs(shape, 1, 0), 1, np.float32, 1)
+        assert plans.in_place
+        with fft.shipped_wisdom_only():  # the copy's plans hold this grid: planning from them alone succeeds
+            import pyfftw
+
+            pyfftw.FFTW(plans.real_in, plans.row_spec, axes=(1, 2), flags=("FFTW_ESTIMATE", "FFTW_WISDOM_ONLY"))
+    finally:
+        fft.shipped_wisdom.cache_clear()
+    assert (REPO / "src" / "roughcontact" / "core" / "fftw_wisdom.json").read_bytes() == shipped
+
+
 #: ``benchmarks/mpi/memory.py run``'s output, as run on 2026-12-05 with the shared-memory windows and the slab
 #: transforms in place (the raw lines in a results file).
 MEMORY_RUN = REPO / "benchmarks" / "results" / "2026-12-05_mpi_memory_per_rank.md"

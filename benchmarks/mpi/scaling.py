@@ -10,6 +10,11 @@ holds those pages once, in their owner's count. ``--tile T`` stacks the surface 
 along x (a ``T L x L`` cell): the same contact problem repeated, so the iterations stay the same and
 the work per rank is constant when ``T`` grows with ``R`` (weak scaling). ``--max-iter`` stops each
 step early: every field is allocated in the first iterations, so a few give the peak memory.
+``--measured-plans`` (one rank, ``T > 1``): the tiled grid's 2-D pair is not in the shipped wisdom (square grids
+only), so FFTW would plan it by its heuristics; this measures it first (``FFTW_MEASURE``, both precisions, before the
+timed solve) into a copy of the shipped wisdom that the process then plans with, so that one rank on the tiled grid
+is timed with plans of the quality the square grid's have (the weak scaling's serial reference, benchmarks/README.md,
+"The weak scaling's own ceiling").
 ``python benchmarks/mpi/scaling.py --make N SURFACE.npy`` writes the surface (k_l = 4, k_s = N / 8,
 H = 0.8, rms slope 0.1) first, in a process of its own; ``--single`` solves it without MPI
 (:func:`~roughcontact.solver.solve_contact` and the batched solver with B = 1), for reference.
@@ -51,7 +56,29 @@ def mapped_bytes(parts) -> int:
     return total
 
 
-def run(path: str, steps: int, tile: int, max_iter: int | None) -> None:
+def measured_plans(shape, directory: str) -> None:
+    """Plan ``shape``'s 2-D pairs on one rank with FFTW_MEASURE into a copy of the shipped wisdom in ``directory``,
+    and make this process plan with that copy, ``shape`` counted as a grid it holds (module docstring)."""
+    import shutil
+    from pathlib import Path
+
+    from roughcontact.core import fft
+    from roughcontact.solver.mpi import slabs
+
+    shape = tuple(int(s) for s in shape)
+    shipped = fft.has_shipped_plans
+    fft.has_shipped_plans = lambda s: tuple(int(v) for v in s) == shape or shipped(s)  # in place, as a square's
+    copy = Path(directory) / "wisdom.json"
+    shutil.copy(fft.WISDOM_FILE, copy)
+    fft.add_plans([lambda flags, r=real: slabs.SlabPlans(slabs.Slabs(shape, 1, 0), 1, r, 1, flags=flags)
+                   for real in (np.float64, np.float32)], copy, {"benchmark": f"{shape} on one rank"})
+    fft.WISDOM_FILE = copy
+    fft.shipped_wisdom.cache_clear()
+
+
+def run(path: str, steps: int, tile: int, max_iter: int | None, measured: bool = False) -> None:
+    import tempfile
+
     from mpi4py import MPI
 
     from roughcontact.solver.mpi import rows_of, slabs, solve_contact_mpi
@@ -71,6 +98,11 @@ def run(path: str, steps: int, tile: int, max_iter: int | None) -> None:
     shape = (tile * n, n)
     x0, x1 = rows_of(shape, comm)
     rows = np.ascontiguousarray(np.take(h, np.arange(x0, x1) % n, axis=0))
+    if measured:
+        if comm.size != 1 or tile == 1:
+            raise SystemExit("--measured-plans: one rank and --tile 2 or more (the square grids' plans are shipped)")
+        tmp = tempfile.TemporaryDirectory()
+        measured_plans(shape, tmp.name)
     comm.Barrier()
     t0, c0 = time.perf_counter(), time.process_time()
     ds = solve_contact_mpi(rows, shape, P_MAX * np.arange(1, steps + 1) / steps, comm=comm,
@@ -113,10 +145,12 @@ if __name__ == "__main__":
     ap.add_argument("--tile", type=int, default=1)
     ap.add_argument("--single", action="store_true", help="the same problem by solve_contact and the batch, no MPI")
     ap.add_argument("--max-iter", type=int, default=None, help="iterations per step at most (memory runs)")
+    ap.add_argument("--measured-plans", action="store_true",
+                    help="one rank on a tiled grid: its 2-D pair measured first (module docstring)")
     a = ap.parse_args()
     if a.make:
         make(a.make, a.surface)
     elif a.single:
         single(a.surface, a.steps)
     else:
-        run(a.surface, a.steps, a.tile, a.max_iter)
+        run(a.surface, a.steps, a.tile, a.max_iter, a.measured_plans)
