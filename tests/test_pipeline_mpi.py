@@ -476,12 +476,16 @@ def test_a_tiled_grid_is_planned_in_place_from_its_measured_plans(tmp_path, monk
         data = json.loads(fft.WISDOM_FILE.read_text())
         chosen = data["machines"].get(fft.machine_key(), data["machines"][data["default"]])
         assert chosen["benchmark"] == f"{shape} on one rank"
-        plans = slabs.SlabPlans(slabs.Slabs(shape, 1, 0), 1, np.float32, 1)
-        assert plans.in_place
-        with fft.shipped_wisdom_only():  # the copy's plans hold this grid: planning from them alone succeeds
-            import pyfftw
+        import pyfftw
 
-            pyfftw.FFTW(plans.real_in, plans.row_spec, axes=(1, 2), flags=("FFTW_ESTIMATE", "FFTW_WISDOM_ONLY"))
+        for real in (np.float32, np.float64):
+            plans = slabs.SlabPlans(slabs.Slabs(shape, 1, 0), 1, real, 1)
+            assert plans.in_place == (real == np.float32)
+            # the copy's plans hold this grid, both precisions and directions: planning from them alone succeeds
+            with fft.shipped_wisdom_only():
+                only = ("FFTW_ESTIMATE", "FFTW_WISDOM_ONLY")
+                pyfftw.FFTW(plans.real_in, plans.row_spec, axes=(1, 2), flags=only)
+                pyfftw.FFTW(plans.row_spec, plans.real_out, axes=(1, 2), direction="FFTW_BACKWARD", flags=only)
     finally:
         fft.shipped_wisdom.cache_clear()
     assert (REPO / "src" / "roughcontact" / "core" / "fftw_wisdom.json").read_bytes() == shipped

@@ -14,7 +14,7 @@ step early: every field is allocated in the first iterations, so a few give the 
 only), so FFTW would plan it by its heuristics; this measures it first (``FFTW_MEASURE``, both precisions, before the
 timed solve) into a copy of the shipped wisdom that the process then plans with, so that one rank on the tiled grid
 is timed with plans of the quality the square grid's have (the weak scaling's serial reference, benchmarks/README.md,
-"The weak scaling's own ceiling").
+"The weak scaling's serial reference").
 ``python benchmarks/mpi/scaling.py --make N SURFACE.npy`` writes the surface (k_l = 4, k_s = N / 8,
 H = 0.8, rms slope 0.1) first, in a process of its own; ``--single`` solves it without MPI
 (:func:`~roughcontact.solver.solve_contact` and the batched solver with B = 1), for reference.
