@@ -12,7 +12,7 @@ measures them, the timed ones reuse them from FFTW's store), not from the shippe
 codelets of pyFFTW's wheel, which another FFTW build lacks (FFTW then forgets the whole store and plans by its
 heuristics). So the script compares two FFTW builds on an equal footing: run it once as installed, once with
 ``PYTHONPATH`` pointing at a copy of pyFFTW whose float library is another build (benchmarks/README.md, "The weak
-scaling's own ceiling; an FFTW with AVX2 and AVX-512 codelets"). The outputs are not the shipped plans' bits.
+scaling's serial reference; an FFTW with AVX2 and AVX-512 codelets"). The outputs are not the shipped plans' bits.
 """
 
 from __future__ import annotations

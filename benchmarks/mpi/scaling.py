@@ -65,13 +65,16 @@ def measured_plans(shape, directory: str) -> None:
     from roughcontact.core import fft
     from roughcontact.solver.mpi import slabs
 
-    shape = tuple(int(s) for s in shape)
+    shape = nx, ny = tuple(int(s) for s in shape)
+    if nx % ny:
+        raise ValueError(f"measured_plans: {shape} is not a square tiled along x")
     shipped = fft.has_shipped_plans
     fft.has_shipped_plans = lambda s: tuple(int(v) for v in s) == shape or shipped(s)  # in place, as a square's
     copy = Path(directory) / "wisdom.json"
     shutil.copy(fft.WISDOM_FILE, copy)
-    fft.add_plans([lambda flags, r=real: slabs.SlabPlans(slabs.Slabs(shape, 1, 0), 1, r, 1, flags=flags)
-                   for real in (np.float64, np.float32)], copy, {"benchmark": f"{shape} on one rank"})
+    # the one-rank problems of the slab wisdom's own list (both precisions)
+    fft.add_plans(slabs.slab_problems(sizes=(ny,), ranks=(1,), tiles=(nx // ny,)), copy,
+                  {"benchmark": f"{shape} on one rank"})
     fft.WISDOM_FILE = copy
     fft.shipped_wisdom.cache_clear()
 
@@ -101,7 +104,7 @@ def run(path: str, steps: int, tile: int, max_iter: int | None, measured: bool =
     if measured:
         if comm.size != 1 or tile == 1:
             raise SystemExit("--measured-plans: one rank and --tile 2 or more (the square grids' plans are shipped)")
-        tmp = tempfile.TemporaryDirectory()
+        tmp = tempfile.TemporaryDirectory()  # kept until run returns: the solve reads the copy when it plans
         measured_plans(shape, tmp.name)
     comm.Barrier()
     t0, c0 = time.perf_counter(), time.process_time()
