@@ -31,7 +31,7 @@ WORKER = textwrap.dedent(
     out = {}
     for n in (128, 256):
         h = generate_surface(n, 4, 32, 0.5, 1, rms_slope=0.1)
-        out[f"surface N={n} (pyFFTW)"] = hashlib.sha256(h.tobytes()).hexdigest()
+        out[f"surface N={n}"] = hashlib.sha256(h.tobytes()).hexdigest()
         # Solve on a surface made with numpy.fft so the solve is checked on its own.
         h = generate_surface(n, 4, 32, 0.5, 1, rms_slope=0.1, backend="numpy")
         ds = solve_contact(h, [0.001, 0.002, 0.003], store_fields=True)
@@ -40,7 +40,7 @@ WORKER = textwrap.dedent(
             if name != "wall_time":  # the only legitimately varying output
                 digest.update(name.encode())
                 digest.update(ds[name].values.tobytes())
-        out[f"solve N={n} (pyFFTW)"] = digest.hexdigest()
+        out[f"solve N={n}"] = digest.hexdigest()
         out[f"backend N={n}"] = ds.attrs["fft_backend"]
     print("@@RESULT@@" + json.dumps(out), flush=True)
     """
@@ -49,9 +49,23 @@ WORKER = textwrap.dedent(
 BURNER = "import time\nend = time.monotonic() + 600\nwhile time.monotonic() < end:\n    pass\n"
 
 
+def _mkl_service() -> bool:
+    try:
+        import mkl  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+# ROUGHCONTACT_FFT=mkl (Intel MKL under pyFFTW, core.fftw_library: no planner, no wisdom) on half the workers:
+# the same check of MKL's own determinism at half the cost
+@pytest.mark.parametrize(("library", "n_workers", "label"), [("pyfftw", N_WORKERS, "pyfftw"),
+                                                             ("mkl", N_WORKERS // 2, "pyfftw-mkl")])
 @pytest.mark.slow
-def test_fft_results_identical_across_concurrent_processes(tmp_path):
-    env = dict(os.environ, ROUGHCONTACT_FFT="pyfftw", OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
+def test_fft_results_identical_across_concurrent_processes(tmp_path, library, n_workers, label):
+    if library == "mkl" and not _mkl_service():
+        pytest.skip("mkl-service is not installed (pip install -e '.[mkl]')")
+    env = dict(os.environ, ROUGHCONTACT_FFT=library, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
     script = tmp_path / "worker.py"
     script.write_text(WORKER)
     burners = [subprocess.Popen([sys.executable, "-c", BURNER]) for _ in range(os.cpu_count() or 1)]
@@ -59,7 +73,7 @@ def test_fft_results_identical_across_concurrent_processes(tmp_path):
         workers = [
             subprocess.Popen([sys.executable, str(script)], env=env, stdout=subprocess.PIPE,
                              stderr=subprocess.PIPE, text=True)
-            for _ in range(N_WORKERS)
+            for _ in range(n_workers)
         ]
         results = []
         for i, proc in enumerate(workers):
@@ -78,14 +92,14 @@ def test_fft_results_identical_across_concurrent_processes(tmp_path):
             b.kill()
         for b in burners:
             b.wait()
-    assert all(r[k] == "pyfftw" for r in results for k in r if k.startswith("backend")), results
+    assert all(r[k] == label for r in results for k in r if k.startswith("backend")), results
     differing = {}
     for key in results[0]:
         counts = Counter(r[key] for r in results)
         if len(counts) > 1:
             differing[key] = sorted(counts.values(), reverse=True)
     assert not differing, (
-        f"{N_WORKERS} concurrent processes computed different bytes (group sizes of equal hashes): "
+        f"{n_workers} concurrent processes computed different bytes (group sizes of equal hashes): "
         f"{differing}; FFT plans are not deterministic (timing-based planning?)"
     )
 

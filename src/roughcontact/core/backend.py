@@ -24,6 +24,7 @@ import os
 import numpy as np
 
 from . import fft as _fft
+from .fftw_library import fft_label
 from .passes import remap, scatter_scaled, weighted_squares
 
 #: Names the ``array_backend`` setting accepts.
@@ -343,8 +344,8 @@ class ArrayBackend:
         return self.xp.zeros(shape, dtype=dtype)
 
     def fft_name(self) -> str:
-        """The FFT library's name, for the outputs' ``fft_backend`` attribute."""
-        return _fft.default_backend()
+        """The FFT library's name, for the outputs' ``fft_backend`` attribute (:func:`fft_label`)."""
+        return fft_label(_fft.default_backend())
 
     def real_fft(self, shape, threads: int = 1, dtype=np.float64):
         """The cached FFT pair of :mod:`.fft` for ``shape`` (forward / backward, numpy's norms)."""

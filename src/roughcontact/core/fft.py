@@ -41,7 +41,10 @@ from pathlib import Path
 
 import numpy as np
 
+from . import fftw_library as _library
 from .cell import Cell
+
+_library.load_mkl_first()  # ROUGHCONTACT_FFT=mkl: MKL's FFTW3 interface to answer pyFFTW (core.fftw_library)
 
 try:  # pragma: no cover - exercised by whichever backend is installed
     import pyfftw
@@ -53,8 +56,8 @@ except ImportError:  # pragma: no cover
 
 _log = logging.getLogger(__name__)
 
-#: Backends a caller may ask for.
-BACKENDS = ("pyfftw", "numpy")
+#: Backends a caller may ask for (``ROUGHCONTACT_FFT=mkl``: pyFFTW answered by Intel MKL, core.fftw_library).
+BACKENDS = ("pyfftw", "numpy", "mkl")
 
 #: FFTW planner flags. ``FFTW_ESTIMATE`` is deterministic (no timing); do not use
 #: ``FFTW_MEASURE``/``FFTW_PATIENT`` here: they make results vary between processes.
@@ -327,7 +330,9 @@ def _fill_missing(wisdom: str, extra: str) -> str:
 def default_backend() -> str:
     """Name of the backend used when none is asked for.
 
-    ``ROUGHCONTACT_FFT=numpy`` in the environment forces the numpy.fft fallback.
+    ``ROUGHCONTACT_FFT=numpy`` in the environment forces the numpy.fft fallback (no FFTW anywhere: the single
+    solve, a batch, the MPI ranks); ``ROUGHCONTACT_FFT=mkl`` gives ``"pyfftw"`` with Intel MKL answering pyFFTW's
+    calls (:mod:`.fftw_library`; a ``ValueError`` naming the remedy where it cannot).
     """
     forced = os.environ.get("ROUGHCONTACT_FFT", "").strip().lower()
     if forced:
@@ -337,6 +342,9 @@ def default_backend() -> str:
             )
         if forced == "pyfftw" and not _HAVE_PYFFTW:
             raise ValueError("ROUGHCONTACT_FFT=pyfftw but pyfftw cannot be imported")
+        if forced == "mkl":
+            _library.check_request()
+            return "pyfftw"
         return forced
     return "pyfftw" if _HAVE_PYFFTW else "numpy"
 

@@ -39,6 +39,7 @@ import numpy as np
 from ..core.backend import ArrayBackend, SpectralProduct, get_backend, multiply_spectrum, remap_rows
 from ..core.cell import Cell
 from ..core.fft import default_backend, get_fft, wavenumbers
+from ..core.fftw_library import fft_label
 from .love import (  # noqa: F401 (re-exported: the free operator's influence lives in love)
     free_influence,
     free_multiplier,
@@ -347,7 +348,7 @@ class FreeHalfSpace:
 
     @property
     def backend(self) -> str:
-        return self.fft.backend
+        return fft_label(self.fft.backend)
 
     def apply(self, field: np.ndarray) -> np.ndarray:
         """``K field`` [length per pressure x field], float64, shape (nx, ny)."""

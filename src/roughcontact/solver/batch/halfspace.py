@@ -24,8 +24,9 @@ class BatchFFT:
     :class:`~roughcontact.core.backend.SpectralProduct` (planned with the package's shipped wisdom
     only, :func:`~roughcontact.core.fft.shipped_wisdom_only`: the same plan whatever else the process
     planned), and :mod:`scipy.fft` for the rest (the float64 refreshes, other shapes) or where pyFFTW
-    is missing; CuPy: :mod:`cupyx.scipy.fft` (cuFFT, plans from CuPy's plan cache: the batch keeps one
-    shape, so one plan per precision and direction serves the whole solve); a stand-in CuPy without
+    is missing or ``ROUGHCONTACT_FFT=numpy`` asks for no FFTW (:func:`~roughcontact.core.fft.default_backend`,
+    which the outputs' ``fft_backend`` names); CuPy: :mod:`cupyx.scipy.fft` (cuFFT, plans from CuPy's plan cache:
+    the batch keeps one shape, so one plan per precision and direction serves the whole solve); a stand-in CuPy without
     ``cupyx`` (tests): the array module's ``fft``. The inverse is unnormalised (``norm="forward"``):
     the ``1 / (nx ny)`` sits in the multipliers.
     """
@@ -53,7 +54,8 @@ class BatchFFT:
             mod = be.xp.fft
         self.mod = mod
         self.batch, self.threads, self.spec64 = batch, threads, None
-        if be.name == "numpy" and batch is not None and fft_module.has_pyfftw():
+        # pyFFTW unless ROUGHCONTACT_FFT=numpy asks for none: the library the outputs' fft_backend names
+        if be.name == "numpy" and batch is not None and fft_module.default_backend() == "pyfftw":
             self._plan32(batch, threads)
 
     def _plan32(self, batch: int, threads: int) -> None:

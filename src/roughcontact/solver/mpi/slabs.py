@@ -493,6 +493,8 @@ def make_fft(library: str, comm, slabs: Slabs, threads: int = 1):
         from .mpi4pyfft import MpiFFTPlan
 
         return MpiFFTPlan(comm, slabs, threads)
-    from ...core import fft as fft_module
+    from ...core import fft as fft_module, fftw_library
 
-    return FftwSlabFFT(comm, slabs, threads) if fft_module.has_pyfftw() else SlabFFT(comm, slabs, threads)
+    # SciPy's where no FFTW is asked for, or MKL answers pyFFTW (core.fftw_library: it cannot plan the slabs)
+    fftw = fft_module.default_backend() == "pyfftw" and fftw_library.pyfftw_library() == "fftw"
+    return FftwSlabFFT(comm, slabs, threads) if fftw else SlabFFT(comm, slabs, threads)
