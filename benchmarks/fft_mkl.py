@@ -1,7 +1,9 @@
-"""Intel MKL's FFTs (``mkl_fft``) beside the solver's pyFFTW, and what loading MKL does to Tamaas (not adopted).
+"""Intel MKL's FFTs beside the solver's pyFFTW: ``mkl_fft``, MKL under pyFFTW, and what loading MKL does to Tamaas.
 
-MKL is no dependency of the package (benchmarks/README.md, "Intel MKL's FFTs: measured, not adopted"). Install it
-into a copy of the environment to run this (``pip install mkl_fft mkl-service``: about 1 GB of wheels).
+benchmarks/README.md, "Intel MKL's FFTs: under pyFFTW as an option, and what they do to Tamaas". ``--on-mkl`` and
+``--on-mkl-scan`` need the package's ``mkl`` extra (``pip install -e '.[mkl]'``: mkl-service, about 1 GB installed);
+``--check``, ``--pairs``, ``--solve`` and ``--tamaas`` also ``mkl_fft`` (``pip install mkl_fft``: no dependency of
+the package, measured and not adopted), ``--tamaas`` Tamaas (the ``test`` extra).
 
 - ``--check``: ``mkl_fft.rfftn`` and ``irfftn`` of a random field against numpy.fft's on every grid of ``n0`` in
   2-399 (and a dozen larger) by ``n1`` in {n0, 40, 48, 64, 100, 2 n0}, both precisions, one thread; prints the
@@ -34,7 +36,7 @@ import os
 import subprocess
 import sys
 import time
-from importlib.metadata import version
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 os.environ.setdefault("MKL_NUM_THREADS", "1")
@@ -47,11 +49,18 @@ from roughcontact.core import fft as fft_module  # noqa: E402
 HERE = Path(__file__).resolve().parent
 
 
+def _version(name: str) -> str:
+    try:
+        return version(name)
+    except PackageNotFoundError:
+        return "(not installed)"
+
+
 def _mkl_fft():
     try:
         import mkl_fft
     except ImportError:
-        sys.exit("fft_mkl.py needs mkl_fft: pip install mkl_fft mkl-service (into a copy of the environment)")
+        sys.exit("fft_mkl.py --check, --pairs, --solve and --tamaas need mkl_fft: pip install mkl_fft")
     return mkl_fft
 
 
@@ -104,11 +113,6 @@ def check() -> list:
     for n0, n1, dt, fwd, inv in bad:
         print(f"  n0 = {n0}, n1 = {n1}, {dt}: forward off by {fwd:.3g} of max |F|, inverse {inv:.3g}")
     return bad
-
-
-def _shape(text: str) -> tuple[int, int]:
-    a, _, b = text.partition("x")
-    return int(a), int(b or a)
 
 
 def _shape(text: str) -> tuple[int, int]:
@@ -290,11 +294,11 @@ def main(argv=None) -> None:
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--tamaas-rounds", type=int, default=None, help="rounds of --tamaas (default: --rounds)")
     args = ap.parse_args(argv)
-    _mkl_fft()
+    if args.check or args.pairs or args.solve or args.tamaas:
+        _mkl_fft()
     print(f"{time.strftime('%Y-%m-%d %H:%M:%S UTC', time.gmtime())}, load {os.getloadavg()[0]:.2f}, "
-          f"mkl {version('mkl')}, mkl_fft {version('mkl_fft')}, pyFFTW {version('pyFFTW')}, tamaas "
-          f"{version('tamaas')}, CPU {fft_module.machine_key()}, OMP_NUM_THREADS={os.environ.get('OMP_NUM_THREADS')}",
-          flush=True)
+          + ", ".join(f"{name} {_version(name)}" for name in ("mkl", "mkl_fft", "pyFFTW", "tamaas"))
+          + f", CPU {fft_module.machine_key()}, OMP_NUM_THREADS={os.environ.get('OMP_NUM_THREADS')}", flush=True)
     if args.check:
         check()
     if args.pairs:

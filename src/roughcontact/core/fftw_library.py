@@ -8,14 +8,14 @@ different from FFTW's in the last bits. :func:`pyfftw_library` tells which answe
 says it (:func:`fft_label`: ``pyfftw-mkl``, ``mpi-slab-mkl``), whoever loaded MKL.
 
 ``ROUGHCONTACT_FFT=mkl`` asks for it: :mod:`.fft` then loads MKL (:func:`load_mkl_first`, mkl-service from the
-``mkl`` extra: ``pip install -e '.[mkl]'``, about 1 GB of wheels) before it imports pyFFTW. Measured on an Intel
-Xeon (2026-12-05, benchmarks/README.md, "Intel MKL's FFTs"): the paper case at 256²-1024² in 0.66-0.68x the CPU,
-the same iterations and A/A0, and pyFFTW's 2-D r2c and c2r on MKL equal to numpy.fft's on 4912 grids and
-precisions. MKL is loaded for the whole process: any other library that binds FFTW's functions lazily after that
-(Tamaas 2.9's wheel, whose FFTW is static and exported) runs on MKL too (Tamaas took 0.30-0.34x its CPU). The
-variable must be set before the process first imports pyFFTW; the solve refuses it otherwise. The MPI ranks' slab
-transforms are SciPy's where MKL answers pyFFTW: MKL's FFTW3 interface cannot plan their strided transforms (pyFFTW
-raises "the planner returning NULL" on 2 ranks).
+``mkl`` extra: ``pip install -e '.[mkl]'``, about 1 GB installed) before it imports pyFFTW. Measured on an Intel
+Xeon (2026-12-05, benchmarks/README.md, "Intel MKL's FFTs"): the paper case at 256²-1024² in 0.66-0.68x the CPU, the
+same iterations and A/A0, and pyFFTW's 2-D r2c and c2r on MKL within 1e-4 (float32) and 1e-10 (float64) of
+numpy.fft's largest value on 4912 grids and precisions. MKL is loaded for the whole process: any other library that
+binds FFTW's functions lazily after that (Tamaas 2.9's wheel, whose FFTW is static and exported) runs on MKL too
+(Tamaas took 0.30-0.34x its CPU). The variable must be set before the process first imports pyFFTW; the solve
+refuses it otherwise. The MPI ranks' slab transforms are SciPy's where MKL answers pyFFTW: MKL's FFTW3 interface
+does not plan one of their strided transforms (pyFFTW raises "the planner returning NULL" on 2 ranks).
 
 Examples
 --------
