@@ -5,7 +5,7 @@ global namespace first. Where Intel MKL's runtime is there already (loaded with 
 ``import mkl`` does), MKL's FFTW3 interface answers pyFFTW's double and single-precision calls instead of FFTW:
 the same plans asked for, MKL's transforms done, no wisdom kept (the shipped FFTW plans do not apply), results
 different from FFTW's in the last bits. :func:`pyfftw_library` tells which answers, and the outputs' ``fft_backend``
-says it (:func:`fft_label`: ``pyfftw-mkl``, ``mpi-slab-mkl``), whoever loaded MKL.
+says it (:func:`fft_label`: ``pyfftw-mkl``), whoever loaded MKL.
 
 ``ROUGHCONTACT_FFT=mkl`` asks for it: :mod:`.fft` then loads MKL (:func:`load_mkl_first`, mkl-service from the
 ``mkl`` extra: ``pip install -e '.[mkl]'``, about 1 GB installed) before it imports pyFFTW. Measured on an Intel
