@@ -74,7 +74,7 @@ _SLAB = textwrap.dedent(
 @pytest.mark.parametrize(("library", "kind"), [("numpy", "SlabFFT"), ("pyfftw", "FftwSlabFFT"), ("mkl", "SlabFFT")])
 def test_the_mpi_slab_transforms_follow_the_variable(library, kind):
     """SciPy's slab transforms where no FFTW is asked for, and where MKL answers pyFFTW: MKL's FFTW3 interface
-    does not plan one of the slabs' strided transforms (pyFFTW raises "the planner returning NULL" on 2 ranks)."""
+    plans no 1-D transform batched over two axes, as the slabs' are (pyFFTW raises "the planner returning NULL")."""
     pytest.importorskip("mpi4py")
     if library == "mkl":
         pytest.importorskip("mkl", reason="mkl-service is not installed (pip install -e '.[mkl]')")

@@ -15,7 +15,8 @@ numpy.fft's largest value on 4912 grids and precisions. MKL is loaded for the wh
 binds FFTW's functions lazily after that (Tamaas 2.9's wheel, whose FFTW is static and exported) runs on MKL too
 (Tamaas took 0.30-0.34x its CPU). The variable must be set before the process first imports pyFFTW; the solve
 refuses it otherwise. The MPI ranks' slab transforms are SciPy's where MKL answers pyFFTW: MKL's FFTW3 interface
-does not plan one of their strided transforms (pyFFTW raises "the planner returning NULL" on 2 ranks).
+plans no 1-D transform batched over two axes (the slabs' ``(B, rows, n)`` along ``n``: pyFFTW raises "the planner
+returning NULL"; over one axis it plans them).
 
 Examples
 --------

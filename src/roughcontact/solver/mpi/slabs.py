@@ -495,6 +495,6 @@ def make_fft(library: str, comm, slabs: Slabs, threads: int = 1):
         return MpiFFTPlan(comm, slabs, threads)
     from ...core import fft as fft_module, fftw_library
 
-    # SciPy's where no FFTW is asked for, or MKL answers pyFFTW (core.fftw_library: it fails one slab transform)
+    # SciPy's where no FFTW is asked for, or MKL answers pyFFTW (core.fftw_library: MKL plans none of these)
     fftw = fft_module.default_backend() == "pyfftw" and fftw_library.pyfftw_library() == "fftw"
     return FftwSlabFFT(comm, slabs, threads) if fftw else SlabFFT(comm, slabs, threads)
