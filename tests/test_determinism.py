@@ -17,6 +17,8 @@ from collections import Counter
 import numpy as np
 import pytest
 
+from roughcontact.core.fftw_library import mkl_installed
+
 pytest.importorskip("pyfftw")
 
 N_WORKERS = 8
@@ -49,21 +51,13 @@ WORKER = textwrap.dedent(
 BURNER = "import time\nend = time.monotonic() + 600\nwhile time.monotonic() < end:\n    pass\n"
 
 
-def _mkl_service() -> bool:
-    try:
-        import mkl  # noqa: F401
-    except ImportError:
-        return False
-    return True
-
-
 # ROUGHCONTACT_FFT=mkl (Intel MKL under pyFFTW, core.fftw_library: no planner, no wisdom) on half the workers:
 # the same check of MKL's own determinism at half the cost
 @pytest.mark.parametrize(("library", "n_workers", "label"), [("pyfftw", N_WORKERS, "pyfftw"),
                                                              ("mkl", N_WORKERS // 2, "pyfftw-mkl")])
 @pytest.mark.slow
 def test_fft_results_identical_across_concurrent_processes(tmp_path, library, n_workers, label):
-    if library == "mkl" and not _mkl_service():
+    if library == "mkl" and not mkl_installed():
         pytest.skip("mkl-service is not installed (pip install -e '.[mkl]')")
     env = dict(os.environ, ROUGHCONTACT_FFT=library, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
     script = tmp_path / "worker.py"

@@ -32,6 +32,7 @@ from __future__ import annotations
 import ctypes
 import functools
 import importlib
+import importlib.util
 import logging
 import os
 
@@ -39,6 +40,12 @@ import os
 INSTALL_HINT = "pip install -e '.[mkl]' (mkl-service, which brings Intel MKL)"
 
 _load_error: str | None = None
+
+
+def mkl_installed() -> bool:
+    """Whether mkl-service is installed, found without importing it: an import would load MKL into the process'
+    global namespace, under every library that binds FFTW's functions afterwards (module docstring)."""
+    return importlib.util.find_spec("mkl") is not None
 
 
 def requested() -> bool:
