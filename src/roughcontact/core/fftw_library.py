@@ -14,9 +14,9 @@ same iterations and A/A0, and pyFFTW's 2-D r2c and c2r on MKL within 1e-4 (float
 numpy.fft's largest value on 4912 grids and precisions. MKL is loaded for the whole process: any other library that
 binds FFTW's functions lazily after that (Tamaas 2.9's wheel, whose FFTW is static and exported) runs on MKL too
 (Tamaas took 0.30-0.34x its CPU). The variable must be set before the process first imports pyFFTW; the solve
-refuses it otherwise. The MPI ranks' slab transforms are SciPy's where MKL answers pyFFTW: MKL's FFTW3 interface
-plans no 1-D transform batched over two axes (the slabs' ``(B, rows, n)`` along ``n``: pyFFTW raises "the planner
-returning NULL"; over one axis it plans them).
+refuses it otherwise. MKL's FFTW3 interface plans no 1-D transform batched over two axes (the MPI slabs'
+``(B, rows, n)`` along ``n``: pyFFTW raises "the planner returning NULL"), but plans the same transform on a
+``(B rows, n)`` view, batched over one: :func:`one_batch_axis` gives the array to plan on.
 
 Examples
 --------
@@ -104,6 +104,23 @@ def fft_label(name: str) -> str:
     if name == "pyfftw" and pyfftw_library() not in ("fftw", "none"):
         return f"pyfftw-{pyfftw_library()}"
     return name
+
+
+def one_batch_axis(a):
+    """The array to plan a 1-D transform along ``a``'s last axis on: where MKL answers pyFFTW, a view of ``a``
+    (``(..., n)``, its leading axes mergeable without a copy) with one batch axis, ``(-1, n)``; else ``a`` itself.
+
+    Raises ``ValueError`` where the view would need a copy (a transform planned on a copy would not write ``a``).
+    """
+    if pyfftw_library() != "mkl" or a.ndim <= 2:
+        return a
+    import numpy as np
+
+    view = a.reshape(-1, a.shape[-1])
+    if not np.shares_memory(view, a):
+        raise ValueError(f"one_batch_axis: an array of shape {a.shape} and strides {a.strides} has no view "
+                         "with one batch axis")
+    return view
 
 
 def check_request() -> None:

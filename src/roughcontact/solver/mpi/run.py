@@ -89,8 +89,9 @@ def solve_contact_mpi(heights, shape, pressures, settings: SolverSettings | None
     xarray.Dataset or None
         On rank 0, :func:`~roughcontact.solver.solve_contact`'s dataset (dims ``step``; with
         ``fields``, ``contact_pressure`` and ``gap`` over ``field_step, x, y``), attributes as there
-        plus ``mpi_ranks`` and ``fft_library``; ``fft_backend`` is ``"mpi-slab"`` or
-        ``"mpi-mpi4py-fft"``. None on the other ranks.
+        plus ``mpi_ranks`` and ``fft_library``; ``fft_backend`` is ``"mpi-slab"`` (FFTW's slab transforms),
+        ``"mpi-slab-mkl"`` (MKL's, ``ROUGHCONTACT_FFT=mkl``), ``"mpi-slab-scipy"`` (SciPy's, ``ROUGHCONTACT_FFT=numpy``
+        or no pyFFTW) or ``"mpi-mpi4py-fft"``. None on the other ranks.
 
     Raises
     ------

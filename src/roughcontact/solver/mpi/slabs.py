@@ -11,9 +11,9 @@ multipliers).
 
 Two implementations of that one layout (:data:`FFT_LIBRARIES`):
 
-- ``"slab"`` (the default): pyFFTW's planned 1-D transforms (:class:`FftwSlabFFT`: the ranks of a machine write
-  their blocks into each other's shared memory, ``Alltoallw`` takes the others; scipy.fft's and ``Alltoallv``,
-  :class:`SlabFFT`, where pyFFTW is missing), pip-installable with the ``mpi`` extra;
+- ``"slab"`` (the default): pyFFTW's planned 1-D transforms, FFTW's or MKL's (:class:`FftwSlabFFT`: a machine's
+  ranks write their blocks into each other's shared memory, ``Alltoallw`` takes the others; scipy.fft's and
+  ``Alltoallv``, :class:`SlabFFT`, where pyFFTW is missing or not asked for), pip-installable with the ``mpi`` extra;
 - ``"mpi4py-fft"`` (:class:`~.mpi4pyfft.MpiFFTPlan`): mpi4py-fft's ``PFFT`` on FFTW, which has no wheel on
   PyPI and builds only where FFTW's headers and libraries are installed (``libfftw3-dev``):
   measured against the first in ``benchmarks/README.md`` ("The solver over MPI ranks").
@@ -26,6 +26,7 @@ import shutil
 
 import numpy as np
 
+from ...core import fftw_library
 from .transpose import copy_transposed
 
 #: Distributed FFT implementations :func:`make_fft` accepts.
@@ -42,12 +43,8 @@ def _complex_type(dtype):
 def split(n: int, parts: int) -> list[tuple[int, int]]:
     """``[(start, stop), ...]``: ``n`` items in ``parts`` consecutive blocks, the first ``n % parts`` one larger."""
     base, extra = divmod(n, parts)
-    out, start = [], 0
-    for r in range(parts):
-        stop = start + base + (r < extra)
-        out.append((start, stop))
-        start = stop
-    return out
+    stops = [0, *np.cumsum([base + (r < extra) for r in range(parts)]).tolist()]
+    return list(zip(stops[:-1], stops[1:], strict=True))
 
 
 #: Bytes of a memory page: each rank's part of a shared-memory window starts on one (FFTW plans an aligned buffer).
@@ -106,7 +103,7 @@ class SlabFFT:
     give complex64 spectra. One rank skips the exchange (the serial transform).
     """
 
-    name = "slab"
+    name = "slab-scipy"  # the outputs' fft_backend: "mpi-" + name
 
     def __init__(self, comm, slabs: Slabs, threads: int = 1):
         import scipy.fft
@@ -196,8 +193,7 @@ class SlabPlans:
         else:  # float32 out of place: the input stays the kernels' (they zero only what they wrote last)
             self.real_in = pyfftw.empty_aligned((B, rows, ny), dtype=real)
             self.real_out = pyfftw.empty_aligned((B, rows, ny), dtype=real) if real == np.float32 else self.real_in
-        # planned with the shipped wisdom alone (core.fft), or measured with ``flags`` in FFTW's store as it is
-        # (write_wisdom, which makes the shipped slab plans)
+        # planned with the shipped wisdom alone (core.fft), or measured with ``flags`` (write_wisdom: the shipped plans)
         kw = {"flags": fft_module.PLANNER_FLAGS if flags is None else tuple(flags), "threads": threads}
         with fft_module.shipped_wisdom_only() if flags is None else contextlib.nullcontext():
             if slabs.size == 1:
@@ -217,10 +213,13 @@ class SlabPlans:
                 self.exchange = exchange
                 self.send = exchange[:size].view(cplx)
             self.types = {}  # FftwSlabFFT._receive_types' datatypes, by receiving buffer
-            self.rfft = pyfftw.FFTW(self.real_in, self.row_spec, axes=(2,), direction="FFTW_FORWARD", **kw)
-            self.cfft = pyfftw.FFTW(self.col_spec, self.col_spec, axes=(2,), direction="FFTW_FORWARD", **kw)
-            self.icfft = pyfftw.FFTW(self.col_spec, self.col_spec, axes=(2,), direction="FFTW_BACKWARD", **kw)
-            self.irfft = pyfftw.FFTW(self.row_spec, self.real_out, axes=(2,), direction="FFTW_BACKWARD", **kw)
+            # planned on (B rows, n) views where MKL answers pyFFTW (it plans no 1-D transform batched over two axes)
+            bufs = (self.real_in, self.row_spec, self.col_spec, self.real_out)
+            ri, rs, cs, ro = map(fftw_library.one_batch_axis, bufs)
+            self.rfft = pyfftw.FFTW(ri, rs, axes=(-1,), direction="FFTW_FORWARD", **kw)
+            self.cfft = pyfftw.FFTW(cs, cs, axes=(-1,), direction="FFTW_FORWARD", **kw)
+            self.icfft = pyfftw.FFTW(cs, cs, axes=(-1,), direction="FFTW_BACKWARD", **kw)
+            self.irfft = pyfftw.FFTW(rs, ro, axes=(-1,), direction="FFTW_BACKWARD", **kw)
 
 
 #: Grids and rank counts whose slab transforms :func:`write_wisdom` measures for the shipped wisdom: ``T N x N``
@@ -298,6 +297,7 @@ class FftwSlabFFT(SlabFFT):
 
     def __init__(self, comm, slabs: Slabs, threads: int = 1, node=None):
         super().__init__(comm, slabs, threads)
+        self.name = "slab-mkl" if fftw_library.pyfftw_library() == "mkl" else "slab"  # MKL's transforms or FFTW's
         self._plans = {}
         self._windows = []
         self.peer_parts = []  # (address, bytes) of the other ranks' parts of the windows (memory measurements)
@@ -493,8 +493,8 @@ def make_fft(library: str, comm, slabs: Slabs, threads: int = 1):
         from .mpi4pyfft import MpiFFTPlan
 
         return MpiFFTPlan(comm, slabs, threads)
-    from ...core import fft as fft_module, fftw_library
+    from ...core import fft as fft_module
 
-    # SciPy's where no FFTW is asked for, or MKL answers pyFFTW (core.fftw_library: MKL plans none of these)
-    fftw = fft_module.default_backend() == "pyfftw" and fftw_library.pyfftw_library() == "fftw"
+    # pyFFTW's plans where it is asked for and FFTW or MKL answers it (core.fftw_library), else SciPy's
+    fftw = fft_module.default_backend() == "pyfftw" and fftw_library.pyfftw_library() in ("fftw", "mkl")
     return FftwSlabFFT(comm, slabs, threads) if fftw else SlabFFT(comm, slabs, threads)
