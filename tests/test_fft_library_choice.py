@@ -25,6 +25,7 @@ from roughcontact.core.fftw_library import mkl_installed
 from roughcontact.solver import solve_contact
 from roughcontact.solver.batch import solve_contact_batch
 from roughcontact.surfaces.synthetic import generate_surface
+from test_solver_mpi import MPIEXEC
 
 pyfftw = pytest.importorskip("pyfftw")
 
@@ -211,12 +212,11 @@ def test_mpi_ranks_on_mkl_plan_their_slab_transforms_there(ranks):
     pytest.importorskip("mpi4py")
     if not mkl_installed():
         pytest.skip("mkl-service is not installed (pip install -e '.[mkl]')")
-    mpiexec = os.path.join(os.path.dirname(sys.executable), "mpiexec")
-    if not os.path.exists(mpiexec):
-        pytest.skip("no mpiexec beside this Python (pip install -e '.[mpi]')")
+    if MPIEXEC is None:
+        pytest.skip("mpi4py or mpiexec not installed (pip install -e '.[mpi]')")
     out = {}
     for library in ("pyfftw", "mkl"):
-        res = subprocess.run([mpiexec, "-n", str(ranks), sys.executable, "-c", _RANKS], capture_output=True,
+        res = subprocess.run([MPIEXEC, "-n", str(ranks), sys.executable, "-c", _RANKS], capture_output=True,
                              text=True, timeout=300, env={**os.environ, "ROUGHCONTACT_FFT": library})
         assert res.returncode == 0, res.stderr[-3000:]
         out[library] = [line.split() for line in res.stdout.splitlines()[-2:]]

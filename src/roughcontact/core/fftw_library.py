@@ -36,6 +36,8 @@ import importlib.util
 import logging
 import os
 
+import numpy as np
+
 #: What to install for ``ROUGHCONTACT_FFT=mkl``.
 INSTALL_HINT = "pip install -e '.[mkl]' (mkl-service, which brings Intel MKL)"
 
@@ -114,8 +116,6 @@ def one_batch_axis(a):
     """
     if pyfftw_library() != "mkl" or a.ndim <= 2:
         return a
-    import numpy as np
-
     view = a.reshape(-1, a.shape[-1])
     if not np.shares_memory(view, a):
         raise ValueError(f"one_batch_axis: an array of shape {a.shape} and strides {a.strides} has no view "

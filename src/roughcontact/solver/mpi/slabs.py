@@ -297,7 +297,7 @@ class FftwSlabFFT(SlabFFT):
 
     def __init__(self, comm, slabs: Slabs, threads: int = 1, node=None):
         super().__init__(comm, slabs, threads)
-        self.name = "slab-mkl" if fftw_library.pyfftw_library() == "mkl" else "slab"  # MKL's transforms or FFTW's
+        self.name = "slab" + fftw_library.fft_label("pyfftw").removeprefix("pyfftw")  # "slab", "slab-mkl"
         self._plans = {}
         self._windows = []
         self.peer_parts = []  # (address, bytes) of the other ranks' parts of the windows (memory measurements)
